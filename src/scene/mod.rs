@@ -1,0 +1,1 @@
+//! Scene files (filled in by the scene module work).
