@@ -1,5 +1,18 @@
 //! prism: a hand-written Vulkan renderer for interactive refraction, reflection and
-//! caustics. See README.md for the architecture.
+//! caustics, measuring each technique's GPU time against its error. See README.md for the
+//! architecture: scene file -> scene -> pass plan -> passes -> frame graph -> images/timings.
 #![warn(unsafe_op_in_unsafe_fn)]
 
+pub mod gpu;
+pub mod graph;
+pub mod passes;
+pub mod renderer;
 pub mod scene;
+
+/// Rust side of `shared_constants!` (src/shader_shared.rs): plain `pub const`s.
+macro_rules! shared_constants {
+    ($($name:ident : $ty:ty = $value:expr;)*) => {
+        $(pub const $name: $ty = $value;)*
+    };
+}
+include!("shader_shared.rs");

@@ -1,0 +1,25 @@
+#version 450
+// G-buffer: every visible surface's normal, material and diffuse albedo (MRT).
+#include "frame.glsl"
+layout(push_constant) uniform Push { uint material; } pc;
+layout(location = 0) in vec3 in_position;
+layout(location = 1) in vec3 in_normal;
+layout(location = 2) in vec2 in_checker_uv;
+// RT0 (RGBA16F): xyz = unit world normal as interpolated (not flipped to the viewer), w = material index.
+layout(location = 0) out vec4 out_normal_material;
+// RT1 (RGBA16F): rgb = diffuse albedo with the checker evaluated, a = 1.
+layout(location = 1) out vec4 out_albedo;
+void main() {
+    vec3 n = in_normal;
+    float len = length(n);
+    n = len > 1e-20 ? n / len : vec3(0.0, 1.0, 0.0);
+    Material m = materials[pc.material];
+    vec3 albedo = m.albedo_a.rgb;
+    if (m.albedo_b.w > 0.0) {
+        // Checker (SCENES.md): colour a where floor(s/size) + floor(t/size) is even.
+        vec2 c = floor(in_checker_uv / m.albedo_b.w);
+        albedo = (mod(c.x + c.y, 2.0) == 0.0) ? m.albedo_a.rgb : m.albedo_b.rgb;
+    }
+    out_normal_material = vec4(n, float(pc.material));
+    out_albedo = vec4(albedo, 1.0);
+}

@@ -1,0 +1,64 @@
+// Set 0, shared by every pass: frame uniforms, materials, environment, shadow maps.
+// Layouts mirror src/renderer/gpu_types.rs (std140 / std430, vec4 members only).
+#ifndef PRISM_FRAME_GLSL
+#define PRISM_FRAME_GLSL
+#include "prism_shared.glsl"
+
+const float PI = 3.14159265358979323846;
+
+struct Light {
+    vec4 position;    // xyz: position (point) or unit direction light -> scene (directional); w: kind
+    vec4 intensity;   // rgb: intensity W/sr (point) or irradiance W/m^2 (directional); w: first shadow layer
+    vec4 shadow;      // x: near, y: far, z: normal-offset bias per metre of distance, w: 1/resolution
+    vec4 origin;      // directional: origin of the distance plane
+    mat4 view_proj;   // directional: world -> orthographic light clip space
+};
+
+layout(set = 0, binding = BINDING_FRAME, std140) uniform Frame {
+    mat4 view;
+    mat4 proj;
+    mat4 view_proj;
+    mat4 inv_view_proj;
+    vec4 camera_position;  // w: exposure
+    vec4 viewport;         // w, h, 1/w, 1/h
+    vec4 env_sh[9];        // irradiance SH (Ramamoorthi & Hanrahan 2001), rgb
+    uvec4 info;            // x: light count, y: frame index
+    Light lights[MAX_LIGHTS];
+} frame;
+
+struct Material {
+    vec4 albedo_a;   // diffuse: rgb albedo (or checker colour a); w: kind
+    vec4 albedo_b;   // checker colour b; w: checker size in metres (0: constant albedo)
+    vec4 spec_a;     // dielectric: rgb ior | mirror: rgb reflectance | conductor: rgb eta
+    vec4 spec_b;     // dielectric: rgb absorption per metre | conductor: rgb k
+};
+
+layout(set = 0, binding = BINDING_MATERIALS, std430) readonly buffer Materials {
+    Material materials[];
+};
+
+layout(set = 0, binding = BINDING_ENVIRONMENT) uniform sampler2D environment_map;
+layout(set = 0, binding = BINDING_SHADOW_CUBE) uniform samplerCubeArray shadow_cubes;
+layout(set = 0, binding = BINDING_SHADOW_2D) uniform sampler2DArray shadow_layers;
+
+uint material_kind(uint m) { return uint(materials[m].albedo_a.w + 0.5); }
+
+// Replace NaN/Inf by zero: no NaN or Inf may ever reach a pixel.
+vec3 finite_or_zero(vec3 v) {
+    return mix(v, vec3(0.0), bvec3(isnan(v.x) || isinf(v.x), isnan(v.y) || isinf(v.y), isnan(v.z) || isinf(v.z)));
+}
+
+// World-space position of the surface seen at pixel uv with (reversed) depth d.
+vec3 world_from_depth(vec2 uv, float d) {
+    vec4 clip = vec4(uv * 2.0 - 1.0, d, 1.0);
+    vec4 w = frame.inv_view_proj * clip;
+    return w.xyz / w.w;
+}
+
+// Unit direction of the camera ray through uv (pixel centre (i+0.5)/W, (j+0.5)/H, j = 0 top).
+vec3 camera_ray(vec2 uv) {
+    // A point on the far side of the reversed-Z range (d -> 0 is infinity) is ill-conditioned,
+    // so unproject a point at the near plane (d = 1) and subtract the eye.
+    return normalize(world_from_depth(uv, 1.0) - frame.camera_position.xyz);
+}
+#endif

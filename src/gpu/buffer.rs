@@ -1,0 +1,107 @@
+//! Buffers with gpu-allocator memory, freed after the last frame that used them.
+use std::sync::Arc;
+
+use ash::vk;
+use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
+use gpu_allocator::MemoryLocation;
+
+use super::context::{Garbage, GpuContext};
+use super::error::{GpuError, GpuResult, VkContext};
+
+pub struct Buffer {
+    ctx: Arc<GpuContext>,
+    pub(crate) raw: vk::Buffer,
+    allocation: Option<Allocation>,
+    pub size: u64,
+    pub name: String,
+}
+
+impl Buffer {
+    pub fn new(
+        ctx: &Arc<GpuContext>,
+        name: &str,
+        size: u64,
+        usage: vk::BufferUsageFlags,
+        location: MemoryLocation,
+    ) -> GpuResult<Buffer> {
+        let size = size.max(4);
+        let info = vk::BufferCreateInfo::default()
+            .size(size)
+            .usage(usage)
+            .sharing_mode(vk::SharingMode::EXCLUSIVE);
+        let device = ctx.raw();
+        // SAFETY: valid create info.
+        let raw = unsafe { device.create_buffer(&info, None) }.vk("vkCreateBuffer")?;
+        // SAFETY: raw is a fresh buffer.
+        let requirements = unsafe { device.get_buffer_memory_requirements(raw) };
+        let allocation = ctx
+            .allocator
+            .lock()
+            .unwrap()
+            .as_mut()
+            .expect("allocator alive while the context is")
+            .allocate(&AllocationCreateDesc {
+                name,
+                requirements,
+                location,
+                linear: true,
+                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+            });
+        let allocation = match allocation {
+            Ok(a) => a,
+            Err(source) => {
+                // SAFETY: unbound, unused buffer.
+                unsafe { device.destroy_buffer(raw, None) };
+                return Err(GpuError::Alloc { name: name.into(), source });
+            }
+        };
+        // SAFETY: memory comes from a compatible type with the required size/alignment.
+        unsafe { device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) }
+            .vk("vkBindBufferMemory")?;
+        ctx.set_name(raw, name);
+        Ok(Buffer { ctx: ctx.clone(), raw, allocation: Some(allocation), size, name: name.into() })
+    }
+
+    /// A host-visible buffer filled with `data`.
+    pub fn with_data(
+        ctx: &Arc<GpuContext>,
+        name: &str,
+        data: &[u8],
+        usage: vk::BufferUsageFlags,
+    ) -> GpuResult<Buffer> {
+        let mut b = Buffer::new(ctx, name, data.len() as u64, usage, MemoryLocation::CpuToGpu)?;
+        b.write(0, data);
+        Ok(b)
+    }
+
+    /// Copy `data` into a host-visible buffer at byte `offset`.
+    pub fn write(&mut self, offset: usize, data: &[u8]) {
+        let slice = self
+            .allocation
+            .as_mut()
+            .and_then(|a| a.mapped_slice_mut())
+            .expect("Buffer::write needs a host-visible buffer");
+        slice[offset..offset + data.len()].copy_from_slice(data);
+    }
+
+    /// The contents of a host-visible buffer.
+    pub fn read(&self) -> &[u8] {
+        self.allocation
+            .as_ref()
+            .and_then(|a| a.mapped_slice())
+            .map(|s| &s[..self.size as usize])
+            .expect("Buffer::read needs a host-visible buffer")
+    }
+
+    pub fn raw(&self) -> vk::Buffer {
+        self.raw
+    }
+}
+
+impl Drop for Buffer {
+    fn drop(&mut self) {
+        if let Some(a) = self.allocation.take() {
+            self.ctx.defer_destroy(Garbage::Buffer(self.raw, a));
+        }
+    }
+}

@@ -1,0 +1,396 @@
+//! Command recording. [`Cmd`] is the only way passes touch a command buffer.
+use std::ffi::CString;
+use std::sync::Arc;
+
+use ash::vk;
+
+use super::context::GpuContext;
+use super::error::{GpuResult, VkContext};
+use super::sync::{BufferBarrier, ImageBarrier};
+use super::{Buffer, ComputePipeline, DescriptorSet, Framebuffer, GraphicsPipeline, Image, RenderPass, TimestampPool};
+
+/// A command buffer in the recording state.
+pub struct Cmd<'a> {
+    ctx: &'a GpuContext,
+    pub(crate) raw: vk::CommandBuffer,
+}
+
+/// What a render pass attachment is cleared to.
+#[derive(Clone, Copy, Debug)]
+pub enum Clear {
+    Color([f32; 4]),
+    Depth(f32),
+    /// Attachment is loaded, the value is unused.
+    None,
+}
+
+impl<'a> Cmd<'a> {
+    pub(crate) fn wrap(ctx: &'a GpuContext, raw: vk::CommandBuffer) -> Self {
+        Cmd { ctx, raw }
+    }
+
+    fn dev(&self) -> &ash::Device {
+        self.ctx.raw()
+    }
+
+    pub fn barriers(&self, images: &[ImageBarrier], buffers: &[BufferBarrier]) {
+        if images.is_empty() && buffers.is_empty() {
+            return;
+        }
+        let mut src = vk::PipelineStageFlags::empty();
+        let mut dst = vk::PipelineStageFlags::empty();
+        let image_barriers: Vec<_> = images
+            .iter()
+            .map(|b| {
+                src |= b.src_stages;
+                dst |= b.dst_stages;
+                vk::ImageMemoryBarrier::default()
+                    .src_access_mask(b.src_access)
+                    .dst_access_mask(b.dst_access)
+                    .old_layout(b.old_layout)
+                    .new_layout(b.new_layout)
+                    .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                    .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                    .image(b.image)
+                    .subresource_range(vk::ImageSubresourceRange {
+                        aspect_mask: b.aspect,
+                        base_mip_level: 0,
+                        level_count: 1,
+                        base_array_layer: 0,
+                        layer_count: b.layers,
+                    })
+            })
+            .collect();
+        let buffer_barriers: Vec<_> = buffers
+            .iter()
+            .map(|b| {
+                src |= b.src_stages;
+                dst |= b.dst_stages;
+                vk::BufferMemoryBarrier::default()
+                    .src_access_mask(b.src_access)
+                    .dst_access_mask(b.dst_access)
+                    .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                    .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                    .buffer(b.buffer)
+                    .offset(0)
+                    .size(vk::WHOLE_SIZE)
+            })
+            .collect();
+        // SAFETY: recording command buffer; barrier structs are valid for the call.
+        unsafe {
+            self.dev().cmd_pipeline_barrier(
+                self.raw,
+                src,
+                dst,
+                vk::DependencyFlags::empty(),
+                &[],
+                &buffer_barriers,
+                &image_barriers,
+            )
+        };
+    }
+
+    /// Open a debug-utils label (RenderDoc and the validation layer show it).
+    pub fn begin_label(&self, name: &str) {
+        if let Some(du) = &self.ctx.debug_utils_device {
+            let name = CString::new(name).unwrap_or_default();
+            let label = vk::DebugUtilsLabelEXT::default().label_name(&name);
+            // SAFETY: recording command buffer.
+            unsafe { du.cmd_begin_debug_utils_label(self.raw, &label) };
+        }
+    }
+
+    pub fn end_label(&self) {
+        if let Some(du) = &self.ctx.debug_utils_device {
+            // SAFETY: paired with begin_label.
+            unsafe { du.cmd_end_debug_utils_label(self.raw) };
+        }
+    }
+
+    /// Begin `pass` on `fb` and set the viewport and scissor to the framebuffer.
+    pub fn begin_render_pass(&self, pass: &RenderPass, fb: &Framebuffer, clears: &[Clear]) {
+        let values: Vec<vk::ClearValue> = clears
+            .iter()
+            .map(|c| match *c {
+                Clear::Color(v) => vk::ClearValue { color: vk::ClearColorValue { float32: v } },
+                Clear::Depth(d) => vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: d, stencil: 0 } },
+                Clear::None => vk::ClearValue::default(),
+            })
+            .collect();
+        let info = vk::RenderPassBeginInfo::default()
+            .render_pass(pass.raw)
+            .framebuffer(fb.raw)
+            .render_area(vk::Rect2D { offset: vk::Offset2D::default(), extent: fb.extent })
+            .clear_values(&values);
+        // SAFETY: recording, outside any render pass.
+        unsafe { self.dev().cmd_begin_render_pass(self.raw, &info, vk::SubpassContents::INLINE) };
+        self.set_viewport(fb.extent);
+    }
+
+    pub fn set_viewport(&self, extent: vk::Extent2D) {
+        let viewport = vk::Viewport {
+            x: 0.0,
+            y: 0.0,
+            width: extent.width as f32,
+            height: extent.height as f32,
+            min_depth: 0.0,
+            max_depth: 1.0,
+        };
+        let scissor = vk::Rect2D { offset: vk::Offset2D::default(), extent };
+        // SAFETY: recording; dynamic state declared by every graphics pipeline.
+        unsafe {
+            self.dev().cmd_set_viewport(self.raw, 0, &[viewport]);
+            self.dev().cmd_set_scissor(self.raw, 0, &[scissor]);
+        }
+    }
+
+    pub fn end_render_pass(&self) {
+        // SAFETY: inside a render pass begun by begin_render_pass.
+        unsafe { self.dev().cmd_end_render_pass(self.raw) };
+    }
+
+    pub fn bind_graphics(&self, p: &GraphicsPipeline, sets: &[DescriptorSet]) {
+        // SAFETY: recording; sets are compatible with the pipeline's layout.
+        unsafe {
+            self.dev().cmd_bind_pipeline(self.raw, vk::PipelineBindPoint::GRAPHICS, p.raw);
+            if !sets.is_empty() {
+                let raw: Vec<_> = sets.iter().map(|s| s.raw).collect();
+                self.dev().cmd_bind_descriptor_sets(self.raw, vk::PipelineBindPoint::GRAPHICS, p.layout, 0, &raw, &[]);
+            }
+        }
+    }
+
+    pub fn bind_compute(&self, p: &ComputePipeline, sets: &[DescriptorSet]) {
+        // SAFETY: as bind_graphics.
+        unsafe {
+            self.dev().cmd_bind_pipeline(self.raw, vk::PipelineBindPoint::COMPUTE, p.raw);
+            if !sets.is_empty() {
+                let raw: Vec<_> = sets.iter().map(|s| s.raw).collect();
+                self.dev().cmd_bind_descriptor_sets(self.raw, vk::PipelineBindPoint::COMPUTE, p.layout, 0, &raw, &[]);
+            }
+        }
+    }
+
+    /// Push constants for the graphics pipeline `p` (all stages).
+    pub fn push_graphics<T: bytemuck::Pod>(&self, p: &GraphicsPipeline, value: &T) {
+        // SAFETY: the layout declares a range for all stages at offset 0 of at least this size.
+        unsafe {
+            self.dev()
+                .cmd_push_constants(self.raw, p.layout, vk::ShaderStageFlags::ALL, 0, bytemuck::bytes_of(value))
+        };
+    }
+
+    pub fn push_compute<T: bytemuck::Pod>(&self, p: &ComputePipeline, value: &T) {
+        // SAFETY: as push_graphics.
+        unsafe {
+            self.dev()
+                .cmd_push_constants(self.raw, p.layout, vk::ShaderStageFlags::ALL, 0, bytemuck::bytes_of(value))
+        };
+    }
+
+    pub fn bind_mesh_buffers(&self, vertices: &Buffer, indices: &Buffer) {
+        // SAFETY: recording; buffers were created with VERTEX/INDEX usage.
+        unsafe {
+            self.dev().cmd_bind_vertex_buffers(self.raw, 0, &[vertices.raw], &[0]);
+            self.dev().cmd_bind_index_buffer(self.raw, indices.raw, 0, vk::IndexType::UINT32);
+        }
+    }
+
+    pub fn draw(&self, vertices: u32, instances: u32) {
+        // SAFETY: recording inside a render pass with a bound graphics pipeline.
+        unsafe { self.dev().cmd_draw(self.raw, vertices, instances, 0, 0) };
+    }
+
+    pub fn draw_indexed(&self, index_count: u32, first_index: u32, vertex_offset: i32) {
+        // SAFETY: as draw, with bound index/vertex buffers.
+        unsafe { self.dev().cmd_draw_indexed(self.raw, index_count, 1, first_index, vertex_offset, 0) };
+    }
+
+    pub fn dispatch(&self, x: u32, y: u32, z: u32) {
+        // SAFETY: recording outside a render pass with a bound compute pipeline.
+        unsafe { self.dev().cmd_dispatch(self.raw, x, y, z) };
+    }
+
+    pub fn write_timestamp(&self, pool: &TimestampPool, query: u32, stage: vk::PipelineStageFlags) {
+        // SAFETY: query < pool size; the pool was reset this frame.
+        unsafe { self.dev().cmd_write_timestamp(self.raw, stage, pool.raw, query) };
+    }
+
+    pub fn reset_queries(&self, pool: &TimestampPool) {
+        // SAFETY: recording outside a render pass.
+        unsafe { self.dev().cmd_reset_query_pool(self.raw, pool.raw, 0, pool.capacity) };
+    }
+
+    /// Copy every layer of `image` (in TRANSFER_SRC_OPTIMAL) tightly into `buffer`.
+    pub fn copy_image_to_buffer(&self, image: &Image, buffer: &Buffer) {
+        let region = vk::BufferImageCopy {
+            buffer_offset: 0,
+            buffer_row_length: 0,
+            buffer_image_height: 0,
+            image_subresource: vk::ImageSubresourceLayers {
+                aspect_mask: image.aspect(),
+                mip_level: 0,
+                base_array_layer: 0,
+                layer_count: image.layers(),
+            },
+            image_offset: vk::Offset3D::default(),
+            image_extent: vk::Extent3D { width: image.desc.width, height: image.desc.height, depth: 1 },
+        };
+        // SAFETY: the caller transitioned the image to TRANSFER_SRC_OPTIMAL; buffer is large enough.
+        unsafe {
+            self.dev().cmd_copy_image_to_buffer(
+                self.raw,
+                image.raw,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                buffer.raw,
+                &[region],
+            )
+        };
+    }
+
+    /// Copy `buffer` into every layer of `image` (in TRANSFER_DST_OPTIMAL).
+    pub fn copy_buffer_to_image(&self, buffer: &Buffer, image: &Image) {
+        let region = vk::BufferImageCopy {
+            buffer_offset: 0,
+            buffer_row_length: 0,
+            buffer_image_height: 0,
+            image_subresource: vk::ImageSubresourceLayers {
+                aspect_mask: image.aspect(),
+                mip_level: 0,
+                base_array_layer: 0,
+                layer_count: image.layers(),
+            },
+            image_offset: vk::Offset3D::default(),
+            image_extent: vk::Extent3D { width: image.desc.width, height: image.desc.height, depth: 1 },
+        };
+        // SAFETY: the caller transitioned the image to TRANSFER_DST_OPTIMAL; buffer holds the texels.
+        unsafe {
+            self.dev().cmd_copy_buffer_to_image(
+                self.raw,
+                buffer.raw,
+                image.raw,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &[region],
+            )
+        };
+    }
+
+    /// Clear every layer of a colour image (in TRANSFER_DST_OPTIMAL).
+    pub fn clear_color_image(&self, image: &Image, value: [f32; 4]) {
+        let range = vk::ImageSubresourceRange {
+            aspect_mask: vk::ImageAspectFlags::COLOR,
+            base_mip_level: 0,
+            level_count: 1,
+            base_array_layer: 0,
+            layer_count: image.layers(),
+        };
+        // SAFETY: the caller transitioned the image to TRANSFER_DST_OPTIMAL.
+        unsafe {
+            self.dev().cmd_clear_color_image(
+                self.raw,
+                image.raw,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &vk::ClearColorValue { float32: value },
+                &[range],
+            )
+        };
+    }
+
+    /// Fill a buffer with a repeated u32 (clearing counters and accumulation buffers).
+    pub fn fill_buffer(&self, buffer: &Buffer, value: u32) {
+        // SAFETY: recording outside a render pass; buffer has TRANSFER_DST usage.
+        unsafe { self.dev().cmd_fill_buffer(self.raw, buffer.raw, 0, vk::WHOLE_SIZE, value) };
+    }
+}
+
+/// Command buffers and fences for `frames` frames in flight.
+pub struct CommandPool {
+    ctx: Arc<GpuContext>,
+    pool: vk::CommandPool,
+    buffers: Vec<vk::CommandBuffer>,
+    fences: Vec<vk::Fence>,
+    /// Submission serial of each slot's last submit (0 = never submitted).
+    serials: Vec<u64>,
+}
+
+impl CommandPool {
+    pub fn new(ctx: &Arc<GpuContext>, frames: u32) -> GpuResult<CommandPool> {
+        let device = ctx.raw();
+        let info = vk::CommandPoolCreateInfo::default()
+            .queue_family_index(ctx.queue_family)
+            .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
+        // SAFETY: valid create infos throughout.
+        let pool = unsafe { device.create_command_pool(&info, None) }.vk("vkCreateCommandPool")?;
+        let alloc = vk::CommandBufferAllocateInfo::default()
+            .command_pool(pool)
+            .level(vk::CommandBufferLevel::PRIMARY)
+            .command_buffer_count(frames);
+        let buffers = unsafe { device.allocate_command_buffers(&alloc) }.vk("vkAllocateCommandBuffers")?;
+        let mut fences = Vec::new();
+        for i in 0..frames {
+            let f = unsafe { device.create_fence(&vk::FenceCreateInfo::default().flags(vk::FenceCreateFlags::SIGNALED), None) }
+                .vk("vkCreateFence")?;
+            ctx.set_name(f, &format!("frame_fence_{i}"));
+            ctx.set_name(buffers[i as usize], &format!("frame_cmd_{i}"));
+            fences.push(f);
+        }
+        Ok(CommandPool { ctx: ctx.clone(), pool, buffers, fences, serials: vec![0; frames as usize] })
+    }
+
+    pub fn frames(&self) -> usize {
+        self.buffers.len()
+    }
+
+    /// Wait for slot `i`'s previous submission (its results are then readable), without
+    /// starting a new recording. Returns whether the slot had been submitted before.
+    pub fn wait(&mut self, i: usize) -> GpuResult<bool> {
+        // SAFETY: fence belongs to this device.
+        unsafe { self.ctx.raw().wait_for_fences(&[self.fences[i]], true, u64::MAX) }.vk("vkWaitForFences")?;
+        let had = self.serials[i] != 0;
+        if had {
+            self.ctx.mark_completed(self.serials[i]);
+        }
+        Ok(had)
+    }
+
+    /// Wait for slot `i`, then begin recording into its command buffer.
+    pub fn begin(&mut self, i: usize) -> GpuResult<Cmd<'_>> {
+        self.wait(i)?;
+        let device = self.ctx.raw();
+        // SAFETY: the slot's previous submission has completed (fence waited above).
+        unsafe {
+            device.reset_fences(&[self.fences[i]]).vk("vkResetFences")?;
+            device
+                .reset_command_buffer(self.buffers[i], vk::CommandBufferResetFlags::empty())
+                .vk("vkResetCommandBuffer")?;
+            device
+                .begin_command_buffer(
+                    self.buffers[i],
+                    &vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
+                )
+                .vk("vkBeginCommandBuffer")?;
+        }
+        Ok(Cmd::wrap(&self.ctx, self.buffers[i]))
+    }
+
+    /// End and submit slot `i`.
+    pub fn submit(&mut self, i: usize) -> GpuResult<()> {
+        // SAFETY: slot i is recording (begin was called).
+        unsafe { self.ctx.raw().end_command_buffer(self.buffers[i]) }.vk("vkEndCommandBuffer")?;
+        self.serials[i] = self.ctx.submit(self.buffers[i], self.fences[i])?;
+        Ok(())
+    }
+}
+
+impl Drop for CommandPool {
+    fn drop(&mut self) {
+        // SAFETY: wait for every slot, then destroy; nothing else references these objects.
+        unsafe {
+            let _ = self.ctx.raw().wait_for_fences(&self.fences, true, u64::MAX);
+            for &f in &self.fences {
+                self.ctx.raw().destroy_fence(f, None);
+            }
+            self.ctx.raw().destroy_command_pool(self.pool, None);
+        }
+    }
+}

@@ -1,0 +1,57 @@
+//! The gpu layer: the only module that makes raw `ash` calls (../shared/DESIGN.md, rule 1).
+//!
+//! Everything above it (frame graph, passes, app) works with the small wrappers here:
+//! [`GpuContext`] owns the instance, device, queue, allocator and the deferred-deletion
+//! queue; [`Buffer`] and [`Image`] free themselves after the last frame that used them;
+//! [`Cmd`] records commands; [`Access`] names how a pass touches a resource so that the
+//! frame graph can derive barriers.
+
+mod buffer;
+mod command;
+mod context;
+mod debug;
+mod descriptor;
+mod error;
+mod image;
+mod pipeline;
+mod render_pass;
+mod sync;
+mod timing;
+
+pub use ash::vk;
+pub use buffer::Buffer;
+pub use command::{Clear, Cmd, CommandPool};
+pub use context::{ContextDesc, DeviceInfo, GpuContext};
+pub use descriptor::{DescriptorSet, DescriptorSetLayout, DescriptorWrite};
+pub use error::{GpuError, GpuResult};
+pub use image::{Image, ImageDesc, ImageViewKind, Sampler, SamplerDesc};
+pub use pipeline::{
+    Blend, ComputePipeline, DepthState, GraphicsPipeline, GraphicsPipelineDesc, PipelineLayout,
+    VertexLayout,
+};
+pub use render_pass::{Attachment, Framebuffer, RenderPass, RenderPassDesc};
+pub use sync::{Access, BufferBarrier, ImageBarrier};
+pub use timing::{TimestampPool, TimestampQuery};
+
+pub use gpu_allocator::MemoryLocation;
+
+/// SPIR-V of every shader under `glsl/`, compiled by build.rs.
+mod shaders {
+    include!(concat!(env!("OUT_DIR"), "/shaders.rs"));
+}
+
+/// The SPIR-V words of the shader at `path` (relative to `glsl/`, e.g. `"gbuffer/gbuffer.vert"`).
+pub fn shader_spirv(path: &str) -> GpuResult<Vec<u32>> {
+    let bytes = shaders::SHADERS
+        .iter()
+        .find(|(p, _)| *p == path)
+        .map(|(_, b)| *b)
+        .ok_or_else(|| GpuError::MissingShader(path.to_string()))?;
+    ash::util::read_spv(&mut std::io::Cursor::new(bytes))
+        .map_err(|e| GpuError::InvalidShader(path.to_string(), e.to_string()))
+}
+
+/// Names of every embedded shader (for tests and `--help` diagnostics).
+pub fn shader_names() -> impl Iterator<Item = &'static str> {
+    shaders::SHADERS.iter().map(|(p, _)| *p)
+}

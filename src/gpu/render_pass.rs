@@ -1,0 +1,127 @@
+//! Explicit `VkRenderPass` objects described by a small key (wgpu-hal's `RenderPassKey`).
+//! Initial layout = final layout = the attachment layout; the frame graph does every
+//! transition outside the pass (kajiya), so a pass never changes a layout behind its back.
+use std::sync::Arc;
+
+use ash::vk;
+
+use super::context::GpuContext;
+use super::error::{GpuResult, VkContext};
+use super::image::aspect_of;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Attachment {
+    pub format: vk::Format,
+    /// Clear on load (true) or keep the previous contents (false).
+    pub clear: bool,
+}
+
+#[derive(Clone, Debug, PartialEq, Eq, Hash, Default)]
+pub struct RenderPassDesc {
+    pub colors: Vec<Attachment>,
+    pub depth: Option<Attachment>,
+    /// The depth attachment is only tested, not written (read-only layout).
+    pub depth_read_only: bool,
+}
+
+pub struct RenderPass {
+    ctx: Arc<GpuContext>,
+    pub(crate) raw: vk::RenderPass,
+    pub desc: RenderPassDesc,
+}
+
+impl RenderPass {
+    pub fn new(ctx: &Arc<GpuContext>, name: &str, desc: &RenderPassDesc) -> GpuResult<RenderPass> {
+        let load = |a: &Attachment| if a.clear { vk::AttachmentLoadOp::CLEAR } else { vk::AttachmentLoadOp::LOAD };
+        let mut attachments = Vec::new();
+        let mut color_refs = Vec::new();
+        for (i, c) in desc.colors.iter().enumerate() {
+            attachments.push(
+                vk::AttachmentDescription::default()
+                    .format(c.format)
+                    .samples(vk::SampleCountFlags::TYPE_1)
+                    .load_op(load(c))
+                    .store_op(vk::AttachmentStoreOp::STORE)
+                    .stencil_load_op(vk::AttachmentLoadOp::DONT_CARE)
+                    .stencil_store_op(vk::AttachmentStoreOp::DONT_CARE)
+                    .initial_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+                    .final_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL),
+            );
+            color_refs.push(vk::AttachmentReference { attachment: i as u32, layout: vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL });
+        }
+        let depth_layout = if desc.depth_read_only {
+            vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL
+        } else {
+            vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL
+        };
+        let depth_ref = desc.depth.map(|d| {
+            let has_stencil = aspect_of(d.format).contains(vk::ImageAspectFlags::STENCIL);
+            attachments.push(
+                vk::AttachmentDescription::default()
+                    .format(d.format)
+                    .samples(vk::SampleCountFlags::TYPE_1)
+                    .load_op(load(&d))
+                    .store_op(vk::AttachmentStoreOp::STORE)
+                    .stencil_load_op(if has_stencil { load(&d) } else { vk::AttachmentLoadOp::DONT_CARE })
+                    .stencil_store_op(vk::AttachmentStoreOp::DONT_CARE)
+                    .initial_layout(depth_layout)
+                    .final_layout(depth_layout),
+            );
+            vk::AttachmentReference { attachment: desc.colors.len() as u32, layout: depth_layout }
+        });
+        let mut subpass = vk::SubpassDescription::default()
+            .pipeline_bind_point(vk::PipelineBindPoint::GRAPHICS)
+            .color_attachments(&color_refs);
+        if let Some(d) = depth_ref.as_ref() {
+            subpass = subpass.depth_stencil_attachment(d);
+        }
+        let subpasses = [subpass];
+        let info = vk::RenderPassCreateInfo::default().attachments(&attachments).subpasses(&subpasses);
+        // SAFETY: valid create info; referenced arrays live for the call.
+        let raw = unsafe { ctx.raw().create_render_pass(&info, None) }.vk("vkCreateRenderPass")?;
+        ctx.set_name(raw, name);
+        Ok(RenderPass { ctx: ctx.clone(), raw, desc: desc.clone() })
+    }
+}
+
+impl Drop for RenderPass {
+    fn drop(&mut self) {
+        // SAFETY: render passes are dropped with their owner after the device is idle.
+        unsafe { self.ctx.raw().destroy_render_pass(self.raw, None) };
+    }
+}
+
+pub struct Framebuffer {
+    ctx: Arc<GpuContext>,
+    pub(crate) raw: vk::Framebuffer,
+    pub extent: vk::Extent2D,
+}
+
+impl Framebuffer {
+    /// `views` in attachment order (colours, then depth).
+    pub fn new(
+        ctx: &Arc<GpuContext>,
+        name: &str,
+        pass: &RenderPass,
+        views: &[vk::ImageView],
+        extent: vk::Extent2D,
+    ) -> GpuResult<Framebuffer> {
+        let info = vk::FramebufferCreateInfo::default()
+            .render_pass(pass.raw)
+            .attachments(views)
+            .width(extent.width)
+            .height(extent.height)
+            .layers(1);
+        // SAFETY: views match the pass's attachments.
+        let raw = unsafe { ctx.raw().create_framebuffer(&info, None) }.vk("vkCreateFramebuffer")?;
+        ctx.set_name(raw, name);
+        Ok(Framebuffer { ctx: ctx.clone(), raw, extent })
+    }
+}
+
+impl Drop for Framebuffer {
+    fn drop(&mut self) {
+        // SAFETY: dropped with its owner after the device is idle.
+        unsafe { self.ctx.raw().destroy_framebuffer(self.raw, None) };
+    }
+}

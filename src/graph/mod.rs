@@ -1,0 +1,361 @@
+//! A small linear frame graph (../shared/DESIGN.md, rule 3).
+//!
+//! Passes run in the order they are added. Each declares the resources it reads and writes
+//! with an [`Access`]; a per-resource "last access" table, kept across frames, turns each
+//! pair of accesses into the barrier and layout transition Vulkan needs. Passes therefore
+//! never record a barrier themselves. Every pass is wrapped in the same debug label and
+//! pair of timestamps, under one snake_case name (rule 5).
+use std::collections::HashSet;
+
+use crate::gpu::{vk, Access, Buffer, BufferBarrier, Cmd, Image, ImageBarrier, TimestampPool, TimestampQuery};
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct ImageId(usize);
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct BufferId(usize);
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+enum Res {
+    Image(usize),
+    Buffer(usize),
+}
+
+/// What the graph remembers about a resource between passes and between frames.
+#[derive(Clone, Copy, Debug)]
+struct State {
+    layout: vk::ImageLayout,
+    /// Stages and access of the last write (or layout transition), if any since creation.
+    last_write: Option<(vk::PipelineStageFlags, vk::AccessFlags)>,
+    /// Stages to which the last write has already been made visible.
+    visible: vk::PipelineStageFlags,
+    /// Stages that read the resource since the last write (for write-after-read).
+    reads: vk::PipelineStageFlags,
+}
+
+impl State {
+    const NEW: State = State {
+        layout: vk::ImageLayout::UNDEFINED,
+        last_write: None,
+        visible: vk::PipelineStageFlags::empty(),
+        reads: vk::PipelineStageFlags::empty(),
+    };
+}
+
+struct ImageSlot {
+    raw: vk::Image,
+    aspect: vk::ImageAspectFlags,
+    layers: u32,
+    depth: bool,
+    name: String,
+    state: State,
+}
+
+struct BufferSlot {
+    raw: vk::Buffer,
+    name: String,
+    state: State,
+}
+
+/// The resources known to the graph and their last access. Lives as long as the renderer.
+#[derive(Default)]
+pub struct FrameGraph {
+    images: Vec<ImageSlot>,
+    buffers: Vec<BufferSlot>,
+    skip_barriers: HashSet<Res>,
+}
+
+/// The src/dst half of a barrier computed for one access.
+struct Transition {
+    src_stages: vk::PipelineStageFlags,
+    src_access: vk::AccessFlags,
+    dst_stages: vk::PipelineStageFlags,
+    dst_access: vk::AccessFlags,
+    old_layout: vk::ImageLayout,
+    new_layout: vk::ImageLayout,
+}
+
+/// Update `state` for `access` and return the barrier needed before it, if any.
+fn transition(state: &mut State, access: Access, depth: bool, is_image: bool) -> Option<Transition> {
+    let info = access.info(depth);
+    let new_layout = if is_image { info.layout } else { vk::ImageLayout::UNDEFINED };
+    let layout_change = is_image && state.layout != new_layout;
+    let (w_stages, w_access) = state.last_write.unwrap_or((vk::PipelineStageFlags::empty(), vk::AccessFlags::empty()));
+    let barrier = if info.writes || layout_change {
+        // Write-after-write, write-after-read, or a layout transition: wait for every earlier
+        // write and read, and make the last write available.
+        let src = w_stages | state.reads;
+        let t = Transition {
+            src_stages: if src.is_empty() { vk::PipelineStageFlags::TOP_OF_PIPE } else { src },
+            src_access: w_access,
+            dst_stages: info.stages,
+            dst_access: info.access,
+            old_layout: state.layout,
+            new_layout,
+        };
+        if info.writes {
+            state.last_write = Some((info.stages, info.access));
+            state.visible = vk::PipelineStageFlags::empty();
+            state.reads = vk::PipelineStageFlags::empty();
+        } else {
+            // A layout transition acts as a write completed before `info.stages`: later
+            // readers at other stages chain onto it with an execution dependency.
+            state.last_write = Some((info.stages, vk::AccessFlags::empty()));
+            state.visible = info.stages;
+            state.reads = info.stages;
+        }
+        state.layout = new_layout;
+        Some(t)
+    } else {
+        // Read-after-write: only if this stage has not yet seen the last write.
+        let needed = state.last_write.is_some() && !state.visible.contains(info.stages);
+        state.reads |= info.stages;
+        if needed {
+            state.visible |= info.stages;
+            Some(Transition {
+                src_stages: w_stages,
+                src_access: w_access,
+                dst_stages: info.stages,
+                dst_access: info.access,
+                old_layout: state.layout,
+                new_layout: state.layout,
+            })
+        } else {
+            None
+        }
+    };
+    barrier
+}
+
+impl FrameGraph {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    pub fn register_image(&mut self, image: &Image) -> ImageId {
+        let depth = image.aspect().contains(vk::ImageAspectFlags::DEPTH);
+        self.images.push(ImageSlot {
+            raw: image.raw,
+            aspect: image.aspect(),
+            layers: image.layers(),
+            depth,
+            name: image.name().to_string(),
+            state: State::NEW,
+        });
+        ImageId(self.images.len() - 1)
+    }
+
+    pub fn register_buffer(&mut self, buffer: &Buffer) -> BufferId {
+        self.buffers.push(BufferSlot { raw: buffer.raw, name: buffer.name.clone(), state: State::NEW });
+        BufferId(self.buffers.len() - 1)
+    }
+
+    /// The layout an image is in after the passes recorded so far.
+    pub fn image_layout(&self, id: ImageId) -> vk::ImageLayout {
+        self.images[id.0].state.layout
+    }
+
+    pub fn image_name(&self, id: ImageId) -> &str {
+        &self.images[id.0].name
+    }
+
+    pub fn buffer_name(&self, id: BufferId) -> &str {
+        &self.buffers[id.0].name
+    }
+
+    /// Test-only fault injection: record no barrier for this resource (the state table is
+    /// still updated). Lets a test prove that synchronization validation catches a missing
+    /// barrier, so that "zero validation errors" in the other tests means something.
+    #[doc(hidden)]
+    pub fn skip_barriers_for_tests(&mut self, id: ImageId) {
+        self.skip_barriers.insert(Res::Image(id.0));
+    }
+
+    #[doc(hidden)]
+    pub fn skip_buffer_barriers_for_tests(&mut self, id: BufferId) {
+        self.skip_barriers.insert(Res::Buffer(id.0));
+    }
+
+    /// Start a frame's pass list.
+    pub fn frame(&mut self) -> Frame<'_, '_> {
+        Frame { graph: self, passes: Vec::new() }
+    }
+
+    /// Record the barriers for `uses` into `cmd` (used by the executor and by readback).
+    fn apply(&mut self, cmd: &Cmd, uses: &[(Res, Access)]) {
+        let mut images = Vec::new();
+        let mut buffers = Vec::new();
+        for &(res, access) in uses {
+            let skip = self.skip_barriers.contains(&res);
+            match res {
+                Res::Image(i) => {
+                    let slot = &mut self.images[i];
+                    if let Some(t) = transition(&mut slot.state, access, slot.depth, true) {
+                        if !skip {
+                            images.push(ImageBarrier {
+                                image: slot.raw,
+                                aspect: slot.aspect,
+                                layers: slot.layers,
+                                src_stages: t.src_stages,
+                                src_access: t.src_access,
+                                dst_stages: t.dst_stages,
+                                dst_access: t.dst_access,
+                                old_layout: t.old_layout,
+                                new_layout: t.new_layout,
+                            });
+                        }
+                    }
+                }
+                Res::Buffer(i) => {
+                    let slot = &mut self.buffers[i];
+                    if let Some(t) = transition(&mut slot.state, access, false, false) {
+                        if !skip {
+                            buffers.push(BufferBarrier {
+                                buffer: slot.raw,
+                                src_stages: t.src_stages,
+                                src_access: t.src_access,
+                                dst_stages: t.dst_stages,
+                                dst_access: t.dst_access,
+                            });
+                        }
+                    }
+                }
+            }
+        }
+        cmd.barriers(&images, &buffers);
+    }
+
+    /// Declare accesses outside any pass (uploads, readbacks) and record their barriers now.
+    pub fn access_now(&mut self, cmd: &Cmd, images: &[(ImageId, Access)], buffers: &[(BufferId, Access)]) {
+        let uses: Vec<_> = images
+            .iter()
+            .map(|&(id, a)| (Res::Image(id.0), a))
+            .chain(buffers.iter().map(|&(id, a)| (Res::Buffer(id.0), a)))
+            .collect();
+        self.apply(cmd, &uses);
+    }
+}
+
+type RecordFn<'a> = Box<dyn FnOnce(&Cmd) + 'a>;
+
+struct PassNode<'a> {
+    name: String,
+    uses: Vec<(Res, Access)>,
+    record: RecordFn<'a>,
+}
+
+/// One frame's list of passes, executed in order.
+pub struct Frame<'g, 'a> {
+    graph: &'g mut FrameGraph,
+    passes: Vec<PassNode<'a>>,
+}
+
+/// Builder for one pass: declare its accesses, then give the recording closure.
+pub struct PassBuilder<'f, 'g, 'a> {
+    frame: &'f mut Frame<'g, 'a>,
+    name: String,
+    uses: Vec<(Res, Access)>,
+}
+
+impl<'g, 'a> Frame<'g, 'a> {
+    /// Add a pass named `name` (snake_case: it is also the timing and golden-image name).
+    pub fn pass(&mut self, name: &str) -> PassBuilder<'_, 'g, 'a> {
+        PassBuilder { frame: self, name: name.to_string(), uses: Vec::new() }
+    }
+
+    pub fn pass_names(&self) -> Vec<&str> {
+        self.passes.iter().map(|p| p.name.as_str()).collect()
+    }
+
+    /// Record every pass into `cmd`: barriers, label, timestamps, the pass's commands.
+    /// Returns the timestamp query pairs written (if a pool is given).
+    pub fn execute(self, cmd: &Cmd, timestamps: Option<&TimestampPool>) -> Vec<TimestampQuery> {
+        let Frame { graph, passes } = self;
+        let mut queries = Vec::new();
+        if let Some(pool) = timestamps {
+            cmd.reset_queries(pool);
+        }
+        for (i, pass) in passes.into_iter().enumerate() {
+            graph.apply(cmd, &pass.uses);
+            cmd.begin_label(&pass.name);
+            let q = timestamps.filter(|p| 2 * i as u32 + 1 < p.capacity());
+            if let Some(pool) = q {
+                cmd.write_timestamp(pool, 2 * i as u32, vk::PipelineStageFlags::TOP_OF_PIPE);
+            }
+            (pass.record)(cmd);
+            if let Some(pool) = q {
+                cmd.write_timestamp(pool, 2 * i as u32 + 1, vk::PipelineStageFlags::BOTTOM_OF_PIPE);
+                queries.push(TimestampQuery { name: pass.name.clone(), start: 2 * i as u32, end: 2 * i as u32 + 1 });
+            }
+            cmd.end_label();
+        }
+        queries
+    }
+}
+
+impl<'f, 'g, 'a> PassBuilder<'f, 'g, 'a> {
+    pub fn read(mut self, id: ImageId, access: Access) -> Self {
+        self.uses.push((Res::Image(id.0), access));
+        self
+    }
+    pub fn write(mut self, id: ImageId, access: Access) -> Self {
+        self.uses.push((Res::Image(id.0), access));
+        self
+    }
+    pub fn read_buffer(mut self, id: BufferId, access: Access) -> Self {
+        self.uses.push((Res::Buffer(id.0), access));
+        self
+    }
+    pub fn write_buffer(mut self, id: BufferId, access: Access) -> Self {
+        self.uses.push((Res::Buffer(id.0), access));
+        self
+    }
+    /// Finish the pass with the closure that records its commands.
+    pub fn record(self, f: impl FnOnce(&Cmd) + 'a) {
+        self.frame.passes.push(PassNode { name: self.name, uses: self.uses, record: Box::new(f) });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn write_then_read_needs_one_barrier_per_new_stage() {
+        let mut s = State::NEW;
+        let t = transition(&mut s, Access::ColorAttachment, false, true).unwrap();
+        assert_eq!(t.old_layout, vk::ImageLayout::UNDEFINED);
+        assert_eq!(t.new_layout, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL);
+        let t = transition(&mut s, Access::FragmentSampled, false, true).unwrap();
+        assert_eq!(t.src_stages, vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT);
+        assert_eq!(t.src_access, vk::AccessFlags::COLOR_ATTACHMENT_READ | vk::AccessFlags::COLOR_ATTACHMENT_WRITE);
+        assert_eq!(t.new_layout, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL);
+        // Same stage again: nothing to do.
+        assert!(transition(&mut s, Access::FragmentSampled, false, true).is_none());
+        // A vertex-shader read (caustic splatting) has not seen the write's transition yet.
+        let t = transition(&mut s, Access::VertexSampled, false, true).unwrap();
+        assert_eq!(t.dst_stages, vk::PipelineStageFlags::VERTEX_SHADER);
+        // Writing again must wait for both readers (write-after-read).
+        let t = transition(&mut s, Access::ColorAttachment, false, true).unwrap();
+        assert!(t.src_stages.contains(vk::PipelineStageFlags::FRAGMENT_SHADER | vk::PipelineStageFlags::VERTEX_SHADER));
+    }
+
+    #[test]
+    fn buffers_have_no_layouts_and_storage_writes_serialise() {
+        let mut s = State::NEW;
+        let t = transition(&mut s, Access::ComputeWrite, false, false).unwrap();
+        assert_eq!(t.new_layout, vk::ImageLayout::UNDEFINED);
+        let t = transition(&mut s, Access::ComputeWrite, false, false).unwrap();
+        assert_eq!(t.src_access, vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE);
+        let t = transition(&mut s, Access::IndirectArgs, false, false).unwrap();
+        assert_eq!(t.dst_stages, vk::PipelineStageFlags::DRAW_INDIRECT);
+    }
+
+    #[test]
+    fn depth_sampling_uses_the_read_only_depth_layout() {
+        let mut s = State::NEW;
+        transition(&mut s, Access::DepthAttachment, true, true);
+        let t = transition(&mut s, Access::FragmentSampled, true, true).unwrap();
+        assert_eq!(t.new_layout, vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL);
+    }
+}

@@ -1,0 +1,85 @@
+//! G-buffer: the first visible surface of every object, as MRT (see glsl/gbuffer/gbuffer.frag
+//! for what each channel encodes) plus reversed-Z depth.
+use std::sync::Arc;
+
+use crate::gpu::{
+    vk, Access, Attachment, Blend, Clear, DepthState, DescriptorSet, DescriptorSetLayout, Framebuffer, GpuContext,
+    GpuResult, GraphicsPipeline, GraphicsPipelineDesc, PipelineLayout, RenderPass, RenderPassDesc, VertexLayout,
+};
+use crate::graph::Frame;
+use crate::renderer::gpu_scene::GpuScene;
+use crate::renderer::plan::GBUFFER;
+use crate::renderer::targets::Targets;
+
+pub struct GBufferPass {
+    render_pass: RenderPass,
+    _layout: PipelineLayout,
+    pipeline: GraphicsPipeline,
+    framebuffer: Framebuffer,
+}
+
+impl GBufferPass {
+    pub fn new(ctx: &Arc<GpuContext>, frame_layout: &DescriptorSetLayout, targets: &Targets) -> GpuResult<Self> {
+        let render_pass = RenderPass::new(
+            ctx,
+            GBUFFER,
+            &RenderPassDesc {
+                colors: vec![
+                    Attachment { format: targets.gbuf_normal.format(), clear: true },
+                    Attachment { format: targets.gbuf_albedo.format(), clear: true },
+                ],
+                depth: Some(Attachment { format: targets.depth.format(), clear: true }),
+                depth_read_only: false,
+            },
+        )?;
+        let layout = PipelineLayout::new(ctx, GBUFFER, &[frame_layout], 4)?;
+        let pipeline = GraphicsPipeline::new(
+            ctx,
+            &GraphicsPipelineDesc {
+                name: GBUFFER,
+                vertex_shader: "common/mesh.vert",
+                fragment_shader: "gbuffer/gbuffer.frag",
+                vertex: VertexLayout::Mesh,
+                topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+                // No culling: quads are one-sided and the camera may sit inside a refractor.
+                cull: vk::CullModeFlags::NONE,
+                depth: DepthState::REVERSED_Z,
+                blend: &[Blend::Off, Blend::Off],
+                specialization: &[],
+            },
+            &layout,
+            &render_pass,
+        )?;
+        let framebuffer = Framebuffer::new(
+            ctx,
+            GBUFFER,
+            &render_pass,
+            &[targets.gbuf_normal.view(), targets.gbuf_albedo.view(), targets.depth.view()],
+            targets.extent(),
+        )?;
+        Ok(GBufferPass { render_pass, _layout: layout, pipeline, framebuffer })
+    }
+
+    pub fn record<'a>(&'a self, frame: &mut Frame<'_, 'a>, scene: &'a GpuScene, targets: &Targets, frame_set: DescriptorSet) {
+        frame
+            .pass(GBUFFER)
+            .write(targets.gbuf_normal_id, Access::ColorAttachment)
+            .write(targets.gbuf_albedo_id, Access::ColorAttachment)
+            .write(targets.depth_id, Access::DepthAttachment)
+            .record(move |cmd| {
+                // Reversed Z: clear to 0 (infinitely far).
+                cmd.begin_render_pass(
+                    &self.render_pass,
+                    &self.framebuffer,
+                    &[Clear::Color([0.0; 4]), Clear::Color([0.0; 4]), Clear::Depth(0.0)],
+                );
+                cmd.bind_graphics(&self.pipeline, &[frame_set]);
+                cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
+                for d in &scene.draws {
+                    cmd.push_graphics(&self.pipeline, &d.material);
+                    cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
+                }
+                cmd.end_render_pass();
+            });
+    }
+}

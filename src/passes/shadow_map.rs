@@ -1,0 +1,94 @@
+//! Shadow maps: a cube of six faces for each point light, an orthographic map for each
+//! directional light, all layers of one R32F atlas holding the distance to the light
+//! (see glsl/shadow/shadow.frag for why distance rather than depth).
+use std::sync::Arc;
+
+use crate::gpu::{
+    vk, Access, Attachment, Blend, Clear, DepthState, Framebuffer, GpuContext, GpuResult, GraphicsPipeline,
+    GraphicsPipelineDesc, PipelineLayout, RenderPass, RenderPassDesc, VertexLayout,
+};
+use crate::graph::Frame;
+use crate::renderer::gpu_scene::{GpuScene, ShadowFace};
+use crate::renderer::gpu_types::ShadowPush;
+use crate::renderer::plan::SHADOW_MAP;
+use crate::renderer::targets::Targets;
+
+/// Cleared distance: "no occluder in this direction".
+pub const FAR_DISTANCE: f32 = 3.0e38;
+
+pub struct ShadowMapPass {
+    render_pass: RenderPass,
+    _layout: PipelineLayout,
+    pipeline: GraphicsPipeline,
+    framebuffers: Vec<Framebuffer>,
+    faces: Vec<ShadowFace>,
+}
+
+impl ShadowMapPass {
+    pub fn new(ctx: &Arc<GpuContext>, scene: &GpuScene, targets: &Targets) -> GpuResult<Self> {
+        let render_pass = RenderPass::new(
+            ctx,
+            SHADOW_MAP,
+            &RenderPassDesc {
+                colors: vec![Attachment { format: targets.shadow_atlas.format(), clear: true }],
+                depth: Some(Attachment { format: targets.shadow_depth.format(), clear: true }),
+                depth_read_only: false,
+            },
+        )?;
+        let layout = PipelineLayout::new(ctx, SHADOW_MAP, &[], std::mem::size_of::<ShadowPush>() as u32)?;
+        let pipeline = GraphicsPipeline::new(
+            ctx,
+            &GraphicsPipelineDesc {
+                name: SHADOW_MAP,
+                vertex_shader: "shadow/shadow.vert",
+                fragment_shader: "shadow/shadow.frag",
+                vertex: VertexLayout::Mesh,
+                topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+                // Both sides cast: open shapes (quads, the ring) have no back to rely on.
+                cull: vk::CullModeFlags::NONE,
+                depth: DepthState::LESS,
+                blend: &[Blend::Off],
+                specialization: &[],
+            },
+            &layout,
+            &render_pass,
+        )?;
+        let mut framebuffers = Vec::new();
+        for face in &scene.shadow_faces {
+            framebuffers.push(Framebuffer::new(
+                ctx,
+                &format!("shadow_face_{}", face.layer),
+                &render_pass,
+                &[targets.shadow_atlas.layer_view(face.layer), targets.shadow_depth.layer_view(face.layer)],
+                targets.shadow_atlas.extent(),
+            )?);
+        }
+        Ok(ShadowMapPass { render_pass, _layout: layout, pipeline, framebuffers, faces: scene.shadow_faces.clone() })
+    }
+
+    pub fn record<'a>(&'a self, frame: &mut Frame<'_, 'a>, scene: &'a GpuScene, targets: &Targets) {
+        frame
+            .pass(SHADOW_MAP)
+            .write(targets.shadow_atlas_id, Access::ColorAttachment)
+            .write(targets.shadow_depth_id, Access::DepthAttachment)
+            .record(move |cmd| {
+                for (face, fb) in self.faces.iter().zip(&self.framebuffers) {
+                    cmd.begin_render_pass(
+                        &self.render_pass,
+                        fb,
+                        &[Clear::Color([FAR_DISTANCE; 4]), Clear::Depth(1.0)],
+                    );
+                    cmd.bind_graphics(&self.pipeline, &[]);
+                    cmd.push_graphics(
+                        &self.pipeline,
+                        &ShadowPush { view_proj: face.view_proj.to_cols_array_2d(), light: face.light, origin: face.origin },
+                    );
+                    cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
+                    for d in &scene.draws {
+                        cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
+                    }
+                    cmd.end_render_pass();
+                }
+            });
+    }
+}

@@ -1,0 +1,310 @@
+//! The scene's GPU-side data: one vertex and index buffer for every object (baked to world
+//! space by the scene loader), the material table, the environment map, the irradiance of
+//! the environment for diffuse surfaces, and the light records with their shadow projections.
+use std::sync::Arc;
+
+use glam::{Mat4, Vec3};
+
+use crate::gpu::{vk, Buffer, GpuContext, Image, ImageDesc, MemoryLocation};
+use crate::graph::{FrameGraph, ImageId};
+use crate::scene::{Albedo, Environment, Light, Material, Scene};
+use crate::{LIGHT_DIRECTIONAL, LIGHT_POINT, MATERIAL_CONDUCTOR, MATERIAL_DIELECTRIC, MATERIAL_DIFFUSE, MATERIAL_MIRROR};
+use crate::{MAX_LIGHTS, SHADOW_LAYERS_PER_LIGHT};
+
+use super::gpu_types::{GpuLight, GpuMaterial, Vertex};
+use super::RenderError;
+
+/// One indexed draw of one object.
+#[derive(Clone, Copy, Debug)]
+pub struct Draw {
+    pub first_index: u32,
+    pub index_count: u32,
+    pub vertex_offset: i32,
+    pub material: u32,
+}
+
+/// A shadow-map face to render: which atlas layer, and the light-space transform.
+#[derive(Clone, Copy, Debug)]
+pub struct ShadowFace {
+    pub layer: u32,
+    pub view_proj: Mat4,
+    pub light: [f32; 4],
+    pub origin: [f32; 4],
+}
+
+pub struct GpuScene {
+    pub vertices: Buffer,
+    pub indices: Buffer,
+    pub draws: Vec<Draw>,
+    pub materials: Buffer,
+    pub environment: Image,
+    pub environment_id: ImageId,
+    pub env_sh: [[f32; 4]; 9],
+    pub lights: Vec<GpuLight>,
+    pub shadow_faces: Vec<ShadowFace>,
+    /// Centre and radius of a sphere bounding every object and the camera.
+    pub bounds_center: Vec3,
+    pub bounds_radius: f32,
+}
+
+fn v4(v: Vec3, w: f32) -> [f32; 4] {
+    [v.x, v.y, v.z, w]
+}
+
+pub fn gpu_material(m: &Material) -> GpuMaterial {
+    let kind = |k: u32| k as f32;
+    match m {
+        Material::Diffuse { albedo: Albedo::Constant(c) } => GpuMaterial {
+            albedo_a: v4(*c, kind(MATERIAL_DIFFUSE)),
+            ..Default::default()
+        },
+        Material::Diffuse { albedo: Albedo::Checker { a, b, size } } => GpuMaterial {
+            albedo_a: v4(*a, kind(MATERIAL_DIFFUSE)),
+            albedo_b: v4(*b, *size),
+            ..Default::default()
+        },
+        Material::Mirror { reflectance } => GpuMaterial {
+            albedo_a: v4(Vec3::ZERO, kind(MATERIAL_MIRROR)),
+            spec_a: v4(*reflectance, 0.0),
+            ..Default::default()
+        },
+        Material::Conductor { eta, k } => GpuMaterial {
+            albedo_a: v4(Vec3::ZERO, kind(MATERIAL_CONDUCTOR)),
+            spec_a: v4(*eta, 0.0),
+            spec_b: v4(*k, 0.0),
+            ..Default::default()
+        },
+        Material::Dielectric { ior, absorption } => GpuMaterial {
+            albedo_a: v4(Vec3::ZERO, kind(MATERIAL_DIELECTRIC)),
+            spec_a: v4(*ior, 0.0),
+            spec_b: v4(*absorption, 0.0),
+            ..Default::default()
+        },
+    }
+}
+
+/// Irradiance spherical-harmonic coefficients L_lm of a lat-long map (Ramamoorthi & Hanrahan
+/// 2001, Eq. 10): sum of L(d) Y_lm(d) dOmega over texels, dOmega = (2pi/W)(pi/H) sin(theta).
+pub fn environment_sh(width: u32, height: u32, texels: &[[f32; 4]]) -> [[f32; 4]; 9] {
+    let mut sh = [[0f64; 3]; 9];
+    let (w, h) = (width as usize, height as usize);
+    for j in 0..h {
+        let theta = (j as f64 + 0.5) / h as f64 * std::f64::consts::PI;
+        let d_omega = (2.0 * std::f64::consts::PI / w as f64) * (std::f64::consts::PI / h as f64) * theta.sin();
+        for i in 0..w {
+            let u = (i as f64 + 0.5) / w as f64;
+            // Inverse of u = 0.5 + atan2(x, -z) / (2 pi), v = acos(y) / pi.
+            let phi = (u - 0.5) * 2.0 * std::f64::consts::PI;
+            let (x, y, z) = (theta.sin() * phi.sin(), theta.cos(), -theta.sin() * phi.cos());
+            let basis = [
+                0.282095,
+                0.488603 * y,
+                0.488603 * z,
+                0.488603 * x,
+                1.092548 * x * y,
+                1.092548 * y * z,
+                0.315392 * (3.0 * z * z - 1.0),
+                1.092548 * x * z,
+                0.546274 * (x * x - y * y),
+            ];
+            let t = texels[j * w + i];
+            for (k, b) in basis.iter().enumerate() {
+                for c in 0..3 {
+                    sh[k][c] += t[c] as f64 * b * d_omega;
+                }
+            }
+        }
+    }
+    sh.map(|c| [c[0] as f32, c[1] as f32, c[2] as f32, 0.0])
+}
+
+/// View matrices of the six cube faces, in Vulkan's cube-map face order (+X, -X, +Y, -Y,
+/// +Z, -Z). The up vectors follow the cube-map addressing table of the Vulkan spec (16.5.4):
+/// for +X, s = -z and t = -y, so "up" in the face's view is -Y. Used with a projection that
+/// is *not* y-flipped, the rendered rows match the sampler's t axis.
+pub fn cube_face_views(eye: Vec3) -> [Mat4; 6] {
+    let f = |dir: Vec3, up: Vec3| Mat4::look_at_rh(eye, eye + dir, up);
+    [
+        f(Vec3::X, -Vec3::Y),
+        f(-Vec3::X, -Vec3::Y),
+        f(Vec3::Y, Vec3::Z),
+        f(-Vec3::Y, -Vec3::Z),
+        f(Vec3::Z, -Vec3::Y),
+        f(-Vec3::Z, -Vec3::Y),
+    ]
+}
+
+impl GpuScene {
+    pub fn new(ctx: &Arc<GpuContext>, scene: &Scene, graph: &mut FrameGraph, shadow_size: u32) -> Result<GpuScene, RenderError> {
+        if scene.lights.len() > MAX_LIGHTS as usize {
+            return Err(RenderError::Limit(format!(
+                "the scene has {} lights; prism supports at most {MAX_LIGHTS} (MAX_LIGHTS in src/shader_shared.rs)",
+                scene.lights.len()
+            )));
+        }
+        // Geometry: concatenate every object's world-space mesh.
+        let mut vertices: Vec<Vertex> = Vec::new();
+        let mut indices: Vec<u32> = Vec::new();
+        let mut draws = Vec::new();
+        let (mut lo, mut hi) = (scene.camera.position, scene.camera.position);
+        for o in &scene.objects {
+            let m = &o.mesh;
+            draws.push(Draw {
+                first_index: indices.len() as u32,
+                index_count: m.indices.len() as u32,
+                vertex_offset: vertices.len() as i32,
+                material: o.material as u32,
+            });
+            for k in 0..m.positions.len() {
+                let p = m.positions[k];
+                lo = lo.min(p);
+                hi = hi.max(p);
+                vertices.push(Vertex {
+                    position: p.to_array(),
+                    normal: m.normals[k].to_array(),
+                    checker_uv: m.checker_uv.get(k).copied().unwrap_or_default().to_array(),
+                });
+            }
+            indices.extend_from_slice(&m.indices);
+        }
+        let bounds_center = (lo + hi) * 0.5;
+        let bounds_radius = ((hi - lo).length() * 0.5).max(1e-6);
+        // Host-visible buffers: written once here, read by the GPU after the submission that
+        // follows (host writes are visible to every later queue submission).
+        let vertices = Buffer::with_data(ctx, "scene_vertices", bytemuck::cast_slice(&vertices), vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER)?;
+        let indices = Buffer::with_data(ctx, "scene_indices", bytemuck::cast_slice(&indices), vk::BufferUsageFlags::INDEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER)?;
+        let mats: Vec<GpuMaterial> = scene.materials.iter().map(gpu_material).collect();
+        let mats = if mats.is_empty() { vec![GpuMaterial::default()] } else { mats };
+        let materials = Buffer::with_data(ctx, "scene_materials", bytemuck::cast_slice(&mats), vk::BufferUsageFlags::STORAGE_BUFFER)?;
+
+        // Environment: always a texture (a constant is a 1x1 map) so one lookup serves all.
+        let (w, h, texels) = match &scene.environment {
+            Environment::Constant(c) => (1, 1, vec![[c.x, c.y, c.z, 1.0]]),
+            Environment::Image { width, height, texels, .. } => (*width, *height, texels.clone()),
+        };
+        let env_sh = environment_sh(w, h, &texels);
+        let environment = Image::new(
+            ctx,
+            &ImageDesc::d2("environment", vk::Format::R32G32B32A32_SFLOAT, w, h, vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST),
+        )?;
+        let environment_id = graph.register_image(&environment);
+        let staging = Buffer::new(ctx, "environment_staging", (texels.len() * 16) as u64, vk::BufferUsageFlags::TRANSFER_SRC, MemoryLocation::CpuToGpu)?;
+        let mut staging = staging;
+        staging.write(0, bytemuck::cast_slice(&texels));
+        ctx.one_shot(|cmd| {
+            graph.access_now(cmd, &[(environment_id, crate::gpu::Access::TransferWrite)], &[]);
+            cmd.copy_buffer_to_image(&staging, &environment);
+            graph.access_now(cmd, &[(environment_id, crate::gpu::Access::FragmentSampled)], &[]);
+        })?;
+        drop(staging);
+
+        // Lights and their shadow faces. Each light owns SHADOW_LAYERS_PER_LIGHT atlas layers.
+        let mut lights = Vec::new();
+        let mut shadow_faces = Vec::new();
+        let texel = 2.0 / shadow_size.max(1) as f32;
+        for (i, l) in scene.lights.iter().enumerate() {
+            let base = i as u32 * SHADOW_LAYERS_PER_LIGHT;
+            match l {
+                Light::Point { position, intensity } => {
+                    // Near/far bound every object from the light; near is small relative to
+                    // the scene so that tiny and huge scenes behave alike.
+                    let far = (position.distance(bounds_center) + bounds_radius) * 1.01;
+                    let near = (far * 1e-4).max(1e-9);
+                    let proj = Mat4::perspective_rh(std::f32::consts::FRAC_PI_2, 1.0, near, far);
+                    for (f, view) in cube_face_views(*position).iter().enumerate() {
+                        shadow_faces.push(ShadowFace {
+                            layer: base + f as u32,
+                            view_proj: proj * *view,
+                            light: v4(*position, LIGHT_POINT as f32),
+                            origin: [0.0; 4],
+                        });
+                    }
+                    lights.push(GpuLight {
+                        position: v4(*position, LIGHT_POINT as f32),
+                        intensity: v4(*intensity, base as f32),
+                        // A cube texel at distance r spans about 2r/size: offset by 1.5 texels.
+                        shadow: [near, far, 1.5 * texel, 1.0 / shadow_size.max(1) as f32],
+                        origin: [0.0; 4],
+                        view_proj: Mat4::IDENTITY.to_cols_array_2d(),
+                    });
+                }
+                Light::Directional { direction, irradiance } => {
+                    let dir = direction.normalize();
+                    let r = bounds_radius * 1.01;
+                    let origin = bounds_center - dir * r;
+                    let up = if dir.y.abs() > 0.99 { Vec3::Z } else { Vec3::Y };
+                    let view = Mat4::look_at_rh(origin, origin + dir, up);
+                    let proj = Mat4::orthographic_rh(-r, r, -r, r, 0.0, 2.0 * r);
+                    let view_proj = proj * view;
+                    shadow_faces.push(ShadowFace {
+                        layer: base,
+                        view_proj,
+                        light: v4(dir, LIGHT_DIRECTIONAL as f32),
+                        origin: v4(origin, 0.0),
+                    });
+                    lights.push(GpuLight {
+                        position: v4(dir, LIGHT_DIRECTIONAL as f32),
+                        intensity: v4(*irradiance, base as f32),
+                        // A texel spans 2r/size metres: offset by 1.5 texels.
+                        shadow: [0.0, 2.0 * r, 1.5 * 2.0 * r / shadow_size.max(1) as f32, 1.0 / shadow_size.max(1) as f32],
+                        origin: v4(origin, 0.0),
+                        view_proj: view_proj.to_cols_array_2d(),
+                    });
+                }
+            }
+        }
+        Ok(GpuScene {
+            vertices,
+            indices,
+            draws,
+            materials,
+            environment,
+            environment_id,
+            env_sh,
+            lights,
+            shadow_faces,
+            bounds_center,
+            bounds_radius,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A constant environment L has irradiance pi L for every normal: the SH projection
+    /// must reproduce it (c4 L00 = 0.886227 * 0.282095 * 4 pi L = pi L).
+    #[test]
+    fn constant_environment_irradiance_is_pi_l() {
+        let sh = environment_sh(64, 32, &vec![[0.5, 1.0, 2.0, 1.0]; 64 * 32]);
+        let e = 0.886227 * sh[0][1] as f64;
+        assert!((e - std::f64::consts::PI).abs() < 1e-2, "{e}");
+        for k in 1..9 {
+            assert!(sh[k][1].abs() < 1e-2, "band {k}: {}", sh[k][1]);
+        }
+    }
+
+    /// Every cube face's view must map its own axis to the centre of the face and agree with
+    /// the Vulkan cube addressing table (s, t) for a direction off-centre.
+    #[test]
+    fn cube_faces_match_vulkan_addressing() {
+        let views = cube_face_views(Vec3::ZERO);
+        let proj = Mat4::perspective_rh(std::f32::consts::FRAC_PI_2, 1.0, 0.1, 10.0);
+        // (major axis, s-axis direction, t-axis direction) from the spec's table.
+        let table = [
+            (Vec3::X, -Vec3::Z, -Vec3::Y),
+            (-Vec3::X, Vec3::Z, -Vec3::Y),
+            (Vec3::Y, Vec3::X, Vec3::Z),
+            (-Vec3::Y, Vec3::X, -Vec3::Z),
+            (Vec3::Z, Vec3::X, -Vec3::Y),
+            (-Vec3::Z, -Vec3::X, -Vec3::Y),
+        ];
+        for (f, (major, s, t)) in table.iter().enumerate() {
+            let d = *major + 0.3 * *s + 0.2 * *t;
+            let clip = proj * views[f] * d.extend(1.0);
+            let ndc = clip.truncate() / clip.w;
+            assert!((ndc.x - 0.3).abs() < 1e-5 && (ndc.y - 0.2).abs() < 1e-5, "face {f}: {ndc:?}");
+        }
+    }
+}

@@ -1,0 +1,366 @@
+//! The renderer: turns a [`Scene`] into GPU data, creates exactly the passes the scene
+//! needs ([`plan`]), records them through the frame graph each frame, and reads back images
+//! and per-pass GPU timings. Headless; the demo window shares it and only swaps the final
+//! target.
+pub mod gpu_scene;
+pub mod gpu_types;
+pub mod plan;
+pub mod targets;
+
+use std::sync::Arc;
+
+use glam::{Mat4, Vec3};
+
+use crate::gpu::{
+    self, vk, Access, Buffer, CommandPool, DescriptorSet, DescriptorSetLayout, DescriptorWrite, GpuContext, GpuError,
+    MemoryLocation, Sampler, SamplerDesc, TimestampPool, TimestampQuery,
+};
+use crate::graph::{FrameGraph, ImageId};
+use crate::passes::deferred_shading::DeferredShadingPass;
+use crate::passes::gbuffer::GBufferPass;
+use crate::passes::shadow_map::{ShadowMapPass, FAR_DISTANCE};
+use crate::passes::specular_single::{Mode, SpecularSinglePass};
+use crate::passes::tonemap::TonemapPass;
+use crate::scene::Scene;
+use crate::{BINDING_ENVIRONMENT, BINDING_FRAME, BINDING_MATERIALS, BINDING_SHADOW_2D, BINDING_SHADOW_CUBE};
+
+use gpu_scene::GpuScene;
+use gpu_types::FrameUniforms;
+use plan::PlannedPass;
+use targets::Targets;
+
+/// Frames the CPU may record ahead of the GPU; each has its own command buffer, fence,
+/// uniform buffer, descriptor set and timestamp pool.
+pub const FRAMES_IN_FLIGHT: usize = 2;
+
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
+    #[error("{0}")]
+    Limit(String),
+}
+
+/// GPU time of one pass in one frame, in milliseconds from the frame's first timestamp.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct PassTime {
+    pub name: String,
+    pub start_ms: f64,
+    pub end_ms: f64,
+}
+
+impl PassTime {
+    pub fn duration_ms(&self) -> f64 {
+        self.end_ms - self.start_ms
+    }
+}
+
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct FrameTiming {
+    pub frame: u64,
+    pub passes: Vec<PassTime>,
+}
+
+impl FrameTiming {
+    /// Frame time = last end - first start (../shared/DESIGN.md, rule 6).
+    pub fn total_ms(&self) -> f64 {
+        let start = self.passes.iter().map(|p| p.start_ms).fold(f64::INFINITY, f64::min);
+        let end = self.passes.iter().map(|p| p.end_ms).fold(f64::NEG_INFINITY, f64::max);
+        if self.passes.is_empty() {
+            0.0
+        } else {
+            end - start
+        }
+    }
+}
+
+struct Passes {
+    shadow_map: Option<ShadowMapPass>,
+    gbuffer: GBufferPass,
+    deferred: DeferredShadingPass,
+    refraction_single: Option<SpecularSinglePass>,
+    reflection_single: Option<SpecularSinglePass>,
+    tonemap: TonemapPass,
+}
+
+pub struct Renderer {
+    // Field order matters for drop: passes and GPU data before the context they came from.
+    passes: Passes,
+    frame_sets: Vec<DescriptorSet>,
+    frame_layout: DescriptorSetLayout,
+    frame_buffers: Vec<Buffer>,
+    _samplers: Vec<Sampler>,
+    scene: GpuScene,
+    targets: Targets,
+    timestamps: Vec<TimestampPool>,
+    commands: CommandPool,
+    graph: FrameGraph,
+    plan: Vec<PlannedPass>,
+    uniforms: FrameUniforms,
+    /// (frame index, queries) of each slot's submitted but not yet read frame.
+    pending: Vec<Option<(u64, Vec<TimestampQuery>)>>,
+    completed: Vec<FrameTiming>,
+    frame_index: u64,
+    ctx: Arc<GpuContext>,
+}
+
+/// Camera projection: reversed-Z with an infinite far plane (depth 1 at the near plane,
+/// 0 at infinity) for uniform precision over scene scales of 1e-3 to 1e4, y flipped for
+/// Vulkan's downward y so that pixel row 0 is the top of the image (SCENES.md).
+pub fn camera_projection(vfov_deg: f32, aspect: f32, near: f32) -> Mat4 {
+    let mut p = Mat4::perspective_infinite_reverse_rh(vfov_deg.to_radians(), aspect, near);
+    p.y_axis.y = -p.y_axis.y;
+    p
+}
+
+impl Renderer {
+    pub fn new(ctx: &Arc<GpuContext>, scene: &Scene) -> Result<Renderer, RenderError> {
+        let plan = plan::plan(scene);
+        let mut graph = FrameGraph::new();
+        let shadow_size = scene.render.shadow_map_size;
+        let shadowed = plan::has(&plan, plan::SHADOW_MAP);
+        let gpu_scene = GpuScene::new(ctx, scene, &mut graph, shadow_size)?;
+        let targets = Targets::new(
+            ctx,
+            &mut graph,
+            scene.camera.width,
+            scene.camera.height,
+            if shadowed { scene.lights.len() as u32 } else { 0 },
+            shadow_size,
+        )?;
+
+        let nearest = Sampler::new(ctx, "nearest_clamp", SamplerDesc::NEAREST_CLAMP)?;
+        let latlong = Sampler::new(ctx, "latlong", SamplerDesc::LATLONG)?;
+        let stages = vk::ShaderStageFlags::ALL_GRAPHICS | vk::ShaderStageFlags::COMPUTE;
+        let frame_layout = DescriptorSetLayout::new(
+            ctx,
+            "frame",
+            &[
+                (BINDING_FRAME, vk::DescriptorType::UNIFORM_BUFFER, stages),
+                (BINDING_MATERIALS, vk::DescriptorType::STORAGE_BUFFER, stages),
+                (BINDING_ENVIRONMENT, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, stages),
+                (BINDING_SHADOW_CUBE, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, stages),
+                (BINDING_SHADOW_2D, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, stages),
+            ],
+            FRAMES_IN_FLIGHT as u32,
+        )?;
+        let mut frame_buffers = Vec::new();
+        let mut frame_sets = Vec::new();
+        for i in 0..FRAMES_IN_FLIGHT {
+            let ubo = Buffer::new(
+                ctx,
+                &format!("frame_uniforms_{i}"),
+                std::mem::size_of::<FrameUniforms>() as u64,
+                vk::BufferUsageFlags::UNIFORM_BUFFER,
+                MemoryLocation::CpuToGpu,
+            )?;
+            let set = frame_layout.allocate(
+                &format!("frame_set_{i}"),
+                &[
+                    DescriptorWrite::Uniform(BINDING_FRAME, &ubo),
+                    DescriptorWrite::Storage(BINDING_MATERIALS, &gpu_scene.materials),
+                    DescriptorWrite::Sampled(BINDING_ENVIRONMENT, gpu_scene.environment.view(), &latlong, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL),
+                    DescriptorWrite::Sampled(BINDING_SHADOW_CUBE, targets.shadow_atlas.view(), &nearest, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL),
+                    DescriptorWrite::Sampled(BINDING_SHADOW_2D, targets.shadow_atlas.array_view(), &nearest, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL),
+                ],
+            )?;
+            frame_buffers.push(ubo);
+            frame_sets.push(set);
+        }
+
+        // The atlas is bound even when no shadow pass writes it: give it defined contents
+        // ("nothing occludes") and the layout the shaders expect.
+        let atlas_id = targets.shadow_atlas_id;
+        ctx.one_shot(|cmd| {
+            graph.access_now(cmd, &[(atlas_id, Access::TransferWrite)], &[]);
+            cmd.clear_color_image(&targets.shadow_atlas, [FAR_DISTANCE; 4]);
+            graph.access_now(cmd, &[(atlas_id, Access::FragmentSampled)], &[]);
+        })?;
+
+        let passes = Passes {
+            shadow_map: if shadowed { Some(ShadowMapPass::new(ctx, &gpu_scene, &targets)?) } else { None },
+            gbuffer: GBufferPass::new(ctx, &frame_layout, &targets)?,
+            deferred: DeferredShadingPass::new(ctx, &frame_layout, &targets, &nearest, shadowed)?,
+            refraction_single: if plan::has(&plan, plan::REFRACTION_SINGLE) {
+                Some(SpecularSinglePass::new(ctx, Mode::Refraction, &frame_layout, &targets, &nearest)?)
+            } else {
+                None
+            },
+            reflection_single: if plan::has(&plan, plan::REFLECTION_SINGLE) {
+                Some(SpecularSinglePass::new(ctx, Mode::Reflection, &frame_layout, &targets, &nearest)?)
+            } else {
+                None
+            },
+            tonemap: TonemapPass::new(ctx, &frame_layout, &targets, &nearest)?,
+        };
+
+        let cam = &scene.camera;
+        let view = cam.view();
+        // Near plane scaled to the scene, so that the tiny and the huge behave alike.
+        let extent = gpu_scene.bounds_radius.max(cam.position.distance(gpu_scene.bounds_center));
+        let proj = camera_projection(cam.vfov_deg, cam.width as f32 / cam.height as f32, (extent * 1e-5).max(1e-12));
+        let view_proj = proj * view;
+        let mut uniforms = FrameUniforms {
+            view: view.to_cols_array_2d(),
+            proj: proj.to_cols_array_2d(),
+            view_proj: view_proj.to_cols_array_2d(),
+            inv_view_proj: view_proj.inverse().to_cols_array_2d(),
+            camera_position: Vec3::extend(cam.position, scene.render.exposure).to_array(),
+            viewport: [cam.width as f32, cam.height as f32, 1.0 / cam.width as f32, 1.0 / cam.height as f32],
+            env_sh: gpu_scene.env_sh,
+            info: [gpu_scene.lights.len() as u32, 0, 0, 0],
+            lights: Default::default(),
+        };
+        for (i, l) in gpu_scene.lights.iter().enumerate() {
+            uniforms.lights[i] = *l;
+        }
+
+        let mut timestamps = Vec::new();
+        for i in 0..FRAMES_IN_FLIGHT {
+            timestamps.push(TimestampPool::new(ctx, &format!("timestamps_{i}"), 2 * plan.len() as u32)?);
+        }
+        Ok(Renderer {
+            passes,
+            frame_sets,
+            frame_layout,
+            frame_buffers,
+            _samplers: vec![nearest, latlong],
+            scene: gpu_scene,
+            targets,
+            timestamps,
+            commands: CommandPool::new(ctx, FRAMES_IN_FLIGHT as u32)?,
+            graph,
+            plan,
+            uniforms,
+            pending: vec![None; FRAMES_IN_FLIGHT],
+            completed: Vec::new(),
+            frame_index: 0,
+            ctx: ctx.clone(),
+        })
+    }
+
+    pub fn context(&self) -> &Arc<GpuContext> {
+        &self.ctx
+    }
+
+    /// The passes this renderer records, in order, with the reason for each.
+    pub fn plan(&self) -> &[PlannedPass] {
+        &self.plan
+    }
+
+    pub fn width(&self) -> u32 {
+        self.targets.width
+    }
+
+    pub fn height(&self) -> u32 {
+        self.targets.height
+    }
+
+    fn collect_slot(&mut self, slot: usize) -> Result<(), RenderError> {
+        if let Some((frame, queries)) = self.pending[slot].take() {
+            let pool = &self.timestamps[slot];
+            let last = queries.iter().map(|q| q.end + 1).max().unwrap_or(0);
+            if let Some(ticks) = pool.read_ticks(last)? {
+                let origin = queries.iter().map(|q| ticks[q.start as usize]).min().unwrap_or(0);
+                let passes = queries
+                    .iter()
+                    .map(|q| PassTime {
+                        name: q.name.clone(),
+                        start_ms: pool.ticks_to_ms(origin, ticks[q.start as usize]),
+                        end_ms: pool.ticks_to_ms(origin, ticks[q.end as usize]),
+                    })
+                    .collect();
+                self.completed.push(FrameTiming { frame, passes });
+            }
+        }
+        Ok(())
+    }
+
+    /// Record and submit one frame. Timings of frames whose fences have signalled are
+    /// collected into [`Renderer::take_timings`].
+    pub fn render_frame(&mut self) -> Result<(), RenderError> {
+        let slot = (self.frame_index % FRAMES_IN_FLIGHT as u64) as usize;
+        // Wait for this slot's previous frame; its timestamps are then readable without WAIT.
+        self.commands.wait(slot)?;
+        self.collect_slot(slot)?;
+        self.uniforms.info[1] = self.frame_index as u32;
+        self.frame_buffers[slot].write(0, bytemuck::bytes_of(&self.uniforms));
+
+        let Renderer { passes, frame_sets, scene, targets, timestamps, commands, graph, .. } = self;
+        let frame_set = frame_sets[slot];
+        let cmd = commands.begin(slot)?;
+        let mut frame = graph.frame();
+        if let Some(p) = &passes.shadow_map {
+            p.record(&mut frame, scene, targets);
+        }
+        passes.gbuffer.record(&mut frame, scene, targets, frame_set);
+        passes.deferred.record(&mut frame, scene, targets, frame_set);
+        if let Some(p) = &passes.refraction_single {
+            p.record(&mut frame, scene, targets, frame_set);
+        }
+        if let Some(p) = &passes.reflection_single {
+            p.record(&mut frame, scene, targets, frame_set);
+        }
+        passes.tonemap.record(&mut frame, targets, frame_set);
+        debug_assert_eq!(frame.pass_names(), self.plan.iter().map(|p| p.name).collect::<Vec<_>>());
+        let queries = frame.execute(&cmd, Some(&timestamps[slot]));
+        drop(cmd);
+        self.commands.submit(slot)?;
+        self.pending[slot] = Some((self.frame_index, queries));
+        self.frame_index += 1;
+        Ok(())
+    }
+
+    /// Wait for every submitted frame and collect its timings.
+    pub fn finish(&mut self) -> Result<(), RenderError> {
+        for slot in 0..FRAMES_IN_FLIGHT {
+            self.commands.wait(slot)?;
+            self.collect_slot(slot)?;
+        }
+        self.completed.sort_by_key(|f| f.frame);
+        Ok(())
+    }
+
+    /// Timings of every completed frame so far (and forget them).
+    pub fn take_timings(&mut self) -> Vec<FrameTiming> {
+        std::mem::take(&mut self.completed)
+    }
+
+    fn read_image(&mut self, id: ImageId, bytes_per_texel: u64) -> Result<Vec<u8>, RenderError> {
+        self.finish()?;
+        let (w, h) = (self.targets.width as u64, self.targets.height as u64);
+        let buffer = Buffer::new(&self.ctx, "readback", w * h * bytes_per_texel, vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu)?;
+        let buffer_id = self.graph.register_buffer(&buffer);
+        let image = if id == self.targets.hdr_id { &self.targets.hdr } else { &self.targets.ldr };
+        let graph = &mut self.graph;
+        self.ctx.one_shot(|cmd| {
+            graph.access_now(cmd, &[(id, Access::TransferRead)], &[(buffer_id, Access::TransferWrite)]);
+            cmd.copy_image_to_buffer(image, &buffer);
+            graph.access_now(cmd, &[], &[(buffer_id, Access::HostRead)]);
+        })?;
+        Ok(buffer.read().to_vec())
+    }
+
+    /// Linear radiance, RGBA f32, row 0 at the top.
+    pub fn read_hdr(&mut self) -> Result<Vec<f32>, RenderError> {
+        let bytes = self.read_image(self.targets.hdr_id, 16)?;
+        Ok(bytemuck::pod_collect_to_vec(&bytes))
+    }
+
+    /// Tone-mapped sRGB, RGBA u8, row 0 at the top.
+    pub fn read_ldr(&mut self) -> Result<Vec<u8>, RenderError> {
+        self.read_image(self.targets.ldr_id, 4)
+    }
+}
+
+impl Drop for Renderer {
+    fn drop(&mut self) {
+        // Pipelines, samplers and layouts are destroyed immediately by their wrappers: the
+        // GPU must be idle first.
+        let _ = self.ctx.wait_idle();
+        let _ = &self.frame_layout;
+    }
+}
+
+/// Re-exported for tests that build their own passes.
+pub use gpu::Cmd;

@@ -1,0 +1,94 @@
+//! Which passes a scene needs, and why (../shared/DESIGN.md, rule 4: model only what the
+//! scene requires). Pure CPU: `prism passes SCENE` prints this without touching the GPU, and
+//! the renderer creates and records exactly these passes.
+use crate::scene::{Light, Material, Scene};
+
+/// Snake_case pass names: also the timing names and golden-image names.
+pub const SHADOW_MAP: &str = "shadow_map";
+pub const GBUFFER: &str = "gbuffer";
+pub const DEFERRED_SHADING: &str = "deferred_shading";
+pub const REFRACTION_SINGLE: &str = "refraction_single";
+pub const REFLECTION_SINGLE: &str = "reflection_single";
+pub const TONEMAP: &str = "tonemap";
+
+#[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
+pub struct PlannedPass {
+    pub name: &'static str,
+    /// Which objects, lights or settings require the pass.
+    pub reason: String,
+}
+
+fn names(scene: &Scene, pred: impl Fn(&Material) -> bool) -> Vec<String> {
+    scene
+        .objects
+        .iter()
+        .filter(|o| pred(&scene.materials[o.material]))
+        .map(|o| o.name.clone())
+        .collect()
+}
+
+fn list(v: &[String]) -> String {
+    v.join(", ")
+}
+
+fn describe_light(i: usize, l: &Light) -> String {
+    match l {
+        Light::Point { position: p, .. } => format!("light {i} (point at ({}, {}, {}))", p.x, p.y, p.z),
+        Light::Directional { direction: d, .. } => {
+            format!("light {i} (directional ({:.3}, {:.3}, {:.3}))", d.x, d.y, d.z)
+        }
+    }
+}
+
+/// The ordered pass list for `scene`.
+pub fn plan(scene: &Scene) -> Vec<PlannedPass> {
+    let diffuse = names(scene, Material::is_diffuse);
+    let dielectric = names(scene, |m| matches!(m, Material::Dielectric { .. }));
+    let metal = names(scene, |m| matches!(m, Material::Mirror { .. } | Material::Conductor { .. }));
+    let mut passes = Vec::new();
+
+    if !scene.lights.is_empty() && !diffuse.is_empty() {
+        let lights: Vec<_> = scene.lights.iter().enumerate().map(|(i, l)| describe_light(i, l)).collect();
+        passes.push(PlannedPass {
+            name: SHADOW_MAP,
+            reason: format!("{} cast shadows on the diffuse receivers {}", lights.join(" and "), list(&diffuse)),
+        });
+    }
+    passes.push(PlannedPass {
+        name: GBUFFER,
+        reason: if scene.objects.is_empty() {
+            "clears depth: the scene has no objects, so the environment fills the frame".into()
+        } else {
+            format!("rasterises the first visible surface of {} object(s)", scene.objects.len())
+        },
+    });
+    passes.push(PlannedPass {
+        name: DEFERRED_SHADING,
+        reason: if diffuse.is_empty() {
+            "environment background (no diffuse object)".into()
+        } else if scene.lights.is_empty() {
+            format!("environment background; diffuse {} lit by the environment only", list(&diffuse))
+        } else {
+            format!("environment background; diffuse {} lit by {} light(s)", list(&diffuse), scene.lights.len())
+        },
+    });
+    if !dielectric.is_empty() && scene.render.refraction == "single" {
+        passes.push(PlannedPass {
+            name: REFRACTION_SINGLE,
+            reason: format!("dielectric {} (render.refraction = \"single\")", list(&dielectric)),
+        });
+    }
+    if !metal.is_empty() && scene.render.reflection == "single" {
+        passes.push(PlannedPass {
+            name: REFLECTION_SINGLE,
+            reason: format!("mirror/conductor {} (render.reflection = \"single\")", list(&metal)),
+        });
+    }
+    passes.push(PlannedPass { name: TONEMAP, reason: "linear radiance -> sRGB PNG output".into() });
+    passes
+}
+
+/// Whether the plan contains `name`.
+pub fn has(plan: &[PlannedPass], name: &str) -> bool {
+    plan.iter().any(|p| p.name == name)
+}

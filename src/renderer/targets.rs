@@ -1,0 +1,118 @@
+//! Render targets of a frame, registered with the frame graph.
+use std::sync::Arc;
+
+use crate::gpu::{vk, GpuContext, Image, ImageDesc, ImageViewKind};
+use crate::graph::{FrameGraph, ImageId};
+use crate::SHADOW_LAYERS_PER_LIGHT;
+
+use super::RenderError;
+
+/// Formats, chosen for measurement rather than bandwidth: radiance is 32-bit float so that
+/// error metrics see the technique's error, not the storage's.
+pub const HDR_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
+pub const LDR_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
+pub const GBUF_NORMAL_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
+pub const GBUF_ALBEDO_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
+pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
+pub const SHADOW_FORMAT: vk::Format = vk::Format::R32_SFLOAT;
+
+pub struct Targets {
+    pub width: u32,
+    pub height: u32,
+    pub gbuf_normal: Image,
+    pub gbuf_albedo: Image,
+    pub depth: Image,
+    pub hdr: Image,
+    pub ldr: Image,
+    /// Distance-to-light atlas: SHADOW_LAYERS_PER_LIGHT layers per light, cube-compatible.
+    pub shadow_atlas: Image,
+    /// One depth layer per atlas layer, so faces never wait on each other's depth buffer.
+    pub shadow_depth: Image,
+    pub gbuf_normal_id: ImageId,
+    pub gbuf_albedo_id: ImageId,
+    pub depth_id: ImageId,
+    pub hdr_id: ImageId,
+    pub ldr_id: ImageId,
+    pub shadow_atlas_id: ImageId,
+    pub shadow_depth_id: ImageId,
+}
+
+impl Targets {
+    pub fn new(
+        ctx: &Arc<GpuContext>,
+        graph: &mut FrameGraph,
+        width: u32,
+        height: u32,
+        lights: u32,
+        shadow_size: u32,
+    ) -> Result<Targets, RenderError> {
+        let max = ctx.limits().max_image_dimension2_d;
+        if width == 0 || height == 0 || width > max || height > max {
+            return Err(RenderError::Limit(format!(
+                "image size {width}x{height} is outside 1..={max} (the device's maxImageDimension2D)"
+            )));
+        }
+        if shadow_size == 0 || shadow_size > ctx.limits().max_image_dimension_cube {
+            return Err(RenderError::Limit(format!(
+                "render.shadow_map_size = {shadow_size} is outside 1..={}",
+                ctx.limits().max_image_dimension_cube
+            )));
+        }
+        use vk::ImageUsageFlags as U;
+        let attach_sampled = U::COLOR_ATTACHMENT | U::SAMPLED | U::TRANSFER_SRC;
+        let mk = |name: &str, format, usage| Image::new(ctx, &ImageDesc::d2(name, format, width, height, usage));
+        let gbuf_normal = mk("gbuf_normal", GBUF_NORMAL_FORMAT, attach_sampled)?;
+        let gbuf_albedo = mk("gbuf_albedo", GBUF_ALBEDO_FORMAT, attach_sampled)?;
+        let depth = mk("depth", DEPTH_FORMAT, U::DEPTH_STENCIL_ATTACHMENT | U::SAMPLED | U::TRANSFER_SRC)?;
+        let hdr = mk("hdr", HDR_FORMAT, attach_sampled | U::STORAGE)?;
+        let ldr = mk("ldr", LDR_FORMAT, U::COLOR_ATTACHMENT | U::TRANSFER_SRC)?;
+        // Without lights the atlas is a 1x1 placeholder that is still bound (and cleared).
+        let (size, layers) = if lights == 0 { (1, SHADOW_LAYERS_PER_LIGHT) } else { (shadow_size, lights * SHADOW_LAYERS_PER_LIGHT) };
+        let shadow_atlas = Image::new(
+            ctx,
+            &ImageDesc {
+                name: "shadow_atlas".into(),
+                format: SHADOW_FORMAT,
+                width: size,
+                height: size,
+                layers,
+                usage: U::COLOR_ATTACHMENT | U::SAMPLED | U::TRANSFER_DST | U::TRANSFER_SRC,
+                view: ImageViewKind::CubeArray,
+            },
+        )?;
+        let shadow_depth = Image::new(
+            ctx,
+            &ImageDesc {
+                name: "shadow_depth".into(),
+                format: DEPTH_FORMAT,
+                width: size,
+                height: size,
+                layers,
+                usage: U::DEPTH_STENCIL_ATTACHMENT,
+                view: ImageViewKind::D2Array,
+            },
+        )?;
+        Ok(Targets {
+            width,
+            height,
+            gbuf_normal_id: graph.register_image(&gbuf_normal),
+            gbuf_albedo_id: graph.register_image(&gbuf_albedo),
+            depth_id: graph.register_image(&depth),
+            hdr_id: graph.register_image(&hdr),
+            ldr_id: graph.register_image(&ldr),
+            shadow_atlas_id: graph.register_image(&shadow_atlas),
+            shadow_depth_id: graph.register_image(&shadow_depth),
+            gbuf_normal,
+            gbuf_albedo,
+            depth,
+            hdr,
+            ldr,
+            shadow_atlas,
+            shadow_depth,
+        })
+    }
+
+    pub fn extent(&self) -> vk::Extent2D {
+        vk::Extent2D { width: self.width, height: self.height }
+    }
+}

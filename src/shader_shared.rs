@@ -1,0 +1,41 @@
+// Constants shared by Rust and GLSL: the single source of truth (../shared/DESIGN.md, rule 7).
+//
+// This file is `include!`d twice: by the library (src/lib.rs, where the macro makes
+// `pub const`s) and by build.rs (where the same macro emits `#define`s into the generated
+// GLSL header `prism_shared.glsl`). Edit a value here and both sides change together.
+shared_constants! {
+    // Material kinds (GpuMaterial.albedo_a.w).
+    MATERIAL_DIFFUSE: u32 = 0;
+    MATERIAL_MIRROR: u32 = 1;
+    MATERIAL_CONDUCTOR: u32 = 2;
+    MATERIAL_DIELECTRIC: u32 = 3;
+
+    // Light kinds (GpuLight.position.w).
+    LIGHT_POINT: u32 = 0;
+    LIGHT_DIRECTIONAL: u32 = 1;
+
+    // At most this many lights; each owns 6 layers of the shadow atlas (a cube for a point
+    // light, layer 0 of its 6 for a directional light's orthographic map).
+    MAX_LIGHTS: u32 = 4;
+    SHADOW_LAYERS_PER_LIGHT: u32 = 6;
+
+    // Descriptor set 0 (frame set) bindings, shared by every pass.
+    BINDING_FRAME: u32 = 0;
+    BINDING_MATERIALS: u32 = 1;
+    BINDING_ENVIRONMENT: u32 = 2;
+    BINDING_SHADOW_CUBE: u32 = 3;
+    BINDING_SHADOW_2D: u32 = 4;
+
+    // Descriptor set 1 (G-buffer inputs) bindings.
+    BINDING_GBUF_NORMAL: u32 = 0;
+    BINDING_GBUF_ALBEDO: u32 = 1;
+    BINDING_GBUF_DEPTH: u32 = 2;
+    BINDING_HDR: u32 = 3;
+
+    // Compute workgroup edge for 2D image kernels.
+    WORKGROUP_2D: u32 = 8;
+
+    // Specular-pass modes (specialisation constant 0 of specular/single.frag).
+    SPECULAR_MODE_REFRACTION: u32 = 0;
+    SPECULAR_MODE_REFLECTION: u32 = 1;
+}
