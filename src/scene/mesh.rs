@@ -1,0 +1,372 @@
+//! Triangle meshes: the common currency of every shape, OBJ loading and validation,
+//! and vertex normals that are never NaN.
+
+use std::path::Path;
+
+use glam::{Mat3, Mat4, Vec2, Vec3};
+
+use super::error::ErrorKind;
+
+/// An indexed triangle mesh in world space (after loading).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Mesh {
+    pub positions: Vec<Vec3>,
+    /// Unit length, never NaN; one per position.
+    pub normals: Vec<Vec3>,
+    /// Checker-albedo coordinates (s, t) in metres, one per position.
+    pub checker_uv: Vec<Vec2>,
+    /// Three per triangle, counter-clockwise seen from the side the normals point to.
+    pub indices: Vec<u32>,
+}
+
+impl Mesh {
+    /// Axis-aligned bounds (min, max); both zero for an empty mesh.
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        if self.positions.is_empty() {
+            return (Vec3::ZERO, Vec3::ZERO);
+        }
+        self.positions.iter().fold(
+            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+            |(lo, hi), &p| (lo.min(p), hi.max(p)),
+        )
+    }
+
+    pub fn triangle_count(&self) -> usize {
+        self.indices.len() / 3
+    }
+
+    /// Appends `other`, offsetting its indices.
+    pub fn append(&mut self, other: &Mesh) {
+        let base = self.positions.len() as u32;
+        self.positions.extend_from_slice(&other.positions);
+        self.normals.extend_from_slice(&other.normals);
+        self.checker_uv.extend_from_slice(&other.checker_uv);
+        self.indices.extend(other.indices.iter().map(|i| i + base));
+    }
+
+    /// Applies an affine transform to positions and (by the inverse transpose) normals.
+    pub fn transform(&mut self, m: Mat4) {
+        for p in &mut self.positions {
+            *p = m.transform_point3(*p);
+        }
+        let n = Mat3::from_mat4(m).inverse().transpose();
+        for v in &mut self.normals {
+            // A singular transform (scale 0 is rejected on load, but keep this total)
+            // leaves the old normal rather than a NaN.
+            *v = (n * *v).try_normalize().unwrap_or(*v);
+        }
+    }
+
+    /// Sets the checker coordinates to world (x, z), the convention for every shape
+    /// except non-horizontal quads.
+    pub fn set_checker_uv_xz(&mut self) {
+        self.checker_uv = self.positions.iter().map(|p| Vec2::new(p.x, p.z)).collect();
+    }
+
+    /// Area-weighted vertex normals. A vertex whose weighted sum vanishes (only
+    /// degenerate triangles, or opposite faces cancelling) takes the normal of one of
+    /// its non-degenerate faces, and failing that +Y, so no normal is ever NaN.
+    pub fn compute_vertex_normals(&mut self) {
+        let mut sum = vec![Vec3::ZERO; self.positions.len()];
+        let mut any_face = vec![None::<Vec3>; self.positions.len()];
+        for tri in self.indices.chunks_exact(3) {
+            let [a, b, c] = [tri[0] as usize, tri[1] as usize, tri[2] as usize];
+            let (Some(&pa), Some(&pb), Some(&pc)) = (
+                self.positions.get(a),
+                self.positions.get(b),
+                self.positions.get(c),
+            ) else {
+                continue;
+            };
+            // |cross| is twice the area, so summing it weights by area.
+            let w = (pb - pa).cross(pc - pa);
+            let face = w.try_normalize();
+            for i in [a, b, c] {
+                sum[i] += w;
+                if any_face[i].is_none() {
+                    any_face[i] = face;
+                }
+            }
+        }
+        self.normals = sum
+            .iter()
+            .zip(&any_face)
+            .map(|(s, f)| s.try_normalize().or(*f).unwrap_or(Vec3::Y))
+            .collect();
+    }
+
+    /// Replaces any zero-length or non-finite normal with a computed one, and
+    /// normalizes the rest (OBJ normals need not be unit length).
+    pub(crate) fn repair_normals(&mut self) {
+        if self.normals.len() != self.positions.len() {
+            self.compute_vertex_normals();
+            return;
+        }
+        if self.normals.iter().any(|n| n.try_normalize().is_none()) {
+            let given = std::mem::take(&mut self.normals);
+            self.compute_vertex_normals();
+            for (n, g) in self.normals.iter_mut().zip(given) {
+                if let Some(g) = g.try_normalize() {
+                    *n = g;
+                }
+            }
+        } else {
+            for n in &mut self.normals {
+                *n = n.normalize();
+            }
+        }
+    }
+}
+
+/// Why an OBJ file was rejected; `line` is 1-based.
+#[derive(Debug)]
+pub(crate) struct ObjError {
+    pub kind: ErrorKind,
+    pub line: Option<usize>,
+    pub message: String,
+    pub hint: String,
+}
+
+fn obj_err(kind: ErrorKind, line: Option<usize>, message: String, hint: &str) -> ObjError {
+    ObjError {
+        kind,
+        line,
+        message,
+        hint: hint.to_string(),
+    }
+}
+
+/// Reads and validates an OBJ file (triangulated, one index per vertex). Normals from
+/// the file are kept (normalized); missing ones are computed, area-weighted.
+pub(crate) fn load_obj(path: &Path) -> Result<Mesh, ObjError> {
+    let text = std::fs::read_to_string(path).map_err(|e| {
+        obj_err(
+            ErrorKind::MissingFile,
+            None,
+            format!("cannot read mesh file: {e}"),
+            "mesh paths are relative to the scene file's directory",
+        )
+    })?;
+    parse_obj(&text)
+}
+
+/// Parses OBJ text. Positions and face indices are checked line by line first, so
+/// that an error can name the offending line (tobj reports no lines).
+pub(crate) fn parse_obj(text: &str) -> Result<Mesh, ObjError> {
+    prescan(text)?;
+    let opts = tobj::LoadOptions {
+        triangulate: true,
+        single_index: true,
+        ignore_points: true,
+        ignore_lines: true,
+    };
+    let mut reader = std::io::BufReader::new(text.as_bytes());
+    // Materials (mtllib) are ignored: the scene file assigns the material.
+    let (models, _materials) =
+        tobj::load_obj_buf(&mut reader, &opts, |_| Err(tobj::LoadError::OpenFileFailed)).map_err(
+            |e| {
+                obj_err(
+                    ErrorKind::Mesh,
+                    None,
+                    format!("malformed OBJ: {e}"),
+                    "check the file with a mesh viewer, or re-export it as triangles",
+                )
+            },
+        )?;
+    let mut mesh = Mesh::default();
+    let mut had_normals = true;
+    for model in &models {
+        let m = &model.mesh;
+        let n = m.positions.len() / 3;
+        let mut part = Mesh {
+            positions: m
+                .positions
+                .chunks_exact(3)
+                .map(|p| Vec3::new(p[0], p[1], p[2]))
+                .collect(),
+            normals: m
+                .normals
+                .chunks_exact(3)
+                .map(|p| Vec3::new(p[0], p[1], p[2]))
+                .collect(),
+            checker_uv: Vec::new(),
+            indices: m.indices.clone(),
+        };
+        if let Some(bad) = part.indices.iter().find(|&&i| i as usize >= n) {
+            return Err(obj_err(
+                ErrorKind::Mesh,
+                None,
+                format!("face index {} is out of range ({n} vertices)", bad + 1),
+                "OBJ indices are 1-based and must name an existing vertex",
+            ));
+        }
+        if part.positions.iter().any(|p| !p.is_finite()) {
+            return Err(obj_err(
+                ErrorKind::Mesh,
+                None,
+                "a vertex position is not a finite number".to_string(),
+                "remove NaN/inf coordinates from the file",
+            ));
+        }
+        had_normals &= part.normals.len() == part.positions.len();
+        if part.normals.len() != part.positions.len() {
+            part.normals.clear();
+        }
+        part.checker_uv = vec![Vec2::ZERO; part.positions.len()];
+        mesh.append(&part);
+    }
+    if mesh.indices.is_empty() {
+        return Err(obj_err(
+            ErrorKind::Mesh,
+            None,
+            "the OBJ file has no triangles".to_string(),
+            "a mesh needs `v` and `f` lines",
+        ));
+    }
+    if had_normals {
+        mesh.repair_normals();
+    } else {
+        mesh.compute_vertex_normals();
+    }
+    Ok(mesh)
+}
+
+/// Checks `v` and `f` lines, returning an error that names the first bad line.
+fn prescan(text: &str) -> Result<(), ObjError> {
+    let total = text
+        .lines()
+        .filter(|l| l.split_whitespace().next() == Some("v"))
+        .count() as i64;
+    let mut seen: i64 = 0;
+    for (i, line) in text.lines().enumerate() {
+        let ln = Some(i + 1);
+        let mut tok = line.split_whitespace();
+        match tok.next() {
+            Some("v") => {
+                seen += 1;
+                for axis in ["x", "y", "z"] {
+                    let value = tok.next().and_then(|t| t.parse::<f32>().ok());
+                    match value {
+                        None => {
+                            return Err(obj_err(
+                                ErrorKind::Mesh,
+                                ln,
+                                format!("vertex {seen} has no valid {axis} coordinate"),
+                                "a `v` line holds three numbers: v x y z",
+                            ))
+                        }
+                        Some(v) if !v.is_finite() => {
+                            return Err(obj_err(
+                                ErrorKind::Mesh,
+                                ln,
+                                format!("vertex {seen} has a non-finite {axis} coordinate ({v})"),
+                                "remove NaN/inf coordinates from the file",
+                            ))
+                        }
+                        Some(_) => {}
+                    }
+                }
+            }
+            Some("f") => {
+                let mut count = 0;
+                for t in tok {
+                    count += 1;
+                    let first = t.split('/').next().unwrap_or("");
+                    let idx: i64 = first.parse().map_err(|_| {
+                        obj_err(
+                            ErrorKind::Mesh,
+                            ln,
+                            format!("face vertex `{t}` is not an index"),
+                            "a face vertex is `v`, `v/vt`, `v//vn` or `v/vt/vn` with integer indices",
+                        )
+                    })?;
+                    // Positive indices are 1-based over the whole file; negative ones
+                    // count back from the last vertex defined so far.
+                    let ok = if idx > 0 {
+                        idx <= total
+                    } else {
+                        idx < 0 && seen + idx >= 0
+                    };
+                    if !ok {
+                        return Err(obj_err(
+                            ErrorKind::Mesh,
+                            ln,
+                            format!(
+                                "face index {idx} is out of range (the file has {total} vertices)"
+                            ),
+                            "OBJ indices are 1-based and must name an existing vertex",
+                        ));
+                    }
+                }
+                if count < 3 {
+                    return Err(obj_err(
+                        ErrorKind::Mesh,
+                        ln,
+                        format!("face has {count} vertices"),
+                        "a face needs at least three vertices",
+                    ));
+                }
+            }
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn degenerate_triangles_give_finite_unit_normals() {
+        // Triangle 0 is fine; triangle 1 has a repeated vertex; triangle 2 is three
+        // collinear points; vertex 5 only touches degenerate triangles.
+        let text = "v 0 0 0\nv 1 0 0\nv 0 0 -1\nv 2 0 0\nv 3 0 0\nv 4 0 0\n\
+                    f 1 2 3\nf 1 1 2\nf 4 5 6\n";
+        let m = parse_obj(text).expect("valid obj");
+        assert_eq!(m.triangle_count(), 3, "degenerate triangles are kept");
+        for n in &m.normals {
+            assert!(n.is_finite());
+            assert!((n.length() - 1.0).abs() < 1e-5);
+        }
+        assert!((m.normals[0] - Vec3::Y).length() < 1e-5);
+        assert_eq!(m.normals[4], Vec3::Y);
+    }
+
+    #[test]
+    fn nan_position_names_the_line() {
+        let e = parse_obj("# c\nv 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n").unwrap_err();
+        assert_eq!(e.line, Some(3));
+        assert_eq!(e.kind, ErrorKind::Mesh);
+        assert!(e.message.contains("non-finite"), "{}", e.message);
+    }
+
+    #[test]
+    fn out_of_range_index_names_the_line() {
+        let e = parse_obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 4\n").unwrap_err();
+        assert_eq!(e.line, Some(5));
+        assert!(e.message.contains("out of range"), "{}", e.message);
+        let e = parse_obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf -1 -2 -4\n").unwrap_err();
+        assert_eq!(e.line, Some(4));
+    }
+
+    #[test]
+    fn quads_are_triangulated_and_negative_indices_work() {
+        let m = parse_obj("v 0 0 0\nv 1 0 0\nv 1 0 -1\nv 0 0 -1\nf -4 -3 -2 -1\n").unwrap();
+        assert_eq!(m.triangle_count(), 2);
+        assert!(m.normals.iter().all(|n| (*n - Vec3::Y).length() < 1e-5));
+    }
+
+    #[test]
+    fn transform_keeps_normals_unit() {
+        let mut m = parse_obj("v 0 0 0\nv 1 0 0\nv 0 0 -1\nf 1 2 3\n").unwrap();
+        m.transform(
+            Mat4::from_rotation_x(std::f32::consts::FRAC_PI_2) * Mat4::from_scale(Vec3::splat(2.0)),
+        );
+        for n in &m.normals {
+            assert!((n.length() - 1.0).abs() < 1e-5);
+            assert!((*n - Vec3::Z).length() < 1e-5, "{n}");
+        }
+        assert!((m.positions[1] - Vec3::new(2.0, 0.0, 0.0)).length() < 1e-5);
+    }
+}
