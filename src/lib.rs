@@ -3,8 +3,10 @@
 //! architecture: scene file -> scene -> pass plan -> passes -> frame graph -> images/timings.
 #![warn(unsafe_op_in_unsafe_fn)]
 
+pub mod app;
 pub mod gpu;
 pub mod graph;
+pub mod metrics;
 pub mod passes;
 pub mod renderer;
 pub mod scene;

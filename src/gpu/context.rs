@@ -392,9 +392,10 @@ impl GpuContext {
             .vk("vkCreateFence")?;
         let serial = self.submit(raw, fence);
         // SAFETY: fence is valid; we wait for our own submission.
-        let waited = serial.and_then(|_| {
-            unsafe { self.device.wait_for_fences(&[fence], true, u64::MAX) }.vk("vkWaitForFences")
-        });
+        let waited = match &serial {
+            Ok(_) => unsafe { self.device.wait_for_fences(&[fence], true, u64::MAX) }.vk("vkWaitForFences"),
+            Err(_) => Ok(()),
+        };
         // SAFETY: the submission has completed (or failed), so the buffer and fence are idle.
         unsafe {
             self.device.destroy_fence(fence, None);

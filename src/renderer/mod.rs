@@ -58,6 +58,8 @@ impl PassTime {
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct FrameTiming {
     pub frame: u64,
+    /// The frame's first timestamp on the device clock, in ms (for laying out traces).
+    pub gpu_start_ms: f64,
     pub passes: Vec<PassTime>,
 }
 
@@ -270,7 +272,7 @@ impl Renderer {
                         end_ms: pool.ticks_to_ms(origin, ticks[q.end as usize]),
                     })
                     .collect();
-                self.completed.push(FrameTiming { frame, passes });
+                self.completed.push(FrameTiming { frame, gpu_start_ms: pool.ticks_to_ms(0, origin), passes });
             }
         }
         Ok(())

@@ -1,0 +1,203 @@
+//! The command line: `prism render`, `prism bench`, `prism passes`. The CLI parses,
+//! loads, and hands work to the renderer; it never records commands itself.
+pub mod bench;
+pub mod output;
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use anyhow::{Context, Result};
+use clap::{Args, Parser, Subcommand};
+
+use crate::gpu::{ContextDesc, GpuContext};
+use crate::renderer::Renderer;
+use crate::scene::{self, Scene};
+
+use output::OutputFile;
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "prism",
+    version,
+    about = "A Vulkan renderer for refraction, reflection and caustics that measures each technique's GPU time against its error.",
+    long_about = "prism renders the scenes of five classic papers on interactive refraction, reflection and caustics \
+                  side by side, times every pass with GPU timestamps and (later) compares each technique against an \
+                  exact reference. It runs headless on any Vulkan 1.2 device, including Mesa's lavapipe on the CPU.\n\n\
+                  SCENE is a path to a .toml scene file or the name of a benchmark scene in assets/scenes/ \
+                  (sphere_env, bunny_env, bubble_env, sphere_nearby, caustic_sphere, caustic_bunny, metal_ring, \
+                  water_pool, room_mirror, room_glass). Without SCENE, the default scene (sphere_nearby) is used. \
+                  Every scene key is documented in docs/scene-format.md.\n\n\
+                  Environment: PRISM_DEVICE picks a device like --device; PRISM_VALIDATION=1 (or sync) enables the \
+                  Vulkan validation layer (and synchronization validation); VK_DRIVER_FILES selects a driver, e.g. \
+                  /usr/share/vulkan/icd.d/lvp_icd.x86_64.json for lavapipe."
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Render a scene to a PNG (tone-mapped) and optionally a linear EXR.
+    Render(RenderArgs),
+    /// Render N frames and print per-pass GPU times (median, min, max) and the frame total.
+    Bench(bench::BenchArgs),
+    /// Print the passes a scene needs and which object, light or setting requires each.
+    Passes(PassesArgs),
+}
+
+/// Options shared by every command that loads a scene.
+#[derive(Args, Debug, Clone)]
+pub struct SceneArgs {
+    /// Scene file (.toml) or benchmark scene name; default: the sphere_nearby scene.
+    pub scene: Option<PathBuf>,
+    /// Override any scene key, e.g. --set render.refraction=single --set materials.glass.ior=1.33
+    /// (repeatable; dotted path, array elements by index: objects.0.radius=0.5).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
+    /// Image width in pixels (same as --set camera.width=W).
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Image height in pixels (same as --set camera.height=H).
+    #[arg(long)]
+    pub height: Option<u32>,
+}
+
+/// Options for choosing and checking the Vulkan device.
+#[derive(Args, Debug, Clone)]
+pub struct GpuArgs {
+    /// Vulkan device by index or by a substring of its name (default: prefer a discrete GPU).
+    #[arg(long)]
+    pub device: Option<String>,
+    /// Enable the Vulkan validation layer; the command fails if it reports any error.
+    #[arg(long)]
+    pub validation: bool,
+    /// Also enable synchronization validation (slow; implies --validation).
+    #[arg(long)]
+    pub sync_validation: bool,
+}
+
+#[derive(Args, Debug)]
+pub struct RenderArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// Output PNG (tone-mapped sRGB).
+    #[arg(short, long, default_value = "prism.png")]
+    pub output: PathBuf,
+    /// Also write linear radiance to this OpenEXR file.
+    #[arg(long)]
+    pub exr: Option<PathBuf>,
+    #[command(flatten)]
+    pub gpu: GpuArgs,
+}
+
+#[derive(Args, Debug)]
+pub struct PassesArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// Print JSON instead of a table.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// SCENE as given: an existing path, or a benchmark scene's name.
+pub fn resolve_scene_path(scene: Option<&Path>) -> PathBuf {
+    match scene {
+        None => scene::default_scene_path(),
+        Some(p) if p.exists() => p.to_path_buf(),
+        Some(p) => {
+            let s = p.to_string_lossy();
+            if !s.contains('/') && p.extension().is_none() {
+                scene::benchmark_scene_path(&s)
+            } else {
+                p.to_path_buf()
+            }
+        }
+    }
+}
+
+impl SceneArgs {
+    pub fn load(&self) -> Result<Scene> {
+        let path = resolve_scene_path(self.scene.as_deref());
+        let mut overrides = self.set.clone();
+        if let Some(w) = self.width {
+            overrides.push(format!("camera.width={w}"));
+        }
+        if let Some(h) = self.height {
+            overrides.push(format!("camera.height={h}"));
+        }
+        Ok(scene::load(&path, &overrides)?)
+    }
+}
+
+impl GpuArgs {
+    pub fn context(&self) -> Result<Arc<GpuContext>> {
+        let mut desc = ContextDesc::from_env();
+        desc.validation |= self.validation || self.sync_validation;
+        desc.sync_validation |= self.sync_validation;
+        desc.device = self.device.clone();
+        Ok(GpuContext::new(&desc)?)
+    }
+}
+
+/// Fail if validation was on and reported errors: they are bugs, never noise.
+pub fn check_validation(ctx: &GpuContext) -> Result<()> {
+    let errors = ctx.validation_errors();
+    if errors > 0 {
+        anyhow::bail!("the Vulkan validation layer reported {errors} error(s) (printed above)");
+    }
+    Ok(())
+}
+
+pub fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Render(args) => render(args),
+        Command::Bench(args) => bench::run(args),
+        Command::Passes(args) => passes(args),
+    }
+}
+
+fn render(args: RenderArgs) -> Result<()> {
+    let scene = args.scene.load()?;
+    // Check the output paths before any work so that a bad path fails fast and leaves nothing.
+    let png = OutputFile::prepare(&args.output)?;
+    let exr = args.exr.as_deref().map(OutputFile::prepare).transpose()?;
+    let ctx = args.gpu.context()?;
+    let mut renderer = Renderer::new(&ctx, &scene).context("cannot set up the renderer")?;
+    renderer.render_frame()?;
+    let (w, h) = (renderer.width(), renderer.height());
+    let hdr = renderer.read_hdr()?;
+    let ldr = renderer.read_ldr()?;
+    let timing = renderer.take_timings();
+    check_validation(&ctx)?;
+    output::write_png(png, w, h, &ldr)?;
+    if let Some(exr) = exr {
+        let path = exr.path().to_path_buf();
+        output::write_exr(exr, w, h, &hdr)?;
+        eprintln!("wrote {}", path.display());
+    }
+    let total = timing.first().map(|t| t.total_ms()).unwrap_or(0.0);
+    eprintln!(
+        "wrote {} ({w}x{h}, scene {}, {} on {}, GPU frame {total:.2} ms)",
+        args.output.display(),
+        scene.name,
+        renderer.plan().iter().map(|p| p.name).collect::<Vec<_>>().join(" -> "),
+        ctx.info.name
+    );
+    Ok(())
+}
+
+fn passes(args: PassesArgs) -> Result<()> {
+    let scene = args.scene.load()?;
+    let plan = crate::renderer::plan::plan(&scene);
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&plan)?);
+    } else {
+        println!("passes for {} ({}):", scene.name, scene.source.display());
+        let width = plan.iter().map(|p| p.name.len()).max().unwrap_or(0);
+        for (i, p) in plan.iter().enumerate() {
+            println!("  {:>2}. {:width$}  {}", i + 1, p.name, p.reason);
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,3 @@
+//! Image error metrics and timing statistics.
+pub mod image;
+pub mod timing;
