@@ -501,7 +501,11 @@ fn overrides_create_render_parameters_only() {
     assert!(s.canonical.contains("iterations = 4"), "{}", s.canonical);
 
     for (set, needle) in [
-        ("camera.fov=3", "`camera.fov` does not exist"),
+        (
+            "camera.fov=3",
+            "`camera.fov` is not written in the scene file",
+        ),
+        ("camera.width=256", "`camera.width` is not written"),
         ("objects.3.radius=1", "index 3 is out of range"),
         ("materials.metal.ior=1", "`materials.metal` does not exist"),
         ("lights.0.intensity=1", "`lights` does not exist"),
