@@ -357,6 +357,20 @@ type SetError = (String, String);
 
 fn missing(segs: &[&str], depth: usize) -> SetError {
     let at = segs[..=depth].join(".");
+    if depth + 1 == segs.len() && depth > 0 {
+        // The table exists but does not write this key: it may be a misspelling, or
+        // a real key left at its default, which must be written to be overridden
+        // (so that the file, not the command line, decides what a scene holds).
+        return (
+            format!("`{at}` is not written in the scene file"),
+            format!(
+                "check the spelling against docs/scene-format.md; if `{}` is a real key \
+                 taking its default, write it in the file to override it (only keys under \
+                 `render` are created)",
+                segs[depth]
+            ),
+        );
+    }
     (
         format!("`{at}` does not exist in the scene"),
         "an override may only change a key the scene file already has (new keys are \
