@@ -19,7 +19,9 @@ layout(set = 0, binding = BINDING_FRAME, std140) uniform Frame {
     mat4 proj;
     mat4 view_proj;
     mat4 inv_view_proj;
+    mat4 inv_view;
     vec4 camera_position;  // w: exposure
+    vec4 clip;             // x: near plane distance of the reversed-Z infinite projection
     vec4 viewport;         // w, h, 1/w, 1/h
     vec4 env_sh[9];        // irradiance SH (Ramamoorthi & Hanrahan 2001), rgb
     uvec4 info;            // x: light count, y: frame index
@@ -48,17 +50,24 @@ vec3 finite_or_zero(vec3 v) {
     return mix(v, vec3(0.0), bvec3(isnan(v.x) || isinf(v.x), isnan(v.y) || isinf(v.y), isnan(v.z) || isinf(v.z)));
 }
 
-// World-space position of the surface seen at pixel uv with (reversed) depth d.
-vec3 world_from_depth(vec2 uv, float d) {
-    vec4 clip = vec4(uv * 2.0 - 1.0, d, 1.0);
-    vec4 w = frame.inv_view_proj * clip;
-    return w.xyz / w.w;
+// View-space direction through uv with z = -1 (pixel centre ((i+0.5)/W, (j+0.5)/H), j = 0
+// the top row). Built from the projection's diagonal rather than by unprojecting a point:
+// the near plane sits 1e-5 scene extents from the eye, and unprojecting a point there in
+// world space loses most of the direction's precision to the camera's world position.
+vec3 view_ray(vec2 uv) {
+    vec2 ndc = uv * 2.0 - 1.0;
+    return vec3(ndc.x / frame.proj[0][0], ndc.y / frame.proj[1][1], -1.0);
 }
 
-// Unit direction of the camera ray through uv (pixel centre (i+0.5)/W, (j+0.5)/H, j = 0 top).
+// Unit world-space direction of the camera ray through uv.
 vec3 camera_ray(vec2 uv) {
-    // A point on the far side of the reversed-Z range (d -> 0 is infinity) is ill-conditioned,
-    // so unproject a point at the near plane (d = 1) and subtract the eye.
-    return normalize(world_from_depth(uv, 1.0) - frame.camera_position.xyz);
+    return normalize(mat3(frame.inv_view) * view_ray(uv));
+}
+
+// World-space position of the surface seen at uv with reversed depth d. For the infinite
+// reversed-Z projection d = near / (-z_view), so the view-space distance along -z is near / d.
+vec3 world_from_depth(vec2 uv, float d) {
+    vec3 v = view_ray(uv) * (frame.clip.x / d);
+    return (frame.inv_view * vec4(v, 1.0)).xyz;
 }
 #endif

@@ -52,14 +52,23 @@ impl Buffer {
             Err(source) => {
                 // SAFETY: unbound, unused buffer.
                 unsafe { device.destroy_buffer(raw, None) };
-                return Err(GpuError::Alloc { name: name.into(), source });
+                return Err(GpuError::Alloc {
+                    name: name.into(),
+                    source,
+                });
             }
         };
         // SAFETY: memory comes from a compatible type with the required size/alignment.
         unsafe { device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) }
             .vk("vkBindBufferMemory")?;
         ctx.set_name(raw, name);
-        Ok(Buffer { ctx: ctx.clone(), raw, allocation: Some(allocation), size, name: name.into() })
+        Ok(Buffer {
+            ctx: ctx.clone(),
+            raw,
+            allocation: Some(allocation),
+            size,
+            name: name.into(),
+        })
     }
 
     /// A host-visible buffer filled with `data`.
@@ -69,7 +78,13 @@ impl Buffer {
         data: &[u8],
         usage: vk::BufferUsageFlags,
     ) -> GpuResult<Buffer> {
-        let mut b = Buffer::new(ctx, name, data.len() as u64, usage, MemoryLocation::CpuToGpu)?;
+        let mut b = Buffer::new(
+            ctx,
+            name,
+            data.len() as u64,
+            usage,
+            MemoryLocation::CpuToGpu,
+        )?;
         b.write(0, data);
         Ok(b)
     }

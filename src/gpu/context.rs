@@ -53,7 +53,11 @@ pub struct DeviceInfo {
 /// A resource waiting for the GPU to finish with it before it is destroyed.
 pub(crate) enum Garbage {
     Buffer(vk::Buffer, gpu_allocator::vulkan::Allocation),
-    Image(vk::Image, Vec<vk::ImageView>, gpu_allocator::vulkan::Allocation),
+    Image(
+        vk::Image,
+        Vec<vk::ImageView>,
+        gpu_allocator::vulkan::Allocation,
+    ),
 }
 
 /// Everything that outlives single resources. Shared through `Arc` by every wrapper so that
@@ -99,8 +103,8 @@ impl GpuContext {
         }
         let validation = want_validation && has_validation;
         // SAFETY: as above.
-        let extensions = unsafe { entry.enumerate_instance_extension_properties(None) }
-            .unwrap_or_default();
+        let extensions =
+            unsafe { entry.enumerate_instance_extension_properties(None) }.unwrap_or_default();
         let has_debug_utils = extensions.iter().any(|e| {
             e.extension_name_as_c_str()
                 .is_ok_and(|n| n == ash::ext::debug_utils::NAME)
@@ -120,6 +124,23 @@ impl GpuContext {
         if has_debug_utils {
             ext_names.push(ash::ext::debug_utils::NAME.as_ptr());
         }
+        // VkValidationFeaturesEXT belongs to VK_EXT_validation_features, which the validation
+        // layer itself provides; the layer ignores the struct unless it is enabled.
+        // SAFETY: plain enumeration call.
+        let layer_extensions = if validation {
+            unsafe { entry.enumerate_instance_extension_properties(Some(VALIDATION_LAYER)) }
+                .unwrap_or_default()
+        } else {
+            Vec::new()
+        };
+        let has_validation_features = layer_extensions.iter().any(|e| {
+            e.extension_name_as_c_str()
+                .is_ok_and(|n| n == ash::ext::validation_features::NAME)
+        });
+        let sync_validation = validation && desc.sync_validation && has_validation_features;
+        if sync_validation {
+            ext_names.push(ash::ext::validation_features::NAME.as_ptr());
+        }
         // Synchronization validation is switched on through VkValidationFeaturesEXT: the
         // 1.3.239 layer has no VK_EXT_layer_settings (../shared/DESIGN.md).
         let enabled_features = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
@@ -131,7 +152,7 @@ impl GpuContext {
             .application_info(&app_info)
             .enabled_layer_names(&layer_names)
             .enabled_extension_names(&ext_names);
-        if validation && desc.sync_validation {
+        if sync_validation {
             create_info = create_info.push_next(&mut validation_features);
         }
         if has_debug_utils {
@@ -142,9 +163,17 @@ impl GpuContext {
         let instance = match unsafe { entry.create_instance(&create_info, None) } {
             Ok(i) => i,
             Err(result @ vk::Result::ERROR_INCOMPATIBLE_DRIVER) => {
-                return Err(GpuError::NoDriver { call: "vkCreateInstance", result })
+                return Err(GpuError::NoDriver {
+                    call: "vkCreateInstance",
+                    result,
+                })
             }
-            Err(result) => return Err(GpuError::Vk { call: "vkCreateInstance", result }),
+            Err(result) => {
+                return Err(GpuError::Vk {
+                    call: "vkCreateInstance",
+                    result,
+                })
+            }
         };
         let debug = if has_debug_utils {
             Some(debug::Messenger::new(&entry, &instance, &debug_state)?)
@@ -164,8 +193,7 @@ impl GpuContext {
         // SAFETY: physical is a handle enumerated from this instance.
         let properties = unsafe { instance.get_physical_device_properties(physical) };
         let supported = unsafe { instance.get_physical_device_features(physical) };
-        let queue_props =
-            unsafe { instance.get_physical_device_queue_family_properties(physical) };
+        let queue_props = unsafe { instance.get_physical_device_queue_family_properties(physical) };
 
         // Features are enabled when present; the passes that need one check for it.
         let features = vk::PhysicalDeviceFeatures {
@@ -194,8 +222,8 @@ impl GpuContext {
             .queue_create_infos(&queue_info)
             .enabled_features(&features);
         // SAFETY: device_info is valid for the call.
-        let device = unsafe { instance.create_device(physical, &device_info, None) }
-            .vk("vkCreateDevice")?;
+        let device =
+            unsafe { instance.create_device(physical, &device_info, None) }.vk("vkCreateDevice")?;
         // SAFETY: family/index were requested above.
         let queue = unsafe { device.get_device_queue(queue_family, 0) };
 
@@ -207,10 +235,13 @@ impl GpuContext {
             buffer_device_address: false,
             allocation_sizes: Default::default(),
         })
-        .map_err(|source| GpuError::Alloc { name: "allocator".into(), source })?;
+        .map_err(|source| GpuError::Alloc {
+            name: "allocator".into(),
+            source,
+        })?;
 
-        let debug_utils_device = has_debug_utils
-            .then(|| ash::ext::debug_utils::Device::new(&instance, &device));
+        let debug_utils_device =
+            has_debug_utils.then(|| ash::ext::debug_utils::Device::new(&instance, &device));
 
         let mut driver_props = vk::PhysicalDeviceDriverProperties::default();
         let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver_props);
@@ -218,7 +249,9 @@ impl GpuContext {
         unsafe { instance.get_physical_device_properties2(physical, &mut props2) };
         let cstr = |s: &[c_char]| {
             // SAFETY: Vulkan strings are NUL-terminated within their fixed arrays.
-            unsafe { CStr::from_ptr(s.as_ptr()) }.to_string_lossy().into_owned()
+            unsafe { CStr::from_ptr(s.as_ptr()) }
+                .to_string_lossy()
+                .into_owned()
         };
         let v = properties.api_version;
         let info = DeviceInfo {
@@ -235,12 +268,15 @@ impl GpuContext {
             timestamp_period_ns: properties.limits.timestamp_period,
             timestamp_valid_bits: queue_props[queue_family as usize].timestamp_valid_bits,
             validation,
-            sync_validation: validation && desc.sync_validation,
+            sync_validation,
         };
 
         let pool_info = vk::CommandPoolCreateInfo::default()
             .queue_family_index(queue_family)
-            .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER | vk::CommandPoolCreateFlags::TRANSIENT);
+            .flags(
+                vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER
+                    | vk::CommandPoolCreateFlags::TRANSIENT,
+            );
         // SAFETY: valid device and create info.
         let oneshot_pool =
             unsafe { device.create_command_pool(&pool_info, None) }.vk("vkCreateCommandPool")?;
@@ -293,7 +329,8 @@ impl GpuContext {
     pub fn supports_format(&self, format: vk::Format, features: vk::FormatFeatureFlags) -> bool {
         // SAFETY: plain query.
         let props = unsafe {
-            self.instance.get_physical_device_format_properties(self.physical, format)
+            self.instance
+                .get_physical_device_format_properties(self.physical, format)
         };
         props.optimal_tiling_features.contains(features)
     }
@@ -388,12 +425,16 @@ impl GpuContext {
         // SAFETY: recording state.
         unsafe { self.device.end_command_buffer(raw) }.vk("vkEndCommandBuffer")?;
         // SAFETY: default fence create info.
-        let fence = unsafe { self.device.create_fence(&vk::FenceCreateInfo::default(), None) }
-            .vk("vkCreateFence")?;
+        let fence = unsafe {
+            self.device
+                .create_fence(&vk::FenceCreateInfo::default(), None)
+        }
+        .vk("vkCreateFence")?;
         let serial = self.submit(raw, fence);
         // SAFETY: fence is valid; we wait for our own submission.
         let waited = match &serial {
-            Ok(_) => unsafe { self.device.wait_for_fences(&[fence], true, u64::MAX) }.vk("vkWaitForFences"),
+            Ok(_) => unsafe { self.device.wait_for_fences(&[fence], true, u64::MAX) }
+                .vk("vkWaitForFences"),
             Err(_) => Ok(()),
         };
         // SAFETY: the submission has completed (or failed), so the buffer and fence are idle.
@@ -452,7 +493,10 @@ fn device_type_rank(t: vk::PhysicalDeviceType) -> u32 {
 }
 
 /// Prefer a discrete GPU; `--device`/`PRISM_DEVICE` picks by index or name substring.
-fn pick_device(instance: &ash::Instance, desc: &ContextDesc) -> GpuResult<(vk::PhysicalDevice, u32)> {
+fn pick_device(
+    instance: &ash::Instance,
+    desc: &ContextDesc,
+) -> GpuResult<(vk::PhysicalDevice, u32)> {
     // SAFETY: valid instance.
     let devices = match unsafe { instance.enumerate_physical_devices() } {
         Ok(d) if !d.is_empty() => d,
@@ -462,7 +506,12 @@ fn pick_device(instance: &ash::Instance, desc: &ContextDesc) -> GpuResult<(vk::P
                 result: vk::Result::ERROR_INITIALIZATION_FAILED,
             })
         }
-        Err(result) => return Err(GpuError::NoDriver { call: "vkEnumeratePhysicalDevices", result }),
+        Err(result) => {
+            return Err(GpuError::NoDriver {
+                call: "vkEnumeratePhysicalDevices",
+                result,
+            })
+        }
     };
     let mut candidates = Vec::new();
     for (index, &pd) in devices.iter().enumerate() {

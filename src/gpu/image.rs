@@ -29,8 +29,22 @@ pub struct ImageDesc {
 }
 
 impl ImageDesc {
-    pub fn d2(name: &str, format: vk::Format, width: u32, height: u32, usage: vk::ImageUsageFlags) -> Self {
-        ImageDesc { name: name.into(), format, width, height, layers: 1, usage, view: ImageViewKind::D2 }
+    pub fn d2(
+        name: &str,
+        format: vk::Format,
+        width: u32,
+        height: u32,
+        usage: vk::ImageUsageFlags,
+    ) -> Self {
+        ImageDesc {
+            name: name.into(),
+            format,
+            width,
+            height,
+            layers: 1,
+            usage,
+            view: ImageViewKind::D2,
+        }
     }
 }
 
@@ -66,13 +80,21 @@ impl Image {
         let info = vk::ImageCreateInfo::default()
             .image_type(vk::ImageType::TYPE_2D)
             .format(desc.format)
-            .extent(vk::Extent3D { width: desc.width.max(1), height: desc.height.max(1), depth: 1 })
+            .extent(vk::Extent3D {
+                width: desc.width.max(1),
+                height: desc.height.max(1),
+                depth: 1,
+            })
             .mip_levels(1)
             .array_layers(desc.layers.max(1))
             .samples(vk::SampleCountFlags::TYPE_1)
             .tiling(vk::ImageTiling::OPTIMAL)
             .usage(desc.usage)
-            .flags(if cube { vk::ImageCreateFlags::CUBE_COMPATIBLE } else { vk::ImageCreateFlags::empty() })
+            .flags(if cube {
+                vk::ImageCreateFlags::CUBE_COMPATIBLE
+            } else {
+                vk::ImageCreateFlags::empty()
+            })
             .initial_layout(vk::ImageLayout::UNDEFINED);
         // SAFETY: valid create info.
         let raw = unsafe { device.create_image(&info, None) }.vk("vkCreateImage")?;
@@ -96,7 +118,10 @@ impl Image {
             Err(source) => {
                 // SAFETY: unbound, unused image.
                 unsafe { device.destroy_image(raw, None) };
-                return Err(GpuError::Alloc { name: desc.name.clone(), source });
+                return Err(GpuError::Alloc {
+                    name: desc.name.clone(),
+                    source,
+                });
             }
         };
         // SAFETY: compatible memory.
@@ -135,7 +160,11 @@ impl Image {
                 layer_views.push(make_view(vk::ImageViewType::TYPE_2D, l, 1)?);
             }
         }
-        let array_view = if cube { Some(make_view(vk::ImageViewType::TYPE_2D_ARRAY, 0, layers)?) } else { None };
+        let array_view = if cube {
+            Some(make_view(vk::ImageViewType::TYPE_2D_ARRAY, 0, layers)?)
+        } else {
+            None
+        };
         Ok(Image {
             ctx: ctx.clone(),
             raw,
@@ -148,7 +177,10 @@ impl Image {
     }
 
     pub fn extent(&self) -> vk::Extent2D {
-        vk::Extent2D { width: self.desc.width, height: self.desc.height }
+        vk::Extent2D {
+            width: self.desc.width,
+            height: self.desc.height,
+        }
     }
     pub fn format(&self) -> vk::Format {
         self.desc.format
@@ -235,7 +267,10 @@ impl Sampler {
         // SAFETY: valid create info.
         let raw = unsafe { ctx.raw().create_sampler(&info, None) }.vk("vkCreateSampler")?;
         ctx.set_name(raw, name);
-        Ok(Sampler { ctx: ctx.clone(), raw })
+        Ok(Sampler {
+            ctx: ctx.clone(),
+            raw,
+        })
     }
 }
 

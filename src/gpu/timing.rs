@@ -32,7 +32,11 @@ impl TimestampPool {
         // SAFETY: valid create info.
         let raw = unsafe { ctx.raw().create_query_pool(&info, None) }.vk("vkCreateQueryPool")?;
         ctx.set_name(raw, name);
-        Ok(TimestampPool { ctx: ctx.clone(), raw, capacity })
+        Ok(TimestampPool {
+            ctx: ctx.clone(),
+            raw,
+            capacity,
+        })
     }
 
     pub fn capacity(&self) -> u32 {
@@ -63,7 +67,11 @@ impl TimestampPool {
             return Ok(None);
         }
         let bits = self.ctx.info.timestamp_valid_bits;
-        let mask = if bits >= 64 { u64::MAX } else { (1u64 << bits) - 1 };
+        let mask = if bits >= 64 {
+            u64::MAX
+        } else {
+            (1u64 << bits) - 1
+        };
         Ok(Some(data.iter().map(|d| d[0] & mask).collect()))
     }
 

@@ -3,8 +3,9 @@
 use std::sync::Arc;
 
 use crate::gpu::{
-    vk, Access, Attachment, Clear, DescriptorSet, DescriptorSetLayout, DescriptorWrite, Framebuffer, GpuContext,
-    GpuResult, GraphicsPipeline, PipelineLayout, RenderPass, RenderPassDesc, Sampler,
+    vk, Access, Attachment, Clear, DescriptorSet, DescriptorSetLayout, DescriptorWrite,
+    Framebuffer, GpuContext, GpuResult, GraphicsPipeline, PipelineLayout, RenderPass,
+    RenderPassDesc, Sampler,
 };
 use crate::graph::Frame;
 use crate::renderer::gpu_scene::GpuScene;
@@ -37,7 +38,10 @@ impl DeferredShadingPass {
             ctx,
             DEFERRED_SHADING,
             &RenderPassDesc {
-                colors: vec![Attachment { format: targets.hdr.format(), clear: true }],
+                colors: vec![Attachment {
+                    format: targets.hdr.format(),
+                    clear: true,
+                }],
                 depth: None,
                 depth_read_only: false,
             },
@@ -55,18 +59,59 @@ impl DeferredShadingPass {
         let set = set_layout.allocate(
             DEFERRED_SHADING,
             &[
-                DescriptorWrite::Sampled(BINDING_GBUF_NORMAL, targets.gbuf_normal.view(), nearest, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL),
-                DescriptorWrite::Sampled(BINDING_GBUF_ALBEDO, targets.gbuf_albedo.view(), nearest, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL),
-                DescriptorWrite::Sampled(BINDING_GBUF_DEPTH, targets.depth.view(), nearest, vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL),
+                DescriptorWrite::Sampled(
+                    BINDING_GBUF_NORMAL,
+                    targets.gbuf_normal.view(),
+                    nearest,
+                    vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                ),
+                DescriptorWrite::Sampled(
+                    BINDING_GBUF_ALBEDO,
+                    targets.gbuf_albedo.view(),
+                    nearest,
+                    vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                ),
+                DescriptorWrite::Sampled(
+                    BINDING_GBUF_DEPTH,
+                    targets.depth.view(),
+                    nearest,
+                    vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL,
+                ),
             ],
         )?;
-        let (layout, pipeline) =
-            fullscreen_pipeline(ctx, DEFERRED_SHADING, "shading/deferred.frag", &[frame_layout, &set_layout], &render_pass, &[])?;
-        let framebuffer = Framebuffer::new(ctx, DEFERRED_SHADING, &render_pass, &[targets.hdr.view()], targets.extent())?;
-        Ok(DeferredShadingPass { render_pass, _set_layout: set_layout, set, _layout: layout, pipeline, framebuffer, shadowed })
+        let (layout, pipeline) = fullscreen_pipeline(
+            ctx,
+            DEFERRED_SHADING,
+            "shading/deferred.frag",
+            &[frame_layout, &set_layout],
+            &render_pass,
+            &[],
+        )?;
+        let framebuffer = Framebuffer::new(
+            ctx,
+            DEFERRED_SHADING,
+            &render_pass,
+            &[targets.hdr.view()],
+            targets.extent(),
+        )?;
+        Ok(DeferredShadingPass {
+            render_pass,
+            _set_layout: set_layout,
+            set,
+            _layout: layout,
+            pipeline,
+            framebuffer,
+            shadowed,
+        })
     }
 
-    pub fn record<'a>(&'a self, frame: &mut Frame<'_, 'a>, scene: &GpuScene, targets: &Targets, frame_set: DescriptorSet) {
+    pub fn record<'a>(
+        &'a self,
+        frame: &mut Frame<'_, 'a>,
+        scene: &GpuScene,
+        targets: &Targets,
+        frame_set: DescriptorSet,
+    ) {
         let mut pass = frame
             .pass(DEFERRED_SHADING)
             .read(targets.gbuf_normal_id, Access::FragmentSampled)
@@ -78,7 +123,11 @@ impl DeferredShadingPass {
             pass = pass.read(targets.shadow_atlas_id, Access::FragmentSampled);
         }
         pass.record(move |cmd| {
-            cmd.begin_render_pass(&self.render_pass, &self.framebuffer, &[Clear::Color([0.0; 4])]);
+            cmd.begin_render_pass(
+                &self.render_pass,
+                &self.framebuffer,
+                &[Clear::Color([0.0; 4])],
+            );
             cmd.bind_graphics(&self.pipeline, &[frame_set, self.set]);
             cmd.draw(3, 1);
             cmd.end_render_pass();

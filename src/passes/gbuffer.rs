@@ -3,8 +3,9 @@
 use std::sync::Arc;
 
 use crate::gpu::{
-    vk, Access, Attachment, Blend, Clear, DepthState, DescriptorSet, DescriptorSetLayout, Framebuffer, GpuContext,
-    GpuResult, GraphicsPipeline, GraphicsPipelineDesc, PipelineLayout, RenderPass, RenderPassDesc, VertexLayout,
+    vk, Access, Attachment, Blend, Clear, DepthState, DescriptorSet, DescriptorSetLayout,
+    Framebuffer, GpuContext, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, PipelineLayout,
+    RenderPass, RenderPassDesc, VertexLayout,
 };
 use crate::graph::Frame;
 use crate::renderer::gpu_scene::GpuScene;
@@ -19,16 +20,29 @@ pub struct GBufferPass {
 }
 
 impl GBufferPass {
-    pub fn new(ctx: &Arc<GpuContext>, frame_layout: &DescriptorSetLayout, targets: &Targets) -> GpuResult<Self> {
+    pub fn new(
+        ctx: &Arc<GpuContext>,
+        frame_layout: &DescriptorSetLayout,
+        targets: &Targets,
+    ) -> GpuResult<Self> {
         let render_pass = RenderPass::new(
             ctx,
             GBUFFER,
             &RenderPassDesc {
                 colors: vec![
-                    Attachment { format: targets.gbuf_normal.format(), clear: true },
-                    Attachment { format: targets.gbuf_albedo.format(), clear: true },
+                    Attachment {
+                        format: targets.gbuf_normal.format(),
+                        clear: true,
+                    },
+                    Attachment {
+                        format: targets.gbuf_albedo.format(),
+                        clear: true,
+                    },
                 ],
-                depth: Some(Attachment { format: targets.depth.format(), clear: true }),
+                depth: Some(Attachment {
+                    format: targets.depth.format(),
+                    clear: true,
+                }),
                 depth_read_only: false,
             },
         )?;
@@ -54,13 +68,28 @@ impl GBufferPass {
             ctx,
             GBUFFER,
             &render_pass,
-            &[targets.gbuf_normal.view(), targets.gbuf_albedo.view(), targets.depth.view()],
+            &[
+                targets.gbuf_normal.view(),
+                targets.gbuf_albedo.view(),
+                targets.depth.view(),
+            ],
             targets.extent(),
         )?;
-        Ok(GBufferPass { render_pass, _layout: layout, pipeline, framebuffer })
+        Ok(GBufferPass {
+            render_pass,
+            _layout: layout,
+            pipeline,
+            framebuffer,
+        })
     }
 
-    pub fn record<'a>(&'a self, frame: &mut Frame<'_, 'a>, scene: &'a GpuScene, targets: &Targets, frame_set: DescriptorSet) {
+    pub fn record<'a>(
+        &'a self,
+        frame: &mut Frame<'_, 'a>,
+        scene: &'a GpuScene,
+        targets: &Targets,
+        frame_set: DescriptorSet,
+    ) {
         frame
             .pass(GBUFFER)
             .write(targets.gbuf_normal_id, Access::ColorAttachment)
@@ -71,7 +100,11 @@ impl GBufferPass {
                 cmd.begin_render_pass(
                     &self.render_pass,
                     &self.framebuffer,
-                    &[Clear::Color([0.0; 4]), Clear::Color([0.0; 4]), Clear::Depth(0.0)],
+                    &[
+                        Clear::Color([0.0; 4]),
+                        Clear::Color([0.0; 4]),
+                        Clear::Depth(0.0),
+                    ],
                 );
                 cmd.bind_graphics(&self.pipeline, &[frame_set]);
                 cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);

@@ -4,8 +4,9 @@
 use std::sync::Arc;
 
 use crate::gpu::{
-    vk, Access, Attachment, Blend, Clear, DepthState, Framebuffer, GpuContext, GpuResult, GraphicsPipeline,
-    GraphicsPipelineDesc, PipelineLayout, RenderPass, RenderPassDesc, VertexLayout,
+    vk, Access, Attachment, Blend, Clear, DepthState, Framebuffer, GpuContext, GpuResult,
+    GraphicsPipeline, GraphicsPipelineDesc, PipelineLayout, RenderPass, RenderPassDesc,
+    VertexLayout,
 };
 use crate::graph::Frame;
 use crate::renderer::gpu_scene::{GpuScene, ShadowFace};
@@ -30,12 +31,23 @@ impl ShadowMapPass {
             ctx,
             SHADOW_MAP,
             &RenderPassDesc {
-                colors: vec![Attachment { format: targets.shadow_atlas.format(), clear: true }],
-                depth: Some(Attachment { format: targets.shadow_depth.format(), clear: true }),
+                colors: vec![Attachment {
+                    format: targets.shadow_atlas.format(),
+                    clear: true,
+                }],
+                depth: Some(Attachment {
+                    format: targets.shadow_depth.format(),
+                    clear: true,
+                }),
                 depth_read_only: false,
             },
         )?;
-        let layout = PipelineLayout::new(ctx, SHADOW_MAP, &[], std::mem::size_of::<ShadowPush>() as u32)?;
+        let layout = PipelineLayout::new(
+            ctx,
+            SHADOW_MAP,
+            &[],
+            std::mem::size_of::<ShadowPush>() as u32,
+        )?;
         let pipeline = GraphicsPipeline::new(
             ctx,
             &GraphicsPipelineDesc {
@@ -59,11 +71,20 @@ impl ShadowMapPass {
                 ctx,
                 &format!("shadow_face_{}", face.layer),
                 &render_pass,
-                &[targets.shadow_atlas.layer_view(face.layer), targets.shadow_depth.layer_view(face.layer)],
+                &[
+                    targets.shadow_atlas.layer_view(face.layer),
+                    targets.shadow_depth.layer_view(face.layer),
+                ],
                 targets.shadow_atlas.extent(),
             )?);
         }
-        Ok(ShadowMapPass { render_pass, _layout: layout, pipeline, framebuffers, faces: scene.shadow_faces.clone() })
+        Ok(ShadowMapPass {
+            render_pass,
+            _layout: layout,
+            pipeline,
+            framebuffers,
+            faces: scene.shadow_faces.clone(),
+        })
     }
 
     pub fn record<'a>(&'a self, frame: &mut Frame<'_, 'a>, scene: &'a GpuScene, targets: &Targets) {
@@ -81,7 +102,11 @@ impl ShadowMapPass {
                     cmd.bind_graphics(&self.pipeline, &[]);
                     cmd.push_graphics(
                         &self.pipeline,
-                        &ShadowPush { view_proj: face.view_proj.to_cols_array_2d(), light: face.light, origin: face.origin },
+                        &ShadowPush {
+                            view_proj: face.view_proj.to_cols_array_2d(),
+                            light: face.light,
+                            origin: face.origin,
+                        },
                     );
                     cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
                     for d in &scene.draws {

@@ -7,14 +7,17 @@
 use std::sync::Arc;
 
 use crate::gpu::{
-    vk, Access, Attachment, Clear, DescriptorSet, DescriptorSetLayout, DescriptorWrite, Framebuffer, GpuContext,
-    GpuResult, GraphicsPipeline, PipelineLayout, RenderPass, RenderPassDesc, Sampler,
+    vk, Access, Attachment, Clear, DescriptorSet, DescriptorSetLayout, DescriptorWrite,
+    Framebuffer, GpuContext, GpuResult, GraphicsPipeline, PipelineLayout, RenderPass,
+    RenderPassDesc, Sampler,
 };
 use crate::graph::Frame;
 use crate::renderer::gpu_scene::GpuScene;
 use crate::renderer::plan::{REFLECTION_SINGLE, REFRACTION_SINGLE};
 use crate::renderer::targets::Targets;
-use crate::{BINDING_GBUF_DEPTH, BINDING_GBUF_NORMAL, SPECULAR_MODE_REFLECTION, SPECULAR_MODE_REFRACTION};
+use crate::{
+    BINDING_GBUF_DEPTH, BINDING_GBUF_NORMAL, SPECULAR_MODE_REFLECTION, SPECULAR_MODE_REFRACTION,
+};
 
 use super::{fullscreen_pipeline, FRAGMENT, SAMPLED};
 
@@ -51,7 +54,10 @@ impl SpecularSinglePass {
             ctx,
             name,
             &RenderPassDesc {
-                colors: vec![Attachment { format: targets.hdr.format(), clear: false }],
+                colors: vec![Attachment {
+                    format: targets.hdr.format(),
+                    clear: false,
+                }],
                 depth: None,
                 depth_read_only: false,
             },
@@ -59,23 +65,62 @@ impl SpecularSinglePass {
         let set_layout = DescriptorSetLayout::new(
             ctx,
             name,
-            &[(BINDING_GBUF_NORMAL, SAMPLED, FRAGMENT), (BINDING_GBUF_DEPTH, SAMPLED, FRAGMENT)],
+            &[
+                (BINDING_GBUF_NORMAL, SAMPLED, FRAGMENT),
+                (BINDING_GBUF_DEPTH, SAMPLED, FRAGMENT),
+            ],
             1,
         )?;
         let set = set_layout.allocate(
             name,
             &[
-                DescriptorWrite::Sampled(BINDING_GBUF_NORMAL, targets.gbuf_normal.view(), nearest, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL),
-                DescriptorWrite::Sampled(BINDING_GBUF_DEPTH, targets.depth.view(), nearest, vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL),
+                DescriptorWrite::Sampled(
+                    BINDING_GBUF_NORMAL,
+                    targets.gbuf_normal.view(),
+                    nearest,
+                    vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                ),
+                DescriptorWrite::Sampled(
+                    BINDING_GBUF_DEPTH,
+                    targets.depth.view(),
+                    nearest,
+                    vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL,
+                ),
             ],
         )?;
-        let (layout, pipeline) =
-            fullscreen_pipeline(ctx, name, "specular/single.frag", &[frame_layout, &set_layout], &render_pass, &[spec])?;
-        let framebuffer = Framebuffer::new(ctx, name, &render_pass, &[targets.hdr.view()], targets.extent())?;
-        Ok(SpecularSinglePass { name, render_pass, _set_layout: set_layout, set, _layout: layout, pipeline, framebuffer })
+        let (layout, pipeline) = fullscreen_pipeline(
+            ctx,
+            name,
+            "specular/single.frag",
+            &[frame_layout, &set_layout],
+            &render_pass,
+            &[spec],
+        )?;
+        let framebuffer = Framebuffer::new(
+            ctx,
+            name,
+            &render_pass,
+            &[targets.hdr.view()],
+            targets.extent(),
+        )?;
+        Ok(SpecularSinglePass {
+            name,
+            render_pass,
+            _set_layout: set_layout,
+            set,
+            _layout: layout,
+            pipeline,
+            framebuffer,
+        })
     }
 
-    pub fn record<'a>(&'a self, frame: &mut Frame<'_, 'a>, scene: &GpuScene, targets: &Targets, frame_set: DescriptorSet) {
+    pub fn record<'a>(
+        &'a self,
+        frame: &mut Frame<'_, 'a>,
+        scene: &GpuScene,
+        targets: &Targets,
+        frame_set: DescriptorSet,
+    ) {
         frame
             .pass(self.name)
             .read(targets.gbuf_normal_id, Access::FragmentSampled)

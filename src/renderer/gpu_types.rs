@@ -31,13 +31,18 @@ pub struct FrameUniforms {
     pub proj: [[f32; 4]; 4],
     pub view_proj: [[f32; 4]; 4],
     pub inv_view_proj: [[f32; 4]; 4],
+    pub inv_view: [[f32; 4]; 4],
     pub camera_position: [f32; 4],
+    pub clip: [f32; 4],
     pub viewport: [f32; 4],
     pub env_sh: [[f32; 4]; 9],
     pub info: [u32; 4],
     pub lights: [GpuLight; MAX_LIGHTS as usize],
 }
-const _: () = assert!(std::mem::size_of::<FrameUniforms>() == 4 * 64 + 2 * 16 + 9 * 16 + 16 + 128 * MAX_LIGHTS as usize);
+const _: () = assert!(
+    std::mem::size_of::<FrameUniforms>()
+        == 5 * 64 + 3 * 16 + 9 * 16 + 16 + 128 * MAX_LIGHTS as usize
+);
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]

@@ -12,8 +12,8 @@ use std::sync::Arc;
 use glam::{Mat4, Vec3};
 
 use crate::gpu::{
-    self, vk, Access, Buffer, CommandPool, DescriptorSet, DescriptorSetLayout, DescriptorWrite, GpuContext, GpuError,
-    MemoryLocation, Sampler, SamplerDesc, TimestampPool, TimestampQuery,
+    self, vk, Access, Buffer, CommandPool, DescriptorSet, DescriptorSetLayout, DescriptorWrite,
+    GpuContext, GpuError, MemoryLocation, Sampler, SamplerDesc, TimestampPool, TimestampQuery,
 };
 use crate::graph::{FrameGraph, ImageId};
 use crate::passes::deferred_shading::DeferredShadingPass;
@@ -22,7 +22,9 @@ use crate::passes::shadow_map::{ShadowMapPass, FAR_DISTANCE};
 use crate::passes::specular_single::{Mode, SpecularSinglePass};
 use crate::passes::tonemap::TonemapPass;
 use crate::scene::Scene;
-use crate::{BINDING_ENVIRONMENT, BINDING_FRAME, BINDING_MATERIALS, BINDING_SHADOW_2D, BINDING_SHADOW_CUBE};
+use crate::{
+    BINDING_ENVIRONMENT, BINDING_FRAME, BINDING_MATERIALS, BINDING_SHADOW_2D, BINDING_SHADOW_CUBE,
+};
 
 use gpu_scene::GpuScene;
 use gpu_types::FrameUniforms;
@@ -66,8 +68,16 @@ pub struct FrameTiming {
 impl FrameTiming {
     /// Frame time = last end - first start (../shared/DESIGN.md, rule 6).
     pub fn total_ms(&self) -> f64 {
-        let start = self.passes.iter().map(|p| p.start_ms).fold(f64::INFINITY, f64::min);
-        let end = self.passes.iter().map(|p| p.end_ms).fold(f64::NEG_INFINITY, f64::max);
+        let start = self
+            .passes
+            .iter()
+            .map(|p| p.start_ms)
+            .fold(f64::INFINITY, f64::min);
+        let end = self
+            .passes
+            .iter()
+            .map(|p| p.end_ms)
+            .fold(f64::NEG_INFINITY, f64::max);
         if self.passes.is_empty() {
             0.0
         } else {
@@ -127,7 +137,11 @@ impl Renderer {
             &mut graph,
             scene.camera.width,
             scene.camera.height,
-            if shadowed { scene.lights.len() as u32 } else { 0 },
+            if shadowed {
+                scene.lights.len() as u32
+            } else {
+                0
+            },
             shadow_size,
         )?;
 
@@ -139,10 +153,26 @@ impl Renderer {
             "frame",
             &[
                 (BINDING_FRAME, vk::DescriptorType::UNIFORM_BUFFER, stages),
-                (BINDING_MATERIALS, vk::DescriptorType::STORAGE_BUFFER, stages),
-                (BINDING_ENVIRONMENT, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, stages),
-                (BINDING_SHADOW_CUBE, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, stages),
-                (BINDING_SHADOW_2D, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, stages),
+                (
+                    BINDING_MATERIALS,
+                    vk::DescriptorType::STORAGE_BUFFER,
+                    stages,
+                ),
+                (
+                    BINDING_ENVIRONMENT,
+                    vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+                    stages,
+                ),
+                (
+                    BINDING_SHADOW_CUBE,
+                    vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+                    stages,
+                ),
+                (
+                    BINDING_SHADOW_2D,
+                    vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+                    stages,
+                ),
             ],
             FRAMES_IN_FLIGHT as u32,
         )?;
@@ -161,9 +191,24 @@ impl Renderer {
                 &[
                     DescriptorWrite::Uniform(BINDING_FRAME, &ubo),
                     DescriptorWrite::Storage(BINDING_MATERIALS, &gpu_scene.materials),
-                    DescriptorWrite::Sampled(BINDING_ENVIRONMENT, gpu_scene.environment.view(), &latlong, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL),
-                    DescriptorWrite::Sampled(BINDING_SHADOW_CUBE, targets.shadow_atlas.view(), &nearest, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL),
-                    DescriptorWrite::Sampled(BINDING_SHADOW_2D, targets.shadow_atlas.array_view(), &nearest, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL),
+                    DescriptorWrite::Sampled(
+                        BINDING_ENVIRONMENT,
+                        gpu_scene.environment.view(),
+                        &latlong,
+                        vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                    ),
+                    DescriptorWrite::Sampled(
+                        BINDING_SHADOW_CUBE,
+                        targets.shadow_atlas.view(),
+                        &nearest,
+                        vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                    ),
+                    DescriptorWrite::Sampled(
+                        BINDING_SHADOW_2D,
+                        targets.shadow_atlas.array_view(),
+                        &nearest,
+                        vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                    ),
                 ],
             )?;
             frame_buffers.push(ubo);
@@ -180,16 +225,32 @@ impl Renderer {
         })?;
 
         let passes = Passes {
-            shadow_map: if shadowed { Some(ShadowMapPass::new(ctx, &gpu_scene, &targets)?) } else { None },
+            shadow_map: if shadowed {
+                Some(ShadowMapPass::new(ctx, &gpu_scene, &targets)?)
+            } else {
+                None
+            },
             gbuffer: GBufferPass::new(ctx, &frame_layout, &targets)?,
             deferred: DeferredShadingPass::new(ctx, &frame_layout, &targets, &nearest, shadowed)?,
             refraction_single: if plan::has(&plan, plan::REFRACTION_SINGLE) {
-                Some(SpecularSinglePass::new(ctx, Mode::Refraction, &frame_layout, &targets, &nearest)?)
+                Some(SpecularSinglePass::new(
+                    ctx,
+                    Mode::Refraction,
+                    &frame_layout,
+                    &targets,
+                    &nearest,
+                )?)
             } else {
                 None
             },
             reflection_single: if plan::has(&plan, plan::REFLECTION_SINGLE) {
-                Some(SpecularSinglePass::new(ctx, Mode::Reflection, &frame_layout, &targets, &nearest)?)
+                Some(SpecularSinglePass::new(
+                    ctx,
+                    Mode::Reflection,
+                    &frame_layout,
+                    &targets,
+                    &nearest,
+                )?)
             } else {
                 None
             },
@@ -199,16 +260,26 @@ impl Renderer {
         let cam = &scene.camera;
         let view = cam.view();
         // Near plane scaled to the scene, so that the tiny and the huge behave alike.
-        let extent = gpu_scene.bounds_radius.max(cam.position.distance(gpu_scene.bounds_center));
-        let proj = camera_projection(cam.vfov_deg, cam.width as f32 / cam.height as f32, (extent * 1e-5).max(1e-12));
+        let extent = gpu_scene
+            .bounds_radius
+            .max(cam.position.distance(gpu_scene.bounds_center));
+        let near = (extent * 1e-5).max(1e-12);
+        let proj = camera_projection(cam.vfov_deg, cam.width as f32 / cam.height as f32, near);
         let view_proj = proj * view;
         let mut uniforms = FrameUniforms {
             view: view.to_cols_array_2d(),
             proj: proj.to_cols_array_2d(),
             view_proj: view_proj.to_cols_array_2d(),
             inv_view_proj: view_proj.inverse().to_cols_array_2d(),
+            inv_view: view.inverse().to_cols_array_2d(),
             camera_position: Vec3::extend(cam.position, scene.render.exposure).to_array(),
-            viewport: [cam.width as f32, cam.height as f32, 1.0 / cam.width as f32, 1.0 / cam.height as f32],
+            clip: [near, 0.0, 0.0, 0.0],
+            viewport: [
+                cam.width as f32,
+                cam.height as f32,
+                1.0 / cam.width as f32,
+                1.0 / cam.height as f32,
+            ],
             env_sh: gpu_scene.env_sh,
             info: [gpu_scene.lights.len() as u32, 0, 0, 0],
             lights: Default::default(),
@@ -219,7 +290,11 @@ impl Renderer {
 
         let mut timestamps = Vec::new();
         for i in 0..FRAMES_IN_FLIGHT {
-            timestamps.push(TimestampPool::new(ctx, &format!("timestamps_{i}"), 2 * plan.len() as u32)?);
+            timestamps.push(TimestampPool::new(
+                ctx,
+                &format!("timestamps_{i}"),
+                2 * plan.len() as u32,
+            )?);
         }
         Ok(Renderer {
             passes,
@@ -258,12 +333,37 @@ impl Renderer {
         self.targets.height
     }
 
+    /// Test-only fault injection: stop emitting barriers for the target named `name`
+    /// (see [`FrameGraph::skip_barriers_for_tests`]).
+    #[doc(hidden)]
+    pub fn skip_barriers_for_tests(&mut self, name: &str) {
+        let t = &self.targets;
+        let ids = [
+            t.gbuf_normal_id,
+            t.gbuf_albedo_id,
+            t.depth_id,
+            t.hdr_id,
+            t.ldr_id,
+            t.shadow_atlas_id,
+            t.shadow_depth_id,
+        ];
+        for id in ids {
+            if self.graph.image_name(id) == name {
+                self.graph.skip_barriers_for_tests(id);
+            }
+        }
+    }
+
     fn collect_slot(&mut self, slot: usize) -> Result<(), RenderError> {
         if let Some((frame, queries)) = self.pending[slot].take() {
             let pool = &self.timestamps[slot];
             let last = queries.iter().map(|q| q.end + 1).max().unwrap_or(0);
             if let Some(ticks) = pool.read_ticks(last)? {
-                let origin = queries.iter().map(|q| ticks[q.start as usize]).min().unwrap_or(0);
+                let origin = queries
+                    .iter()
+                    .map(|q| ticks[q.start as usize])
+                    .min()
+                    .unwrap_or(0);
                 let passes = queries
                     .iter()
                     .map(|q| PassTime {
@@ -272,7 +372,11 @@ impl Renderer {
                         end_ms: pool.ticks_to_ms(origin, ticks[q.end as usize]),
                     })
                     .collect();
-                self.completed.push(FrameTiming { frame, gpu_start_ms: pool.ticks_to_ms(0, origin), passes });
+                self.completed.push(FrameTiming {
+                    frame,
+                    gpu_start_ms: pool.ticks_to_ms(0, origin),
+                    passes,
+                });
             }
         }
         Ok(())
@@ -288,7 +392,16 @@ impl Renderer {
         self.uniforms.info[1] = self.frame_index as u32;
         self.frame_buffers[slot].write(0, bytemuck::bytes_of(&self.uniforms));
 
-        let Renderer { passes, frame_sets, scene, targets, timestamps, commands, graph, .. } = self;
+        let Renderer {
+            passes,
+            frame_sets,
+            scene,
+            targets,
+            timestamps,
+            commands,
+            graph,
+            ..
+        } = self;
         let frame_set = frame_sets[slot];
         let cmd = commands.begin(slot)?;
         let mut frame = graph.frame();
@@ -296,7 +409,9 @@ impl Renderer {
             p.record(&mut frame, scene, targets);
         }
         passes.gbuffer.record(&mut frame, scene, targets, frame_set);
-        passes.deferred.record(&mut frame, scene, targets, frame_set);
+        passes
+            .deferred
+            .record(&mut frame, scene, targets, frame_set);
         if let Some(p) = &passes.refraction_single {
             p.record(&mut frame, scene, targets, frame_set);
         }
@@ -304,7 +419,10 @@ impl Renderer {
             p.record(&mut frame, scene, targets, frame_set);
         }
         passes.tonemap.record(&mut frame, targets, frame_set);
-        debug_assert_eq!(frame.pass_names(), self.plan.iter().map(|p| p.name).collect::<Vec<_>>());
+        debug_assert_eq!(
+            frame.pass_names(),
+            self.plan.iter().map(|p| p.name).collect::<Vec<_>>()
+        );
         let queries = frame.execute(&cmd, Some(&timestamps[slot]));
         drop(cmd);
         self.commands.submit(slot)?;
@@ -331,12 +449,26 @@ impl Renderer {
     fn read_image(&mut self, id: ImageId, bytes_per_texel: u64) -> Result<Vec<u8>, RenderError> {
         self.finish()?;
         let (w, h) = (self.targets.width as u64, self.targets.height as u64);
-        let buffer = Buffer::new(&self.ctx, "readback", w * h * bytes_per_texel, vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu)?;
+        let buffer = Buffer::new(
+            &self.ctx,
+            "readback",
+            w * h * bytes_per_texel,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuToCpu,
+        )?;
         let buffer_id = self.graph.register_buffer(&buffer);
-        let image = if id == self.targets.hdr_id { &self.targets.hdr } else { &self.targets.ldr };
+        let image = if id == self.targets.hdr_id {
+            &self.targets.hdr
+        } else {
+            &self.targets.ldr
+        };
         let graph = &mut self.graph;
         self.ctx.one_shot(|cmd| {
-            graph.access_now(cmd, &[(id, Access::TransferRead)], &[(buffer_id, Access::TransferWrite)]);
+            graph.access_now(
+                cmd,
+                &[(id, Access::TransferRead)],
+                &[(buffer_id, Access::TransferWrite)],
+            );
             cmd.copy_image_to_buffer(image, &buffer);
             graph.access_now(cmd, &[], &[(buffer_id, Access::HostRead)]);
         })?;

@@ -1,0 +1,155 @@
+//! Helpers shared by the integration tests: a validated Vulkan context, small renders of
+//! benchmark scenes, and golden-image comparison.
+#![allow(dead_code)] // each test binary uses a different subset
+
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use prism::gpu::{ContextDesc, GpuContext};
+use prism::metrics::image::{diff_heatmap_rgba8, fraction_differing_rgba8, psnr_rgba8};
+use prism::renderer::Renderer;
+use prism::scene::{self, Scene};
+
+/// Test renders are small (CI has 2 cores and lavapipe): 96^2 unless a test says otherwise.
+pub const SIZE: u32 = 96;
+
+/// A context with the validation layer on (and synchronization validation if `sync`).
+/// Under CI=true a missing validation layer is a failure: without it "zero validation
+/// errors" would be vacuous.
+pub fn context(sync: bool) -> Arc<GpuContext> {
+    let ctx = GpuContext::new(&ContextDesc {
+        validation: true,
+        sync_validation: sync,
+        device: None,
+    })
+    .expect("cannot create a Vulkan context (is mesa-vulkan-drivers installed?)");
+    if std::env::var("CI").is_ok_and(|v| v == "true") {
+        assert!(
+            ctx.info.validation,
+            "CI=true but VK_LAYER_KHRONOS_validation is not installed"
+        );
+    }
+    ctx
+}
+
+pub fn assert_no_validation_errors(ctx: &GpuContext) {
+    let n = ctx.validation_errors();
+    assert_eq!(
+        n,
+        0,
+        "validation errors:\n{}",
+        ctx.validation_messages().join("\n")
+    );
+}
+
+/// A benchmark scene at `size`^2 with extra overrides.
+pub fn scene(name: &str, size: u32, overrides: &[&str]) -> Scene {
+    let mut o: Vec<String> = vec![
+        format!("camera.width={size}"),
+        format!("camera.height={size}"),
+    ];
+    o.extend(overrides.iter().map(|s| s.to_string()));
+    scene::load(&scene::benchmark_scene_path(name), &o).unwrap_or_else(|e| panic!("{name}: {e}"))
+}
+
+pub struct Rendered {
+    pub width: u32,
+    pub height: u32,
+    pub hdr: Vec<f32>,
+    pub ldr: Vec<u8>,
+    pub passes: Vec<String>,
+}
+
+impl Rendered {
+    /// Linear RGB at pixel (i, j), j = 0 the top row.
+    pub fn radiance(&self, i: u32, j: u32) -> [f32; 3] {
+        let k = 4 * (j * self.width + i) as usize;
+        [self.hdr[k], self.hdr[k + 1], self.hdr[k + 2]]
+    }
+}
+
+/// Render one frame of `scene` on `ctx`, read back HDR and LDR, and check validation.
+pub fn render_on(ctx: &Arc<GpuContext>, scene: &Scene) -> Rendered {
+    let mut r = Renderer::new(ctx, scene).expect("renderer");
+    r.render_frame().expect("frame");
+    let hdr = r.read_hdr().expect("hdr readback");
+    let ldr = r.read_ldr().expect("ldr readback");
+    let passes = r.plan().iter().map(|p| p.name.to_string()).collect();
+    let out = Rendered {
+        width: r.width(),
+        height: r.height(),
+        hdr,
+        ldr,
+        passes,
+    };
+    drop(r);
+    assert_no_validation_errors(ctx);
+    out
+}
+
+pub fn render(scene: &Scene) -> Rendered {
+    let ctx = context(false);
+    render_on(&ctx, scene)
+}
+
+pub fn golden_dir() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/golden")
+}
+
+/// Compare `image` with tests/golden/NAME.png.
+///
+/// Metric and threshold: lavapipe renders bit-identically run to run on one machine, but
+/// another CPU (AVX2 vs AVX-512 llvmpipe), LLVM or Mesa version may round differently, which
+/// moves a few silhouette and shadow-edge pixels and shifts smooth regions by a level or
+/// two. So the comparison allows at most 1% of pixels to differ by more than 8/255 in any
+/// channel, and needs PSNR >= 35 dB overall. A real change to a technique (for example the
+/// ior 1.5 -> 1.45 check in tests/golden.rs, or a broken shadow) moves far more pixels.
+///
+/// `PRISM_UPDATE_GOLDEN=1` rewrites the reference. A missing reference is written and the
+/// test passes, except under CI=true, where it fails. On failure NAME-actual.png and
+/// NAME-diff.png are written beside the reference.
+pub fn assert_golden(name: &str, r: &Rendered) {
+    let dir = golden_dir();
+    let path = dir.join(format!("{name}.png"));
+    let actual_path = dir.join(format!("{name}-actual.png"));
+    let diff_path = dir.join(format!("{name}-diff.png"));
+    let save = |p: &PathBuf, data: &[u8]| {
+        image::RgbaImage::from_raw(r.width, r.height, data.to_vec())
+            .unwrap()
+            .save(p)
+            .unwrap();
+    };
+    let update = std::env::var("PRISM_UPDATE_GOLDEN").is_ok_and(|v| v == "1");
+    if update || !path.exists() {
+        assert!(
+            update || !std::env::var("CI").is_ok_and(|v| v == "true"),
+            "golden image {} is missing (CI=true): run the tests locally with PRISM_UPDATE_GOLDEN=1 and commit it",
+            path.display()
+        );
+        save(&path, &r.ldr);
+        eprintln!("wrote golden image {}", path.display());
+        return;
+    }
+    let golden = image::open(&path).expect("golden image").to_rgba8();
+    assert_eq!(
+        (golden.width(), golden.height()),
+        (r.width, r.height),
+        "{name}: golden size differs"
+    );
+    let golden = golden.into_raw();
+    let differing = fraction_differing_rgba8(&r.ldr, &golden, 8);
+    let psnr = psnr_rgba8(&r.ldr, &golden);
+    if differing > 0.01 || psnr < 35.0 {
+        save(&actual_path, &r.ldr);
+        save(&diff_path, &diff_heatmap_rgba8(&r.ldr, &golden, 32));
+        panic!(
+            "{name}: {:.2}% of pixels differ by more than 8/255 (limit 1%), PSNR {psnr:.1} dB (limit 35); \
+             see {} and {}",
+            differing * 100.0,
+            actual_path.display(),
+            diff_path.display()
+        );
+    }
+    let _ = std::fs::remove_file(&actual_path);
+    let _ = std::fs::remove_file(&diff_path);
+}

@@ -1,0 +1,86 @@
+//! The validation check can fail. A deliberately missing barrier is reported, both in a
+//! test-only pass (a write-after-write hazard that only synchronization validation sees) and
+//! in the real renderer (a skipped layout transition). Without these, "zero validation
+//! errors" in the other tests would prove nothing.
+mod common;
+
+use prism::gpu::{vk, Access, Buffer, MemoryLocation};
+use prism::graph::FrameGraph;
+
+/// Two test-only passes that both write one buffer (transfer fills); the graph would put a
+/// barrier between them. Returns the validation error count.
+fn two_writes(skip_barrier: bool) -> Option<u64> {
+    let ctx = common::context(true);
+    if !ctx.info.sync_validation {
+        assert!(
+            !std::env::var("CI").is_ok_and(|v| v == "true"),
+            "CI needs the validation layer"
+        );
+        eprintln!("synchronization validation unavailable: skipping");
+        return None;
+    }
+    let buffer = Buffer::new(
+        &ctx,
+        "test_data",
+        256,
+        vk::BufferUsageFlags::TRANSFER_DST,
+        MemoryLocation::GpuOnly,
+    )
+    .unwrap();
+    let mut graph = FrameGraph::new();
+    let id = graph.register_buffer(&buffer);
+    if skip_barrier {
+        graph.skip_buffer_barriers_for_tests(id);
+    }
+    let buffer = &buffer;
+    ctx.one_shot(|cmd| {
+        let mut frame = graph.frame();
+        for (name, value) in [("first_write", 1), ("second_write", 2)] {
+            frame
+                .pass(name)
+                .write_buffer(id, Access::TransferWrite)
+                .record(move |cmd| cmd.fill_buffer(buffer, value));
+        }
+        frame.execute(cmd, None);
+    })
+    .unwrap();
+    ctx.wait_idle().unwrap();
+    Some(ctx.validation_errors())
+}
+
+#[test]
+fn missing_barrier_in_a_test_pass_is_reported_by_sync_validation() {
+    if let Some(errors) = two_writes(true) {
+        assert!(
+            errors > 0,
+            "a write-after-write hazard without a barrier must be reported"
+        );
+    }
+}
+
+#[test]
+fn the_same_passes_with_the_graph_barriers_are_clean() {
+    if let Some(errors) = two_writes(false) {
+        assert_eq!(errors, 0);
+    }
+}
+
+/// Skip the G-buffer normal target's barriers in the real renderer: the gbuffer pass then
+/// renders into an image still in UNDEFINED layout, and the validation layer must say so.
+#[test]
+fn skipped_transition_in_the_renderer_is_reported() {
+    let ctx = common::context(false);
+    if !ctx.info.validation {
+        return;
+    }
+    let scene = common::scene("sphere_env", 32, &[]);
+    let mut r = prism::renderer::Renderer::new(&ctx, &scene).unwrap();
+    r.skip_barriers_for_tests("gbuf_normal");
+    r.render_frame().unwrap();
+    r.finish().unwrap();
+    drop(r);
+    assert!(
+        ctx.validation_errors() > 0,
+        "a missing layout transition must be reported"
+    );
+}
