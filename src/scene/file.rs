@@ -336,8 +336,9 @@ pub(crate) fn parse_override(raw: &str) -> Result<Override, SceneError> {
     })
 }
 
-/// Applies `ov` to `doc`. Intermediate tables may be created only under `render`
-/// (technique parameters are open-ended); anywhere else the path must exist.
+/// Applies `ov` to `doc`. The last key may be new (a key left at its default); missing
+/// intermediate tables are created only under `render` (technique parameters are
+/// open-ended); anywhere else the tables on the path must exist.
 pub(crate) fn apply_override(
     doc: &mut toml_edit::DocumentMut,
     ov: &Override,
@@ -391,11 +392,13 @@ fn set_table_like(
     if last {
         match t.get_mut(seg) {
             Some(item) => replace_item(item, value, segs, depth),
-            None if create => {
+            // A key of an existing table may be added: it may be a real key left at its
+            // default. A misspelt one is then rejected by the schema (deny_unknown_fields),
+            // with an error that names this override.
+            None => {
                 t.insert(seg, toml_edit::Item::Value(value));
                 Ok(())
             }
-            None => Err(missing(segs, depth)),
         }
     } else {
         if t.get(seg).is_none() {
@@ -550,12 +553,13 @@ impl Source {
         })
     }
 
-    /// The override whose value contains byte `offset` of the effective text.
+    /// The override whose key or value contains byte `offset` of the effective text
+    /// (an unknown-field error points at the key an override added).
     fn override_at(&self, offset: usize) -> Option<&Override> {
+        let within = |r: &Range<usize>| r.start <= offset && offset < r.end.max(r.start + 1);
         self.overrides.iter().rev().find(|o| {
-            self.values
-                .get(&o.dotted())
-                .is_some_and(|r| r.start <= offset && offset < r.end.max(r.start + 1))
+            let d = o.dotted();
+            self.values.get(&d).is_some_and(within) || self.keys.get(&d).is_some_and(within)
         })
     }
 

@@ -1,0 +1,70 @@
+//! The pass list is derived from the scene (model only what the scene requires), and
+//! `prism passes` prints it with reasons.
+mod common;
+
+use prism::renderer::plan::plan;
+
+fn names(scene: &str, overrides: &[&str]) -> Vec<&'static str> {
+    plan(&common::scene(scene, 64, overrides)).iter().map(|p| p.name).collect()
+}
+
+#[test]
+fn pass_lists_follow_the_scene() {
+    // No light: no shadow map. A refractor: the refraction baseline.
+    assert_eq!(names("sphere_env", &[]), ["gbuffer", "deferred_shading", "refraction_single", "tonemap"]);
+    // A point light and diffuse receivers: a shadow map first.
+    assert_eq!(
+        names("sphere_nearby", &[]),
+        ["shadow_map", "gbuffer", "deferred_shading", "refraction_single", "tonemap"]
+    );
+    // A mirror and no refractor: reflection, no refraction pass.
+    assert_eq!(
+        names("room_mirror", &[]),
+        ["shadow_map", "gbuffer", "deferred_shading", "reflection_single", "tonemap"]
+    );
+    assert_eq!(
+        names("metal_ring", &[]),
+        ["shadow_map", "gbuffer", "deferred_shading", "reflection_single", "tonemap"]
+    );
+    // room_glass: the glass ball refracts; nothing reflects only.
+    assert_eq!(
+        names("room_glass", &[]),
+        ["shadow_map", "gbuffer", "deferred_shading", "refraction_single", "tonemap"]
+    );
+}
+
+#[test]
+fn a_scene_without_refractors_records_no_refraction_pass() {
+    // Turning sphere_nearby's glass into a diffuse material removes the refraction pass.
+    let n = names("sphere_nearby", &["objects.3.material=\"bunny\""]);
+    assert!(!n.contains(&"refraction_single"), "{n:?}");
+    assert!(n.contains(&"shadow_map"));
+}
+
+#[test]
+fn renderer_records_exactly_the_planned_passes() {
+    let ctx = common::context(false);
+    for name in ["sphere_env", "sphere_nearby", "metal_ring"] {
+        let s = common::scene(name, 32, &[]);
+        let mut r = prism::renderer::Renderer::new(&ctx, &s).unwrap();
+        r.render_frame().unwrap();
+        r.finish().unwrap();
+        let t = r.take_timings();
+        let recorded: Vec<_> = t[0].passes.iter().map(|p| p.name.as_str()).collect();
+        let planned: Vec<_> = plan(&s).iter().map(|p| p.name).collect();
+        assert_eq!(recorded, planned, "{name}");
+    }
+    common::assert_no_validation_errors(&ctx);
+}
+
+#[test]
+fn prism_passes_prints_the_passes_and_why() {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_prism")).args(["passes", "sphere_nearby"]).output().unwrap();
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("shadow_map") && text.contains("light 0 (point at (2, 5, 3))"), "{text}");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_prism")).args(["passes", "sphere_env", "--json"]).output().unwrap();
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let names: Vec<_> = json.as_array().unwrap().iter().map(|p| p["name"].as_str().unwrap().to_string()).collect();
+    assert_eq!(names, ["gbuffer", "deferred_shading", "refraction_single", "tonemap"]);
+}
