@@ -16,6 +16,13 @@ impl OutputFile {
         let name = target
             .file_name()
             .with_context(|| format!("{}: output path has no file name", target.display()))?;
+        if target.is_dir() {
+            anyhow::bail!(
+                "{}: cannot write output: it is a directory\n  hint: give a file name, e.g. {}",
+                target.display(),
+                target.join("out.png").display()
+            );
+        }
         let dir = match target.parent() {
             Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
             _ => PathBuf::from("."),
