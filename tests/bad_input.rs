@@ -42,7 +42,10 @@ impl Case {
     }
 
     fn listing(&self) -> Vec<String> {
-        let mut v: Vec<_> = std::fs::read_dir(&self.dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+        let mut v: Vec<_> = std::fs::read_dir(&self.dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
         v.sort();
         v
     }
@@ -189,7 +192,13 @@ fn unwritable_output_path() {
     assert!(e.contains("does not exist") && !e.contains("panicked"), "{e}");
     // A directory as the output path.
     std::fs::create_dir(c.dir.join("adir")).unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_prism")).arg("render").arg(&scene).arg("-o").arg(c.dir.join("adir")).output().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_prism"))
+        .arg("render")
+        .arg(&scene)
+        .arg("-o")
+        .arg(c.dir.join("adir"))
+        .output()
+        .unwrap();
     let e = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1));
     assert!(e.contains("is a directory"), "{e}");

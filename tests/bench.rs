@@ -9,7 +9,19 @@ fn bench_writes_table_json_and_a_valid_chrome_trace() {
     std::fs::create_dir_all(&dir).unwrap();
     let (json, trace) = (dir.join("bench.json"), dir.join("trace.json"));
     let out = Command::new(env!("CARGO_BIN_EXE_prism"))
-        .args(["bench", "sphere_nearby", "--width", "48", "--height", "48", "--frames", "5", "--warmup", "2", "--validation"])
+        .args([
+            "bench",
+            "sphere_nearby",
+            "--width",
+            "48",
+            "--height",
+            "48",
+            "--frames",
+            "5",
+            "--warmup",
+            "2",
+            "--validation",
+        ])
         .arg("--json")
         .arg(&json)
         .arg("--trace")
@@ -32,7 +44,8 @@ fn bench_writes_table_json_and_a_valid_chrome_trace() {
     let names: Vec<_> = report["passes"].as_array().unwrap().iter().map(|p| p["name"].as_str().unwrap()).collect();
     assert_eq!(names, passes);
     for p in report["passes"].as_array().unwrap() {
-        let (min, med, max) = (p["min_ms"].as_f64().unwrap(), p["median_ms"].as_f64().unwrap(), p["max_ms"].as_f64().unwrap());
+        let (min, med, max) =
+            (p["min_ms"].as_f64().unwrap(), p["median_ms"].as_f64().unwrap(), p["max_ms"].as_f64().unwrap());
         assert!(0.0 <= min && min <= med && med <= max, "{p}");
     }
 

@@ -36,7 +36,8 @@ fn golden_comparison_detects_small_changes() {
     if !golden_dir().join("sphere_env.png").exists() {
         return; // written by golden_sphere_env on first run
     }
-    let (differing, psnr) = golden_difference("sphere_env", &render(&scene("sphere_env", GOLDEN_SIZE, &["materials.glass.ior=1.45"])));
+    let (differing, psnr) =
+        golden_difference("sphere_env", &render(&scene("sphere_env", GOLDEN_SIZE, &["materials.glass.ior=1.45"])));
     eprintln!("ior 1.45 vs 1.5: {:.2}% of pixels differ, PSNR {psnr:.1} dB", differing * 100.0);
     assert!(differing > MAX_DIFFERING || psnr < MIN_PSNR, "ior 1.45 passed as 1.5: {differing} {psnr}");
     if golden_dir().join("sphere_nearby.png").exists() {

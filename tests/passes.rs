@@ -22,15 +22,9 @@ fn pass_lists_follow_the_scene() {
         names("room_mirror", &[]),
         ["shadow_map", "gbuffer", "deferred_shading", "reflection_single", "tonemap"]
     );
-    assert_eq!(
-        names("metal_ring", &[]),
-        ["shadow_map", "gbuffer", "deferred_shading", "reflection_single", "tonemap"]
-    );
+    assert_eq!(names("metal_ring", &[]), ["shadow_map", "gbuffer", "deferred_shading", "reflection_single", "tonemap"]);
     // room_glass: the glass ball refracts; nothing reflects only.
-    assert_eq!(
-        names("room_glass", &[]),
-        ["shadow_map", "gbuffer", "deferred_shading", "refraction_single", "tonemap"]
-    );
+    assert_eq!(names("room_glass", &[]), ["shadow_map", "gbuffer", "deferred_shading", "refraction_single", "tonemap"]);
 }
 
 #[test]
@@ -59,11 +53,15 @@ fn renderer_records_exactly_the_planned_passes() {
 
 #[test]
 fn prism_passes_prints_the_passes_and_why() {
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_prism")).args(["passes", "sphere_nearby"]).output().unwrap();
+    let out =
+        std::process::Command::new(env!("CARGO_BIN_EXE_prism")).args(["passes", "sphere_nearby"]).output().unwrap();
     assert!(out.status.success());
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(text.contains("shadow_map") && text.contains("light 0 (point at (2, 5, 3))"), "{text}");
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_prism")).args(["passes", "sphere_env", "--json"]).output().unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_prism"))
+        .args(["passes", "sphere_env", "--json"])
+        .output()
+        .unwrap();
     let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let names: Vec<_> = json.as_array().unwrap().iter().map(|p| p["name"].as_str().unwrap().to_string()).collect();
     assert_eq!(names, ["gbuffer", "deferred_shading", "refraction_single", "tonemap"]);

@@ -47,10 +47,7 @@ fn pixel_of(s: &prism::scene::Scene, p: Vec3) -> (u32, u32) {
     let ndc = clip.truncate() / clip.w;
     let u = (ndc.x * 0.5 + 0.5) * cam.width as f32;
     let v = (ndc.y * 0.5 + 0.5) * cam.height as f32;
-    assert!(
-        u >= 0.0 && v >= 0.0 && u < cam.width as f32 && v < cam.height as f32,
-        "{p} is off screen"
-    );
+    assert!(u >= 0.0 && v >= 0.0 && u < cam.width as f32 && v < cam.height as f32, "{p} is off screen");
     (u as u32, v as u32)
 }
 
@@ -68,10 +65,7 @@ fn deferred_lighting_matches_closed_form() {
     let expected = 0.8 / std::f32::consts::PI * 50.0 * 5.0 / 28.24f32.powf(1.5);
     let got = r.radiance(i, j);
     for c in got {
-        assert!(
-            (c - expected).abs() / expected < 0.02,
-            "lit floor: got {got:?}, expected {expected}"
-        );
+        assert!((c - expected).abs() / expected < 0.02, "lit floor: got {got:?}, expected {expected}");
     }
     let (i, j) = pixel_of(&s, Vec3::new(0.3, 0.0, 0.3));
     assert_eq!(r.radiance(i, j), [0.0; 3], "shadowed floor must be black");
@@ -85,8 +79,5 @@ fn background_and_ior_one_show_the_environment_unchanged() {
     let with = render(&scene("sphere_env", 64, &["materials.glass.ior=1.0"]));
     let without = render(&scene("sphere_env", 64, &["objects.0.radius=0.001"]));
     let rmse = prism::metrics::image::rmse_rgba(&with.hdr, &without.hdr);
-    assert!(
-        rmse < 0.02,
-        "ior 1 should not distort the view: RMSE {rmse}"
-    );
+    assert!(rmse < 0.02, "ior 1 should not distort the view: RMSE {rmse}");
 }

@@ -12,21 +12,12 @@ use prism::graph::FrameGraph;
 fn two_writes(skip_barrier: bool) -> Option<u64> {
     let ctx = common::context(true);
     if !ctx.info.sync_validation {
-        assert!(
-            !std::env::var("CI").is_ok_and(|v| v == "true"),
-            "CI needs the validation layer"
-        );
+        assert!(!std::env::var("CI").is_ok_and(|v| v == "true"), "CI needs the validation layer");
         eprintln!("synchronization validation unavailable: skipping");
         return None;
     }
-    let buffer = Buffer::new(
-        &ctx,
-        "test_data",
-        256,
-        vk::BufferUsageFlags::TRANSFER_DST,
-        MemoryLocation::GpuOnly,
-    )
-    .unwrap();
+    let buffer =
+        Buffer::new(&ctx, "test_data", 256, vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuOnly).unwrap();
     let mut graph = FrameGraph::new();
     let id = graph.register_buffer(&buffer);
     if skip_barrier {
@@ -36,10 +27,7 @@ fn two_writes(skip_barrier: bool) -> Option<u64> {
     ctx.one_shot(|cmd| {
         let mut frame = graph.frame();
         for (name, value) in [("first_write", 1), ("second_write", 2)] {
-            frame
-                .pass(name)
-                .write_buffer(id, Access::TransferWrite)
-                .record(move |cmd| cmd.fill_buffer(buffer, value));
+            frame.pass(name).write_buffer(id, Access::TransferWrite).record(move |cmd| cmd.fill_buffer(buffer, value));
         }
         frame.execute(cmd, None);
     })
@@ -51,10 +39,7 @@ fn two_writes(skip_barrier: bool) -> Option<u64> {
 #[test]
 fn missing_barrier_in_a_test_pass_is_reported_by_sync_validation() {
     if let Some(errors) = two_writes(true) {
-        assert!(
-            errors > 0,
-            "a write-after-write hazard without a barrier must be reported"
-        );
+        assert!(errors > 0, "a write-after-write hazard without a barrier must be reported");
     }
 }
 
@@ -79,8 +64,5 @@ fn skipped_transition_in_the_renderer_is_reported() {
     r.render_frame().unwrap();
     r.finish().unwrap();
     drop(r);
-    assert!(
-        ctx.validation_errors() > 0,
-        "a missing layout transition must be reported"
-    );
+    assert!(ctx.validation_errors() > 0, "a missing layout transition must be reported");
 }

@@ -73,8 +73,7 @@ pub fn git_revision() -> String {
     };
     match run(&["rev-parse", "--short=12", "HEAD"]) {
         Some(rev) => {
-            let dirty = run(&["status", "--porcelain", "--untracked-files=no"])
-                .is_some_and(|s| !s.is_empty());
+            let dirty = run(&["status", "--porcelain", "--untracked-files=no"]).is_some_and(|s| !s.is_empty());
             if dirty {
                 format!("{rev}-dirty")
             } else {
@@ -100,17 +99,9 @@ pub fn summarize(frames: &[FrameTiming]) -> (Vec<PassStats>, Stats) {
         .map(|name| {
             let v: Vec<f64> = frames
                 .iter()
-                .flat_map(|f| {
-                    f.passes
-                        .iter()
-                        .filter(|p| p.name == name)
-                        .map(|p| p.duration_ms())
-                })
+                .flat_map(|f| f.passes.iter().filter(|p| p.name == name).map(|p| p.duration_ms()))
                 .collect();
-            PassStats {
-                stats: Stats::of(&v),
-                name,
-            }
+            PassStats { stats: Stats::of(&v), name }
         })
         .collect();
     let totals: Vec<f64> = frames.iter().map(|f| f.total_ms()).collect();
@@ -165,11 +156,8 @@ pub fn run(args: BenchArgs) -> Result<()> {
     renderer.finish()?;
     bar.finish_and_clear();
     check_validation(&ctx)?;
-    let frames: Vec<FrameTiming> = renderer
-        .take_timings()
-        .into_iter()
-        .filter(|f| f.frame >= args.warmup as u64)
-        .collect();
+    let frames: Vec<FrameTiming> =
+        renderer.take_timings().into_iter().filter(|f| f.frame >= args.warmup as u64).collect();
     let (passes, frame) = summarize(&frames);
 
     println!(
@@ -183,28 +171,16 @@ pub fn run(args: BenchArgs) -> Result<()> {
         ctx.info.driver_name,
         ctx.info.driver_info
     );
-    let width = passes
-        .iter()
-        .map(|p| p.name.len())
-        .max()
-        .unwrap_or(5)
-        .max(5);
-    println!(
-        "{:width$}  {:>10}  {:>10}  {:>10}",
-        "pass", "median ms", "min ms", "max ms"
-    );
+    let width = passes.iter().map(|p| p.name.len()).max().unwrap_or(5).max(5);
+    println!("{:width$}  {:>10}  {:>10}  {:>10}", "pass", "median ms", "min ms", "max ms");
     for p in &passes {
-        println!(
-            "{:width$}  {:>10.3}  {:>10.3}  {:>10.3}",
-            p.name, p.stats.median_ms, p.stats.min_ms, p.stats.max_ms
-        );
+        println!("{:width$}  {:>10.3}  {:>10.3}  {:>10.3}", p.name, p.stats.median_ms, p.stats.min_ms, p.stats.max_ms);
     }
-    println!(
-        "{:width$}  {:>10.3}  {:>10.3}  {:>10.3}",
-        "frame", frame.median_ms, frame.min_ms, frame.max_ms
-    );
+    println!("{:width$}  {:>10.3}  {:>10.3}  {:>10.3}", "frame", frame.median_ms, frame.min_ms, frame.max_ms);
     if ctx.info.device_type == "CPU" {
-        println!("note: a CPU device (lavapipe): times are CPU time; compare ratios within one run, not absolute times.");
+        println!(
+            "note: a CPU device (lavapipe): times are CPU time; compare ratios within one run, not absolute times."
+        );
     }
 
     if let Some(out) = json_out {

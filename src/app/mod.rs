@@ -181,12 +181,7 @@ fn render(args: RenderArgs) -> Result<()> {
         "wrote {} ({w}x{h}, scene {}, {} on {}, GPU frame {total:.2} ms)",
         args.output.display(),
         scene.name,
-        renderer
-            .plan()
-            .iter()
-            .map(|p| p.name)
-            .collect::<Vec<_>>()
-            .join(" -> "),
+        renderer.plan().iter().map(|p| p.name).collect::<Vec<_>>().join(" -> "),
         ctx.info.name
     );
     Ok(())

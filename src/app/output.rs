@@ -13,9 +13,7 @@ pub struct OutputFile {
 
 impl OutputFile {
     pub fn prepare(target: &Path) -> Result<OutputFile> {
-        let name = target
-            .file_name()
-            .with_context(|| format!("{}: output path has no file name", target.display()))?;
+        let name = target.file_name().with_context(|| format!("{}: output path has no file name", target.display()))?;
         if target.is_dir() {
             anyhow::bail!(
                 "{}: cannot write output: it is a directory\n  hint: give a file name, e.g. {}",
@@ -34,22 +32,14 @@ impl OutputFile {
                 dir.display()
             );
         }
-        let temp = dir.join(format!(
-            ".{}.prism-{}.tmp",
-            name.to_string_lossy(),
-            std::process::id()
-        ));
+        let temp = dir.join(format!(".{}.prism-{}.tmp", name.to_string_lossy(), std::process::id()));
         std::fs::write(&temp, b"").with_context(|| {
             format!(
                 "{}: cannot write output (directory not writable?)\n  hint: choose a writable path",
                 target.display()
             )
         })?;
-        Ok(OutputFile {
-            target: target.to_path_buf(),
-            temp,
-            committed: false,
-        })
+        Ok(OutputFile { target: target.to_path_buf(), temp, committed: false })
     }
 
     pub fn path(&self) -> &Path {
@@ -63,19 +53,14 @@ impl OutputFile {
 
     /// Write `bytes` and move them into place.
     pub fn commit_bytes(self, bytes: &[u8]) -> Result<()> {
-        std::fs::write(&self.temp, bytes)
-            .with_context(|| format!("{}: cannot write output", self.target.display()))?;
+        std::fs::write(&self.temp, bytes).with_context(|| format!("{}: cannot write output", self.target.display()))?;
         self.commit()
     }
 
     /// Move the finished temporary file into place.
     pub fn commit(mut self) -> Result<()> {
-        std::fs::rename(&self.temp, &self.target).with_context(|| {
-            format!(
-                "{}: cannot move the finished output into place",
-                self.target.display()
-            )
-        })?;
+        std::fs::rename(&self.temp, &self.target)
+            .with_context(|| format!("{}: cannot move the finished output into place", self.target.display()))?;
         self.committed = true;
         Ok(())
     }
@@ -91,8 +76,7 @@ impl Drop for OutputFile {
 
 /// Encode RGBA8 pixels as PNG into `out`.
 pub fn write_png(out: OutputFile, width: u32, height: u32, rgba: &[u8]) -> Result<()> {
-    let img = image::RgbaImage::from_raw(width, height, rgba.to_vec())
-        .context("image buffer has the wrong size")?;
+    let img = image::RgbaImage::from_raw(width, height, rgba.to_vec()).context("image buffer has the wrong size")?;
     img.save_with_format(out.temp_path(), image::ImageFormat::Png)
         .with_context(|| format!("{}: cannot encode PNG", out.path().display()))?;
     out.commit()
@@ -100,12 +84,8 @@ pub fn write_png(out: OutputFile, width: u32, height: u32, rgba: &[u8]) -> Resul
 
 /// Encode linear RGBA f32 radiance as an RGB f32 OpenEXR file (unscaled, per SCENES.md).
 pub fn write_exr(out: OutputFile, width: u32, height: u32, rgba: &[f32]) -> Result<()> {
-    let rgb: Vec<f32> = rgba
-        .chunks_exact(4)
-        .flat_map(|p| [p[0], p[1], p[2]])
-        .collect();
-    let img = image::Rgb32FImage::from_raw(width, height, rgb)
-        .context("image buffer has the wrong size")?;
+    let rgb: Vec<f32> = rgba.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect();
+    let img = image::Rgb32FImage::from_raw(width, height, rgb).context("image buffer has the wrong size")?;
     image::DynamicImage::ImageRgb32F(img)
         .save_with_format(out.temp_path(), image::ImageFormat::OpenExr)
         .with_context(|| format!("{}: cannot encode EXR", out.path().display()))?;

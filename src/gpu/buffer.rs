@@ -25,66 +25,39 @@ impl Buffer {
         location: MemoryLocation,
     ) -> GpuResult<Buffer> {
         let size = size.max(4);
-        let info = vk::BufferCreateInfo::default()
-            .size(size)
-            .usage(usage)
-            .sharing_mode(vk::SharingMode::EXCLUSIVE);
+        let info = vk::BufferCreateInfo::default().size(size).usage(usage).sharing_mode(vk::SharingMode::EXCLUSIVE);
         let device = ctx.raw();
         // SAFETY: valid create info.
         let raw = unsafe { device.create_buffer(&info, None) }.vk("vkCreateBuffer")?;
         // SAFETY: raw is a fresh buffer.
         let requirements = unsafe { device.get_buffer_memory_requirements(raw) };
-        let allocation = ctx
-            .allocator
-            .lock()
-            .unwrap()
-            .as_mut()
-            .expect("allocator alive while the context is")
-            .allocate(&AllocationCreateDesc {
-                name,
-                requirements,
-                location,
-                linear: true,
-                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
-            });
+        let allocation =
+            ctx.allocator.lock().unwrap().as_mut().expect("allocator alive while the context is").allocate(
+                &AllocationCreateDesc {
+                    name,
+                    requirements,
+                    location,
+                    linear: true,
+                    allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+                },
+            );
         let allocation = match allocation {
             Ok(a) => a,
             Err(source) => {
                 // SAFETY: unbound, unused buffer.
                 unsafe { device.destroy_buffer(raw, None) };
-                return Err(GpuError::Alloc {
-                    name: name.into(),
-                    source,
-                });
+                return Err(GpuError::Alloc { name: name.into(), source });
             }
         };
         // SAFETY: memory comes from a compatible type with the required size/alignment.
-        unsafe { device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) }
-            .vk("vkBindBufferMemory")?;
+        unsafe { device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) }.vk("vkBindBufferMemory")?;
         ctx.set_name(raw, name);
-        Ok(Buffer {
-            ctx: ctx.clone(),
-            raw,
-            allocation: Some(allocation),
-            size,
-            name: name.into(),
-        })
+        Ok(Buffer { ctx: ctx.clone(), raw, allocation: Some(allocation), size, name: name.into() })
     }
 
     /// A host-visible buffer filled with `data`.
-    pub fn with_data(
-        ctx: &Arc<GpuContext>,
-        name: &str,
-        data: &[u8],
-        usage: vk::BufferUsageFlags,
-    ) -> GpuResult<Buffer> {
-        let mut b = Buffer::new(
-            ctx,
-            name,
-            data.len() as u64,
-            usage,
-            MemoryLocation::CpuToGpu,
-        )?;
+    pub fn with_data(ctx: &Arc<GpuContext>, name: &str, data: &[u8], usage: vk::BufferUsageFlags) -> GpuResult<Buffer> {
+        let mut b = Buffer::new(ctx, name, data.len() as u64, usage, MemoryLocation::CpuToGpu)?;
         b.write(0, data);
         Ok(b)
     }

@@ -7,10 +7,7 @@ use ash::vk;
 use super::context::GpuContext;
 use super::error::{GpuResult, VkContext};
 use super::sync::{BufferBarrier, ImageBarrier};
-use super::{
-    Buffer, ComputePipeline, DescriptorSet, Framebuffer, GraphicsPipeline, Image, RenderPass,
-    TimestampPool,
-};
+use super::{Buffer, ComputePipeline, DescriptorSet, Framebuffer, GraphicsPipeline, Image, RenderPass, TimestampPool};
 
 /// A command buffer in the recording state.
 pub struct Cmd<'a> {
@@ -115,31 +112,20 @@ impl<'a> Cmd<'a> {
         let values: Vec<vk::ClearValue> = clears
             .iter()
             .map(|c| match *c {
-                Clear::Color(v) => vk::ClearValue {
-                    color: vk::ClearColorValue { float32: v },
-                },
-                Clear::Depth(d) => vk::ClearValue {
-                    depth_stencil: vk::ClearDepthStencilValue {
-                        depth: d,
-                        stencil: 0,
-                    },
-                },
+                Clear::Color(v) => vk::ClearValue { color: vk::ClearColorValue { float32: v } },
+                Clear::Depth(d) => {
+                    vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: d, stencil: 0 } }
+                }
                 Clear::None => vk::ClearValue::default(),
             })
             .collect();
         let info = vk::RenderPassBeginInfo::default()
             .render_pass(pass.raw)
             .framebuffer(fb.raw)
-            .render_area(vk::Rect2D {
-                offset: vk::Offset2D::default(),
-                extent: fb.extent,
-            })
+            .render_area(vk::Rect2D { offset: vk::Offset2D::default(), extent: fb.extent })
             .clear_values(&values);
         // SAFETY: recording, outside any render pass.
-        unsafe {
-            self.dev()
-                .cmd_begin_render_pass(self.raw, &info, vk::SubpassContents::INLINE)
-        };
+        unsafe { self.dev().cmd_begin_render_pass(self.raw, &info, vk::SubpassContents::INLINE) };
         self.set_viewport(fb.extent);
     }
 
@@ -152,10 +138,7 @@ impl<'a> Cmd<'a> {
             min_depth: 0.0,
             max_depth: 1.0,
         };
-        let scissor = vk::Rect2D {
-            offset: vk::Offset2D::default(),
-            extent,
-        };
+        let scissor = vk::Rect2D { offset: vk::Offset2D::default(), extent };
         // SAFETY: recording; dynamic state declared by every graphics pipeline.
         unsafe {
             self.dev().cmd_set_viewport(self.raw, 0, &[viewport]);
@@ -171,18 +154,10 @@ impl<'a> Cmd<'a> {
     pub fn bind_graphics(&self, p: &GraphicsPipeline, sets: &[DescriptorSet]) {
         // SAFETY: recording; sets are compatible with the pipeline's layout.
         unsafe {
-            self.dev()
-                .cmd_bind_pipeline(self.raw, vk::PipelineBindPoint::GRAPHICS, p.raw);
+            self.dev().cmd_bind_pipeline(self.raw, vk::PipelineBindPoint::GRAPHICS, p.raw);
             if !sets.is_empty() {
                 let raw: Vec<_> = sets.iter().map(|s| s.raw).collect();
-                self.dev().cmd_bind_descriptor_sets(
-                    self.raw,
-                    vk::PipelineBindPoint::GRAPHICS,
-                    p.layout,
-                    0,
-                    &raw,
-                    &[],
-                );
+                self.dev().cmd_bind_descriptor_sets(self.raw, vk::PipelineBindPoint::GRAPHICS, p.layout, 0, &raw, &[]);
             }
         }
     }
@@ -190,18 +165,10 @@ impl<'a> Cmd<'a> {
     pub fn bind_compute(&self, p: &ComputePipeline, sets: &[DescriptorSet]) {
         // SAFETY: as bind_graphics.
         unsafe {
-            self.dev()
-                .cmd_bind_pipeline(self.raw, vk::PipelineBindPoint::COMPUTE, p.raw);
+            self.dev().cmd_bind_pipeline(self.raw, vk::PipelineBindPoint::COMPUTE, p.raw);
             if !sets.is_empty() {
                 let raw: Vec<_> = sets.iter().map(|s| s.raw).collect();
-                self.dev().cmd_bind_descriptor_sets(
-                    self.raw,
-                    vk::PipelineBindPoint::COMPUTE,
-                    p.layout,
-                    0,
-                    &raw,
-                    &[],
-                );
+                self.dev().cmd_bind_descriptor_sets(self.raw, vk::PipelineBindPoint::COMPUTE, p.layout, 0, &raw, &[]);
             }
         }
     }
@@ -210,36 +177,22 @@ impl<'a> Cmd<'a> {
     pub fn push_graphics<T: bytemuck::Pod>(&self, p: &GraphicsPipeline, value: &T) {
         // SAFETY: the layout declares a range for all stages at offset 0 of at least this size.
         unsafe {
-            self.dev().cmd_push_constants(
-                self.raw,
-                p.layout,
-                vk::ShaderStageFlags::ALL,
-                0,
-                bytemuck::bytes_of(value),
-            )
+            self.dev().cmd_push_constants(self.raw, p.layout, vk::ShaderStageFlags::ALL, 0, bytemuck::bytes_of(value))
         };
     }
 
     pub fn push_compute<T: bytemuck::Pod>(&self, p: &ComputePipeline, value: &T) {
         // SAFETY: as push_graphics.
         unsafe {
-            self.dev().cmd_push_constants(
-                self.raw,
-                p.layout,
-                vk::ShaderStageFlags::ALL,
-                0,
-                bytemuck::bytes_of(value),
-            )
+            self.dev().cmd_push_constants(self.raw, p.layout, vk::ShaderStageFlags::ALL, 0, bytemuck::bytes_of(value))
         };
     }
 
     pub fn bind_mesh_buffers(&self, vertices: &Buffer, indices: &Buffer) {
         // SAFETY: recording; buffers were created with VERTEX/INDEX usage.
         unsafe {
-            self.dev()
-                .cmd_bind_vertex_buffers(self.raw, 0, &[vertices.raw], &[0]);
-            self.dev()
-                .cmd_bind_index_buffer(self.raw, indices.raw, 0, vk::IndexType::UINT32);
+            self.dev().cmd_bind_vertex_buffers(self.raw, 0, &[vertices.raw], &[0]);
+            self.dev().cmd_bind_index_buffer(self.raw, indices.raw, 0, vk::IndexType::UINT32);
         }
     }
 
@@ -250,10 +203,7 @@ impl<'a> Cmd<'a> {
 
     pub fn draw_indexed(&self, index_count: u32, first_index: u32, vertex_offset: i32) {
         // SAFETY: as draw, with bound index/vertex buffers.
-        unsafe {
-            self.dev()
-                .cmd_draw_indexed(self.raw, index_count, 1, first_index, vertex_offset, 0)
-        };
+        unsafe { self.dev().cmd_draw_indexed(self.raw, index_count, 1, first_index, vertex_offset, 0) };
     }
 
     pub fn dispatch(&self, x: u32, y: u32, z: u32) {
@@ -263,18 +213,12 @@ impl<'a> Cmd<'a> {
 
     pub fn write_timestamp(&self, pool: &TimestampPool, query: u32, stage: vk::PipelineStageFlags) {
         // SAFETY: query < pool size; the pool was reset this frame.
-        unsafe {
-            self.dev()
-                .cmd_write_timestamp(self.raw, stage, pool.raw, query)
-        };
+        unsafe { self.dev().cmd_write_timestamp(self.raw, stage, pool.raw, query) };
     }
 
     pub fn reset_queries(&self, pool: &TimestampPool) {
         // SAFETY: recording outside a render pass.
-        unsafe {
-            self.dev()
-                .cmd_reset_query_pool(self.raw, pool.raw, 0, pool.capacity)
-        };
+        unsafe { self.dev().cmd_reset_query_pool(self.raw, pool.raw, 0, pool.capacity) };
     }
 
     /// Copy every layer of `image` (in TRANSFER_SRC_OPTIMAL) tightly into `buffer`.
@@ -290,11 +234,7 @@ impl<'a> Cmd<'a> {
                 layer_count: image.layers(),
             },
             image_offset: vk::Offset3D::default(),
-            image_extent: vk::Extent3D {
-                width: image.desc.width,
-                height: image.desc.height,
-                depth: 1,
-            },
+            image_extent: vk::Extent3D { width: image.desc.width, height: image.desc.height, depth: 1 },
         };
         // SAFETY: the caller transitioned the image to TRANSFER_SRC_OPTIMAL; buffer is large enough.
         unsafe {
@@ -321,11 +261,7 @@ impl<'a> Cmd<'a> {
                 layer_count: image.layers(),
             },
             image_offset: vk::Offset3D::default(),
-            image_extent: vk::Extent3D {
-                width: image.desc.width,
-                height: image.desc.height,
-                depth: 1,
-            },
+            image_extent: vk::Extent3D { width: image.desc.width, height: image.desc.height, depth: 1 },
         };
         // SAFETY: the caller transitioned the image to TRANSFER_DST_OPTIMAL; buffer holds the texels.
         unsafe {
@@ -363,10 +299,7 @@ impl<'a> Cmd<'a> {
     /// Fill a buffer with a repeated u32 (clearing counters and accumulation buffers).
     pub fn fill_buffer(&self, buffer: &Buffer, value: u32) {
         // SAFETY: recording outside a render pass; buffer has TRANSFER_DST usage.
-        unsafe {
-            self.dev()
-                .cmd_fill_buffer(self.raw, buffer.raw, 0, vk::WHOLE_SIZE, value)
-        };
+        unsafe { self.dev().cmd_fill_buffer(self.raw, buffer.raw, 0, vk::WHOLE_SIZE, value) };
     }
 }
 
@@ -392,28 +325,18 @@ impl CommandPool {
             .command_pool(pool)
             .level(vk::CommandBufferLevel::PRIMARY)
             .command_buffer_count(frames);
-        let buffers =
-            unsafe { device.allocate_command_buffers(&alloc) }.vk("vkAllocateCommandBuffers")?;
+        let buffers = unsafe { device.allocate_command_buffers(&alloc) }.vk("vkAllocateCommandBuffers")?;
         let mut fences = Vec::new();
         for i in 0..frames {
             let f = unsafe {
-                device.create_fence(
-                    &vk::FenceCreateInfo::default().flags(vk::FenceCreateFlags::SIGNALED),
-                    None,
-                )
+                device.create_fence(&vk::FenceCreateInfo::default().flags(vk::FenceCreateFlags::SIGNALED), None)
             }
             .vk("vkCreateFence")?;
             ctx.set_name(f, &format!("frame_fence_{i}"));
             ctx.set_name(buffers[i as usize], &format!("frame_cmd_{i}"));
             fences.push(f);
         }
-        Ok(CommandPool {
-            ctx: ctx.clone(),
-            pool,
-            buffers,
-            fences,
-            serials: vec![0; frames as usize],
-        })
+        Ok(CommandPool { ctx: ctx.clone(), pool, buffers, fences, serials: vec![0; frames as usize] })
     }
 
     pub fn frames(&self) -> usize {
@@ -424,12 +347,7 @@ impl CommandPool {
     /// starting a new recording. Returns whether the slot had been submitted before.
     pub fn wait(&mut self, i: usize) -> GpuResult<bool> {
         // SAFETY: fence belongs to this device.
-        unsafe {
-            self.ctx
-                .raw()
-                .wait_for_fences(&[self.fences[i]], true, u64::MAX)
-        }
-        .vk("vkWaitForFences")?;
+        unsafe { self.ctx.raw().wait_for_fences(&[self.fences[i]], true, u64::MAX) }.vk("vkWaitForFences")?;
         let had = self.serials[i] != 0;
         if had {
             self.ctx.mark_completed(self.serials[i]);
@@ -450,8 +368,7 @@ impl CommandPool {
             device
                 .begin_command_buffer(
                     self.buffers[i],
-                    &vk::CommandBufferBeginInfo::default()
-                        .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
+                    &vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
                 )
                 .vk("vkBeginCommandBuffer")?;
         }

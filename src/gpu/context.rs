@@ -53,11 +53,7 @@ pub struct DeviceInfo {
 /// A resource waiting for the GPU to finish with it before it is destroyed.
 pub(crate) enum Garbage {
     Buffer(vk::Buffer, gpu_allocator::vulkan::Allocation),
-    Image(
-        vk::Image,
-        Vec<vk::ImageView>,
-        gpu_allocator::vulkan::Allocation,
-    ),
+    Image(vk::Image, Vec<vk::ImageView>, gpu_allocator::vulkan::Allocation),
 }
 
 /// Everything that outlives single resources. Shared through `Arc` by every wrapper so that
@@ -91,9 +87,7 @@ impl GpuContext {
 
         // SAFETY: plain enumeration calls on a valid entry.
         let layers = unsafe { entry.enumerate_instance_layer_properties() }.unwrap_or_default();
-        let has_validation = layers
-            .iter()
-            .any(|l| l.layer_name_as_c_str().is_ok_and(|n| n == VALIDATION_LAYER));
+        let has_validation = layers.iter().any(|l| l.layer_name_as_c_str().is_ok_and(|n| n == VALIDATION_LAYER));
         let want_validation = desc.validation || desc.sync_validation;
         if want_validation && !has_validation {
             eprintln!(
@@ -103,12 +97,9 @@ impl GpuContext {
         }
         let validation = want_validation && has_validation;
         // SAFETY: as above.
-        let extensions =
-            unsafe { entry.enumerate_instance_extension_properties(None) }.unwrap_or_default();
-        let has_debug_utils = extensions.iter().any(|e| {
-            e.extension_name_as_c_str()
-                .is_ok_and(|n| n == ash::ext::debug_utils::NAME)
-        });
+        let extensions = unsafe { entry.enumerate_instance_extension_properties(None) }.unwrap_or_default();
+        let has_debug_utils =
+            extensions.iter().any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == ash::ext::debug_utils::NAME));
 
         let app_name = c"prism";
         let app_info = vk::ApplicationInfo::default()
@@ -128,15 +119,13 @@ impl GpuContext {
         // layer itself provides; the layer ignores the struct unless it is enabled.
         // SAFETY: plain enumeration call.
         let layer_extensions = if validation {
-            unsafe { entry.enumerate_instance_extension_properties(Some(VALIDATION_LAYER)) }
-                .unwrap_or_default()
+            unsafe { entry.enumerate_instance_extension_properties(Some(VALIDATION_LAYER)) }.unwrap_or_default()
         } else {
             Vec::new()
         };
-        let has_validation_features = layer_extensions.iter().any(|e| {
-            e.extension_name_as_c_str()
-                .is_ok_and(|n| n == ash::ext::validation_features::NAME)
-        });
+        let has_validation_features = layer_extensions
+            .iter()
+            .any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == ash::ext::validation_features::NAME));
         let sync_validation = validation && desc.sync_validation && has_validation_features;
         if sync_validation {
             ext_names.push(ash::ext::validation_features::NAME.as_ptr());
@@ -163,23 +152,11 @@ impl GpuContext {
         let instance = match unsafe { entry.create_instance(&create_info, None) } {
             Ok(i) => i,
             Err(result @ vk::Result::ERROR_INCOMPATIBLE_DRIVER) => {
-                return Err(GpuError::NoDriver {
-                    call: "vkCreateInstance",
-                    result,
-                })
+                return Err(GpuError::NoDriver { call: "vkCreateInstance", result })
             }
-            Err(result) => {
-                return Err(GpuError::Vk {
-                    call: "vkCreateInstance",
-                    result,
-                })
-            }
+            Err(result) => return Err(GpuError::Vk { call: "vkCreateInstance", result }),
         };
-        let debug = if has_debug_utils {
-            Some(debug::Messenger::new(&entry, &instance, &debug_state)?)
-        } else {
-            None
-        };
+        let debug = if has_debug_utils { Some(debug::Messenger::new(&entry, &instance, &debug_state)?) } else { None };
 
         let (physical, queue_family) = match pick_device(&instance, desc) {
             Ok(v) => v,
@@ -205,8 +182,7 @@ impl GpuContext {
             large_points: supported.large_points,
             shader_float64: supported.shader_float64,
             sampler_anisotropy: supported.sampler_anisotropy,
-            shader_storage_image_write_without_format: supported
-                .shader_storage_image_write_without_format,
+            shader_storage_image_write_without_format: supported.shader_storage_image_write_without_format,
             ..Default::default()
         };
         if features.image_cube_array == vk::FALSE {
@@ -215,15 +191,11 @@ impl GpuContext {
             ));
         }
         let priorities = [1.0f32];
-        let queue_info = [vk::DeviceQueueCreateInfo::default()
-            .queue_family_index(queue_family)
-            .queue_priorities(&priorities)];
-        let device_info = vk::DeviceCreateInfo::default()
-            .queue_create_infos(&queue_info)
-            .enabled_features(&features);
+        let queue_info =
+            [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&priorities)];
+        let device_info = vk::DeviceCreateInfo::default().queue_create_infos(&queue_info).enabled_features(&features);
         // SAFETY: device_info is valid for the call.
-        let device =
-            unsafe { instance.create_device(physical, &device_info, None) }.vk("vkCreateDevice")?;
+        let device = unsafe { instance.create_device(physical, &device_info, None) }.vk("vkCreateDevice")?;
         // SAFETY: family/index were requested above.
         let queue = unsafe { device.get_device_queue(queue_family, 0) };
 
@@ -235,13 +207,9 @@ impl GpuContext {
             buffer_device_address: false,
             allocation_sizes: Default::default(),
         })
-        .map_err(|source| GpuError::Alloc {
-            name: "allocator".into(),
-            source,
-        })?;
+        .map_err(|source| GpuError::Alloc { name: "allocator".into(), source })?;
 
-        let debug_utils_device =
-            has_debug_utils.then(|| ash::ext::debug_utils::Device::new(&instance, &device));
+        let debug_utils_device = has_debug_utils.then(|| ash::ext::debug_utils::Device::new(&instance, &device));
 
         let mut driver_props = vk::PhysicalDeviceDriverProperties::default();
         let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver_props);
@@ -249,9 +217,7 @@ impl GpuContext {
         unsafe { instance.get_physical_device_properties2(physical, &mut props2) };
         let cstr = |s: &[c_char]| {
             // SAFETY: Vulkan strings are NUL-terminated within their fixed arrays.
-            unsafe { CStr::from_ptr(s.as_ptr()) }
-                .to_string_lossy()
-                .into_owned()
+            unsafe { CStr::from_ptr(s.as_ptr()) }.to_string_lossy().into_owned()
         };
         let v = properties.api_version;
         let info = DeviceInfo {
@@ -273,13 +239,9 @@ impl GpuContext {
 
         let pool_info = vk::CommandPoolCreateInfo::default()
             .queue_family_index(queue_family)
-            .flags(
-                vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER
-                    | vk::CommandPoolCreateFlags::TRANSIENT,
-            );
+            .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER | vk::CommandPoolCreateFlags::TRANSIENT);
         // SAFETY: valid device and create info.
-        let oneshot_pool =
-            unsafe { device.create_command_pool(&pool_info, None) }.vk("vkCreateCommandPool")?;
+        let oneshot_pool = unsafe { device.create_command_pool(&pool_info, None) }.vk("vkCreateCommandPool")?;
 
         Ok(Arc::new(GpuContext {
             entry,
@@ -328,10 +290,7 @@ impl GpuContext {
     /// Whether `format` can be used with `features` as an optimally tiled image.
     pub fn supports_format(&self, format: vk::Format, features: vk::FormatFeatureFlags) -> bool {
         // SAFETY: plain query.
-        let props = unsafe {
-            self.instance
-                .get_physical_device_format_properties(self.physical, format)
-        };
+        let props = unsafe { self.instance.get_physical_device_format_properties(self.physical, format) };
         props.optimal_tiling_features.contains(features)
     }
 
@@ -339,8 +298,7 @@ impl GpuContext {
     pub fn wait_idle(&self) -> GpuResult<()> {
         // SAFETY: no other thread submits to this queue while we wait (single-threaded renderer).
         unsafe { self.device.device_wait_idle() }.vk("vkDeviceWaitIdle")?;
-        self.completed
-            .store(self.submitted.load(Ordering::SeqCst), Ordering::SeqCst);
+        self.completed.store(self.submitted.load(Ordering::SeqCst), Ordering::SeqCst);
         self.collect_garbage();
         Ok(())
     }
@@ -414,10 +372,8 @@ impl GpuContext {
             .level(vk::CommandBufferLevel::PRIMARY)
             .command_buffer_count(1);
         // SAFETY: pool is valid and externally synchronised by the mutex.
-        let raw = unsafe { self.device.allocate_command_buffers(&alloc_info) }
-            .vk("vkAllocateCommandBuffers")?[0];
-        let begin = vk::CommandBufferBeginInfo::default()
-            .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+        let raw = unsafe { self.device.allocate_command_buffers(&alloc_info) }.vk("vkAllocateCommandBuffers")?[0];
+        let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
         // SAFETY: freshly allocated command buffer.
         unsafe { self.device.begin_command_buffer(raw, &begin) }.vk("vkBeginCommandBuffer")?;
         let cmd = super::Cmd::wrap(self, raw);
@@ -425,16 +381,11 @@ impl GpuContext {
         // SAFETY: recording state.
         unsafe { self.device.end_command_buffer(raw) }.vk("vkEndCommandBuffer")?;
         // SAFETY: default fence create info.
-        let fence = unsafe {
-            self.device
-                .create_fence(&vk::FenceCreateInfo::default(), None)
-        }
-        .vk("vkCreateFence")?;
+        let fence = unsafe { self.device.create_fence(&vk::FenceCreateInfo::default(), None) }.vk("vkCreateFence")?;
         let serial = self.submit(raw, fence);
         // SAFETY: fence is valid; we wait for our own submission.
         let waited = match &serial {
-            Ok(_) => unsafe { self.device.wait_for_fences(&[fence], true, u64::MAX) }
-                .vk("vkWaitForFences"),
+            Ok(_) => unsafe { self.device.wait_for_fences(&[fence], true, u64::MAX) }.vk("vkWaitForFences"),
             Err(_) => Ok(()),
         };
         // SAFETY: the submission has completed (or failed), so the buffer and fence are idle.
@@ -452,9 +403,7 @@ impl GpuContext {
     pub fn set_name<H: vk::Handle>(&self, handle: H, name: &str) {
         if let Some(du) = &self.debug_utils_device {
             let Ok(name) = CString::new(name) else { return };
-            let info = vk::DebugUtilsObjectNameInfoEXT::default()
-                .object_handle(handle)
-                .object_name(&name);
+            let info = vk::DebugUtilsObjectNameInfoEXT::default().object_handle(handle).object_name(&name);
             // SAFETY: handle belongs to this device; name outlives the call.
             let _ = unsafe { du.set_debug_utils_object_name(&info) };
         }
@@ -469,8 +418,7 @@ impl Drop for GpuContext {
             let _ = self.device.device_wait_idle();
             self.completed.store(u64::MAX, Ordering::SeqCst);
             self.collect_garbage();
-            self.device
-                .destroy_command_pool(*self.oneshot_pool.get_mut().unwrap(), None);
+            self.device.destroy_command_pool(*self.oneshot_pool.get_mut().unwrap(), None);
             drop(self.allocator.get_mut().unwrap().take());
             self.device.destroy_device(None);
             if let Some(m) = self.debug.take() {
@@ -493,10 +441,7 @@ fn device_type_rank(t: vk::PhysicalDeviceType) -> u32 {
 }
 
 /// Prefer a discrete GPU; `--device`/`PRISM_DEVICE` picks by index or name substring.
-fn pick_device(
-    instance: &ash::Instance,
-    desc: &ContextDesc,
-) -> GpuResult<(vk::PhysicalDevice, u32)> {
+fn pick_device(instance: &ash::Instance, desc: &ContextDesc) -> GpuResult<(vk::PhysicalDevice, u32)> {
     // SAFETY: valid instance.
     let devices = match unsafe { instance.enumerate_physical_devices() } {
         Ok(d) if !d.is_empty() => d,
@@ -506,26 +451,16 @@ fn pick_device(
                 result: vk::Result::ERROR_INITIALIZATION_FAILED,
             })
         }
-        Err(result) => {
-            return Err(GpuError::NoDriver {
-                call: "vkEnumeratePhysicalDevices",
-                result,
-            })
-        }
+        Err(result) => return Err(GpuError::NoDriver { call: "vkEnumeratePhysicalDevices", result }),
     };
     let mut candidates = Vec::new();
     for (index, &pd) in devices.iter().enumerate() {
         // SAFETY: pd was enumerated from instance.
         let props = unsafe { instance.get_physical_device_properties(pd) };
         let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
-        let name = props
-            .device_name_as_c_str()
-            .map(|c| c.to_string_lossy().into_owned())
-            .unwrap_or_default();
-        let family = families.iter().position(|f| {
-            f.queue_flags
-                .contains(vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE)
-        });
+        let name = props.device_name_as_c_str().map(|c| c.to_string_lossy().into_owned()).unwrap_or_default();
+        let family =
+            families.iter().position(|f| f.queue_flags.contains(vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE));
         if let Some(family) = family {
             candidates.push((index, name, props.device_type, pd, family as u32));
         }
@@ -533,23 +468,16 @@ fn pick_device(
     if candidates.is_empty() {
         return Err(GpuError::NoSuitableDevice);
     }
-    let wanted = desc
-        .device
-        .clone()
-        .or_else(|| std::env::var("PRISM_DEVICE").ok().filter(|s| !s.is_empty()));
+    let wanted = desc.device.clone().or_else(|| std::env::var("PRISM_DEVICE").ok().filter(|s| !s.is_empty()));
     if let Some(w) = wanted {
-        let hit = candidates.iter().find(|c| {
-            w.parse::<usize>().ok() == Some(c.0) || c.1.to_lowercase().contains(&w.to_lowercase())
-        });
+        let hit = candidates
+            .iter()
+            .find(|c| w.parse::<usize>().ok() == Some(c.0) || c.1.to_lowercase().contains(&w.to_lowercase()));
         return match hit {
             Some(c) => Ok((c.3, c.4)),
             None => Err(GpuError::NoSuchDevice(
                 w,
-                candidates
-                    .iter()
-                    .map(|c| format!("[{}] {}", c.0, c.1))
-                    .collect::<Vec<_>>()
-                    .join(", "),
+                candidates.iter().map(|c| format!("[{}] {}", c.0, c.1)).collect::<Vec<_>>().join(", "),
             )),
         };
     }

@@ -23,21 +23,13 @@ pub(crate) struct Messenger {
 }
 
 impl Messenger {
-    pub fn new(
-        entry: &ash::Entry,
-        instance: &ash::Instance,
-        state: &Arc<DebugState>,
-    ) -> GpuResult<Self> {
+    pub fn new(entry: &ash::Entry, instance: &ash::Instance, state: &Arc<DebugState>) -> GpuResult<Self> {
         let loader = ash::ext::debug_utils::Instance::new(entry, instance);
         let info = messenger_create_info(state);
         // SAFETY: the user-data pointer stays valid: `_state` keeps the Arc alive until destroy.
-        let handle = unsafe { loader.create_debug_utils_messenger(&info, None) }
-            .vk("vkCreateDebugUtilsMessengerEXT")?;
-        Ok(Messenger {
-            loader,
-            handle,
-            _state: state.clone(),
-        })
+        let handle =
+            unsafe { loader.create_debug_utils_messenger(&info, None) }.vk("vkCreateDebugUtilsMessengerEXT")?;
+        Ok(Messenger { loader, handle, _state: state.clone() })
     }
 
     /// # Safety
@@ -48,14 +40,9 @@ impl Messenger {
     }
 }
 
-pub(crate) fn messenger_create_info(
-    state: &Arc<DebugState>,
-) -> vk::DebugUtilsMessengerCreateInfoEXT<'static> {
+pub(crate) fn messenger_create_info(state: &Arc<DebugState>) -> vk::DebugUtilsMessengerCreateInfoEXT<'static> {
     vk::DebugUtilsMessengerCreateInfoEXT::default()
-        .message_severity(
-            vk::DebugUtilsMessageSeverityFlagsEXT::ERROR
-                | vk::DebugUtilsMessageSeverityFlagsEXT::WARNING,
-        )
+        .message_severity(vk::DebugUtilsMessageSeverityFlagsEXT::ERROR | vk::DebugUtilsMessageSeverityFlagsEXT::WARNING)
         .message_type(
             vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
                 | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
@@ -78,9 +65,7 @@ unsafe extern "system" fn callback(
             let msg = if data.is_null() || (*data).p_message.is_null() {
                 "(no message)".to_string()
             } else {
-                CStr::from_ptr((*data).p_message)
-                    .to_string_lossy()
-                    .into_owned()
+                CStr::from_ptr((*data).p_message).to_string_lossy().into_owned()
             };
             (msg, (user as *const DebugState).as_ref())
         };

@@ -19,12 +19,7 @@ pub type Binding = (u32, vk::DescriptorType, vk::ShaderStageFlags);
 
 impl DescriptorSetLayout {
     /// A layout with `bindings` and room for `max_sets` sets.
-    pub fn new(
-        ctx: &Arc<GpuContext>,
-        name: &str,
-        bindings: &[Binding],
-        max_sets: u32,
-    ) -> GpuResult<Self> {
+    pub fn new(ctx: &Arc<GpuContext>, name: &str, bindings: &[Binding], max_sets: u32) -> GpuResult<Self> {
         let raw_bindings: Vec<_> = bindings
             .iter()
             .map(|&(b, ty, stages)| {
@@ -38,41 +33,27 @@ impl DescriptorSetLayout {
         let info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&raw_bindings);
         let device = ctx.raw();
         // SAFETY: valid create info.
-        let raw = unsafe { device.create_descriptor_set_layout(&info, None) }
-            .vk("vkCreateDescriptorSetLayout")?;
+        let raw = unsafe { device.create_descriptor_set_layout(&info, None) }.vk("vkCreateDescriptorSetLayout")?;
         ctx.set_name(raw, name);
         let mut sizes: Vec<vk::DescriptorPoolSize> = Vec::new();
         for &(_, ty, _) in bindings {
             match sizes.iter_mut().find(|s| s.ty == ty) {
                 Some(s) => s.descriptor_count += max_sets,
-                None => sizes.push(vk::DescriptorPoolSize {
-                    ty,
-                    descriptor_count: max_sets,
-                }),
+                None => sizes.push(vk::DescriptorPoolSize { ty, descriptor_count: max_sets }),
             }
         }
-        let pool_info = vk::DescriptorPoolCreateInfo::default()
-            .max_sets(max_sets.max(1))
-            .pool_sizes(&sizes);
+        let pool_info = vk::DescriptorPoolCreateInfo::default().max_sets(max_sets.max(1)).pool_sizes(&sizes);
         // SAFETY: valid create info.
-        let pool = unsafe { device.create_descriptor_pool(&pool_info, None) }
-            .vk("vkCreateDescriptorPool")?;
-        Ok(DescriptorSetLayout {
-            ctx: ctx.clone(),
-            raw,
-            pool,
-        })
+        let pool = unsafe { device.create_descriptor_pool(&pool_info, None) }.vk("vkCreateDescriptorPool")?;
+        Ok(DescriptorSetLayout { ctx: ctx.clone(), raw, pool })
     }
 
     /// Allocate a set and fill it with `writes`.
     pub fn allocate(&self, name: &str, writes: &[DescriptorWrite<'_>]) -> GpuResult<DescriptorSet> {
         let layouts = [self.raw];
-        let info = vk::DescriptorSetAllocateInfo::default()
-            .descriptor_pool(self.pool)
-            .set_layouts(&layouts);
+        let info = vk::DescriptorSetAllocateInfo::default().descriptor_pool(self.pool).set_layouts(&layouts);
         // SAFETY: pool has room (sized by max_sets).
-        let raw = unsafe { self.ctx.raw().allocate_descriptor_sets(&info) }
-            .vk("vkAllocateDescriptorSets")?[0];
+        let raw = unsafe { self.ctx.raw().allocate_descriptor_sets(&info) }.vk("vkAllocateDescriptorSets")?[0];
         self.ctx.set_name(raw, name);
         let set = DescriptorSet { raw };
         set.update(&self.ctx, writes);
@@ -110,26 +91,19 @@ impl DescriptorSet {
         let mut image_infos = Vec::with_capacity(writes.len());
         for w in writes {
             match w {
-                DescriptorWrite::Uniform(_, b) | DescriptorWrite::Storage(_, b) => buffer_infos
-                    .push([vk::DescriptorBufferInfo {
-                        buffer: b.raw,
-                        offset: 0,
-                        range: vk::WHOLE_SIZE,
-                    }]),
-                DescriptorWrite::Sampled(_, view, sampler, layout) => {
-                    image_infos.push([vk::DescriptorImageInfo {
-                        sampler: sampler.raw,
-                        image_view: *view,
-                        image_layout: *layout,
-                    }])
+                DescriptorWrite::Uniform(_, b) | DescriptorWrite::Storage(_, b) => {
+                    buffer_infos.push([vk::DescriptorBufferInfo { buffer: b.raw, offset: 0, range: vk::WHOLE_SIZE }])
                 }
-                DescriptorWrite::StorageImage(_, view) => {
-                    image_infos.push([vk::DescriptorImageInfo {
-                        sampler: vk::Sampler::null(),
-                        image_view: *view,
-                        image_layout: vk::ImageLayout::GENERAL,
-                    }])
-                }
+                DescriptorWrite::Sampled(_, view, sampler, layout) => image_infos.push([vk::DescriptorImageInfo {
+                    sampler: sampler.raw,
+                    image_view: *view,
+                    image_layout: *layout,
+                }]),
+                DescriptorWrite::StorageImage(_, view) => image_infos.push([vk::DescriptorImageInfo {
+                    sampler: vk::Sampler::null(),
+                    image_view: *view,
+                    image_layout: vk::ImageLayout::GENERAL,
+                }]),
             }
         }
         let (mut bi, mut ii) = (0, 0);
@@ -145,9 +119,7 @@ impl DescriptorSet {
                             vk::DescriptorType::STORAGE_BUFFER
                         };
                         bi += 1;
-                        base.dst_binding(*b)
-                            .descriptor_type(ty)
-                            .buffer_info(&buffer_infos[bi - 1])
+                        base.dst_binding(*b).descriptor_type(ty).buffer_info(&buffer_infos[bi - 1])
                     }
                     DescriptorWrite::Sampled(b, ..) => {
                         ii += 1;

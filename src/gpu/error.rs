@@ -13,24 +13,15 @@ pub enum GpuError {
         "no Vulkan driver found ({call} returned {result:?}). Install one, e.g. \
          `apt-get install mesa-vulkan-drivers` for lavapipe, or point VK_DRIVER_FILES at its ICD json"
     )]
-    NoDriver {
-        call: &'static str,
-        result: vk::Result,
-    },
+    NoDriver { call: &'static str, result: vk::Result },
     #[error("no Vulkan device matches {0:?}; available: {1}")]
     NoSuchDevice(String, String),
     #[error("no Vulkan device with a graphics+compute queue was found")]
     NoSuitableDevice,
     #[error("{call} failed: {result:?}")]
-    Vk {
-        call: &'static str,
-        result: vk::Result,
-    },
+    Vk { call: &'static str, result: vk::Result },
     #[error("GPU memory allocation for {name} failed: {source}")]
-    Alloc {
-        name: String,
-        source: gpu_allocator::AllocationError,
-    },
+    Alloc { name: String, source: gpu_allocator::AllocationError },
     #[error("shader {0} is not embedded in this binary (is it under glsl/?)")]
     MissingShader(String),
     #[error("shader {0} is not valid SPIR-V: {1}")]

@@ -29,22 +29,8 @@ pub struct ImageDesc {
 }
 
 impl ImageDesc {
-    pub fn d2(
-        name: &str,
-        format: vk::Format,
-        width: u32,
-        height: u32,
-        usage: vk::ImageUsageFlags,
-    ) -> Self {
-        ImageDesc {
-            name: name.into(),
-            format,
-            width,
-            height,
-            layers: 1,
-            usage,
-            view: ImageViewKind::D2,
-        }
+    pub fn d2(name: &str, format: vk::Format, width: u32, height: u32, usage: vk::ImageUsageFlags) -> Self {
+        ImageDesc { name: name.into(), format, width, height, layers: 1, usage, view: ImageViewKind::D2 }
     }
 }
 
@@ -63,9 +49,7 @@ pub struct Image {
 
 pub(crate) fn aspect_of(format: vk::Format) -> vk::ImageAspectFlags {
     match format {
-        vk::Format::D16_UNORM | vk::Format::D32_SFLOAT | vk::Format::X8_D24_UNORM_PACK32 => {
-            vk::ImageAspectFlags::DEPTH
-        }
+        vk::Format::D16_UNORM | vk::Format::D32_SFLOAT | vk::Format::X8_D24_UNORM_PACK32 => vk::ImageAspectFlags::DEPTH,
         vk::Format::D24_UNORM_S8_UINT | vk::Format::D32_SFLOAT_S8_UINT => {
             vk::ImageAspectFlags::DEPTH | vk::ImageAspectFlags::STENCIL
         }
@@ -80,68 +64,52 @@ impl Image {
         let info = vk::ImageCreateInfo::default()
             .image_type(vk::ImageType::TYPE_2D)
             .format(desc.format)
-            .extent(vk::Extent3D {
-                width: desc.width.max(1),
-                height: desc.height.max(1),
-                depth: 1,
-            })
+            .extent(vk::Extent3D { width: desc.width.max(1), height: desc.height.max(1), depth: 1 })
             .mip_levels(1)
             .array_layers(desc.layers.max(1))
             .samples(vk::SampleCountFlags::TYPE_1)
             .tiling(vk::ImageTiling::OPTIMAL)
             .usage(desc.usage)
-            .flags(if cube {
-                vk::ImageCreateFlags::CUBE_COMPATIBLE
-            } else {
-                vk::ImageCreateFlags::empty()
-            })
+            .flags(if cube { vk::ImageCreateFlags::CUBE_COMPATIBLE } else { vk::ImageCreateFlags::empty() })
             .initial_layout(vk::ImageLayout::UNDEFINED);
         // SAFETY: valid create info.
         let raw = unsafe { device.create_image(&info, None) }.vk("vkCreateImage")?;
         // SAFETY: fresh image.
         let requirements = unsafe { device.get_image_memory_requirements(raw) };
-        let allocation = ctx
-            .allocator
-            .lock()
-            .unwrap()
-            .as_mut()
-            .expect("allocator alive while the context is")
-            .allocate(&AllocationCreateDesc {
-                name: &desc.name,
-                requirements,
-                location: MemoryLocation::GpuOnly,
-                linear: false,
-                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
-            });
+        let allocation =
+            ctx.allocator.lock().unwrap().as_mut().expect("allocator alive while the context is").allocate(
+                &AllocationCreateDesc {
+                    name: &desc.name,
+                    requirements,
+                    location: MemoryLocation::GpuOnly,
+                    linear: false,
+                    allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+                },
+            );
         let allocation = match allocation {
             Ok(a) => a,
             Err(source) => {
                 // SAFETY: unbound, unused image.
                 unsafe { device.destroy_image(raw, None) };
-                return Err(GpuError::Alloc {
-                    name: desc.name.clone(),
-                    source,
-                });
+                return Err(GpuError::Alloc { name: desc.name.clone(), source });
             }
         };
         // SAFETY: compatible memory.
-        unsafe { device.bind_image_memory(raw, allocation.memory(), allocation.offset()) }
-            .vk("vkBindImageMemory")?;
+        unsafe { device.bind_image_memory(raw, allocation.memory(), allocation.offset()) }.vk("vkBindImageMemory")?;
         ctx.set_name(raw, &desc.name);
 
         let aspect = aspect_of(desc.format);
         let make_view = |ty: vk::ImageViewType, base: u32, count: u32| {
-            let info = vk::ImageViewCreateInfo::default()
-                .image(raw)
-                .view_type(ty)
-                .format(desc.format)
-                .subresource_range(vk::ImageSubresourceRange {
-                    aspect_mask: aspect,
-                    base_mip_level: 0,
-                    level_count: 1,
-                    base_array_layer: base,
-                    layer_count: count,
-                });
+            let info =
+                vk::ImageViewCreateInfo::default().image(raw).view_type(ty).format(desc.format).subresource_range(
+                    vk::ImageSubresourceRange {
+                        aspect_mask: aspect,
+                        base_mip_level: 0,
+                        level_count: 1,
+                        base_array_layer: base,
+                        layer_count: count,
+                    },
+                );
             // SAFETY: view within the image's subresources.
             unsafe { device.create_image_view(&info, None) }.vk("vkCreateImageView")
         };
@@ -160,11 +128,7 @@ impl Image {
                 layer_views.push(make_view(vk::ImageViewType::TYPE_2D, l, 1)?);
             }
         }
-        let array_view = if cube {
-            Some(make_view(vk::ImageViewType::TYPE_2D_ARRAY, 0, layers)?)
-        } else {
-            None
-        };
+        let array_view = if cube { Some(make_view(vk::ImageViewType::TYPE_2D_ARRAY, 0, layers)?) } else { None };
         Ok(Image {
             ctx: ctx.clone(),
             raw,
@@ -177,10 +141,7 @@ impl Image {
     }
 
     pub fn extent(&self) -> vk::Extent2D {
-        vk::Extent2D {
-            width: self.desc.width,
-            height: self.desc.height,
-        }
+        vk::Extent2D { width: self.desc.width, height: self.desc.height }
     }
     pub fn format(&self) -> vk::Format {
         self.desc.format
@@ -267,10 +228,7 @@ impl Sampler {
         // SAFETY: valid create info.
         let raw = unsafe { ctx.raw().create_sampler(&info, None) }.vk("vkCreateSampler")?;
         ctx.set_name(raw, name);
-        Ok(Sampler {
-            ctx: ctx.clone(),
-            raw,
-        })
+        Ok(Sampler { ctx: ctx.clone(), raw })
     }
 }
 

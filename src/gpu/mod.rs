@@ -26,8 +26,7 @@ pub use descriptor::{DescriptorSet, DescriptorSetLayout, DescriptorWrite};
 pub use error::{GpuError, GpuResult};
 pub use image::{Image, ImageDesc, ImageViewKind, Sampler, SamplerDesc};
 pub use pipeline::{
-    Blend, ComputePipeline, DepthState, GraphicsPipeline, GraphicsPipelineDesc, PipelineLayout,
-    VertexLayout,
+    Blend, ComputePipeline, DepthState, GraphicsPipeline, GraphicsPipelineDesc, PipelineLayout, VertexLayout,
 };
 pub use render_pass::{Attachment, Framebuffer, RenderPass, RenderPassDesc};
 pub use sync::{Access, BufferBarrier, ImageBarrier};

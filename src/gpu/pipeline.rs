@@ -14,30 +14,17 @@ pub struct PipelineLayout {
 
 impl PipelineLayout {
     /// Push constants are visible to every stage; lavapipe allows 128 bytes.
-    pub fn new(
-        ctx: &Arc<GpuContext>,
-        name: &str,
-        sets: &[&DescriptorSetLayout],
-        push_bytes: u32,
-    ) -> GpuResult<Self> {
+    pub fn new(ctx: &Arc<GpuContext>, name: &str, sets: &[&DescriptorSetLayout], push_bytes: u32) -> GpuResult<Self> {
         let raw_sets: Vec<_> = sets.iter().map(|s| s.raw).collect();
-        let ranges = [vk::PushConstantRange {
-            stage_flags: vk::ShaderStageFlags::ALL,
-            offset: 0,
-            size: push_bytes,
-        }];
+        let ranges = [vk::PushConstantRange { stage_flags: vk::ShaderStageFlags::ALL, offset: 0, size: push_bytes }];
         let mut info = vk::PipelineLayoutCreateInfo::default().set_layouts(&raw_sets);
         if push_bytes > 0 {
             info = info.push_constant_ranges(&ranges);
         }
         // SAFETY: valid create info.
-        let raw = unsafe { ctx.raw().create_pipeline_layout(&info, None) }
-            .vk("vkCreatePipelineLayout")?;
+        let raw = unsafe { ctx.raw().create_pipeline_layout(&info, None) }.vk("vkCreatePipelineLayout")?;
         ctx.set_name(raw, name);
-        Ok(PipelineLayout {
-            ctx: ctx.clone(),
-            raw,
-        })
+        Ok(PipelineLayout { ctx: ctx.clone(), raw })
     }
 }
 
@@ -71,24 +58,12 @@ pub struct DepthState {
 }
 
 impl DepthState {
-    pub const OFF: DepthState = DepthState {
-        test: false,
-        write: false,
-        compare: vk::CompareOp::ALWAYS,
-    };
+    pub const OFF: DepthState = DepthState { test: false, write: false, compare: vk::CompareOp::ALWAYS };
     /// prism uses reversed Z (1 at the near plane, 0 at infinity) for precision across scene
     /// scales from 1e-3 to 1e4, so nearer means greater.
-    pub const REVERSED_Z: DepthState = DepthState {
-        test: true,
-        write: true,
-        compare: vk::CompareOp::GREATER,
-    };
+    pub const REVERSED_Z: DepthState = DepthState { test: true, write: true, compare: vk::CompareOp::GREATER };
     /// Ordinary Z for light-space maps whose far plane is bounded by the scene.
-    pub const LESS: DepthState = DepthState {
-        test: true,
-        write: true,
-        compare: vk::CompareOp::LESS,
-    };
+    pub const LESS: DepthState = DepthState { test: true, write: true, compare: vk::CompareOp::LESS };
 }
 
 pub struct GraphicsPipelineDesc<'a> {
@@ -130,16 +105,10 @@ impl GraphicsPipeline {
         let vs = shader_module(ctx, desc.vertex_shader)?;
         let fs = shader_module(ctx, desc.fragment_shader)?;
         let spec_entries: Vec<_> = (0..desc.specialization.len() as u32)
-            .map(|i| vk::SpecializationMapEntry {
-                constant_id: i,
-                offset: i * 4,
-                size: 4,
-            })
+            .map(|i| vk::SpecializationMapEntry { constant_id: i, offset: i * 4, size: 4 })
             .collect();
         let spec_data: &[u8] = bytemuck::cast_slice(desc.specialization);
-        let spec = vk::SpecializationInfo::default()
-            .map_entries(&spec_entries)
-            .data(spec_data);
+        let spec = vk::SpecializationInfo::default().map_entries(&spec_entries).data(spec_data);
         let stages = [
             vk::PipelineShaderStageCreateInfo::default()
                 .stage(vk::ShaderStageFlags::VERTEX)
@@ -152,11 +121,8 @@ impl GraphicsPipeline {
                 .name(c"main")
                 .specialization_info(&spec),
         ];
-        let bindings = [vk::VertexInputBindingDescription {
-            binding: 0,
-            stride: 32,
-            input_rate: vk::VertexInputRate::VERTEX,
-        }];
+        let bindings =
+            [vk::VertexInputBindingDescription { binding: 0, stride: 32, input_rate: vk::VertexInputRate::VERTEX }];
         let attributes = [
             vk::VertexInputAttributeDescription {
                 location: 0,
@@ -183,18 +149,15 @@ impl GraphicsPipeline {
                 .vertex_binding_descriptions(&bindings)
                 .vertex_attribute_descriptions(&attributes),
         };
-        let input_assembly =
-            vk::PipelineInputAssemblyStateCreateInfo::default().topology(desc.topology);
-        let viewport = vk::PipelineViewportStateCreateInfo::default()
-            .viewport_count(1)
-            .scissor_count(1);
+        let input_assembly = vk::PipelineInputAssemblyStateCreateInfo::default().topology(desc.topology);
+        let viewport = vk::PipelineViewportStateCreateInfo::default().viewport_count(1).scissor_count(1);
         let raster = vk::PipelineRasterizationStateCreateInfo::default()
             .polygon_mode(vk::PolygonMode::FILL)
             .cull_mode(desc.cull)
             .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
             .line_width(1.0);
-        let multisample = vk::PipelineMultisampleStateCreateInfo::default()
-            .rasterization_samples(vk::SampleCountFlags::TYPE_1);
+        let multisample =
+            vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::TYPE_1);
         let depth = vk::PipelineDepthStencilStateCreateInfo::default()
             .depth_test_enable(desc.depth.test)
             .depth_write_enable(desc.depth.write)
@@ -203,8 +166,9 @@ impl GraphicsPipeline {
             .blend
             .iter()
             .map(|b| match b {
-                Blend::Off => vk::PipelineColorBlendAttachmentState::default()
-                    .color_write_mask(vk::ColorComponentFlags::RGBA),
+                Blend::Off => {
+                    vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA)
+                }
                 Blend::Additive => vk::PipelineColorBlendAttachmentState::default()
                     .blend_enable(true)
                     .src_color_blend_factor(vk::BlendFactor::ONE)
@@ -233,10 +197,7 @@ impl GraphicsPipeline {
             .render_pass(pass.raw)
             .subpass(0);
         // SAFETY: every referenced state struct lives until the call returns.
-        let result = unsafe {
-            ctx.raw()
-                .create_graphics_pipelines(vk::PipelineCache::null(), &[info], None)
-        };
+        let result = unsafe { ctx.raw().create_graphics_pipelines(vk::PipelineCache::null(), &[info], None) };
         // SAFETY: modules are no longer needed once the pipeline exists (or failed).
         unsafe {
             ctx.raw().destroy_shader_module(vs, None);
@@ -244,11 +205,7 @@ impl GraphicsPipeline {
         }
         let raw = result.map_err(|(_, e)| e).vk("vkCreateGraphicsPipelines")?[0];
         ctx.set_name(raw, desc.name);
-        Ok(GraphicsPipeline {
-            ctx: ctx.clone(),
-            raw,
-            layout: layout.raw,
-        })
+        Ok(GraphicsPipeline { ctx: ctx.clone(), raw, layout: layout.raw })
     }
 }
 
@@ -275,37 +232,23 @@ impl ComputePipeline {
     ) -> GpuResult<Self> {
         let module = shader_module(ctx, shader)?;
         let spec_entries: Vec<_> = (0..specialization.len() as u32)
-            .map(|i| vk::SpecializationMapEntry {
-                constant_id: i,
-                offset: i * 4,
-                size: 4,
-            })
+            .map(|i| vk::SpecializationMapEntry { constant_id: i, offset: i * 4, size: 4 })
             .collect();
-        let spec = vk::SpecializationInfo::default()
-            .map_entries(&spec_entries)
-            .data(bytemuck::cast_slice(specialization));
+        let spec =
+            vk::SpecializationInfo::default().map_entries(&spec_entries).data(bytemuck::cast_slice(specialization));
         let stage = vk::PipelineShaderStageCreateInfo::default()
             .stage(vk::ShaderStageFlags::COMPUTE)
             .module(module)
             .name(c"main")
             .specialization_info(&spec);
-        let info = vk::ComputePipelineCreateInfo::default()
-            .stage(stage)
-            .layout(layout.raw);
+        let info = vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout.raw);
         // SAFETY: valid create info.
-        let result = unsafe {
-            ctx.raw()
-                .create_compute_pipelines(vk::PipelineCache::null(), &[info], None)
-        };
+        let result = unsafe { ctx.raw().create_compute_pipelines(vk::PipelineCache::null(), &[info], None) };
         // SAFETY: module no longer needed.
         unsafe { ctx.raw().destroy_shader_module(module, None) };
         let raw = result.map_err(|(_, e)| e).vk("vkCreateComputePipelines")?[0];
         ctx.set_name(raw, name);
-        Ok(ComputePipeline {
-            ctx: ctx.clone(),
-            raw,
-            layout: layout.raw,
-        })
+        Ok(ComputePipeline { ctx: ctx.clone(), raw, layout: layout.raw })
     }
 }
 

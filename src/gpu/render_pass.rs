@@ -71,19 +71,12 @@ impl RenderPass {
                     .samples(vk::SampleCountFlags::TYPE_1)
                     .load_op(load(&d))
                     .store_op(vk::AttachmentStoreOp::STORE)
-                    .stencil_load_op(if has_stencil {
-                        load(&d)
-                    } else {
-                        vk::AttachmentLoadOp::DONT_CARE
-                    })
+                    .stencil_load_op(if has_stencil { load(&d) } else { vk::AttachmentLoadOp::DONT_CARE })
                     .stencil_store_op(vk::AttachmentStoreOp::DONT_CARE)
                     .initial_layout(depth_layout)
                     .final_layout(depth_layout),
             );
-            vk::AttachmentReference {
-                attachment: desc.colors.len() as u32,
-                layout: depth_layout,
-            }
+            vk::AttachmentReference { attachment: desc.colors.len() as u32, layout: depth_layout }
         });
         let mut subpass = vk::SubpassDescription::default()
             .pipeline_bind_point(vk::PipelineBindPoint::GRAPHICS)
@@ -92,17 +85,11 @@ impl RenderPass {
             subpass = subpass.depth_stencil_attachment(d);
         }
         let subpasses = [subpass];
-        let info = vk::RenderPassCreateInfo::default()
-            .attachments(&attachments)
-            .subpasses(&subpasses);
+        let info = vk::RenderPassCreateInfo::default().attachments(&attachments).subpasses(&subpasses);
         // SAFETY: valid create info; referenced arrays live for the call.
         let raw = unsafe { ctx.raw().create_render_pass(&info, None) }.vk("vkCreateRenderPass")?;
         ctx.set_name(raw, name);
-        Ok(RenderPass {
-            ctx: ctx.clone(),
-            raw,
-            desc: desc.clone(),
-        })
+        Ok(RenderPass { ctx: ctx.clone(), raw, desc: desc.clone() })
     }
 }
 
@@ -137,11 +124,7 @@ impl Framebuffer {
         // SAFETY: views match the pass's attachments.
         let raw = unsafe { ctx.raw().create_framebuffer(&info, None) }.vk("vkCreateFramebuffer")?;
         ctx.set_name(raw, name);
-        Ok(Framebuffer {
-            ctx: ctx.clone(),
-            raw,
-            extent,
-        })
+        Ok(Framebuffer { ctx: ctx.clone(), raw, extent })
     }
 }
 

@@ -51,11 +51,7 @@ impl Access {
         use vk::AccessFlags as A;
         use vk::ImageLayout as L;
         use vk::PipelineStageFlags as S;
-        let sampled = if depth_format {
-            L::DEPTH_STENCIL_READ_ONLY_OPTIMAL
-        } else {
-            L::SHADER_READ_ONLY_OPTIMAL
-        };
+        let sampled = if depth_format { L::DEPTH_STENCIL_READ_ONLY_OPTIMAL } else { L::SHADER_READ_ONLY_OPTIMAL };
         let (stages, access, layout, writes) = match self {
             Access::Nothing => (S::TOP_OF_PIPE, A::empty(), L::UNDEFINED, false),
             Access::ColorAttachment => (
@@ -81,40 +77,15 @@ impl Access {
             Access::VertexSampled => (S::VERTEX_SHADER, A::SHADER_READ, sampled, false),
             Access::ComputeSampled => (S::COMPUTE_SHADER, A::SHADER_READ, sampled, false),
             Access::ComputeRead => (S::COMPUTE_SHADER, A::SHADER_READ, L::GENERAL, false),
-            Access::ComputeWrite => (
-                S::COMPUTE_SHADER,
-                A::SHADER_READ | A::SHADER_WRITE,
-                L::GENERAL,
-                true,
-            ),
+            Access::ComputeWrite => (S::COMPUTE_SHADER, A::SHADER_READ | A::SHADER_WRITE, L::GENERAL, true),
             Access::VertexStorageRead => (S::VERTEX_SHADER, A::SHADER_READ, L::GENERAL, false),
             Access::FragmentStorageRead => (S::FRAGMENT_SHADER, A::SHADER_READ, L::GENERAL, false),
-            Access::IndirectArgs => (
-                S::DRAW_INDIRECT,
-                A::INDIRECT_COMMAND_READ,
-                L::UNDEFINED,
-                false,
-            ),
-            Access::TransferRead => (
-                S::TRANSFER,
-                A::TRANSFER_READ,
-                L::TRANSFER_SRC_OPTIMAL,
-                false,
-            ),
-            Access::TransferWrite => (
-                S::TRANSFER,
-                A::TRANSFER_WRITE,
-                L::TRANSFER_DST_OPTIMAL,
-                true,
-            ),
+            Access::IndirectArgs => (S::DRAW_INDIRECT, A::INDIRECT_COMMAND_READ, L::UNDEFINED, false),
+            Access::TransferRead => (S::TRANSFER, A::TRANSFER_READ, L::TRANSFER_SRC_OPTIMAL, false),
+            Access::TransferWrite => (S::TRANSFER, A::TRANSFER_WRITE, L::TRANSFER_DST_OPTIMAL, true),
             Access::HostRead => (S::HOST, A::HOST_READ, L::GENERAL, false),
         };
-        AccessInfo {
-            stages,
-            access,
-            layout,
-            writes,
-        }
+        AccessInfo { stages, access, layout, writes }
     }
 }
 

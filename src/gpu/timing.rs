@@ -26,17 +26,11 @@ pub struct TimestampQuery {
 
 impl TimestampPool {
     pub fn new(ctx: &Arc<GpuContext>, name: &str, capacity: u32) -> GpuResult<TimestampPool> {
-        let info = vk::QueryPoolCreateInfo::default()
-            .query_type(vk::QueryType::TIMESTAMP)
-            .query_count(capacity);
+        let info = vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(capacity);
         // SAFETY: valid create info.
         let raw = unsafe { ctx.raw().create_query_pool(&info, None) }.vk("vkCreateQueryPool")?;
         ctx.set_name(raw, name);
-        Ok(TimestampPool {
-            ctx: ctx.clone(),
-            raw,
-            capacity,
-        })
+        Ok(TimestampPool { ctx: ctx.clone(), raw, capacity })
     }
 
     pub fn capacity(&self) -> u32 {
@@ -67,22 +61,14 @@ impl TimestampPool {
             return Ok(None);
         }
         let bits = self.ctx.info.timestamp_valid_bits;
-        let mask = if bits >= 64 {
-            u64::MAX
-        } else {
-            (1u64 << bits) - 1
-        };
+        let mask = if bits >= 64 { u64::MAX } else { (1u64 << bits) - 1 };
         Ok(Some(data.iter().map(|d| d[0] & mask).collect()))
     }
 
     /// Milliseconds between two masked tick values (handles wrap-around of the valid bits).
     pub fn ticks_to_ms(&self, start: u64, end: u64) -> f64 {
         let bits = self.ctx.info.timestamp_valid_bits;
-        let delta = if bits >= 64 {
-            end.wrapping_sub(start)
-        } else {
-            end.wrapping_sub(start) & ((1u64 << bits) - 1)
-        };
+        let delta = if bits >= 64 { end.wrapping_sub(start) } else { end.wrapping_sub(start) & ((1u64 << bits) - 1) };
         delta as f64 * self.ctx.info.timestamp_period_ns as f64 * 1e-6
     }
 }

@@ -7,9 +7,7 @@
 //! pair of timestamps, under one snake_case name (rule 5).
 use std::collections::HashSet;
 
-use crate::gpu::{
-    vk, Access, Buffer, BufferBarrier, Cmd, Image, ImageBarrier, TimestampPool, TimestampQuery,
-};
+use crate::gpu::{vk, Access, Buffer, BufferBarrier, Cmd, Image, ImageBarrier, TimestampPool, TimestampQuery};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct ImageId(usize);
@@ -78,32 +76,17 @@ struct Transition {
 }
 
 /// Update `state` for `access` and return the barrier needed before it, if any.
-fn transition(
-    state: &mut State,
-    access: Access,
-    depth: bool,
-    is_image: bool,
-) -> Option<Transition> {
+fn transition(state: &mut State, access: Access, depth: bool, is_image: bool) -> Option<Transition> {
     let info = access.info(depth);
-    let new_layout = if is_image {
-        info.layout
-    } else {
-        vk::ImageLayout::UNDEFINED
-    };
+    let new_layout = if is_image { info.layout } else { vk::ImageLayout::UNDEFINED };
     let layout_change = is_image && state.layout != new_layout;
-    let (w_stages, w_access) = state
-        .last_write
-        .unwrap_or((vk::PipelineStageFlags::empty(), vk::AccessFlags::empty()));
+    let (w_stages, w_access) = state.last_write.unwrap_or((vk::PipelineStageFlags::empty(), vk::AccessFlags::empty()));
     let barrier = if info.writes || layout_change {
         // Write-after-write, write-after-read, or a layout transition: wait for every earlier
         // write and read, and make the last write available.
         let src = w_stages | state.reads;
         let t = Transition {
-            src_stages: if src.is_empty() {
-                vk::PipelineStageFlags::TOP_OF_PIPE
-            } else {
-                src
-            },
+            src_stages: if src.is_empty() { vk::PipelineStageFlags::TOP_OF_PIPE } else { src },
             src_access: w_access,
             dst_stages: info.stages,
             dst_access: info.access,
@@ -163,11 +146,7 @@ impl FrameGraph {
     }
 
     pub fn register_buffer(&mut self, buffer: &Buffer) -> BufferId {
-        self.buffers.push(BufferSlot {
-            raw: buffer.raw,
-            name: buffer.name.clone(),
-            state: State::NEW,
-        });
+        self.buffers.push(BufferSlot { raw: buffer.raw, name: buffer.name.clone(), state: State::NEW });
         BufferId(self.buffers.len() - 1)
     }
 
@@ -199,10 +178,7 @@ impl FrameGraph {
 
     /// Start a frame's pass list.
     pub fn frame(&mut self) -> Frame<'_, '_> {
-        Frame {
-            graph: self,
-            passes: Vec::new(),
-        }
+        Frame { graph: self, passes: Vec::new() }
     }
 
     /// Record the barriers for `uses` into `cmd` (used by the executor and by readback).
@@ -250,12 +226,7 @@ impl FrameGraph {
     }
 
     /// Declare accesses outside any pass (uploads, readbacks) and record their barriers now.
-    pub fn access_now(
-        &mut self,
-        cmd: &Cmd,
-        images: &[(ImageId, Access)],
-        buffers: &[(BufferId, Access)],
-    ) {
+    pub fn access_now(&mut self, cmd: &Cmd, images: &[(ImageId, Access)], buffers: &[(BufferId, Access)]) {
         let uses: Vec<_> = images
             .iter()
             .map(|&(id, a)| (Res::Image(id.0), a))
@@ -289,11 +260,7 @@ pub struct PassBuilder<'f, 'g, 'a> {
 impl<'g, 'a> Frame<'g, 'a> {
     /// Add a pass named `name` (snake_case: it is also the timing and golden-image name).
     pub fn pass(&mut self, name: &str) -> PassBuilder<'_, 'g, 'a> {
-        PassBuilder {
-            frame: self,
-            name: name.to_string(),
-            uses: Vec::new(),
-        }
+        PassBuilder { frame: self, name: name.to_string(), uses: Vec::new() }
     }
 
     pub fn pass_names(&self) -> Vec<&str> {
@@ -317,16 +284,8 @@ impl<'g, 'a> Frame<'g, 'a> {
             }
             (pass.record)(cmd);
             if let Some(pool) = q {
-                cmd.write_timestamp(
-                    pool,
-                    2 * i as u32 + 1,
-                    vk::PipelineStageFlags::BOTTOM_OF_PIPE,
-                );
-                queries.push(TimestampQuery {
-                    name: pass.name.clone(),
-                    start: 2 * i as u32,
-                    end: 2 * i as u32 + 1,
-                });
+                cmd.write_timestamp(pool, 2 * i as u32 + 1, vk::PipelineStageFlags::BOTTOM_OF_PIPE);
+                queries.push(TimestampQuery { name: pass.name.clone(), start: 2 * i as u32, end: 2 * i as u32 + 1 });
             }
             cmd.end_label();
         }
@@ -353,11 +312,7 @@ impl<'f, 'g, 'a> PassBuilder<'f, 'g, 'a> {
     }
     /// Finish the pass with the closure that records its commands.
     pub fn record(self, f: impl FnOnce(&Cmd) + 'a) {
-        self.frame.passes.push(PassNode {
-            name: self.name,
-            uses: self.uses,
-            record: Box::new(f),
-        });
+        self.frame.passes.push(PassNode { name: self.name, uses: self.uses, record: Box::new(f) });
     }
 }
 
@@ -372,14 +327,8 @@ mod tests {
         assert_eq!(t.old_layout, vk::ImageLayout::UNDEFINED);
         assert_eq!(t.new_layout, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL);
         let t = transition(&mut s, Access::FragmentSampled, false, true).unwrap();
-        assert_eq!(
-            t.src_stages,
-            vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT
-        );
-        assert_eq!(
-            t.src_access,
-            vk::AccessFlags::COLOR_ATTACHMENT_READ | vk::AccessFlags::COLOR_ATTACHMENT_WRITE
-        );
+        assert_eq!(t.src_stages, vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT);
+        assert_eq!(t.src_access, vk::AccessFlags::COLOR_ATTACHMENT_READ | vk::AccessFlags::COLOR_ATTACHMENT_WRITE);
         assert_eq!(t.new_layout, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL);
         // Same stage again: nothing to do.
         assert!(transition(&mut s, Access::FragmentSampled, false, true).is_none());
@@ -388,9 +337,7 @@ mod tests {
         assert_eq!(t.dst_stages, vk::PipelineStageFlags::VERTEX_SHADER);
         // Writing again must wait for both readers (write-after-read).
         let t = transition(&mut s, Access::ColorAttachment, false, true).unwrap();
-        assert!(t.src_stages.contains(
-            vk::PipelineStageFlags::FRAGMENT_SHADER | vk::PipelineStageFlags::VERTEX_SHADER
-        ));
+        assert!(t.src_stages.contains(vk::PipelineStageFlags::FRAGMENT_SHADER | vk::PipelineStageFlags::VERTEX_SHADER));
     }
 
     #[test]
@@ -399,10 +346,7 @@ mod tests {
         let t = transition(&mut s, Access::ComputeWrite, false, false).unwrap();
         assert_eq!(t.new_layout, vk::ImageLayout::UNDEFINED);
         let t = transition(&mut s, Access::ComputeWrite, false, false).unwrap();
-        assert_eq!(
-            t.src_access,
-            vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE
-        );
+        assert_eq!(t.src_access, vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE);
         let t = transition(&mut s, Access::IndirectArgs, false, false).unwrap();
         assert_eq!(t.dst_stages, vk::PipelineStageFlags::DRAW_INDIRECT);
     }
@@ -412,9 +356,6 @@ mod tests {
         let mut s = State::NEW;
         transition(&mut s, Access::DepthAttachment, true, true);
         let t = transition(&mut s, Access::FragmentSampled, true, true).unwrap();
-        assert_eq!(
-            t.new_layout,
-            vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL
-        );
+        assert_eq!(t.new_layout, vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL);
     }
 }

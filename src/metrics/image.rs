@@ -59,12 +59,7 @@ pub fn diff_heatmap_rgba8(a: &[u8], b: &[u8], full_scale: u8) -> Vec<u8> {
         let r = t.clamp(0.0, 1.0);
         let g = (t - 1.0).clamp(0.0, 1.0);
         let bl = (t - 2.0).clamp(0.0, 1.0);
-        out.extend_from_slice(&[
-            (r * 255.0) as u8,
-            (g * 255.0) as u8,
-            (bl * 255.0) as u8,
-            255,
-        ]);
+        out.extend_from_slice(&[(r * 255.0) as u8, (g * 255.0) as u8, (bl * 255.0) as u8, 255]);
     }
     out
 }

@@ -19,11 +19,7 @@ impl Stats {
         let mut v: Vec<f64> = values.to_vec();
         v.sort_by(|a, b| a.total_cmp(b));
         let n = v.len();
-        let median = if n % 2 == 1 {
-            v[n / 2]
-        } else {
-            0.5 * (v[n / 2 - 1] + v[n / 2])
-        };
+        let median = if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) };
         Stats {
             median_ms: median,
             min_ms: v[0],
@@ -41,10 +37,7 @@ mod tests {
     #[test]
     fn median_of_odd_and_even_counts() {
         let s = Stats::of(&[3.0, 1.0, 2.0]);
-        assert_eq!(
-            (s.median_ms, s.min_ms, s.max_ms, s.mean_ms),
-            (2.0, 1.0, 3.0, 2.0)
-        );
+        assert_eq!((s.median_ms, s.min_ms, s.max_ms, s.mean_ms), (2.0, 1.0, 3.0, 2.0));
         assert_eq!(Stats::of(&[4.0, 1.0, 2.0, 3.0]).median_ms, 2.5);
         assert_eq!(Stats::of(&[]).samples, 0);
     }

@@ -3,9 +3,8 @@
 use std::sync::Arc;
 
 use crate::gpu::{
-    vk, Access, Attachment, Clear, DescriptorSet, DescriptorSetLayout, DescriptorWrite,
-    Framebuffer, GpuContext, GpuResult, GraphicsPipeline, PipelineLayout, RenderPass,
-    RenderPassDesc, Sampler,
+    vk, Access, Attachment, Clear, DescriptorSet, DescriptorSetLayout, DescriptorWrite, Framebuffer, GpuContext,
+    GpuResult, GraphicsPipeline, PipelineLayout, RenderPass, RenderPassDesc, Sampler,
 };
 use crate::graph::Frame;
 use crate::renderer::gpu_scene::GpuScene;
@@ -38,10 +37,7 @@ impl DeferredShadingPass {
             ctx,
             DEFERRED_SHADING,
             &RenderPassDesc {
-                colors: vec![Attachment {
-                    format: targets.hdr.format(),
-                    clear: true,
-                }],
+                colors: vec![Attachment { format: targets.hdr.format(), clear: true }],
                 depth: None,
                 depth_read_only: false,
             },
@@ -87,13 +83,8 @@ impl DeferredShadingPass {
             &render_pass,
             &[],
         )?;
-        let framebuffer = Framebuffer::new(
-            ctx,
-            DEFERRED_SHADING,
-            &render_pass,
-            &[targets.hdr.view()],
-            targets.extent(),
-        )?;
+        let framebuffer =
+            Framebuffer::new(ctx, DEFERRED_SHADING, &render_pass, &[targets.hdr.view()], targets.extent())?;
         Ok(DeferredShadingPass {
             render_pass,
             _set_layout: set_layout,
@@ -123,11 +114,7 @@ impl DeferredShadingPass {
             pass = pass.read(targets.shadow_atlas_id, Access::FragmentSampled);
         }
         pass.record(move |cmd| {
-            cmd.begin_render_pass(
-                &self.render_pass,
-                &self.framebuffer,
-                &[Clear::Color([0.0; 4])],
-            );
+            cmd.begin_render_pass(&self.render_pass, &self.framebuffer, &[Clear::Color([0.0; 4])]);
             cmd.bind_graphics(&self.pipeline, &[frame_set, self.set]);
             cmd.draw(3, 1);
             cmd.end_render_pass();

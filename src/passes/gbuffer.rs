@@ -3,9 +3,8 @@
 use std::sync::Arc;
 
 use crate::gpu::{
-    vk, Access, Attachment, Blend, Clear, DepthState, DescriptorSet, DescriptorSetLayout,
-    Framebuffer, GpuContext, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, PipelineLayout,
-    RenderPass, RenderPassDesc, VertexLayout,
+    vk, Access, Attachment, Blend, Clear, DepthState, DescriptorSet, DescriptorSetLayout, Framebuffer, GpuContext,
+    GpuResult, GraphicsPipeline, GraphicsPipelineDesc, PipelineLayout, RenderPass, RenderPassDesc, VertexLayout,
 };
 use crate::graph::Frame;
 use crate::renderer::gpu_scene::GpuScene;
@@ -20,29 +19,16 @@ pub struct GBufferPass {
 }
 
 impl GBufferPass {
-    pub fn new(
-        ctx: &Arc<GpuContext>,
-        frame_layout: &DescriptorSetLayout,
-        targets: &Targets,
-    ) -> GpuResult<Self> {
+    pub fn new(ctx: &Arc<GpuContext>, frame_layout: &DescriptorSetLayout, targets: &Targets) -> GpuResult<Self> {
         let render_pass = RenderPass::new(
             ctx,
             GBUFFER,
             &RenderPassDesc {
                 colors: vec![
-                    Attachment {
-                        format: targets.gbuf_normal.format(),
-                        clear: true,
-                    },
-                    Attachment {
-                        format: targets.gbuf_albedo.format(),
-                        clear: true,
-                    },
+                    Attachment { format: targets.gbuf_normal.format(), clear: true },
+                    Attachment { format: targets.gbuf_albedo.format(), clear: true },
                 ],
-                depth: Some(Attachment {
-                    format: targets.depth.format(),
-                    clear: true,
-                }),
+                depth: Some(Attachment { format: targets.depth.format(), clear: true }),
                 depth_read_only: false,
             },
         )?;
@@ -68,19 +54,10 @@ impl GBufferPass {
             ctx,
             GBUFFER,
             &render_pass,
-            &[
-                targets.gbuf_normal.view(),
-                targets.gbuf_albedo.view(),
-                targets.depth.view(),
-            ],
+            &[targets.gbuf_normal.view(), targets.gbuf_albedo.view(), targets.depth.view()],
             targets.extent(),
         )?;
-        Ok(GBufferPass {
-            render_pass,
-            _layout: layout,
-            pipeline,
-            framebuffer,
-        })
+        Ok(GBufferPass { render_pass, _layout: layout, pipeline, framebuffer })
     }
 
     pub fn record<'a>(
@@ -100,11 +77,7 @@ impl GBufferPass {
                 cmd.begin_render_pass(
                     &self.render_pass,
                     &self.framebuffer,
-                    &[
-                        Clear::Color([0.0; 4]),
-                        Clear::Color([0.0; 4]),
-                        Clear::Depth(0.0),
-                    ],
+                    &[Clear::Color([0.0; 4]), Clear::Color([0.0; 4]), Clear::Depth(0.0)],
                 );
                 cmd.bind_graphics(&self.pipeline, &[frame_set]);
                 cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);

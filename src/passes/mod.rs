@@ -10,8 +10,8 @@ pub mod tonemap;
 use std::sync::Arc;
 
 use crate::gpu::{
-    vk, Blend, DepthState, DescriptorSetLayout, GpuContext, GpuResult, GraphicsPipeline,
-    GraphicsPipelineDesc, PipelineLayout, RenderPass, VertexLayout,
+    vk, Blend, DepthState, DescriptorSetLayout, GpuContext, GpuResult, GraphicsPipeline, GraphicsPipelineDesc,
+    PipelineLayout, RenderPass, VertexLayout,
 };
 
 /// A full-screen-triangle pipeline over `fragment_shader` with set 0 (frame) and `set1`.

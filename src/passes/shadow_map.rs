@@ -4,9 +4,8 @@
 use std::sync::Arc;
 
 use crate::gpu::{
-    vk, Access, Attachment, Blend, Clear, DepthState, Framebuffer, GpuContext, GpuResult,
-    GraphicsPipeline, GraphicsPipelineDesc, PipelineLayout, RenderPass, RenderPassDesc,
-    VertexLayout,
+    vk, Access, Attachment, Blend, Clear, DepthState, Framebuffer, GpuContext, GpuResult, GraphicsPipeline,
+    GraphicsPipelineDesc, PipelineLayout, RenderPass, RenderPassDesc, VertexLayout,
 };
 use crate::graph::Frame;
 use crate::renderer::gpu_scene::{GpuScene, ShadowFace};
@@ -31,23 +30,12 @@ impl ShadowMapPass {
             ctx,
             SHADOW_MAP,
             &RenderPassDesc {
-                colors: vec![Attachment {
-                    format: targets.shadow_atlas.format(),
-                    clear: true,
-                }],
-                depth: Some(Attachment {
-                    format: targets.shadow_depth.format(),
-                    clear: true,
-                }),
+                colors: vec![Attachment { format: targets.shadow_atlas.format(), clear: true }],
+                depth: Some(Attachment { format: targets.shadow_depth.format(), clear: true }),
                 depth_read_only: false,
             },
         )?;
-        let layout = PipelineLayout::new(
-            ctx,
-            SHADOW_MAP,
-            &[],
-            std::mem::size_of::<ShadowPush>() as u32,
-        )?;
+        let layout = PipelineLayout::new(ctx, SHADOW_MAP, &[], std::mem::size_of::<ShadowPush>() as u32)?;
         let pipeline = GraphicsPipeline::new(
             ctx,
             &GraphicsPipelineDesc {
@@ -71,20 +59,11 @@ impl ShadowMapPass {
                 ctx,
                 &format!("shadow_face_{}", face.layer),
                 &render_pass,
-                &[
-                    targets.shadow_atlas.layer_view(face.layer),
-                    targets.shadow_depth.layer_view(face.layer),
-                ],
+                &[targets.shadow_atlas.layer_view(face.layer), targets.shadow_depth.layer_view(face.layer)],
                 targets.shadow_atlas.extent(),
             )?);
         }
-        Ok(ShadowMapPass {
-            render_pass,
-            _layout: layout,
-            pipeline,
-            framebuffers,
-            faces: scene.shadow_faces.clone(),
-        })
+        Ok(ShadowMapPass { render_pass, _layout: layout, pipeline, framebuffers, faces: scene.shadow_faces.clone() })
     }
 
     pub fn record<'a>(&'a self, frame: &mut Frame<'_, 'a>, scene: &'a GpuScene, targets: &Targets) {
@@ -94,11 +73,7 @@ impl ShadowMapPass {
             .write(targets.shadow_depth_id, Access::DepthAttachment)
             .record(move |cmd| {
                 for (face, fb) in self.faces.iter().zip(&self.framebuffers) {
-                    cmd.begin_render_pass(
-                        &self.render_pass,
-                        fb,
-                        &[Clear::Color([FAR_DISTANCE; 4]), Clear::Depth(1.0)],
-                    );
+                    cmd.begin_render_pass(&self.render_pass, fb, &[Clear::Color([FAR_DISTANCE; 4]), Clear::Depth(1.0)]);
                     cmd.bind_graphics(&self.pipeline, &[]);
                     cmd.push_graphics(
                         &self.pipeline,

@@ -7,17 +7,14 @@
 use std::sync::Arc;
 
 use crate::gpu::{
-    vk, Access, Attachment, Clear, DescriptorSet, DescriptorSetLayout, DescriptorWrite,
-    Framebuffer, GpuContext, GpuResult, GraphicsPipeline, PipelineLayout, RenderPass,
-    RenderPassDesc, Sampler,
+    vk, Access, Attachment, Clear, DescriptorSet, DescriptorSetLayout, DescriptorWrite, Framebuffer, GpuContext,
+    GpuResult, GraphicsPipeline, PipelineLayout, RenderPass, RenderPassDesc, Sampler,
 };
 use crate::graph::Frame;
 use crate::renderer::gpu_scene::GpuScene;
 use crate::renderer::plan::{REFLECTION_SINGLE, REFRACTION_SINGLE};
 use crate::renderer::targets::Targets;
-use crate::{
-    BINDING_GBUF_DEPTH, BINDING_GBUF_NORMAL, SPECULAR_MODE_REFLECTION, SPECULAR_MODE_REFRACTION,
-};
+use crate::{BINDING_GBUF_DEPTH, BINDING_GBUF_NORMAL, SPECULAR_MODE_REFLECTION, SPECULAR_MODE_REFRACTION};
 
 use super::{fullscreen_pipeline, FRAGMENT, SAMPLED};
 
@@ -54,10 +51,7 @@ impl SpecularSinglePass {
             ctx,
             name,
             &RenderPassDesc {
-                colors: vec![Attachment {
-                    format: targets.hdr.format(),
-                    clear: false,
-                }],
+                colors: vec![Attachment { format: targets.hdr.format(), clear: false }],
                 depth: None,
                 depth_read_only: false,
             },
@@ -65,10 +59,7 @@ impl SpecularSinglePass {
         let set_layout = DescriptorSetLayout::new(
             ctx,
             name,
-            &[
-                (BINDING_GBUF_NORMAL, SAMPLED, FRAGMENT),
-                (BINDING_GBUF_DEPTH, SAMPLED, FRAGMENT),
-            ],
+            &[(BINDING_GBUF_NORMAL, SAMPLED, FRAGMENT), (BINDING_GBUF_DEPTH, SAMPLED, FRAGMENT)],
             1,
         )?;
         let set = set_layout.allocate(
@@ -96,13 +87,7 @@ impl SpecularSinglePass {
             &render_pass,
             &[spec],
         )?;
-        let framebuffer = Framebuffer::new(
-            ctx,
-            name,
-            &render_pass,
-            &[targets.hdr.view()],
-            targets.extent(),
-        )?;
+        let framebuffer = Framebuffer::new(ctx, name, &render_pass, &[targets.hdr.view()], targets.extent())?;
         Ok(SpecularSinglePass {
             name,
             render_pass,

@@ -2,9 +2,8 @@
 use std::sync::Arc;
 
 use crate::gpu::{
-    vk, Access, Attachment, Clear, DescriptorSet, DescriptorSetLayout, DescriptorWrite,
-    Framebuffer, GpuContext, GpuResult, GraphicsPipeline, PipelineLayout, RenderPass,
-    RenderPassDesc, Sampler,
+    vk, Access, Attachment, Clear, DescriptorSet, DescriptorSetLayout, DescriptorWrite, Framebuffer, GpuContext,
+    GpuResult, GraphicsPipeline, PipelineLayout, RenderPass, RenderPassDesc, Sampler,
 };
 use crate::graph::Frame;
 use crate::renderer::plan::TONEMAP;
@@ -33,16 +32,12 @@ impl TonemapPass {
             ctx,
             TONEMAP,
             &RenderPassDesc {
-                colors: vec![Attachment {
-                    format: targets.ldr.format(),
-                    clear: true,
-                }],
+                colors: vec![Attachment { format: targets.ldr.format(), clear: true }],
                 depth: None,
                 depth_read_only: false,
             },
         )?;
-        let set_layout =
-            DescriptorSetLayout::new(ctx, TONEMAP, &[(BINDING_HDR, SAMPLED, FRAGMENT)], 1)?;
+        let set_layout = DescriptorSetLayout::new(ctx, TONEMAP, &[(BINDING_HDR, SAMPLED, FRAGMENT)], 1)?;
         let set = set_layout.allocate(
             TONEMAP,
             &[DescriptorWrite::Sampled(
@@ -52,47 +47,19 @@ impl TonemapPass {
                 vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
             )],
         )?;
-        let (layout, pipeline) = fullscreen_pipeline(
-            ctx,
-            TONEMAP,
-            "tonemap/tonemap.frag",
-            &[frame_layout, &set_layout],
-            &render_pass,
-            &[],
-        )?;
-        let framebuffer = Framebuffer::new(
-            ctx,
-            TONEMAP,
-            &render_pass,
-            &[targets.ldr.view()],
-            targets.extent(),
-        )?;
-        Ok(TonemapPass {
-            render_pass,
-            _set_layout: set_layout,
-            set,
-            _layout: layout,
-            pipeline,
-            framebuffer,
-        })
+        let (layout, pipeline) =
+            fullscreen_pipeline(ctx, TONEMAP, "tonemap/tonemap.frag", &[frame_layout, &set_layout], &render_pass, &[])?;
+        let framebuffer = Framebuffer::new(ctx, TONEMAP, &render_pass, &[targets.ldr.view()], targets.extent())?;
+        Ok(TonemapPass { render_pass, _set_layout: set_layout, set, _layout: layout, pipeline, framebuffer })
     }
 
-    pub fn record<'a>(
-        &'a self,
-        frame: &mut Frame<'_, 'a>,
-        targets: &Targets,
-        frame_set: DescriptorSet,
-    ) {
+    pub fn record<'a>(&'a self, frame: &mut Frame<'_, 'a>, targets: &Targets, frame_set: DescriptorSet) {
         frame
             .pass(TONEMAP)
             .read(targets.hdr_id, Access::FragmentSampled)
             .write(targets.ldr_id, Access::ColorAttachment)
             .record(move |cmd| {
-                cmd.begin_render_pass(
-                    &self.render_pass,
-                    &self.framebuffer,
-                    &[Clear::Color([0.0; 4])],
-                );
+                cmd.begin_render_pass(&self.render_pass, &self.framebuffer, &[Clear::Color([0.0; 4])]);
                 cmd.bind_graphics(&self.pipeline, &[frame_set, self.set]);
                 cmd.draw(3, 1);
                 cmd.end_render_pass();

@@ -9,8 +9,7 @@ use crate::gpu::{vk, Buffer, GpuContext, Image, ImageDesc, MemoryLocation};
 use crate::graph::{FrameGraph, ImageId};
 use crate::scene::{Albedo, Environment, Light, Material, Scene};
 use crate::{
-    LIGHT_DIRECTIONAL, LIGHT_POINT, MATERIAL_CONDUCTOR, MATERIAL_DIELECTRIC, MATERIAL_DIFFUSE,
-    MATERIAL_MIRROR,
+    LIGHT_DIRECTIONAL, LIGHT_POINT, MATERIAL_CONDUCTOR, MATERIAL_DIELECTRIC, MATERIAL_DIFFUSE, MATERIAL_MIRROR,
 };
 use crate::{MAX_LIGHTS, SHADOW_LAYERS_PER_LIGHT};
 
@@ -57,19 +56,12 @@ fn v4(v: Vec3, w: f32) -> [f32; 4] {
 pub fn gpu_material(m: &Material) -> GpuMaterial {
     let kind = |k: u32| k as f32;
     match m {
-        Material::Diffuse {
-            albedo: Albedo::Constant(c),
-        } => GpuMaterial {
-            albedo_a: v4(*c, kind(MATERIAL_DIFFUSE)),
-            ..Default::default()
-        },
-        Material::Diffuse {
-            albedo: Albedo::Checker { a, b, size },
-        } => GpuMaterial {
-            albedo_a: v4(*a, kind(MATERIAL_DIFFUSE)),
-            albedo_b: v4(*b, *size),
-            ..Default::default()
-        },
+        Material::Diffuse { albedo: Albedo::Constant(c) } => {
+            GpuMaterial { albedo_a: v4(*c, kind(MATERIAL_DIFFUSE)), ..Default::default() }
+        }
+        Material::Diffuse { albedo: Albedo::Checker { a, b, size } } => {
+            GpuMaterial { albedo_a: v4(*a, kind(MATERIAL_DIFFUSE)), albedo_b: v4(*b, *size), ..Default::default() }
+        }
         Material::Mirror { reflectance } => GpuMaterial {
             albedo_a: v4(Vec3::ZERO, kind(MATERIAL_MIRROR)),
             spec_a: v4(*reflectance, 0.0),
@@ -97,18 +89,12 @@ pub fn environment_sh(width: u32, height: u32, texels: &[[f32; 4]]) -> [[f32; 4]
     let (w, h) = (width as usize, height as usize);
     for j in 0..h {
         let theta = (j as f64 + 0.5) / h as f64 * std::f64::consts::PI;
-        let d_omega = (2.0 * std::f64::consts::PI / w as f64)
-            * (std::f64::consts::PI / h as f64)
-            * theta.sin();
+        let d_omega = (2.0 * std::f64::consts::PI / w as f64) * (std::f64::consts::PI / h as f64) * theta.sin();
         for i in 0..w {
             let u = (i as f64 + 0.5) / w as f64;
             // Inverse of u = 0.5 + atan2(x, -z) / (2 pi), v = acos(y) / pi.
             let phi = (u - 0.5) * 2.0 * std::f64::consts::PI;
-            let (x, y, z) = (
-                theta.sin() * phi.sin(),
-                theta.cos(),
-                -theta.sin() * phi.cos(),
-            );
+            let (x, y, z) = (theta.sin() * phi.sin(), theta.cos(), -theta.sin() * phi.cos());
             let basis = [
                 0.282095,
                 0.488603 * y,
@@ -202,11 +188,7 @@ impl GpuScene {
             vk::BufferUsageFlags::INDEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER,
         )?;
         let mats: Vec<GpuMaterial> = scene.materials.iter().map(gpu_material).collect();
-        let mats = if mats.is_empty() {
-            vec![GpuMaterial::default()]
-        } else {
-            mats
-        };
+        let mats = if mats.is_empty() { vec![GpuMaterial::default()] } else { mats };
         let materials = Buffer::with_data(
             ctx,
             "scene_materials",
@@ -217,12 +199,7 @@ impl GpuScene {
         // Environment: always a texture (a constant is a 1x1 map) so one lookup serves all.
         let (w, h, texels) = match &scene.environment {
             Environment::Constant(c) => (1, 1, vec![[c.x, c.y, c.z, 1.0]]),
-            Environment::Image {
-                width,
-                height,
-                texels,
-                ..
-            } => (*width, *height, texels.clone()),
+            Environment::Image { width, height, texels, .. } => (*width, *height, texels.clone()),
         };
         let env_sh = environment_sh(w, h, &texels);
         let environment = Image::new(
@@ -246,17 +223,9 @@ impl GpuScene {
         let mut staging = staging;
         staging.write(0, bytemuck::cast_slice(&texels));
         ctx.one_shot(|cmd| {
-            graph.access_now(
-                cmd,
-                &[(environment_id, crate::gpu::Access::TransferWrite)],
-                &[],
-            );
+            graph.access_now(cmd, &[(environment_id, crate::gpu::Access::TransferWrite)], &[]);
             cmd.copy_buffer_to_image(&staging, &environment);
-            graph.access_now(
-                cmd,
-                &[(environment_id, crate::gpu::Access::FragmentSampled)],
-                &[],
-            );
+            graph.access_now(cmd, &[(environment_id, crate::gpu::Access::FragmentSampled)], &[]);
         })?;
         drop(staging);
 
@@ -267,10 +236,7 @@ impl GpuScene {
         for (i, l) in scene.lights.iter().enumerate() {
             let base = i as u32 * SHADOW_LAYERS_PER_LIGHT;
             match l {
-                Light::Point {
-                    position,
-                    intensity,
-                } => {
+                Light::Point { position, intensity } => {
                     // Near/far bound every object from the light; near is small relative to
                     // the scene so that tiny and huge scenes behave alike.
                     let far = (position.distance(bounds_center) + bounds_radius) * 1.01;
@@ -293,10 +259,7 @@ impl GpuScene {
                         view_proj: Mat4::IDENTITY.to_cols_array_2d(),
                     });
                 }
-                Light::Directional {
-                    direction,
-                    irradiance,
-                } => {
+                Light::Directional { direction, irradiance } => {
                     let dir = direction.normalize();
                     let r = bounds_radius * 1.01;
                     let origin = bounds_center - dir * r;
@@ -377,10 +340,7 @@ mod tests {
             let d = *major + 0.3 * *s + 0.2 * *t;
             let clip = proj * views[f] * d.extend(1.0);
             let ndc = clip.truncate() / clip.w;
-            assert!(
-                (ndc.x - 0.3).abs() < 1e-5 && (ndc.y - 0.2).abs() < 1e-5,
-                "face {f}: {ndc:?}"
-            );
+            assert!((ndc.x - 0.3).abs() < 1e-5 && (ndc.y - 0.2).abs() < 1e-5, "face {f}: {ndc:?}");
         }
     }
 }

@@ -39,10 +39,8 @@ pub struct FrameUniforms {
     pub info: [u32; 4],
     pub lights: [GpuLight; MAX_LIGHTS as usize],
 }
-const _: () = assert!(
-    std::mem::size_of::<FrameUniforms>()
-        == 5 * 64 + 3 * 16 + 9 * 16 + 16 + 128 * MAX_LIGHTS as usize
-);
+const _: () =
+    assert!(std::mem::size_of::<FrameUniforms>() == 5 * 64 + 3 * 16 + 9 * 16 + 16 + 128 * MAX_LIGHTS as usize);
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]

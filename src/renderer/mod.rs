@@ -12,8 +12,8 @@ use std::sync::Arc;
 use glam::{Mat4, Vec3};
 
 use crate::gpu::{
-    self, vk, Access, Buffer, CommandPool, DescriptorSet, DescriptorSetLayout, DescriptorWrite,
-    GpuContext, GpuError, MemoryLocation, Sampler, SamplerDesc, TimestampPool, TimestampQuery,
+    self, vk, Access, Buffer, CommandPool, DescriptorSet, DescriptorSetLayout, DescriptorWrite, GpuContext, GpuError,
+    MemoryLocation, Sampler, SamplerDesc, TimestampPool, TimestampQuery,
 };
 use crate::graph::{FrameGraph, ImageId};
 use crate::passes::deferred_shading::DeferredShadingPass;
@@ -22,9 +22,7 @@ use crate::passes::shadow_map::{ShadowMapPass, FAR_DISTANCE};
 use crate::passes::specular_single::{Mode, SpecularSinglePass};
 use crate::passes::tonemap::TonemapPass;
 use crate::scene::Scene;
-use crate::{
-    BINDING_ENVIRONMENT, BINDING_FRAME, BINDING_MATERIALS, BINDING_SHADOW_2D, BINDING_SHADOW_CUBE,
-};
+use crate::{BINDING_ENVIRONMENT, BINDING_FRAME, BINDING_MATERIALS, BINDING_SHADOW_2D, BINDING_SHADOW_CUBE};
 
 use gpu_scene::GpuScene;
 use gpu_types::FrameUniforms;
@@ -68,16 +66,8 @@ pub struct FrameTiming {
 impl FrameTiming {
     /// Frame time = last end - first start (../shared/DESIGN.md, rule 6).
     pub fn total_ms(&self) -> f64 {
-        let start = self
-            .passes
-            .iter()
-            .map(|p| p.start_ms)
-            .fold(f64::INFINITY, f64::min);
-        let end = self
-            .passes
-            .iter()
-            .map(|p| p.end_ms)
-            .fold(f64::NEG_INFINITY, f64::max);
+        let start = self.passes.iter().map(|p| p.start_ms).fold(f64::INFINITY, f64::min);
+        let end = self.passes.iter().map(|p| p.end_ms).fold(f64::NEG_INFINITY, f64::max);
         if self.passes.is_empty() {
             0.0
         } else {
@@ -137,11 +127,7 @@ impl Renderer {
             &mut graph,
             scene.camera.width,
             scene.camera.height,
-            if shadowed {
-                scene.lights.len() as u32
-            } else {
-                0
-            },
+            if shadowed { scene.lights.len() as u32 } else { 0 },
             shadow_size,
         )?;
 
@@ -153,26 +139,10 @@ impl Renderer {
             "frame",
             &[
                 (BINDING_FRAME, vk::DescriptorType::UNIFORM_BUFFER, stages),
-                (
-                    BINDING_MATERIALS,
-                    vk::DescriptorType::STORAGE_BUFFER,
-                    stages,
-                ),
-                (
-                    BINDING_ENVIRONMENT,
-                    vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
-                    stages,
-                ),
-                (
-                    BINDING_SHADOW_CUBE,
-                    vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
-                    stages,
-                ),
-                (
-                    BINDING_SHADOW_2D,
-                    vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
-                    stages,
-                ),
+                (BINDING_MATERIALS, vk::DescriptorType::STORAGE_BUFFER, stages),
+                (BINDING_ENVIRONMENT, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, stages),
+                (BINDING_SHADOW_CUBE, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, stages),
+                (BINDING_SHADOW_2D, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, stages),
             ],
             FRAMES_IN_FLIGHT as u32,
         )?;
@@ -225,32 +195,16 @@ impl Renderer {
         })?;
 
         let passes = Passes {
-            shadow_map: if shadowed {
-                Some(ShadowMapPass::new(ctx, &gpu_scene, &targets)?)
-            } else {
-                None
-            },
+            shadow_map: if shadowed { Some(ShadowMapPass::new(ctx, &gpu_scene, &targets)?) } else { None },
             gbuffer: GBufferPass::new(ctx, &frame_layout, &targets)?,
             deferred: DeferredShadingPass::new(ctx, &frame_layout, &targets, &nearest, shadowed)?,
             refraction_single: if plan::has(&plan, plan::REFRACTION_SINGLE) {
-                Some(SpecularSinglePass::new(
-                    ctx,
-                    Mode::Refraction,
-                    &frame_layout,
-                    &targets,
-                    &nearest,
-                )?)
+                Some(SpecularSinglePass::new(ctx, Mode::Refraction, &frame_layout, &targets, &nearest)?)
             } else {
                 None
             },
             reflection_single: if plan::has(&plan, plan::REFLECTION_SINGLE) {
-                Some(SpecularSinglePass::new(
-                    ctx,
-                    Mode::Reflection,
-                    &frame_layout,
-                    &targets,
-                    &nearest,
-                )?)
+                Some(SpecularSinglePass::new(ctx, Mode::Reflection, &frame_layout, &targets, &nearest)?)
             } else {
                 None
             },
@@ -260,9 +214,7 @@ impl Renderer {
         let cam = &scene.camera;
         let view = cam.view();
         // Near plane scaled to the scene, so that the tiny and the huge behave alike.
-        let extent = gpu_scene
-            .bounds_radius
-            .max(cam.position.distance(gpu_scene.bounds_center));
+        let extent = gpu_scene.bounds_radius.max(cam.position.distance(gpu_scene.bounds_center));
         let near = (extent * 1e-5).max(1e-12);
         let proj = camera_projection(cam.vfov_deg, cam.width as f32 / cam.height as f32, near);
         let view_proj = proj * view;
@@ -274,12 +226,7 @@ impl Renderer {
             inv_view: view.inverse().to_cols_array_2d(),
             camera_position: Vec3::extend(cam.position, scene.render.exposure).to_array(),
             clip: [near, 0.0, 0.0, 0.0],
-            viewport: [
-                cam.width as f32,
-                cam.height as f32,
-                1.0 / cam.width as f32,
-                1.0 / cam.height as f32,
-            ],
+            viewport: [cam.width as f32, cam.height as f32, 1.0 / cam.width as f32, 1.0 / cam.height as f32],
             env_sh: gpu_scene.env_sh,
             info: [gpu_scene.lights.len() as u32, 0, 0, 0],
             lights: Default::default(),
@@ -290,11 +237,7 @@ impl Renderer {
 
         let mut timestamps = Vec::new();
         for i in 0..FRAMES_IN_FLIGHT {
-            timestamps.push(TimestampPool::new(
-                ctx,
-                &format!("timestamps_{i}"),
-                2 * plan.len() as u32,
-            )?);
+            timestamps.push(TimestampPool::new(ctx, &format!("timestamps_{i}"), 2 * plan.len() as u32)?);
         }
         Ok(Renderer {
             passes,
@@ -338,15 +281,8 @@ impl Renderer {
     #[doc(hidden)]
     pub fn skip_barriers_for_tests(&mut self, name: &str) {
         let t = &self.targets;
-        let ids = [
-            t.gbuf_normal_id,
-            t.gbuf_albedo_id,
-            t.depth_id,
-            t.hdr_id,
-            t.ldr_id,
-            t.shadow_atlas_id,
-            t.shadow_depth_id,
-        ];
+        let ids =
+            [t.gbuf_normal_id, t.gbuf_albedo_id, t.depth_id, t.hdr_id, t.ldr_id, t.shadow_atlas_id, t.shadow_depth_id];
         for id in ids {
             if self.graph.image_name(id) == name {
                 self.graph.skip_barriers_for_tests(id);
@@ -359,11 +295,7 @@ impl Renderer {
             let pool = &self.timestamps[slot];
             let last = queries.iter().map(|q| q.end + 1).max().unwrap_or(0);
             if let Some(ticks) = pool.read_ticks(last)? {
-                let origin = queries
-                    .iter()
-                    .map(|q| ticks[q.start as usize])
-                    .min()
-                    .unwrap_or(0);
+                let origin = queries.iter().map(|q| ticks[q.start as usize]).min().unwrap_or(0);
                 let passes = queries
                     .iter()
                     .map(|q| PassTime {
@@ -372,11 +304,7 @@ impl Renderer {
                         end_ms: pool.ticks_to_ms(origin, ticks[q.end as usize]),
                     })
                     .collect();
-                self.completed.push(FrameTiming {
-                    frame,
-                    gpu_start_ms: pool.ticks_to_ms(0, origin),
-                    passes,
-                });
+                self.completed.push(FrameTiming { frame, gpu_start_ms: pool.ticks_to_ms(0, origin), passes });
             }
         }
         Ok(())
@@ -392,16 +320,7 @@ impl Renderer {
         self.uniforms.info[1] = self.frame_index as u32;
         self.frame_buffers[slot].write(0, bytemuck::bytes_of(&self.uniforms));
 
-        let Renderer {
-            passes,
-            frame_sets,
-            scene,
-            targets,
-            timestamps,
-            commands,
-            graph,
-            ..
-        } = self;
+        let Renderer { passes, frame_sets, scene, targets, timestamps, commands, graph, .. } = self;
         let frame_set = frame_sets[slot];
         let cmd = commands.begin(slot)?;
         let mut frame = graph.frame();
@@ -409,9 +328,7 @@ impl Renderer {
             p.record(&mut frame, scene, targets);
         }
         passes.gbuffer.record(&mut frame, scene, targets, frame_set);
-        passes
-            .deferred
-            .record(&mut frame, scene, targets, frame_set);
+        passes.deferred.record(&mut frame, scene, targets, frame_set);
         if let Some(p) = &passes.refraction_single {
             p.record(&mut frame, scene, targets, frame_set);
         }
@@ -419,10 +336,7 @@ impl Renderer {
             p.record(&mut frame, scene, targets, frame_set);
         }
         passes.tonemap.record(&mut frame, targets, frame_set);
-        debug_assert_eq!(
-            frame.pass_names(),
-            self.plan.iter().map(|p| p.name).collect::<Vec<_>>()
-        );
+        debug_assert_eq!(frame.pass_names(), self.plan.iter().map(|p| p.name).collect::<Vec<_>>());
         let queries = frame.execute(&cmd, Some(&timestamps[slot]));
         drop(cmd);
         self.commands.submit(slot)?;
@@ -457,18 +371,10 @@ impl Renderer {
             MemoryLocation::GpuToCpu,
         )?;
         let buffer_id = self.graph.register_buffer(&buffer);
-        let image = if id == self.targets.hdr_id {
-            &self.targets.hdr
-        } else {
-            &self.targets.ldr
-        };
+        let image = if id == self.targets.hdr_id { &self.targets.hdr } else { &self.targets.ldr };
         let graph = &mut self.graph;
         self.ctx.one_shot(|cmd| {
-            graph.access_now(
-                cmd,
-                &[(id, Access::TransferRead)],
-                &[(buffer_id, Access::TransferWrite)],
-            );
+            graph.access_now(cmd, &[(id, Access::TransferRead)], &[(buffer_id, Access::TransferWrite)]);
             cmd.copy_image_to_buffer(image, &buffer);
             graph.access_now(cmd, &[], &[(buffer_id, Access::HostRead)]);
         })?;

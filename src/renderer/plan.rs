@@ -19,12 +19,7 @@ pub struct PlannedPass {
 }
 
 fn names(scene: &Scene, pred: impl Fn(&Material) -> bool) -> Vec<String> {
-    scene
-        .objects
-        .iter()
-        .filter(|o| pred(&scene.materials[o.material]))
-        .map(|o| o.name.clone())
-        .collect()
+    scene.objects.iter().filter(|o| pred(&scene.materials[o.material])).map(|o| o.name.clone()).collect()
 }
 
 fn list(v: &[String]) -> String {
@@ -37,10 +32,7 @@ fn describe_light(i: usize, l: &Light) -> String {
             format!("light {i} (point at ({}, {}, {}))", p.x, p.y, p.z)
         }
         Light::Directional { direction: d, .. } => {
-            format!(
-                "light {i} (directional ({:.3}, {:.3}, {:.3}))",
-                d.x, d.y, d.z
-            )
+            format!("light {i} (directional ({:.3}, {:.3}, {:.3}))", d.x, d.y, d.z)
         }
     }
 }
@@ -49,25 +41,14 @@ fn describe_light(i: usize, l: &Light) -> String {
 pub fn plan(scene: &Scene) -> Vec<PlannedPass> {
     let diffuse = names(scene, Material::is_diffuse);
     let dielectric = names(scene, |m| matches!(m, Material::Dielectric { .. }));
-    let metal = names(scene, |m| {
-        matches!(m, Material::Mirror { .. } | Material::Conductor { .. })
-    });
+    let metal = names(scene, |m| matches!(m, Material::Mirror { .. } | Material::Conductor { .. }));
     let mut passes = Vec::new();
 
     if !scene.lights.is_empty() && !diffuse.is_empty() {
-        let lights: Vec<_> = scene
-            .lights
-            .iter()
-            .enumerate()
-            .map(|(i, l)| describe_light(i, l))
-            .collect();
+        let lights: Vec<_> = scene.lights.iter().enumerate().map(|(i, l)| describe_light(i, l)).collect();
         passes.push(PlannedPass {
             name: SHADOW_MAP,
-            reason: format!(
-                "{} cast shadows on the diffuse receivers {}",
-                lights.join(" and "),
-                list(&diffuse)
-            ),
+            reason: format!("{} cast shadows on the diffuse receivers {}", lights.join(" and "), list(&diffuse)),
         });
     }
     passes.push(PlannedPass {
@@ -75,10 +56,7 @@ pub fn plan(scene: &Scene) -> Vec<PlannedPass> {
         reason: if scene.objects.is_empty() {
             "clears depth: the scene has no objects, so the environment fills the frame".into()
         } else {
-            format!(
-                "rasterises the first visible surface of {} object(s)",
-                scene.objects.len()
-            )
+            format!("rasterises the first visible surface of {} object(s)", scene.objects.len())
         },
     });
     passes.push(PlannedPass {
@@ -86,40 +64,24 @@ pub fn plan(scene: &Scene) -> Vec<PlannedPass> {
         reason: if diffuse.is_empty() {
             "environment background (no diffuse object)".into()
         } else if scene.lights.is_empty() {
-            format!(
-                "environment background; diffuse {} lit by the environment only",
-                list(&diffuse)
-            )
+            format!("environment background; diffuse {} lit by the environment only", list(&diffuse))
         } else {
-            format!(
-                "environment background; diffuse {} lit by {} light(s)",
-                list(&diffuse),
-                scene.lights.len()
-            )
+            format!("environment background; diffuse {} lit by {} light(s)", list(&diffuse), scene.lights.len())
         },
     });
     if !dielectric.is_empty() && scene.render.refraction == "single" {
         passes.push(PlannedPass {
             name: REFRACTION_SINGLE,
-            reason: format!(
-                "dielectric {} (render.refraction = \"single\")",
-                list(&dielectric)
-            ),
+            reason: format!("dielectric {} (render.refraction = \"single\")", list(&dielectric)),
         });
     }
     if !metal.is_empty() && scene.render.reflection == "single" {
         passes.push(PlannedPass {
             name: REFLECTION_SINGLE,
-            reason: format!(
-                "mirror/conductor {} (render.reflection = \"single\")",
-                list(&metal)
-            ),
+            reason: format!("mirror/conductor {} (render.reflection = \"single\")", list(&metal)),
         });
     }
-    passes.push(PlannedPass {
-        name: TONEMAP,
-        reason: "linear radiance -> sRGB PNG output".into(),
-    });
+    passes.push(PlannedPass { name: TONEMAP, reason: "linear radiance -> sRGB PNG output".into() });
     passes
 }
 

@@ -60,24 +60,15 @@ impl Targets {
         }
         use vk::ImageUsageFlags as U;
         let attach_sampled = U::COLOR_ATTACHMENT | U::SAMPLED | U::TRANSFER_SRC;
-        let mk = |name: &str, format, usage| {
-            Image::new(ctx, &ImageDesc::d2(name, format, width, height, usage))
-        };
+        let mk = |name: &str, format, usage| Image::new(ctx, &ImageDesc::d2(name, format, width, height, usage));
         let gbuf_normal = mk("gbuf_normal", GBUF_NORMAL_FORMAT, attach_sampled)?;
         let gbuf_albedo = mk("gbuf_albedo", GBUF_ALBEDO_FORMAT, attach_sampled)?;
-        let depth = mk(
-            "depth",
-            DEPTH_FORMAT,
-            U::DEPTH_STENCIL_ATTACHMENT | U::SAMPLED | U::TRANSFER_SRC,
-        )?;
+        let depth = mk("depth", DEPTH_FORMAT, U::DEPTH_STENCIL_ATTACHMENT | U::SAMPLED | U::TRANSFER_SRC)?;
         let hdr = mk("hdr", HDR_FORMAT, attach_sampled | U::STORAGE)?;
         let ldr = mk("ldr", LDR_FORMAT, U::COLOR_ATTACHMENT | U::TRANSFER_SRC)?;
         // Without lights the atlas is a 1x1 placeholder that is still bound (and cleared).
-        let (size, layers) = if lights == 0 {
-            (1, SHADOW_LAYERS_PER_LIGHT)
-        } else {
-            (shadow_size, lights * SHADOW_LAYERS_PER_LIGHT)
-        };
+        let (size, layers) =
+            if lights == 0 { (1, SHADOW_LAYERS_PER_LIGHT) } else { (shadow_size, lights * SHADOW_LAYERS_PER_LIGHT) };
         let shadow_atlas = Image::new(
             ctx,
             &ImageDesc {
@@ -123,9 +114,6 @@ impl Targets {
     }
 
     pub fn extent(&self) -> vk::Extent2D {
-        vk::Extent2D {
-            width: self.width,
-            height: self.height,
-        }
+        vk::Extent2D { width: self.width, height: self.height }
     }
 }

@@ -33,10 +33,7 @@ pub const GRID_HEIGHT: u32 = 1024;
 /// (0, 0) the top-left corner. -Z maps to the image centre, +Y to the top row.
 pub fn dir_to_latlong(d: Vec3) -> Vec2 {
     let d = d.normalize_or(Vec3::NEG_Z);
-    Vec2::new(
-        0.5 + d.x.atan2(-d.z) / TAU,
-        d.y.clamp(-1.0, 1.0).acos() / PI,
-    )
+    Vec2::new(0.5 + d.x.atan2(-d.z) / TAU, d.y.clamp(-1.0, 1.0).acos() / PI)
 }
 
 /// Lat-long (u, v) -> unit direction; the inverse of [`dir_to_latlong`].
@@ -75,10 +72,7 @@ pub fn grid_texels(width: u32, height: u32) -> Vec<[f32; 4]> {
     let mut t = Vec::with_capacity(width as usize * height as usize);
     for j in 0..height {
         for i in 0..width {
-            let d = latlong_dir(
-                (i as f32 + 0.5) / width as f32,
-                (j as f32 + 0.5) / height as f32,
-            );
+            let d = latlong_dir((i as f32 + 0.5) / width as f32, (j as f32 + 0.5) / height as f32);
             let c = grid_radiance(d);
             t.push([c.x, c.y, c.z, 1.0]);
         }
@@ -92,10 +86,7 @@ pub fn grid_path() -> PathBuf {
 }
 
 fn write_exr(path: &Path, width: u32, height: u32, texels: &[[f32; 4]]) -> Result<(), SceneError> {
-    let fail = |message: String| SceneError::Bake {
-        path: path.to_path_buf(),
-        message,
-    };
+    let fail = |message: String| SceneError::Bake { path: path.to_path_buf(), message };
     if let Some(dir) = path.parent() {
         std::fs::create_dir_all(dir).map_err(|e| fail(e.to_string()))?;
     }
@@ -105,11 +96,8 @@ fn write_exr(path: &Path, width: u32, height: u32, texels: &[[f32; 4]]) -> Resul
     // Write beside the target and rename: rename is atomic, so a concurrent reader
     // (parallel tests, two prism processes) sees no file or a whole one.
     static COUNTER: AtomicU64 = AtomicU64::new(0);
-    let tmp = path.with_extension(format!(
-        "tmp-{}-{}.exr",
-        std::process::id(),
-        COUNTER.fetch_add(1, Ordering::Relaxed)
-    ));
+    let tmp =
+        path.with_extension(format!("tmp-{}-{}.exr", std::process::id(), COUNTER.fetch_add(1, Ordering::Relaxed)));
     let written = img
         .save_with_format(&tmp, image::ImageFormat::OpenExr)
         .map_err(|e| fail(e.to_string()))
@@ -128,17 +116,9 @@ pub fn grid_environment() -> Result<Environment, SceneError> {
     let mut cache = CACHE.lock().unwrap_or_else(|p| p.into_inner());
     if cache.is_none() {
         if !path.exists() {
-            write_exr(
-                &path,
-                GRID_WIDTH,
-                GRID_HEIGHT,
-                &grid_texels(GRID_WIDTH, GRID_HEIGHT),
-            )?;
+            write_exr(&path, GRID_WIDTH, GRID_HEIGHT, &grid_texels(GRID_WIDTH, GRID_HEIGHT))?;
         }
-        let (w, h, texels) = read_image(&path).map_err(|message| SceneError::Bake {
-            path: path.clone(),
-            message,
-        })?;
+        let (w, h, texels) = read_image(&path).map_err(|message| SceneError::Bake { path: path.clone(), message })?;
         if (w, h) != (GRID_WIDTH, GRID_HEIGHT) {
             return Err(SceneError::Bake {
                 path,
@@ -147,12 +127,7 @@ pub fn grid_environment() -> Result<Environment, SceneError> {
         }
         *cache = Some(texels);
     }
-    Ok(Environment::Image {
-        path,
-        width: GRID_WIDTH,
-        height: GRID_HEIGHT,
-        texels: cache.clone().unwrap_or_default(),
-    })
+    Ok(Environment::Image { path, width: GRID_WIDTH, height: GRID_HEIGHT, texels: cache.clone().unwrap_or_default() })
 }
 
 fn srgb_to_linear(c: f32) -> f32 {
@@ -165,10 +140,8 @@ fn srgb_to_linear(c: f32) -> f32 {
 
 /// Reads an .exr, .hdr or .png as linear RGBA (PNG is decoded from sRGB).
 pub(crate) fn read_image(path: &Path) -> Result<(u32, u32, Vec<[f32; 4]>), String> {
-    let img = image::ImageReader::open(path)
-        .map_err(|e| e.to_string())?
-        .with_guessed_format()
-        .map_err(|e| e.to_string())?;
+    let img =
+        image::ImageReader::open(path).map_err(|e| e.to_string())?.with_guessed_format().map_err(|e| e.to_string())?;
     let is_png = img.format() == Some(image::ImageFormat::Png);
     let img = img.decode().map_err(|e| e.to_string())?;
     let rgba = img.into_rgba32f();
@@ -193,23 +166,13 @@ mod tests {
 
     #[test]
     fn latlong_round_trip() {
-        for &(u, v) in &[
-            (0.5, 0.5),
-            (0.1, 0.3),
-            (0.9, 0.8),
-            (0.25, 0.01),
-            (0.75, 0.99),
-        ] {
+        for &(u, v) in &[(0.5, 0.5), (0.1, 0.3), (0.9, 0.8), (0.25, 0.01), (0.75, 0.99)] {
             let d = latlong_dir(u, v);
             assert!((d.length() - 1.0).abs() < 1e-5);
             let uv = dir_to_latlong(d);
             assert!((uv - Vec2::new(u, v)).length() < 1e-5, "{u},{v} -> {uv}");
         }
-        for d in [
-            Vec3::new(0.3, 0.4, -0.5),
-            Vec3::new(-1.0, -0.2, 0.7),
-            Vec3::X,
-        ] {
+        for d in [Vec3::new(0.3, 0.4, -0.5), Vec3::new(-1.0, -0.2, 0.7), Vec3::X] {
             let d = d.normalize();
             let uv = dir_to_latlong(d);
             assert!((latlong_dir(uv.x, uv.y) - d).length() < 1e-5);
@@ -226,19 +189,8 @@ mod tests {
             Vec3::new(lat.cos() * lon.sin(), lat.sin(), -lat.cos() * lon.cos())
         };
         // Lines at lon 0, 15, -30 and lat 0, 45 (within 0.5 degree).
-        for (lon, lat) in [
-            (0.2, 7.0),
-            (15.4, 7.0),
-            (-30.3, 7.0),
-            (7.0, 0.3),
-            (7.0, 44.6),
-            (7.0, -60.0),
-        ] {
-            assert_eq!(
-                grid_radiance(dir(lon, lat)),
-                Vec3::splat(2.0),
-                "{lon},{lat}"
-            );
+        for (lon, lat) in [(0.2, 7.0), (15.4, 7.0), (-30.3, 7.0), (7.0, 0.3), (7.0, 44.6), (7.0, -60.0)] {
+            assert_eq!(grid_radiance(dir(lon, lat)), Vec3::splat(2.0), "{lon},{lat}");
         }
         // Sky between lines: mix(horizon, zenith, y).
         // lat 37: y = sin 37 deg = 0.601815, so (0.8 - 0.55 y, 0.85 - 0.4 y, 0.9).

@@ -18,21 +18,13 @@ pub struct Location {
 impl Location {
     /// A location naming the file only.
     pub fn file(file: impl Into<PathBuf>) -> Self {
-        Location {
-            file: file.into(),
-            line: None,
-            column: None,
-        }
+        Location { file: file.into(), line: None, column: None }
     }
 
     /// The location of a byte offset in `text`, the contents of `file`.
     pub fn at_offset(file: impl Into<PathBuf>, text: &str, offset: usize) -> Self {
         let (line, column) = line_col(text, offset);
-        Location {
-            file: file.into(),
-            line: Some(line),
-            column: Some(column),
-        }
+        Location { file: file.into(), line: Some(line), column: Some(column) }
     }
 }
 
@@ -98,22 +90,12 @@ pub enum SceneError {
 
     /// A `--set` override that is malformed or names a path that does not exist.
     #[error("--set {set}: {message}\n  hint: {hint}")]
-    Override {
-        set: String,
-        message: String,
-        hint: String,
-    },
+    Override { set: String, message: String, hint: String },
 
     /// Anything wrong with the scene's contents or the files it references. `set`
     /// names the override that put the offending value there, if one did.
     #[error("{at}: {}{message}\n  hint: {hint}", set.as_ref().map(|s| format!("--set {s}: ")).unwrap_or_default())]
-    Invalid {
-        kind: ErrorKind,
-        at: Location,
-        set: Option<String>,
-        message: String,
-        hint: String,
-    },
+    Invalid { kind: ErrorKind, at: Location, set: Option<String>, message: String, hint: String },
 
     /// The procedural `grid` environment could not be written to its cache file.
     #[error("{}: cannot bake the grid environment: {message}\n  hint: the assets/environments/ directory must be writable (or delete a corrupt grid.exr)", path.display())]

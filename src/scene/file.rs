@@ -45,9 +45,7 @@ impl<'de> Deserialize<'de> for Rgb {
             fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Rgb, A::Error> {
                 let mut c = [0.0f32; 3];
                 for (i, slot) in c.iter_mut().enumerate() {
-                    *slot = seq
-                        .next_element::<f32>()?
-                        .ok_or_else(|| de::Error::invalid_length(i, &self))?;
+                    *slot = seq.next_element::<f32>()?.ok_or_else(|| de::Error::invalid_length(i, &self))?;
                 }
                 if seq.next_element::<f32>()?.is_some() {
                     return Err(de::Error::invalid_length(4, &self));
@@ -98,10 +96,7 @@ pub(crate) struct FileEnvironment {
 
 impl FileEnvironment {
     pub fn present(&self) -> Vec<&'static str> {
-        present(&[
-            ("radiance", self.radiance.is_some()),
-            ("file", self.file.is_some()),
-        ])
+        present(&[("radiance", self.radiance.is_some()), ("file", self.file.is_some())])
     }
 }
 
@@ -281,11 +276,7 @@ pub(crate) fn list(items: &[&str]) -> String {
     if items.is_empty() {
         return "no keys".to_string();
     }
-    items
-        .iter()
-        .map(|s| format!("`{s}`"))
-        .collect::<Vec<_>>()
-        .join(", ")
+    items.iter().map(|s| format!("`{s}`")).collect::<Vec<_>>().join(", ")
 }
 
 /// One `--set key=value` override.
@@ -304,16 +295,13 @@ impl Override {
 }
 
 pub(crate) fn parse_override(raw: &str) -> Result<Override, SceneError> {
-    let fail = |message: &str| {
-        SceneError::Override {
+    let fail = |message: &str| SceneError::Override {
         set: raw.to_string(),
         message: message.to_string(),
-        hint: "write `--set dotted.key=value`, e.g. `--set objects.0.radius=0.5` or `--set render.refraction=single`".to_string(),
-    }
+        hint: "write `--set dotted.key=value`, e.g. `--set objects.0.radius=0.5` or `--set render.refraction=single`"
+            .to_string(),
     };
-    let (key, value) = raw
-        .split_once('=')
-        .ok_or_else(|| fail("no `=` in the override"))?;
+    let (key, value) = raw.split_once('=').ok_or_else(|| fail("no `=` in the override"))?;
     let key = key.trim();
     if key.is_empty() {
         return Err(fail("empty key"));
@@ -329,29 +317,17 @@ pub(crate) fn parse_override(raw: &str) -> Result<Override, SceneError> {
         Ok(v) => v,
         Err(_) => toml_edit::Value::from(text),
     };
-    Ok(Override {
-        raw: raw.to_string(),
-        path,
-        value,
-    })
+    Ok(Override { raw: raw.to_string(), path, value })
 }
 
 /// Applies `ov` to `doc`. The last key may be new (a key left at its default); missing
 /// intermediate tables are created only under `render` (technique parameters are
 /// open-ended); anywhere else the tables on the path must exist.
-pub(crate) fn apply_override(
-    doc: &mut toml_edit::DocumentMut,
-    ov: &Override,
-) -> Result<(), SceneError> {
+pub(crate) fn apply_override(doc: &mut toml_edit::DocumentMut, ov: &Override) -> Result<(), SceneError> {
     let create = ov.path[0] == "render";
     let segs: Vec<&str> = ov.path.iter().map(String::as_str).collect();
-    set_table_like(doc.as_table_mut(), &segs, 0, ov.value.clone(), create).map_err(
-        |(message, hint)| SceneError::Override {
-            set: ov.raw.clone(),
-            message,
-            hint,
-        },
-    )
+    set_table_like(doc.as_table_mut(), &segs, 0, ov.value.clone(), create)
+        .map_err(|(message, hint)| SceneError::Override { set: ov.raw.clone(), message, hint })
 }
 
 type SetError = (String, String);
@@ -467,11 +443,7 @@ fn set_value(
             }
         }
         _ => Err((
-            format!(
-                "`{}` is a {}, not a table or array",
-                segs[..depth].join("."),
-                v.type_name()
-            ),
+            format!("`{}` is a {}, not a table or array", segs[..depth].join("."), v.type_name()),
             "remove the extra segments after the key".to_string(),
         )),
     }
@@ -508,10 +480,7 @@ fn replace_item(
             *old = value;
             Ok(())
         }
-        _ => Err((
-            format!("`{}` is a table", segs[..=depth].join(".")),
-            "set its keys one at a time".to_string(),
-        )),
+        _ => Err((format!("`{}` is a table", segs[..=depth].join(".")), "set its keys one at a time".to_string())),
     }
 }
 
@@ -528,13 +497,8 @@ pub(crate) struct Source {
 
 impl Source {
     fn new(file: &Path, text: String, overrides: Vec<Override>) -> Self {
-        let mut src = Source {
-            file: file.to_path_buf(),
-            text,
-            values: HashMap::new(),
-            keys: HashMap::new(),
-            overrides,
-        };
+        let mut src =
+            Source { file: file.to_path_buf(), text, values: HashMap::new(), keys: HashMap::new(), overrides };
         if let Ok(doc) = toml_edit::ImDocument::parse(src.text.clone()) {
             let mut values = HashMap::new();
             let mut keys = HashMap::new();
@@ -589,31 +553,13 @@ impl Source {
     /// An error about the value at dotted `path`.
     pub fn error(&self, kind: ErrorKind, path: &str, message: String, hint: String) -> SceneError {
         let at = self.location_of(self.span(&self.values, path).map(|r| r.start));
-        SceneError::Invalid {
-            kind,
-            at,
-            set: self.override_for(path).map(|o| o.raw.clone()),
-            message,
-            hint,
-        }
+        SceneError::Invalid { kind, at, set: self.override_for(path).map(|o| o.raw.clone()), message, hint }
     }
 
     /// An error about the key at dotted `path` (e.g. a key the variant does not take).
-    pub fn key_error(
-        &self,
-        kind: ErrorKind,
-        path: &str,
-        message: String,
-        hint: String,
-    ) -> SceneError {
+    pub fn key_error(&self, kind: ErrorKind, path: &str, message: String, hint: String) -> SceneError {
         let at = self.location_of(self.span(&self.keys, path).map(|r| r.start));
-        SceneError::Invalid {
-            kind,
-            at,
-            set: self.override_for(path).map(|o| o.raw.clone()),
-            message,
-            hint,
-        }
+        SceneError::Invalid { kind, at, set: self.override_for(path).map(|o| o.raw.clone()), message, hint }
     }
 
     /// A serde error from deserializing the effective text.
@@ -630,9 +576,7 @@ impl Source {
         SceneError::Invalid {
             kind: ErrorKind::Schema,
             at: self.location_of(offset),
-            set: offset
-                .and_then(|o| self.override_at(o))
-                .map(|o| o.raw.clone()),
+            set: offset.and_then(|o| self.override_at(o)).map(|o| o.raw.clone()),
             message,
             hint: hint.to_string(),
         }
@@ -708,22 +652,12 @@ fn walk_value(
 }
 
 /// Parses `text` (the contents of `origin`), applies `overrides` and deserializes.
-pub(crate) fn parse(
-    text: &str,
-    origin: &Path,
-    overrides: &[String],
-) -> Result<(FileScene, Source), SceneError> {
+pub(crate) fn parse(text: &str, origin: &Path, overrides: &[String]) -> Result<(FileScene, Source), SceneError> {
     let mut doc: toml_edit::DocumentMut = text.parse().map_err(|e: toml_edit::TomlError| {
         let offset = e.span().map(|r| r.start);
         // toml_edit's message carries its own rendering of the line; keep the first
         // line of its explanation, which says what was expected.
-        let message = e
-            .message()
-            .lines()
-            .find(|l| !l.trim().is_empty())
-            .unwrap_or("invalid TOML")
-            .trim()
-            .to_string();
+        let message = e.message().lines().find(|l| !l.trim().is_empty()).unwrap_or("invalid TOML").trim().to_string();
         SceneError::Invalid {
             kind: ErrorKind::Syntax,
             at: match offset {

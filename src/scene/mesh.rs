@@ -25,10 +25,9 @@ impl Mesh {
         if self.positions.is_empty() {
             return (Vec3::ZERO, Vec3::ZERO);
         }
-        self.positions.iter().fold(
-            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
-            |(lo, hi), &p| (lo.min(p), hi.max(p)),
-        )
+        self.positions
+            .iter()
+            .fold((Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)), |(lo, hi), &p| (lo.min(p), hi.max(p)))
     }
 
     pub fn triangle_count(&self) -> usize {
@@ -71,11 +70,9 @@ impl Mesh {
         let mut any_face = vec![None::<Vec3>; self.positions.len()];
         for tri in self.indices.chunks_exact(3) {
             let [a, b, c] = [tri[0] as usize, tri[1] as usize, tri[2] as usize];
-            let (Some(&pa), Some(&pb), Some(&pc)) = (
-                self.positions.get(a),
-                self.positions.get(b),
-                self.positions.get(c),
-            ) else {
+            let (Some(&pa), Some(&pb), Some(&pc)) =
+                (self.positions.get(a), self.positions.get(b), self.positions.get(c))
+            else {
                 continue;
             };
             // |cross| is twice the area, so summing it weights by area.
@@ -88,11 +85,7 @@ impl Mesh {
                 }
             }
         }
-        self.normals = sum
-            .iter()
-            .zip(&any_face)
-            .map(|(s, f)| s.try_normalize().or(*f).unwrap_or(Vec3::Y))
-            .collect();
+        self.normals = sum.iter().zip(&any_face).map(|(s, f)| s.try_normalize().or(*f).unwrap_or(Vec3::Y)).collect();
     }
 
     /// Replaces any zero-length or non-finite normal with a computed one, and
@@ -128,12 +121,7 @@ pub(crate) struct ObjError {
 }
 
 fn obj_err(kind: ErrorKind, line: Option<usize>, message: String, hint: &str) -> ObjError {
-    ObjError {
-        kind,
-        line,
-        message,
-        hint: hint.to_string(),
-    }
+    ObjError { kind, line, message, hint: hint.to_string() }
 }
 
 /// Reads and validates an OBJ file (triangulated, one index per vertex). Normals from
@@ -154,41 +142,26 @@ pub(crate) fn load_obj(path: &Path) -> Result<Mesh, ObjError> {
 /// that an error can name the offending line (tobj reports no lines).
 pub(crate) fn parse_obj(text: &str) -> Result<Mesh, ObjError> {
     prescan(text)?;
-    let opts = tobj::LoadOptions {
-        triangulate: true,
-        single_index: true,
-        ignore_points: true,
-        ignore_lines: true,
-    };
+    let opts = tobj::LoadOptions { triangulate: true, single_index: true, ignore_points: true, ignore_lines: true };
     let mut reader = std::io::BufReader::new(text.as_bytes());
     // Materials (mtllib) are ignored: the scene file assigns the material.
-    let (models, _materials) =
-        tobj::load_obj_buf(&mut reader, &opts, |_| Err(tobj::LoadError::OpenFileFailed)).map_err(
-            |e| {
-                obj_err(
-                    ErrorKind::Mesh,
-                    None,
-                    format!("malformed OBJ: {e}"),
-                    "check the file with a mesh viewer, or re-export it as triangles",
-                )
-            },
-        )?;
+    let (models, _materials) = tobj::load_obj_buf(&mut reader, &opts, |_| Err(tobj::LoadError::OpenFileFailed))
+        .map_err(|e| {
+            obj_err(
+                ErrorKind::Mesh,
+                None,
+                format!("malformed OBJ: {e}"),
+                "check the file with a mesh viewer, or re-export it as triangles",
+            )
+        })?;
     let mut mesh = Mesh::default();
     let mut had_normals = true;
     for model in &models {
         let m = &model.mesh;
         let n = m.positions.len() / 3;
         let mut part = Mesh {
-            positions: m
-                .positions
-                .chunks_exact(3)
-                .map(|p| Vec3::new(p[0], p[1], p[2]))
-                .collect(),
-            normals: m
-                .normals
-                .chunks_exact(3)
-                .map(|p| Vec3::new(p[0], p[1], p[2]))
-                .collect(),
+            positions: m.positions.chunks_exact(3).map(|p| Vec3::new(p[0], p[1], p[2])).collect(),
+            normals: m.normals.chunks_exact(3).map(|p| Vec3::new(p[0], p[1], p[2])).collect(),
             checker_uv: Vec::new(),
             indices: m.indices.clone(),
         };
@@ -233,10 +206,7 @@ pub(crate) fn parse_obj(text: &str) -> Result<Mesh, ObjError> {
 
 /// Checks `v` and `f` lines, returning an error that names the first bad line.
 fn prescan(text: &str) -> Result<(), ObjError> {
-    let total = text
-        .lines()
-        .filter(|l| l.split_whitespace().next() == Some("v"))
-        .count() as i64;
+    let total = text.lines().filter(|l| l.split_whitespace().next() == Some("v")).count() as i64;
     let mut seen: i64 = 0;
     for (i, line) in text.lines().enumerate() {
         let ln = Some(i + 1);
@@ -282,18 +252,12 @@ fn prescan(text: &str) -> Result<(), ObjError> {
                     })?;
                     // Positive indices are 1-based over the whole file; negative ones
                     // count back from the last vertex defined so far.
-                    let ok = if idx > 0 {
-                        idx <= total
-                    } else {
-                        idx < 0 && seen + idx >= 0
-                    };
+                    let ok = if idx > 0 { idx <= total } else { idx < 0 && seen + idx >= 0 };
                     if !ok {
                         return Err(obj_err(
                             ErrorKind::Mesh,
                             ln,
-                            format!(
-                                "face index {idx} is out of range (the file has {total} vertices)"
-                            ),
+                            format!("face index {idx} is out of range (the file has {total} vertices)"),
                             "OBJ indices are 1-based and must name an existing vertex",
                         ));
                     }
@@ -360,9 +324,7 @@ mod tests {
     #[test]
     fn transform_keeps_normals_unit() {
         let mut m = parse_obj("v 0 0 0\nv 1 0 0\nv 0 0 -1\nf 1 2 3\n").unwrap();
-        m.transform(
-            Mat4::from_rotation_x(std::f32::consts::FRAC_PI_2) * Mat4::from_scale(Vec3::splat(2.0)),
-        );
+        m.transform(Mat4::from_rotation_x(std::f32::consts::FRAC_PI_2) * Mat4::from_scale(Vec3::splat(2.0)));
         for n in &m.normals {
             assert!((n.length() - 1.0).abs() < 1e-5);
             assert!((*n - Vec3::Z).length() < 1e-5, "{n}");

@@ -18,8 +18,8 @@ use std::path::{Path, PathBuf};
 use glam::{Mat4, Quat, Vec2, Vec3};
 
 pub use environment::{
-    dir_to_latlong, grid_environment, grid_path, grid_radiance, grid_texels, latlong_dir,
-    Environment, GRID_HEIGHT, GRID_WIDTH,
+    dir_to_latlong, grid_environment, grid_path, grid_radiance, grid_texels, latlong_dir, Environment, GRID_HEIGHT,
+    GRID_WIDTH,
 };
 pub use error::{line_col, ErrorKind, Location, SceneError};
 pub use mesh::Mesh;
@@ -36,23 +36,11 @@ pub const REFLECTION_TECHNIQUES: &[&str] = &["single"];
 pub const CAUSTICS_TECHNIQUES: &[&str] = &["none"];
 
 /// The technique keys of `[render]` and their accepted values.
-pub const TECHNIQUE_KEYS: &[(&str, &[&str])] = &[
-    ("refraction", REFRACTION_TECHNIQUES),
-    ("reflection", REFLECTION_TECHNIQUES),
-    ("caustics", CAUSTICS_TECHNIQUES),
-];
+pub const TECHNIQUE_KEYS: &[(&str, &[&str])] =
+    &[("refraction", REFRACTION_TECHNIQUES), ("reflection", REFLECTION_TECHNIQUES), ("caustics", CAUSTICS_TECHNIQUES)];
 
 /// Every `shape` an object may have.
-pub const SHAPES: &[&str] = &[
-    "sphere",
-    "quad",
-    "box",
-    "torus",
-    "open_cylinder",
-    "lathe",
-    "heightfield",
-    "mesh",
-];
+pub const SHAPES: &[&str] = &["sphere", "quad", "box", "torus", "open_cylinder", "lathe", "heightfield", "mesh"];
 
 /// `env!("CARGO_MANIFEST_DIR")/assets`.
 pub fn assets_dir() -> PathBuf {
@@ -276,10 +264,7 @@ impl Default for RenderSettings {
 
 /// Loads the scene file at `path`, applying `overrides` ("dotted.key=value").
 pub fn load(path: &Path, overrides: &[String]) -> Result<Scene, SceneError> {
-    let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io { path: path.to_path_buf(), source })?;
     load_str(&text, path, overrides)
 }
 
@@ -313,10 +298,7 @@ fn build(f: FileScene, src: &Source) -> Result<Scene, SceneError> {
         .map(|(i, o)| object(o, i, &material_names, &render, src))
         .collect::<Result<Vec<_>, _>>()?;
     let name = f.name.clone().unwrap_or_else(|| {
-        src.file
-            .file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_else(|| "scene".to_string())
+        src.file.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "scene".to_string())
     });
     Ok(Scene {
         name,
@@ -389,17 +371,9 @@ fn positive(src: &Source, path: &str, v: f32) -> Result<f32, SceneError> {
 /// A colour or coefficient: finite and >= 0 (> 0 if `strict`) in every channel.
 fn rgb(src: &Source, path: &str, c: Rgb, strict: bool) -> Result<Vec3, SceneError> {
     let v = vec3(src, path, c.0)?;
-    let ok = if strict {
-        v.cmpgt(Vec3::ZERO).all()
-    } else {
-        v.cmpge(Vec3::ZERO).all()
-    };
+    let ok = if strict { v.cmpgt(Vec3::ZERO).all() } else { v.cmpge(Vec3::ZERO).all() };
     if !ok {
-        let bound = if strict {
-            "greater than 0"
-        } else {
-            "at least 0"
-        };
+        let bound = if strict { "greater than 0" } else { "at least 0" };
         return Err(value_err(
             src,
             path,
@@ -419,14 +393,7 @@ fn render_settings(t: Option<&toml::Table>, src: &Source) -> Result<RenderSettin
     let Some(t) = t else {
         return Ok(r);
     };
-    const KEYS: &[&str] = &[
-        "refraction",
-        "reflection",
-        "caustics",
-        "shadow_map_size",
-        "exposure",
-        "sphere_segments",
-    ];
+    const KEYS: &[&str] = &["refraction", "reflection", "caustics", "shadow_map_size", "exposure", "sphere_segments"];
     let int = |key: &str, v: &toml::Value, lo: i64, hi: i64| -> Result<u32, SceneError> {
         let path = format!("render.{key}");
         match v.as_integer() {
@@ -496,10 +463,7 @@ fn render_settings(t: Option<&toml::Table>, src: &Source) -> Result<RenderSettin
                         ErrorKind::Schema,
                         &path,
                         format!("unknown key `{key}` in [render]"),
-                        format!(
-                            "[render] takes {} and technique parameter tables [render.<technique>]",
-                            list(KEYS)
-                        ),
+                        format!("[render] takes {} and technique parameter tables [render.<technique>]", list(KEYS)),
                     ))
                 }
             },
@@ -550,14 +514,7 @@ fn camera(c: &file::FileCamera, src: &Source) -> Result<Camera, SceneError> {
             "choose an `up` not along target - position",
         ));
     }
-    Ok(Camera {
-        position,
-        target,
-        up,
-        vfov_deg,
-        width,
-        height,
-    })
+    Ok(Camera { position, target, up, vfov_deg, width, height })
 }
 
 fn environment(e: Option<&file::FileEnvironment>, src: &Source) -> Result<Environment, SceneError> {
@@ -571,46 +528,20 @@ fn environment(e: Option<&file::FileEnvironment>, src: &Source) -> Result<Enviro
             grid_environment()
         }
         "constant" => {
-            check_keys(
-                src,
-                "environment",
-                &what,
-                &e.present(),
-                &["radiance"],
-                &["radiance"],
-            )?;
+            check_keys(src, "environment", &what, &e.present(), &["radiance"], &["radiance"])?;
             let radiance = e.radiance.unwrap_or(Rgb([0.0; 3]));
-            Ok(Environment::Constant(rgb(
-                src,
-                "environment.radiance",
-                radiance,
-                false,
-            )?))
+            Ok(Environment::Constant(rgb(src, "environment.radiance", radiance, false)?))
         }
         "image" => {
-            check_keys(
-                src,
-                "environment",
-                &what,
-                &e.present(),
-                &["file"],
-                &["file"],
-            )?;
+            check_keys(src, "environment", &what, &e.present(), &["file"], &["file"])?;
             let rel = e.file.as_deref().unwrap_or_default();
             let path = relative_to(&src.file, rel);
             let (width, height, texels) = environment::read_image(&path).map_err(|message| {
-                let kind = if path.exists() {
-                    ErrorKind::Image
-                } else {
-                    ErrorKind::MissingFile
-                };
+                let kind = if path.exists() { ErrorKind::Image } else { ErrorKind::MissingFile };
                 src.error(
                     kind,
                     "environment.file",
-                    format!(
-                        "cannot load environment image {}: {message}",
-                        path.display()
-                    ),
+                    format!("cannot load environment image {}: {message}", path.display()),
                     "give an .exr, .hdr or .png path relative to the scene file".to_string(),
                 )
             })?;
@@ -622,12 +553,7 @@ fn environment(e: Option<&file::FileEnvironment>, src: &Source) -> Result<Enviro
                     "use an image of at least 1 x 1 texels".to_string(),
                 ));
             }
-            Ok(Environment::Image {
-                path,
-                width,
-                height,
-                texels,
-            })
+            Ok(Environment::Image { path, width, height, texels })
         }
         other => Err(value_err(
             src,
@@ -640,10 +566,7 @@ fn environment(e: Option<&file::FileEnvironment>, src: &Source) -> Result<Enviro
 
 /// `rel` resolved against the directory of scene file `scene`.
 fn relative_to(scene: &Path, rel: &str) -> PathBuf {
-    scene
-        .parent()
-        .map(|d| d.join(rel))
-        .unwrap_or_else(|| PathBuf::from(rel))
+    scene.parent().map(|d| d.join(rel)).unwrap_or_else(|| PathBuf::from(rel))
 }
 
 fn light(l: &file::FileLight, path: &str, src: &Source) -> Result<Light, SceneError> {
@@ -653,34 +576,16 @@ fn light(l: &file::FileLight, path: &str, src: &Source) -> Result<Light, SceneEr
             let keys = ["position", "intensity"];
             check_keys(src, path, &what, &l.present(), &keys, &keys)?;
             Ok(Light::Point {
-                position: vec3(
-                    src,
-                    &format!("{path}.position"),
-                    l.position.unwrap_or_default(),
-                )?,
-                intensity: rgb(
-                    src,
-                    &format!("{path}.intensity"),
-                    l.intensity.unwrap_or(Rgb([0.0; 3])),
-                    false,
-                )?,
+                position: vec3(src, &format!("{path}.position"), l.position.unwrap_or_default())?,
+                intensity: rgb(src, &format!("{path}.intensity"), l.intensity.unwrap_or(Rgb([0.0; 3])), false)?,
             })
         }
         "directional" => {
             let keys = ["direction", "irradiance"];
             check_keys(src, path, &what, &l.present(), &keys, &keys)?;
             Ok(Light::Directional {
-                direction: unit(
-                    src,
-                    &format!("{path}.direction"),
-                    l.direction.unwrap_or_default(),
-                )?,
-                irradiance: rgb(
-                    src,
-                    &format!("{path}.irradiance"),
-                    l.irradiance.unwrap_or(Rgb([0.0; 3])),
-                    false,
-                )?,
+                direction: unit(src, &format!("{path}.direction"), l.direction.unwrap_or_default())?,
+                irradiance: rgb(src, &format!("{path}.irradiance"), l.irradiance.unwrap_or(Rgb([0.0; 3])), false)?,
             })
         }
         other => Err(value_err(
@@ -699,44 +604,35 @@ fn material(m: &file::FileMaterial, path: &str, src: &Source) -> Result<Material
     match m.kind.as_str() {
         "diffuse" => {
             check_keys(src, path, &what, &m.present(), &["albedo", "checker"], &[])?;
-            let albedo =
-                match (m.albedo, &m.checker) {
-                    (Some(a), None) => Albedo::Constant(rgb(src, &p("albedo"), a, false)?),
-                    (None, Some(c)) => Albedo::Checker {
-                        a: rgb(src, &p("checker.a"), c.a, false)?,
-                        b: rgb(src, &p("checker.b"), c.b, false)?,
-                        size: positive(src, &p("checker.size"), c.size)?,
-                    },
-                    (Some(_), Some(_)) => {
-                        return Err(src.error(
-                            ErrorKind::Schema,
-                            path,
-                            "a diffuse material takes `albedo` or `checker`, not both".to_string(),
-                            "remove one of them".to_string(),
-                        ))
-                    }
-                    (None, None) => return Err(src.error(
+            let albedo = match (m.albedo, &m.checker) {
+                (Some(a), None) => Albedo::Constant(rgb(src, &p("albedo"), a, false)?),
+                (None, Some(c)) => Albedo::Checker {
+                    a: rgb(src, &p("checker.a"), c.a, false)?,
+                    b: rgb(src, &p("checker.b"), c.b, false)?,
+                    size: positive(src, &p("checker.size"), c.size)?,
+                },
+                (Some(_), Some(_)) => {
+                    return Err(src.error(
+                        ErrorKind::Schema,
+                        path,
+                        "a diffuse material takes `albedo` or `checker`, not both".to_string(),
+                        "remove one of them".to_string(),
+                    ))
+                }
+                (None, None) => {
+                    return Err(src.error(
                         ErrorKind::Schema,
                         path,
                         "a diffuse material needs `albedo` or `checker`".to_string(),
-                        "add e.g. `albedo = 0.8` or `checker = { a = 0.8, b = 0.2, size = 0.5 }`"
-                            .to_string(),
-                    )),
-                };
+                        "add e.g. `albedo = 0.8` or `checker = { a = 0.8, b = 0.2, size = 0.5 }`".to_string(),
+                    ))
+                }
+            };
             Ok(Material::Diffuse { albedo })
         }
         "mirror" => {
-            check_keys(
-                src,
-                path,
-                &what,
-                &m.present(),
-                &["reflectance"],
-                &["reflectance"],
-            )?;
-            Ok(Material::Mirror {
-                reflectance: rgb(src, &p("reflectance"), m.reflectance.unwrap_or(zero), false)?,
-            })
+            check_keys(src, path, &what, &m.present(), &["reflectance"], &["reflectance"])?;
+            Ok(Material::Mirror { reflectance: rgb(src, &p("reflectance"), m.reflectance.unwrap_or(zero), false)? })
         }
         "conductor" => {
             check_keys(src, path, &what, &m.present(), &["eta", "k"], &["eta", "k"])?;
@@ -746,14 +642,7 @@ fn material(m: &file::FileMaterial, path: &str, src: &Source) -> Result<Material
             })
         }
         "dielectric" => {
-            check_keys(
-                src,
-                path,
-                &what,
-                &m.present(),
-                &["ior", "absorption"],
-                &["ior"],
-            )?;
+            check_keys(src, path, &what, &m.present(), &["ior", "absorption"], &["ior"])?;
             Ok(Material::Dielectric {
                 ior: rgb(src, &p("ior"), m.ior.unwrap_or(zero), true)?,
                 absorption: rgb(src, &p("absorption"), m.absorption.unwrap_or(zero), false)?,
@@ -774,19 +663,10 @@ fn shape_keys(shape: &str) -> Option<(&'static [&'static str], &'static [&'stati
         "sphere" => (&["center", "radius", "segments"], &["radius"]),
         "quad" => (&["center", "size", "normal"], &["size", "normal"]),
         "box" => (&["center", "size"], &["size"]),
-        "torus" => (
-            &["center", "major_radius", "minor_radius", "segments"],
-            &["major_radius", "minor_radius"],
-        ),
-        "open_cylinder" => (
-            &["center", "radius", "height", "segments"],
-            &["radius", "height"],
-        ),
+        "torus" => (&["center", "major_radius", "minor_radius", "segments"], &["major_radius", "minor_radius"]),
+        "open_cylinder" => (&["center", "radius", "height", "segments"], &["radius", "height"]),
         "lathe" => (&["center", "profile", "segments"], &["profile"]),
-        "heightfield" => (
-            &["center", "size", "resolution", "waves", "time"],
-            &["size"],
-        ),
+        "heightfield" => (&["center", "size", "resolution", "waves", "time"], &["size"]),
         "mesh" => (&["file", "fit"], &["file"]),
         _ => return None,
     })
@@ -801,66 +681,36 @@ fn object(
 ) -> Result<Object, SceneError> {
     let path = format!("objects.{i}");
     let p = |k: &str| format!("{path}.{k}");
-    let shape: &'static str = SHAPES
-        .iter()
-        .find(|s| **s == o.shape)
-        .copied()
-        .ok_or_else(|| {
-            value_err(
-                src,
-                &p("shape"),
-                format!("unknown shape `{}`", o.shape),
-                &format!("accepted values: {}", list(SHAPES)),
-            )
-        })?;
-    let material = material_names
-        .iter()
-        .position(|n| *n == o.material)
-        .ok_or_else(|| {
-            let names: Vec<&str> = material_names.iter().map(String::as_str).collect();
-            src.error(
-                ErrorKind::Reference,
-                &p("material"),
-                format!("unknown material `{}`", o.material),
-                if names.is_empty() {
-                    format!("define it as [materials.{}]", o.material)
-                } else {
-                    format!(
-                        "known materials: {}; or define [materials.{}]",
-                        list(&names),
-                        o.material
-                    )
-                },
-            )
-        })?;
+    let shape: &'static str = SHAPES.iter().find(|s| **s == o.shape).copied().ok_or_else(|| {
+        value_err(
+            src,
+            &p("shape"),
+            format!("unknown shape `{}`", o.shape),
+            &format!("accepted values: {}", list(SHAPES)),
+        )
+    })?;
+    let material = material_names.iter().position(|n| *n == o.material).ok_or_else(|| {
+        let names: Vec<&str> = material_names.iter().map(String::as_str).collect();
+        src.error(
+            ErrorKind::Reference,
+            &p("material"),
+            format!("unknown material `{}`", o.material),
+            if names.is_empty() {
+                format!("define it as [materials.{}]", o.material)
+            } else {
+                format!("known materials: {}; or define [materials.{}]", list(&names), o.material)
+            },
+        )
+    })?;
     let (allowed, required) = shape_keys(shape).unwrap_or((&[], &[]));
-    check_keys(
-        src,
-        &path,
-        &format!("shape `{shape}`"),
-        &o.present(),
-        allowed,
-        required,
-    )?;
+    check_keys(src, &path, &format!("shape `{shape}`"), &o.present(), allowed, required)?;
 
     // The transform: scale, then rotation (degrees about X, then Y, then Z), then
     // translation, applied to the shape's own coordinates (centre included).
     let t = o.transform.as_ref();
-    let translation = vec3(
-        src,
-        &p("transform.translation"),
-        t.and_then(|t| t.translation).unwrap_or_default(),
-    )?;
-    let rot_deg = vec3(
-        src,
-        &p("transform.rotation"),
-        t.and_then(|t| t.rotation).unwrap_or_default(),
-    )?;
-    let scale = positive(
-        src,
-        &p("transform.scale"),
-        t.and_then(|t| t.scale).unwrap_or(1.0),
-    )?;
+    let translation = vec3(src, &p("transform.translation"), t.and_then(|t| t.translation).unwrap_or_default())?;
+    let rot_deg = vec3(src, &p("transform.rotation"), t.and_then(|t| t.rotation).unwrap_or_default())?;
+    let scale = positive(src, &p("transform.scale"), t.and_then(|t| t.scale).unwrap_or(1.0))?;
     let rotation = Quat::from_rotation_z(rot_deg.z.to_radians())
         * Quat::from_rotation_y(rot_deg.y.to_radians())
         * Quat::from_rotation_x(rot_deg.x.to_radians());
@@ -882,10 +732,7 @@ fn object(
             return Err(src.error(
                 ErrorKind::Schema,
                 &p("size"),
-                format!(
-                    "shape `{shape}` needs `size` with {n} numbers, not {}",
-                    s.len()
-                ),
+                format!("shape `{shape}` needs `size` with {n} numbers, not {}", s.len()),
                 format!("write `size = [{}]`", vec!["1.0"; n].join(", ")),
             ));
         }
@@ -900,10 +747,7 @@ fn object(
     let mut mesh = match shape {
         "sphere" => {
             let r = radius("radius", o.radius)?;
-            analytic = Some(Analytic::Sphere {
-                center: matrix.transform_point3(center),
-                radius: r * scale,
-            });
+            analytic = Some(Analytic::Sphere { center: matrix.transform_point3(center), radius: r * scale });
             shapes::sphere(center, r, segments)
         }
         "quad" => {
@@ -964,8 +808,7 @@ fn object(
     } else {
         mesh.transform(matrix);
     }
-    let horizontal_quad =
-        shape == "quad" && mesh.normals.first().is_some_and(|n| n.y.abs() > 1.0 - 1e-6);
+    let horizontal_quad = shape == "quad" && mesh.normals.first().is_some_and(|n| n.y.abs() > 1.0 - 1e-6);
     if shape == "quad" && !horizontal_quad {
         // Edge distances scale with the object; rotation and translation keep them.
         for st in &mut mesh.checker_uv {
@@ -974,13 +817,7 @@ fn object(
     } else {
         mesh.set_checker_uv_xz();
     }
-    Ok(Object {
-        name: o.name.clone().unwrap_or_else(|| format!("{shape}{i}")),
-        material,
-        shape,
-        mesh,
-        analytic,
-    })
+    Ok(Object { name: o.name.clone().unwrap_or_else(|| format!("{shape}{i}")), material, shape, mesh, analytic })
 }
 
 fn profile(o: &FileObject, path: &str, src: &Source) -> Result<Vec<Vec2>, SceneError> {
@@ -1023,31 +860,17 @@ fn profile(o: &FileObject, path: &str, src: &Source) -> Result<Vec<Vec2>, SceneE
 /// Loads an OBJ object and places it: with `fit`, the transform's rotation, then a
 /// uniform scale to the fit's extent and a move to its centre (and floor); without,
 /// the caller applies the full transform.
-fn mesh_object(
-    o: &FileObject,
-    path: &str,
-    rotation: Quat,
-    src: &Source,
-) -> Result<Mesh, SceneError> {
+fn mesh_object(o: &FileObject, path: &str, rotation: Quat, src: &Source) -> Result<Mesh, SceneError> {
     let rel = o.file.as_deref().unwrap_or_default();
     let file = relative_to(&src.file, rel);
     let fpath = format!("{path}.file");
     let mut mesh = mesh::load_obj(&file).map_err(|e| {
         if e.kind == ErrorKind::MissingFile || e.line.is_none() {
-            src.error(
-                e.kind,
-                &fpath,
-                format!("{}: {}", file.display(), e.message),
-                e.hint.clone(),
-            )
+            src.error(e.kind, &fpath, format!("{}: {}", file.display(), e.message), e.hint.clone())
         } else {
             SceneError::Invalid {
                 kind: e.kind,
-                at: Location {
-                    file: file.clone(),
-                    line: e.line,
-                    column: None,
-                },
+                at: Location { file: file.clone(), line: e.line, column: None },
                 set: None,
                 message: format!("{} (mesh of {path}, {})", e.message, src.location(&fpath)),
                 hint: e.hint.clone(),
@@ -1068,11 +891,7 @@ fn mesh_object(
         }
     }
     let extent = positive(src, &format!("{path}.fit.extent"), fit.extent)?;
-    let center = vec3(
-        src,
-        &format!("{path}.fit.center"),
-        fit.center.unwrap_or_default(),
-    )?;
+    let center = vec3(src, &format!("{path}.fit.center"), fit.center.unwrap_or_default())?;
     mesh.transform(Mat4::from_quat(rotation));
     let (lo, hi) = mesh.bounds();
     let largest = (hi - lo).max_element();
@@ -1080,18 +899,13 @@ fn mesh_object(
         return Err(src.error(
             ErrorKind::Mesh,
             &fpath,
-            format!(
-                "{}: the mesh has zero size and cannot be fitted",
-                file.display()
-            ),
+            format!("{}: the mesh has zero size and cannot be fitted", file.display()),
             "remove `fit` or use a mesh with extent".to_string(),
         ));
     }
     let s = extent / largest;
     mesh.transform(
-        Mat4::from_translation(center)
-            * Mat4::from_scale(Vec3::splat(s))
-            * Mat4::from_translation(-(lo + hi) * 0.5),
+        Mat4::from_translation(center) * Mat4::from_scale(Vec3::splat(s)) * Mat4::from_translation(-(lo + hi) * 0.5),
     );
     if let Some(floor) = fit.floor {
         let floor = finite(src, &format!("{path}.fit.floor"), floor)?;

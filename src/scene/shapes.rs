@@ -57,11 +57,7 @@ pub fn sphere(center: Vec3, radius: f32, segments: u32) -> Mesh {
         let theta = PI * i as f32 / nlat as f32;
         let phi = TAU * j as f32 / nlon as f32;
         // sin(pi) is not exactly 0 in f32; pin the poles so their vertices coincide.
-        let s = if i == 0 || i == nlat {
-            0.0
-        } else {
-            theta.sin()
-        };
+        let s = if i == 0 || i == nlat { 0.0 } else { theta.sin() };
         let y = if i == 0 {
             1.0
         } else if i == nlat {
@@ -87,12 +83,7 @@ pub fn quad_frame(n: Vec3) -> (Vec3, Vec3) {
 pub fn quad(center: Vec3, size: Vec2, normal: Vec3) -> Mesh {
     let (u, v) = quad_frame(normal);
     let h = size * 0.5;
-    let corners = [
-        Vec2::new(-h.x, -h.y),
-        Vec2::new(h.x, -h.y),
-        Vec2::new(h.x, h.y),
-        Vec2::new(-h.x, h.y),
-    ];
+    let corners = [Vec2::new(-h.x, -h.y), Vec2::new(h.x, -h.y), Vec2::new(h.x, h.y), Vec2::new(-h.x, h.y)];
     Mesh {
         positions: corners.iter().map(|c| center + c.x * u + c.y * v).collect(),
         normals: vec![normal; 4],
@@ -111,11 +102,7 @@ pub fn cuboid(center: Vec3, size: Vec3) -> Mesh {
             n[axis] = sign;
             let (u, v) = quad_frame(n);
             let extent = |d: Vec3| (d * size).abs().max_element();
-            let face = quad(
-                center + n * (size[axis] * 0.5),
-                Vec2::new(extent(u), extent(v)),
-                n,
-            );
+            let face = quad(center + n * (size[axis] * 0.5), Vec2::new(extent(u), extent(v)), n);
             m.append(&face);
         }
     }
@@ -163,11 +150,7 @@ pub fn lathe(center: Vec3, profile: &[Vec2], segments: u32) -> Mesh {
 
 /// A cylinder wall without caps, base centre `center`, normals outward.
 pub fn open_cylinder(center: Vec3, radius: f32, height: f32, segments: u32) -> Mesh {
-    lathe(
-        center,
-        &[Vec2::new(radius, 0.0), Vec2::new(radius, height)],
-        segments,
-    )
+    lathe(center, &[Vec2::new(radius, 0.0), Vec2::new(radius, height)], segments)
 }
 
 /// One travelling sine wave of a heightfield.
@@ -182,10 +165,7 @@ pub struct Wave {
 
 /// h(x, z) = sum of amplitude * sin(kx x + kz z + omega t + phase).
 pub fn wave_height(waves: &[Wave], x: f32, z: f32, time: f32) -> f32 {
-    waves
-        .iter()
-        .map(|w| w.amplitude * (w.kx * x + w.kz * z + w.omega * time + w.phase).sin())
-        .sum()
+    waves.iter().map(|w| w.amplitude * (w.kx * x + w.kz * z + w.omega * time + w.phase).sin()).sum()
 }
 
 /// The unit normal of y = h(x, z), facing +Y: normalize(-dh/dx, 1, -dh/dz).
@@ -202,13 +182,7 @@ pub fn wave_normal(waves: &[Wave], x: f32, z: f32, time: f32) -> Vec3 {
 /// A heightfield y = center.y + h(x, z) over `size` = (sx, sz) centred on `center`,
 /// `resolution` = (nx, nz) cells. h is evaluated at the shape's own (x, z), centre
 /// included, so a pool centred on the origin reads its formula in world coordinates.
-pub fn heightfield(
-    center: Vec3,
-    size: Vec2,
-    resolution: [u32; 2],
-    waves: &[Wave],
-    time: f32,
-) -> Mesh {
+pub fn heightfield(center: Vec3, size: Vec2, resolution: [u32; 2], waves: &[Wave], time: f32) -> Mesh {
     let [nx, nz] = resolution.map(|n| n.max(1));
     grid(nz, nx, |i, j| {
         let x = center.x + size.x * (j as f32 / nx as f32 - 0.5);
@@ -234,10 +208,7 @@ mod tests {
             let [a, b, c] = [t[0], t[1], t[2]].map(|k| k as usize);
             let cross = (m.positions[b] - m.positions[a]).cross(m.positions[c] - m.positions[a]);
             let n = m.normals[a] + m.normals[b] + m.normals[c];
-            assert!(
-                cross.dot(n) > 0.0,
-                "triangle {a},{b},{c} wound against its normals"
-            );
+            assert!(cross.dot(n) > 0.0, "triangle {a},{b},{c} wound against its normals");
         }
     }
 
@@ -298,12 +269,7 @@ mod tests {
 
     #[test]
     fn lathe_ring_normals_outward_inward_up() {
-        let profile = [
-            Vec2::new(1.0, 0.0),
-            Vec2::new(1.0, 0.5),
-            Vec2::new(0.97, 0.5),
-            Vec2::new(0.97, 0.0),
-        ];
+        let profile = [Vec2::new(1.0, 0.0), Vec2::new(1.0, 0.5), Vec2::new(0.97, 0.5), Vec2::new(0.97, 0.0)];
         let m = lathe(Vec3::ZERO, &profile, 32);
         check_consistent(&m);
         let (mut outer, mut inner, mut top) = (0, 0, 0);
@@ -329,20 +295,8 @@ mod tests {
     #[test]
     fn heightfield_matches_formula() {
         let waves = [
-            Wave {
-                amplitude: 0.03,
-                kx: 4.0,
-                kz: 0.0,
-                omega: 3.0,
-                phase: 0.0,
-            },
-            Wave {
-                amplitude: 0.02,
-                kx: 0.0,
-                kz: 5.0,
-                omega: -2.0,
-                phase: 1.0,
-            },
+            Wave { amplitude: 0.03, kx: 4.0, kz: 0.0, omega: 3.0, phase: 0.0 },
+            Wave { amplitude: 0.02, kx: 0.0, kz: 5.0, omega: -2.0, phase: 1.0 },
         ];
         let m = heightfield(Vec3::ZERO, Vec2::new(6.0, 6.0), [8, 8], &waves, 0.0);
         check_consistent(&m);
@@ -353,12 +307,8 @@ mod tests {
         // Normal against a finite difference of the formula.
         let (x, z, e) = (0.3f32, -0.7f32, 1e-3f32);
         let h = |x: f32, z: f32| wave_height(&waves, x, z, 0.0);
-        let fd = Vec3::new(
-            -(h(x + e, z) - h(x - e, z)) / (2.0 * e),
-            1.0,
-            -(h(x, z + e) - h(x, z - e)) / (2.0 * e),
-        )
-        .normalize();
+        let fd = Vec3::new(-(h(x + e, z) - h(x - e, z)) / (2.0 * e), 1.0, -(h(x, z + e) - h(x, z - e)) / (2.0 * e))
+            .normalize();
         assert!((fd - wave_normal(&waves, x, z, 0.0)).length() < 1e-3);
     }
 }

@@ -91,13 +91,7 @@ fn every_benchmark_scene_loads_with_expected_counts() {
             assert_eq!(m.checker_uv.len(), m.positions.len());
             assert!(m.indices.iter().all(|&i| (i as usize) < m.positions.len()));
             assert!(m.positions.iter().all(|p| p.is_finite()));
-            assert!(
-                m.normals
-                    .iter()
-                    .all(|n| n.is_finite() && (n.length() - 1.0).abs() < 1e-4),
-                "{name}/{}",
-                o.name
-            );
+            assert!(m.normals.iter().all(|n| n.is_finite() && (n.length() - 1.0).abs() < 1e-4), "{name}/{}", o.name);
         }
     }
 }
@@ -112,31 +106,14 @@ fn sphere_env_numbers() {
     assert_eq!(c.vfov_deg, 40.0);
     let ball = &s.objects[0];
     assert_eq!(ball.shape, "sphere");
-    assert_eq!(
-        ball.analytic,
-        Some(Analytic::Sphere {
-            center: Vec3::ZERO,
-            radius: 1.0
-        })
-    );
-    assert_eq!(
-        *s.material_of(ball),
-        Material::Dielectric {
-            ior: Vec3::splat(1.5),
-            absorption: Vec3::ZERO
-        }
-    );
+    assert_eq!(ball.analytic, Some(Analytic::Sphere { center: Vec3::ZERO, radius: 1.0 }));
+    assert_eq!(*s.material_of(ball), Material::Dielectric { ior: Vec3::splat(1.5), absorption: Vec3::ZERO });
     assert!(s.material_of(ball).is_specular());
     assert_eq!(s.material_of(ball).kind_name(), "dielectric");
     // 128 x 64 default tessellation.
     assert_eq!(ball.mesh.triangle_count(), 128 * 64 * 2 - 2 * 128);
     match &s.environment {
-        Environment::Image {
-            width,
-            height,
-            texels,
-            path,
-        } => {
+        Environment::Image { width, height, texels, path } => {
             assert_eq!((*width, *height), (GRID_WIDTH, GRID_HEIGHT));
             assert!(path.exists());
             // The texel at (i, j) holds the formula at its centre.
@@ -150,13 +127,7 @@ fn sphere_env_numbers() {
     }
     // bubble_env differs only in the ior.
     let b = bench("bubble_env");
-    assert_eq!(
-        b.materials[0],
-        Material::Dielectric {
-            ior: Vec3::splat(0.75),
-            absorption: Vec3::ZERO
-        }
-    );
+    assert_eq!(b.materials[0], Material::Dielectric { ior: Vec3::splat(0.75), absorption: Vec3::ZERO });
 }
 
 #[test]
@@ -171,22 +142,13 @@ fn bunny_scenes_are_fitted() {
     let bunny = s.object("bunny").expect("bunny");
     assert_eq!(
         *s.material_of(bunny),
-        Material::Dielectric {
-            ior: Vec3::splat(1.3),
-            absorption: Vec3::new(0.1, 0.8, 2.0)
-        }
+        Material::Dielectric { ior: Vec3::splat(1.3), absorption: Vec3::new(0.1, 0.8, 2.0) }
     );
     let (lo, hi) = bunny.mesh.bounds();
     assert!(((hi - lo).max_element() - 2.0).abs() < 1e-5);
     assert!(lo.y.abs() < 1e-5, "resting on the floor: {lo}");
     assert!(((lo.x + hi.x) * 0.5).abs() < 1e-5 && ((lo.z + hi.z) * 0.5).abs() < 1e-5);
-    assert_eq!(
-        s.lights[0],
-        Light::Point {
-            position: Vec3::new(1.0, 5.0, 1.0),
-            intensity: Vec3::splat(50.0)
-        }
-    );
+    assert_eq!(s.lights[0], Light::Point { position: Vec3::new(1.0, 5.0, 1.0), intensity: Vec3::splat(50.0) });
 
     let n = bench("sphere_nearby");
     let bunny = n.object("bunny").expect("bunny");
@@ -197,12 +159,7 @@ fn bunny_scenes_are_fitted() {
     assert!(((lo.z + hi.z) * 0.5 + 1.5).abs() < 1e-5);
     // The OBJ's own orientation: +Y up means the bunny is taller than deep.
     assert!(hi.y - lo.y > hi.z - lo.z);
-    assert_eq!(
-        *n.material_of(bunny),
-        Material::Diffuse {
-            albedo: Albedo::Constant(Vec3::new(0.7, 0.5, 0.3))
-        }
-    );
+    assert_eq!(*n.material_of(bunny), Material::Diffuse { albedo: Albedo::Constant(Vec3::new(0.7, 0.5, 0.3)) });
 }
 
 #[test]
@@ -211,26 +168,20 @@ fn sphere_nearby_walls_and_checker_coordinates() {
     assert_eq!(s.environment, Environment::Constant(Vec3::splat(0.05)));
     let floor = s.object("floor").expect("floor");
     let (lo, hi) = floor.mesh.bounds();
-    assert!(
-        close(lo, Vec3::new(-5.0, -1.0, -5.0), 1e-6) && close(hi, Vec3::new(5.0, -1.0, 5.0), 1e-6)
-    );
+    assert!(close(lo, Vec3::new(-5.0, -1.0, -5.0), 1e-6) && close(hi, Vec3::new(5.0, -1.0, 5.0), 1e-6));
     // Horizontal quad: (s, t) = world (x, z).
     for (p, st) in floor.mesh.positions.iter().zip(&floor.mesh.checker_uv) {
         assert_eq!(*st, Vec2::new(p.x, p.z));
     }
     let wall = s.object("back_wall").expect("wall");
     let (lo, hi) = wall.mesh.bounds();
-    assert!(
-        close(lo, Vec3::new(-5.0, -1.0, -3.0), 1e-6) && close(hi, Vec3::new(5.0, 5.0, -3.0), 1e-6)
-    );
+    assert!(close(lo, Vec3::new(-5.0, -1.0, -3.0), 1e-6) && close(hi, Vec3::new(5.0, 5.0, -3.0), 1e-6));
     assert!(wall.mesh.normals.iter().all(|n| *n == Vec3::Z));
     // Vertical quad: distances from its centre (0, 2, -3) along u = +X and v = +Y.
     for (p, st) in wall.mesh.positions.iter().zip(&wall.mesh.checker_uv) {
         assert!((*st - Vec2::new(p.x, p.y - 2.0)).length() < 1e-6);
     }
-    let Material::Diffuse { albedo } = *s.material_of(floor) else {
-        panic!("floor is diffuse")
-    };
+    let Material::Diffuse { albedo } = *s.material_of(floor) else { panic!("floor is diffuse") };
     let (a, b) = (Vec3::splat(0.8), Vec3::splat(0.2));
     assert_eq!(albedo, Albedo::Checker { a, b, size: 0.5 });
     assert_eq!(albedo.eval(Vec2::new(0.25, 0.25)), a);
@@ -247,12 +198,7 @@ fn sphere_nearby_walls_and_checker_coordinates() {
 fn metal_ring_profile_and_light() {
     let s = bench("metal_ring");
     let ring = s.object("ring").expect("ring");
-    assert_eq!(
-        *s.material_of(ring),
-        Material::Mirror {
-            reflectance: Vec3::splat(0.95)
-        }
-    );
+    assert_eq!(*s.material_of(ring), Material::Mirror { reflectance: Vec3::splat(0.95) });
     let (lo, hi) = ring.mesh.bounds();
     assert!(lo.y.abs() < 1e-6 && (hi.y - 0.5).abs() < 1e-6);
     assert!((hi.x - 1.0).abs() < 1e-5);
@@ -264,19 +210,13 @@ fn metal_ring_profile_and_light() {
         } else if (r - 1.0).abs() < 1e-5 {
             assert!(n.dot(radial) > 0.999, "outer wall faces out");
         } else {
-            assert!(
-                (r - 0.97).abs() < 1e-5 && n.dot(radial) < -0.999,
-                "inner wall faces in"
-            );
+            assert!((r - 0.97).abs() < 1e-5 && n.dot(radial) < -0.999, "inner wall faces in");
         }
         assert!(n.y > -0.5, "no bottom cap");
     }
     let d = Vec3::new(-0.866, -0.5, 0.0).normalize();
     match s.lights[0] {
-        Light::Directional {
-            direction,
-            irradiance,
-        } => {
+        Light::Directional { direction, irradiance } => {
             assert!(close(direction, d, 1e-6));
             assert_eq!(irradiance, Vec3::splat(3.0));
         }
@@ -289,20 +229,8 @@ fn water_pool_heights_follow_the_formula() {
     let s = bench("water_pool");
     let h = |x: f32, z: f32| 0.03 * (4.0 * x).sin() + 0.02 * (5.0 * z + 1.0).sin();
     let waves = [
-        Wave {
-            amplitude: 0.03,
-            kx: 4.0,
-            kz: 0.0,
-            omega: 3.0,
-            phase: 0.0,
-        },
-        Wave {
-            amplitude: 0.02,
-            kx: 0.0,
-            kz: 5.0,
-            omega: -2.0,
-            phase: 1.0,
-        },
+        Wave { amplitude: 0.03, kx: 4.0, kz: 0.0, omega: 3.0, phase: 0.0 },
+        Wave { amplitude: 0.02, kx: 0.0, kz: 5.0, omega: -2.0, phase: 1.0 },
     ];
     for (x, z) in [(0.0, 0.0), (0.3, -1.2), (-2.5, 2.9), (1.0, 1.0)] {
         assert!((wave_height(&waves, x, z, 0.0) - h(x, z)).abs() < 1e-6);
@@ -317,19 +245,12 @@ fn water_pool_heights_follow_the_formula() {
     for p in &water.mesh.positions {
         assert!((p.y - h(p.x, p.z)).abs() < 1e-6, "{p}");
     }
-    assert!(
-        water.mesh.normals.iter().all(|n| n.y > 0.8),
-        "water normals face up"
-    );
+    assert!(water.mesh.normals.iter().all(|n| n.y > 0.8), "water normals face up");
     let (lo, hi) = water.mesh.bounds();
     assert!((lo.x + 3.0).abs() < 1e-6 && (hi.z - 3.0).abs() < 1e-6);
     match s.lights[0] {
         Light::Directional { direction, .. } => {
-            assert!(close(
-                direction,
-                Vec3::new(0.2, -1.0, 0.1).normalize(),
-                1e-6
-            ))
+            assert!(close(direction, Vec3::new(0.2, -1.0, 0.1).normalize(), 1e-6))
         }
         other => panic!("{other:?}"),
     }
@@ -347,49 +268,24 @@ fn water_pool_heights_follow_the_formula() {
 fn rooms_face_inward() {
     let m = bench("room_mirror");
     let g = bench("room_glass");
-    assert_eq!(
-        *m.material_of(m.object("ball").expect("ball")),
-        Material::Mirror {
-            reflectance: Vec3::splat(0.95)
-        }
-    );
+    assert_eq!(*m.material_of(m.object("ball").expect("ball")), Material::Mirror { reflectance: Vec3::splat(0.95) });
     assert_eq!(
         *g.material_of(g.object("ball").expect("ball")),
-        Material::Dielectric {
-            ior: Vec3::splat(1.5),
-            absorption: Vec3::ZERO
-        }
+        Material::Dielectric { ior: Vec3::splat(1.5), absorption: Vec3::ZERO }
     );
     let room_centre = Vec3::new(0.0, 2.0, 0.0);
-    for name in [
-        "floor",
-        "ceiling",
-        "left_wall",
-        "right_wall",
-        "back_wall",
-        "front_wall",
-    ] {
+    for name in ["floor", "ceiling", "left_wall", "right_wall", "back_wall", "front_wall"] {
         let w = m.object(name).expect(name);
         let (lo, hi) = w.mesh.bounds();
-        assert!(
-            w.mesh.normals[0].dot(room_centre - (lo + hi) * 0.5) > 0.0,
-            "{name}"
-        );
+        assert!(w.mesh.normals[0].dot(room_centre - (lo + hi) * 0.5) > 0.0, "{name}");
         assert!(lo.cmpge(Vec3::new(-3.0, 0.0, -3.0) - 1e-6).all());
         assert!(hi.cmple(Vec3::new(3.0, 4.0, 3.0) + 1e-6).all());
     }
     let left = m.material_of(m.object("left_wall").expect("left"));
-    assert_eq!(
-        *left,
-        Material::Diffuse {
-            albedo: Albedo::Constant(Vec3::new(0.8, 0.1, 0.1))
-        }
-    );
+    assert_eq!(*left, Material::Diffuse { albedo: Albedo::Constant(Vec3::new(0.8, 0.1, 0.1)) });
     let b = g.object("box").expect("box");
     let (lo, hi) = b.mesh.bounds();
-    assert!(
-        close(lo, Vec3::new(-1.6, 0.0, -1.4), 1e-6) && close(hi, Vec3::new(-0.8, 0.8, -0.6), 1e-6)
-    );
+    assert!(close(lo, Vec3::new(-1.6, 0.0, -1.4), 1e-6) && close(hi, Vec3::new(-0.8, 0.8, -0.6), 1e-6));
     assert_eq!(
         g.camera,
         Camera {
@@ -410,10 +306,7 @@ fn camera_rays() {
     c.height = 3;
     let (o, d) = c.primary_ray(2, 1);
     assert_eq!(o, c.position);
-    assert!(
-        close(d, Vec3::NEG_Z, 1e-6),
-        "centre pixel looks at the target"
-    );
+    assert!(close(d, Vec3::NEG_Z, 1e-6), "centre pixel looks at the target");
     let (_, top) = c.primary_ray(2, 0);
     assert!(top.y > 0.0, "row 0 is the top");
     let (_, right) = c.primary_ray(4, 1);
@@ -425,11 +318,7 @@ fn camera_rays() {
     let angle = edge.angle_between(Vec3::NEG_Z).to_degrees();
     assert!((angle - 20.0).abs() < 0.05, "{angle}");
     let v = c.view();
-    assert!(close(
-        v.transform_point3(Vec3::ZERO),
-        Vec3::new(0.0, 0.0, -4.0),
-        1e-6
-    ));
+    assert!(close(v.transform_point3(Vec3::ZERO), Vec3::new(0.0, 0.0, -4.0), 1e-6));
 }
 
 #[test]
@@ -437,66 +326,29 @@ fn overrides_set_existing_keys() {
     let p = benchmark_scene_path("sphere_env");
     let s = load(
         &p,
-        &sets(&[
-            "camera.width=256",
-            "objects.0.radius=0.5",
-            "materials.glass.ior=1.2",
-            "objects.0.center.1=0.25",
-        ]),
+        &sets(&["camera.width=256", "objects.0.radius=0.5", "materials.glass.ior=1.2", "objects.0.center.1=0.25"]),
     )
     .expect("overrides apply");
     assert_eq!(s.camera.width, 256);
     assert_eq!(s.camera.height, 512);
-    assert_eq!(
-        s.objects[0].analytic,
-        Some(Analytic::Sphere {
-            center: Vec3::new(0.0, 0.25, 0.0),
-            radius: 0.5
-        })
-    );
-    assert_eq!(
-        s.materials[0],
-        Material::Dielectric {
-            ior: Vec3::splat(1.2),
-            absorption: Vec3::ZERO
-        }
-    );
+    assert_eq!(s.objects[0].analytic, Some(Analytic::Sphere { center: Vec3::new(0.0, 0.25, 0.0), radius: 0.5 }));
+    assert_eq!(s.materials[0], Material::Dielectric { ior: Vec3::splat(1.2), absorption: Vec3::ZERO });
     assert!(s.canonical.contains("width = 256"), "{}", s.canonical);
     let plain = load(&p, &[]).expect("plain");
     assert_ne!(plain.canonical, s.canonical);
     // RGB values and unquoted strings.
-    let s = load(
-        &p,
-        &sets(&[
-            "materials.glass.ior=[1.5, 1.52, 1.54]",
-            "render.refraction=single",
-        ]),
-    )
-    .expect("rgb ior");
-    assert_eq!(
-        s.materials[0],
-        Material::Dielectric {
-            ior: Vec3::new(1.5, 1.52, 1.54),
-            absorption: Vec3::ZERO
-        }
-    );
+    let s = load(&p, &sets(&["materials.glass.ior=[1.5, 1.52, 1.54]", "render.refraction=single"])).expect("rgb ior");
+    assert_eq!(s.materials[0], Material::Dielectric { ior: Vec3::new(1.5, 1.52, 1.54), absorption: Vec3::ZERO });
     assert_eq!(s.render.refraction, "single");
 }
 
 #[test]
 fn overrides_create_render_parameters_only() {
-    let s = load_str(
-        BASE,
-        Path::new("t.toml"),
-        &sets(&["render.wyman.iterations=4", "render.exposure=2"]),
-    )
-    .expect("render tables are created");
+    let s = load_str(BASE, Path::new("t.toml"), &sets(&["render.wyman.iterations=4", "render.exposure=2"]))
+        .expect("render tables are created");
     assert_eq!(s.render.exposure, 2.0);
     let wyman = s.render.params.get("wyman").expect("params");
-    assert_eq!(
-        wyman.get("iterations").and_then(|v| v.as_integer()),
-        Some(4)
-    );
+    assert_eq!(wyman.get("iterations").and_then(|v| v.as_integer()), Some(4));
     // The effective scene holds them, so a cached result keyed by it differs.
     assert!(s.canonical.contains("iterations = 4"), "{}", s.canonical);
 
@@ -516,10 +368,7 @@ fn overrides_create_render_parameters_only() {
         ("camera", "no `=`"),
     ] {
         let e = base_err(BASE, &[set]);
-        let SceneError::Override {
-            set: s, message, ..
-        } = &e
-        else {
+        let SceneError::Override { set: s, message, .. } = &e else {
             panic!("{set}: expected an override error, got {e}");
         };
         assert_eq!(s, set);
@@ -534,10 +383,7 @@ fn technique_names_are_validated() {
     assert_eq!(e.kind(), Some(ErrorKind::Value));
     let text = e.to_string();
     assert!(text.contains("--set render.refraction=wyman"), "{text}");
-    assert!(
-        text.contains("unknown refraction technique `wyman`"),
-        "{text}"
-    );
+    assert!(text.contains("unknown refraction technique `wyman`"), "{text}");
     assert!(text.contains("`single`"), "{text}");
     let e = base_err(&format!("{BASE}\n[render]\ncaustics = \"photon\"\n"), &[]);
     assert_eq!(at(&e).0, Some(19));
@@ -551,11 +397,7 @@ fn technique_names_are_validated() {
 fn errors_caused_by_overrides_name_them() {
     let e = base_err(BASE, &["camera.position=[0, 0, nan]"]);
     assert!(e.to_string().contains("test.toml:2:"), "{e}");
-    assert!(
-        e.to_string()
-            .contains("--set camera.position=[0, 0, nan]: "),
-        "{e}"
-    );
+    assert!(e.to_string().contains("--set camera.position=[0, 0, nan]: "), "{e}");
     let e = base_err(BASE, &["objects.0.radius=-2"]);
     assert_eq!(at(&e).0, Some(16));
     assert!(e.to_string().contains("--set objects.0.radius=-2"), "{e}");
@@ -583,10 +425,7 @@ fn error_malformed_toml() {
     let text = BASE.replace("target = [0, 0, 0]", "target = [0, 0, 0] oops");
     let e = base_err(&text, &[]);
     assert_eq!(at(&e), (Some(3), Some(20)));
-    assert!(
-        e.to_string().starts_with("test.toml:3:20: malformed TOML"),
-        "{e}"
-    );
+    assert!(e.to_string().starts_with("test.toml:3:20: malformed TOML"), "{e}");
 }
 
 #[test]
@@ -602,10 +441,7 @@ fn error_unknown_key() {
     assert_eq!(at(&e), (Some(17), Some(1)));
     assert!(e.to_string().contains("not used by shape `sphere`"), "{e}");
     // Inside an inline table, with the column of the key.
-    let text = BASE.replace(
-        "radius = 1",
-        "radius = 1\ntransform = { scale = 2, spin = 3 }",
-    );
+    let text = BASE.replace("radius = 1", "radius = 1\ntransform = { scale = 2, spin = 3 }");
     let e = base_err(&text, &[]);
     assert_eq!(at(&e), (Some(17), Some(26)));
     // A missing required key points at its table.
@@ -632,12 +468,7 @@ fn error_bad_values() {
         ("radius = 1", "radius = nan", 16, "finite"),
         ("ior = 1.5", "ior = 0", 11, "greater than 0"),
         ("ior = 1.5", "ior = [1.5, -1, 1.5]", 11, "greater than 0"),
-        (
-            "target = [0, 0, 0]",
-            "target = [0, 0, 4]",
-            3,
-            "looks nowhere",
-        ),
+        ("target = [0, 0, 0]", "target = [0, 0, 4]", 3, "looks nowhere"),
         ("radiance = 0", "radiance = -1", 7, "at least 0"),
     ] {
         let e = base_err(&BASE.replace(from, to), &[]);
@@ -646,26 +477,14 @@ fn error_bad_values() {
         assert!(e.to_string().contains(needle), "{e}");
         assert!(e.to_string().contains("hint: "), "{e}");
     }
-    let e = base_err(
-        &BASE.replace("target = [0, 0, 0]", "target = [0, 0, 0]\nwidth = 0"),
-        &[],
-    );
+    let e = base_err(&BASE.replace("target = [0, 0, 0]", "target = [0, 0, 0]\nwidth = 0"), &[]);
     assert_eq!(e.kind(), Some(ErrorKind::Value));
     assert_eq!(at(&e), (Some(4), Some(9)));
-    assert!(
-        e.to_string()
-            .starts_with("test.toml:4:9: `width` must be from 1"),
-        "{e}"
-    );
+    assert!(e.to_string().starts_with("test.toml:4:9: `width` must be from 1"), "{e}");
     let e = base_err(BASE, &["camera.target=[0, 0, 4]"]);
     assert_eq!(e.kind(), Some(ErrorKind::Value));
-    assert!(
-        e.to_string().contains("--set camera.target=[0, 0, 4]"),
-        "{e}"
-    );
-    let dir_light = format!(
-        "{BASE}\n[[lights]]\ntype = \"directional\"\ndirection = [0, 0, 0]\nirradiance = 1\n"
-    );
+    assert!(e.to_string().contains("--set camera.target=[0, 0, 4]"), "{e}");
+    let dir_light = format!("{BASE}\n[[lights]]\ntype = \"directional\"\ndirection = [0, 0, 0]\nirradiance = 1\n");
     let e = base_err(&dir_light, &[]);
     assert_eq!(at(&e).0, Some(20));
     assert!(e.to_string().contains("zero length"), "{e}");
@@ -681,31 +500,16 @@ fn mesh_file_errors() {
         )
     };
     let origin = dir.join("scene.toml");
-    std::fs::write(
-        dir.join("nan.obj"),
-        "v 0 0 0\nv 1 0 0\nv 0 NaN 0\nf 1 2 3\n",
-    )
-    .unwrap();
-    std::fs::write(
-        dir.join("oob.obj"),
-        "v 0 0 0\nv 1 0 0\nv 0 1 0\n\nf 1 2 3\nf 1 2 9\n",
-    )
-    .unwrap();
-    std::fs::write(
-        dir.join("ok.obj"),
-        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 0 0\nf 1 2 3\nf 2 2 4\n",
-    )
-    .unwrap();
+    std::fs::write(dir.join("nan.obj"), "v 0 0 0\nv 1 0 0\nv 0 NaN 0\nf 1 2 3\n").unwrap();
+    std::fs::write(dir.join("oob.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\n\nf 1 2 3\nf 1 2 9\n").unwrap();
+    std::fs::write(dir.join("ok.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 0 0\nf 1 2 3\nf 2 2 4\n").unwrap();
 
     let e = load_str(&scene("nan.obj"), &origin, &[]).unwrap_err();
     assert_eq!(e.kind(), Some(ErrorKind::Mesh));
     let loc = e.location().unwrap();
     assert_eq!((loc.file.clone(), loc.line), (dir.join("nan.obj"), Some(3)));
     assert!(e.to_string().contains("non-finite"), "{e}");
-    assert!(
-        e.to_string().contains("scene.toml:13"),
-        "names the referencing line: {e}"
-    );
+    assert!(e.to_string().contains("scene.toml:13"), "names the referencing line: {e}");
 
     let e = load_str(&scene("oob.obj"), &origin, &[]).unwrap_err();
     assert_eq!(e.kind(), Some(ErrorKind::Mesh));
@@ -722,10 +526,7 @@ fn mesh_file_errors() {
     let s = load_str(&scene("ok.obj"), &origin, &[]).expect("ok.obj");
     let m = &s.objects[0].mesh;
     assert_eq!(m.triangle_count(), 2);
-    assert!(m
-        .normals
-        .iter()
-        .all(|n| n.is_finite() && (n.length() - 1.0).abs() < 1e-5));
+    assert!(m.normals.iter().all(|n| n.is_finite() && (n.length() - 1.0).abs() < 1e-5));
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -735,18 +536,10 @@ fn image_environments_load_linear() {
     let png = dir.join("env.png");
     let img = image::RgbaImage::from_pixel(4, 2, image::Rgba([188, 255, 0, 255]));
     img.save(&png).expect("write png");
-    let text = BASE.replace(
-        "type = \"constant\"\nradiance = 0",
-        "type = \"image\"\nfile = \"env.png\"",
-    );
+    let text = BASE.replace("type = \"constant\"\nradiance = 0", "type = \"image\"\nfile = \"env.png\"");
     let s = load_str(&text, &dir.join("s.toml"), &[]).expect("image env");
     match &s.environment {
-        Environment::Image {
-            width,
-            height,
-            texels,
-            ..
-        } => {
+        Environment::Image { width, height, texels, .. } => {
             assert_eq!((*width, *height), (4, 2));
             // sRGB 188/255 is linear 0.5 (to 3 digits).
             assert!((texels[0][0] - 0.5029).abs() < 1e-3, "{:?}", texels[0]);
@@ -754,12 +547,7 @@ fn image_environments_load_linear() {
         }
         other => panic!("{other:?}"),
     }
-    let e = load_str(
-        &text.replace("env.png", "nope.exr"),
-        &dir.join("s.toml"),
-        &[],
-    )
-    .unwrap_err();
+    let e = load_str(&text.replace("env.png", "nope.exr"), &dir.join("s.toml"), &[]).unwrap_err();
     assert_eq!(e.kind(), Some(ErrorKind::MissingFile));
     assert_eq!(at(&e).0, Some(7));
     let _ = std::fs::remove_dir_all(&dir);

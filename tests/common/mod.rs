@@ -17,37 +17,22 @@ pub const SIZE: u32 = 96;
 /// Under CI=true a missing validation layer is a failure: without it "zero validation
 /// errors" would be vacuous.
 pub fn context(sync: bool) -> Arc<GpuContext> {
-    let ctx = GpuContext::new(&ContextDesc {
-        validation: true,
-        sync_validation: sync,
-        device: None,
-    })
-    .expect("cannot create a Vulkan context (is mesa-vulkan-drivers installed?)");
+    let ctx = GpuContext::new(&ContextDesc { validation: true, sync_validation: sync, device: None })
+        .expect("cannot create a Vulkan context (is mesa-vulkan-drivers installed?)");
     if std::env::var("CI").is_ok_and(|v| v == "true") {
-        assert!(
-            ctx.info.validation,
-            "CI=true but VK_LAYER_KHRONOS_validation is not installed"
-        );
+        assert!(ctx.info.validation, "CI=true but VK_LAYER_KHRONOS_validation is not installed");
     }
     ctx
 }
 
 pub fn assert_no_validation_errors(ctx: &GpuContext) {
     let n = ctx.validation_errors();
-    assert_eq!(
-        n,
-        0,
-        "validation errors:\n{}",
-        ctx.validation_messages().join("\n")
-    );
+    assert_eq!(n, 0, "validation errors:\n{}", ctx.validation_messages().join("\n"));
 }
 
 /// A benchmark scene at `size`^2 with extra overrides.
 pub fn scene(name: &str, size: u32, overrides: &[&str]) -> Scene {
-    let mut o: Vec<String> = vec![
-        format!("camera.width={size}"),
-        format!("camera.height={size}"),
-    ];
+    let mut o: Vec<String> = vec![format!("camera.width={size}"), format!("camera.height={size}")];
     o.extend(overrides.iter().map(|s| s.to_string()));
     scene::load(&scene::benchmark_scene_path(name), &o).unwrap_or_else(|e| panic!("{name}: {e}"))
 }
@@ -75,13 +60,7 @@ pub fn render_on(ctx: &Arc<GpuContext>, scene: &Scene) -> Rendered {
     let hdr = r.read_hdr().expect("hdr readback");
     let ldr = r.read_ldr().expect("ldr readback");
     let passes = r.plan().iter().map(|p| p.name.to_string()).collect();
-    let out = Rendered {
-        width: r.width(),
-        height: r.height(),
-        hdr,
-        ldr,
-        passes,
-    };
+    let out = Rendered { width: r.width(), height: r.height(), hdr, ldr, passes };
     drop(r);
     assert_no_validation_errors(ctx);
     out
@@ -127,10 +106,7 @@ pub fn assert_golden(name: &str, r: &Rendered) {
     let actual_path = dir.join(format!("{name}-actual.png"));
     let diff_path = dir.join(format!("{name}-diff.png"));
     let save = |p: &PathBuf, data: &[u8]| {
-        image::RgbaImage::from_raw(r.width, r.height, data.to_vec())
-            .unwrap()
-            .save(p)
-            .unwrap();
+        image::RgbaImage::from_raw(r.width, r.height, data.to_vec()).unwrap().save(p).unwrap();
     };
     let update = std::env::var("PRISM_UPDATE_GOLDEN").is_ok_and(|v| v == "1");
     if update || !path.exists() {
@@ -144,11 +120,7 @@ pub fn assert_golden(name: &str, r: &Rendered) {
         return;
     }
     let golden = image::open(&path).expect("golden image").to_rgba8();
-    assert_eq!(
-        (golden.width(), golden.height()),
-        (r.width, r.height),
-        "{name}: golden size differs"
-    );
+    assert_eq!((golden.width(), golden.height()), (r.width, r.height), "{name}: golden size differs");
     let golden = golden.into_raw();
     let differing = fraction_differing_rgba8(&r.ldr, &golden, 8);
     let psnr = psnr_rgba8(&r.ldr, &golden);
