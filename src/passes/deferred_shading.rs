@@ -2,26 +2,18 @@
 //! irradiance) and the environment background: glsl/shading/deferred.frag.
 use std::sync::Arc;
 
-use crate::gpu::{
-    vk, Access, Attachment, Clear, DescriptorSet, DescriptorSetLayout, DescriptorWrite, Framebuffer, GpuContext,
-    GpuResult, GraphicsPipeline, PipelineLayout, RenderPass, RenderPassDesc, Sampler,
-};
+use crate::gpu::{DescriptorSet, DescriptorSetLayout, GpuContext, GpuResult, Sampler};
 use crate::graph::Frame;
 use crate::renderer::gpu_scene::GpuScene;
 use crate::renderer::plan::DEFERRED_SHADING;
 use crate::renderer::targets::Targets;
 use crate::{BINDING_GBUF_ALBEDO, BINDING_GBUF_DEPTH, BINDING_GBUF_NORMAL};
 
-use super::{fullscreen_pipeline, FRAGMENT, SAMPLED};
+use super::fullscreen::{FullscreenDesc, FullscreenPass};
 
 pub struct DeferredShadingPass {
-    render_pass: RenderPass,
-    _set_layout: DescriptorSetLayout,
-    set: DescriptorSet,
-    _layout: PipelineLayout,
-    pipeline: GraphicsPipeline,
-    framebuffer: Framebuffer,
-    /// Whether the shadow atlas is written this frame (a shadow_map pass exists).
+    pass: FullscreenPass,
+    /// Whether a shadow_map pass writes the atlas this frame (then it is a declared read).
     shadowed: bool,
 }
 
@@ -33,67 +25,24 @@ impl DeferredShadingPass {
         nearest: &Sampler,
         shadowed: bool,
     ) -> GpuResult<Self> {
-        let render_pass = RenderPass::new(
+        let pass = FullscreenPass::new(
             ctx,
-            DEFERRED_SHADING,
-            &RenderPassDesc {
-                colors: vec![Attachment { format: targets.hdr.format(), clear: true }],
-                depth: None,
-                depth_read_only: false,
+            &FullscreenDesc {
+                name: DEFERRED_SHADING,
+                fragment_shader: "shading/deferred.frag",
+                inputs: &[
+                    (BINDING_GBUF_NORMAL, &targets.gbuf_normal),
+                    (BINDING_GBUF_ALBEDO, &targets.gbuf_albedo),
+                    (BINDING_GBUF_DEPTH, &targets.depth),
+                ],
+                target: (&targets.hdr, targets.hdr_id),
+                clear: true,
+                specialization: &[],
             },
+            frame_layout,
+            nearest,
         )?;
-        let set_layout = DescriptorSetLayout::new(
-            ctx,
-            DEFERRED_SHADING,
-            &[
-                (BINDING_GBUF_NORMAL, SAMPLED, FRAGMENT),
-                (BINDING_GBUF_ALBEDO, SAMPLED, FRAGMENT),
-                (BINDING_GBUF_DEPTH, SAMPLED, FRAGMENT),
-            ],
-            1,
-        )?;
-        let set = set_layout.allocate(
-            DEFERRED_SHADING,
-            &[
-                DescriptorWrite::Sampled(
-                    BINDING_GBUF_NORMAL,
-                    targets.gbuf_normal.view(),
-                    nearest,
-                    vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-                ),
-                DescriptorWrite::Sampled(
-                    BINDING_GBUF_ALBEDO,
-                    targets.gbuf_albedo.view(),
-                    nearest,
-                    vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-                ),
-                DescriptorWrite::Sampled(
-                    BINDING_GBUF_DEPTH,
-                    targets.depth.view(),
-                    nearest,
-                    vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL,
-                ),
-            ],
-        )?;
-        let (layout, pipeline) = fullscreen_pipeline(
-            ctx,
-            DEFERRED_SHADING,
-            "shading/deferred.frag",
-            &[frame_layout, &set_layout],
-            &render_pass,
-            &[],
-        )?;
-        let framebuffer =
-            Framebuffer::new(ctx, DEFERRED_SHADING, &render_pass, &[targets.hdr.view()], targets.extent())?;
-        Ok(DeferredShadingPass {
-            render_pass,
-            _set_layout: set_layout,
-            set,
-            _layout: layout,
-            pipeline,
-            framebuffer,
-            shadowed,
-        })
+        Ok(DeferredShadingPass { pass, shadowed })
     }
 
     pub fn record<'a>(
@@ -103,21 +52,10 @@ impl DeferredShadingPass {
         targets: &Targets,
         frame_set: DescriptorSet,
     ) {
-        let mut pass = frame
-            .pass(DEFERRED_SHADING)
-            .read(targets.gbuf_normal_id, Access::FragmentSampled)
-            .read(targets.gbuf_albedo_id, Access::FragmentSampled)
-            .read(targets.depth_id, Access::FragmentSampled)
-            .read(scene.environment_id, Access::FragmentSampled)
-            .write(targets.hdr_id, Access::ColorAttachment);
+        let mut reads = vec![targets.gbuf_normal_id, targets.gbuf_albedo_id, targets.depth_id, scene.environment_id];
         if self.shadowed {
-            pass = pass.read(targets.shadow_atlas_id, Access::FragmentSampled);
+            reads.push(targets.shadow_atlas_id);
         }
-        pass.record(move |cmd| {
-            cmd.begin_render_pass(&self.render_pass, &self.framebuffer, &[Clear::Color([0.0; 4])]);
-            cmd.bind_graphics(&self.pipeline, &[frame_set, self.set]);
-            cmd.draw(3, 1);
-            cmd.end_render_pass();
-        });
+        self.pass.record(frame, frame_set, &reads);
     }
 }

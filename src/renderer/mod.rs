@@ -12,7 +12,7 @@ use std::sync::Arc;
 use glam::{Mat4, Vec3};
 
 use crate::gpu::{
-    self, vk, Access, Buffer, CommandPool, DescriptorSet, DescriptorSetLayout, DescriptorWrite, GpuContext, GpuError,
+    vk, Access, Buffer, CommandPool, DescriptorSet, DescriptorSetLayout, DescriptorWrite, GpuContext, GpuError,
     MemoryLocation, Sampler, SamplerDesc, TimestampPool, TimestampQuery,
 };
 use crate::graph::{FrameGraph, ImageId};
@@ -89,7 +89,8 @@ pub struct Renderer {
     // Field order matters for drop: passes and GPU data before the context they came from.
     passes: Passes,
     frame_sets: Vec<DescriptorSet>,
-    frame_layout: DescriptorSetLayout,
+    /// Owns the pool the frame sets come from; kept alive for them.
+    _frame_layout: DescriptorSetLayout,
     frame_buffers: Vec<Buffer>,
     _samplers: Vec<Sampler>,
     scene: GpuScene,
@@ -242,7 +243,7 @@ impl Renderer {
         Ok(Renderer {
             passes,
             frame_sets,
-            frame_layout,
+            _frame_layout: frame_layout,
             frame_buffers,
             _samplers: vec![nearest, latlong],
             scene: gpu_scene,
@@ -398,9 +399,5 @@ impl Drop for Renderer {
         // Pipelines, samplers and layouts are destroyed immediately by their wrappers: the
         // GPU must be idle first.
         let _ = self.ctx.wait_idle();
-        let _ = &self.frame_layout;
     }
 }
-
-/// Re-exported for tests that build their own passes.
-pub use gpu::Cmd;
