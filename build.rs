@@ -55,7 +55,7 @@ fn main() {
         options.set_warnings_as_errors();
         let include_dir = glsl.join("include");
         let header = header.clone();
-        let glsl_root = glsl.clone();
+        let repo_root = root.clone();
         options.set_include_callback(move |name, _ty, from, _depth| {
             if name == "prism_shared.glsl" {
                 return Ok(shaderc::ResolvedInclude {
@@ -63,25 +63,27 @@ fn main() {
                     content: header.clone(),
                 });
             }
-            let from_dir = glsl_root.join(from).parent().map(Path::to_path_buf).unwrap_or_default();
+            let from_dir = repo_root.join(from).parent().map(Path::to_path_buf).unwrap_or_default();
             for dir in [include_dir.clone(), from_dir] {
                 let p = dir.join(name);
                 if let Ok(content) = std::fs::read_to_string(&p) {
                     println!("cargo:rerun-if-changed={}", p.display());
-                    return Ok(shaderc::ResolvedInclude { resolved_name: p.to_string_lossy().into_owned(), content });
+                    // Repository-relative, so that errors inside includes read glsl/include/x.glsl:LINE.
+                    let resolved_name = p.strip_prefix(&repo_root).unwrap_or(&p).to_string_lossy().into_owned();
+                    return Ok(shaderc::ResolvedInclude { resolved_name, content });
                 }
             }
             Err(format!("cannot find include \"{name}\" (looked in glsl/include and beside {from})"))
         });
-        // Errors from glslang read `file:line: error: ...`, which names the shader and line.
-        match compiler.compile_into_spirv(&source, kind, &rel, "main", Some(&options)) {
+        // Errors from glslang read `glsl/dir/file:LINE: error: ...`, naming the shader and line.
+        match compiler.compile_into_spirv(&source, kind, &format!("glsl/{rel}"), "main", Some(&options)) {
             Ok(artifact) => {
                 let spv = out.join("shaders").join(format!("{rel}.spv"));
                 std::fs::create_dir_all(spv.parent().unwrap()).unwrap();
                 std::fs::write(&spv, artifact.as_binary_u8()).unwrap();
                 writeln!(generated, "    ({rel:?}, include_bytes!({:?})),", spv.display().to_string()).unwrap();
             }
-            Err(e) => errors.push(format!("glsl/{rel}:\n{e}")),
+            Err(e) => errors.push(e.to_string()),
         }
     }
     generated.push_str("];\n");
