@@ -321,13 +321,16 @@ impl CommandPool {
             .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
         // SAFETY: valid create infos throughout.
         let pool = unsafe { device.create_command_pool(&info, None) }.vk("vkCreateCommandPool")?;
+        ctx.set_name(pool, "frame_command_pool");
         let alloc = vk::CommandBufferAllocateInfo::default()
             .command_pool(pool)
             .level(vk::CommandBufferLevel::PRIMARY)
             .command_buffer_count(frames);
+        // SAFETY: the pool was just created on this device.
         let buffers = unsafe { device.allocate_command_buffers(&alloc) }.vk("vkAllocateCommandBuffers")?;
         let mut fences = Vec::new();
         for i in 0..frames {
+            // SAFETY: valid create info.
             let f = unsafe {
                 device.create_fence(&vk::FenceCreateInfo::default().flags(vk::FenceCreateFlags::SIGNALED), None)
             }

@@ -45,6 +45,7 @@ impl DescriptorSetLayout {
         let pool_info = vk::DescriptorPoolCreateInfo::default().max_sets(max_sets.max(1)).pool_sizes(&sizes);
         // SAFETY: valid create info.
         let pool = unsafe { device.create_descriptor_pool(&pool_info, None) }.vk("vkCreateDescriptorPool")?;
+        ctx.set_name(pool, name);
         Ok(DescriptorSetLayout { ctx: ctx.clone(), raw, pool })
     }
 
