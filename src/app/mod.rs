@@ -2,6 +2,7 @@
 //! loads, and hands work to the renderer; it never records commands itself.
 pub mod bench;
 pub mod output;
+pub mod reference;
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -44,6 +45,8 @@ pub enum Command {
     Bench(bench::BenchArgs),
     /// Print the passes a scene needs and which object, light or setting requires each.
     Passes(PassesArgs),
+    /// Render the exact reference (path tracing + photon-mapped caustics) to EXR/PNG.
+    Reference(reference::ReferenceCmd),
 }
 
 /// Options shared by every command that loads a scene.
@@ -154,6 +157,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Render(args) => render(args),
         Command::Bench(args) => bench::run(args),
         Command::Passes(args) => passes(args),
+        Command::Reference(args) => reference::run(args),
     }
 }
 
