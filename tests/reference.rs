@@ -196,7 +196,11 @@ fn beer_lambert_through_a_slab() {
         // attenuation must be 0.3 m within 1e-4 m (ray origins are pushed off surfaces by
         // 2e-5 scene radii, which shortens the path inside by about that much).
         let d = -beta[c].ln() / sigma;
-        assert!((d - 0.3).abs() < 1e-4, "channel {c}: attenuation {} implies {d} m, expected exp(-{sigma} * 0.3)", beta[c]);
+        assert!(
+            (d - 0.3).abs() < 1e-4,
+            "channel {c}: attenuation {} implies {d} m, expected exp(-{sigma} * 0.3)",
+            beta[c]
+        );
     }
 }
 

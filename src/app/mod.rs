@@ -1,8 +1,10 @@
 //! The command line: `prism render`, `prism bench`, `prism passes`. The CLI parses,
 //! loads, and hands work to the renderer; it never records commands itself.
 pub mod bench;
+pub mod compare;
 pub mod output;
 pub mod reference;
+pub mod sweep;
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -47,6 +49,10 @@ pub enum Command {
     Passes(PassesArgs),
     /// Render the exact reference (path tracing + photon-mapped caustics) to EXR/PNG.
     Reference(reference::ReferenceCmd),
+    /// Time the scene's techniques and measure their error against the exact reference.
+    Compare(compare::CompareArgs),
+    /// Measure every combination of parameter values: CSV, and error against time plots.
+    Sweep(sweep::SweepArgs),
 }
 
 /// Options shared by every command that loads a scene.
@@ -158,6 +164,8 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Bench(args) => bench::run(args),
         Command::Passes(args) => passes(args),
         Command::Reference(args) => reference::run(args),
+        Command::Compare(args) => compare::run(args),
+        Command::Sweep(args) => sweep::run(args),
     }
 }
 

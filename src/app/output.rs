@@ -32,7 +32,8 @@ impl OutputFile {
                 dir.display()
             );
         }
-        let temp = dir.join(format!(".{}.prism-{}.tmp", name.to_string_lossy(), std::process::id()));
+        // Hidden, unique, and ending in the target's own extension (encoders look at it).
+        let temp = dir.join(format!(".prism-tmp-{}-{}", std::process::id(), name.to_string_lossy()));
         std::fs::write(&temp, b"").with_context(|| {
             format!(
                 "{}: cannot write output (directory not writable?)\n  hint: choose a writable path",
