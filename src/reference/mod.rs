@@ -569,6 +569,15 @@ impl Reference {
             .collect()
     }
 
+    /// Number of non-finite values in every buffer the reference accumulates into (the
+    /// per-pixel sums and the photon-mapping state): the stability tests want zero.
+    pub fn non_finite_values(&self) -> usize {
+        let f: &[f32] = bytemuck::cast_slice(self.accum.read());
+        let p: &[f32] = bytemuck::cast_slice(self.pixels.read());
+        let d: &[f32] = bytemuck::cast_slice(self.debug.read());
+        f.iter().chain(p).chain(&d[..4 * self.photons_per_iteration as usize]).filter(|v| !v.is_finite()).count()
+    }
+
     /// (flux rgb, outcome) of every photon of the last iteration (PHOTON_* outcomes).
     pub fn photon_outcomes(&self) -> Vec<[f32; 4]> {
         let all: &[[f32; 4]] = bytemuck::cast_slice(self.debug.read());
