@@ -4,6 +4,7 @@ pub mod bench;
 pub mod compare;
 pub mod output;
 pub mod reference;
+pub mod report;
 pub mod sweep;
 
 use std::path::{Path, PathBuf};
@@ -53,6 +54,8 @@ pub enum Command {
     Compare(compare::CompareArgs),
     /// Measure every combination of parameter values: CSV, and error against time plots.
     Sweep(sweep::SweepArgs),
+    /// Regenerate docs/ACCURACY.md: every technique and setting's time and error, with plots.
+    Report(report::ReportArgs),
 }
 
 /// Options shared by every command that loads a scene.
@@ -166,6 +169,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Reference(args) => reference::run(args),
         Command::Compare(args) => compare::run(args),
         Command::Sweep(args) => sweep::run(args),
+        Command::Report(args) => report::run(args),
     }
 }
 
