@@ -182,3 +182,127 @@ fn wyman_exit_is_near_the_analytic_sphere() {
     );
     assert!(e.median_t2_deg < 5.0 && e.max_t2_deg < 30.0, "T2 error {} / {}", e.median_t2_deg, e.max_t2_deg);
 }
+
+fn assert_finite(what: &str, hdr: &[f32]) {
+    let bad = hdr.iter().filter(|v| !v.is_finite()).count();
+    assert_eq!(bad, 0, "{what}: {bad} non-finite HDR values");
+}
+
+/// Every technique renders the four refraction scenes with finite radiance and no
+/// validation error, and sphere_env at every ior from a bubble's 0.5 to 4 (1.0 and its
+/// neighbours exercise theta_t / theta_i -> 1 and the grazing limits).
+#[test]
+fn every_technique_is_finite_on_every_scene_and_ior() {
+    let ctx = context(false);
+    for t in TECHNIQUES {
+        for name in ["sphere_env", "bunny_env", "bubble_env", "sphere_nearby"] {
+            let r = render_on(&ctx, &scene(name, 64, &[&technique(t)]));
+            assert_finite(&format!("{t} {name}"), &r.hdr);
+            assert!(r.passes.iter().any(|p| p == &format!("refraction_{t}")), "{t} {name}: {:?}", r.passes);
+        }
+        for ior in ["0.5", "0.75", "0.999", "1.0", "1.0001", "1.5", "2.42", "4.0"] {
+            let set = format!("materials.glass.ior={ior}");
+            let r = render_on(&ctx, &scene("sphere_env", 64, &[&technique(t), &set]));
+            assert_finite(&format!("{t} ior {ior}"), &r.hdr);
+        }
+        // Dispersion (exact per-channel ior) and the other choices of each technique.
+        for extra in [
+            "materials.glass.ior=[1.45, 1.5, 1.55]",
+            "render.wyman.back_surface=\"second\"",
+            "render.hu_qin.assume_back_facing=true",
+        ] {
+            let r = render_on(&ctx, &scene("bunny_env", 64, &[&technique(t), extra]));
+            assert_finite(&format!("{t} {extra}"), &r.hdr);
+        }
+    }
+}
+
+/// With ior 1 nothing bends: each technique must show the environment as if the ball were
+/// not there (as tests/render_scenes.rs checks for the baseline), within the same RMSE.
+#[test]
+fn ior_one_shows_the_environment_unchanged() {
+    let ctx = context(false);
+    let without = render_on(&ctx, &scene("sphere_env", 64, &["objects.0.radius=0.001"]));
+    for t in TECHNIQUES {
+        let with = render_on(&ctx, &scene("sphere_env", 64, &[&technique(t), "materials.glass.ior=1.0"]));
+        let rmse = prism::metrics::image::rmse_rgba(&with.hdr, &without.hdr);
+        eprintln!("{t}: ior 1 RMSE {rmse}");
+        assert!(rmse < 0.02, "{t}: ior 1 should not distort the view: RMSE {rmse}");
+    }
+}
+
+/// Golden images at 128^2 (tests/common/mod.rs explains the thresholds).
+#[test]
+fn golden_sphere_env_wyman_and_hu_qin() {
+    for t in TECHNIQUES {
+        let r = render(&scene("sphere_env", 128, &[&technique(t)]));
+        assert_golden(&format!("sphere_env_{t}"), &r);
+    }
+}
+
+/// Section 4's shortcut gives the same exits as the full search on a convex ball, where
+/// every exit is back-facing.
+#[test]
+fn hu_qin_acceleration_agrees_on_a_convex_ball() {
+    let e = exit_errors("hu_qin", 64, &["render.hu_qin.assume_back_facing=true"]);
+    assert!(e.max_p2_pixels <= 1.0, "P2 off by {} pixel footprints", e.max_p2_pixels);
+}
+
+/// A bad technique parameter is a clear error naming the key (and the override or the
+/// file and line that set it), with a non-zero exit and no output.
+#[test]
+fn bad_parameters_are_clear_errors() {
+    let dir = std::env::temp_dir().join(format!("prism-refraction-params-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("out.png");
+    let run = |args: &[&str]| {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_prism"))
+            .arg("render")
+            .args(args)
+            .arg("-o")
+            .arg(&out)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&o.stderr).to_string();
+        assert_eq!(o.status.code(), Some(1), "{args:?}: expected exit 1:\n{stderr}");
+        assert!(!stderr.contains("panicked") && !out.exists(), "{stderr}");
+        stderr
+    };
+    for (set, needle) in [
+        ("render.hu_qin.search_steps=0", "`search_steps` must be an integer from 1 to 24, not 0"),
+        ("render.hu_qin.search_steps=100000", "`search_steps`"),
+        ("render.hu_qin.tolerance=-1", "`tolerance`"),
+        ("render.hu_qin.max_iterations=1e9", "`max_iterations`"),
+        ("render.hu_qin.steps=3", "unknown parameter `steps`"),
+        ("render.wyman.back_surface=\"first\"", "`back_surface` must be \"furthest\" or \"second\""),
+    ] {
+        let e = run(&["sphere_env", "--set", set]);
+        assert!(e.contains(needle) && e.contains(&format!("--set {set}")), "{set}:\n{e}");
+    }
+    let scene = dir.join("scene.toml");
+    let text = std::fs::read_to_string(prism::scene::benchmark_scene_path("sphere_env")).unwrap();
+    std::fs::write(&scene, format!("{text}\n[render.hu_qin]\nmax_iterations = 0\n")).unwrap();
+    let e = run(&[scene.to_str().unwrap()]);
+    assert!(e.contains("scene.toml:") && e.contains("`max_iterations`"), "{e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Synchronization validation over several frames in flight: the layers, the debug targets
+/// and the HDR target are written every frame and read by the next pass, so a missing
+/// declaration would show here as a hazard.
+#[test]
+fn multi_frame_renders_have_no_sync_hazard() {
+    let ctx = context(true);
+    for o in [
+        ["render.refraction=wyman", "render.wyman.back_surface=\"second\""],
+        ["render.refraction=hu_qin", "render.hu_qin.debug=true"],
+    ] {
+        let mut r = Renderer::new(&ctx, &scene("sphere_nearby", 32, &o)).unwrap();
+        for _ in 0..3 {
+            r.render_frame().unwrap();
+        }
+        let hdr = r.read_hdr().unwrap();
+        assert!(hdr.iter().all(|v| v.is_finite()));
+    }
+    common::assert_no_validation_errors(&ctx);
+}
