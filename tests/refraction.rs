@@ -21,7 +21,9 @@ fn technique(t: &str) -> String {
 fn d_n_matches_the_analytic_distance() {
     let s = scene("sphere_env", 32, &["objects.0.radius=0.75"]);
     let mesh = &s.objects[0].mesh;
+    let start = std::time::Instant::now();
     let d = compute_distance_along_normals(mesh);
+    eprintln!("d_N of {} vertices, {} triangles: {:?}", d.len(), mesh.triangle_count(), start.elapsed());
     assert_eq!(d.len(), mesh.positions.len());
     // The tessellation is inscribed: a chord through the polygonal sphere is shorter than
     // 2r by at most the sagitta of a facet, r (1 - cos(pi / segments)) on each side.
@@ -30,6 +32,15 @@ fn d_n_matches_the_analytic_distance() {
     for (i, &x) in d.iter().enumerate() {
         assert!(x <= 1.5 + 1e-4 && x >= 1.5 - 2.0 * sag - 1e-4, "vertex {i}: d_N {x}, expected 1.5");
     }
+
+    // The bunny: every vertex finds a far side (the mesh is closed), in reasonable time.
+    let s = scene("bunny_env", 32, &[]);
+    let mesh = &s.objects[0].mesh;
+    let start = std::time::Instant::now();
+    let d = compute_distance_along_normals(mesh);
+    eprintln!("d_N of {} vertices, {} triangles: {:?}", d.len(), mesh.triangle_count(), start.elapsed());
+    let missing = d.iter().filter(|&&x| x <= 0.0).count();
+    assert!(missing * 100 <= d.len(), "{missing} of {} bunny vertices have no far side", d.len());
 
     let text = r#"
         [camera]
