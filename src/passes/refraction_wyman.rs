@@ -41,7 +41,7 @@ pub fn scene_distance_along_normals(scene: &Scene) -> Vec<f32> {
         if matches!(scene.materials[o.material], Material::Dielectric { .. }) {
             out.extend_from_slice(&distance_along_normals(&o.mesh));
         } else {
-            out.extend(std::iter::repeat(0.0).take(o.mesh.positions.len()));
+            out.extend(std::iter::repeat_n(0.0, o.mesh.positions.len()));
         }
     }
     out
