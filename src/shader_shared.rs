@@ -66,4 +66,21 @@ shared_constants! {
     // Specular-pass modes (specialisation constant 0 of specular/single.frag).
     SPECULAR_MODE_REFRACTION: u32 = 0;
     SPECULAR_MODE_REFLECTION: u32 = 1;
+
+    // Image-space refraction (src/passes/refractor_layers.rs). Set 1 of the layer passes:
+    // the per-vertex d_N storage buffer (Wyman 2005 only) and BINDING_GBUF_DEPTH (peeling).
+    BINDING_REFR_DN: u32 = 4;
+    // Set 1 of the refraction shading passes, besides BINDING_GBUF_NORMAL / _DEPTH.
+    BINDING_REFR_BACK_NORMAL: u32 = 5;
+    BINDING_REFR_BACK_DEPTH: u32 = 6;
+    BINDING_REFR_FRONT_NORMAL: u32 = 7;
+    BINDING_REFR_FRONT_DEPTH: u32 = 8;
+
+    // Which surface of the refractors a layer pass keeps (specialisation constant 0 of
+    // refraction/layers.frag): the nearest front face, the nearest back face, the furthest
+    // back face, or the second surface behind the G-buffer's first (depth peeling).
+    LAYER_FRONT: u32 = 0;
+    LAYER_BACK_NEAREST: u32 = 1;
+    LAYER_BACK_FURTHEST: u32 = 2;
+    LAYER_SECOND: u32 = 3;
 }
