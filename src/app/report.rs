@@ -92,7 +92,9 @@ pub fn run(args: ReportArgs) -> Result<()> {
         args.size, settings.spp, settings.photons
     )?;
 
-    for e in spec.entry.iter().filter(|e| args.only.is_empty() || args.only.contains(&e.scene)) {
+    for (index, e) in spec.entry.iter().enumerate().filter(|(_, e)| args.only.is_empty() || args.only.contains(&e.scene)) {
+        // File names carry the entry's number: a scene may appear in several entries.
+        let stem = format!("{:02}-{}", index + 1, e.scene);
         let params = parse_params(&e.params)?;
         let mut rows = Vec::new();
         for setting in cartesian(&params) {
@@ -137,7 +139,7 @@ pub fn run(args: ReportArgs) -> Result<()> {
             let points: Vec<(f64, f64)> =
                 rows.iter().map(|r| Ok((r.2.frame.median_ms, metric_of(&r.2, "flip_mean")?))).collect::<Result<_>>()?;
             let labels: Vec<String> = rows.iter().map(|r| short_label(&r.0)).collect();
-            let name = format!("{}-sweep", e.scene);
+            let name = format!("{stem}-sweep");
             plot(
                 &assets.join(format!("{name}.svg")),
                 &assets.join(format!("{name}.png")),
@@ -160,7 +162,7 @@ pub fn run(args: ReportArgs) -> Result<()> {
                 strip[dst..dst + src.len()].copy_from_slice(src);
             }
         }
-        let name = format!("{}-images.png", e.scene);
+        let name = format!("{stem}-images.png");
         output::write_png(OutputFile::prepare(&assets.join(&name))?, 3 * w, h, &strip)?;
         writeln!(
             md,
