@@ -1,6 +1,7 @@
 //! The command line: `prism render`, `prism bench`, `prism passes`. The CLI parses,
 //! loads, and hands work to the renderer; it never records commands itself.
 pub mod bench;
+pub mod demo;
 pub mod output;
 
 use std::path::{Path, PathBuf};
@@ -44,6 +45,9 @@ pub enum Command {
     Bench(bench::BenchArgs),
     /// Print the passes a scene needs and which object, light or setting requires each.
     Passes(PassesArgs),
+    /// Show a scene in a window: orbit/fly camera, live pass timings and parameters (X11;
+    /// headless under xvfb-run). Keys and mouse: see README.md, "Interactive demo".
+    Demo(demo::DemoArgs),
 }
 
 /// Options shared by every command that loads a scene.
@@ -132,11 +136,16 @@ impl SceneArgs {
 
 impl GpuArgs {
     pub fn context(&self) -> Result<Arc<GpuContext>> {
+        Ok(GpuContext::new(&self.desc())?)
+    }
+
+    /// The context description these flags (and PRISM_VALIDATION / PRISM_DEVICE) ask for.
+    pub fn desc(&self) -> ContextDesc {
         let mut desc = ContextDesc::from_env();
         desc.validation |= self.validation || self.sync_validation;
         desc.sync_validation |= self.sync_validation;
         desc.device = self.device.clone();
-        Ok(GpuContext::new(&desc)?)
+        desc
     }
 }
 
@@ -154,6 +163,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Render(args) => render(args),
         Command::Bench(args) => bench::run(args),
         Command::Passes(args) => passes(args),
+        Command::Demo(args) => demo::run(args),
     }
 }
 
