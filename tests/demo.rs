@@ -27,9 +27,7 @@ impl Drop for Display {
 }
 
 fn in_path(program: &str) -> bool {
-    std::env::var_os("PATH")
-        .map(|p| std::env::split_paths(&p).any(|d| d.join(program).is_file()))
-        .unwrap_or(false)
+    std::env::var_os("PATH").map(|p| std::env::split_paths(&p).any(|d| d.join(program).is_file())).unwrap_or(false)
 }
 
 /// The display to use, or None (skip) when there is none and Xvfb is not installed.
@@ -151,11 +149,8 @@ fn demo_screenshot_is_the_frame_without_the_overlay() {
     // Same renderer, same camera (up to the controller's float round trip): the frames
     // agree except for rare edge pixels. The overlay (a panel of text over the top-left
     // corner) would change thousands of pixels by far more than 8/255.
-    let differing = a
-        .pixels()
-        .zip(b.pixels())
-        .filter(|(p, q)| p.0.iter().zip(q.0.iter()).any(|(x, y)| x.abs_diff(*y) > 8))
-        .count();
+    let differing =
+        a.pixels().zip(b.pixels()).filter(|(p, q)| p.0.iter().zip(q.0.iter()).any(|(x, y)| x.abs_diff(*y) > 8)).count();
     let total = (160 * 120) as f64;
     assert!(
         (differing as f64) < total * 0.002,

@@ -89,19 +89,10 @@ pub fn run(args: DemoArgs) -> Result<()> {
     if args.frames == Some(0) {
         bail!("--frames must be at least 1");
     }
-    let event_loop = EventLoop::new().map_err(|e| {
-        anyhow::anyhow!("no display: run under xvfb-run or set DISPLAY (the window system said: {e})")
-    })?;
-    let mut app = App {
-        args,
-        path,
-        resize_at,
-        screenshot,
-        screenshot_exr,
-        initial: Some(scene),
-        running: None,
-        result: Ok(()),
-    };
+    let event_loop = EventLoop::new()
+        .map_err(|e| anyhow::anyhow!("no display: run under xvfb-run or set DISPLAY (the window system said: {e})"))?;
+    let mut app =
+        App { args, path, resize_at, screenshot, screenshot_exr, initial: Some(scene), running: None, result: Ok(()) };
     event_loop.run_app(&mut app).context("the window event loop failed")?;
     app.result
 }
@@ -258,8 +249,9 @@ impl Running {
         let display = window.display_handle().context("the window has no display handle")?.as_raw();
         let ctx = GpuContext::for_display(&args.gpu.desc(), display)?;
         let size = window.inner_size();
-        let swapchain = Swapchain::new(&ctx, &*window, (size.width, size.height), args.vsync == OnOff::On, FRAMES_IN_FLIGHT)
-            .context("cannot create the swapchain")?;
+        let swapchain =
+            Swapchain::new(&ctx, &*window, (size.width, size.height), args.vsync == OnOff::On, FRAMES_IN_FLIGHT)
+                .context("cannot create the swapchain")?;
         let overlay = Overlay::new(&ctx, &swapchain, FRAMES_IN_FLIGHT).context("cannot create the overlay")?;
         let renderer = Renderer::new(&ctx, &scene).context("cannot set up the renderer")?;
         let egui_ctx = egui::Context::default();

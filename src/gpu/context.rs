@@ -209,8 +209,7 @@ impl GpuContext {
         let priorities = [1.0f32];
         let queue_info =
             [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&priorities)];
-        let device_extensions =
-            if display.is_some() { vec![ash::khr::swapchain::NAME.as_ptr()] } else { Vec::new() };
+        let device_extensions = if display.is_some() { vec![ash::khr::swapchain::NAME.as_ptr()] } else { Vec::new() };
         let device_info = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queue_info)
             .enabled_features(&features)

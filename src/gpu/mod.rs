@@ -13,12 +13,12 @@ mod debug;
 mod descriptor;
 mod error;
 mod image;
+mod overlay;
 mod pipeline;
 mod render_pass;
 mod swapchain;
 mod sync;
 mod timing;
-mod overlay;
 
 pub use ash::vk;
 pub use buffer::Buffer;
@@ -27,11 +27,11 @@ pub use context::{ContextDesc, DeviceInfo, GpuContext};
 pub use descriptor::{DescriptorSet, DescriptorSetLayout, DescriptorWrite};
 pub use error::{GpuError, GpuResult};
 pub use image::{Image, ImageDesc, ImageViewKind, Sampler, SamplerDesc};
+pub use overlay::Overlay;
 pub use pipeline::{
     Blend, ComputePipeline, DepthState, GraphicsPipeline, GraphicsPipelineDesc, PipelineLayout, VertexLayout,
 };
 pub use render_pass::{Attachment, Framebuffer, RenderPass, RenderPassDesc};
-pub use overlay::Overlay;
 pub use swapchain::{Acquired, Presented, Semaphore, Swapchain, SwapchainImage};
 pub use sync::{Access, BufferBarrier, ImageBarrier};
 pub use timing::{TimestampPool, TimestampQuery};

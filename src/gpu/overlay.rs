@@ -48,22 +48,23 @@ impl Overlay {
             // The swapchain is UNORM (see swapchain.rs): egui's shader encodes sRGB itself.
             srgb_framebuffer: false,
         };
-        let renderer = Renderer::with_default_allocator(
-            &ctx.instance,
-            ctx.physical,
-            ctx.device.clone(),
-            render_pass.raw,
-            options,
-        )
-        .map_err(overlay_error)?;
+        let renderer =
+            Renderer::with_default_allocator(&ctx.instance, ctx.physical, ctx.device.clone(), render_pass.raw, options)
+                .map_err(overlay_error)?;
         let pool_info = vk::CommandPoolCreateInfo::default()
             .queue_family_index(ctx.queue_family)
             .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER | vk::CommandPoolCreateFlags::TRANSIENT);
         // SAFETY: valid device and create info.
         let upload_pool = unsafe { ctx.device.create_command_pool(&pool_info, None) }.vk("vkCreateCommandPool")?;
         ctx.set_name(upload_pool, "overlay_upload_pool");
-        let mut overlay =
-            Overlay { renderer, framebuffers: Vec::new(), render_pass, upload_pool, to_free: Vec::new(), ctx: ctx.clone() };
+        let mut overlay = Overlay {
+            renderer,
+            framebuffers: Vec::new(),
+            render_pass,
+            upload_pool,
+            to_free: Vec::new(),
+            ctx: ctx.clone(),
+        };
         overlay.set_targets(swapchain)?;
         Ok(overlay)
     }

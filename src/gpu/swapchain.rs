@@ -26,8 +26,8 @@ pub struct Semaphore {
 impl Semaphore {
     pub fn new(ctx: &Arc<GpuContext>, name: &str) -> GpuResult<Semaphore> {
         // SAFETY: valid device and default create info.
-        let raw = unsafe { ctx.raw().create_semaphore(&vk::SemaphoreCreateInfo::default(), None) }
-            .vk("vkCreateSemaphore")?;
+        let raw =
+            unsafe { ctx.raw().create_semaphore(&vk::SemaphoreCreateInfo::default(), None) }.vk("vkCreateSemaphore")?;
         ctx.set_name(raw, name);
         Ok(Semaphore { ctx: ctx.clone(), raw })
     }
@@ -278,8 +278,7 @@ impl Swapchain {
         let waits = [self.render_done[index as usize].raw];
         let chains = [self.raw];
         let indices = [index];
-        let info =
-            vk::PresentInfoKHR::default().wait_semaphores(&waits).swapchains(&chains).image_indices(&indices);
+        let info = vk::PresentInfoKHR::default().wait_semaphores(&waits).swapchains(&chains).image_indices(&indices);
         // SAFETY: index was acquired from this swapchain and the submission that signals
         // the semaphore has been made; the queue is used from this thread only.
         match unsafe { self.swapchain_fn.queue_present(self.ctx.queue, &info) } {
