@@ -157,3 +157,64 @@ fn demo_screenshot_is_the_frame_without_the_overlay() {
         "{differing} of {total} pixels differ from `prism render`: the screenshot is not the plain frame"
     );
 }
+
+#[test]
+fn demo_hot_reload_shows_a_scene_error_and_recovers() {
+    use std::io::{BufRead, BufReader};
+    let Some(display) = display() else { return };
+    let dir = out_dir("demo_reload");
+    let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes");
+    let good = std::fs::read_to_string(scenes.join("sphere_env.toml")).unwrap();
+    let scene = dir.join("scene.toml");
+    std::fs::write(&scene, &good).unwrap();
+    // Runs until killed: the test reads its progress from stderr.
+    let mut child = Command::new(env!("CARGO_BIN_EXE_prism"))
+        .args(["demo", scene.to_str().unwrap(), "--frames", "1000000", "--width", "64", "--height", "48"])
+        .env("DISPLAY", &display.name)
+        .env_remove("WAYLAND_DISPLAY")
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let (tx, rx) = std::sync::mpsc::channel();
+    let stderr = child.stderr.take().unwrap();
+    std::thread::spawn(move || {
+        for line in BufReader::new(stderr).lines().map_while(Result::ok) {
+            let _ = tx.send(line);
+        }
+    });
+    let mut log = String::new();
+    let wait_for = |needle: &str, log: &mut String| -> bool {
+        let deadline = Instant::now() + Duration::from_secs(60);
+        while let Some(left) = deadline.checked_duration_since(Instant::now()) {
+            match rx.recv_timeout(left) {
+                Ok(line) => {
+                    log.push_str(&line);
+                    log.push('\n');
+                    if line.contains(needle) {
+                        return true;
+                    }
+                }
+                Err(_) => return false,
+            }
+        }
+        false
+    };
+    let started = wait_for("swapchain", &mut log);
+    // A syntax error on disk: reported, and the window keeps running.
+    std::thread::sleep(Duration::from_millis(600));
+    std::fs::write(&scene, format!("{good}\nbroken = = 1\n")).unwrap();
+    let errored = started && wait_for("scene error", &mut log);
+    // Fixed again, with a different exposure: reloaded.
+    std::thread::sleep(Duration::from_millis(600));
+    std::fs::write(&scene, good.replace("[render]", "[render]\nexposure = 2.0")).unwrap();
+    let reloaded = errored && wait_for("demo: reloaded", &mut log);
+    let still_running = child.try_wait().unwrap().is_none();
+    let _ = child.kill();
+    let _ = child.wait();
+    assert!(started, "the demo did not start:\n{log}");
+    assert!(errored, "the broken scene was not reported:\n{log}");
+    assert!(reloaded, "the fixed scene was not reloaded:\n{log}");
+    assert!(still_running, "the demo exited:\n{log}");
+    assert!(!log.contains("panicked"), "{log}");
+}

@@ -124,6 +124,8 @@ struct Running {
     swap_ids: Vec<ImageId>,
     swapchain_stale: bool,
     needs_rebuild: bool,
+    /// The scene file changed on disk: report the outcome of the rebuild.
+    reloading: bool,
     camera: CameraController,
     ui: ui::UiState,
     stats: ui::Stats,
@@ -287,6 +289,7 @@ impl Running {
             swap_ids: Vec::new(),
             swapchain_stale: false,
             needs_rebuild: false,
+            reloading: false,
             ui: ui::UiState::new(!args.no_overlay),
             stats: ui::Stats::default(),
             cursor: None,
@@ -343,6 +346,9 @@ impl Running {
         let scene = match scene::load(path, &overrides) {
             Ok(s) => s,
             Err(e) => {
+                if self.ui.error.as_deref() != Some(&e.to_string()) {
+                    eprintln!("demo: scene error (the last good scene stays on screen): {e}");
+                }
                 self.ui.error = Some(e.to_string());
                 return Ok(());
             }
@@ -361,6 +367,10 @@ impl Running {
                     self.camera = CameraController::new(scene.camera);
                 }
                 self.scene = scene;
+                if std::mem::take(&mut self.reloading) {
+                    eprintln!("demo: reloaded {}", path.display());
+                    self.ui.status = Some(format!("reloaded {}", path.display()));
+                }
                 self.ui.error = None;
                 self.stats.clear_gpu();
             }
@@ -506,7 +516,7 @@ impl Running {
         if now != self.scene_mtime {
             self.scene_mtime = now;
             self.needs_rebuild = true;
-            self.ui.status = Some(format!("reloaded {}", path.display()));
+            self.reloading = true;
         }
     }
 
