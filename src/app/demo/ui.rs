@@ -344,12 +344,44 @@ fn parameters(ui: &mut egui::Ui, state: &mut UiState, view: &View, req: &mut Req
             ui.end_row();
         }
 
+        for (i, name, center) in object_centers(scene) {
+            ui.label(format!("{name} center"));
+            let mut v = center;
+            ui.horizontal(|ui| {
+                ui.add(egui::DragValue::new(&mut v.x).speed(0.02));
+                ui.add(egui::DragValue::new(&mut v.y).speed(0.02));
+                ui.add(egui::DragValue::new(&mut v.z).speed(0.02));
+            });
+            if v != center {
+                state.set(req, format!("objects.{i}.center"), format_vec(v));
+            }
+            ui.end_row();
+        }
+
         if view.has_heightfield {
             ui.label("animate water");
             ui.checkbox(&mut state.animate, "");
             ui.end_row();
         }
     });
+}
+
+/// (index, name, center) of every object whose file entry has a `center` (spheres, quads,
+/// boxes, heightfields...), read from the effective scene text: moving one is an override.
+pub fn object_centers(scene: &Scene) -> Vec<(usize, String, glam::Vec3)> {
+    let Ok(table) = scene.canonical.parse::<toml::Table>() else { return Vec::new() };
+    let Some(toml::Value::Array(objects)) = table.get("objects") else { return Vec::new() };
+    let number = |v: &toml::Value| v.as_float().or_else(|| v.as_integer().map(|i| i as f64));
+    objects
+        .iter()
+        .enumerate()
+        .filter_map(|(i, o)| {
+            let c = o.get("center")?.as_array()?;
+            let xyz: Vec<f32> = c.iter().filter_map(number).map(|x| x as f32).collect();
+            let name = o.get("name").and_then(|n| n.as_str()).unwrap_or("object").to_string();
+            (xyz.len() == 3).then(|| (i, name, glam::Vec3::new(xyz[0], xyz[1], xyz[2])))
+        })
+        .collect()
 }
 
 /// The override that moves light 0 by `delta` (point light) or turns its direction
@@ -375,6 +407,16 @@ mod tests {
             gpu_start_ms: 0.0,
             passes: passes.iter().map(|&(n, s, e)| PassTime { name: n.into(), start_ms: s, end_ms: e }).collect(),
         }
+    }
+
+    #[test]
+    fn object_centers_come_from_the_scene_file() {
+        let scene = crate::scene::load(&crate::scene::benchmark_scene_path("sphere_nearby"), &[]).unwrap();
+        let centers = object_centers(&scene);
+        assert!(!centers.is_empty());
+        let (i, _, c) = &centers[0];
+        assert_eq!(scene.objects[*i].name, centers[0].1);
+        assert!(c.is_finite());
     }
 
     #[test]
