@@ -8,6 +8,7 @@ pub mod gpu;
 pub mod graph;
 pub mod metrics;
 pub mod passes;
+pub mod reference;
 pub mod renderer;
 pub mod scene;
 

@@ -32,10 +32,55 @@ shared_constants! {
     BINDING_GBUF_DEPTH: u32 = 2;
     BINDING_HDR: u32 = 3;
 
+    // Reference path tracer (src/reference, glsl/reference): one descriptor set.
+    REF_BINDING_UNIFORMS: u32 = 0;
+    REF_BINDING_MATERIALS: u32 = 1;
+    REF_BINDING_ENVIRONMENT: u32 = 2;
+    REF_BINDING_VERTICES: u32 = 3;
+    REF_BINDING_TRIANGLES: u32 = 4;
+    REF_BINDING_NODES: u32 = 5;
+    REF_BINDING_SPHERES: u32 = 6;
+    REF_BINDING_OBJECTS: u32 = 7;
+    REF_BINDING_ACCUM: u32 = 8;
+    REF_BINDING_PIXELS: u32 = 9;
+    REF_BINDING_PHOTONS: u32 = 10;
+    REF_BINDING_GRID: u32 = 11;
+    REF_BINDING_COUNTERS: u32 = 12;
+    REF_BINDING_DEBUG: u32 = 13;
+    // Specular objects photons are aimed at, at most.
+    REF_MAX_TARGETS: u32 = 16;
+    // Traversal stack depth (a SAH BVH over 1e6 triangles is far shallower).
+    REF_STACK_SIZE: u32 = 64;
+    // Threads per workgroup of the 1D reference kernels.
+    REF_WORKGROUP: u32 = 64;
+    // Photon outcomes written to the debug buffer (tests of energy conservation).
+    PHOTON_MISSED: u32 = 0;
+    PHOTON_DEPOSITED: u32 = 1;
+    PHOTON_ESCAPED: u32 = 2;
+    PHOTON_LOST: u32 = 3;
+    PHOTON_DIRECT: u32 = 4;
+
     // Compute workgroup edge for 2D image kernels.
     WORKGROUP_2D: u32 = 8;
 
     // Specular-pass modes (specialisation constant 0 of specular/single.frag).
     SPECULAR_MODE_REFRACTION: u32 = 0;
     SPECULAR_MODE_REFLECTION: u32 = 1;
+
+    // Image-space refraction (src/passes/refractor_layers.rs). Set 1 of the layer passes:
+    // the per-vertex d_N storage buffer (Wyman 2005 only) and BINDING_GBUF_DEPTH (peeling).
+    BINDING_REFR_DN: u32 = 4;
+    // Set 1 of the refraction shading passes, besides BINDING_GBUF_NORMAL / _DEPTH.
+    BINDING_REFR_BACK_NORMAL: u32 = 5;
+    BINDING_REFR_BACK_DEPTH: u32 = 6;
+    BINDING_REFR_FRONT_NORMAL: u32 = 7;
+    BINDING_REFR_FRONT_DEPTH: u32 = 8;
+
+    // Which surface of the refractors a layer pass keeps (specialisation constant 0 of
+    // refraction/layers.frag): the nearest front face, the nearest back face, the furthest
+    // back face, or the second surface behind the G-buffer's first (depth peeling).
+    LAYER_FRONT: u32 = 0;
+    LAYER_BACK_NEAREST: u32 = 1;
+    LAYER_BACK_FURTHEST: u32 = 2;
+    LAYER_SECOND: u32 = 3;
 }

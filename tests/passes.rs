@@ -36,10 +36,36 @@ fn a_scene_without_refractors_records_no_refraction_pass() {
 }
 
 #[test]
+fn image_space_refraction_replaces_the_baseline() {
+    assert_eq!(
+        names("sphere_env", &["render.refraction=wyman"]),
+        ["gbuffer", "deferred_shading", "refraction_wyman_layers", "refraction_wyman", "tonemap"]
+    );
+    assert_eq!(
+        names("sphere_nearby", &["render.refraction=hu_qin"]),
+        ["shadow_map", "gbuffer", "deferred_shading", "refraction_hu_qin_layers", "refraction_hu_qin", "tonemap"]
+    );
+    // Without a refractor, none of their passes.
+    for t in ["wyman", "hu_qin"] {
+        let n = names("sphere_nearby", &[&format!("render.refraction={t}"), "objects.3.material=\"bunny\""]);
+        assert!(!n.iter().any(|p| p.starts_with("refraction")), "{t}: {n:?}");
+        let n = names("room_mirror", &[&format!("render.refraction={t}")]);
+        assert!(!n.iter().any(|p| p.starts_with("refraction")), "{t}: {n:?}");
+    }
+}
+
+#[test]
 fn renderer_records_exactly_the_planned_passes() {
     let ctx = common::context(false);
-    for name in ["sphere_env", "sphere_nearby", "metal_ring"] {
-        let s = common::scene(name, 32, &[]);
+    for (name, o) in [
+        ("sphere_env", ""),
+        ("sphere_nearby", ""),
+        ("metal_ring", ""),
+        ("sphere_env", "render.refraction=wyman"),
+        ("sphere_nearby", "render.refraction=hu_qin"),
+    ] {
+        let o: Vec<&str> = [o].into_iter().filter(|o| !o.is_empty()).collect();
+        let s = common::scene(name, 32, &o);
         let mut r = prism::renderer::Renderer::new(&ctx, &s).unwrap();
         r.render_frame().unwrap();
         r.finish().unwrap();

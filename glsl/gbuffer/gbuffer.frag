@@ -13,13 +13,7 @@ void main() {
     vec3 n = in_normal;
     float len = length(n);
     n = len > 1e-20 ? n / len : vec3(0.0, 1.0, 0.0);
-    Material m = materials[pc.material];
-    vec3 albedo = m.albedo_a.rgb;
-    if (m.albedo_b.w > 0.0) {
-        // Checker (SCENES.md): colour a where floor(s/size) + floor(t/size) is even.
-        vec2 c = floor(in_checker_uv / m.albedo_b.w);
-        albedo = (mod(c.x + c.y, 2.0) == 0.0) ? m.albedo_a.rgb : m.albedo_b.rgb;
-    }
+    vec3 albedo = albedo_at(materials[pc.material], in_checker_uv);
     out_normal_material = vec4(n, float(pc.material));
     out_albedo = vec4(albedo, 1.0);
 }

@@ -1,15 +1,10 @@
-// Latitude-longitude environment lookup with the convention of SCENES.md:
-// u = 0.5 + atan2(x, -z) / (2 pi), v = acos(y) / pi, (0, 0) the top-left texel.
+// The environment through the frame set, and its irradiance for diffuse surfaces.
 #ifndef PRISM_ENVIRONMENT_GLSL
 #define PRISM_ENVIRONMENT_GLSL
 #include "frame.glsl"
 
-vec2 dir_to_latlong(vec3 d) {
-    return vec2(0.5 + atan(d.x, -d.z) / (2.0 * PI), acos(clamp(d.y, -1.0, 1.0)) / PI);
-}
-
 vec3 environment(vec3 d) {
-    return textureLod(environment_map, dir_to_latlong(normalize(d)), 0.0).rgb;
+    return environment_lookup(environment_map, d);
 }
 
 // Irradiance E(n) from 9 SH coefficients (Ramamoorthi & Hanrahan 2001, Eq. 13).

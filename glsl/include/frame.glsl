@@ -2,9 +2,7 @@
 // Layouts mirror src/renderer/gpu_types.rs (std140 / std430, vec4 members only).
 #ifndef PRISM_FRAME_GLSL
 #define PRISM_FRAME_GLSL
-#include "prism_shared.glsl"
-
-const float PI = 3.14159265358979323846;
+#include "common.glsl"
 
 struct Light {
     vec4 position;    // xyz: position (point) or unit direction light -> scene (directional); w: kind
@@ -28,13 +26,6 @@ layout(set = 0, binding = BINDING_FRAME, std140) uniform Frame {
     Light lights[MAX_LIGHTS];
 } frame;
 
-struct Material {
-    vec4 albedo_a;   // diffuse: rgb albedo (or checker colour a); w: kind
-    vec4 albedo_b;   // checker colour b; w: checker size in metres (0: constant albedo)
-    vec4 spec_a;     // dielectric: rgb ior | mirror: rgb reflectance | conductor: rgb eta
-    vec4 spec_b;     // dielectric: rgb absorption per metre | conductor: rgb k
-};
-
 layout(set = 0, binding = BINDING_MATERIALS, std430) readonly buffer Materials {
     Material materials[];
 };
@@ -43,12 +34,7 @@ layout(set = 0, binding = BINDING_ENVIRONMENT) uniform sampler2D environment_map
 layout(set = 0, binding = BINDING_SHADOW_CUBE) uniform samplerCubeArray shadow_cubes;
 layout(set = 0, binding = BINDING_SHADOW_2D) uniform sampler2DArray shadow_layers;
 
-uint material_kind(uint m) { return uint(materials[m].albedo_a.w + 0.5); }
-
-// Replace NaN/Inf by zero: no NaN or Inf may ever reach a pixel.
-vec3 finite_or_zero(vec3 v) {
-    return mix(v, vec3(0.0), bvec3(isnan(v.x) || isinf(v.x), isnan(v.y) || isinf(v.y), isnan(v.z) || isinf(v.z)));
-}
+uint material_kind(uint m) { return kind_of(materials[m]); }
 
 // View-space direction through uv with z = -1 (pixel centre ((i+0.5)/W, (j+0.5)/H), j = 0
 // the top row). Built from the projection's diagonal rather than by unprojecting a point:

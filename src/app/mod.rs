@@ -1,8 +1,12 @@
 //! The command line: `prism render`, `prism bench`, `prism passes`. The CLI parses,
 //! loads, and hands work to the renderer; it never records commands itself.
 pub mod bench;
+pub mod compare;
 pub mod demo;
 pub mod output;
+pub mod reference;
+pub mod report;
+pub mod sweep;
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -48,6 +52,14 @@ pub enum Command {
     /// Show a scene in a window: orbit/fly camera, live pass timings and parameters (X11;
     /// headless under xvfb-run). Keys and mouse: see README.md, "Interactive demo".
     Demo(demo::DemoArgs),
+    /// Render the exact reference (path tracing + photon-mapped caustics) to EXR/PNG.
+    Reference(reference::ReferenceCmd),
+    /// Time the scene's techniques and measure their error against the exact reference.
+    Compare(compare::CompareArgs),
+    /// Measure every combination of parameter values: CSV, and error against time plots.
+    Sweep(sweep::SweepArgs),
+    /// Regenerate docs/ACCURACY.md: every technique and setting's time and error, with plots.
+    Report(report::ReportArgs),
 }
 
 /// Options shared by every command that loads a scene.
@@ -164,6 +176,10 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Bench(args) => bench::run(args),
         Command::Passes(args) => passes(args),
         Command::Demo(args) => demo::run(args),
+        Command::Reference(args) => reference::run(args),
+        Command::Compare(args) => compare::run(args),
+        Command::Sweep(args) => sweep::run(args),
+        Command::Report(args) => report::run(args),
     }
 }
 

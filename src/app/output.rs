@@ -32,7 +32,8 @@ impl OutputFile {
                 dir.display()
             );
         }
-        let temp = dir.join(format!(".{}.prism-{}.tmp", name.to_string_lossy(), std::process::id()));
+        // Hidden, unique, and ending in the target's own extension (encoders look at it).
+        let temp = dir.join(format!(".prism-tmp-{}-{}", std::process::id(), name.to_string_lossy()));
         std::fs::write(&temp, b"").with_context(|| {
             format!(
                 "{}: cannot write output (directory not writable?)\n  hint: choose a writable path",
@@ -90,4 +91,15 @@ pub fn write_exr(out: OutputFile, width: u32, height: u32, rgba: &[f32]) -> Resu
         .save_with_format(out.temp_path(), image::ImageFormat::OpenExr)
         .with_context(|| format!("{}: cannot encode EXR", out.path().display()))?;
     out.commit()
+}
+
+/// The PNG rule of SCENES.md on the CPU, identical to glsl/tonemap/tonemap.frag:
+/// srgb_oetf(clamp(exposure * L, 0, 1)), NaN/Inf as 0. RGBA f32 in, RGBA8 out.
+pub fn tonemap(rgba: &[f32], exposure: f32) -> Vec<u8> {
+    let oetf = |c: f32| {
+        let c = if c.is_finite() { (exposure * c).clamp(0.0, 1.0) } else { 0.0 };
+        let v = if c <= 0.0031308 { 12.92 * c } else { 1.055 * c.powf(1.0 / 2.4) - 0.055 };
+        (v * 255.0 + 0.5) as u8
+    };
+    rgba.chunks_exact(4).flat_map(|p| [oetf(p[0]), oetf(p[1]), oetf(p[2]), 255]).collect()
 }

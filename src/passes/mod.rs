@@ -4,6 +4,10 @@
 pub mod deferred_shading;
 pub mod fullscreen;
 pub mod gbuffer;
+pub mod refraction_hu_qin;
+pub mod refraction_wyman;
+pub mod refractor_layers;
 pub mod shadow_map;
 pub mod specular_single;
 pub mod tonemap;
+pub mod wyman_distance;

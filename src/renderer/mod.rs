@@ -18,9 +18,13 @@ use crate::gpu::{
 use crate::graph::{Frame, FrameGraph, ImageId};
 use crate::passes::deferred_shading::DeferredShadingPass;
 use crate::passes::gbuffer::GBufferPass;
+use crate::passes::refraction_hu_qin::HuQinPass;
+use crate::passes::refraction_wyman::WymanPass;
+use crate::passes::refractor_layers::DebugTarget;
 use crate::passes::shadow_map::{ShadowMapPass, FAR_DISTANCE};
 use crate::passes::specular_single::{Mode, SpecularSinglePass};
 use crate::passes::tonemap::TonemapPass;
+use crate::scene::techniques::{HuQinParams, WymanParams};
 use crate::scene::{Camera, Scene};
 use crate::{BINDING_ENVIRONMENT, BINDING_FRAME, BINDING_MATERIALS, BINDING_SHADOW_2D, BINDING_SHADOW_CUBE};
 
@@ -49,6 +53,9 @@ pub enum RenderError {
     Gpu(#[from] GpuError),
     #[error("{0}")]
     Limit(String),
+    /// A technique parameter (`[render.<technique>]`) that is unknown or out of range.
+    #[error("render.{technique}.{}: {error}", error.key)]
+    Param { technique: &'static str, error: crate::scene::techniques::ParamError },
 }
 
 /// GPU time of one pass in one frame, in milliseconds from the frame's first timestamp.
@@ -92,7 +99,17 @@ struct Passes {
     deferred: DeferredShadingPass,
     refraction_single: Option<SpecularSinglePass>,
     reflection_single: Option<SpecularSinglePass>,
+    refraction_wyman: Option<WymanPass>,
+    refraction_hu_qin: Option<HuQinPass>,
     tonemap: TonemapPass,
+}
+
+impl Passes {
+    /// The debug targets of the refraction techniques that have them enabled.
+    fn debug_targets(&self) -> impl Iterator<Item = &DebugTarget> {
+        let wyman = self.refraction_wyman.iter().flat_map(|p| p.debug_targets());
+        wyman.chain(self.refraction_hu_qin.iter().flat_map(|p| p.debug_targets()))
+    }
 }
 
 pub struct Renderer {
@@ -205,6 +222,20 @@ impl Renderer {
             graph.access_now(cmd, &[(atlas_id, Access::FragmentSampled)], &[]);
         })?;
 
+        let refraction_wyman = if plan::has(&plan, plan::REFRACTION_WYMAN) {
+            let params = WymanParams::from_settings(&scene.render)
+                .map_err(|error| RenderError::Param { technique: "wyman", error })?;
+            Some(WymanPass::new(ctx, params, scene, &gpu_scene, &mut graph, &frame_layout, &targets, &nearest)?)
+        } else {
+            None
+        };
+        let refraction_hu_qin = if plan::has(&plan, plan::REFRACTION_HU_QIN) {
+            let params = HuQinParams::from_settings(&scene.render)
+                .map_err(|error| RenderError::Param { technique: "hu_qin", error })?;
+            Some(HuQinPass::new(ctx, params, scene, &gpu_scene, &mut graph, &frame_layout, &targets, &nearest)?)
+        } else {
+            None
+        };
         let passes = Passes {
             shadow_map: if shadowed { Some(ShadowMapPass::new(ctx, &gpu_scene, &targets)?) } else { None },
             gbuffer: GBufferPass::new(ctx, &frame_layout, &targets)?,
@@ -219,6 +250,8 @@ impl Renderer {
             } else {
                 None
             },
+            refraction_wyman,
+            refraction_hu_qin,
             tonemap: TonemapPass::new(ctx, &frame_layout, &targets, &nearest)?,
         };
 
@@ -362,6 +395,12 @@ impl Renderer {
         if let Some(p) = &passes.refraction_single {
             p.record(&mut frame, scene, targets, frame_set);
         }
+        if let Some(p) = &passes.refraction_wyman {
+            p.record(&mut frame, scene, targets, frame_set);
+        }
+        if let Some(p) = &passes.refraction_hu_qin {
+            p.record(&mut frame, scene, targets, frame_set);
+        }
         if let Some(p) = &passes.reflection_single {
             p.record(&mut frame, scene, targets, frame_set);
         }
@@ -402,7 +441,13 @@ impl Renderer {
             MemoryLocation::GpuToCpu,
         )?;
         let buffer_id = self.graph.register_buffer(&buffer);
-        let image = if id == self.targets.hdr_id { &self.targets.hdr } else { &self.targets.ldr };
+        let image = if id == self.targets.hdr_id {
+            &self.targets.hdr
+        } else if id == self.targets.ldr_id {
+            &self.targets.ldr
+        } else {
+            self.passes.debug_targets().find(|d| d.id == id).map(|d| &d.image).unwrap_or(&self.targets.ldr)
+        };
         let graph = &mut self.graph;
         self.ctx.one_shot(|cmd| {
             graph.access_now(cmd, &[(id, Access::TransferRead)], &[(buffer_id, Access::TransferWrite)]);
@@ -421,6 +466,21 @@ impl Renderer {
     /// Tone-mapped sRGB, RGBA u8, row 0 at the top.
     pub fn read_ldr(&mut self) -> Result<Vec<u8>, RenderError> {
         self.read_image(self.targets.ldr_id, 4)
+    }
+
+    /// Names of the debug targets [`Renderer::read_target`] can read (e.g.
+    /// `refraction_hu_qin_p2`, `refraction_hu_qin_t2` with `render.hu_qin.debug = true`).
+    pub fn debug_targets(&self) -> Vec<String> {
+        self.passes.debug_targets().map(|d| d.name.clone()).collect()
+    }
+
+    /// A debug target, RGBA f32, row 0 at the top; `None` if no pass writes one of that name.
+    pub fn read_target(&mut self, name: &str) -> Result<Option<Vec<f32>>, RenderError> {
+        let Some(id) = self.passes.debug_targets().find(|d| d.name == name).map(|d| d.id) else {
+            return Ok(None);
+        };
+        let bytes = self.read_image(id, 16)?;
+        Ok(Some(bytemuck::pod_collect_to_vec(&bytes)))
     }
 }
 

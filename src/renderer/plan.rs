@@ -10,6 +10,12 @@ pub const DEFERRED_SHADING: &str = "deferred_shading";
 pub const REFRACTION_SINGLE: &str = "refraction_single";
 pub const REFLECTION_SINGLE: &str = "reflection_single";
 pub const TONEMAP: &str = "tonemap";
+/// Wyman 2005 (src/passes/refraction_wyman.rs): the refractor layers, then the shading.
+pub const REFRACTION_WYMAN_LAYERS: &str = "refraction_wyman_layers";
+pub const REFRACTION_WYMAN: &str = "refraction_wyman";
+/// Hu & Qin 2007 (src/passes/refraction_hu_qin.rs): the refractor layers, then the shading.
+pub const REFRACTION_HU_QIN_LAYERS: &str = "refraction_hu_qin_layers";
+pub const REFRACTION_HU_QIN: &str = "refraction_hu_qin";
 
 #[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
 pub struct PlannedPass {
@@ -75,6 +81,9 @@ pub fn plan(scene: &Scene) -> Vec<PlannedPass> {
             reason: format!("dielectric {} (render.refraction = \"single\")", list(&dielectric)),
         });
     }
+    if !dielectric.is_empty() {
+        passes.extend(image_space_refraction(scene, &dielectric));
+    }
     if !metal.is_empty() && scene.render.reflection == "single" {
         passes.push(PlannedPass {
             name: REFLECTION_SINGLE,
@@ -83,6 +92,33 @@ pub fn plan(scene: &Scene) -> Vec<PlannedPass> {
     }
     passes.push(PlannedPass { name: TONEMAP, reason: "linear radiance -> sRGB PNG output".into() });
     passes
+}
+
+/// The passes of the two-interface image-space refraction techniques, if one is selected.
+fn image_space_refraction(scene: &Scene, dielectric: &[String]) -> Vec<PlannedPass> {
+    let (layers, shade, what, exit) = match scene.render.refraction.as_str() {
+        "wyman" => (
+            REFRACTION_WYMAN_LAYERS,
+            REFRACTION_WYMAN,
+            "back surface (depth, normal) and front faces with d_N",
+            "d_V/d_N interpolation, Wyman 2005",
+        ),
+        "hu_qin" => (
+            REFRACTION_HU_QIN_LAYERS,
+            REFRACTION_HU_QIN,
+            "back and front faces (depth, normal)",
+            "binary search and iterative d_T, Hu & Qin 2007",
+        ),
+        _ => return Vec::new(),
+    };
+    let technique = &scene.render.refraction;
+    vec![
+        PlannedPass {
+            name: layers,
+            reason: format!("{what} of dielectric {} (render.refraction = \"{technique}\")", list(dielectric)),
+        },
+        PlannedPass { name: shade, reason: format!("two-interface refraction of {} ({exit})", list(dielectric)) },
+    ]
 }
 
 /// Whether the plan contains `name`.

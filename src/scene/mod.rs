@@ -11,6 +11,7 @@ mod error;
 mod file;
 mod mesh;
 mod shapes;
+pub mod techniques;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -29,7 +30,7 @@ use file::{check_keys, list, FileObject, FileScene, Rgb, Source};
 
 /// Accepted values of `render.refraction`; the first is the default. A technique
 /// joins the benchmark by adding its name here (and to docs/scene-format.md).
-pub const REFRACTION_TECHNIQUES: &[&str] = &["single"];
+pub const REFRACTION_TECHNIQUES: &[&str] = &["single", "wyman", "hu_qin"];
 /// Accepted values of `render.reflection`; the first is the default.
 pub const REFLECTION_TECHNIQUES: &[&str] = &["single"];
 /// Accepted values of `render.caustics`; the first is the default.
@@ -456,6 +457,14 @@ fn render_settings(t: Option<&toml::Table>, src: &Source) -> Result<RenderSettin
             _ => match v.as_table() {
                 // Open-ended technique parameters; the technique checks them.
                 Some(p) => {
+                    techniques::check(key, p).map_err(|e| {
+                        value_err(
+                            src,
+                            &format!("render.{key}.{}", e.key),
+                            format!("render.{key}: {}", e.message),
+                            &e.hint,
+                        )
+                    })?;
                     r.params.insert(key.clone(), p.clone());
                 }
                 None => {

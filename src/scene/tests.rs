@@ -344,13 +344,13 @@ fn overrides_set_existing_keys() {
 
 #[test]
 fn overrides_create_render_parameters_only() {
-    let s = load_str(BASE, Path::new("t.toml"), &sets(&["render.wyman.iterations=4", "render.exposure=2"]))
+    let s = load_str(BASE, Path::new("t.toml"), &sets(&["render.hu_qin.max_iterations=4", "render.exposure=2"]))
         .expect("render tables are created");
     assert_eq!(s.render.exposure, 2.0);
-    let wyman = s.render.params.get("wyman").expect("params");
-    assert_eq!(wyman.get("iterations").and_then(|v| v.as_integer()), Some(4));
+    let wyman = s.render.params.get("hu_qin").expect("params");
+    assert_eq!(wyman.get("max_iterations").and_then(|v| v.as_integer()), Some(4));
     // The effective scene holds them, so a cached result keyed by it differs.
-    assert!(s.canonical.contains("iterations = 4"), "{}", s.canonical);
+    assert!(s.canonical.contains("max_iterations = 4"), "{}", s.canonical);
 
     // A key left at its default may be set; a misspelt one is caught by the schema and
     // the error names the override.
@@ -379,11 +379,11 @@ fn overrides_create_render_parameters_only() {
 
 #[test]
 fn technique_names_are_validated() {
-    let e = base_err(BASE, &["render.refraction=wyman"]);
+    let e = base_err(BASE, &["render.refraction=wyman2"]);
     assert_eq!(e.kind(), Some(ErrorKind::Value));
     let text = e.to_string();
-    assert!(text.contains("--set render.refraction=wyman"), "{text}");
-    assert!(text.contains("unknown refraction technique `wyman`"), "{text}");
+    assert!(text.contains("--set render.refraction=wyman2"), "{text}");
+    assert!(text.contains("unknown refraction technique `wyman2`"), "{text}");
     assert!(text.contains("`single`"), "{text}");
     let e = base_err(&format!("{BASE}\n[render]\ncaustics = \"photon\"\n"), &[]);
     assert_eq!(at(&e).0, Some(19));
@@ -391,6 +391,13 @@ fn technique_names_are_validated() {
     let e = base_err(&format!("{BASE}\n[render]\nshadow_map = 5\n"), &[]);
     assert_eq!(e.kind(), Some(ErrorKind::Schema));
     assert!(e.to_string().contains("unknown key `shadow_map`"), "{e}");
+    // Technique parameters are checked by the technique, naming the key and the override.
+    let e = base_err(BASE, &["render.hu_qin.search_steps=0"]);
+    assert_eq!(e.kind(), Some(ErrorKind::Value));
+    let text = e.to_string();
+    assert!(text.contains("--set render.hu_qin.search_steps=0") && text.contains("`search_steps`"), "{text}");
+    let e = base_err(BASE, &["render.wyman.back_surfaces=\"second\""]);
+    assert!(e.to_string().contains("unknown parameter `back_surfaces`"), "{e}");
 }
 
 #[test]

@@ -6,6 +6,7 @@ use std::collections::{BTreeMap, VecDeque};
 
 use crate::renderer::plan::PlannedPass;
 use crate::renderer::FrameTiming;
+use crate::scene::techniques::{BackSurface, HuQinParams, WymanParams};
 use crate::scene::{Light, Material, Scene, TECHNIQUE_KEYS};
 
 use super::camera::Mode;
@@ -300,8 +301,10 @@ fn parameters(ui: &mut egui::Ui, state: &mut UiState, view: &View, req: &mut Req
             }
         }
 
-        // Technique parameter tables, [render.<technique>]: every number is editable.
-        for (table, values) in &scene.render.params {
+        technique_parameters(ui, state, scene, req);
+
+        // Other technique parameter tables, [render.<technique>]: every number is editable.
+        for (table, values) in scene.render.params.iter().filter(|(t, _)| !KNOWN_TABLES.contains(&t.as_str())) {
             for (key, value) in values {
                 let full = format!("render.{table}.{key}");
                 match value {
@@ -364,6 +367,59 @@ fn parameters(ui: &mut egui::Ui, state: &mut UiState, view: &View, req: &mut Req
             ui.end_row();
         }
     });
+}
+
+/// Parameter tables with their own controls (defaults included) in [`technique_parameters`].
+const KNOWN_TABLES: &[&str] = &["wyman", "hu_qin"];
+
+/// The selected refraction technique's parameters, with their defaults when the file has
+/// no `[render.<technique>]` table (docs/scene-format.md lists them).
+fn technique_parameters(ui: &mut egui::Ui, state: &mut UiState, scene: &Scene, req: &mut Requests) {
+    match scene.render.refraction.as_str() {
+        "wyman" => {
+            let Ok(p) = WymanParams::from_settings(&scene.render) else { return };
+            ui.label("wyman.back_surface");
+            let current = if p.back_surface == BackSurface::Furthest { "furthest" } else { "second" };
+            let mut chosen = current;
+            egui::ComboBox::from_id_salt("wyman_back_surface").selected_text(chosen).show_ui(ui, |ui| {
+                for v in ["furthest", "second"] {
+                    ui.selectable_value(&mut chosen, v, v);
+                }
+            });
+            if chosen != current {
+                state.set(req, "render.wyman.back_surface".into(), format!("\"{chosen}\""));
+            }
+            ui.end_row();
+        }
+        "hu_qin" => {
+            let Ok(p) = HuQinParams::from_settings(&scene.render) else { return };
+            ui.label("hu_qin.search_steps");
+            let mut steps = p.search_steps;
+            if ui.add(egui::Slider::new(&mut steps, 1..=24)).changed() {
+                state.set(req, "render.hu_qin.search_steps".into(), steps.to_string());
+            }
+            ui.end_row();
+            ui.label("hu_qin.tolerance");
+            let mut tolerance = p.tolerance;
+            if ui.add(egui::Slider::new(&mut tolerance, 1e-7..=0.5).logarithmic(true)).changed() {
+                state.set(req, "render.hu_qin.tolerance".into(), format!("{tolerance:e}"));
+            }
+            ui.end_row();
+            ui.label("hu_qin.max_iterations");
+            let mut iterations = p.max_iterations;
+            if ui.add(egui::Slider::new(&mut iterations, 1..=1024).logarithmic(true)).changed() {
+                state.set(req, "render.hu_qin.max_iterations".into(), iterations.to_string());
+            }
+            ui.end_row();
+            ui.label("hu_qin.assume_back_facing");
+            let mut back = p.assume_back_facing;
+            if ui.checkbox(&mut back, "").changed() {
+                state.set(req, "render.hu_qin.assume_back_facing".into(), back.to_string());
+            }
+            ui.end_row();
+        }
+        _ => {}
+    }
 }
 
 /// (index, name, center) of every object whose file entry has a `center` (spheres, quads,

@@ -1,0 +1,96 @@
+#version 450
+// Reference camera paths: every light path with exactly one diffuse vertex (SCENES.md,
+// "Light transport measured"). The camera ray follows mirror, conductor and dielectric
+// interactions (exact Fresnel, chosen stochastically) until it escapes (environment) or
+// reaches a diffuse surface, where it takes (1) direct light from point and directional
+// lights with exact shadow rays, (2) environment light arriving through any specular chain
+// (one cosine-weighted sample), and (3) leaves a visible point for the photon gathering that
+// adds caustics (gather.comp).
+#include "sppm.glsl"
+
+// Environment radiance reaching a diffuse point along d through specular interactions only.
+vec3 environment_through_specular(vec3 o, vec3 d, int channel, inout uint rng) {
+    vec3 beta = vec3(1.0);
+    for (uint bounce = 0u; bounce <= ref.counts.w; ++bounce) {
+        Hit h = trace(o, d, 3.4e38);
+        if (h.kind == 0u) return beta * environment(d);
+        Surface s = surface_at(o, d, h);
+        if (kind_of(materials[s.material]) == MATERIAL_DIFFUSE) return vec3(0.0);   // a second diffuse vertex
+        if (!specular_step(s, o, d, beta, h.t, channel, rand(rng), true)) return vec3(0.0);
+    }
+    return vec3(0.0);
+}
+
+void main() {
+    uint px = gl_GlobalInvocationID.x;
+    uint W = ref.dims.x, H = ref.dims.y;
+    if (px >= W * H) return;
+    uint rng = rng_init(px, push.iteration, push.seed);
+    // Pixel (i, j) samples the ray through its centre ((i+0.5)/W, (j+0.5)/H), j = 0 the top
+    // row (SCENES.md), unless supersampling was asked for.
+    vec2 offset = (ref.photon.w & REF_FLAG_JITTER) != 0u ? vec2(rand(rng), rand(rng)) : vec2(0.5);
+    vec2 ndc = (vec2(px % W, px / W) + offset) / vec2(W, H) * 2.0 - 1.0;
+    vec3 d = normalize(mat3(ref.inv_view) * vec3(ndc.x * ref.proj.x, -ndc.y * ref.proj.y, -1.0));
+    vec3 o = ref.camera_pos.xyz;
+
+    // Dispersion: trace one wavelength channel per path, chosen uniformly, weighted by 3.
+    int channel = -1;
+    vec3 beta = vec3(1.0);
+    if ((ref.photon.w & REF_FLAG_DISPERSION) != 0u) {
+        channel = min(int(rand(rng) * 3.0), 2);
+        beta = vec3(0.0);
+        beta[channel] = 3.0;
+    }
+
+    vec3 L = vec3(0.0);
+    bool visible_point = false;
+    for (uint bounce = 0u; bounce <= ref.counts.w; ++bounce) {
+        Hit h = trace(o, d, 3.4e38);
+        if (h.kind == 0u) {
+            L += beta * environment(d);
+            break;
+        }
+        Surface s = surface_at(o, d, h);
+        Material m = materials[s.material];
+        if (kind_of(m) != MATERIAL_DIFFUSE) {
+            if (!specular_step(s, o, d, beta, h.t, channel, rand(rng), true)) break;
+            continue;
+        }
+        // The diffuse vertex. Normals face the side the path arrived from.
+        vec3 n = dot(d, s.ns) < 0.0 ? s.ns : -s.ns;
+        vec3 ng = dot(d, s.ng) < 0.0 ? s.ng : -s.ng;
+        vec3 albedo = albedo_at(m, s.st);
+        vec3 brdf = albedo / PI;
+        for (uint i = 0u; i < ref.dims.z; ++i) {
+            RefLight l = ref.lights[i];
+            vec3 wi;
+            vec3 E;
+            float dist;
+            if (uint(l.position.w + 0.5) == LIGHT_POINT) {
+                vec3 to = l.position.xyz - s.p;
+                dist = length(to);
+                wi = to / dist;
+                E = l.intensity.rgb / (dist * dist);
+            } else {
+                wi = -l.position.xyz;
+                dist = 3.4e38;
+                E = l.intensity.rgb;
+            }
+            float cosine = dot(n, wi);
+            if (cosine <= 0.0 || dot(ng, wi) <= 0.0) continue;
+            vec3 origin = offset_origin(s, wi);
+            float t_max = dist < 3.0e38 ? length(l.position.xyz - origin) * (1.0 - 1e-6) : dist;
+            if (!occluded(origin, wi, t_max)) L += beta * brdf * E * cosine;
+        }
+        // Cosine-weighted sample: pdf cos/pi cancels the BRDF's 1/pi and the cosine.
+        vec3 wi = cosine_sample(n, rng);
+        if (dot(wi, ng) > 0.0) L += beta * albedo * environment_through_specular(offset_origin(s, wi), wi, channel, rng);
+        pixels[px].vp_pos.xyz = s.p;
+        pixels[px].vp_normal = vec4(n, 1.0);
+        pixels[px].vp_weight = vec4(beta * brdf, 0.0);
+        visible_point = true;
+        break;
+    }
+    if (!visible_point) pixels[px].vp_normal.w = 0.0;
+    accum[px] += vec4(finite_or_zero(L), 1.0);
+}

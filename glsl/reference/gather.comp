@@ -1,0 +1,53 @@
+#version 450
+// Stochastic progressive photon mapping update (Hachisuka & Jensen 2009, Sec. 4, with the
+// progressive radius reduction of Hachisuka et al. 2008, Eqs. 6-8): each pixel's visible
+// point of this iteration collects the photons within its radius R; then
+//   N' = N + alpha M,  R' = R sqrt((N + alpha M) / (N + M)),  tau' = (tau + Phi) (R'/R)^2,
+// and the caustic radiance is tau / (pi R^2 iterations) (resolved on the host).
+#include "sppm.glsl"
+
+void main() {
+    uint px = gl_GlobalInvocationID.x;
+    if (px >= ref.dims.x * ref.dims.y) return;
+    PixelState st = pixels[px];
+    if (st.vp_normal.w < 0.5) return;
+    vec3 p = st.vp_pos.xyz;
+    vec3 n = st.vp_normal.xyz;
+    float R = st.vp_pos.w;
+    float M = 0.0;
+    vec3 phi = vec3(0.0);
+    // The cell size is the initial radius and R only shrinks: the photons within R lie in the
+    // at most 2x2x2 cells overlapping the ball. Buckets visited twice (hash collisions) are
+    // skipped so that no photon is counted twice.
+    ivec3 lo = grid_cell(p - vec3(R)), hi = grid_cell(p + vec3(R));
+    uint visited[8];
+    uint n_visited = 0u;
+    for (int z = lo.z; z <= hi.z; ++z)
+    for (int y = lo.y; y <= hi.y; ++y)
+    for (int x = lo.x; x <= hi.x; ++x) {
+        uint bucket = grid_bucket(ivec3(x, y, z));
+        bool seen = false;
+        for (uint k = 0u; k < n_visited; ++k) seen = seen || visited[k] == bucket;
+        if (seen || n_visited >= 8u) continue;
+        visited[n_visited++] = bucket;
+        uint i = heads[bucket];
+        for (uint guard = 0u; i != END_OF_LIST && guard < ref.photon.y; ++guard) {
+            Photon ph = photons[i];
+            vec3 q = ph.pos.xyz - p;
+            // Only photons arriving on the side the camera sees.
+            if (dot(q, q) <= R * R && dot(ph.dir.xyz, n) < 0.0) {
+                M += 1.0;
+                phi += ph.flux.rgb;
+            }
+            i = floatBitsToUint(ph.pos.w);
+        }
+    }
+    if (M > 0.0) {
+        float alpha = ref.grid.z;
+        float N = st.tau_n.w;
+        float R2 = R * sqrt((N + alpha * M) / (N + M));
+        vec3 tau = (st.tau_n.rgb + finite_or_zero(st.vp_weight.rgb * phi)) * (R2 * R2) / (R * R);
+        pixels[px].tau_n = vec4(tau, N + alpha * M);
+        pixels[px].vp_pos.w = R2;
+    }
+}

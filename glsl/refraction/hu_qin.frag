@@ -1,0 +1,164 @@
+#version 450
+// Hu & Qin 2007, "Interactive Approximate Rendering of Reflections, Refractions, and
+// Caustics", §2.1: refraction of the environment through two interfaces without
+// preprocessing (Fig. 4), for n_t > n_i and n_t < n_i alike.
+//   T1 at the G-buffer's P1; binary search along t1 (T1 projected to the buffer) for the
+//   dividing pixel p_e (Fig. 6, 7); P_e unprojected; theta_1 > theta_2 -> P2 on a front-facing
+//   surface, else back-facing (§2.1.2, Fig. 5); the iterative d_T search against that depth
+//   layer (§2.1.3, Fig. 8, 9); N2 from the matching normal layer (§2.1.4); T2; environment.
+// Section 4's acceleration (ASSUME_BACK_FACING): skip the binary search, assume back-facing,
+// and switch to the front-facing layer when P2 leaves the refractor's silhouette.
+#include "frame.glsl"
+#include "environment.glsl"
+#include "fresnel.glsl"
+#include "refraction.glsl"
+layout(constant_id = 0) const uint DEBUG = 0;
+layout(constant_id = 1) const uint SEARCH_STEPS = 8;
+layout(constant_id = 2) const float TOLERANCE = 1e-4;
+layout(constant_id = 3) const uint MAX_ITERATIONS = 32;
+layout(constant_id = 4) const uint ASSUME_BACK_FACING = 0;
+layout(set = 1, binding = BINDING_GBUF_NORMAL) uniform sampler2D gbuf_normal;
+layout(set = 1, binding = BINDING_GBUF_DEPTH) uniform sampler2D gbuf_depth;
+layout(set = 1, binding = BINDING_REFR_BACK_NORMAL) uniform sampler2D back_normal;
+layout(set = 1, binding = BINDING_REFR_BACK_DEPTH) uniform sampler2D back_depth;
+layout(set = 1, binding = BINDING_REFR_FRONT_NORMAL) uniform sampler2D front_normal;
+layout(set = 1, binding = BINDING_REFR_FRONT_DEPTH) uniform sampler2D front_depth;
+layout(location = 0) in vec2 in_uv;
+layout(location = 0) out vec4 out_radiance;
+layout(location = 1) out vec4 out_p2;
+layout(location = 2) out vec4 out_t2;
+
+// Inside the refractor's silhouette: where its back layer has a surface.
+bool in_silhouette(vec2 uv) {
+    return layer_covered(back_normal, uv);
+}
+
+// Fig. 7: binary search from p1 along the unit screen direction t1 for the dividing pixel
+// p_e, the last pixel inside the silhouette. The interval [inside, outside] starts at
+// [0, 0.75] in uv units, "75 percent of the depth buffer size" (the paper's -1..1 span is
+// 2), and each step halves it: 8 steps resolve 0.75/256 of the image.
+vec2 dividing_pixel(vec2 p1, vec2 t1) {
+    float inside = 0.0, outside = 0.75;
+    for (uint i = 0; i < SEARCH_STEPS; ++i) {
+        float mid = 0.5 * (inside + outside);
+        if (in_silhouette(p1 + mid * t1)) inside = mid; else outside = mid;
+    }
+    return p1 + inside * t1;
+}
+
+// Fig. 9: d_T by the iterative lookup, against the front (flag -1) or back (flag 1) layer.
+// Distances are the view-space distances along -z rather than the paper's [0, 1] buffer z,
+// which with prism's reversed-Z infinite projection is far from linear. Returns false if P2
+// left the silhouette (section 4: then the exit is front-facing); the step is then halved
+// and the search continues from the last point inside.
+bool search_d_t(bool front, vec3 P1, vec3 T1, float tol, float step0, out float d_T) {
+    float flag = front ? -1.0 : 1.0;
+    float step = step0;
+    bool stayed = true;
+    d_T = 0.0;
+    for (uint i = 0; i < MAX_ITERATIONS; ++i) {
+        float next = max(d_T + step, 0.0);
+        vec3 P2 = P1 + next * T1;
+        vec2 uv = project_uv(P2);
+        if (!(front ? layer_covered(front_normal, uv) : in_silhouette(uv))) {
+            stayed = false;
+            step *= 0.5;
+            continue;
+        }
+        d_T = next;
+        float z = front ? layer_view_depth(front_depth, uv) : layer_view_depth(back_depth, uv);
+        step = flag * (z - view_depth(P2));
+        if (abs(step) < tol) break;
+    }
+    return stayed;
+}
+
+void main() {
+    ivec2 px = ivec2(gl_FragCoord.xy);
+    float depth = texelFetch(gbuf_depth, px, 0).r;
+    if (depth <= 0.0) discard;
+    vec4 nm = texelFetch(gbuf_normal, px, 0);
+    uint mat = uint(nm.w + 0.5);
+    if (material_kind(mat) != MATERIAL_DIELECTRIC) discard;
+    Material m = materials[mat];
+    vec3 ior = max(m.spec_a.rgb, vec3(1e-6));
+    vec3 V = camera_ray(in_uv);
+    vec3 N1 = normalize(nm.xyz);
+    if (dot(V, N1) > 0.0) {
+        // The camera is inside the refractor: one interface, as the baseline.
+        out_radiance = vec4(finite_or_zero(refraction_from_inside(V, -N1, ior)), 1.0);
+        return;
+    }
+    vec3 P1 = world_from_depth(in_uv, depth);
+    float dist1 = length(P1 - frame.camera_position.xyz);
+    float tol = TOLERANCE * dist1;
+    float cos_i = clamp(-dot(V, N1), 0.0, 1.0);
+    vec3 L_reflected = environment(reflect(V, N1));
+    // The back layer's thickness along the view ray: the first step of a back-facing search
+    // (the paper's "small positive value" would need more iterations to reach the far side).
+    float d_V = max(layer_view_depth(back_depth, in_uv) - view_depth(P1), tol);
+
+    // Exact per-channel refraction (dispersion) when the ior is RGB; one path otherwise.
+    int channels = (ior.r == ior.g && ior.g == ior.b) ? 1 : 3;
+    vec3 L = vec3(0.0);
+    for (int c = 0; c < 3; ++c) {
+        int k = channels == 1 ? 0 : c;
+        float eta = 1.0 / ior[k];
+        float F = fresnel_dielectric(cos_i, eta);
+        vec3 T1 = refract(V, N1, eta);
+        vec3 L_t = vec3(0.0);
+        vec3 P2 = P1, T2 = vec3(0.0);
+        float kind = 0.0;     // debug: 0 no exit (TIR at P1), 1 back, 2 front, 3 outside the silhouette
+        float d_T = 0.0;
+        if (dot(T1, T1) > 0.0) {
+            // §2.1.2: which surface P2 lies on.
+            bool front = false;
+            // A small positive first step for the front-facing search (Fig. 9), 1% of the
+            // eye distance: the iteration starts at P1, which lies on the front layer.
+            float step_front = 0.01 * dist1;
+            if (ASSUME_BACK_FACING == 0) {
+                vec2 p1 = in_uv;
+                vec2 t1 = project_uv(P1 + (0.01 * dist1) * T1) - p1;
+                if (dot(t1, t1) > 1e-14) {
+                    vec2 pe = dividing_pixel(p1, normalize(t1));
+                    vec3 Pe = world_from_depth(pe, texelFetch(back_depth, texel_of(pe), 0).r);
+                    // Fig. 5: theta_1 between V and T1, theta_2 between V and P1 -> P_e, both in
+                    // the plane of the eye, P1 and P2. T1 turned further from V than the chord
+                    // to the dividing point leaves through the front-facing surface.
+                    vec3 chord = Pe - P1;
+                    float theta_1 = acos(clamp(dot(V, T1), -1.0, 1.0));
+                    float theta_2 = dot(chord, chord) > 0.0 ? acos(clamp(dot(V, normalize(chord)), -1.0, 1.0)) : PI;
+                    front = theta_1 > theta_2;
+                }
+                if (front) search_d_t(true, P1, T1, tol, step_front, d_T);
+                else search_d_t(false, P1, T1, tol, d_V, d_T);
+            } else if (!search_d_t(false, P1, T1, tol, d_V, d_T)) {
+                // Section 4: P2 left the silhouette, so the exit is front-facing.
+                front = true;
+                search_d_t(true, P1, T1, tol, step_front, d_T);
+            }
+            P2 = P1 + d_T * T1;
+            vec2 uv2 = project_uv(P2);
+            // §2.1.4: N2 from the normal layer matching the exit surface.
+            bool covered = front ? layer_covered(front_normal, uv2) : layer_covered(back_normal, uv2);
+            vec3 N2 = !covered ? silhouette_normal(T1)
+                               : (front ? layer_normal_at(front_normal, uv2) : layer_normal_at(back_normal, uv2));
+            kind = !covered ? 3.0 : (front ? 2.0 : 1.0);
+            // Leaving the object: the normal facing T1 is -N2 and eta = n_refractor / n_outside;
+            // TIR at P2 is clamped to the critical angle as in Wyman 2005 §3.3.
+            T2 = refract_clamped(T1, -N2, ior[k]);
+            L_t = environment(T2) * exp(-m.spec_b.rgb * d_T);
+        }
+        if (channels == 1) {
+            L = F * L_reflected + (1.0 - F) * L_t;
+        } else {
+            L[c] = F * L_reflected[c] + (1.0 - F) * L_t[c];
+        }
+        if (c == 0 && DEBUG != 0) {
+            out_p2 = vec4(P2, kind);
+            out_t2 = vec4(T2, d_T);
+        }
+        if (channels == 1) break;
+    }
+    out_radiance = vec4(finite_or_zero(L), 1.0);
+}

@@ -1,0 +1,89 @@
+#version 450
+// Wyman 2005, "An Approximate Image-Space Approach for Interactive Refraction": refraction
+// of a distant environment through two interfaces (§3, and the fragment program of §4).
+//   T1 = Refract(V, N1)                            Snell's law at the G-buffer's P1 (§2)
+//   d_V = back-layer distance - front distance     along the view ray (§3.1, Fig. 3c)
+//   d_N = per-vertex distance along -N, interpolated (§3.1, precomputed on the CPU)
+//   d~ = (theta_t / theta_i) d_V + (1 - theta_t / theta_i) d_N   (§3.1, the equation for d~)
+//   P2~ = P1 + d~ T1, projected into the back-face normal layer for N2 (§3.2)
+//   T2 = Refract(T1, -N2), environment lookup; Fresnel reflection at P1 as the baseline.
+// TIR is clamped to the critical angle and P2 outside the silhouette takes N2 from T1 (§3.3).
+#include "frame.glsl"
+#include "environment.glsl"
+#include "fresnel.glsl"
+#include "refraction.glsl"
+layout(constant_id = 0) const uint DEBUG = 0;
+layout(set = 1, binding = BINDING_GBUF_NORMAL) uniform sampler2D gbuf_normal;
+layout(set = 1, binding = BINDING_GBUF_DEPTH) uniform sampler2D gbuf_depth;
+layout(set = 1, binding = BINDING_REFR_BACK_NORMAL) uniform sampler2D back_normal;
+layout(set = 1, binding = BINDING_REFR_BACK_DEPTH) uniform sampler2D back_depth;
+// The front layer: xyz normal, w = d_N interpolated from the vertices.
+layout(set = 1, binding = BINDING_REFR_FRONT_NORMAL) uniform sampler2D front_normal;
+layout(location = 0) in vec2 in_uv;
+layout(location = 0) out vec4 out_radiance;
+layout(location = 1) out vec4 out_p2;
+layout(location = 2) out vec4 out_t2;
+
+void main() {
+    ivec2 px = ivec2(gl_FragCoord.xy);
+    float depth = texelFetch(gbuf_depth, px, 0).r;
+    if (depth <= 0.0) discard;
+    vec4 nm = texelFetch(gbuf_normal, px, 0);
+    uint mat = uint(nm.w + 0.5);
+    if (material_kind(mat) != MATERIAL_DIELECTRIC) discard;
+    Material m = materials[mat];
+    vec3 ior = max(m.spec_a.rgb, vec3(1e-6));
+    vec3 V = camera_ray(in_uv);
+    vec3 N1 = normalize(nm.xyz);
+    if (dot(V, N1) > 0.0) {
+        // The camera is inside the refractor: one interface, as the baseline.
+        out_radiance = vec4(finite_or_zero(refraction_from_inside(V, -N1, ior)), 1.0);
+        return;
+    }
+    vec3 P1 = world_from_depth(in_uv, depth);
+    float cos_i = clamp(-dot(V, N1), 0.0, 1.0);
+    float theta_i = acos(cos_i);
+    vec3 L_reflected = environment(reflect(V, N1));
+
+    // d_V: distance between the front and the back surface along the view ray (Fig. 3c).
+    bool back_here = layer_covered(back_normal, in_uv);
+    float d_V = back_here ? max(length(world_from_depth(in_uv, texelFetch(back_depth, px, 0).r) - P1), 0.0) : 0.0;
+    float d_N = texelFetch(front_normal, px, 0).w;
+    if (d_N <= 0.0) d_N = d_V;   // open mesh: no far side along -N
+    if (!back_here) d_V = d_N;
+
+    // Exact per-channel refraction (dispersion) when the ior is RGB; one path otherwise.
+    int channels = (ior.r == ior.g && ior.g == ior.b) ? 1 : 3;
+    vec3 L = vec3(0.0);
+    for (int c = 0; c < 3; ++c) {
+        int k = channels == 1 ? 0 : c;
+        float eta = 1.0 / ior[k];
+        vec3 T1 = refract_clamped(V, N1, eta);
+        float theta_t = acos(clamp(-dot(N1, T1), -1.0, 1.0));
+        // theta_t / theta_i -> eta as theta_i -> 0 (Snell for small angles).
+        float ratio = theta_i > 1e-4 ? theta_t / theta_i : eta;
+        // Wyman assumes n_t > n_i (ratio <= 1); for n_t < n_i the same formula
+        // extrapolates beyond d_V, kept non-negative.
+        float d = max(ratio * d_V + (1.0 - ratio) * d_N, 0.0);
+        vec3 P2 = P1 + d * T1;
+        vec2 uv2 = project_uv(P2);
+        bool inside = layer_covered(back_normal, uv2);
+        vec3 N2 = inside ? layer_normal_at(back_normal, uv2) : silhouette_normal(T1);
+        // Leaving the object: the normal facing T1 is -N2, and eta = n_refractor / n_outside.
+        vec3 T2 = refract_clamped(T1, -N2, ior[k]);
+        vec3 absorb = exp(-m.spec_b.rgb * d);
+        vec3 L_t = environment(T2) * absorb;
+        float F = fresnel_dielectric(cos_i, eta);
+        if (channels == 1) {
+            L = F * L_reflected + (1.0 - F) * L_t;
+        } else {
+            L[c] = F * L_reflected[c] + (1.0 - F) * L_t[c];
+        }
+        if (c == 0 && DEBUG != 0) {
+            out_p2 = vec4(P2, inside ? 1.0 : 3.0);
+            out_t2 = vec4(T2, d);
+        }
+        if (channels == 1) break;
+    }
+    out_radiance = vec4(finite_or_zero(L), 1.0);
+}

@@ -1,0 +1,273 @@
+//! `prism compare`: one scene, its selected techniques and the exact reference, side by
+//! side: per-pass GPU time and the error against the reference. The reference is cached on
+//! disk, keyed by everything it depends on, so comparing many settings costs one reference.
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use anyhow::{Context, Result};
+use clap::Args;
+
+use crate::gpu::GpuContext;
+use crate::metrics::image::ErrorMetrics;
+use crate::metrics::timing::Stats;
+use crate::reference::ReferenceSettings;
+use crate::renderer::{FrameTiming, Renderer};
+use crate::scene::{Environment, Scene};
+
+use super::bench::{summarize, PassStats};
+use super::output::{self, OutputFile};
+use super::reference::{render_reference, ReferenceArgs};
+use super::{check_validation, GpuArgs, SceneArgs};
+
+#[derive(Args, Debug, Clone)]
+pub struct MeasureArgs {
+    /// Frames timed per setting.
+    #[arg(long, default_value_t = 20)]
+    pub frames: u32,
+    /// Frames rendered before timing.
+    #[arg(long, default_value_t = 5)]
+    pub warmup: u32,
+    #[command(flatten)]
+    pub reference: ReferenceArgs,
+    /// Recompute the reference even if a cached one exists.
+    #[arg(long)]
+    pub no_cache: bool,
+}
+
+#[derive(Args, Debug)]
+pub struct CompareArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    #[command(flatten)]
+    pub measure: MeasureArgs,
+    /// FLIP error heat map (PNG); default: SCENE-error.png in the current directory.
+    #[arg(long)]
+    pub heatmap: Option<PathBuf>,
+    /// Also write the technique's image and the reference's, tone-mapped, as PNG files with
+    /// this prefix (PREFIX-technique.png, PREFIX-reference.png).
+    #[arg(long)]
+    pub images: Option<String>,
+    /// Write the results as JSON.
+    #[arg(long, value_name = "FILE")]
+    pub json: Option<PathBuf>,
+    #[command(flatten)]
+    pub gpu: GpuArgs,
+}
+
+/// Where cached references live: `PRISM_CACHE_DIR`, else `$XDG_CACHE_HOME/prism`, else
+/// `~/.cache/prism`, else the system's temporary directory.
+pub fn cache_dir() -> PathBuf {
+    if let Some(d) = std::env::var_os("PRISM_CACHE_DIR") {
+        return PathBuf::from(d);
+    }
+    if let Some(d) = std::env::var_os("XDG_CACHE_HOME") {
+        return PathBuf::from(d).join("prism");
+    }
+    if let Some(h) = std::env::var_os("HOME") {
+        return PathBuf::from(h).join(".cache/prism");
+    }
+    std::env::temp_dir().join("prism-cache")
+}
+
+/// 64-bit FNV-1a: stable across Rust versions and platforms (unlike `DefaultHasher`).
+struct Fnv(u64);
+impl Fnv {
+    fn new() -> Self {
+        Fnv(0xcbf29ce484222325)
+    }
+    fn bytes(&mut self, b: &[u8]) {
+        for &x in b {
+            self.0 = (self.0 ^ x as u64).wrapping_mul(0x100000001b3);
+        }
+    }
+}
+
+/// The key of a reference: everything the reference image depends on. The effective scene
+/// without its `[render]` table (technique choices do not change the truth), the geometry
+/// and environment actually loaded (a changed OBJ or image changes the key even if the file
+/// name does not), the settings, and the reference shaders' SPIR-V (a fixed bug invalidates
+/// old references).
+pub fn reference_key(scene: &Scene, settings: &ReferenceSettings) -> String {
+    let mut h = Fnv::new();
+    let mut table: toml::Table = toml::from_str(&scene.canonical).unwrap_or_default();
+    table.remove("render");
+    table.remove("name");
+    h.bytes(toml::to_string(&table).unwrap_or_default().as_bytes());
+    for o in &scene.objects {
+        h.bytes(bytemuck::cast_slice(&o.mesh.positions));
+        h.bytes(bytemuck::cast_slice(&o.mesh.normals));
+        h.bytes(bytemuck::cast_slice(&o.mesh.indices));
+    }
+    if let Environment::Image { texels, .. } = &scene.environment {
+        h.bytes(bytemuck::cast_slice(texels));
+    }
+    h.bytes(serde_json::to_string(settings).unwrap_or_default().as_bytes());
+    for shader in crate::gpu::shader_names().filter(|n| n.starts_with("reference/")) {
+        h.bytes(&crate::gpu::shader_spirv(shader).map(|w| bytemuck::cast_slice(&w).to_vec()).unwrap_or_default());
+    }
+    format!("{:016x}", h.0)
+}
+
+/// The reference of `scene`, from the cache when present. Returns (RGBA f32, cache path,
+/// whether it came from the cache).
+pub fn cached_reference(
+    ctx: &Arc<GpuContext>,
+    scene: &Scene,
+    settings: &ReferenceSettings,
+    use_cache: bool,
+) -> Result<(Vec<f32>, PathBuf, bool)> {
+    let dir = cache_dir();
+    let path = dir.join(format!(
+        "{}-{}x{}-{}.exr",
+        scene.name,
+        scene.camera.width,
+        scene.camera.height,
+        reference_key(scene, settings)
+    ));
+    if use_cache && path.exists() {
+        if let Ok(img) = image::open(&path) {
+            let rgb = img.to_rgb32f();
+            if (rgb.width(), rgb.height()) == (scene.camera.width, scene.camera.height) {
+                let rgba = rgb.pixels().flat_map(|p| [p[0], p[1], p[2], 1.0]).collect();
+                return Ok((rgba, path, true));
+            }
+        }
+    }
+    let image = render_reference(ctx, scene, settings)?;
+    // A cache that cannot be written is not an error: the result is still correct.
+    if std::fs::create_dir_all(&dir).is_ok() {
+        if let Ok(out) = OutputFile::prepare(&path) {
+            let _ = output::write_exr(out, scene.camera.width, scene.camera.height, &image);
+        }
+    }
+    Ok((image, path, false))
+}
+
+/// One technique setting, timed and compared.
+#[derive(Debug, serde::Serialize)]
+pub struct Measurement {
+    pub passes: Vec<PassStats>,
+    pub frame: Stats,
+    pub errors: ErrorMetrics,
+    #[serde(skip)]
+    pub hdr: Vec<f32>,
+    #[serde(skip)]
+    pub ldr: Vec<u8>,
+    #[serde(skip)]
+    pub heatmap: Vec<u8>,
+}
+
+/// Render `scene` with its techniques for `warmup + frames` frames, time the last `frames`,
+/// and compare the last image with `reference`.
+pub fn measure(ctx: &Arc<GpuContext>, scene: &Scene, args: &MeasureArgs, reference: &[f32]) -> Result<Measurement> {
+    let mut renderer = Renderer::new(ctx, scene).context("cannot set up the renderer")?;
+    for _ in 0..args.warmup + args.frames.max(1) {
+        renderer.render_frame()?;
+    }
+    renderer.finish()?;
+    let frames: Vec<FrameTiming> =
+        renderer.take_timings().into_iter().filter(|f| f.frame >= args.warmup as u64).collect();
+    let (passes, frame) = summarize(&frames);
+    let hdr = renderer.read_hdr()?;
+    let ldr = renderer.read_ldr()?;
+    let ref_ldr = output::tonemap(reference, scene.render.exposure);
+    let (errors, heatmap) =
+        ErrorMetrics::between(&hdr, reference, &ldr, &ref_ldr, scene.camera.width, scene.camera.height);
+    Ok(Measurement { passes, frame, errors, hdr, ldr, heatmap })
+}
+
+#[derive(serde::Serialize)]
+struct CompareReport<'a> {
+    scene: &'a str,
+    scene_file: String,
+    width: u32,
+    height: u32,
+    device: &'a crate::gpu::DeviceInfo,
+    git_revision: String,
+    settings: &'a [String],
+    techniques: serde_json::Value,
+    reference: &'a ReferenceSettings,
+    reference_cache: String,
+    frames: u32,
+    #[serde(flatten)]
+    measurement: &'a Measurement,
+}
+
+pub fn print_measurement(m: &Measurement) {
+    let width = m.passes.iter().map(|p| p.name.len()).max().unwrap_or(5).max(5);
+    println!("{:width$}  {:>10}", "pass", "median ms");
+    for p in &m.passes {
+        println!("{:width$}  {:>10.3}", p.name, p.stats.median_ms);
+    }
+    println!("{:width$}  {:>10.3}", "frame", m.frame.median_ms);
+    let e = &m.errors;
+    println!(
+        "error vs reference: RMSE {:.5}  PSNR {:.2} dB  relMSE {:.5}  FLIP mean {:.4}  FLIP p95 {:.4}",
+        e.rmse, e.psnr_db, e.rel_mse, e.flip_mean, e.flip_p95
+    );
+}
+
+pub fn run(args: CompareArgs) -> Result<()> {
+    let scene = args.scene.load()?;
+    let settings = args.measure.reference.settings();
+    settings.validate()?;
+    let heat_path = args.heatmap.clone().unwrap_or_else(|| PathBuf::from(format!("{}-error.png", scene.name)));
+    let heat_out = OutputFile::prepare(&heat_path)?;
+    let json_out = args.json.as_deref().map(OutputFile::prepare).transpose()?;
+    let image_outs = match &args.images {
+        Some(prefix) => Some((
+            OutputFile::prepare(Path::new(&format!("{prefix}-technique.png")))?,
+            OutputFile::prepare(Path::new(&format!("{prefix}-reference.png")))?,
+        )),
+        None => None,
+    };
+    let ctx = args.gpu.context()?;
+    let (reference, cache, cached) = cached_reference(&ctx, &scene, &settings, !args.measure.no_cache)?;
+    let m = measure(&ctx, &scene, &args.measure, &reference)?;
+    check_validation(&ctx)?;
+    let (w, h) = (scene.camera.width, scene.camera.height);
+    println!(
+        "prism compare: {} at {w}x{h} on {}; refraction = {}, reflection = {}, caustics = {}",
+        scene.name, ctx.info.name, scene.render.refraction, scene.render.reflection, scene.render.caustics
+    );
+    println!(
+        "reference: {} spp, {} photons{} ({})",
+        settings.spp,
+        settings.photons,
+        if cached { ", from the cache" } else { "" },
+        cache.display()
+    );
+    print_measurement(&m);
+    if ctx.info.device_type == "CPU" {
+        println!("note: a CPU device (lavapipe): times are CPU time; compare ratios within one run.");
+    }
+    output::write_png(heat_out, w, h, &m.heatmap)?;
+    eprintln!("wrote FLIP heat map {}", heat_path.display());
+    if let Some((t, r)) = image_outs {
+        output::write_png(t, w, h, &m.ldr)?;
+        output::write_png(r, w, h, &output::tonemap(&reference, scene.render.exposure))?;
+    }
+    if let Some(out) = json_out {
+        let techniques = serde_json::json!({
+            "refraction": scene.render.refraction,
+            "reflection": scene.render.reflection,
+            "caustics": scene.render.caustics,
+        });
+        let report = CompareReport {
+            scene: &scene.name,
+            scene_file: scene.source.display().to_string(),
+            width: w,
+            height: h,
+            device: &ctx.info,
+            git_revision: super::bench::git_revision(),
+            settings: &args.scene.set,
+            techniques,
+            reference: &settings,
+            reference_cache: cache.display().to_string(),
+            frames: args.measure.frames,
+            measurement: &m,
+        };
+        out.commit_bytes(serde_json::to_string_pretty(&report)?.as_bytes())?;
+    }
+    Ok(())
+}

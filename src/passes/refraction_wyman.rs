@@ -1,0 +1,118 @@
+//! Wyman 2005, "An Approximate Image-Space Approach for Interactive Refraction" (SIGGRAPH
+//! 2005): refraction of a distant environment through two interfaces. `render.refraction =
+//! "wyman"`, parameters `[render.wyman]` ([`WymanParams`]).
+//!
+//! - `refraction_wyman_layers`: the refractors' back surface, depth and normal (§3.1 Fig. 3a,
+//!   §3.2 Fig. 3d), either the furthest surface or the second one by depth peeling (§3.2,
+//!   `back_surface`), and their front faces carrying d_N interpolated from the vertices.
+//! - `refraction_wyman`: glsl/refraction/wyman.frag, the fragment program of §4: T1 by
+//!   Snell's law at the G-buffer's P1, d_V from the two depths, d~ interpolated between d_V
+//!   and d_N (§3.1), P2~ = P1 + d~ T1 projected into the back normals for N2 (§3.2), T2, the
+//!   environment; TIR clamped to the critical angle and the silhouette fallback of §3.3.
+//!
+//! d_N is precomputed per vertex on the CPU ([`super::wyman_distance`]).
+use std::sync::Arc;
+
+use crate::gpu::{DescriptorSet, DescriptorSetLayout, GpuContext, GpuResult, Sampler};
+use crate::graph::{Frame, FrameGraph};
+use crate::renderer::gpu_scene::GpuScene;
+use crate::renderer::plan::{REFRACTION_WYMAN, REFRACTION_WYMAN_LAYERS};
+use crate::renderer::targets::Targets;
+use crate::scene::techniques::{BackSurface, WymanParams};
+use crate::scene::{Material, Scene};
+use crate::{
+    BINDING_GBUF_DEPTH, BINDING_GBUF_NORMAL, BINDING_REFR_BACK_DEPTH, BINDING_REFR_BACK_NORMAL,
+    BINDING_REFR_FRONT_NORMAL,
+};
+
+use super::refractor_layers::{DebugTarget, LayerKind, RefractorLayers, ShadeDesc, ShadePass};
+use super::wyman_distance::distance_along_normals;
+
+pub struct WymanPass {
+    layers: RefractorLayers,
+    shade: ShadePass,
+    pub params: WymanParams,
+}
+
+/// d_N of every scene vertex, in GpuScene's vertex order (0 for non-refractors).
+pub fn scene_distance_along_normals(scene: &Scene) -> Vec<f32> {
+    let mut out = Vec::new();
+    for o in &scene.objects {
+        if matches!(scene.materials[o.material], Material::Dielectric { .. }) {
+            out.extend_from_slice(&distance_along_normals(&o.mesh));
+        } else {
+            out.extend(std::iter::repeat_n(0.0, o.mesh.positions.len()));
+        }
+    }
+    out
+}
+
+impl WymanPass {
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        ctx: &Arc<GpuContext>,
+        params: WymanParams,
+        scene: &Scene,
+        gpu: &GpuScene,
+        graph: &mut FrameGraph,
+        frame_layout: &DescriptorSetLayout,
+        targets: &Targets,
+        nearest: &Sampler,
+    ) -> GpuResult<Self> {
+        let back = match params.back_surface {
+            BackSurface::Furthest => LayerKind::BackFurthest,
+            BackSurface::Second => LayerKind::Second,
+        };
+        let d_n = scene_distance_along_normals(scene);
+        let layers = RefractorLayers::new(
+            ctx,
+            REFRACTION_WYMAN_LAYERS,
+            &[back, LayerKind::Front],
+            Some(&d_n),
+            scene,
+            gpu,
+            graph,
+            frame_layout,
+            targets,
+            nearest,
+        )?;
+        let (b, f) = (&layers.layers[0], &layers.layers[1]);
+        let shade = ShadePass::new(
+            ctx,
+            &ShadeDesc {
+                name: REFRACTION_WYMAN,
+                fragment_shader: "refraction/wyman.frag",
+                inputs: &[
+                    (BINDING_GBUF_NORMAL, &targets.gbuf_normal, targets.gbuf_normal_id),
+                    (BINDING_GBUF_DEPTH, &targets.depth, targets.depth_id),
+                    (BINDING_REFR_BACK_NORMAL, &b.normal, b.normal_id),
+                    (BINDING_REFR_BACK_DEPTH, &b.depth, b.depth_id),
+                    (BINDING_REFR_FRONT_NORMAL, &f.normal, f.normal_id),
+                ],
+                specialization: &[],
+                debug: params.debug,
+            },
+            graph,
+            frame_layout,
+            targets,
+            nearest,
+        )?;
+        Ok(WymanPass { layers, shade, params })
+    }
+
+    pub fn record<'a>(
+        &'a self,
+        frame: &mut Frame<'_, 'a>,
+        scene: &'a GpuScene,
+        targets: &Targets,
+        frame_set: DescriptorSet,
+    ) {
+        self.layers.record(frame, scene, targets, frame_set);
+        self.shade.record(frame, scene.environment_id, frame_set);
+    }
+
+    /// P2 and T2 (with `debug = true`), see [`ShadePass`].
+    pub fn debug_targets(&self) -> &[DebugTarget] {
+        &self.shade.debug
+    }
+}

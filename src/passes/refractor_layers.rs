@@ -1,0 +1,398 @@
+//! What the two image-space refraction techniques share: the depth+normal layers of the
+//! refractors (Wyman 2005 §3.2 and Fig. 3a,d; Hu & Qin 2007 Fig. 4, "initial pass") and the
+//! full-screen shading pass that overwrites the dielectric pixels of the HDR target, with
+//! optional debug targets holding each pixel's exit point P2 and direction T2.
+//!
+//! A layer is an RGBA32F normal target (see glsl/refraction/layers.frag for the channels)
+//! and a D32 depth target, drawn from the refractors' draws only. Which surface it keeps:
+//!
+//! | layer | culling | depth test | cleared to |
+//! |---|---|---|---|
+//! | `Front` (nearest front face) | back faces | GREATER (reversed Z: nearest) | 0 |
+//! | `BackNearest` | front faces | GREATER | 0 |
+//! | `BackFurthest` | front faces | LESS (furthest) | 1 (the near plane) |
+//! | `Second` (depth peeling) | none | GREATER, behind the G-buffer's surface | 0 |
+//!
+//! Front faces are counter-clockwise in the (upright, y-flipped) image, as the meshes are
+//! counter-clockwise seen from outside.
+use std::sync::Arc;
+
+use crate::gpu::{
+    vk, Access, Attachment, Blend, Buffer, Clear, DepthState, DescriptorSet, DescriptorSetLayout, DescriptorWrite,
+    Framebuffer, GpuContext, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc, PipelineLayout,
+    RenderPass, RenderPassDesc, Sampler, VertexLayout,
+};
+use crate::graph::{Frame, FrameGraph, ImageId};
+use crate::renderer::gpu_scene::{Draw, GpuScene};
+use crate::renderer::targets::{Targets, DEPTH_FORMAT, HDR_FORMAT};
+use crate::scene::{Material, Scene};
+use crate::{BINDING_GBUF_DEPTH, BINDING_REFR_DN, LAYER_BACK_FURTHEST, LAYER_BACK_NEAREST, LAYER_FRONT, LAYER_SECOND};
+
+/// Normal (and d_N) layers are 32-bit float like the radiance: P2's error should be the
+/// technique's, not the storage's.
+pub const LAYER_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LayerKind {
+    Front,
+    BackNearest,
+    BackFurthest,
+    Second,
+}
+
+impl LayerKind {
+    fn mode(self) -> u32 {
+        match self {
+            LayerKind::Front => LAYER_FRONT,
+            LayerKind::BackNearest => LAYER_BACK_NEAREST,
+            LayerKind::BackFurthest => LAYER_BACK_FURTHEST,
+            LayerKind::Second => LAYER_SECOND,
+        }
+    }
+
+    fn cull(self) -> vk::CullModeFlags {
+        match self {
+            LayerKind::Front => vk::CullModeFlags::BACK,
+            LayerKind::BackNearest | LayerKind::BackFurthest => vk::CullModeFlags::FRONT,
+            LayerKind::Second => vk::CullModeFlags::NONE,
+        }
+    }
+
+    fn depth(self) -> (DepthState, f32) {
+        match self {
+            LayerKind::BackFurthest => (DepthState { test: true, write: true, compare: vk::CompareOp::LESS }, 1.0),
+            _ => (DepthState::REVERSED_Z, 0.0),
+        }
+    }
+}
+
+/// One layer's targets, registered with the frame graph.
+pub struct Layer {
+    pub kind: LayerKind,
+    pub normal: Image,
+    pub depth: Image,
+    pub normal_id: ImageId,
+    pub depth_id: ImageId,
+}
+
+struct LayerPipeline {
+    pipeline: GraphicsPipeline,
+    framebuffer: Framebuffer,
+    clear_depth: f32,
+}
+
+/// The refractors' layers, drawn in one graph pass named `name`.
+pub struct RefractorLayers {
+    name: &'static str,
+    render_pass: RenderPass,
+    _set_layout: DescriptorSetLayout,
+    set: DescriptorSet,
+    _layout: PipelineLayout,
+    pipelines: Vec<LayerPipeline>,
+    pub layers: Vec<Layer>,
+    /// The draws of dielectric objects.
+    draws: Vec<Draw>,
+    /// Per scene vertex d_N (Wyman) or a placeholder; bound at BINDING_REFR_DN.
+    _d_n: Buffer,
+    reads_gbuffer_depth: bool,
+}
+
+/// The draws whose material is a dielectric.
+pub fn refractor_draws(scene: &Scene, gpu: &GpuScene) -> Vec<Draw> {
+    gpu.draws
+        .iter()
+        .filter(|d| matches!(scene.materials.get(d.material as usize), Some(Material::Dielectric { .. })))
+        .copied()
+        .collect()
+}
+
+impl RefractorLayers {
+    /// `d_n`: one f32 per scene vertex (in GpuScene's order), written to the layers' w.
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        ctx: &Arc<GpuContext>,
+        name: &'static str,
+        kinds: &[LayerKind],
+        d_n: Option<&[f32]>,
+        scene: &Scene,
+        gpu: &GpuScene,
+        graph: &mut FrameGraph,
+        frame_layout: &DescriptorSetLayout,
+        targets: &Targets,
+        nearest: &Sampler,
+    ) -> GpuResult<Self> {
+        let render_pass = RenderPass::new(
+            ctx,
+            name,
+            &RenderPassDesc {
+                colors: vec![Attachment { format: LAYER_FORMAT, clear: true }],
+                depth: Some(Attachment { format: DEPTH_FORMAT, clear: true }),
+                depth_read_only: false,
+            },
+        )?;
+        let set_layout = DescriptorSetLayout::new(
+            ctx,
+            name,
+            &[
+                (BINDING_REFR_DN, vk::DescriptorType::STORAGE_BUFFER, vk::ShaderStageFlags::VERTEX),
+                (BINDING_GBUF_DEPTH, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, vk::ShaderStageFlags::FRAGMENT),
+            ],
+            1,
+        )?;
+        // A placeholder of one float where the technique has no d_N (the shader never reads it).
+        let data: Vec<f32> = d_n.map(|d| d.to_vec()).filter(|d| !d.is_empty()).unwrap_or_else(|| vec![0.0]);
+        let d_n_buffer = Buffer::with_data(
+            ctx,
+            &format!("{name}_d_n"),
+            bytemuck::cast_slice(&data),
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+        )?;
+        let depth_layout = Access::FragmentSampled.info(true).layout;
+        let set = set_layout.allocate(
+            name,
+            &[
+                DescriptorWrite::Storage(BINDING_REFR_DN, &d_n_buffer),
+                DescriptorWrite::Sampled(BINDING_GBUF_DEPTH, targets.depth.view(), nearest, depth_layout),
+            ],
+        )?;
+        let layout = PipelineLayout::new(ctx, name, &[frame_layout, &set_layout], 0)?;
+        let has_d_n = u32::from(d_n.is_some());
+        use vk::ImageUsageFlags as U;
+        let mut layers = Vec::new();
+        let mut pipelines = Vec::new();
+        for (i, &kind) in kinds.iter().enumerate() {
+            let label = format!("{name}_{i}");
+            let normal = Image::new(
+                ctx,
+                &ImageDesc::d2(
+                    &format!("{label}_normal"),
+                    LAYER_FORMAT,
+                    targets.width,
+                    targets.height,
+                    U::COLOR_ATTACHMENT | U::SAMPLED | U::TRANSFER_SRC,
+                ),
+            )?;
+            let depth = Image::new(
+                ctx,
+                &ImageDesc::d2(
+                    &format!("{label}_depth"),
+                    DEPTH_FORMAT,
+                    targets.width,
+                    targets.height,
+                    U::DEPTH_STENCIL_ATTACHMENT | U::SAMPLED | U::TRANSFER_SRC,
+                ),
+            )?;
+            let (depth_state, clear_depth) = kind.depth();
+            let pipeline = GraphicsPipeline::new(
+                ctx,
+                &GraphicsPipelineDesc {
+                    name: &label,
+                    vertex_shader: "refraction/layers.vert",
+                    fragment_shader: "refraction/layers.frag",
+                    vertex: VertexLayout::Mesh,
+                    topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+                    cull: kind.cull(),
+                    depth: depth_state,
+                    blend: &[Blend::Off],
+                    specialization: &[kind.mode(), has_d_n],
+                },
+                &layout,
+                &render_pass,
+            )?;
+            let framebuffer =
+                Framebuffer::new(ctx, &label, &render_pass, &[normal.view(), depth.view()], targets.extent())?;
+            pipelines.push(LayerPipeline { pipeline, framebuffer, clear_depth });
+            layers.push(Layer {
+                kind,
+                normal_id: graph.register_image(&normal),
+                depth_id: graph.register_image(&depth),
+                normal,
+                depth,
+            });
+        }
+        Ok(RefractorLayers {
+            name,
+            render_pass,
+            _set_layout: set_layout,
+            set,
+            _layout: layout,
+            pipelines,
+            layers,
+            draws: refractor_draws(scene, gpu),
+            _d_n: d_n_buffer,
+            reads_gbuffer_depth: kinds.contains(&LayerKind::Second),
+        })
+    }
+
+    pub fn layer(&self, kind: LayerKind) -> Option<&Layer> {
+        self.layers.iter().find(|l| l.kind == kind)
+    }
+
+    pub fn record<'a>(
+        &'a self,
+        frame: &mut Frame<'_, 'a>,
+        scene: &'a GpuScene,
+        targets: &Targets,
+        frame_set: DescriptorSet,
+    ) {
+        let mut pass = frame.pass(self.name);
+        if self.reads_gbuffer_depth {
+            pass = pass.read(targets.depth_id, Access::FragmentSampled);
+        }
+        for l in &self.layers {
+            pass = pass.write(l.normal_id, Access::ColorAttachment).write(l.depth_id, Access::DepthAttachment);
+        }
+        pass.record(move |cmd| {
+            for p in &self.pipelines {
+                cmd.begin_render_pass(
+                    &self.render_pass,
+                    &p.framebuffer,
+                    &[Clear::Color([0.0; 4]), Clear::Depth(p.clear_depth)],
+                );
+                cmd.bind_graphics(&p.pipeline, &[frame_set, self.set]);
+                cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
+                for d in &self.draws {
+                    cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
+                }
+                cmd.end_render_pass();
+            }
+        });
+    }
+}
+
+/// A debug target of a shading pass: RGBA32F, cleared to 0 each frame.
+pub struct DebugTarget {
+    pub name: String,
+    pub image: Image,
+    pub id: ImageId,
+}
+
+/// The full-screen shading of a refraction technique: reads the G-buffer and the layers,
+/// overwrites the dielectric pixels of the HDR target (RT0), and with `debug` also writes
+/// P2 (RT1: xyz world position, w = exit kind, 0 where none) and T2 (RT2: xyz unit
+/// direction) into [`DebugTarget`]s named `<name>_p2` and `<name>_t2`.
+pub struct ShadePass {
+    name: &'static str,
+    render_pass: RenderPass,
+    _set_layout: DescriptorSetLayout,
+    set: DescriptorSet,
+    _layout: PipelineLayout,
+    pipeline: GraphicsPipeline,
+    framebuffer: Framebuffer,
+    reads: Vec<ImageId>,
+    hdr: ImageId,
+    pub debug: Vec<DebugTarget>,
+}
+
+pub struct ShadeDesc<'a> {
+    pub name: &'static str,
+    pub fragment_shader: &'a str,
+    /// Set-1 inputs: (binding, image, graph id), sampled with the nearest sampler.
+    pub inputs: &'a [(u32, &'a Image, ImageId)],
+    /// Specialisation constants 1, 2, ... (constant 0 is the debug flag).
+    pub specialization: &'a [u32],
+    pub debug: bool,
+}
+
+impl ShadePass {
+    pub fn new(
+        ctx: &Arc<GpuContext>,
+        desc: &ShadeDesc<'_>,
+        graph: &mut FrameGraph,
+        frame_layout: &DescriptorSetLayout,
+        targets: &Targets,
+        nearest: &Sampler,
+    ) -> GpuResult<Self> {
+        let name = desc.name;
+        let mut colors = vec![Attachment { format: HDR_FORMAT, clear: false }];
+        let mut debug = Vec::new();
+        if desc.debug {
+            for what in ["p2", "t2"] {
+                let target = format!("{name}_{what}");
+                let image = Image::new(
+                    ctx,
+                    &ImageDesc::d2(
+                        &target,
+                        HDR_FORMAT,
+                        targets.width,
+                        targets.height,
+                        vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC,
+                    ),
+                )?;
+                colors.push(Attachment { format: HDR_FORMAT, clear: true });
+                debug.push(DebugTarget { name: target, id: graph.register_image(&image), image });
+            }
+        }
+        let render_pass = RenderPass::new(ctx, name, &RenderPassDesc { colors, depth: None, depth_read_only: false })?;
+        let bindings: Vec<_> = desc
+            .inputs
+            .iter()
+            .map(|&(b, _, _)| (b, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, vk::ShaderStageFlags::FRAGMENT))
+            .collect();
+        let set_layout = DescriptorSetLayout::new(ctx, name, &bindings, 1)?;
+        let writes: Vec<_> = desc
+            .inputs
+            .iter()
+            .map(|&(b, image, _)| {
+                let layout = Access::FragmentSampled.info(image.aspect().contains(vk::ImageAspectFlags::DEPTH)).layout;
+                DescriptorWrite::Sampled(b, image.view(), nearest, layout)
+            })
+            .collect();
+        let set = set_layout.allocate(name, &writes)?;
+        let layout = PipelineLayout::new(ctx, name, &[frame_layout, &set_layout], 0)?;
+        let mut specialization = vec![u32::from(desc.debug)];
+        specialization.extend_from_slice(desc.specialization);
+        let blend = vec![Blend::Off; 1 + debug.len()];
+        let pipeline = GraphicsPipeline::new(
+            ctx,
+            &GraphicsPipelineDesc {
+                name,
+                vertex_shader: "common/fullscreen.vert",
+                fragment_shader: desc.fragment_shader,
+                vertex: VertexLayout::None,
+                topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+                cull: vk::CullModeFlags::NONE,
+                depth: DepthState::OFF,
+                blend: &blend,
+                specialization: &specialization,
+            },
+            &layout,
+            &render_pass,
+        )?;
+        let mut views = vec![targets.hdr.view()];
+        views.extend(debug.iter().map(|d| d.image.view()));
+        let framebuffer = Framebuffer::new(ctx, name, &render_pass, &views, targets.extent())?;
+        Ok(ShadePass {
+            name,
+            render_pass,
+            _set_layout: set_layout,
+            set,
+            _layout: layout,
+            pipeline,
+            framebuffer,
+            reads: desc.inputs.iter().map(|&(_, _, id)| id).collect(),
+            hdr: targets.hdr_id,
+            debug,
+        })
+    }
+
+    /// Add the pass to `frame`; `environment` is sampled through the frame set.
+    pub fn record<'a>(&'a self, frame: &mut Frame<'_, 'a>, environment: ImageId, frame_set: DescriptorSet) {
+        let mut pass = frame.pass(self.name).read(environment, Access::FragmentSampled);
+        for &id in &self.reads {
+            pass = pass.read(id, Access::FragmentSampled);
+        }
+        pass = pass.write(self.hdr, Access::ColorAttachment);
+        for d in &self.debug {
+            pass = pass.write(d.id, Access::ColorAttachment);
+        }
+        pass.record(move |cmd| {
+            let mut clears = vec![Clear::None];
+            clears.extend(self.debug.iter().map(|_| Clear::Color([0.0; 4])));
+            cmd.begin_render_pass(&self.render_pass, &self.framebuffer, &clears);
+            cmd.bind_graphics(&self.pipeline, &[frame_set, self.set]);
+            cmd.draw(3, 1);
+            cmd.end_render_pass();
+        });
+    }
+}

@@ -1,0 +1,624 @@
+//! prism's exact reference: a progressive path tracer with photon-mapped caustics in compute
+//! shaders (glsl/reference/), over the same scene data as the rasterised techniques.
+//!
+//! What it computes is SCENES.md's "light transport measured": every path with exactly one
+//! diffuse vertex. Camera paths (camera.comp) follow exact specular chains (mirror,
+//! conductor Fresnel, dielectric Fresnel chosen stochastically, Snell, total internal
+//! reflection, Beer-Lambert absorption, (n_i/n_t)^2 radiance scaling, per-channel ior) to
+//! the environment or to a diffuse surface, which takes direct light with exact shadow rays
+//! and environment light through specular chains. Caustics (light -> specular chain ->
+//! diffuse) come from stochastic progressive photon mapping (photons.comp, gather.comp),
+//! which converges as the photon count grows. Triangles are found through a SAH BVH built on
+//! the CPU ([`bvh`]); spheres are intersected exactly.
+//!
+//! Graded-index media (the eikonal issue) will add an RK4 integration of the ray equation
+//! between surface hits inside volumes; the hook is `specular_step` in
+//! glsl/reference/scene.glsl, the one place where a path crosses a medium.
+pub mod bvh;
+
+use std::sync::Arc;
+
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Vec3};
+
+use crate::gpu::{
+    vk, Access, Buffer, ComputePipeline, DescriptorSet, DescriptorSetLayout, DescriptorWrite, GpuContext,
+    MemoryLocation, PipelineLayout, Sampler, SamplerDesc,
+};
+use crate::graph::{BufferId, FrameGraph};
+use crate::renderer::gpu_scene::GpuScene;
+use crate::renderer::RenderError;
+use crate::scene::{Analytic, Light, Material, Scene};
+use crate::*;
+
+use bvh::Bvh;
+
+/// How the reference is computed. The defaults give a converged image of the benchmark
+/// scenes at 512^2 in minutes on lavapipe.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct ReferenceSettings {
+    /// Camera samples per pixel (each also one photon-mapping iteration).
+    pub spp: u32,
+    /// Photons traced in all (spread over the `spp` iterations); 0 disables caustics.
+    pub photons: u64,
+    /// Specular interactions followed per path.
+    pub max_depth: u32,
+    pub seed: u32,
+    /// Initial photon gathering radius in metres; default 1% of the scene's radius.
+    pub radius: Option<f32>,
+    /// SPPM radius reduction alpha (Hachisuka et al. 2008 use 0.7; 2/3 is the usual choice).
+    pub alpha: f32,
+    /// Supersample each pixel's area instead of its centre.
+    pub jitter: bool,
+}
+
+impl Default for ReferenceSettings {
+    fn default() -> Self {
+        ReferenceSettings {
+            spp: 64,
+            photons: 1 << 22,
+            max_depth: 16,
+            seed: 1,
+            radius: None,
+            alpha: 2.0 / 3.0,
+            jitter: false,
+        }
+    }
+}
+
+impl ReferenceSettings {
+    pub fn validate(&self) -> Result<(), RenderError> {
+        let bad = |m: String| Err(RenderError::Limit(m));
+        if self.spp == 0 || self.spp > 1 << 20 {
+            return bad(format!("spp = {} must be in 1..=1048576", self.spp));
+        }
+        if self.photons > 1 << 34 {
+            return bad(format!("photons = {} is absurd (at most 2^34)", self.photons));
+        }
+        if self.max_depth > 1024 {
+            return bad(format!("max_depth = {} must be at most 1024", self.max_depth));
+        }
+        if !(self.alpha > 0.0 && self.alpha < 1.0) {
+            return bad(format!("alpha = {} must be in (0, 1)", self.alpha));
+        }
+        if let Some(r) = self.radius {
+            if !(r.is_finite() && r > 0.0) {
+                return bad(format!("radius = {r} must be a positive number of metres"));
+            }
+        }
+        Ok(())
+    }
+
+    /// Photons per iteration (the photon pass of each of the `spp` iterations).
+    pub fn photons_per_iteration(&self) -> u32 {
+        if self.photons == 0 {
+            0
+        } else {
+            (self.photons / self.spp as u64).clamp(1, u32::MAX as u64 / 4) as u32
+        }
+    }
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct RefLight {
+    position: [f32; 4],
+    intensity: [f32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct RefUniforms {
+    inv_view: [[f32; 4]; 4],
+    camera_pos: [f32; 4],
+    proj: [f32; 4],
+    dims: [u32; 4],
+    counts: [u32; 4],
+    photon: [u32; 4],
+    grid: [f32; 4],
+    lights: [RefLight; MAX_LIGHTS as usize],
+    targets: [[f32; 4]; REF_MAX_TARGETS as usize],
+}
+const _: () = assert!(
+    std::mem::size_of::<RefUniforms>() == 64 + 6 * 16 + 32 * MAX_LIGHTS as usize + 16 * REF_MAX_TARGETS as usize
+);
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct RefPush {
+    iteration: u32,
+    seed: u32,
+    mode: u32,
+    count: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+struct PixelState {
+    tau_n: [f32; 4],
+    vp_pos: [f32; 4],
+    vp_normal: [f32; 4],
+    vp_weight: [f32; 4],
+}
+
+const FLAG_DISPERSION: u32 = 1;
+const FLAG_JITTER: u32 = 2;
+
+/// Probe modes of glsl/reference/probe.comp (tests).
+#[derive(Clone, Copy, Debug)]
+pub enum Probe {
+    /// (o, d) -> (t_bvh, tri_bvh, t_brute, tri_brute).
+    Raycast = 0,
+    /// (o, d) -> final (o, outcome), (d, bounces), throughput; always transmitting.
+    SpecularPath = 1,
+    /// (cos_i, eta), eta_rgb, k_rgb -> F_dielectric, F_conductor rgb.
+    Fresnel = 2,
+}
+
+/// The reference renderer for one scene. Create it, `run` iterations, read the `image`.
+pub struct Reference {
+    settings: ReferenceSettings,
+    width: u32,
+    height: u32,
+    iterations_done: u32,
+    photons_per_iteration: u32,
+    _set_layout: DescriptorSetLayout,
+    set: DescriptorSet,
+    _layout: PipelineLayout,
+    camera: ComputePipeline,
+    photons: ComputePipeline,
+    gather: ComputePipeline,
+    probe: ComputePipeline,
+    graph: FrameGraph,
+    accum: Buffer,
+    pixels: Buffer,
+    photon_buffer: Buffer,
+    grid: Buffer,
+    counters: Buffer,
+    debug: Buffer,
+    ids: [BufferId; 6],
+    _static: Vec<Buffer>,
+    _sampler: Sampler,
+    _scene: GpuScene,
+    has_photons: bool,
+    ctx: Arc<GpuContext>,
+}
+
+/// Bounding sphere (centre, radius) of an object's vertices.
+fn bounding_sphere(positions: &[Vec3]) -> (Vec3, f32) {
+    let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+    for &p in positions {
+        lo = lo.min(p);
+        hi = hi.max(p);
+    }
+    let c = (lo + hi) * 0.5;
+    let r = positions.iter().map(|p| p.distance(c)).fold(0.0f32, f32::max);
+    (c, r)
+}
+
+impl Reference {
+    pub fn new(ctx: &Arc<GpuContext>, scene: &Scene, settings: &ReferenceSettings) -> Result<Reference, RenderError> {
+        settings.validate()?;
+        let (width, height) = (scene.camera.width, scene.camera.height);
+        if width == 0 || height == 0 {
+            return Err(RenderError::Limit(format!("image size {width}x{height} must not be zero")));
+        }
+        let mut graph = FrameGraph::new();
+        let gpu_scene = GpuScene::new(ctx, scene, &mut graph, 1)?;
+
+        // Triangles of every object that is not an exact sphere, with global vertex indices.
+        let mut tris: Vec<[u32; 4]> = Vec::new();
+        let mut corners: Vec<[Vec3; 3]> = Vec::new();
+        let mut spheres: Vec<[f32; 8]> = Vec::new();
+        let mut vertex_base = 0u32;
+        for (oi, o) in scene.objects.iter().enumerate() {
+            match o.analytic {
+                Some(Analytic::Sphere { center, radius }) => {
+                    let info = f32::from_bits(oi as u32);
+                    spheres.push([center.x, center.y, center.z, radius, info, 0.0, 0.0, 0.0]);
+                }
+                None => {
+                    for t in o.mesh.indices.chunks_exact(3) {
+                        tris.push([vertex_base + t[0], vertex_base + t[1], vertex_base + t[2], oi as u32]);
+                        corners.push([0, 1, 2].map(|k| o.mesh.positions[t[k] as usize]));
+                    }
+                }
+            }
+            vertex_base += o.mesh.positions.len() as u32;
+        }
+        let bvh = Bvh::build(&corners);
+        let ordered: Vec<[u32; 4]> = bvh.order.iter().map(|&i| tris[i as usize]).collect();
+        let objects: Vec<u32> = scene.objects.iter().map(|o| o.material as u32).collect();
+
+        // Photon targets: bounding spheres of the specular objects.
+        let mut targets = Vec::new();
+        for o in &scene.objects {
+            if scene.materials[o.material].is_specular() {
+                let (c, r) = match o.analytic {
+                    Some(Analytic::Sphere { center, radius }) => (center, radius),
+                    None => bounding_sphere(&o.mesh.positions),
+                };
+                // A little margin so that the cone contains the whole tessellated object.
+                targets.push([c.x, c.y, c.z, r * 1.001 + 1e-6]);
+            }
+        }
+        if targets.len() > REF_MAX_TARGETS as usize {
+            return Err(RenderError::Limit(format!(
+                "the scene has {} specular objects; the reference aims photons at most {REF_MAX_TARGETS} (REF_MAX_TARGETS)",
+                targets.len()
+            )));
+        }
+        let has_photons = settings.photons > 0 && !targets.is_empty() && !scene.lights.is_empty();
+        let photons_per_iteration = if has_photons { settings.photons_per_iteration() } else { 0 };
+        let dispersion = scene
+            .materials
+            .iter()
+            .any(|m| matches!(m, Material::Dielectric { ior, .. } if ior.x != ior.y || ior.y != ior.z));
+
+        let scene_radius = gpu_scene.bounds_radius.max(1e-20);
+        let radius = settings.radius.unwrap_or(0.01 * scene_radius);
+        let table = (2 * photons_per_iteration.max(1)).next_power_of_two().max(1 << 12);
+        let cam = &scene.camera;
+        let tan_y = (cam.vfov_deg.to_radians() * 0.5).tan();
+        let mut uniforms = RefUniforms {
+            inv_view: cam.view().inverse().to_cols_array_2d(),
+            camera_pos: cam.position.extend(1.0).to_array(),
+            // The ray epsilon scales with the scene, so that 1e-3 and 1e4 scenes behave alike.
+            proj: [tan_y * cam.aspect(), tan_y, scene_radius * 2e-5, scene_radius],
+            dims: [width, height, scene.lights.len() as u32, spheres.len() as u32],
+            counts: [ordered.len() as u32, bvh.nodes.len() as u32, targets.len() as u32, settings.max_depth],
+            photon: [
+                photons_per_iteration,
+                photons_per_iteration.max(1),
+                table,
+                (dispersion as u32 * FLAG_DISPERSION) | (settings.jitter as u32 * FLAG_JITTER),
+            ],
+            grid: [radius, radius, settings.alpha, 0.0],
+            lights: [RefLight::zeroed(); MAX_LIGHTS as usize],
+            targets: [[0.0; 4]; REF_MAX_TARGETS as usize],
+        };
+        for (i, l) in scene.lights.iter().enumerate() {
+            uniforms.lights[i] = match l {
+                Light::Point { position, intensity } => RefLight {
+                    position: position.extend(LIGHT_POINT as f32).to_array(),
+                    intensity: intensity.extend(0.0).to_array(),
+                },
+                Light::Directional { direction, irradiance } => RefLight {
+                    position: direction.normalize().extend(LIGHT_DIRECTIONAL as f32).to_array(),
+                    intensity: irradiance.extend(0.0).to_array(),
+                },
+            };
+        }
+        for (i, t) in targets.iter().enumerate() {
+            uniforms.targets[i] = *t;
+        }
+
+        use vk::BufferUsageFlags as U;
+        let storage = |name: &str, data: &[u8]| Buffer::with_data(ctx, name, data, U::STORAGE_BUFFER);
+        let ubo = Buffer::with_data(ctx, "reference_uniforms", bytemuck::bytes_of(&uniforms), U::UNIFORM_BUFFER)?;
+        let triangles = storage("reference_triangles", bytemuck::cast_slice(&ordered))?;
+        let nodes = storage("reference_bvh", bytemuck::cast_slice(&bvh.nodes))?;
+        let sphere_buf = storage("reference_spheres", bytemuck::cast_slice(&spheres))?;
+        let object_buf = storage("reference_objects", bytemuck::cast_slice(&objects))?;
+        let pixels_n = (width * height) as usize;
+        let accum =
+            Buffer::new(ctx, "reference_accum", (pixels_n * 16) as u64, U::STORAGE_BUFFER, MemoryLocation::CpuToGpu)?;
+        let mut pixels =
+            Buffer::new(ctx, "reference_pixels", (pixels_n * 64) as u64, U::STORAGE_BUFFER, MemoryLocation::CpuToGpu)?;
+        let initial = PixelState { vp_pos: [0.0, 0.0, 0.0, radius], ..Default::default() };
+        pixels.write(0, bytemuck::cast_slice(&vec![initial; pixels_n]));
+        let mut accum = accum;
+        accum.write(0, &vec![0u8; pixels_n * 16]);
+        let photon_buffer = Buffer::new(
+            ctx,
+            "reference_photons",
+            photons_per_iteration.max(1) as u64 * 48,
+            U::STORAGE_BUFFER,
+            MemoryLocation::GpuOnly,
+        )?;
+        let grid = Buffer::new(
+            ctx,
+            "reference_grid",
+            table as u64 * 4,
+            U::STORAGE_BUFFER | U::TRANSFER_DST,
+            MemoryLocation::GpuOnly,
+        )?;
+        let counters =
+            Buffer::new(ctx, "reference_counters", 16, U::STORAGE_BUFFER | U::TRANSFER_DST, MemoryLocation::GpuOnly)?;
+        let debug = Buffer::new(
+            ctx,
+            "reference_debug",
+            (photons_per_iteration.max(1) as u64).max(3 * 4096) * 16,
+            U::STORAGE_BUFFER,
+            MemoryLocation::CpuToGpu,
+        )?;
+
+        let sampler = Sampler::new(ctx, "reference_latlong", SamplerDesc::LATLONG)?;
+        let c = vk::ShaderStageFlags::COMPUTE;
+        let sb = vk::DescriptorType::STORAGE_BUFFER;
+        let set_layout = DescriptorSetLayout::new(
+            ctx,
+            "reference",
+            &[
+                (REF_BINDING_UNIFORMS, vk::DescriptorType::UNIFORM_BUFFER, c),
+                (REF_BINDING_MATERIALS, sb, c),
+                (REF_BINDING_ENVIRONMENT, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, c),
+                (REF_BINDING_VERTICES, sb, c),
+                (REF_BINDING_TRIANGLES, sb, c),
+                (REF_BINDING_NODES, sb, c),
+                (REF_BINDING_SPHERES, sb, c),
+                (REF_BINDING_OBJECTS, sb, c),
+                (REF_BINDING_ACCUM, sb, c),
+                (REF_BINDING_PIXELS, sb, c),
+                (REF_BINDING_PHOTONS, sb, c),
+                (REF_BINDING_GRID, sb, c),
+                (REF_BINDING_COUNTERS, sb, c),
+                (REF_BINDING_DEBUG, sb, c),
+            ],
+            1,
+        )?;
+        let set = set_layout.allocate(
+            "reference",
+            &[
+                DescriptorWrite::Uniform(REF_BINDING_UNIFORMS, &ubo),
+                DescriptorWrite::Storage(REF_BINDING_MATERIALS, &gpu_scene.materials),
+                DescriptorWrite::Sampled(
+                    REF_BINDING_ENVIRONMENT,
+                    gpu_scene.environment.view(),
+                    &sampler,
+                    vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                ),
+                DescriptorWrite::Storage(REF_BINDING_VERTICES, &gpu_scene.vertices),
+                DescriptorWrite::Storage(REF_BINDING_TRIANGLES, &triangles),
+                DescriptorWrite::Storage(REF_BINDING_NODES, &nodes),
+                DescriptorWrite::Storage(REF_BINDING_SPHERES, &sphere_buf),
+                DescriptorWrite::Storage(REF_BINDING_OBJECTS, &object_buf),
+                DescriptorWrite::Storage(REF_BINDING_ACCUM, &accum),
+                DescriptorWrite::Storage(REF_BINDING_PIXELS, &pixels),
+                DescriptorWrite::Storage(REF_BINDING_PHOTONS, &photon_buffer),
+                DescriptorWrite::Storage(REF_BINDING_GRID, &grid),
+                DescriptorWrite::Storage(REF_BINDING_COUNTERS, &counters),
+                DescriptorWrite::Storage(REF_BINDING_DEBUG, &debug),
+            ],
+        )?;
+        let layout = PipelineLayout::new(ctx, "reference", &[&set_layout], std::mem::size_of::<RefPush>() as u32)?;
+        let camera = ComputePipeline::new(ctx, "reference_camera", "reference/camera.comp", &layout, &[])?;
+        let photons = ComputePipeline::new(ctx, "reference_photons", "reference/photons.comp", &layout, &[])?;
+        let gather = ComputePipeline::new(ctx, "reference_gather", "reference/gather.comp", &layout, &[])?;
+        let probe = ComputePipeline::new(ctx, "reference_probe", "reference/probe.comp", &layout, &[])?;
+        let ids = [
+            graph.register_buffer(&accum),
+            graph.register_buffer(&pixels),
+            graph.register_buffer(&photon_buffer),
+            graph.register_buffer(&grid),
+            graph.register_buffer(&counters),
+            graph.register_buffer(&debug),
+        ];
+        Ok(Reference {
+            settings: settings.clone(),
+            width,
+            height,
+            iterations_done: 0,
+            photons_per_iteration,
+            _set_layout: set_layout,
+            set,
+            _layout: layout,
+            camera,
+            photons,
+            gather,
+            probe,
+            graph,
+            accum,
+            pixels,
+            photon_buffer,
+            grid,
+            counters,
+            debug,
+            ids,
+            _static: vec![ubo, triangles, nodes, sphere_buf, object_buf],
+            _sampler: sampler,
+            _scene: gpu_scene,
+            has_photons,
+            ctx: ctx.clone(),
+        })
+    }
+
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+    pub fn iterations_done(&self) -> u32 {
+        self.iterations_done
+    }
+    pub fn photons_per_iteration(&self) -> u32 {
+        self.photons_per_iteration
+    }
+
+    /// Run `count` more iterations (camera sample + photon pass + gather each) in one
+    /// submission.
+    pub fn run(&mut self, count: u32) -> Result<(), RenderError> {
+        let pixel_groups = (self.width * self.height).div_ceil(REF_WORKGROUP);
+        let photon_groups = self.photons_per_iteration.div_ceil(REF_WORKGROUP);
+        let [accum, pixels, photons, grid, counters, debug] = self.ids;
+        let start = self.iterations_done;
+        let Reference {
+            graph,
+            camera,
+            photons: photon_pipe,
+            gather,
+            set,
+            grid: grid_buf,
+            counters: counter_buf,
+            settings,
+            has_photons,
+            ..
+        } = self;
+        let (camera, photon_pipe, gather, grid_buf, counter_buf) =
+            (&*camera, &*photon_pipe, &*gather, &*grid_buf, &*counter_buf);
+        let set = *set;
+        let seed = settings.seed;
+        let has_photons = *has_photons;
+        self.ctx.one_shot(|cmd| {
+            let mut frame = graph.frame();
+            for it in start..start + count {
+                let push = RefPush { iteration: it, seed, mode: 0, count: 0 };
+                frame
+                    .pass("reference_camera")
+                    .write_buffer(accum, Access::ComputeWrite)
+                    .write_buffer(pixels, Access::ComputeWrite)
+                    .record(move |cmd| {
+                        cmd.bind_compute(camera, &[set]);
+                        cmd.push_compute(camera, &push);
+                        cmd.dispatch(pixel_groups, 1, 1);
+                    });
+                if has_photons {
+                    frame
+                        .pass("reference_clear_grid")
+                        .write_buffer(grid, Access::TransferWrite)
+                        .write_buffer(counters, Access::TransferWrite)
+                        .record(|cmd| {
+                            cmd.fill_buffer(grid_buf, u32::MAX);
+                            cmd.fill_buffer(counter_buf, 0);
+                        });
+                    frame
+                        .pass("reference_photons")
+                        .write_buffer(photons, Access::ComputeWrite)
+                        .write_buffer(grid, Access::ComputeWrite)
+                        .write_buffer(counters, Access::ComputeWrite)
+                        .write_buffer(debug, Access::ComputeWrite)
+                        .record(move |cmd| {
+                            cmd.bind_compute(photon_pipe, &[set]);
+                            cmd.push_compute(photon_pipe, &push);
+                            cmd.dispatch(photon_groups, 1, 1);
+                        });
+                    frame
+                        .pass("reference_gather")
+                        .read_buffer(photons, Access::ComputeRead)
+                        .read_buffer(grid, Access::ComputeRead)
+                        .write_buffer(pixels, Access::ComputeWrite)
+                        .record(move |cmd| {
+                            cmd.bind_compute(gather, &[set]);
+                            cmd.push_compute(gather, &push);
+                            cmd.dispatch(pixel_groups, 1, 1);
+                        });
+                }
+            }
+            frame.execute(cmd, None);
+            graph.access_now(
+                cmd,
+                &[],
+                &[(accum, Access::HostRead), (pixels, Access::HostRead), (debug, Access::HostRead)],
+            );
+        })?;
+        self.iterations_done += count;
+        Ok(())
+    }
+
+    /// Run every iteration of the settings, calling `progress(done, total)` after each batch.
+    /// Batches grow until one takes about half a second, so progress stays live.
+    pub fn run_all(&mut self, mut progress: impl FnMut(u32, u32)) -> Result<(), RenderError> {
+        let total = self.settings.spp;
+        let mut batch = 1u32;
+        while self.iterations_done < total {
+            let n = batch.min(total - self.iterations_done);
+            let t = std::time::Instant::now();
+            self.run(n)?;
+            progress(self.iterations_done, total);
+            if t.elapsed().as_secs_f32() < 0.25 {
+                batch = (batch * 2).min(64);
+            }
+        }
+        Ok(())
+    }
+
+    /// The converged estimate so far, linear RGBA f32 (row 0 at the top): the mean of the
+    /// camera paths plus the photon-mapped caustics tau / (pi R^2 iterations).
+    pub fn image(&self) -> Vec<f32> {
+        let accum: &[[f32; 4]] = bytemuck::cast_slice(self.accum.read());
+        let pixels: &[PixelState] = bytemuck::cast_slice(self.pixels.read());
+        let k = self.iterations_done.max(1) as f32;
+        let mut out = Vec::with_capacity(accum.len() * 4);
+        for (a, p) in accum.iter().zip(pixels) {
+            let n = a[3].max(1.0);
+            let r = p.vp_pos[3];
+            let caustic =
+                if self.iterations_done > 0 && r > 0.0 { 1.0 / (std::f32::consts::PI * r * r * k) } else { 0.0 };
+            for c in 0..3 {
+                let v = a[c] / n + p.tau_n[c] * caustic;
+                out.push(if v.is_finite() { v } else { 0.0 });
+            }
+            out.push(1.0);
+        }
+        out
+    }
+
+    /// The caustic part alone (for tests of convergence and energy).
+    pub fn caustic_image(&self) -> Vec<f32> {
+        let pixels: &[PixelState] = bytemuck::cast_slice(self.pixels.read());
+        let k = self.iterations_done.max(1) as f32;
+        pixels
+            .iter()
+            .flat_map(|p| {
+                let r = p.vp_pos[3];
+                let s =
+                    if r > 0.0 && self.iterations_done > 0 { 1.0 / (std::f32::consts::PI * r * r * k) } else { 0.0 };
+                [p.tau_n[0] * s, p.tau_n[1] * s, p.tau_n[2] * s, 1.0]
+            })
+            .collect()
+    }
+
+    /// Number of non-finite values in every buffer the reference accumulates into (the
+    /// per-pixel sums and the photon-mapping state): the stability tests want zero.
+    pub fn non_finite_values(&self) -> usize {
+        let f: &[f32] = bytemuck::cast_slice(self.accum.read());
+        let p: &[f32] = bytemuck::cast_slice(self.pixels.read());
+        let d: &[f32] = bytemuck::cast_slice(self.debug.read());
+        f.iter().chain(p).chain(&d[..4 * self.photons_per_iteration as usize]).filter(|v| !v.is_finite()).count()
+    }
+
+    /// (flux rgb, outcome) of every photon of the last iteration (PHOTON_* outcomes).
+    pub fn photon_outcomes(&self) -> Vec<[f32; 4]> {
+        let all: &[[f32; 4]] = bytemuck::cast_slice(self.debug.read());
+        all[..self.photons_per_iteration as usize].to_vec()
+    }
+
+    /// Run the probe kernel on records of 3 vec4s (see glsl/reference/probe.comp); tests.
+    pub fn probe(&mut self, mode: Probe, records: &[[[f32; 4]; 3]]) -> Result<Vec<[[f32; 4]; 3]>, RenderError> {
+        let capacity = self.debug.size as usize / 48;
+        let mut out = Vec::with_capacity(records.len());
+        for chunk in records.chunks(capacity.max(1)) {
+            self.debug.write(0, bytemuck::cast_slice(chunk));
+            let debug = self.ids[5];
+            let (graph, probe, set) = (&mut self.graph, &self.probe, self.set);
+            let push = RefPush { iteration: 0, seed: 0, mode: mode as u32, count: chunk.len() as u32 };
+            self.ctx.one_shot(|cmd| {
+                let mut frame = graph.frame();
+                frame.pass("reference_probe").write_buffer(debug, Access::ComputeWrite).record(move |cmd| {
+                    cmd.bind_compute(probe, &[set]);
+                    cmd.push_compute(probe, &push);
+                    cmd.dispatch((chunk.len() as u32).div_ceil(REF_WORKGROUP), 1, 1);
+                });
+                frame.execute(cmd, None);
+                graph.access_now(cmd, &[], &[(debug, Access::HostRead)]);
+            })?;
+            let data: &[[[f32; 4]; 3]] = bytemuck::cast_slice(&self.debug.read()[..chunk.len() * 48]);
+            out.extend_from_slice(data);
+        }
+        Ok(out)
+    }
+}
+
+/// The camera's view matrix (re-exported for tests that project points).
+pub fn view_matrix(scene: &Scene) -> Mat4 {
+    scene.camera.view()
+}
+
+impl Drop for Reference {
+    fn drop(&mut self) {
+        // Pipelines and layouts are destroyed immediately: the GPU must be idle first.
+        let _ = self.ctx.wait_idle();
+        let _ = (&self.photon_buffer, &self.grid, &self.counters);
+    }
+}

@@ -1,0 +1,212 @@
+//! Typed, validated parameters of the refraction techniques: the `[render.wyman]` and
+//! `[render.hu_qin]` tables (docs/scene-format.md lists every key with its default).
+//!
+//! The scene loader checks a table when it reads it, so that a misspelt key or an absurd
+//! value is an error naming `file:line` or the `--set` that put it there; the passes parse
+//! the same table again into these structs (cannot fail after loading).
+
+use super::RenderSettings;
+
+/// A parameter that is unknown or out of range: the key (under `render.<technique>.`), what
+/// is wrong, and what to do.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ParamError {
+    pub key: String,
+    pub message: String,
+    pub hint: String,
+}
+
+impl std::fmt::Display for ParamError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}\n  hint: {}", self.message, self.hint)
+    }
+}
+
+/// Which surface Wyman 2005 (§3.2) refracts through the second time on a concave object.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BackSurface {
+    /// The surface furthest from the eye (yellow point of Fig. 2): shows the geometry users
+    /// expect on objects of high depth complexity.
+    Furthest,
+    /// The second surface from the eye, found by depth peeling (black point of Fig. 2):
+    /// smoother, ignores more distant surfaces.
+    Second,
+}
+
+/// `[render.wyman]`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WymanParams {
+    pub back_surface: BackSurface,
+    /// Also write P2 and T2 to the debug targets `refraction_wyman_p2` / `_t2`.
+    pub debug: bool,
+}
+
+impl Default for WymanParams {
+    fn default() -> Self {
+        WymanParams { back_surface: BackSurface::Furthest, debug: false }
+    }
+}
+
+/// `[render.hu_qin]`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HuQinParams {
+    /// Binary-search steps for the dividing pixel p_e (Hu & Qin 2007, Fig. 7; "eight steps
+    /// ... are sufficient").
+    pub search_steps: u32,
+    /// Convergence tolerance of the d_T iteration (Fig. 9), as a fraction of the eye's
+    /// distance to P1, so that it means the same at every scene scale.
+    pub tolerance: f32,
+    /// Upper bound on the d_T iterations (Fig. 9 loops until the tolerance is met).
+    pub max_iterations: u32,
+    /// Section 4's acceleration: assume a back-facing exit, and decide "front-facing" only
+    /// when P2 leaves the refractor's silhouette (skips the binary search).
+    pub assume_back_facing: bool,
+    /// Also write P2 and T2 to the debug targets `refraction_hu_qin_p2` / `_t2`.
+    pub debug: bool,
+}
+
+impl Default for HuQinParams {
+    fn default() -> Self {
+        HuQinParams { search_steps: 8, tolerance: 1e-4, max_iterations: 32, assume_back_facing: false, debug: false }
+    }
+}
+
+fn unknown(technique: &str, key: &str, accepted: &[&str]) -> ParamError {
+    ParamError {
+        key: key.to_string(),
+        message: format!("unknown parameter `{key}` of render.{technique}"),
+        hint: format!("render.{technique} takes {}", accepted.join(", ")),
+    }
+}
+
+fn boolean(key: &str, v: &toml::Value) -> Result<bool, ParamError> {
+    v.as_bool().ok_or_else(|| ParamError {
+        key: key.to_string(),
+        message: format!("`{key}` must be true or false, not {v}"),
+        hint: "write a boolean without quotes".into(),
+    })
+}
+
+fn integer(key: &str, v: &toml::Value, lo: i64, hi: i64) -> Result<u32, ParamError> {
+    match v.as_integer() {
+        Some(n) if (lo..=hi).contains(&n) => Ok(n as u32),
+        _ => Err(ParamError {
+            key: key.to_string(),
+            message: format!("`{key}` must be an integer from {lo} to {hi}, not {v}"),
+            hint: "use a whole number in range".into(),
+        }),
+    }
+}
+
+fn number(key: &str, v: &toml::Value, lo: f64, hi: f64) -> Result<f32, ParamError> {
+    match v.as_float().or_else(|| v.as_integer().map(|i| i as f64)) {
+        Some(x) if x.is_finite() && x >= lo && x <= hi => Ok(x as f32),
+        _ => Err(ParamError {
+            key: key.to_string(),
+            message: format!("`{key}` must be a number from {lo:e} to {hi:e}, not {v}"),
+            hint: "use a finite number in range".into(),
+        }),
+    }
+}
+
+impl WymanParams {
+    pub const KEYS: &'static [&'static str] = &["back_surface", "debug"];
+
+    pub fn from_table(t: Option<&toml::Table>) -> Result<Self, ParamError> {
+        let mut p = WymanParams::default();
+        for (key, v) in t.into_iter().flatten() {
+            match key.as_str() {
+                "back_surface" => {
+                    p.back_surface = match v.as_str() {
+                        Some("furthest") => BackSurface::Furthest,
+                        Some("second") => BackSurface::Second,
+                        _ => {
+                            return Err(ParamError {
+                                key: key.clone(),
+                                message: format!("`back_surface` must be \"furthest\" or \"second\", not {v}"),
+                                hint: "Wyman 2005 §3.2: the furthest surface, or the second by depth peeling".into(),
+                            })
+                        }
+                    }
+                }
+                "debug" => p.debug = boolean(key, v)?,
+                _ => return Err(unknown("wyman", key, Self::KEYS)),
+            }
+        }
+        Ok(p)
+    }
+
+    pub fn from_settings(r: &RenderSettings) -> Result<Self, ParamError> {
+        Self::from_table(r.params.get("wyman"))
+    }
+}
+
+impl HuQinParams {
+    pub const KEYS: &'static [&'static str] =
+        &["search_steps", "tolerance", "max_iterations", "assume_back_facing", "debug"];
+
+    pub fn from_table(t: Option<&toml::Table>) -> Result<Self, ParamError> {
+        let mut p = HuQinParams::default();
+        for (key, v) in t.into_iter().flatten() {
+            match key.as_str() {
+                // 2^24 intervals already resolve far below a texel of the largest image.
+                "search_steps" => p.search_steps = integer(key, v, 1, 24)?,
+                "tolerance" => p.tolerance = number(key, v, 1e-7, 0.5)?,
+                "max_iterations" => p.max_iterations = integer(key, v, 1, 1024)?,
+                "assume_back_facing" => p.assume_back_facing = boolean(key, v)?,
+                "debug" => p.debug = boolean(key, v)?,
+                _ => return Err(unknown("hu_qin", key, Self::KEYS)),
+            }
+        }
+        Ok(p)
+    }
+
+    pub fn from_settings(r: &RenderSettings) -> Result<Self, ParamError> {
+        Self::from_table(r.params.get("hu_qin"))
+    }
+}
+
+/// Check the parameter table `[render.<technique>]` if the technique is one of these.
+pub fn check(technique: &str, t: &toml::Table) -> Result<(), ParamError> {
+    match technique {
+        "wyman" => WymanParams::from_table(Some(t)).map(|_| ()),
+        "hu_qin" => HuQinParams::from_table(Some(t)).map(|_| ()),
+        _ => Ok(()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn table(s: &str) -> toml::Table {
+        s.parse().unwrap()
+    }
+
+    #[test]
+    fn defaults_and_values() {
+        assert_eq!(HuQinParams::from_table(None).unwrap(), HuQinParams::default());
+        let p = HuQinParams::from_table(Some(&table("search_steps = 4\ntolerance = 0.01\nassume_back_facing = true")))
+            .unwrap();
+        assert_eq!((p.search_steps, p.tolerance, p.assume_back_facing), (4, 0.01, true));
+        let w = WymanParams::from_table(Some(&table("back_surface = \"second\""))).unwrap();
+        assert_eq!(w.back_surface, BackSurface::Second);
+    }
+
+    #[test]
+    fn bad_values_name_the_key() {
+        for (t, key) in [
+            ("search_steps = 0", "search_steps"),
+            ("search_steps = 100000", "search_steps"),
+            ("tolerance = -1.0", "tolerance"),
+            ("max_iterations = 0", "max_iterations"),
+            ("steps = 3", "steps"),
+        ] {
+            let e = HuQinParams::from_table(Some(&table(t))).unwrap_err();
+            assert_eq!(e.key, key, "{t}");
+            assert!(e.message.contains(key), "{e}");
+        }
+        let e = WymanParams::from_table(Some(&table("back_surface = \"first\""))).unwrap_err();
+        assert!(e.message.contains("back_surface"), "{e}");
+    }
+}

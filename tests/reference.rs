@@ -1,0 +1,329 @@
+//! The exact reference is right: its own GLSL (through the probe kernel) and its images
+//! against closed-form answers, the BVH against brute force, convergence and determinism.
+mod common;
+
+use glam::Vec3;
+use prism::reference::{Probe, Reference, ReferenceSettings};
+use prism::scene::{self, Scene};
+use prism::{PHOTON_DEPOSITED, PHOTON_DIRECT, PHOTON_ESCAPED, PHOTON_LOST, PHOTON_MISSED};
+
+fn settings(spp: u32, photons: u64) -> ReferenceSettings {
+    ReferenceSettings { spp, photons, ..ReferenceSettings::default() }
+}
+
+fn reference(ctx: &std::sync::Arc<prism::gpu::GpuContext>, s: &Scene, st: &ReferenceSettings) -> Reference {
+    Reference::new(ctx, s, st).expect("reference")
+}
+
+fn rec(o: Vec3, d: Vec3) -> [[f32; 4]; 3] {
+    [o.extend(0.0).to_array(), d.extend(0.0).to_array(), [0.0; 4]]
+}
+
+/// SplitMix64 for reproducible test inputs.
+fn rng(state: &mut u64) -> f32 {
+    *state = state.wrapping_add(0x9E3779B97F4A7C15);
+    let mut z = *state;
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58476D1CE4E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D049BB133111EB);
+    ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
+}
+
+#[test]
+fn gpu_bvh_traversal_agrees_exactly_with_brute_force_on_the_bunny() {
+    let ctx = common::context(false);
+    let s = common::scene("bunny_env", 16, &[]);
+    let mut r = reference(&ctx, &s, &settings(1, 0));
+    let mut state = 3u64;
+    let rays: Vec<_> = (0..3000)
+        .map(|_| {
+            let o = Vec3::new(rng(&mut state) - 0.5, rng(&mut state) - 0.5, rng(&mut state) - 0.5).normalize() * 3.0;
+            let t = Vec3::new(rng(&mut state) - 0.5, rng(&mut state) - 0.5, rng(&mut state) - 0.5) * 1.6;
+            rec(o, (t - o).normalize())
+        })
+        .collect();
+    let out = r.probe(Probe::Raycast, &rays).unwrap();
+    let mut hits = 0;
+    for (i, o) in out.iter().enumerate() {
+        let [t_bvh, tri_bvh, t_bf, tri_bf] = o[0];
+        assert_eq!(t_bvh, t_bf, "ray {i}: t differs");
+        if t_bvh >= 0.0 {
+            assert_eq!(tri_bvh.to_bits(), tri_bf.to_bits(), "ray {i}: triangle differs");
+            hits += 1;
+        }
+    }
+    assert!(hits > 800, "only {hits} hits");
+    drop(r);
+    common::assert_no_validation_errors(&ctx);
+}
+
+/// Analytic path through a sphere of radius R at the origin: entry by Snell, exit by Snell.
+fn sphere_exit(o: Vec3, d: Vec3, r: f32, n: f32) -> Option<(Vec3, Vec3)> {
+    let b = o.dot(d);
+    let c = o.dot(o) - r * r;
+    let disc = b * b - c;
+    if disc < 0.0 {
+        return None;
+    }
+    let p1 = o + (-b - disc.sqrt()) * d;
+    let n1 = p1 / r;
+    let t1 = refract(d, n1, 1.0 / n)?;
+    // Inside: the chord from p1 along t1 ends at p2 = p1 - 2 (p1 . t1) t1.
+    let p2 = p1 - 2.0 * p1.dot(t1) * t1;
+    let n2 = -p2 / r;
+    let t2 = refract(t1, n2, n)?;
+    Some((p2, t2))
+}
+
+/// GLSL's refract: eta = n_i / n_t, n facing the incoming ray.
+fn refract(i: Vec3, n: Vec3, eta: f32) -> Option<Vec3> {
+    let c = n.dot(i);
+    let k = 1.0 - eta * eta * (1.0 - c * c);
+    (k >= 0.0).then(|| (eta * i - (eta * c + k.sqrt()) * n).normalize())
+}
+
+#[test]
+fn ray_through_a_glass_sphere_matches_snell_twice() {
+    let ctx = common::context(false);
+    let s = common::scene("sphere_env", 16, &[]);
+    let mut r = reference(&ctx, &s, &settings(1, 0));
+    let cam = Vec3::new(0.0, 0.0, 4.0);
+    let mut records = Vec::new();
+    let mut expected = Vec::new();
+    for k in 0..200 {
+        // Rays from the camera at offsets up to 0.95 of the silhouette.
+        let a = k as f32 / 200.0 * std::f32::consts::TAU;
+        let rho = 0.95 * (k as f32 / 200.0).sqrt();
+        let target = Vec3::new(rho * a.cos(), rho * a.sin(), 0.0);
+        let d = (target - cam).normalize();
+        records.push(rec(cam, d));
+        expected.push(sphere_exit(cam, d, 1.0, 1.5));
+    }
+    let out = r.probe(Probe::SpecularPath, &records).unwrap();
+    for (k, (o, e)) in out.iter().zip(&expected).enumerate() {
+        let (p2, t2) = e.expect("analytic path");
+        assert_eq!(o[0][3] as u32, PHOTON_ESCAPED, "ray {k} should escape");
+        assert_eq!(o[1][3] as u32, 2, "ray {k}: two refractions");
+        // The probe's final origin is the exit point pushed off the surface by the epsilon.
+        let p = Vec3::new(o[0][0], o[0][1], o[0][2]);
+        let d = Vec3::new(o[1][0], o[1][1], o[1][2]);
+        // Tolerances: the origin offset (2e-5 scene radii) and f32 arithmetic near grazing
+        // incidence; a pixel of sphere_env at 512^2 spans 1.4e-3 rad, far more.
+        assert!(p.distance(p2) < 1e-3, "ray {k}: exit point {p} vs {p2}");
+        assert!(d.distance(t2) < 5e-4, "ray {k}: exit direction {d} vs {t2}");
+    }
+}
+
+#[test]
+fn total_internal_reflection_sets_in_at_the_critical_angle() {
+    let ctx = common::context(false);
+    let s = common::scene("sphere_env", 16, &[]);
+    let mut r = reference(&ctx, &s, &settings(1, 0));
+    // From the centre of the glass ball a ray meets the surface at normal incidence; start
+    // on the chord at distance h from the centre so that the angle of incidence is asin(h).
+    let critical = (1.0f32 / 1.5).asin();
+    let mut records = Vec::new();
+    for delta in [-0.01f32, 0.01] {
+        let h = (critical + delta).sin();
+        records.push(rec(Vec3::new(0.0, h, 0.0), Vec3::X));
+    }
+    let out = r.probe(Probe::SpecularPath, &records).unwrap();
+    // Below the critical angle: one refraction and out. Above: reflected inside, again and again.
+    assert_eq!(out[0][1][3] as u32, 1, "below critical: {:?}", out[0]);
+    assert!(out[1][1][3] as u32 > 1, "above critical: {:?}", out[1]);
+    // The transmitted ray obeys Snell: sin(theta_t) = 1.5 sin(theta_i).
+    let n = Vec3::new((1.0 - (critical - 0.01).sin().powi(2)).sqrt(), (critical - 0.01).sin(), 0.0);
+    let d = Vec3::new(out[0][1][0], out[0][1][1], out[0][1][2]);
+    let sin_t = d.cross(n).length();
+    assert!((sin_t - 1.5 * (critical - 0.01).sin()).abs() < 1e-4, "{sin_t}");
+}
+
+#[test]
+fn fresnel_matches_closed_forms() {
+    let ctx = common::context(false);
+    let s = common::scene("sphere_env", 16, &[]);
+    let mut r = reference(&ctx, &s, &settings(1, 0));
+    let n = 1.5f32;
+    let brewster = n.atan();
+    // Gold at 550 nm (Johnson & Christy 1972, via refractiveindex.info): n = 0.43, k = 2.45.
+    let (gn, gk) = (0.43f32, 2.45f32);
+    let records = [
+        [[1.0, 1.0 / n, 0.0, 0.0], [gn; 4], [gk; 4]],
+        [[brewster.cos(), 1.0 / n, 0.0, 0.0], [gn; 4], [gk; 4]],
+        [[0.3, n, 0.0, 0.0], [gn; 4], [gk; 4]], // from inside, beyond the critical angle
+    ];
+    let out = r.probe(Probe::Fresnel, &records).unwrap();
+    let normal = ((n - 1.0) / (n + 1.0)).powi(2);
+    assert!((out[0][0][0] - normal).abs() < 1e-6, "normal incidence: {}", out[0][0][0]);
+    // At Brewster's angle r_p = 0, so F = r_s^2 / 2 with r_s = (cos_i - n cos_t)/(cos_i + n cos_t).
+    let cos_t = (1.0 - (brewster.sin() / n).powi(2)).sqrt();
+    let rs = (brewster.cos() - n * cos_t) / (brewster.cos() + n * cos_t);
+    assert!((out[1][0][0] - 0.5 * rs * rs).abs() < 1e-6, "Brewster: {} vs {}", out[1][0][0], 0.5 * rs * rs);
+    assert_eq!(out[2][0][0], 1.0, "total internal reflection");
+    // Conductor at normal incidence: ((n-1)^2 + k^2) / ((n+1)^2 + k^2).
+    let f0 = ((gn - 1.0).powi(2) + gk * gk) / ((gn + 1.0).powi(2) + gk * gk);
+    assert!((out[0][1][0] - f0).abs() < 1e-5, "gold at normal incidence {} vs {f0}", out[0][1][0]);
+}
+
+const SLAB: &str = r#"
+[camera]
+position = [0, 0, 4]
+target = [0, 0, 0]
+width = 16
+height = 16
+[environment]
+type = "constant"
+radiance = 1
+[materials.tinted]
+type = "dielectric"
+ior = 1.5
+absorption = [0.5, 1.0, 2.0]
+[[objects]]
+material = "tinted"
+shape = "box"
+center = [0, 0, 0]
+size = [2, 2, 0.3]
+"#;
+
+#[test]
+fn beer_lambert_through_a_slab() {
+    let ctx = common::context(false);
+    let s = scene::load_str(SLAB, std::path::Path::new("slab.toml"), &[]).unwrap();
+    let mut r = reference(&ctx, &s, &settings(1, 0));
+    let out = r.probe(Probe::SpecularPath, &[rec(Vec3::new(0.1, 0.2, 4.0), -Vec3::Z)]).unwrap();
+    let beta = out[0][2];
+    for (c, sigma) in [0.5f32, 1.0, 2.0].iter().enumerate() {
+        // exp(-sigma d) with d the slab's thickness: the path length implied by the
+        // attenuation must be 0.3 m within 1e-4 m (ray origins are pushed off surfaces by
+        // 2e-5 scene radii, which shortens the path inside by about that much).
+        let d = -beta[c].ln() / sigma;
+        assert!(
+            (d - 0.3).abs() < 1e-4,
+            "channel {c}: attenuation {} implies {d} m, expected exp(-{sigma} * 0.3)",
+            beta[c]
+        );
+    }
+}
+
+/// caustic_sphere: the ball lens focuses the point light at the paraxial image distance
+/// from its centre, 1/s_i = 2(n-1)/(nR) - 1/s_o (s_o = 3.8, n = 1.5, R = 1: s_i = 2.478).
+#[test]
+fn ball_lens_focus_matches_the_paraxial_formula() {
+    let ctx = common::context(false);
+    // Without the floor, so that the rays leave the lens and can be intersected with the axis.
+    let s = common::scene("caustic_sphere", 16, &["objects.0.size=[0.001, 0.001]", "objects.0.center=[50, -50, 50]"]);
+    let mut r = reference(&ctx, &s, &settings(1, 0));
+    let light = Vec3::new(0.0, 5.0, 0.0);
+    let centre = Vec3::new(0.0, 1.2, 0.0);
+    let mut records = Vec::new();
+    for k in 1..=4 {
+        let h = 0.002 * k as f32; // heights at the lens, 0.2% to 0.8% of R: paraxial
+        records.push(rec(light, (centre + Vec3::new(h, 0.0, 0.0) - light).normalize()));
+    }
+    let out = r.probe(Probe::SpecularPath, &records).unwrap();
+    let (n, radius, s_o) = (1.5f32, 1.0f32, 3.8f32);
+    let s_i = 1.0 / (2.0 * (n - 1.0) / (n * radius) - 1.0 / s_o);
+    for o in &out {
+        let p = Vec3::new(o[0][0], o[0][1], o[0][2]);
+        let d = Vec3::new(o[1][0], o[1][1], o[1][2]);
+        // Where the exit ray crosses the axis x = 0.
+        let t = -p.x / d.x;
+        let y = p.y + t * d.y;
+        let distance = centre.y - y;
+        assert!((distance - s_i).abs() / s_i < 0.01, "focus at {distance}, paraxial {s_i}");
+    }
+}
+
+/// A non-absorbing glass ball: every photon aimed at it ends on the floor or escapes, and the
+/// flux on the floor plus the flux elsewhere equals the light's flux through the ball's solid
+/// angle, I * 2 pi (1 - cos theta), sin theta = R / distance.
+#[test]
+fn photon_energy_is_conserved_through_a_clear_sphere() {
+    let ctx = common::context(false);
+    let s = common::scene("caustic_sphere", 32, &[]);
+    let mut r = reference(&ctx, &s, &settings(1, 1 << 16));
+    r.run(1).unwrap();
+    let photons = r.photon_outcomes();
+    let (mut floor, mut elsewhere, mut lost, mut past) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
+    for p in &photons {
+        match p[3] as u32 {
+            PHOTON_DEPOSITED => floor += p[0] as f64,
+            PHOTON_ESCAPED => elsewhere += p[0] as f64,
+            PHOTON_LOST => lost += p[0] as f64,
+            // The target sphere is 0.1% larger than the ball (a margin for tessellated
+            // objects): a thin ring of photons passes it and lights the floor directly.
+            PHOTON_MISSED | PHOTON_DIRECT => past += p[0] as f64,
+            _ => unreachable!(),
+        }
+    }
+    let cone = |r: f64| {
+        let sin_t = r / 3.8;
+        50.0 * 2.0 * std::f64::consts::PI * (1.0 - (1.0 - sin_t * sin_t).sqrt())
+    };
+    let emitted = floor + elsewhere + lost + past;
+    assert!((emitted - cone(1.001)).abs() / cone(1.001) < 1e-4, "emitted {emitted} vs {}", cone(1.001));
+    // Flux through the ball itself: the light's flux through its solid angle, within the
+    // Monte Carlo error of the ring's share.
+    let through = floor + elsewhere + lost;
+    assert!((through - cone(1.0)).abs() / cone(1.0) < 2e-3, "through the ball {through} vs {}", cone(1.0));
+    assert!(lost / through < 1e-3, "too much flux lost at the depth limit: {lost}");
+    let total = through;
+    // Most of the light goes through the ball to the floor (Fresnel reflects about 8%).
+    assert!(floor / total > 0.8 && floor / total < 0.97, "floor fraction {}", floor / total);
+}
+
+/// Monte Carlo error falls as 1/sqrt(samples): against a 16x longer render, 4 spp has about
+/// sqrt((1/4 + 1/256) / (1/16 + 1/256)) = 1.96 times the RMSE of 16 spp.
+#[test]
+fn reference_converges_as_one_over_sqrt_samples() {
+    let ctx = common::context(false);
+    let s = common::scene("sphere_nearby", 32, &[]);
+    let render = |spp: u32, seed: u32| {
+        let st = ReferenceSettings { spp, photons: 0, seed, ..ReferenceSettings::default() };
+        let mut r = reference(&ctx, &s, &st);
+        r.run_all(|_, _| {}).unwrap();
+        r.image()
+    };
+    let truth = render(256, 1);
+    let e4 = prism::metrics::image::rmse_rgba(&render(4, 2), &truth);
+    let e16 = prism::metrics::image::rmse_rgba(&render(16, 3), &truth);
+    let ratio = e4 / e16;
+    assert!(ratio > 1.6 && ratio < 2.4, "RMSE 4 spp {e4}, 16 spp {e16}: ratio {ratio}");
+}
+
+/// More photons converge: the caustic's error against a long render falls with the photon
+/// count (progressive photon mapping is consistent).
+#[test]
+fn caustics_converge_with_more_photons() {
+    let ctx = common::context(false);
+    let s = common::scene("caustic_sphere", 32, &[]);
+    let caustic = |spp: u32, photons: u64, seed: u32| {
+        let st = ReferenceSettings { spp, photons, seed, ..ReferenceSettings::default() };
+        let mut r = reference(&ctx, &s, &st);
+        r.run_all(|_, _| {}).unwrap();
+        r.caustic_image()
+    };
+    let truth = caustic(64, 1 << 22, 1);
+    let errors: Vec<f64> = [(4, 1u64 << 14), (16, 1 << 16), (64, 1 << 18)]
+        .iter()
+        .map(|&(spp, n)| prism::metrics::image::rmse_rgba(&caustic(spp, n, 7), &truth))
+        .collect();
+    assert!(errors[0] > errors[1] && errors[1] > errors[2], "errors {errors:?}");
+    // The caustic is there: bright pixels under the ball.
+    assert!(truth.chunks(4).any(|p| p[0] > 1.0), "no caustic found");
+}
+
+#[test]
+fn same_seed_same_image() {
+    let ctx = common::context(false);
+    let s = common::scene("sphere_nearby", 24, &[]);
+    let run = || {
+        let mut r = reference(&ctx, &s, &settings(4, 1 << 14));
+        r.run_all(|_, _| {}).unwrap();
+        r.image()
+    };
+    let (a, b) = (run(), run());
+    // Camera paths are bit-identical; caustics may differ in the last bits, since photons in
+    // one grid cell are summed in the order the GPU inserted them.
+    let max_rel = a.iter().zip(&b).map(|(x, y)| (x - y).abs() / x.abs().max(1e-3)).fold(0.0f32, f32::max);
+    assert!(max_rel < 1e-4, "{max_rel}");
+}

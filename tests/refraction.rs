@@ -1,0 +1,319 @@
+//! The image-space refraction techniques (issue 4): Wyman 2005 (`wyman`) and Hu & Qin 2007
+//! (`hu_qin`) against the analytic sphere, stability at every ior, the ior-1 identity, and
+//! golden images.
+mod common;
+
+use common::{assert_golden, context, render, render_on, scene};
+use glam::Vec3;
+use prism::passes::wyman_distance::compute_distance_along_normals;
+use prism::renderer::Renderer;
+
+const TECHNIQUES: [&str; 2] = ["wyman", "hu_qin"];
+
+fn technique(t: &str) -> String {
+    format!("render.refraction={t}")
+}
+
+/// Wyman's d_N (§3.1) on shapes whose answer is known: every vertex of a sphere looks along
+/// its inverted normal through the centre, a chord of 2r; every vertex of a box looks
+/// straight across to the opposite face.
+#[test]
+fn d_n_matches_the_analytic_distance() {
+    let s = scene("sphere_env", 32, &["objects.0.radius=0.75"]);
+    let mesh = &s.objects[0].mesh;
+    let start = std::time::Instant::now();
+    let d = compute_distance_along_normals(mesh);
+    eprintln!("d_N of {} vertices, {} triangles: {:?}", d.len(), mesh.triangle_count(), start.elapsed());
+    assert_eq!(d.len(), mesh.positions.len());
+    // The tessellation is inscribed: a chord through the polygonal sphere is shorter than
+    // 2r by at most the sagitta of a facet, r (1 - cos(pi / segments)) on each side.
+    let segments = s.render.sphere_segments as f32;
+    let sag = 0.75 * (1.0 - (std::f32::consts::PI / segments).cos());
+    for (i, &x) in d.iter().enumerate() {
+        assert!(x <= 1.5 + 1e-4 && x >= 1.5 - 2.0 * sag - 1e-4, "vertex {i}: d_N {x}, expected 1.5");
+    }
+
+    // The bunny: every vertex finds a far side (the mesh is closed), in reasonable time.
+    let s = scene("bunny_env", 32, &[]);
+    let mesh = &s.objects[0].mesh;
+    let start = std::time::Instant::now();
+    let d = compute_distance_along_normals(mesh);
+    eprintln!("d_N of {} vertices, {} triangles: {:?}", d.len(), mesh.triangle_count(), start.elapsed());
+    let missing = d.iter().filter(|&&x| x <= 0.0).count();
+    assert!(missing * 100 <= d.len(), "{missing} of {} bunny vertices have no far side", d.len());
+
+    let text = r#"
+        [camera]
+        position = [0, 0, 5]
+        target = [0, 0, 0]
+        [environment]
+        type = "constant"
+        radiance = [1, 1, 1]
+        [materials.glass]
+        type = "dielectric"
+        ior = 1.5
+        [[objects]]
+        name = "box"
+        material = "glass"
+        shape = "box"
+        center = [0.5, -0.25, 0]
+        size = [2, 0.5, 1.25]
+    "#;
+    let s = prism::scene::load_str(text, std::path::Path::new("box.toml"), &[]).unwrap();
+    let mesh = &s.objects[0].mesh;
+    let d = compute_distance_along_normals(mesh);
+    for (k, n) in mesh.normals.iter().enumerate() {
+        let expected = n.abs().dot(Vec3::new(2.0, 0.5, 1.25));
+        assert!((d[k] - expected).abs() < 1e-4, "box vertex {k} normal {n}: d_N {}, expected {expected}", d[k]);
+    }
+}
+
+/// Exit point and direction of the camera ray through pixel (i, j) of `scene` after two
+/// refractions by the sphere at the origin of radius r and index ior (Snell at both
+/// interfaces); None if the ray misses or is totally internally reflected.
+fn analytic_exit(s: &prism::scene::Scene, i: u32, j: u32, r: f32, ior: f32) -> Option<(Vec3, Vec3)> {
+    let (o, d) = s.camera.primary_ray(i, j);
+    let hit = |o: Vec3, d: Vec3, far: bool| -> Option<f32> {
+        let b = o.dot(d);
+        let c = o.dot(o) - r * r;
+        let disc = b * b - c;
+        if disc < 0.0 {
+            return None;
+        }
+        Some(if far { -b + disc.sqrt() } else { -b - disc.sqrt() })
+    };
+    let refract = |i: Vec3, n: Vec3, eta: f32| -> Option<Vec3> {
+        let c = -i.dot(n);
+        let k = 1.0 - eta * eta * (1.0 - c * c);
+        (k >= 0.0).then(|| eta * i + (eta * c - k.sqrt()) * n)
+    };
+    let t = hit(o, d, false)?;
+    let p1 = o + t * d;
+    let t1 = refract(d, p1 / r, 1.0 / ior)?;
+    let p2 = p1 + hit(p1, t1, true)? * t1;
+    let t2 = refract(t1, -p2 / r, ior)?;
+    Some((p2, t2))
+}
+
+struct ExitErrors {
+    pixels: usize,
+    /// Largest |P2 - exact| over the pixels, in units of the pixel footprint at P2.
+    max_p2_pixels: f32,
+    /// Median of the same.
+    median_p2_pixels: f32,
+    /// Largest angle between T2 and the exact direction, degrees.
+    max_t2_deg: f32,
+    median_t2_deg: f32,
+}
+
+/// Render sphere_env with `technique` and its debug targets, and compare P2 and T2 with
+/// the analytic exit of the tessellated ball's exact sphere on every other pixel that sees
+/// it (pixels within 3 of the silhouette are left out: there a pixel's footprint covers
+/// the whole range of exits).
+fn exit_errors(technique: &str, size: u32, extra: &[&str]) -> ExitErrors {
+    let mut o = vec![format!("render.refraction={technique}"), format!("render.{technique}.debug=true")];
+    o.extend(extra.iter().map(|s| s.to_string()));
+    let refs: Vec<&str> = o.iter().map(|s| s.as_str()).collect();
+    let s = scene("sphere_env", size, &refs);
+    let ctx = context(false);
+    let mut r = Renderer::new(&ctx, &s).unwrap();
+    r.render_frame().unwrap();
+    let p2 = r.read_target(&format!("refraction_{technique}_p2")).unwrap().expect("debug P2 target");
+    let t2 = r.read_target(&format!("refraction_{technique}_t2")).unwrap().expect("debug T2 target");
+    drop(r);
+    common::assert_no_validation_errors(&ctx);
+    // Pixel footprint at distance z: 2 z tan(vfov / 2) / height.
+    let footprint =
+        |p: Vec3| (p - s.camera.position).length() * 2.0 * (s.camera.vfov_deg.to_radians() / 2.0).tan() / size as f32;
+    let (mut dp, mut dt) = (Vec::new(), Vec::new());
+    for j in (0..size).step_by(2) {
+        for i in (0..size).step_by(2) {
+            // Far enough inside the silhouette: the neighbours 3 pixels away also hit the ball.
+            let near_edge = [(-3, 0), (3, 0), (0, -3), (0, 3)].iter().any(|&(di, dj)| {
+                let (a, b) = (i as i32 + di, j as i32 + dj);
+                a < 0 || b < 0 || analytic_exit(&s, a as u32, b as u32, 1.0, 1.5).is_none()
+            });
+            let Some((p, t)) = analytic_exit(&s, i, j, 1.0, 1.5) else { continue };
+            if near_edge {
+                continue;
+            }
+            let k = 4 * (j * size + i) as usize;
+            assert!(p2[k + 3] > 0.0, "{technique}: pixel ({i}, {j}) has no exit");
+            let gp = Vec3::new(p2[k], p2[k + 1], p2[k + 2]);
+            let gt = Vec3::new(t2[k], t2[k + 1], t2[k + 2]);
+            dp.push((gp - p).length() / footprint(p));
+            dt.push(gt.normalize().dot(t).clamp(-1.0, 1.0).acos().to_degrees());
+        }
+    }
+    let stats = |v: &mut Vec<f32>| {
+        v.sort_by(f32::total_cmp);
+        (v[v.len() - 1], v[v.len() / 2])
+    };
+    let pixels = dp.len();
+    let (max_p2_pixels, median_p2_pixels) = stats(&mut dp);
+    let (max_t2_deg, median_t2_deg) = stats(&mut dt);
+    ExitErrors { pixels, max_p2_pixels, median_p2_pixels, max_t2_deg, median_t2_deg }
+}
+
+/// Hu & Qin's search (Fig. 7, 9) finds the exit of a convex object up to the layers'
+/// resolution: P2 within a pixel's footprint of the exact exit point (the layers are
+/// sampled at texel centres, so the surface found is the one seen through P2's texel: up
+/// to half a footprint laterally, and the tessellation adds a little).
+/// T2 then follows from N2 at that texel.
+#[test]
+fn hu_qin_exit_matches_the_analytic_sphere() {
+    let e = exit_errors("hu_qin", 64, &[]);
+    eprintln!(
+        "hu_qin: {} pixels, P2 error max {:.3} / median {:.3} px, T2 error max {:.3} / median {:.3} deg",
+        e.pixels, e.max_p2_pixels, e.median_p2_pixels, e.max_t2_deg, e.median_t2_deg
+    );
+    assert!(e.pixels > 100);
+    assert!(e.max_p2_pixels <= 1.0, "P2 off by {} pixel footprints", e.max_p2_pixels);
+    // N2 is the normal of P2's nearest texel: its surface point lies up to half a texel from
+    // P2 on screen, and near the silhouette one texel spans a wide arc of the back surface
+    // (at 64^2 about 1.3 degrees of normal per texel in the middle, several at the edge).
+    assert!(e.median_t2_deg < 1.5 && e.max_t2_deg < 6.0, "T2 off by {} / {} degrees", e.median_t2_deg, e.max_t2_deg);
+}
+
+/// Wyman's P2 is an approximation (d~ interpolated, §3.1): report its error, and bound it
+/// loosely (it must land on the right side of the ball).
+#[test]
+fn wyman_exit_is_near_the_analytic_sphere() {
+    let e = exit_errors("wyman", 64, &[]);
+    eprintln!(
+        "wyman: {} pixels, P2 error max {:.3} / median {:.3} px, T2 error max {:.3} / median {:.3} deg",
+        e.pixels, e.max_p2_pixels, e.median_p2_pixels, e.max_t2_deg, e.median_t2_deg
+    );
+    assert!(e.pixels > 100);
+    assert!(
+        e.median_p2_pixels < 3.0 && e.max_p2_pixels < 15.0,
+        "P2 error {} / {}",
+        e.median_p2_pixels,
+        e.max_p2_pixels
+    );
+    assert!(e.median_t2_deg < 5.0 && e.max_t2_deg < 30.0, "T2 error {} / {}", e.median_t2_deg, e.max_t2_deg);
+}
+
+fn assert_finite(what: &str, hdr: &[f32]) {
+    let bad = hdr.iter().filter(|v| !v.is_finite()).count();
+    assert_eq!(bad, 0, "{what}: {bad} non-finite HDR values");
+}
+
+/// Every technique renders the four refraction scenes with finite radiance and no
+/// validation error, and sphere_env at every ior from a bubble's 0.5 to 4 (1.0 and its
+/// neighbours exercise theta_t / theta_i -> 1 and the grazing limits).
+#[test]
+fn every_technique_is_finite_on_every_scene_and_ior() {
+    let ctx = context(false);
+    for t in TECHNIQUES {
+        for name in ["sphere_env", "bunny_env", "bubble_env", "sphere_nearby"] {
+            let r = render_on(&ctx, &scene(name, 64, &[&technique(t)]));
+            assert_finite(&format!("{t} {name}"), &r.hdr);
+            assert!(r.passes.iter().any(|p| p == &format!("refraction_{t}")), "{t} {name}: {:?}", r.passes);
+        }
+        for ior in ["0.5", "0.75", "0.999", "1.0", "1.0001", "1.5", "2.42", "4.0"] {
+            let set = format!("materials.glass.ior={ior}");
+            let r = render_on(&ctx, &scene("sphere_env", 64, &[&technique(t), &set]));
+            assert_finite(&format!("{t} ior {ior}"), &r.hdr);
+        }
+        // Dispersion (exact per-channel ior) and the other choices of each technique.
+        for extra in [
+            "materials.glass.ior=[1.45, 1.5, 1.55]",
+            "render.wyman.back_surface=\"second\"",
+            "render.hu_qin.assume_back_facing=true",
+        ] {
+            let r = render_on(&ctx, &scene("bunny_env", 64, &[&technique(t), extra]));
+            assert_finite(&format!("{t} {extra}"), &r.hdr);
+        }
+    }
+}
+
+/// With ior 1 nothing bends: each technique must show the environment as if the ball were
+/// not there (as tests/render_scenes.rs checks for the baseline), within the same RMSE.
+#[test]
+fn ior_one_shows_the_environment_unchanged() {
+    let ctx = context(false);
+    let without = render_on(&ctx, &scene("sphere_env", 64, &["objects.0.radius=0.001"]));
+    for t in TECHNIQUES {
+        let with = render_on(&ctx, &scene("sphere_env", 64, &[&technique(t), "materials.glass.ior=1.0"]));
+        let rmse = prism::metrics::image::rmse_rgba(&with.hdr, &without.hdr);
+        eprintln!("{t}: ior 1 RMSE {rmse}");
+        assert!(rmse < 0.02, "{t}: ior 1 should not distort the view: RMSE {rmse}");
+    }
+}
+
+/// Golden images at 128^2 (tests/common/mod.rs explains the thresholds).
+#[test]
+fn golden_sphere_env_wyman_and_hu_qin() {
+    for t in TECHNIQUES {
+        let r = render(&scene("sphere_env", 128, &[&technique(t)]));
+        assert_golden(&format!("sphere_env_{t}"), &r);
+    }
+}
+
+/// Section 4's shortcut gives the same exits as the full search on a convex ball, where
+/// every exit is back-facing.
+#[test]
+fn hu_qin_acceleration_agrees_on_a_convex_ball() {
+    let e = exit_errors("hu_qin", 64, &["render.hu_qin.assume_back_facing=true"]);
+    assert!(e.max_p2_pixels <= 1.0, "P2 off by {} pixel footprints", e.max_p2_pixels);
+}
+
+/// A bad technique parameter is a clear error naming the key (and the override or the
+/// file and line that set it), with a non-zero exit and no output.
+#[test]
+fn bad_parameters_are_clear_errors() {
+    let dir = std::env::temp_dir().join(format!("prism-refraction-params-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("out.png");
+    let run = |args: &[&str]| {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_prism"))
+            .arg("render")
+            .args(args)
+            .arg("-o")
+            .arg(&out)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&o.stderr).to_string();
+        assert_eq!(o.status.code(), Some(1), "{args:?}: expected exit 1:\n{stderr}");
+        assert!(!stderr.contains("panicked") && !out.exists(), "{stderr}");
+        stderr
+    };
+    for (set, needle) in [
+        ("render.hu_qin.search_steps=0", "`search_steps` must be an integer from 1 to 24, not 0"),
+        ("render.hu_qin.search_steps=100000", "`search_steps`"),
+        ("render.hu_qin.tolerance=-1", "`tolerance`"),
+        ("render.hu_qin.max_iterations=1e9", "`max_iterations`"),
+        ("render.hu_qin.steps=3", "unknown parameter `steps`"),
+        ("render.wyman.back_surface=\"first\"", "`back_surface` must be \"furthest\" or \"second\""),
+    ] {
+        let e = run(&["sphere_env", "--set", set]);
+        assert!(e.contains(needle) && e.contains(&format!("--set {set}")), "{set}:\n{e}");
+    }
+    let scene = dir.join("scene.toml");
+    let text = std::fs::read_to_string(prism::scene::benchmark_scene_path("sphere_env")).unwrap();
+    std::fs::write(&scene, format!("{text}\n[render.hu_qin]\nmax_iterations = 0\n")).unwrap();
+    let e = run(&[scene.to_str().unwrap()]);
+    assert!(e.contains("scene.toml:") && e.contains("`max_iterations`"), "{e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Synchronization validation over several frames in flight: the layers, the debug targets
+/// and the HDR target are written every frame and read by the next pass, so a missing
+/// declaration would show here as a hazard.
+#[test]
+fn multi_frame_renders_have_no_sync_hazard() {
+    let ctx = context(true);
+    for o in [
+        ["render.refraction=wyman", "render.wyman.back_surface=\"second\""],
+        ["render.refraction=hu_qin", "render.hu_qin.debug=true"],
+    ] {
+        let mut r = Renderer::new(&ctx, &scene("sphere_nearby", 32, &o)).unwrap();
+        for _ in 0..3 {
+            r.render_frame().unwrap();
+        }
+        let hdr = r.read_hdr().unwrap();
+        assert!(hdr.iter().all(|v| v.is_finite()));
+    }
+    common::assert_no_validation_errors(&ctx);
+}
