@@ -2,6 +2,7 @@
 //! loads, and hands work to the renderer; it never records commands itself.
 pub mod bench;
 pub mod compare;
+pub mod demo;
 pub mod output;
 pub mod reference;
 pub mod report;
@@ -48,6 +49,9 @@ pub enum Command {
     Bench(bench::BenchArgs),
     /// Print the passes a scene needs and which object, light or setting requires each.
     Passes(PassesArgs),
+    /// Show a scene in a window: orbit/fly camera, live pass timings and parameters (X11;
+    /// headless under xvfb-run). Keys and mouse: see README.md, "Interactive demo".
+    Demo(demo::DemoArgs),
     /// Render the exact reference (path tracing + photon-mapped caustics) to EXR/PNG.
     Reference(reference::ReferenceCmd),
     /// Time the scene's techniques and measure their error against the exact reference.
@@ -144,11 +148,16 @@ impl SceneArgs {
 
 impl GpuArgs {
     pub fn context(&self) -> Result<Arc<GpuContext>> {
+        Ok(GpuContext::new(&self.desc())?)
+    }
+
+    /// The context description these flags (and PRISM_VALIDATION / PRISM_DEVICE) ask for.
+    pub fn desc(&self) -> ContextDesc {
         let mut desc = ContextDesc::from_env();
         desc.validation |= self.validation || self.sync_validation;
         desc.sync_validation |= self.sync_validation;
         desc.device = self.device.clone();
-        Ok(GpuContext::new(&desc)?)
+        desc
     }
 }
 
@@ -166,6 +175,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Render(args) => render(args),
         Command::Bench(args) => bench::run(args),
         Command::Passes(args) => passes(args),
+        Command::Demo(args) => demo::run(args),
         Command::Reference(args) => reference::run(args),
         Command::Compare(args) => compare::run(args),
         Command::Sweep(args) => sweep::run(args),

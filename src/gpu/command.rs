@@ -296,11 +296,51 @@ impl<'a> Cmd<'a> {
         };
     }
 
+    /// Blit all of `src` (in TRANSFER_SRC_OPTIMAL) onto all of the external image `dst` (in
+    /// TRANSFER_DST_OPTIMAL, e.g. a swapchain image), scaling with `filter` and converting
+    /// between colour formats (RGBA to BGRA).
+    pub fn blit_to(&self, src: &Image, dst: vk::Image, dst_extent: vk::Extent2D, filter: vk::Filter) {
+        let layers = vk::ImageSubresourceLayers {
+            aspect_mask: vk::ImageAspectFlags::COLOR,
+            mip_level: 0,
+            base_array_layer: 0,
+            layer_count: 1,
+        };
+        let corner = |w: u32, h: u32| vk::Offset3D { x: w as i32, y: h as i32, z: 1 };
+        let region = vk::ImageBlit {
+            src_subresource: layers,
+            src_offsets: [vk::Offset3D::default(), corner(src.desc.width, src.desc.height)],
+            dst_subresource: layers,
+            dst_offsets: [vk::Offset3D::default(), corner(dst_extent.width, dst_extent.height)],
+        };
+        // SAFETY: the caller transitioned both images (frame graph); both are single-layer
+        // colour images created with TRANSFER_SRC / TRANSFER_DST usage.
+        unsafe {
+            self.dev().cmd_blit_image(
+                self.raw,
+                src.raw,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                dst,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &[region],
+                filter,
+            )
+        };
+    }
+
     /// Fill a buffer with a repeated u32 (clearing counters and accumulation buffers).
     pub fn fill_buffer(&self, buffer: &Buffer, value: u32) {
         // SAFETY: recording outside a render pass; buffer has TRANSFER_DST usage.
         unsafe { self.dev().cmd_fill_buffer(self.raw, buffer.raw, 0, vk::WHOLE_SIZE, value) };
     }
+}
+
+/// Semaphores a frame's submission waits for (each at a pipeline stage) and signals: the
+/// swapchain's acquire and present semaphores. Empty for headless frames.
+#[derive(Clone, Debug, Default)]
+pub struct SubmitSync {
+    pub wait: Vec<(vk::Semaphore, vk::PipelineStageFlags)>,
+    pub signal: Vec<vk::Semaphore>,
 }
 
 /// Command buffers and fences for `frames` frames in flight.
@@ -380,9 +420,14 @@ impl CommandPool {
 
     /// End and submit slot `i`.
     pub fn submit(&mut self, i: usize) -> GpuResult<()> {
+        self.submit_with(i, &SubmitSync::default())
+    }
+
+    /// End and submit slot `i`, waiting for and signalling the semaphores in `sync`.
+    pub fn submit_with(&mut self, i: usize, sync: &SubmitSync) -> GpuResult<()> {
         // SAFETY: slot i is recording (begin was called).
         unsafe { self.ctx.raw().end_command_buffer(self.buffers[i]) }.vk("vkEndCommandBuffer")?;
-        self.serials[i] = self.ctx.submit(self.buffers[i], self.fences[i])?;
+        self.serials[i] = self.ctx.submit(self.buffers[i], self.fences[i], sync)?;
         Ok(())
     }
 }

@@ -81,7 +81,18 @@ pub struct GpuContext {
 }
 
 impl GpuContext {
+    /// A headless context: no surface or swapchain extension.
     pub fn new(desc: &ContextDesc) -> GpuResult<Arc<GpuContext>> {
+        Self::create(desc, None)
+    }
+
+    /// A context that can present to windows of `display`: enables the display's surface
+    /// instance extensions and VK_KHR_swapchain (the demo window, src/gpu/swapchain.rs).
+    pub fn for_display(desc: &ContextDesc, display: raw_window_handle::RawDisplayHandle) -> GpuResult<Arc<GpuContext>> {
+        Self::create(desc, Some(display))
+    }
+
+    fn create(desc: &ContextDesc, display: Option<raw_window_handle::RawDisplayHandle>) -> GpuResult<Arc<GpuContext>> {
         // SAFETY: loading libvulkan runs its initialisers; the library is the system loader.
         let entry = unsafe { ash::Entry::load() }.map_err(|e| GpuError::NoLoader(e.to_string()))?;
 
@@ -126,6 +137,11 @@ impl GpuContext {
         let has_validation_features = layer_extensions
             .iter()
             .any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == ash::ext::validation_features::NAME));
+        if let Some(display) = display {
+            let surface = ash_window::enumerate_required_extensions(display)
+                .map_err(|result| GpuError::Vk { call: "ash_window::enumerate_required_extensions", result })?;
+            ext_names.extend_from_slice(surface);
+        }
         let sync_validation = validation && desc.sync_validation && has_validation_features;
         if sync_validation {
             ext_names.push(ash::ext::validation_features::NAME.as_ptr());
@@ -193,7 +209,11 @@ impl GpuContext {
         let priorities = [1.0f32];
         let queue_info =
             [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&priorities)];
-        let device_info = vk::DeviceCreateInfo::default().queue_create_infos(&queue_info).enabled_features(&features);
+        let device_extensions = if display.is_some() { vec![ash::khr::swapchain::NAME.as_ptr()] } else { Vec::new() };
+        let device_info = vk::DeviceCreateInfo::default()
+            .queue_create_infos(&queue_info)
+            .enabled_features(&features)
+            .enabled_extension_names(&device_extensions);
         // SAFETY: device_info is valid for the call.
         let device = unsafe { instance.create_device(physical, &device_info, None) }.vk("vkCreateDevice")?;
         // SAFETY: family/index were requested above.
@@ -304,10 +324,17 @@ impl GpuContext {
     }
 
     /// Submit `cmd` on the queue, signalling `fence`. Returns the submission serial.
-    pub(crate) fn submit(&self, cmd: vk::CommandBuffer, fence: vk::Fence) -> GpuResult<u64> {
+    pub(crate) fn submit(&self, cmd: vk::CommandBuffer, fence: vk::Fence, sync: &super::SubmitSync) -> GpuResult<u64> {
         let cmds = [cmd];
-        let submit = [vk::SubmitInfo::default().command_buffers(&cmds)];
-        // SAFETY: cmd is fully recorded; fence is unsignalled.
+        let wait: Vec<_> = sync.wait.iter().map(|w| w.0).collect();
+        let stages: Vec<_> = sync.wait.iter().map(|w| w.1).collect();
+        let submit = [vk::SubmitInfo::default()
+            .command_buffers(&cmds)
+            .wait_semaphores(&wait)
+            .wait_dst_stage_mask(&stages)
+            .signal_semaphores(&sync.signal)];
+        // SAFETY: cmd is fully recorded; fence is unsignalled; the semaphores are the caller's
+        // (a waited one has a pending signal, a signalled one has no pending operation).
         unsafe { self.device.queue_submit(self.queue, &submit, fence) }.vk("vkQueueSubmit")?;
         Ok(self.submitted.fetch_add(1, Ordering::SeqCst) + 1)
     }
@@ -382,7 +409,7 @@ impl GpuContext {
         unsafe { self.device.end_command_buffer(raw) }.vk("vkEndCommandBuffer")?;
         // SAFETY: default fence create info.
         let fence = unsafe { self.device.create_fence(&vk::FenceCreateInfo::default(), None) }.vk("vkCreateFence")?;
-        let serial = self.submit(raw, fence);
+        let serial = self.submit(raw, fence, &super::SubmitSync::default());
         // SAFETY: fence is valid; we wait for our own submission.
         let waited = match &serial {
             Ok(_) => unsafe { self.device.wait_for_fences(&[fence], true, u64::MAX) }.vk("vkWaitForFences"),

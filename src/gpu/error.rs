@@ -28,6 +28,10 @@ pub enum GpuError {
     InvalidShader(String, String),
     #[error("{0}")]
     Unsupported(String),
+    #[error("the window surface was lost (VK_ERROR_SURFACE_LOST_KHR)")]
+    SurfaceLost,
+    #[error("overlay (egui) renderer: {0}")]
+    Overlay(String),
 }
 
 pub type GpuResult<T> = Result<T, GpuError>;

@@ -13,22 +13,26 @@ mod debug;
 mod descriptor;
 mod error;
 mod image;
+mod overlay;
 mod pipeline;
 mod render_pass;
+mod swapchain;
 mod sync;
 mod timing;
 
 pub use ash::vk;
 pub use buffer::Buffer;
-pub use command::{Clear, Cmd, CommandPool};
+pub use command::{Clear, Cmd, CommandPool, SubmitSync};
 pub use context::{ContextDesc, DeviceInfo, GpuContext};
 pub use descriptor::{DescriptorSet, DescriptorSetLayout, DescriptorWrite};
 pub use error::{GpuError, GpuResult};
 pub use image::{Image, ImageDesc, ImageViewKind, Sampler, SamplerDesc};
+pub use overlay::Overlay;
 pub use pipeline::{
     Blend, ComputePipeline, DepthState, GraphicsPipeline, GraphicsPipelineDesc, PipelineLayout, VertexLayout,
 };
 pub use render_pass::{Attachment, Framebuffer, RenderPass, RenderPassDesc};
+pub use swapchain::{Acquired, Presented, Semaphore, Swapchain, SwapchainImage};
 pub use sync::{Access, BufferBarrier, ImageBarrier};
 pub use timing::{TimestampPool, TimestampQuery};
 

@@ -35,6 +35,9 @@ pub enum Access {
     TransferWrite,
     /// Read by the host after the submission's fence.
     HostRead,
+    /// Handed to the presentation engine (a swapchain image after its last pass). The
+    /// queue-present semaphore orders it; the barrier only changes the layout.
+    Present,
 }
 
 /// What an access means to Vulkan.
@@ -84,6 +87,7 @@ impl Access {
             Access::TransferRead => (S::TRANSFER, A::TRANSFER_READ, L::TRANSFER_SRC_OPTIMAL, false),
             Access::TransferWrite => (S::TRANSFER, A::TRANSFER_WRITE, L::TRANSFER_DST_OPTIMAL, true),
             Access::HostRead => (S::HOST, A::HOST_READ, L::GENERAL, false),
+            Access::Present => (S::BOTTOM_OF_PIPE, A::empty(), L::PRESENT_SRC_KHR, false),
         };
         AccessInfo { stages, access, layout, writes }
     }

@@ -145,6 +145,39 @@ impl FrameGraph {
         ImageId(self.images.len() - 1)
     }
 
+    /// Track an image the graph does not own through an [`Image`] (a swapchain image): its
+    /// raw handle, aspect, layer count and a name for diagnostics.
+    pub fn register_external_image(
+        &mut self,
+        raw: vk::Image,
+        aspect: vk::ImageAspectFlags,
+        layers: u32,
+        name: &str,
+    ) -> ImageId {
+        self.images.push(ImageSlot {
+            raw,
+            aspect,
+            layers,
+            depth: aspect.contains(vk::ImageAspectFlags::DEPTH),
+            name: name.to_string(),
+            state: State::NEW,
+        });
+        ImageId(self.images.len() - 1)
+    }
+
+    /// An external image's contents became undefined and the image usable from `stage` on:
+    /// a swapchain image after vkAcquireNextImageKHR, whose semaphore the submission waits
+    /// for at `stage`. The next access then transitions from UNDEFINED and its barrier
+    /// starts at `stage`, which chains it after the semaphore wait.
+    pub fn reacquire_image(&mut self, id: ImageId, stage: vk::PipelineStageFlags) {
+        self.images[id.0].state = State {
+            layout: vk::ImageLayout::UNDEFINED,
+            last_write: Some((stage, vk::AccessFlags::empty())),
+            visible: vk::PipelineStageFlags::empty(),
+            reads: vk::PipelineStageFlags::empty(),
+        };
+    }
+
     pub fn register_buffer(&mut self, buffer: &Buffer) -> BufferId {
         self.buffers.push(BufferSlot { raw: buffer.raw, name: buffer.name.clone(), state: State::NEW });
         BufferId(self.buffers.len() - 1)
@@ -178,7 +211,7 @@ impl FrameGraph {
 
     /// Start a frame's pass list.
     pub fn frame(&mut self) -> Frame<'_, '_> {
-        Frame { graph: self, passes: Vec::new() }
+        Frame { graph: self, passes: Vec::new(), release: Vec::new() }
     }
 
     /// Record the barriers for `uses` into `cmd` (used by the executor and by readback).
@@ -248,6 +281,8 @@ struct PassNode<'a> {
 pub struct Frame<'g, 'a> {
     graph: &'g mut FrameGraph,
     passes: Vec<PassNode<'a>>,
+    /// Accesses after the last pass (see [`Frame::release`]).
+    release: Vec<(Res, Access)>,
 }
 
 /// Builder for one pass: declare its accesses, then give the recording closure.
@@ -263,6 +298,12 @@ impl<'g, 'a> Frame<'g, 'a> {
         PassBuilder { frame: self, name: name.to_string(), uses: Vec::new() }
     }
 
+    /// Declare an access that follows every pass of the frame, outside the command buffer:
+    /// `Access::Present` for a swapchain image. Its barrier is recorded after the last pass.
+    pub fn release(&mut self, id: ImageId, access: Access) {
+        self.release.push((Res::Image(id.0), access));
+    }
+
     pub fn pass_names(&self) -> Vec<&str> {
         self.passes.iter().map(|p| p.name.as_str()).collect()
     }
@@ -270,7 +311,7 @@ impl<'g, 'a> Frame<'g, 'a> {
     /// Record every pass into `cmd`: barriers, label, timestamps, the pass's commands.
     /// Returns the timestamp query pairs written (if a pool is given).
     pub fn execute(self, cmd: &Cmd, timestamps: Option<&TimestampPool>) -> Vec<TimestampQuery> {
-        let Frame { graph, passes } = self;
+        let Frame { graph, passes, release } = self;
         let mut queries = Vec::new();
         if let Some(pool) = timestamps {
             cmd.reset_queries(pool);
@@ -289,6 +330,7 @@ impl<'g, 'a> Frame<'g, 'a> {
             }
             cmd.end_label();
         }
+        graph.apply(cmd, &release);
         queries
     }
 }
@@ -349,6 +391,24 @@ mod tests {
         assert_eq!(t.src_access, vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE);
         let t = transition(&mut s, Access::IndirectArgs, false, false).unwrap();
         assert_eq!(t.dst_stages, vk::PipelineStageFlags::DRAW_INDIRECT);
+    }
+
+    #[test]
+    fn reacquired_swapchain_image_waits_for_the_acquire_stage_and_ends_in_present() {
+        let mut g = FrameGraph::new();
+        let id = g.register_external_image(vk::Image::null(), vk::ImageAspectFlags::COLOR, 1, "swapchain_0");
+        g.reacquire_image(id, vk::PipelineStageFlags::TRANSFER);
+        let s = &mut g.images[id.0].state;
+        let t = transition(s, Access::TransferWrite, false, true).unwrap();
+        assert_eq!(t.src_stages, vk::PipelineStageFlags::TRANSFER);
+        assert_eq!(t.old_layout, vk::ImageLayout::UNDEFINED);
+        transition(s, Access::ColorAttachment, false, true).unwrap();
+        let t = transition(s, Access::Present, false, true).unwrap();
+        assert_eq!(t.src_stages, vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT);
+        assert_eq!(t.new_layout, vk::ImageLayout::PRESENT_SRC_KHR);
+        // Next frame: acquired again, contents undefined.
+        g.reacquire_image(id, vk::PipelineStageFlags::TRANSFER);
+        assert_eq!(g.image_layout(id), vk::ImageLayout::UNDEFINED);
     }
 
     #[test]

@@ -12,10 +12,10 @@ use std::sync::Arc;
 use glam::{Mat4, Vec3};
 
 use crate::gpu::{
-    vk, Access, Buffer, CommandPool, DescriptorSet, DescriptorSetLayout, DescriptorWrite, GpuContext, GpuError,
-    MemoryLocation, Sampler, SamplerDesc, TimestampPool, TimestampQuery,
+    vk, Access, Buffer, CommandPool, DescriptorSet, DescriptorSetLayout, DescriptorWrite, GpuContext, GpuError, Image,
+    MemoryLocation, Sampler, SamplerDesc, SubmitSync, TimestampPool, TimestampQuery,
 };
-use crate::graph::{FrameGraph, ImageId};
+use crate::graph::{Frame, FrameGraph, ImageId};
 use crate::passes::deferred_shading::DeferredShadingPass;
 use crate::passes::gbuffer::GBufferPass;
 use crate::passes::refraction_hu_qin::HuQinPass;
@@ -25,7 +25,7 @@ use crate::passes::shadow_map::{ShadowMapPass, FAR_DISTANCE};
 use crate::passes::specular_single::{Mode, SpecularSinglePass};
 use crate::passes::tonemap::TonemapPass;
 use crate::scene::techniques::{HuQinParams, WymanParams};
-use crate::scene::Scene;
+use crate::scene::{Camera, Scene};
 use crate::{BINDING_ENVIRONMENT, BINDING_FRAME, BINDING_MATERIALS, BINDING_SHADOW_2D, BINDING_SHADOW_CUBE};
 
 use gpu_scene::GpuScene;
@@ -36,6 +36,16 @@ use targets::Targets;
 /// Frames the CPU may record ahead of the GPU; each has its own command buffer, fence,
 /// uniform buffer, descriptor set and timestamp pool.
 pub const FRAMES_IN_FLIGHT: usize = 2;
+
+/// Timestamp pairs reserved for passes a caller appends to a frame
+/// ([`Renderer::render_frame_with`]: the demo window's blit and overlay).
+pub const EXTRA_TIMED_PASSES: usize = 4;
+
+/// The tone-mapped image a caller's extra passes read (the demo copies it to the window).
+pub struct FinalImage<'a> {
+    pub ldr: &'a Image,
+    pub ldr_id: ImageId,
+}
 
 #[derive(Debug, thiserror::Error)]
 pub enum RenderError {
@@ -245,33 +255,20 @@ impl Renderer {
             tonemap: TonemapPass::new(ctx, &frame_layout, &targets, &nearest)?,
         };
 
-        let cam = &scene.camera;
-        let view = cam.view();
-        // Near plane scaled to the scene, so that the tiny and the huge behave alike.
-        let extent = gpu_scene.bounds_radius.max(cam.position.distance(gpu_scene.bounds_center));
-        let near = (extent * 1e-5).max(1e-12);
-        let proj = camera_projection(cam.vfov_deg, cam.width as f32 / cam.height as f32, near);
-        let view_proj = proj * view;
         let mut uniforms = FrameUniforms {
-            view: view.to_cols_array_2d(),
-            proj: proj.to_cols_array_2d(),
-            view_proj: view_proj.to_cols_array_2d(),
-            inv_view_proj: view_proj.inverse().to_cols_array_2d(),
-            inv_view: view.inverse().to_cols_array_2d(),
-            camera_position: Vec3::extend(cam.position, scene.render.exposure).to_array(),
-            clip: [near, 0.0, 0.0, 0.0],
-            viewport: [cam.width as f32, cam.height as f32, 1.0 / cam.width as f32, 1.0 / cam.height as f32],
             env_sh: gpu_scene.env_sh,
             info: [gpu_scene.lights.len() as u32, 0, 0, 0],
-            lights: Default::default(),
+            ..bytemuck::Zeroable::zeroed()
         };
+        set_camera_uniforms(&mut uniforms, &scene.camera, scene.render.exposure, &gpu_scene);
         for (i, l) in gpu_scene.lights.iter().enumerate() {
             uniforms.lights[i] = *l;
         }
 
         let mut timestamps = Vec::new();
         for i in 0..FRAMES_IN_FLIGHT {
-            timestamps.push(TimestampPool::new(ctx, &format!("timestamps_{i}"), 2 * plan.len() as u32)?);
+            let pairs = plan.len() + EXTRA_TIMED_PASSES;
+            timestamps.push(TimestampPool::new(ctx, &format!("timestamps_{i}"), 2 * pairs as u32)?);
         }
         Ok(Renderer {
             passes,
@@ -344,13 +341,45 @@ impl Renderer {
         Ok(())
     }
 
-    /// Record and submit one frame. Timings of frames whose fences have signalled are
-    /// collected into [`Renderer::take_timings`].
-    pub fn render_frame(&mut self) -> Result<(), RenderError> {
+    /// Look from `camera` from the next frame on (position, target, up, field of view; its
+    /// width and height must be the renderer's: a new size needs a new renderer).
+    pub fn set_camera(&mut self, camera: &Camera) {
+        let exposure = self.uniforms.camera_position[3];
+        set_camera_uniforms(&mut self.uniforms, camera, exposure, &self.scene);
+    }
+
+    /// The frame graph, to register external images (the demo's swapchain images).
+    pub fn graph_mut(&mut self) -> &mut FrameGraph {
+        &mut self.graph
+    }
+
+    /// Wait until the next frame's slot is free (its previous submission complete, its
+    /// timings collected) and return the slot. [`Renderer::render_frame_with`] records into
+    /// it; a window acquires its swapchain image in between, with the slot's semaphore.
+    pub fn wait_for_next_slot(&mut self) -> Result<usize, RenderError> {
         let slot = (self.frame_index % FRAMES_IN_FLIGHT as u64) as usize;
         // Wait for this slot's previous frame; its timestamps are then readable without WAIT.
         self.commands.wait(slot)?;
         self.collect_slot(slot)?;
+        Ok(slot)
+    }
+
+    /// Record and submit one frame. Timings of frames whose fences have signalled are
+    /// collected into [`Renderer::take_timings`].
+    pub fn render_frame(&mut self) -> Result<(), RenderError> {
+        self.render_frame_with(&SubmitSync::default(), |_, _| {})
+    }
+
+    /// Record one frame, let `extra` append passes after the scene's (they see the final
+    /// tone-mapped image), and submit it with the semaphores of `sync`. The demo window uses
+    /// this to copy the image to the swapchain, draw its overlay and present; headless
+    /// rendering is `render_frame`, which appends nothing.
+    pub fn render_frame_with<'s>(
+        &'s mut self,
+        sync: &SubmitSync,
+        extra: impl FnOnce(&mut Frame<'_, 's>, FinalImage<'s>),
+    ) -> Result<(), RenderError> {
+        let slot = self.wait_for_next_slot()?;
         self.uniforms.info[1] = self.frame_index as u32;
         self.frame_buffers[slot].write(0, bytemuck::bytes_of(&self.uniforms));
 
@@ -377,9 +406,10 @@ impl Renderer {
         }
         passes.tonemap.record(&mut frame, targets, frame_set);
         debug_assert_eq!(frame.pass_names(), self.plan.iter().map(|p| p.name).collect::<Vec<_>>());
+        extra(&mut frame, FinalImage { ldr: &targets.ldr, ldr_id: targets.ldr_id });
         let queries = frame.execute(&cmd, Some(&timestamps[slot]));
         drop(cmd);
-        self.commands.submit(slot)?;
+        commands.submit_with(slot, sync)?;
         self.pending[slot] = Some((self.frame_index, queries));
         self.frame_index += 1;
         Ok(())
@@ -452,6 +482,24 @@ impl Renderer {
         let bytes = self.read_image(id, 16)?;
         Ok(Some(bytemuck::pod_collect_to_vec(&bytes)))
     }
+}
+
+/// View, projection and position uniforms for `cam`, with the near plane scaled to the
+/// scene so that the tiny and the huge behave alike.
+fn set_camera_uniforms(u: &mut FrameUniforms, cam: &Camera, exposure: f32, gpu_scene: &GpuScene) {
+    let view = cam.view();
+    let extent = gpu_scene.bounds_radius.max(cam.position.distance(gpu_scene.bounds_center));
+    let near = (extent * 1e-5).max(1e-12);
+    let proj = camera_projection(cam.vfov_deg, cam.width as f32 / cam.height as f32, near);
+    let view_proj = proj * view;
+    u.view = view.to_cols_array_2d();
+    u.proj = proj.to_cols_array_2d();
+    u.view_proj = view_proj.to_cols_array_2d();
+    u.inv_view_proj = view_proj.inverse().to_cols_array_2d();
+    u.inv_view = view.inverse().to_cols_array_2d();
+    u.camera_position = Vec3::extend(cam.position, exposure).to_array();
+    u.clip = [near, 0.0, 0.0, 0.0];
+    u.viewport = [cam.width as f32, cam.height as f32, 1.0 / cam.width as f32, 1.0 / cam.height as f32];
 }
 
 impl Drop for Renderer {

@@ -1,0 +1,695 @@
+//! `prism demo`: the renderer in a window. The same [`Renderer`] as the headless path
+//! records the scene's passes; the window appends two passes of its own through the frame
+//! graph (`present_blit`: the tone-mapped image onto the swapchain image; `overlay`: the
+//! egui heads-up display on top) and presents. Parameters change by reloading the scene with
+//! `--set`-style overrides and rebuilding the renderer; errors while running (a bad scene
+//! edit, a lost surface) are shown or recovered from, never a panic.
+mod camera;
+mod ui;
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::{Duration, Instant, SystemTime};
+
+use anyhow::{bail, Context, Result};
+use clap::{Args, ValueEnum};
+use glam::Vec2;
+use winit::application::ApplicationHandler;
+use winit::dpi::PhysicalSize;
+use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
+use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
+use winit::keyboard::{KeyCode, PhysicalKey};
+use winit::raw_window_handle::HasDisplayHandle;
+use winit::window::{Window, WindowId};
+
+use crate::gpu::{vk, Access, Acquired, GpuContext, GpuError, Overlay, Presented, SubmitSync, Swapchain};
+use crate::graph::ImageId;
+use crate::renderer::{RenderError, Renderer, FRAMES_IN_FLIGHT};
+use crate::scene::{self, Scene};
+
+use super::output::{self, OutputFile};
+use super::{check_validation, resolve_scene_path, GpuArgs, SceneArgs};
+use camera::{CameraController, Drag};
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum OnOff {
+    On,
+    Off,
+}
+
+#[derive(Args, Debug)]
+pub struct DemoArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    #[command(flatten)]
+    pub gpu: GpuArgs,
+    /// Wait for vertical blank (FIFO) or present as soon as possible (MAILBOX or IMMEDIATE
+    /// when the driver offers them).
+    #[arg(long, value_enum, default_value = "on")]
+    pub vsync: OnOff,
+    /// Render N frames in the window, then exit (for tests and docs).
+    #[arg(long, value_name = "N")]
+    pub frames: Option<u64>,
+    /// On exit (see --frames), write the last frame without the overlay to this PNG.
+    #[arg(long, value_name = "PNG")]
+    pub screenshot: Option<PathBuf>,
+    /// On exit, also write the last frame's linear radiance to this OpenEXR file.
+    #[arg(long, value_name = "EXR")]
+    pub screenshot_exr: Option<PathBuf>,
+    /// Start with the overlay hidden (F1 shows it).
+    #[arg(long)]
+    pub no_overlay: bool,
+    /// Test hook: after FRAME presented frames, ask the window system to resize the window
+    /// to WxH.
+    #[arg(long, hide = true, num_args = 2, value_names = ["FRAME", "WxH"])]
+    pub resize_at: Vec<String>,
+}
+
+/// `--resize-at FRAME WxH`.
+fn parse_resize(v: &[String]) -> Result<Option<(u64, u32, u32)>> {
+    let [frame, size] = v else { return Ok(None) };
+    let frame: u64 = frame.parse().with_context(|| format!("--resize-at: bad frame number {frame:?}"))?;
+    let (w, h) = size.split_once('x').with_context(|| format!("--resize-at: size {size:?} is not WxH"))?;
+    let (w, h): (u32, u32) = (w.parse()?, h.parse()?);
+    if w == 0 || h == 0 {
+        bail!("--resize-at: the size must be at least 1x1");
+    }
+    Ok(Some((frame, w, h)))
+}
+
+pub fn run(args: DemoArgs) -> Result<()> {
+    let resize_at = parse_resize(&args.resize_at)?;
+    let path = resolve_scene_path(args.scene.scene.as_deref());
+    let scene = args.scene.load()?;
+    let screenshot = args.screenshot.as_deref().map(OutputFile::prepare).transpose()?;
+    let screenshot_exr = args.screenshot_exr.as_deref().map(OutputFile::prepare).transpose()?;
+    if (screenshot.is_some() || screenshot_exr.is_some()) && args.frames.is_none() {
+        bail!("--screenshot needs --frames N (interactively, F12 writes screenshots)");
+    }
+    if args.frames == Some(0) {
+        bail!("--frames must be at least 1");
+    }
+    let event_loop = EventLoop::new()
+        .map_err(|e| anyhow::anyhow!("no display: run under xvfb-run or set DISPLAY (the window system said: {e})"))?;
+    let mut app =
+        App { args, path, resize_at, screenshot, screenshot_exr, initial: Some(scene), running: None, result: Ok(()) };
+    event_loop.run_app(&mut app).context("the window event loop failed")?;
+    app.result
+}
+
+struct App {
+    args: DemoArgs,
+    path: PathBuf,
+    resize_at: Option<(u64, u32, u32)>,
+    screenshot: Option<OutputFile>,
+    screenshot_exr: Option<OutputFile>,
+    /// The scene loaded before the window opened, taken by `resumed`.
+    initial: Option<Scene>,
+    running: Option<Running>,
+    result: Result<()>,
+}
+
+/// Everything that exists while the window is open. Field order is drop order: GPU objects
+/// before the context, the surface (in the swapchain) before the window.
+struct Running {
+    renderer: Renderer,
+    overlay: Overlay,
+    swapchain: Swapchain,
+    ctx: Arc<GpuContext>,
+    egui: egui_winit::State,
+    window: Arc<Window>,
+
+    scene: Scene,
+    /// The swapchain images as registered in the current renderer's frame graph.
+    swap_ids: Vec<ImageId>,
+    swapchain_stale: bool,
+    needs_rebuild: bool,
+    /// The scene file changed on disk: report the outcome of the rebuild.
+    reloading: bool,
+    camera: CameraController,
+    ui: ui::UiState,
+    stats: ui::Stats,
+    cursor: Option<Vec2>,
+    start: Instant,
+    last_frame: Instant,
+    scene_mtime: Option<SystemTime>,
+    last_poll: Instant,
+    frames: u64,
+    screenshots: u32,
+}
+
+impl ApplicationHandler for App {
+    fn resumed(&mut self, event_loop: &ActiveEventLoop) {
+        let Some(scene) = self.initial.take() else { return };
+        match Running::new(event_loop, &self.args, &self.path, scene) {
+            Ok(r) => self.running = Some(r),
+            Err(e) => self.fail(event_loop, e),
+        }
+    }
+
+    fn window_event(&mut self, event_loop: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
+        let Some(r) = self.running.as_mut() else { return };
+        match event {
+            WindowEvent::CloseRequested => return self.finish(event_loop),
+            WindowEvent::RedrawRequested => {
+                let outcome = r.frame(&self.args);
+                match outcome {
+                    Ok(true) => {}
+                    Ok(false) => return self.finish(event_loop),
+                    Err(e) => return self.fail(event_loop, e),
+                }
+                if let Some((at, w, h)) = self.resize_at {
+                    if r.frames == at {
+                        eprintln!("demo: requesting a resize to {w}x{h}");
+                        let _ = r.window.request_inner_size(PhysicalSize::new(w, h));
+                    }
+                }
+                if self.args.frames.is_some_and(|n| r.frames >= n) {
+                    return self.finish(event_loop);
+                }
+            }
+            event => {
+                if r.input(event) {
+                    return self.finish(event_loop);
+                }
+            }
+        }
+    }
+
+    fn about_to_wait(&mut self, event_loop: &ActiveEventLoop) {
+        let Some(r) = self.running.as_mut() else { return };
+        let size = r.window.inner_size();
+        if size.width == 0 || size.height == 0 {
+            // Minimized: pause rendering, look again in a while.
+            event_loop.set_control_flow(ControlFlow::WaitUntil(Instant::now() + Duration::from_millis(100)));
+        } else {
+            event_loop.set_control_flow(ControlFlow::Poll);
+            r.window.request_redraw();
+        }
+    }
+
+    fn exiting(&mut self, _event_loop: &ActiveEventLoop) {
+        self.shutdown();
+    }
+}
+
+impl App {
+    fn fail(&mut self, event_loop: &ActiveEventLoop, e: anyhow::Error) {
+        if self.result.is_ok() {
+            self.result = Err(e);
+        }
+        self.shutdown();
+        event_loop.exit();
+    }
+
+    /// Normal end: write the requested screenshots, check validation, close.
+    fn finish(&mut self, event_loop: &ActiveEventLoop) {
+        if let Some(r) = self.running.as_mut() {
+            let png = self.screenshot.take();
+            let exr = self.screenshot_exr.take();
+            if png.is_some() || exr.is_some() {
+                if let Err(e) = r.write_screenshot(png, exr) {
+                    return self.fail(event_loop, e);
+                }
+            }
+        }
+        self.shutdown();
+        event_loop.exit();
+    }
+
+    /// Free every GPU object (renderer, overlay, swapchain: each waits for the device), then
+    /// check what the validation layer reported.
+    fn shutdown(&mut self) {
+        if let Some(r) = self.running.take() {
+            let Running { renderer, overlay, swapchain, ctx, window, .. } = r;
+            drop(renderer);
+            drop(overlay);
+            drop(swapchain);
+            let checked = check_validation(&ctx);
+            drop(ctx);
+            drop(window);
+            if let Err(e) = checked {
+                if self.result.is_ok() {
+                    self.result = Err(e);
+                }
+            }
+        }
+    }
+}
+
+fn mtime(path: &Path) -> Option<SystemTime> {
+    std::fs::metadata(path).and_then(|m| m.modified()).ok()
+}
+
+impl Running {
+    fn new(event_loop: &ActiveEventLoop, args: &DemoArgs, path: &Path, scene: Scene) -> Result<Running> {
+        let (w, h) = (scene.camera.width, scene.camera.height);
+        let attributes = Window::default_attributes()
+            .with_title(format!("prism: {}", scene.name))
+            .with_inner_size(PhysicalSize::new(w, h));
+        let window = Arc::new(event_loop.create_window(attributes).context("cannot open a window")?);
+        let display = window.display_handle().context("the window has no display handle")?.as_raw();
+        let ctx = GpuContext::for_display(&args.gpu.desc(), display)?;
+        let size = window.inner_size();
+        let swapchain =
+            Swapchain::new(&ctx, &*window, (size.width, size.height), args.vsync == OnOff::On, FRAMES_IN_FLIGHT)
+                .context("cannot create the swapchain")?;
+        let overlay = Overlay::new(&ctx, &swapchain, FRAMES_IN_FLIGHT).context("cannot create the overlay")?;
+        let renderer = Renderer::new(&ctx, &scene).context("cannot set up the renderer")?;
+        let egui_ctx = egui::Context::default();
+        let max_texture = ctx.limits().max_image_dimension2_d as usize;
+        let egui = egui_winit::State::new(
+            egui_ctx,
+            egui::ViewportId::ROOT,
+            &*window,
+            Some(window.scale_factor() as f32),
+            None,
+            Some(max_texture),
+        );
+        eprintln!(
+            "demo: {} on {}, window {}x{}, swapchain {}x{} ({:?})",
+            scene.name,
+            ctx.info.name,
+            size.width,
+            size.height,
+            swapchain.extent().width,
+            swapchain.extent().height,
+            swapchain.present_mode()
+        );
+        let now = Instant::now();
+        let mut r = Running {
+            renderer,
+            overlay,
+            swapchain,
+            ctx,
+            egui,
+            window,
+            camera: CameraController::new(scene.camera),
+            scene,
+            swap_ids: Vec::new(),
+            swapchain_stale: false,
+            needs_rebuild: false,
+            reloading: false,
+            ui: ui::UiState::new(!args.no_overlay),
+            stats: ui::Stats::default(),
+            cursor: None,
+            start: now,
+            last_frame: now,
+            scene_mtime: mtime(path),
+            last_poll: now,
+            frames: 0,
+            screenshots: 0,
+        };
+        r.register_swapchain();
+        Ok(r)
+    }
+
+    /// Register the swapchain images with the current renderer's frame graph.
+    fn register_swapchain(&mut self) {
+        let graph = self.renderer.graph_mut();
+        self.swap_ids = self
+            .swapchain
+            .images()
+            .iter()
+            .enumerate()
+            .map(|(i, img)| {
+                graph.register_external_image(img.raw, vk::ImageAspectFlags::COLOR, 1, &format!("swapchain_{i}"))
+            })
+            .collect();
+    }
+
+    fn has_heightfield(&self) -> bool {
+        self.scene.objects.iter().any(|o| o.shape == "heightfield")
+    }
+
+    /// Every override: the command line's, the window size, the overlay's, the animation time.
+    fn overrides(&self, args: &DemoArgs, size: (u32, u32)) -> Vec<String> {
+        let mut o = args.scene.set.clone();
+        o.push(format!("camera.width={}", size.0));
+        o.push(format!("camera.height={}", size.1));
+        o.extend(self.ui.overrides.iter().map(|(k, v)| format!("{k}={v}")));
+        if self.ui.animate {
+            let t = self.start.elapsed().as_secs_f32();
+            for (i, obj) in self.scene.objects.iter().enumerate() {
+                if obj.shape == "heightfield" {
+                    o.push(format!("objects.{i}.time={t}"));
+                }
+            }
+        }
+        o
+    }
+
+    /// Reload the scene with the current overrides and rebuild the renderer at `size`.
+    /// A failure keeps the previous scene and renderer and shows the error in the overlay.
+    fn rebuild(&mut self, args: &DemoArgs, path: &Path, size: (u32, u32)) -> Result<()> {
+        let overrides = self.overrides(args, size);
+        let scene = match scene::load(path, &overrides) {
+            Ok(s) => s,
+            Err(e) => {
+                if self.ui.error.as_deref() != Some(&e.to_string()) {
+                    eprintln!("demo: scene error (the last good scene stays on screen): {e}");
+                }
+                self.ui.error = Some(e.to_string());
+                return Ok(());
+            }
+        };
+        match Renderer::new(&self.ctx, &scene) {
+            Ok(renderer) => {
+                // The old renderer waits for its frames when dropped.
+                self.renderer = renderer;
+                self.register_swapchain();
+                let camera_moved = scene.camera.position != self.scene.camera.position
+                    || scene.camera.target != self.scene.camera.target
+                    || scene.camera.up != self.scene.camera.up
+                    || scene.camera.vfov_deg != self.scene.camera.vfov_deg;
+                if camera_moved {
+                    // The file's camera changed (hot reload): start from it.
+                    self.camera = CameraController::new(scene.camera);
+                }
+                self.scene = scene;
+                if std::mem::take(&mut self.reloading) {
+                    eprintln!("demo: reloaded {}", path.display());
+                    self.ui.status = Some(format!("reloaded {}", path.display()));
+                }
+                self.ui.error = None;
+                self.stats.clear_gpu();
+            }
+            Err(RenderError::Gpu(e @ (GpuError::Vk { .. } | GpuError::Alloc { .. }))) => {
+                return Err(e).context("cannot rebuild the renderer");
+            }
+            Err(e) => self.ui.error = Some(format!("{e}")),
+        }
+        Ok(())
+    }
+
+    /// Handle one input event. Returns true when the user asked to quit.
+    fn input(&mut self, event: WindowEvent) -> bool {
+        let response = self.egui.on_window_event(&self.window, &event);
+        let egui_ctx = self.egui.egui_ctx().clone();
+        match event {
+            WindowEvent::Resized(_) => self.swapchain_stale = true,
+            WindowEvent::Focused(false) => self.camera.release_all(),
+            WindowEvent::KeyboardInput { event, .. } => {
+                let PhysicalKey::Code(code) = event.physical_key else { return false };
+                let pressed = event.state == ElementState::Pressed;
+                if response.consumed && pressed {
+                    return false;
+                }
+                self.camera.set_key(code, pressed);
+                if pressed && !event.repeat {
+                    match code {
+                        KeyCode::Escape => return true,
+                        KeyCode::Tab => self.camera.toggle_mode(),
+                        KeyCode::KeyR => self.camera.reset(),
+                        KeyCode::F1 | KeyCode::KeyH => self.ui.visible = !self.ui.visible,
+                        KeyCode::F5 => self.needs_rebuild = true,
+                        KeyCode::F12 | KeyCode::KeyP => self.screenshot_now(),
+                        KeyCode::Space => self.ui.animate = !self.ui.animate,
+                        _ => {}
+                    }
+                }
+                if pressed {
+                    self.move_light(code);
+                }
+            }
+            WindowEvent::MouseInput { state, button, .. } => {
+                let pressed = state == ElementState::Pressed;
+                if pressed && (response.consumed || egui_ctx.wants_pointer_input()) {
+                    return false;
+                }
+                let drag = match button {
+                    MouseButton::Left => Some(Drag::Rotate),
+                    MouseButton::Right | MouseButton::Middle => Some(Drag::Pan),
+                    _ => None,
+                };
+                if drag.is_some() {
+                    self.camera.set_drag(if pressed { drag } else { None });
+                }
+            }
+            WindowEvent::CursorMoved { position, .. } => {
+                let p = Vec2::new(position.x as f32, position.y as f32);
+                if let Some(last) = self.cursor {
+                    if self.camera.dragging() {
+                        self.camera.mouse_moved(p - last);
+                    }
+                }
+                self.cursor = Some(p);
+            }
+            WindowEvent::CursorLeft { .. } => self.cursor = None,
+            WindowEvent::MouseWheel { delta, .. } => {
+                if response.consumed || egui_ctx.wants_pointer_input() {
+                    return false;
+                }
+                let lines = match delta {
+                    MouseScrollDelta::LineDelta(_, y) => y,
+                    MouseScrollDelta::PixelDelta(p) => p.y as f32 / 40.0,
+                };
+                self.camera.wheel(lines);
+            }
+            _ => {}
+        }
+        false
+    }
+
+    /// Arrow keys move light 0 in the horizontal plane, Page Up/Down along up (a point
+    /// light); a directional light's direction turns the same way.
+    fn move_light(&mut self, code: KeyCode) {
+        let (right, up, back) = self.camera.frame();
+        let dir = match code {
+            KeyCode::ArrowLeft => -right,
+            KeyCode::ArrowRight => right,
+            KeyCode::ArrowUp => -back,
+            KeyCode::ArrowDown => back,
+            KeyCode::PageUp => up,
+            KeyCode::PageDown => -up,
+            _ => return,
+        };
+        let step = match self.scene.lights.first() {
+            Some(scene::Light::Point { .. }) => self.camera.scale() * 0.05,
+            _ => 0.05,
+        };
+        if let Some((k, v)) = ui::light_override(&self.scene, dir * step) {
+            self.ui.overrides.insert(k, v);
+            self.needs_rebuild = true;
+        }
+    }
+
+    /// F12: the current frame without the overlay, as PNG and EXR in the working directory.
+    fn screenshot_now(&mut self) {
+        self.screenshots += 1;
+        let stem = format!("prism-{}-{}", self.scene.name, self.screenshots);
+        let result = (|| -> Result<()> {
+            let png = OutputFile::prepare(Path::new(&format!("{stem}.png")))?;
+            let exr = OutputFile::prepare(Path::new(&format!("{stem}.exr")))?;
+            self.write_screenshot(Some(png), Some(exr))
+        })();
+        match result {
+            Ok(()) => self.ui.status = Some(format!("wrote {stem}.png and {stem}.exr")),
+            Err(e) => self.ui.error = Some(format!("screenshot: {e:#}")),
+        }
+    }
+
+    fn write_screenshot(&mut self, png: Option<OutputFile>, exr: Option<OutputFile>) -> Result<()> {
+        let (w, h) = (self.renderer.width(), self.renderer.height());
+        if let Some(png) = png {
+            let ldr = self.renderer.read_ldr()?;
+            let path = png.path().to_path_buf();
+            output::write_png(png, w, h, &ldr)?;
+            eprintln!("demo: wrote {} ({w}x{h})", path.display());
+        }
+        if let Some(exr) = exr {
+            let hdr = self.renderer.read_hdr()?;
+            let path = exr.path().to_path_buf();
+            output::write_exr(exr, w, h, &hdr)?;
+            eprintln!("demo: wrote {} ({w}x{h})", path.display());
+        }
+        Ok(())
+    }
+
+    /// Poll the scene file's modification time (twice a second) for hot reload.
+    fn poll_scene_file(&mut self, path: &Path) {
+        if self.last_poll.elapsed() < Duration::from_millis(500) {
+            return;
+        }
+        self.last_poll = Instant::now();
+        let now = mtime(path);
+        if now != self.scene_mtime {
+            self.scene_mtime = now;
+            self.needs_rebuild = true;
+            self.reloading = true;
+        }
+    }
+
+    /// Recreate the swapchain (and the overlay's framebuffers) for the window's size.
+    /// Returns false while the window has no area.
+    fn refresh_swapchain(&mut self) -> Result<bool> {
+        let size = self.window.inner_size();
+        let ready = match self.swapchain.recreate((size.width, size.height)) {
+            Ok(ready) => ready,
+            Err(GpuError::SurfaceLost) => {
+                self.recreate_surface()?;
+                return Ok(self.swapchain.is_ready());
+            }
+            Err(e) => return Err(e).context("cannot recreate the swapchain"),
+        };
+        self.overlay.set_targets(&self.swapchain)?;
+        self.register_swapchain();
+        self.swapchain_stale = false;
+        if ready {
+            let e = self.swapchain.extent();
+            eprintln!("demo: swapchain {}x{}", e.width, e.height);
+        }
+        Ok(ready)
+    }
+
+    /// The surface was lost: make a new surface and swapchain for the same window.
+    fn recreate_surface(&mut self) -> Result<()> {
+        eprintln!("demo: the window surface was lost; creating a new one");
+        let size = self.window.inner_size();
+        self.swapchain
+            .recreate_surface(&*self.window, (size.width, size.height))
+            .context("cannot recreate the window surface")?;
+        self.overlay.set_targets(&self.swapchain)?;
+        self.register_swapchain();
+        Ok(())
+    }
+
+    /// Render and present one frame. Returns false when the window should close.
+    fn frame(&mut self, args: &DemoArgs) -> Result<bool> {
+        let now = Instant::now();
+        let dt = now.duration_since(self.last_frame).as_secs_f32();
+        self.last_frame = now;
+        let size = self.window.inner_size();
+        if size.width == 0 || size.height == 0 {
+            return Ok(true);
+        }
+        if (self.swapchain_stale || !self.swapchain.is_ready()) && !self.refresh_swapchain()? {
+            return Ok(true);
+        }
+        let extent = self.swapchain.extent();
+        let path = resolve_scene_path(args.scene.scene.as_deref());
+        self.poll_scene_file(&path);
+        let resized = (self.renderer.width(), self.renderer.height()) != (extent.width, extent.height);
+        let animating = self.ui.animate && self.has_heightfield();
+        if self.needs_rebuild || resized || animating {
+            self.needs_rebuild = false;
+            self.rebuild(args, &path, (extent.width, extent.height))?;
+        }
+        self.camera.update(dt);
+        let camera = self.camera.camera(self.renderer.width(), self.renderer.height());
+        self.renderer.set_camera(&camera);
+
+        // The overlay's UI for this frame.
+        let input = self.egui.take_egui_input(&self.window);
+        let egui_ctx = self.egui.egui_ctx().clone();
+        let present_mode = format!("{:?}", self.swapchain.present_mode());
+        let device = self.ctx.info.name.clone();
+        let has_heightfield = self.has_heightfield();
+        let mut requests = ui::Requests::default();
+        let full = egui_ctx.run(input, |c| {
+            let view = ui::View {
+                scene: &self.scene,
+                plan: self.renderer.plan(),
+                device: &device,
+                render_size: (self.renderer.width(), self.renderer.height()),
+                present_mode: &present_mode,
+                stats: &self.stats,
+                camera_mode: self.camera.mode,
+                has_heightfield,
+            };
+            requests = ui::draw(c, &mut self.ui, &view);
+        });
+        self.egui.handle_platform_output(&self.window, full.platform_output);
+        let primitives = egui_ctx.tessellate(full.shapes, full.pixels_per_point);
+        self.apply(requests);
+
+        // Acquire with the slot's semaphore once the slot's previous frame has finished.
+        let slot = self.renderer.wait_for_next_slot()?;
+        let acquired = match self.swapchain.acquire(slot) {
+            Ok(a) => a,
+            Err(GpuError::SurfaceLost) => {
+                self.recreate_surface()?;
+                self.swapchain_stale = true;
+                return Ok(true);
+            }
+            Err(e) => return Err(e.into()),
+        };
+        let Acquired::Image { index, wait, render_done, suboptimal } = acquired else {
+            self.swapchain_stale = true;
+            return Ok(true);
+        };
+        self.overlay.update_textures(&full.textures_delta)?;
+        let swap_id = self.swap_ids[index as usize];
+        let swap_raw = self.swapchain.images()[index as usize].raw;
+        // The blit is the image's first use: wait for the acquire there, and let the graph
+        // chain its transition from UNDEFINED onto that wait.
+        let first_use = vk::PipelineStageFlags::TRANSFER;
+        self.renderer.graph_mut().reacquire_image(swap_id, first_use);
+        let sync = SubmitSync { wait: vec![(wait, first_use)], signal: vec![render_done] };
+        let overlay = &mut self.overlay;
+        let show_overlay = self.ui.visible && !primitives.is_empty();
+        let mut overlay_result = Ok(());
+        let ppp = full.pixels_per_point;
+        self.renderer.render_frame_with(&sync, |frame, fin| {
+            frame
+                .pass(ui::PRESENT_BLIT)
+                .read(fin.ldr_id, Access::TransferRead)
+                .write(swap_id, Access::TransferWrite)
+                .record(move |cmd| cmd.blit_to(fin.ldr, swap_raw, extent, vk::Filter::LINEAR));
+            if show_overlay {
+                let result = &mut overlay_result;
+                let primitives = &primitives;
+                frame.pass(ui::OVERLAY).write(swap_id, Access::ColorAttachment).record(move |cmd| {
+                    *result = overlay.record(cmd, index as usize, ppp, primitives);
+                });
+            }
+            frame.release(swap_id, Access::Present);
+        })?;
+        overlay_result?;
+        match self.swapchain.present(index) {
+            Ok(Presented::Ok) => self.swapchain_stale |= suboptimal,
+            Ok(Presented::Stale) => self.swapchain_stale = true,
+            Err(GpuError::SurfaceLost) => {
+                self.recreate_surface()?;
+                self.swapchain_stale = true;
+            }
+            Err(e) => return Err(e.into()),
+        }
+        self.overlay.free_textures()?;
+        for t in self.renderer.take_timings() {
+            self.stats.push_gpu(t);
+        }
+        self.stats.push_cpu(dt as f64 * 1000.0);
+        self.frames += 1;
+        Ok(true)
+    }
+
+    fn apply(&mut self, r: ui::Requests) {
+        if r.toggle_mode {
+            self.camera.toggle_mode();
+        }
+        if r.reset_camera {
+            self.camera.reset();
+        }
+        if r.rebuild || r.reload {
+            self.needs_rebuild = true;
+        }
+        if r.screenshot {
+            self.screenshot_now();
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn resize_hook_parses_frame_and_size() {
+        assert_eq!(parse_resize(&[]).unwrap(), None);
+        assert_eq!(parse_resize(&["3".into(), "200x100".into()]).unwrap(), Some((3, 200, 100)));
+        assert!(parse_resize(&["x".into(), "200x100".into()]).is_err());
+        assert!(parse_resize(&["3".into(), "200".into()]).is_err());
+        assert!(parse_resize(&["3".into(), "0x5".into()]).is_err());
+    }
+}

@@ -1,0 +1,489 @@
+//! The demo's heads-up overlay (egui): per-pass GPU times, frame time, the scene's passes
+//! with the plan's reasons, and controls for every parameter the scene exposes. Controls
+//! do not touch the renderer: they edit `--set`-style overrides, and the window reloads the
+//! scene with them and rebuilds the renderer.
+use std::collections::{BTreeMap, VecDeque};
+
+use crate::renderer::plan::PlannedPass;
+use crate::renderer::FrameTiming;
+use crate::scene::techniques::{BackSurface, HuQinParams, WymanParams};
+use crate::scene::{Light, Material, Scene, TECHNIQUE_KEYS};
+
+use super::camera::Mode;
+
+/// Passes the window appends after the scene's: timed and labelled like every pass, but
+/// not part of any technique's cost.
+pub const PRESENT_BLIT: &str = "present_blit";
+pub const OVERLAY: &str = "overlay";
+
+/// Frames the averages run over.
+const WINDOW: usize = 60;
+
+/// Rolling GPU and CPU frame statistics.
+#[derive(Default)]
+pub struct Stats {
+    gpu: VecDeque<FrameTiming>,
+    cpu_ms: VecDeque<f64>,
+}
+
+impl Stats {
+    pub fn push_gpu(&mut self, t: FrameTiming) {
+        self.gpu.push_back(t);
+        if self.gpu.len() > WINDOW {
+            self.gpu.pop_front();
+        }
+    }
+
+    pub fn push_cpu(&mut self, ms: f64) {
+        self.cpu_ms.push_back(ms);
+        if self.cpu_ms.len() > WINDOW {
+            self.cpu_ms.pop_front();
+        }
+    }
+
+    /// Forget GPU timings (the pass list changed with a rebuilt renderer).
+    pub fn clear_gpu(&mut self) {
+        self.gpu.clear();
+    }
+
+    pub fn cpu_avg_ms(&self) -> f64 {
+        mean(self.cpu_ms.iter().copied())
+    }
+
+    pub fn cpu_last_ms(&self) -> f64 {
+        self.cpu_ms.back().copied().unwrap_or(0.0)
+    }
+
+    /// (name, last ms, average ms) of every pass of the latest frame, in order.
+    pub fn passes(&self) -> Vec<(String, f64, f64)> {
+        let Some(last) = self.gpu.back() else { return Vec::new() };
+        last.passes
+            .iter()
+            .map(|p| {
+                let avg = mean(
+                    self.gpu.iter().flat_map(|f| f.passes.iter().filter(|q| q.name == p.name).map(|q| q.duration_ms())),
+                );
+                (p.name.clone(), p.duration_ms(), avg)
+            })
+            .collect()
+    }
+
+    /// Average technique total: first start to last end of the scene's own passes, without
+    /// the window's blit and overlay.
+    pub fn technique_total_ms(&self) -> f64 {
+        mean(self.gpu.iter().map(technique_total))
+    }
+}
+
+/// The scene passes' span of one frame (the overlay and blit excluded).
+pub fn technique_total(f: &FrameTiming) -> f64 {
+    let scene: Vec<_> = f.passes.iter().filter(|p| p.name != PRESENT_BLIT && p.name != OVERLAY).collect();
+    if scene.is_empty() {
+        return 0.0;
+    }
+    let start = scene.iter().map(|p| p.start_ms).fold(f64::INFINITY, f64::min);
+    let end = scene.iter().map(|p| p.end_ms).fold(f64::NEG_INFINITY, f64::max);
+    end - start
+}
+
+fn mean(values: impl Iterator<Item = f64>) -> f64 {
+    let (sum, n) = values.fold((0.0, 0usize), |(s, n), v| (s + v, n + 1));
+    if n == 0 {
+        0.0
+    } else {
+        sum / n as f64
+    }
+}
+
+/// What the overlay asks the window to do this frame.
+#[derive(Default)]
+pub struct Requests {
+    pub screenshot: bool,
+    pub reset_camera: bool,
+    pub toggle_mode: bool,
+    pub reload: bool,
+    /// The overrides changed: reload the scene with them and rebuild the renderer.
+    pub rebuild: bool,
+}
+
+/// Overlay state that outlives a frame.
+pub struct UiState {
+    pub visible: bool,
+    /// Overrides set from the overlay, by key (applied after the command line's).
+    pub overrides: BTreeMap<String, String>,
+    /// Animate heightfield objects (water) with the elapsed time.
+    pub animate: bool,
+    /// The last scene or renderer error, shown until the next successful rebuild.
+    pub error: Option<String>,
+    /// The last status line (a screenshot written, a reload).
+    pub status: Option<String>,
+}
+
+impl UiState {
+    pub fn new(visible: bool) -> Self {
+        UiState { visible, overrides: BTreeMap::new(), animate: true, error: None, status: None }
+    }
+
+    fn set(&mut self, requests: &mut Requests, key: String, value: String) {
+        self.overrides.insert(key, value);
+        requests.rebuild = true;
+    }
+}
+
+/// Facts the overlay shows.
+pub struct View<'a> {
+    pub scene: &'a Scene,
+    pub plan: &'a [PlannedPass],
+    pub device: &'a str,
+    pub render_size: (u32, u32),
+    pub present_mode: &'a str,
+    pub stats: &'a Stats,
+    pub camera_mode: Mode,
+    pub has_heightfield: bool,
+}
+
+/// The current value of `render.<key>` for a technique key.
+fn technique_value<'a>(scene: &'a Scene, key: &str, accepted: &'a [&'a str]) -> &'a str {
+    match key {
+        "refraction" => &scene.render.refraction,
+        "reflection" => &scene.render.reflection,
+        "caustics" => &scene.render.caustics,
+        _ => accepted.first().copied().unwrap_or(""),
+    }
+}
+
+fn format_vec(v: glam::Vec3) -> String {
+    format!("[{}, {}, {}]", v.x, v.y, v.z)
+}
+
+/// Draw the overlay; returns what the window should do.
+pub fn draw(ctx: &egui::Context, state: &mut UiState, view: &View) -> Requests {
+    let mut req = Requests::default();
+    if !state.visible {
+        return req;
+    }
+    egui::Window::new(format!("prism: {}", view.scene.name))
+        .default_pos([8.0, 8.0])
+        .default_width(300.0)
+        .resizable(true)
+        .show(ctx, |ui| {
+            ui.label(format!(
+                "{} · {}x{} · {}",
+                view.device, view.render_size.0, view.render_size.1, view.present_mode
+            ));
+            if let Some(e) = &state.error {
+                ui.colored_label(egui::Color32::from_rgb(255, 96, 96), format!("error: {e}"));
+            }
+            if let Some(s) = &state.status {
+                ui.label(s);
+            }
+            ui.separator();
+            timings(ui, view);
+            ui.separator();
+            egui::CollapsingHeader::new("passes (why each runs)").default_open(false).show(ui, |ui| {
+                for p in view.plan {
+                    ui.label(egui::RichText::new(p.name).strong());
+                    ui.label(&p.reason);
+                }
+            });
+            egui::CollapsingHeader::new("parameters").default_open(true).show(ui, |ui| {
+                parameters(ui, state, view, &mut req);
+            });
+            ui.separator();
+            ui.horizontal(|ui| {
+                if ui.button(format!("camera: {}", view.camera_mode.name())).clicked() {
+                    req.toggle_mode = true;
+                }
+                if ui.button("reset camera").clicked() {
+                    req.reset_camera = true;
+                }
+            });
+            ui.horizontal(|ui| {
+                if ui.button("screenshot").clicked() {
+                    req.screenshot = true;
+                }
+                if ui.button("reload scene").clicked() {
+                    req.reload = true;
+                }
+                if ui.button("defaults").clicked() && !state.overrides.is_empty() {
+                    state.overrides.clear();
+                    req.rebuild = true;
+                }
+            });
+        });
+    req
+}
+
+fn timings(ui: &mut egui::Ui, view: &View) {
+    let s = view.stats;
+    let cpu = s.cpu_avg_ms();
+    ui.label(format!(
+        "frame {:.1} ms avg ({:.1} fps), last {:.1} ms",
+        cpu,
+        if cpu > 0.0 { 1000.0 / cpu } else { 0.0 },
+        s.cpu_last_ms()
+    ));
+    egui::Grid::new("gpu_times").striped(true).num_columns(3).show(ui, |ui| {
+        ui.label(egui::RichText::new("GPU pass").strong());
+        ui.label(egui::RichText::new("avg ms").strong());
+        ui.label(egui::RichText::new("last ms").strong());
+        ui.end_row();
+        for (name, last, avg) in s.passes() {
+            let window_pass = name == PRESENT_BLIT || name == OVERLAY;
+            let text = if window_pass { format!("({name})") } else { name };
+            ui.label(text);
+            ui.label(format!("{avg:.3}"));
+            ui.label(format!("{last:.3}"));
+            ui.end_row();
+        }
+        ui.label(egui::RichText::new("technique total").strong());
+        ui.label(egui::RichText::new(format!("{:.3}", s.technique_total_ms())).strong());
+        ui.label("");
+        ui.end_row();
+    });
+    ui.small("(window passes in parentheses: not in the total)");
+}
+
+fn parameters(ui: &mut egui::Ui, state: &mut UiState, view: &View, req: &mut Requests) {
+    let scene = view.scene;
+    egui::Grid::new("params").num_columns(2).show(ui, |ui| {
+        for (key, accepted) in TECHNIQUE_KEYS {
+            let current = technique_value(scene, key, accepted).to_string();
+            ui.label(*key);
+            let mut chosen = current.clone();
+            egui::ComboBox::from_id_salt(*key).selected_text(&chosen).show_ui(ui, |ui| {
+                for v in *accepted {
+                    ui.selectable_value(&mut chosen, v.to_string(), *v);
+                }
+            });
+            if chosen != current {
+                state.set(req, format!("render.{key}"), format!("\"{chosen}\""));
+            }
+            ui.end_row();
+        }
+
+        ui.label("exposure");
+        let mut exposure = scene.render.exposure;
+        if ui.add(egui::Slider::new(&mut exposure, 0.05..=16.0).logarithmic(true)).changed() {
+            state.set(req, "render.exposure".into(), exposure.to_string());
+        }
+        ui.end_row();
+
+        ui.label("shadow map");
+        let mut size = scene.render.shadow_map_size;
+        egui::ComboBox::from_id_salt("shadow_map_size").selected_text(size.to_string()).show_ui(ui, |ui| {
+            for s in [128u32, 256, 512, 1024, 2048, 4096] {
+                ui.selectable_value(&mut size, s, s.to_string());
+            }
+        });
+        if size != scene.render.shadow_map_size {
+            state.set(req, "render.shadow_map_size".into(), size.to_string());
+        }
+        ui.end_row();
+
+        ui.label("sphere segments");
+        let mut segments = scene.render.sphere_segments;
+        if ui.add(egui::Slider::new(&mut segments, 8..=512).logarithmic(true)).changed() {
+            state.set(req, "render.sphere_segments".into(), segments.to_string());
+        }
+        ui.end_row();
+
+        for (name, m) in scene.material_names.iter().zip(&scene.materials) {
+            if let Material::Dielectric { ior, .. } = m {
+                ui.label(format!("{name} ior"));
+                let mut v = ior.x;
+                let dispersive = ior.y != ior.x || ior.z != ior.x;
+                let slider = egui::Slider::new(&mut v, 1.0..=3.0);
+                if ui.add_enabled(!dispersive, slider).changed() {
+                    state.set(req, format!("materials.{name}.ior"), v.to_string());
+                }
+                ui.end_row();
+            }
+        }
+
+        technique_parameters(ui, state, scene, req);
+
+        // Other technique parameter tables, [render.<technique>]: every number is editable.
+        for (table, values) in scene.render.params.iter().filter(|(t, _)| !KNOWN_TABLES.contains(&t.as_str())) {
+            for (key, value) in values {
+                let full = format!("render.{table}.{key}");
+                match value {
+                    toml::Value::Integer(i) => {
+                        ui.label(format!("{table}.{key}"));
+                        let mut v = *i;
+                        if ui.add(egui::DragValue::new(&mut v)).changed() {
+                            state.set(req, full, v.to_string());
+                        }
+                        ui.end_row();
+                    }
+                    toml::Value::Float(f) => {
+                        ui.label(format!("{table}.{key}"));
+                        let mut v = *f;
+                        if ui.add(egui::DragValue::new(&mut v).speed(0.01)).changed() {
+                            state.set(req, full, format!("{v:?}"));
+                        }
+                        ui.end_row();
+                    }
+                    _ => {}
+                }
+            }
+        }
+
+        if let Some(light) = scene.lights.first() {
+            let (key, mut v) = match light {
+                Light::Point { position, .. } => ("lights.0.position", *position),
+                Light::Directional { direction, .. } => ("lights.0.direction", *direction),
+            };
+            ui.label(if key.ends_with("position") { "light 0 position" } else { "light 0 direction" });
+            let before = v;
+            ui.horizontal(|ui| {
+                ui.add(egui::DragValue::new(&mut v.x).speed(0.02));
+                ui.add(egui::DragValue::new(&mut v.y).speed(0.02));
+                ui.add(egui::DragValue::new(&mut v.z).speed(0.02));
+            });
+            if v != before {
+                state.set(req, key.into(), format_vec(v));
+            }
+            ui.end_row();
+        }
+
+        for (i, name, center) in object_centers(scene) {
+            ui.label(format!("{name} center"));
+            let mut v = center;
+            ui.horizontal(|ui| {
+                ui.add(egui::DragValue::new(&mut v.x).speed(0.02));
+                ui.add(egui::DragValue::new(&mut v.y).speed(0.02));
+                ui.add(egui::DragValue::new(&mut v.z).speed(0.02));
+            });
+            if v != center {
+                state.set(req, format!("objects.{i}.center"), format_vec(v));
+            }
+            ui.end_row();
+        }
+
+        if view.has_heightfield {
+            ui.label("animate water");
+            ui.checkbox(&mut state.animate, "");
+            ui.end_row();
+        }
+    });
+}
+
+/// Parameter tables with their own controls (defaults included) in [`technique_parameters`].
+const KNOWN_TABLES: &[&str] = &["wyman", "hu_qin"];
+
+/// The selected refraction technique's parameters, with their defaults when the file has
+/// no `[render.<technique>]` table (docs/scene-format.md lists them).
+fn technique_parameters(ui: &mut egui::Ui, state: &mut UiState, scene: &Scene, req: &mut Requests) {
+    match scene.render.refraction.as_str() {
+        "wyman" => {
+            let Ok(p) = WymanParams::from_settings(&scene.render) else { return };
+            ui.label("wyman.back_surface");
+            let current = if p.back_surface == BackSurface::Furthest { "furthest" } else { "second" };
+            let mut chosen = current;
+            egui::ComboBox::from_id_salt("wyman_back_surface").selected_text(chosen).show_ui(ui, |ui| {
+                for v in ["furthest", "second"] {
+                    ui.selectable_value(&mut chosen, v, v);
+                }
+            });
+            if chosen != current {
+                state.set(req, "render.wyman.back_surface".into(), format!("\"{chosen}\""));
+            }
+            ui.end_row();
+        }
+        "hu_qin" => {
+            let Ok(p) = HuQinParams::from_settings(&scene.render) else { return };
+            ui.label("hu_qin.search_steps");
+            let mut steps = p.search_steps;
+            if ui.add(egui::Slider::new(&mut steps, 1..=24)).changed() {
+                state.set(req, "render.hu_qin.search_steps".into(), steps.to_string());
+            }
+            ui.end_row();
+            ui.label("hu_qin.tolerance");
+            let mut tolerance = p.tolerance;
+            if ui.add(egui::Slider::new(&mut tolerance, 1e-7..=0.5).logarithmic(true)).changed() {
+                state.set(req, "render.hu_qin.tolerance".into(), format!("{tolerance:e}"));
+            }
+            ui.end_row();
+            ui.label("hu_qin.max_iterations");
+            let mut iterations = p.max_iterations;
+            if ui.add(egui::Slider::new(&mut iterations, 1..=1024).logarithmic(true)).changed() {
+                state.set(req, "render.hu_qin.max_iterations".into(), iterations.to_string());
+            }
+            ui.end_row();
+            ui.label("hu_qin.assume_back_facing");
+            let mut back = p.assume_back_facing;
+            if ui.checkbox(&mut back, "").changed() {
+                state.set(req, "render.hu_qin.assume_back_facing".into(), back.to_string());
+            }
+            ui.end_row();
+        }
+        _ => {}
+    }
+}
+
+/// (index, name, center) of every object whose file entry has a `center` (spheres, quads,
+/// boxes, heightfields...), read from the effective scene text: moving one is an override.
+pub fn object_centers(scene: &Scene) -> Vec<(usize, String, glam::Vec3)> {
+    let Ok(table) = scene.canonical.parse::<toml::Table>() else { return Vec::new() };
+    let Some(toml::Value::Array(objects)) = table.get("objects") else { return Vec::new() };
+    let number = |v: &toml::Value| v.as_float().or_else(|| v.as_integer().map(|i| i as f64));
+    objects
+        .iter()
+        .enumerate()
+        .filter_map(|(i, o)| {
+            let c = o.get("center")?.as_array()?;
+            let xyz: Vec<f32> = c.iter().filter_map(number).map(|x| x as f32).collect();
+            let name = o.get("name").and_then(|n| n.as_str()).unwrap_or("object").to_string();
+            (xyz.len() == 3).then(|| (i, name, glam::Vec3::new(xyz[0], xyz[1], xyz[2])))
+        })
+        .collect()
+}
+
+/// The override that moves light 0 by `delta` (point light) or turns its direction
+/// (directional light: `delta` added to the unit direction, then renormalized on load).
+pub fn light_override(scene: &Scene, delta: glam::Vec3) -> Option<(String, String)> {
+    match scene.lights.first()? {
+        Light::Point { position, .. } => Some(("lights.0.position".into(), format_vec(*position + delta))),
+        Light::Directional { direction, .. } => {
+            let d = (*direction + delta).try_normalize()?;
+            Some(("lights.0.direction".into(), format_vec(d)))
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::renderer::PassTime;
+
+    fn frame(passes: &[(&str, f64, f64)]) -> FrameTiming {
+        FrameTiming {
+            frame: 0,
+            gpu_start_ms: 0.0,
+            passes: passes.iter().map(|&(n, s, e)| PassTime { name: n.into(), start_ms: s, end_ms: e }).collect(),
+        }
+    }
+
+    #[test]
+    fn object_centers_come_from_the_scene_file() {
+        let scene = crate::scene::load(&crate::scene::benchmark_scene_path("sphere_nearby"), &[]).unwrap();
+        let centers = object_centers(&scene);
+        assert!(!centers.is_empty());
+        let (i, _, c) = &centers[0];
+        assert_eq!(scene.objects[*i].name, centers[0].1);
+        assert!(c.is_finite());
+    }
+
+    #[test]
+    fn technique_total_excludes_the_window_passes() {
+        let f = frame(&[("gbuffer", 0.0, 1.0), ("tonemap", 1.0, 1.5), (PRESENT_BLIT, 1.5, 2.0), (OVERLAY, 2.0, 5.0)]);
+        assert_eq!(technique_total(&f), 1.5);
+        let mut s = Stats::default();
+        s.push_gpu(f);
+        s.push_gpu(frame(&[("gbuffer", 0.0, 3.0), ("tonemap", 3.0, 3.5), (OVERLAY, 3.5, 9.0)]));
+        assert_eq!(s.technique_total_ms(), 2.5);
+        let passes = s.passes();
+        assert_eq!(passes[0], ("gbuffer".to_string(), 3.0, 2.0));
+    }
+}
