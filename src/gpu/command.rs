@@ -9,6 +9,23 @@ use super::error::{GpuResult, VkContext};
 use super::sync::{BufferBarrier, ImageBarrier};
 use super::{Buffer, ComputePipeline, DescriptorSet, Framebuffer, GraphicsPipeline, Image, RenderPass, TimestampPool};
 
+/// A tightly packed copy of every layer of `image` to or from a buffer.
+fn whole_image_region(image: &Image) -> vk::BufferImageCopy {
+    vk::BufferImageCopy {
+        buffer_offset: 0,
+        buffer_row_length: 0,
+        buffer_image_height: 0,
+        image_subresource: vk::ImageSubresourceLayers {
+            aspect_mask: image.aspect(),
+            mip_level: 0,
+            base_array_layer: 0,
+            layer_count: image.layers(),
+        },
+        image_offset: vk::Offset3D::default(),
+        image_extent: vk::Extent3D { width: image.desc.width, height: image.desc.height, depth: 1 },
+    }
+}
+
 /// A command buffer in the recording state.
 pub struct Cmd<'a> {
     ctx: &'a GpuContext,
@@ -223,19 +240,7 @@ impl<'a> Cmd<'a> {
 
     /// Copy every layer of `image` (in TRANSFER_SRC_OPTIMAL) tightly into `buffer`.
     pub fn copy_image_to_buffer(&self, image: &Image, buffer: &Buffer) {
-        let region = vk::BufferImageCopy {
-            buffer_offset: 0,
-            buffer_row_length: 0,
-            buffer_image_height: 0,
-            image_subresource: vk::ImageSubresourceLayers {
-                aspect_mask: image.aspect(),
-                mip_level: 0,
-                base_array_layer: 0,
-                layer_count: image.layers(),
-            },
-            image_offset: vk::Offset3D::default(),
-            image_extent: vk::Extent3D { width: image.desc.width, height: image.desc.height, depth: 1 },
-        };
+        let region = whole_image_region(image);
         // SAFETY: the caller transitioned the image to TRANSFER_SRC_OPTIMAL; buffer is large enough.
         unsafe {
             self.dev().cmd_copy_image_to_buffer(
@@ -250,19 +255,7 @@ impl<'a> Cmd<'a> {
 
     /// Copy `buffer` into every layer of `image` (in TRANSFER_DST_OPTIMAL).
     pub fn copy_buffer_to_image(&self, buffer: &Buffer, image: &Image) {
-        let region = vk::BufferImageCopy {
-            buffer_offset: 0,
-            buffer_row_length: 0,
-            buffer_image_height: 0,
-            image_subresource: vk::ImageSubresourceLayers {
-                aspect_mask: image.aspect(),
-                mip_level: 0,
-                base_array_layer: 0,
-                layer_count: image.layers(),
-            },
-            image_offset: vk::Offset3D::default(),
-            image_extent: vk::Extent3D { width: image.desc.width, height: image.desc.height, depth: 1 },
-        };
+        let region = whole_image_region(image);
         // SAFETY: the caller transitioned the image to TRANSFER_DST_OPTIMAL; buffer holds the texels.
         unsafe {
             self.dev().cmd_copy_buffer_to_image(
