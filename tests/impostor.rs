@@ -120,22 +120,34 @@ fn hit_points_converge_to_the_walls() {
 /// Classic environment mapping reflects the room as if it were infinitely far; the distance
 /// impostor localizes it. Against the exact reference the impostor's error is far smaller,
 /// on room_mirror (reflection) and room_glass (double refraction, with the box's occlusion).
+/// Measured at 64^2 over the specular pixels (64 spp reference without photons): room_mirror
+/// RMSE 2.38 (single) vs 0.027 (impostor), room_glass 0.164 vs 0.047.
 #[test]
 fn impostor_error_is_far_below_classic_environment_mapping() {
     let ctx = common::context(false);
     for (scene, effect) in [("room_mirror", "reflection"), ("room_glass", "refraction")] {
         let s = common::scene(scene, 64, &[]);
-        let mut r = Reference::new(&ctx, &s, &ReferenceSettings { spp: 16, photons: 0, ..Default::default() }).unwrap();
+        let mut r = Reference::new(&ctx, &s, &ReferenceSettings { spp: 64, photons: 0, ..Default::default() }).unwrap();
         r.run_all(|_, _| {}).unwrap();
         let reference = r.image();
         drop(r);
-        let error = |t: &str| {
+        let render = |t: &str| {
             let s = common::scene(scene, 64, &[&format!("render.{effect}={t}")]);
             let hdr = common::render_on(&ctx, &s).hdr;
             assert_eq!(non_finite_count(&hdr), 0);
-            rmse_rgba(&hdr, &reference)
+            hdr
         };
-        let (single, impostor) = (error("single"), error("impostor"));
+        let (single, impostor) = (render("single"), render("impostor"));
+        // RMSE over the specular object's pixels: where the two techniques differ at all (the
+        // rest is the same deferred shading).
+        let mask: Vec<bool> = single.chunks(4).zip(impostor.chunks(4)).map(|(a, b)| a != b).collect();
+        let masked = |img: &[f32]| -> f64 {
+            let pick = |v: &[f32]| -> Vec<f32> {
+                v.chunks(4).zip(&mask).filter(|(_, &m)| m).flat_map(|(p, _)| p.to_vec()).collect()
+            };
+            rmse_rgba(&pick(img), &pick(&reference))
+        };
+        let (single, impostor) = (masked(&single), masked(&impostor));
         eprintln!("{scene}: RMSE single {single:.4}, impostor {impostor:.4}");
         assert!(impostor < 0.6 * single, "{scene}: single {single}, impostor {impostor}");
     }
