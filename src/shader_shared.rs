@@ -83,4 +83,17 @@ shared_constants! {
     LAYER_BACK_NEAREST: u32 = 1;
     LAYER_BACK_FURTHEST: u32 = 2;
     LAYER_SECOND: u32 = 3;
+
+    // Distance impostors (Szirmay-Kalos et al. 2005, src/passes/distance_impostor.rs). Set 1
+    // of the impostor shading passes, besides BINDING_GBUF_NORMAL / _DEPTH: the environment
+    // impostor's radiance (rgb, distance in a unless separate) and distance cubes, and the
+    // refractor map (xyz outward normal, w distance from the refractor's centre).
+    BINDING_IMPOSTOR_RADIANCE: u32 = 9;
+    BINDING_IMPOSTOR_DISTANCE: u32 = 10;
+    BINDING_IMPOSTOR_REFRACTOR: u32 = 11;
+    // The probe kernel's record buffer (glsl/impostor/probe.comp, tests).
+    BINDING_IMPOSTOR_PROBE: u32 = 12;
+    // Probe modes: Hit() against a map, and the conductor Fresnel terms.
+    IMPOSTOR_PROBE_HIT: u32 = 0;
+    IMPOSTOR_PROBE_FRESNEL: u32 = 1;
 }

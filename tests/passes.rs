@@ -55,6 +55,34 @@ fn image_space_refraction_replaces_the_baseline() {
 }
 
 #[test]
+fn distance_impostors_replace_the_baselines() {
+    assert_eq!(
+        names("room_mirror", &["render.reflection=impostor"]),
+        ["shadow_map", "gbuffer", "deferred_shading", "reflection_impostor_map", "reflection_impostor", "tonemap"]
+    );
+    assert_eq!(
+        names("room_glass", &["render.refraction=impostor"]),
+        [
+            "shadow_map",
+            "gbuffer",
+            "deferred_shading",
+            "refraction_impostor_map",
+            "refraction_impostor_refractor_map",
+            "refraction_impostor",
+            "tonemap"
+        ]
+    );
+    // A scene without mirrors or conductors records no reflection impostor pass, one without
+    // refractors no refraction impostor pass.
+    let n = names("room_glass", &["render.reflection=impostor"]);
+    assert!(!n.iter().any(|p| p.starts_with("reflection")), "{n:?}");
+    let n = names("room_mirror", &["render.refraction=impostor"]);
+    assert!(!n.iter().any(|p| p.starts_with("refraction")), "{n:?}");
+    let n = names("room_mirror", &["render.reflection=impostor", "objects.6.material=\"white\""]);
+    assert!(!n.iter().any(|p| p.contains("impostor")), "{n:?}");
+}
+
+#[test]
 fn renderer_records_exactly_the_planned_passes() {
     let ctx = common::context(false);
     for (name, o) in [
@@ -63,6 +91,8 @@ fn renderer_records_exactly_the_planned_passes() {
         ("metal_ring", ""),
         ("sphere_env", "render.refraction=wyman"),
         ("sphere_nearby", "render.refraction=hu_qin"),
+        ("room_mirror", "render.reflection=impostor"),
+        ("room_glass", "render.refraction=impostor"),
     ] {
         let o: Vec<&str> = [o].into_iter().filter(|o| !o.is_empty()).collect();
         let s = common::scene(name, 32, &o);

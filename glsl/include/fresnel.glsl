@@ -32,4 +32,16 @@ vec3 fresnel_conductor(float cos_i, vec3 eta, vec3 k) {
     vec3 rp = rs * (t3 - t4) / max(t3 + t4, vec3(1e-12));
     return clamp(0.5 * (rp + rs), 0.0, 1.0);
 }
+
+// The conductor Fresnel approximation of Szirmay-Kalos et al. 2005, §3 (after Lazanyi &
+// Szirmay-Kalos 2005): Schlick's form with F(0) from the complex index n + i k,
+//   F = ((n-1)^2 + k^2 + 4 n (1 - cos)^5) / ((n+1)^2 + k^2),
+// exact at normal incidence and at grazing incidence (F = 1), per channel.
+vec3 fresnel_conductor_approx(float cos_i, vec3 eta, vec3 k) {
+    float c = 1.0 - clamp(cos_i, 0.0, 1.0);
+    float c5 = (c * c) * (c * c) * c;
+    vec3 num = (eta - 1.0) * (eta - 1.0) + k * k + 4.0 * eta * c5;
+    vec3 den = (eta + 1.0) * (eta + 1.0) + k * k;
+    return clamp(num / max(den, vec3(1e-12)), 0.0, 1.0);
+}
 #endif

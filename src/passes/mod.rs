@@ -2,6 +2,7 @@
 //! render pass, declares its reads and writes to the frame graph and records its commands.
 //! None of them touches raw Vulkan or records a barrier.
 pub mod deferred_shading;
+pub mod distance_impostor;
 pub mod fullscreen;
 pub mod gbuffer;
 pub mod refraction_hu_qin;

@@ -17,6 +17,7 @@ use crate::gpu::{
 };
 use crate::graph::{Frame, FrameGraph, ImageId};
 use crate::passes::deferred_shading::DeferredShadingPass;
+use crate::passes::distance_impostor::{object_bounds, ImpostorMap, ImpostorReflection, ImpostorRefraction};
 use crate::passes::gbuffer::GBufferPass;
 use crate::passes::refraction_hu_qin::HuQinPass;
 use crate::passes::refraction_wyman::WymanPass;
@@ -24,7 +25,7 @@ use crate::passes::refractor_layers::DebugTarget;
 use crate::passes::shadow_map::{ShadowMapPass, FAR_DISTANCE};
 use crate::passes::specular_single::{Mode, SpecularSinglePass};
 use crate::passes::tonemap::TonemapPass;
-use crate::scene::techniques::{HuQinParams, WymanParams};
+use crate::scene::techniques::{HuQinParams, ImpostorParams, WymanParams};
 use crate::scene::{Camera, Scene};
 use crate::{BINDING_ENVIRONMENT, BINDING_FRAME, BINDING_MATERIALS, BINDING_SHADOW_2D, BINDING_SHADOW_CUBE};
 
@@ -101,6 +102,8 @@ struct Passes {
     reflection_single: Option<SpecularSinglePass>,
     refraction_wyman: Option<WymanPass>,
     refraction_hu_qin: Option<HuQinPass>,
+    refraction_impostor: Option<ImpostorRefraction>,
+    reflection_impostor: Option<ImpostorReflection>,
     tonemap: TonemapPass,
 }
 
@@ -126,12 +129,34 @@ pub struct Renderer {
     commands: CommandPool,
     graph: FrameGraph,
     plan: Vec<PlannedPass>,
+    /// Every object's vertex range and current (centre, bounding radius), for moving objects.
+    objects: Vec<ObjectState>,
     uniforms: FrameUniforms,
     /// (frame index, queries) of each slot's submitted but not yet read frame.
     pending: Vec<Option<(u64, Vec<TimestampQuery>)>>,
     completed: Vec<FrameTiming>,
     frame_index: u64,
     ctx: Arc<GpuContext>,
+}
+
+/// Where an object's vertices are in the scene's vertex buffer, and where the object is now.
+struct ObjectState {
+    name: String,
+    first_vertex: usize,
+    vertex_count: usize,
+    bounds: (Vec3, f32),
+}
+
+/// Which effect's distance impostor [`Renderer::impostor_map`] and
+/// [`Renderer::probe_impostor`] address.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ImpostorEffect {
+    /// The environment impostor of `render.reflection = "impostor"`.
+    Reflection,
+    /// The environment impostor of `render.refraction = "impostor"`.
+    Refraction,
+    /// The refractor map of `render.refraction = "impostor"`.
+    Refractor,
 }
 
 /// Camera projection: reversed-Z with an infinite far plane (depth 1 at the near plane,
@@ -236,6 +261,30 @@ impl Renderer {
         } else {
             None
         };
+        let impostor_params = || {
+            ImpostorParams::from_settings(&scene.render)
+                .map_err(|error| RenderError::Param { technique: "impostor", error })
+        };
+        let refraction_impostor = if plan::has(&plan, plan::REFRACTION_IMPOSTOR) {
+            let p = impostor_params()?;
+            Some(ImpostorRefraction::new(ctx, p, scene, &gpu_scene, &mut graph, &frame_layout, &targets, &nearest)?)
+        } else {
+            None
+        };
+        let reflection_impostor = if plan::has(&plan, plan::REFLECTION_IMPOSTOR) {
+            let p = impostor_params()?;
+            Some(ImpostorReflection::new(ctx, p, scene, &gpu_scene, &mut graph, &frame_layout, &targets, &nearest)?)
+        } else {
+            None
+        };
+        let objects = (0..scene.objects.len())
+            .map(|i| ObjectState {
+                name: scene.objects[i].name.clone(),
+                first_vertex: gpu_scene.draws[i].vertex_offset as usize,
+                vertex_count: scene.objects[i].mesh.positions.len(),
+                bounds: object_bounds(scene, i),
+            })
+            .collect();
         let passes = Passes {
             shadow_map: if shadowed { Some(ShadowMapPass::new(ctx, &gpu_scene, &targets)?) } else { None },
             gbuffer: GBufferPass::new(ctx, &frame_layout, &targets)?,
@@ -252,6 +301,8 @@ impl Renderer {
             },
             refraction_wyman,
             refraction_hu_qin,
+            refraction_impostor,
+            reflection_impostor,
             tonemap: TonemapPass::new(ctx, &frame_layout, &targets, &nearest)?,
         };
 
@@ -282,6 +333,7 @@ impl Renderer {
             commands: CommandPool::new(ctx, FRAMES_IN_FLIGHT as u32)?,
             graph,
             plan,
+            objects,
             uniforms,
             pending: vec![None; FRAMES_IN_FLIGHT],
             completed: Vec::new(),
@@ -383,7 +435,15 @@ impl Renderer {
         self.uniforms.info[1] = self.frame_index as u32;
         self.frame_buffers[slot].write(0, bytemuck::bytes_of(&self.uniforms));
 
+        if let Some(p) = &mut self.passes.refraction_impostor {
+            p.map.begin_frame();
+            p.refractor.begin_frame();
+        }
+        if let Some(p) = &mut self.passes.reflection_impostor {
+            p.map.begin_frame();
+        }
         let Renderer { passes, frame_sets, scene, targets, timestamps, commands, graph, .. } = self;
+        let shadow_atlas = passes.shadow_map.as_ref().map(|_| targets.shadow_atlas_id);
         let frame_set = frame_sets[slot];
         let cmd = commands.begin(slot)?;
         let mut frame = graph.frame();
@@ -401,8 +461,14 @@ impl Renderer {
         if let Some(p) = &passes.refraction_hu_qin {
             p.record(&mut frame, scene, targets, frame_set);
         }
+        if let Some(p) = &passes.refraction_impostor {
+            p.record(&mut frame, scene, targets, frame_set, shadow_atlas);
+        }
         if let Some(p) = &passes.reflection_single {
             p.record(&mut frame, scene, targets, frame_set);
+        }
+        if let Some(p) = &passes.reflection_impostor {
+            p.record(&mut frame, scene, targets, frame_set, shadow_atlas);
         }
         passes.tonemap.record(&mut frame, targets, frame_set);
         debug_assert_eq!(frame.pass_names(), self.plan.iter().map(|p| p.name).collect::<Vec<_>>());
@@ -500,6 +566,70 @@ fn set_camera_uniforms(u: &mut FrameUniforms, cam: &Camera, exposure: f32, gpu_s
     u.camera_position = Vec3::extend(cam.position, exposure).to_array();
     u.clip = [near, 0.0, 0.0, 0.0];
     u.viewport = [cam.width as f32, cam.height as f32, 1.0 / cam.width as f32, 1.0 / cam.height as f32];
+}
+
+impl Renderer {
+    /// Move object `name` so that its centre is at `center` (the demo window drags objects;
+    /// tests move them). Waits for the frames in flight, rewrites the object's vertices, and
+    /// tells the distance impostors, which are rendered again if the object left its map's
+    /// reference point by more than `render.impostor.regenerate_distance` (Szirmay-Kalos et
+    /// al. 2005, §6). Returns false if there is no such object.
+    pub fn move_object(&mut self, name: &str, center: Vec3) -> Result<bool, RenderError> {
+        let Some(index) = self.objects.iter().position(|o| o.name == name) else {
+            return Ok(false);
+        };
+        self.finish()?;
+        let o = &mut self.objects[index];
+        let offset = center - o.bounds.0;
+        let stride = std::mem::size_of::<gpu_types::Vertex>();
+        let range = o.first_vertex * stride..(o.first_vertex + o.vertex_count) * stride;
+        let mut vertices: Vec<gpu_types::Vertex> =
+            bytemuck::pod_collect_to_vec(&self.scene.vertices.read()[range.clone()]);
+        for v in &mut vertices {
+            v.position = (Vec3::from(v.position) + offset).to_array();
+        }
+        self.scene.vertices.write(range.start, bytemuck::cast_slice(&vertices));
+        o.bounds.0 = center;
+        let bounds: Vec<_> = self.objects.iter().map(|o| o.bounds).collect();
+        if let Some(p) = &mut self.passes.refraction_impostor {
+            p.objects_moved(&bounds);
+        }
+        if let Some(p) = &mut self.passes.reflection_impostor {
+            p.map.objects_moved(&bounds);
+        }
+        Ok(true)
+    }
+
+    /// A distance impostor or refractor map of this renderer, if its technique is selected.
+    pub fn impostor_map(&self, effect: ImpostorEffect) -> Option<&ImpostorMap> {
+        match effect {
+            ImpostorEffect::Reflection => self.passes.reflection_impostor.as_ref().map(|p| &p.map),
+            ImpostorEffect::Refraction => self.passes.refraction_impostor.as_ref().map(|p| &p.map),
+            ImpostorEffect::Refractor => self.passes.refraction_impostor.as_ref().map(|p| &p.refractor),
+        }
+    }
+
+    /// Run the impostor probe kernel (glsl/impostor/probe.comp: the shaders' own `Hit()` and
+    /// Fresnel terms) on a map rendered by an earlier frame; see [`ImpostorMap::probe`].
+    /// `None` if the effect has no map.
+    pub fn probe_impostor(
+        &mut self,
+        effect: ImpostorEffect,
+        fresnel: bool,
+        iterations: u32,
+        records: &[[[f32; 4]; 3]],
+    ) -> Result<Option<Vec<[[f32; 4]; 3]>>, RenderError> {
+        self.finish()?;
+        let map = match effect {
+            ImpostorEffect::Reflection => self.passes.reflection_impostor.as_ref().map(|p| &p.map),
+            ImpostorEffect::Refraction => self.passes.refraction_impostor.as_ref().map(|p| &p.map),
+            ImpostorEffect::Refractor => self.passes.refraction_impostor.as_ref().map(|p| &p.refractor),
+        };
+        match map {
+            Some(m) => Ok(Some(m.probe(&self.ctx, &mut self.graph, fresnel, iterations, records)?)),
+            None => Ok(None),
+        }
+    }
 }
 
 impl Drop for Renderer {

@@ -16,6 +16,13 @@ pub const REFRACTION_WYMAN: &str = "refraction_wyman";
 /// Hu & Qin 2007 (src/passes/refraction_hu_qin.rs): the refractor layers, then the shading.
 pub const REFRACTION_HU_QIN_LAYERS: &str = "refraction_hu_qin_layers";
 pub const REFRACTION_HU_QIN: &str = "refraction_hu_qin";
+/// Szirmay-Kalos et al. 2005 (src/passes/distance_impostor.rs): the environment distance
+/// impostor around the specular objects, the refractor map, then the shading.
+pub const REFLECTION_IMPOSTOR_MAP: &str = "reflection_impostor_map";
+pub const REFLECTION_IMPOSTOR: &str = "reflection_impostor";
+pub const REFRACTION_IMPOSTOR_MAP: &str = "refraction_impostor_map";
+pub const REFRACTION_IMPOSTOR_REFRACTOR_MAP: &str = "refraction_impostor_refractor_map";
+pub const REFRACTION_IMPOSTOR: &str = "refraction_impostor";
 
 #[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
 pub struct PlannedPass {
@@ -84,10 +91,26 @@ pub fn plan(scene: &Scene) -> Vec<PlannedPass> {
     if !dielectric.is_empty() {
         passes.extend(image_space_refraction(scene, &dielectric));
     }
+    if !dielectric.is_empty() && scene.render.refraction == "impostor" {
+        passes.extend(impostor_refraction(&dielectric));
+    }
     if !metal.is_empty() && scene.render.reflection == "single" {
         passes.push(PlannedPass {
             name: REFLECTION_SINGLE,
             reason: format!("mirror/conductor {} (render.reflection = \"single\")", list(&metal)),
+        });
+    }
+    if !metal.is_empty() && scene.render.reflection == "impostor" {
+        passes.push(PlannedPass {
+            name: REFLECTION_IMPOSTOR_MAP,
+            reason: format!(
+                "distance impostor (radiance + distance cube) around mirror/conductor {} (render.reflection = \"impostor\")",
+                list(&metal)
+            ),
+        });
+        passes.push(PlannedPass {
+            name: REFLECTION_IMPOSTOR,
+            reason: format!("localized reflection of {} (Hit(), Szirmay-Kalos et al. 2005)", list(&metal)),
         });
     }
     passes.push(PlannedPass { name: TONEMAP, reason: "linear radiance -> sRGB PNG output".into() });
@@ -118,6 +141,25 @@ fn image_space_refraction(scene: &Scene, dielectric: &[String]) -> Vec<PlannedPa
             reason: format!("{what} of dielectric {} (render.refraction = \"{technique}\")", list(dielectric)),
         },
         PlannedPass { name: shade, reason: format!("two-interface refraction of {} ({exit})", list(dielectric)) },
+    ]
+}
+
+/// The passes of double refraction with distance impostors (Szirmay-Kalos et al. 2005, §4).
+fn impostor_refraction(dielectric: &[String]) -> Vec<PlannedPass> {
+    let list = list(dielectric);
+    vec![
+        PlannedPass {
+            name: REFRACTION_IMPOSTOR_MAP,
+            reason: format!("distance impostor around dielectric {list} (render.refraction = \"impostor\")"),
+        },
+        PlannedPass {
+            name: REFRACTION_IMPOSTOR_REFRACTOR_MAP,
+            reason: format!("refractor map (distance + normal cube) of {list}"),
+        },
+        PlannedPass {
+            name: REFRACTION_IMPOSTOR,
+            reason: format!("double refraction of {list} through the refractor map (Szirmay-Kalos et al. 2005, §4)"),
+        },
     ]
 }
 

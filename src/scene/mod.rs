@@ -30,9 +30,9 @@ use file::{check_keys, list, FileObject, FileScene, Rgb, Source};
 
 /// Accepted values of `render.refraction`; the first is the default. A technique
 /// joins the benchmark by adding its name here (and to docs/scene-format.md).
-pub const REFRACTION_TECHNIQUES: &[&str] = &["single", "wyman", "hu_qin"];
+pub const REFRACTION_TECHNIQUES: &[&str] = &["single", "wyman", "hu_qin", "impostor"];
 /// Accepted values of `render.reflection`; the first is the default.
-pub const REFLECTION_TECHNIQUES: &[&str] = &["single"];
+pub const REFLECTION_TECHNIQUES: &[&str] = &["single", "impostor"];
 /// Accepted values of `render.caustics`; the first is the default.
 pub const CAUSTICS_TECHNIQUES: &[&str] = &["none"];
 

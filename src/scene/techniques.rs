@@ -1,5 +1,5 @@
-//! Typed, validated parameters of the refraction techniques: the `[render.wyman]` and
-//! `[render.hu_qin]` tables (docs/scene-format.md lists every key with its default).
+//! Typed, validated parameters of the refraction techniques: the `[render.wyman]`,
+//! `[render.hu_qin]` and `[render.impostor]` tables (docs/scene-format.md lists every key with its default).
 //!
 //! The scene loader checks a table when it reads it, so that a misspelt key or an absurd
 //! value is an error naming `file:line` or the `--set` that put it there; the passes parse
@@ -68,6 +68,56 @@ pub struct HuQinParams {
 impl Default for HuQinParams {
     fn default() -> Self {
         HuQinParams { search_steps: 8, tolerance: 1e-4, max_iterations: 32, assume_back_facing: false, debug: false }
+    }
+}
+
+/// Which conductor Fresnel term the impostor shading uses (Szirmay-Kalos et al. 2005, §3).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ImpostorFresnel {
+    /// The paper's Schlick-like approximation with n and k.
+    Approximate,
+    /// The exact formula for a complex index (glsl/include/fresnel.glsl).
+    Exact,
+}
+
+/// When a distance impostor is rendered again (Szirmay-Kalos et al. 2005, §6: "this
+/// preparation phase is usually not executed in each frame, only if the object movements
+/// are large enough").
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ImpostorUpdate {
+    /// When its object moved farther than `regenerate_distance` from the reference point.
+    OnMove,
+    /// Every frame (the map's full cost shows in every frame's timing).
+    EveryFrame,
+}
+
+/// `[render.impostor]`: distance impostors, `render.reflection = "impostor"` and
+/// `render.refraction = "impostor"`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ImpostorParams {
+    /// Edge of each cube face in texels (§6 uses 256).
+    pub resolution: u32,
+    /// Hit() refinement steps after the initial guesses (§2.2; 0 = d_l of Eq. 4 only).
+    pub iterations: u32,
+    /// Distance in a separate R32F cube instead of the radiance cube's alpha (§6).
+    pub separate_distance: bool,
+    pub fresnel: ImpostorFresnel,
+    pub update: ImpostorUpdate,
+    /// How far an object's centre may move from its map's reference point before the map is
+    /// rendered again, as a fraction of the object's bounding radius (scale-free).
+    pub regenerate_distance: f32,
+}
+
+impl Default for ImpostorParams {
+    fn default() -> Self {
+        ImpostorParams {
+            resolution: 256,
+            iterations: 4,
+            separate_distance: false,
+            fresnel: ImpostorFresnel::Approximate,
+            update: ImpostorUpdate::OnMove,
+            regenerate_distance: 0.25,
+        }
     }
 }
 
@@ -166,11 +216,62 @@ impl HuQinParams {
     }
 }
 
+impl ImpostorParams {
+    pub const KEYS: &'static [&'static str] =
+        &["resolution", "iterations", "separate_distance", "fresnel", "update", "regenerate_distance"];
+
+    pub fn from_table(t: Option<&toml::Table>) -> Result<Self, ParamError> {
+        let mut p = ImpostorParams::default();
+        for (key, v) in t.into_iter().flatten() {
+            match key.as_str() {
+                // 4096^2 x 6 x 16 bytes = 1.6 GB, near lavapipe's 2 GiB allocation limit.
+                "resolution" => p.resolution = integer(key, v, 4, 4096)?,
+                "iterations" => p.iterations = integer(key, v, 0, 64)?,
+                "separate_distance" => p.separate_distance = boolean(key, v)?,
+                "fresnel" => {
+                    p.fresnel = match v.as_str() {
+                        Some("approximate") => ImpostorFresnel::Approximate,
+                        Some("exact") => ImpostorFresnel::Exact,
+                        _ => {
+                            return Err(ParamError {
+                                key: key.clone(),
+                                message: format!("`fresnel` must be \"approximate\" or \"exact\", not {v}"),
+                                hint: "the paper's n,k approximation (§3) or the exact conductor formula".into(),
+                            })
+                        }
+                    }
+                }
+                "update" => {
+                    p.update = match v.as_str() {
+                        Some("on_move") => ImpostorUpdate::OnMove,
+                        Some("every_frame") => ImpostorUpdate::EveryFrame,
+                        _ => {
+                            return Err(ParamError {
+                                key: key.clone(),
+                                message: format!("`update` must be \"on_move\" or \"every_frame\", not {v}"),
+                                hint: "render the maps again when objects move, or every frame".into(),
+                            })
+                        }
+                    }
+                }
+                "regenerate_distance" => p.regenerate_distance = number(key, v, 0.0, 1e6)?,
+                _ => return Err(unknown("impostor", key, Self::KEYS)),
+            }
+        }
+        Ok(p)
+    }
+
+    pub fn from_settings(r: &RenderSettings) -> Result<Self, ParamError> {
+        Self::from_table(r.params.get("impostor"))
+    }
+}
+
 /// Check the parameter table `[render.<technique>]` if the technique is one of these.
 pub fn check(technique: &str, t: &toml::Table) -> Result<(), ParamError> {
     match technique {
         "wyman" => WymanParams::from_table(Some(t)).map(|_| ()),
         "hu_qin" => HuQinParams::from_table(Some(t)).map(|_| ()),
+        "impostor" => ImpostorParams::from_table(Some(t)).map(|_| ()),
         _ => Ok(()),
     }
 }
@@ -205,6 +306,17 @@ mod tests {
             let e = HuQinParams::from_table(Some(&table(t))).unwrap_err();
             assert_eq!(e.key, key, "{t}");
             assert!(e.message.contains(key), "{e}");
+        }
+        for (t, key) in [
+            ("resolution = 2", "resolution"),
+            ("iterations = 65", "iterations"),
+            ("fresnel = \"schlick\"", "fresnel"),
+            ("update = \"never\"", "update"),
+            ("regenerate_distance = -1", "regenerate_distance"),
+            ("iteration = 3", "iteration"),
+        ] {
+            let e = ImpostorParams::from_table(Some(&table(t))).unwrap_err();
+            assert_eq!(e.key, key, "{t}");
         }
         let e = WymanParams::from_table(Some(&table("back_surface = \"first\""))).unwrap_err();
         assert!(e.message.contains("back_surface"), "{e}");

@@ -1,0 +1,714 @@
+//! Szirmay-Kalos, Aszódi, Lazányi, Premecz 2005, "Approximate Ray-Tracing on the GPU with
+//! Distance Impostors" (Eurographics 2005), §2-4 and §6: localized environment mapping.
+//! `render.reflection = "impostor"` and `render.refraction = "impostor"`, parameters
+//! `[render.impostor]` ([`ImpostorParams`]).
+//!
+//! - [`ImpostorMap`] with [`MapContent::Environment`] (`*_impostor_map`): the *distance
+//!   impostor* (§2, §3), a cube map around a reference point (the specular objects' centre)
+//!   holding the radiance of the visible diffuse surface, exactly as deferred shading computes
+//!   it (glsl/include/lighting.glsl), and the distance of that surface from the reference
+//!   point, computed per pixel (§3), in the alpha channel or in a separate R32F cube (§6). The
+//!   specular objects themselves are left out of their own map.
+//! - [`ImpostorMap`] with [`MapContent::Refractor`] (`refraction_impostor_refractor_map`): the
+//!   *refractor map* (§4), the refractor's own surface seen from its centre: outward normal
+//!   and distance. It moves with the object, so it is rendered once.
+//! - `reflection_impostor` (glsl/impostor/reflect.frag): R = reflect(V, N), Hit() (§3,
+//!   glsl/include/impostor.glsl: d_p, d_l of Eq. 4, Eq. 6 by false position), the radiance
+//!   towards the hit, times the conductor Fresnel term (§3's approximation or exact).
+//! - `refraction_impostor` (glsl/impostor/refract.frag): the double refraction of §4 (Fig. 8).
+//!
+//! Regeneration (§6: "this preparation phase is usually not executed in each frame, only if
+//! the object movements are large enough"): [`ImpostorMap::objects_moved`] re-centres a map and
+//! marks it for rendering when its objects' centre left the reference point by more than
+//! `regenerate_distance` bounding radii; otherwise the map pass records nothing that frame.
+//! One map is shared by all specular objects of an effect (the paper's "single environment
+//! map for all of them"), with its reference point at their mean centre.
+use std::sync::Arc;
+
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Vec3};
+
+use crate::gpu::{
+    vk, Access, Attachment, Blend, Buffer, Clear, ComputePipeline, DepthState, DescriptorSet, DescriptorSetLayout,
+    DescriptorWrite, Framebuffer, GpuContext, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc,
+    ImageViewKind, PipelineLayout, RenderPass, RenderPassDesc, Sampler, SamplerDesc, VertexLayout,
+};
+use crate::graph::{Frame, FrameGraph, ImageId};
+use crate::renderer::gpu_scene::{cube_face_views, GpuScene};
+use crate::renderer::plan::{
+    REFLECTION_IMPOSTOR, REFLECTION_IMPOSTOR_MAP, REFRACTION_IMPOSTOR, REFRACTION_IMPOSTOR_MAP,
+    REFRACTION_IMPOSTOR_REFRACTOR_MAP,
+};
+use crate::renderer::targets::{Targets, DEPTH_FORMAT};
+use crate::scene::techniques::{ImpostorFresnel, ImpostorParams, ImpostorUpdate};
+use crate::scene::{Analytic, Material, Scene};
+use crate::{
+    BINDING_GBUF_DEPTH, BINDING_GBUF_NORMAL, BINDING_IMPOSTOR_DISTANCE, BINDING_IMPOSTOR_PROBE,
+    BINDING_IMPOSTOR_RADIANCE, BINDING_IMPOSTOR_REFRACTOR, IMPOSTOR_PROBE_FRESNEL, IMPOSTOR_PROBE_HIT, WORKGROUP_2D,
+};
+
+/// Cleared distance where no surface is seen: IMPOSTOR_NO_SURFACE of glsl/include/impostor.glsl.
+pub const NO_SURFACE: f32 = 1e15;
+/// Radiance (rgb) + distance (a), or the refractor map's normal (xyz) + distance (w).
+pub const CUBE_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
+pub const DISTANCE_FORMAT: vk::Format = vk::Format::R32_SFLOAT;
+
+/// Push constants of glsl/impostor/map.vert and the map fragment shaders.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct MapPush {
+    view_proj: [[f32; 4]; 4],
+    reference: [f32; 4],
+    material: [u32; 4],
+}
+const _: () = assert!(std::mem::size_of::<MapPush>() == 96);
+
+/// Push constants of the shading passes (glsl/impostor/shade_common.glsl).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct ShadePush {
+    env_reference: [f32; 4],
+    refractor_center: [f32; 4],
+}
+const _: () = assert!(std::mem::size_of::<ShadePush>() == 32);
+
+/// Push constants of glsl/impostor/probe.comp.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct ProbePush {
+    reference: [f32; 4],
+    info: [u32; 4],
+}
+
+/// Centre and bounding radius of an object: the exact sphere's, or its mesh's bounding box.
+pub fn object_bounds(scene: &Scene, object: usize) -> (Vec3, f32) {
+    let o = &scene.objects[object];
+    if let Some(Analytic::Sphere { center, radius }) = o.analytic {
+        return (center, radius);
+    }
+    let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+    for &p in &o.mesh.positions {
+        lo = lo.min(p);
+        hi = hi.max(p);
+    }
+    if lo.x > hi.x {
+        return (Vec3::ZERO, 0.0);
+    }
+    ((lo + hi) * 0.5, (hi - lo).length() * 0.5)
+}
+
+/// What a map stores.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MapContent {
+    /// §3: radiance and distance of everything but the map's own objects.
+    Environment,
+    /// §4: outward normal and distance of the map's own objects only.
+    Refractor,
+}
+
+/// A cube map around a reference point: a distance impostor or a refractor map.
+pub struct ImpostorMap {
+    name: &'static str,
+    content: MapContent,
+    render_pass: RenderPass,
+    _layout: PipelineLayout,
+    pipeline: GraphicsPipeline,
+    framebuffers: Vec<Framebuffer>,
+    /// RGBA32F cube: radiance + distance (environment) or normal + distance (refractor).
+    pub cube: Image,
+    pub cube_id: ImageId,
+    /// The separate R32F distance cube (`separate_distance`).
+    pub distance: Option<(Image, ImageId)>,
+    _depth: Image,
+    depth_id: ImageId,
+    /// Indices into `GpuScene::draws` rendered into the map.
+    draws: Vec<usize>,
+    /// The objects the map belongs to (whose centre is its reference point).
+    objects: Vec<usize>,
+    /// Scene bounds, for the far plane.
+    bounds: (Vec3, f32),
+    reference: Vec3,
+    /// Bounding radius of the largest of `objects` (unit of `regenerate_distance`).
+    radius: f32,
+    update: ImpostorUpdate,
+    regenerate_distance: f32,
+    /// Render the map in the next frame.
+    pending: bool,
+    /// Render the map in the frame being recorded.
+    regenerating: bool,
+    generations: u32,
+}
+
+impl ImpostorMap {
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        ctx: &Arc<GpuContext>,
+        name: &'static str,
+        content: MapContent,
+        objects: Vec<usize>,
+        params: &ImpostorParams,
+        scene: &Scene,
+        gpu: &GpuScene,
+        graph: &mut FrameGraph,
+        frame_layout: &DescriptorSetLayout,
+    ) -> GpuResult<Self> {
+        let size = params.resolution;
+        let separate = content == MapContent::Environment && params.separate_distance;
+        use vk::ImageUsageFlags as U;
+        let cube_desc = |name: String, format| ImageDesc {
+            name,
+            format,
+            width: size,
+            height: size,
+            layers: 6,
+            usage: U::COLOR_ATTACHMENT | U::SAMPLED | U::TRANSFER_SRC,
+            view: ImageViewKind::Cube,
+        };
+        let cube = Image::new(ctx, &cube_desc(name.to_string(), CUBE_FORMAT))?;
+        let cube_id = graph.register_image(&cube);
+        let distance = if separate {
+            let image = Image::new(ctx, &cube_desc(format!("{name}_distance"), DISTANCE_FORMAT))?;
+            let id = graph.register_image(&image);
+            Some((image, id))
+        } else {
+            None
+        };
+        let depth = Image::new(
+            ctx,
+            &ImageDesc {
+                name: format!("{name}_depth"),
+                format: DEPTH_FORMAT,
+                width: size,
+                height: size,
+                layers: 6,
+                usage: U::DEPTH_STENCIL_ATTACHMENT,
+                view: ImageViewKind::D2Array,
+            },
+        )?;
+        let depth_id = graph.register_image(&depth);
+        let mut colors = vec![Attachment { format: CUBE_FORMAT, clear: true }];
+        if separate {
+            colors.push(Attachment { format: DISTANCE_FORMAT, clear: true });
+        }
+        let render_pass = RenderPass::new(
+            ctx,
+            name,
+            &RenderPassDesc {
+                colors,
+                depth: Some(Attachment { format: DEPTH_FORMAT, clear: true }),
+                depth_read_only: false,
+            },
+        )?;
+        let layout = PipelineLayout::new(ctx, name, &[frame_layout], std::mem::size_of::<MapPush>() as u32)?;
+        let fragment_shader = match (content, separate) {
+            (MapContent::Refractor, _) => "impostor/refractor.frag",
+            (MapContent::Environment, false) => "impostor/map.frag",
+            (MapContent::Environment, true) => "impostor/map_separate.frag",
+        };
+        let blend = vec![Blend::Off; if separate { 2 } else { 1 }];
+        let pipeline = GraphicsPipeline::new(
+            ctx,
+            &GraphicsPipelineDesc {
+                name,
+                vertex_shader: "impostor/map.vert",
+                fragment_shader,
+                vertex: VertexLayout::Mesh,
+                topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+                // Quads are one-sided and the reference point may sit on either side.
+                cull: vk::CullModeFlags::NONE,
+                depth: DepthState::LESS,
+                blend: &blend,
+                specialization: &[],
+            },
+            &layout,
+            &render_pass,
+        )?;
+        let mut framebuffers = Vec::new();
+        for face in 0..6 {
+            let mut views = vec![cube.layer_view(face)];
+            if let Some((d, _)) = &distance {
+                views.push(d.layer_view(face));
+            }
+            views.push(depth.layer_view(face));
+            framebuffers.push(Framebuffer::new(
+                ctx,
+                &format!("{name}_face_{face}"),
+                &render_pass,
+                &views,
+                cube.extent(),
+            )?);
+        }
+        let draws = (0..scene.objects.len())
+            .filter(|i| objects.contains(i) == (content == MapContent::Refractor))
+            .filter(|&i| i < gpu.draws.len())
+            .collect();
+        let mut map = ImpostorMap {
+            name,
+            content,
+            render_pass,
+            _layout: layout,
+            pipeline,
+            framebuffers,
+            cube,
+            cube_id,
+            distance,
+            _depth: depth,
+            depth_id,
+            draws,
+            objects,
+            bounds: (gpu.bounds_center, gpu.bounds_radius),
+            reference: Vec3::ZERO,
+            radius: 0.0,
+            update: params.update,
+            regenerate_distance: params.regenerate_distance,
+            pending: true,
+            regenerating: false,
+            generations: 0,
+        };
+        let centers: Vec<_> = (0..scene.objects.len()).map(|i| object_bounds(scene, i)).collect();
+        map.reference = map.center_of(&centers);
+        map.radius = map.objects.iter().map(|&i| centers[i].1).fold(0.0, f32::max);
+        Ok(map)
+    }
+
+    fn center_of(&self, bounds: &[(Vec3, f32)]) -> Vec3 {
+        let sum: Vec3 = self.objects.iter().map(|&i| bounds[i].0).sum();
+        sum / self.objects.len().max(1) as f32
+    }
+
+    /// The map's reference point (the paper's o).
+    pub fn reference(&self) -> Vec3 {
+        self.reference
+    }
+
+    /// How many times the map has been rendered.
+    pub fn generations(&self) -> u32 {
+        self.generations
+    }
+
+    /// The objects' centres and radii changed (`bounds[i]` of object i): re-centre the map and
+    /// render it again if they moved farther than `regenerate_distance` radii (§6). A refractor
+    /// map moves with its object and is never rendered again.
+    pub fn objects_moved(&mut self, bounds: &[(Vec3, f32)]) {
+        let c = self.center_of(bounds);
+        if self.content == MapContent::Refractor {
+            // Not rendered yet: render it where the object now is.
+            if self.generations == 0 {
+                self.reference = c;
+            }
+            return;
+        }
+        if c.distance(self.reference) > self.regenerate_distance * self.radius {
+            self.reference = c;
+            self.pending = true;
+        }
+    }
+
+    /// Decide whether this frame renders the map; call before recording.
+    pub fn begin_frame(&mut self) {
+        self.regenerating = self.pending || self.update == ImpostorUpdate::EveryFrame;
+        self.pending = false;
+        if self.regenerating {
+            self.generations += 1;
+        }
+    }
+
+    /// The distance cube (separate, or the alpha of the main cube) and its channel.
+    fn distance_view(&self) -> (&Image, ImageId, u32) {
+        match &self.distance {
+            Some((image, id)) => (image, *id, 0),
+            None => (&self.cube, self.cube_id, 3),
+        }
+    }
+
+    pub fn record<'a>(
+        &'a self,
+        frame: &mut Frame<'_, 'a>,
+        scene: &'a GpuScene,
+        frame_set: DescriptorSet,
+        shadow_atlas: Option<ImageId>,
+    ) {
+        let mut pass = frame.pass(self.name);
+        if !self.regenerating {
+            // Nothing moved far enough: the map of an earlier frame stays valid (§6).
+            pass.record(|_| {});
+            return;
+        }
+        pass = pass.write(self.cube_id, Access::ColorAttachment).write(self.depth_id, Access::DepthAttachment);
+        if let Some((_, id)) = &self.distance {
+            pass = pass.write(*id, Access::ColorAttachment);
+        }
+        if let (Some(atlas), MapContent::Environment) = (shadow_atlas, self.content) {
+            pass = pass.read(atlas, Access::FragmentSampled);
+        }
+        // Near and far planes bound the whole scene from the reference point; the depth only
+        // orders surfaces, the stored distance is computed exactly per pixel.
+        let far = (self.reference.distance(self.bounds.0) + self.bounds.1) * 1.01;
+        let proj = Mat4::perspective_rh(std::f32::consts::FRAC_PI_2, 1.0, far * 1e-5, far);
+        let views = cube_face_views(self.reference);
+        let reference = self.reference.extend(1.0).to_array();
+        pass.record(move |cmd| {
+            let mut clears = vec![Clear::Color([0.0, 0.0, 0.0, NO_SURFACE])];
+            if self.distance.is_some() {
+                clears.push(Clear::Color([NO_SURFACE; 4]));
+            }
+            clears.push(Clear::Depth(1.0));
+            for (view, fb) in views.iter().zip(&self.framebuffers) {
+                cmd.begin_render_pass(&self.render_pass, fb, &clears);
+                cmd.bind_graphics(&self.pipeline, &[frame_set]);
+                cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
+                for &i in &self.draws {
+                    let d = &scene.draws[i];
+                    let push = MapPush {
+                        view_proj: (proj * *view).to_cols_array_2d(),
+                        reference,
+                        material: [d.material, 0, 0, 0],
+                    };
+                    cmd.push_graphics(&self.pipeline, &push);
+                    cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
+                }
+                cmd.end_render_pass();
+            }
+        });
+    }
+
+    /// Run glsl/impostor/probe.comp against this map: the shader's own `Hit()` with
+    /// `iterations` steps (records: (x, _), (R, _), _ -> (hit, missed), (d, ratio, _, _), _),
+    /// or the conductor Fresnel terms ((cos, ...), (eta, _), (k, _) -> (approx, _), (exact, _)).
+    /// For tests; waits for the GPU.
+    pub fn probe(
+        &self,
+        ctx: &Arc<GpuContext>,
+        graph: &mut FrameGraph,
+        fresnel: bool,
+        iterations: u32,
+        records: &[[[f32; 4]; 3]],
+    ) -> GpuResult<Vec<[[f32; 4]; 3]>> {
+        let stage = vk::ShaderStageFlags::COMPUTE;
+        let set_layout = DescriptorSetLayout::new(
+            ctx,
+            "impostor_probe",
+            &[
+                (BINDING_IMPOSTOR_PROBE, vk::DescriptorType::STORAGE_BUFFER, stage),
+                (BINDING_IMPOSTOR_DISTANCE, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, stage),
+            ],
+            1,
+        )?;
+        let mut data = records.to_vec();
+        if data.is_empty() {
+            return Ok(data);
+        }
+        let buffer = Buffer::with_data(
+            ctx,
+            "impostor_probe_records",
+            bytemuck::cast_slice(&data),
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+        )?;
+        let sampler = Sampler::new(ctx, "impostor_probe_linear", SamplerDesc::LINEAR_CLAMP)?;
+        let (image, image_id, channel) = self.distance_view();
+        let set = set_layout.allocate(
+            "impostor_probe",
+            &[
+                DescriptorWrite::Storage(BINDING_IMPOSTOR_PROBE, &buffer),
+                DescriptorWrite::Sampled(
+                    BINDING_IMPOSTOR_DISTANCE,
+                    image.view(),
+                    &sampler,
+                    vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                ),
+            ],
+        )?;
+        let layout =
+            PipelineLayout::new(ctx, "impostor_probe", &[&set_layout], std::mem::size_of::<ProbePush>() as u32)?;
+        let pipeline =
+            ComputePipeline::new(ctx, "impostor_probe", "impostor/probe.comp", &layout, &[iterations, channel])?;
+        let buffer_id = graph.register_buffer(&buffer);
+        let mode = if fresnel { IMPOSTOR_PROBE_FRESNEL } else { IMPOSTOR_PROBE_HIT };
+        let push =
+            ProbePush { reference: self.reference.extend(0.0).to_array(), info: [data.len() as u32, mode, 0, 0] };
+        let groups = (data.len() as u32).div_ceil(WORKGROUP_2D * WORKGROUP_2D);
+        ctx.one_shot(|cmd| {
+            let mut frame = graph.frame();
+            frame
+                .pass("impostor_probe")
+                .read(image_id, Access::ComputeSampled)
+                .write_buffer(buffer_id, Access::ComputeWrite)
+                .record(|cmd| {
+                    cmd.bind_compute(&pipeline, &[set]);
+                    cmd.push_compute(&pipeline, &push);
+                    cmd.dispatch(groups, 1, 1);
+                });
+            frame.execute(cmd, None);
+            graph.access_now(cmd, &[], &[(buffer_id, Access::HostRead)]);
+        })?;
+        ctx.wait_idle()?;
+        data.copy_from_slice(bytemuck::cast_slice(buffer.read()));
+        Ok(data)
+    }
+}
+
+/// A full-screen pass shading the specular pixels of the G-buffer with the impostors.
+struct ShadePass {
+    name: &'static str,
+    render_pass: RenderPass,
+    _set_layout: DescriptorSetLayout,
+    set: DescriptorSet,
+    _layout: PipelineLayout,
+    pipeline: GraphicsPipeline,
+    framebuffer: Framebuffer,
+    _linear: Sampler,
+    reads: Vec<ImageId>,
+}
+
+impl ShadePass {
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        ctx: &Arc<GpuContext>,
+        name: &'static str,
+        fragment_shader: &str,
+        params: &ImpostorParams,
+        env: &ImpostorMap,
+        refractor: Option<&ImpostorMap>,
+        gpu: &GpuScene,
+        frame_layout: &DescriptorSetLayout,
+        targets: &Targets,
+        nearest: &Sampler,
+    ) -> GpuResult<Self> {
+        let render_pass = RenderPass::new(
+            ctx,
+            name,
+            &RenderPassDesc {
+                colors: vec![Attachment { format: targets.hdr.format(), clear: false }],
+                depth: None,
+                depth_read_only: false,
+            },
+        )?;
+        // Cube maps are filtered: bilinear distances follow planar walls between texels
+        // (§2.1 assumes the surface planar between samples); the G-buffer is fetched per texel.
+        let linear = Sampler::new(ctx, &format!("{name}_linear"), SamplerDesc::LINEAR_CLAMP)?;
+        let (dist_image, dist_id, channel) = env.distance_view();
+        let sampled = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
+        let depth_layout = vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL;
+        let mut writes = vec![
+            DescriptorWrite::Sampled(BINDING_GBUF_NORMAL, targets.gbuf_normal.view(), nearest, sampled),
+            DescriptorWrite::Sampled(BINDING_GBUF_DEPTH, targets.depth.view(), nearest, depth_layout),
+            DescriptorWrite::Sampled(BINDING_IMPOSTOR_RADIANCE, env.cube.view(), &linear, sampled),
+            DescriptorWrite::Sampled(BINDING_IMPOSTOR_DISTANCE, dist_image.view(), &linear, sampled),
+        ];
+        let mut reads = vec![targets.gbuf_normal_id, targets.depth_id, gpu.environment_id, env.cube_id];
+        if dist_id != env.cube_id {
+            reads.push(dist_id);
+        }
+        if let Some(r) = refractor {
+            writes.push(DescriptorWrite::Sampled(BINDING_IMPOSTOR_REFRACTOR, r.cube.view(), &linear, sampled));
+            reads.push(r.cube_id);
+        }
+        let frag = vk::ShaderStageFlags::FRAGMENT;
+        let sampler_binding = |b: u32| (b, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, frag);
+        let mut bindings = vec![
+            sampler_binding(BINDING_GBUF_NORMAL),
+            sampler_binding(BINDING_GBUF_DEPTH),
+            sampler_binding(BINDING_IMPOSTOR_RADIANCE),
+            sampler_binding(BINDING_IMPOSTOR_DISTANCE),
+        ];
+        if refractor.is_some() {
+            bindings.push(sampler_binding(BINDING_IMPOSTOR_REFRACTOR));
+        }
+        let set_layout = DescriptorSetLayout::new(ctx, name, &bindings, 1)?;
+        let set = set_layout.allocate(name, &writes)?;
+        let layout =
+            PipelineLayout::new(ctx, name, &[frame_layout, &set_layout], std::mem::size_of::<ShadePush>() as u32)?;
+        let pipeline = GraphicsPipeline::new(
+            ctx,
+            &GraphicsPipelineDesc {
+                name,
+                vertex_shader: "common/fullscreen.vert",
+                fragment_shader,
+                vertex: VertexLayout::None,
+                topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+                cull: vk::CullModeFlags::NONE,
+                depth: DepthState::OFF,
+                blend: &[Blend::Off],
+                // Constants 0..2 of glsl/impostor/shade_common.glsl.
+                specialization: &[params.iterations, channel, u32::from(params.fresnel == ImpostorFresnel::Exact)],
+            },
+            &layout,
+            &render_pass,
+        )?;
+        let framebuffer = Framebuffer::new(ctx, name, &render_pass, &[targets.hdr.view()], targets.extent())?;
+        Ok(ShadePass {
+            name,
+            render_pass,
+            _set_layout: set_layout,
+            set,
+            _layout: layout,
+            pipeline,
+            framebuffer,
+            _linear: linear,
+            reads,
+        })
+    }
+
+    fn record<'a>(&'a self, frame: &mut Frame<'_, 'a>, targets: &Targets, frame_set: DescriptorSet, push: ShadePush) {
+        let mut pass = frame.pass(self.name);
+        for &id in &self.reads {
+            pass = pass.read(id, Access::FragmentSampled);
+        }
+        pass.write(targets.hdr_id, Access::ColorAttachment).record(move |cmd| {
+            // Keeps the deferred result and overwrites only the pixels of its materials.
+            cmd.begin_render_pass(&self.render_pass, &self.framebuffer, &[Clear::None]);
+            cmd.bind_graphics(&self.pipeline, &[frame_set, self.set]);
+            cmd.push_graphics(&self.pipeline, &push);
+            cmd.draw(3, 1);
+            cmd.end_render_pass();
+        });
+    }
+}
+
+fn objects_where(scene: &Scene, pred: impl Fn(&Material) -> bool) -> Vec<usize> {
+    (0..scene.objects.len()).filter(|&i| pred(&scene.materials[scene.objects[i].material])).collect()
+}
+
+/// `render.reflection = "impostor"`: localized reflections of mirrors and conductors (§3).
+pub struct ImpostorReflection {
+    pub map: ImpostorMap,
+    shade: ShadePass,
+    pub params: ImpostorParams,
+}
+
+impl ImpostorReflection {
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        ctx: &Arc<GpuContext>,
+        params: ImpostorParams,
+        scene: &Scene,
+        gpu: &GpuScene,
+        graph: &mut FrameGraph,
+        frame_layout: &DescriptorSetLayout,
+        targets: &Targets,
+        nearest: &Sampler,
+    ) -> GpuResult<Self> {
+        let metals = objects_where(scene, |m| matches!(m, Material::Mirror { .. } | Material::Conductor { .. }));
+        let map = ImpostorMap::new(
+            ctx,
+            REFLECTION_IMPOSTOR_MAP,
+            MapContent::Environment,
+            metals,
+            &params,
+            scene,
+            gpu,
+            graph,
+            frame_layout,
+        )?;
+        let shade = ShadePass::new(
+            ctx,
+            REFLECTION_IMPOSTOR,
+            "impostor/reflect.frag",
+            &params,
+            &map,
+            None,
+            gpu,
+            frame_layout,
+            targets,
+            nearest,
+        )?;
+        Ok(ImpostorReflection { map, shade, params })
+    }
+
+    pub fn record<'a>(
+        &'a self,
+        frame: &mut Frame<'_, 'a>,
+        scene: &'a GpuScene,
+        targets: &Targets,
+        frame_set: DescriptorSet,
+        shadow_atlas: Option<ImageId>,
+    ) {
+        self.map.record(frame, scene, frame_set, shadow_atlas);
+        let push = ShadePush { env_reference: self.map.reference.extend(1.0).to_array(), refractor_center: [0.0; 4] };
+        self.shade.record(frame, targets, frame_set, push);
+    }
+}
+
+/// `render.refraction = "impostor"`: double refraction through a refractor map (§4).
+pub struct ImpostorRefraction {
+    pub map: ImpostorMap,
+    pub refractor: ImpostorMap,
+    shade: ShadePass,
+    /// Where the refractors' centre is now (the refractor map moves with them).
+    refractor_center: Vec3,
+    pub params: ImpostorParams,
+}
+
+impl ImpostorRefraction {
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        ctx: &Arc<GpuContext>,
+        params: ImpostorParams,
+        scene: &Scene,
+        gpu: &GpuScene,
+        graph: &mut FrameGraph,
+        frame_layout: &DescriptorSetLayout,
+        targets: &Targets,
+        nearest: &Sampler,
+    ) -> GpuResult<Self> {
+        let glass = objects_where(scene, |m| matches!(m, Material::Dielectric { .. }));
+        let map = ImpostorMap::new(
+            ctx,
+            REFRACTION_IMPOSTOR_MAP,
+            MapContent::Environment,
+            glass.clone(),
+            &params,
+            scene,
+            gpu,
+            graph,
+            frame_layout,
+        )?;
+        let refractor = ImpostorMap::new(
+            ctx,
+            REFRACTION_IMPOSTOR_REFRACTOR_MAP,
+            MapContent::Refractor,
+            glass,
+            &params,
+            scene,
+            gpu,
+            graph,
+            frame_layout,
+        )?;
+        let shade = ShadePass::new(
+            ctx,
+            REFRACTION_IMPOSTOR,
+            "impostor/refract.frag",
+            &params,
+            &map,
+            Some(&refractor),
+            gpu,
+            frame_layout,
+            targets,
+            nearest,
+        )?;
+        let refractor_center = refractor.reference;
+        Ok(ImpostorRefraction { map, refractor, shade, refractor_center, params })
+    }
+
+    pub fn objects_moved(&mut self, bounds: &[(Vec3, f32)]) {
+        self.map.objects_moved(bounds);
+        self.refractor_center = self.refractor.center_of(bounds);
+    }
+
+    pub fn record<'a>(
+        &'a self,
+        frame: &mut Frame<'_, 'a>,
+        scene: &'a GpuScene,
+        targets: &Targets,
+        frame_set: DescriptorSet,
+        shadow_atlas: Option<ImageId>,
+    ) {
+        self.map.record(frame, scene, frame_set, shadow_atlas);
+        self.refractor.record(frame, scene, frame_set, None);
+        let push = ShadePush {
+            env_reference: self.map.reference.extend(1.0).to_array(),
+            refractor_center: self.refractor_center.extend(1.0).to_array(),
+        };
+        self.shade.record(frame, targets, frame_set, push);
+    }
+}
