@@ -16,11 +16,14 @@ void main() {
     float R = st.vp_pos.w;
     float M = 0.0;
     vec3 phi = vec3(0.0);
-    // The cell size is the initial radius and R only shrinks: the photons within R lie in the
-    // at most 2x2x2 cells overlapping the ball. Buckets visited twice (hash collisions) are
-    // skipped so that no photon is counted twice.
+    // The cell size is twice the initial radius and R only shrinks, so the ball of radius R
+    // overlaps at most 2 cells per axis: its photons lie in at most 2x2x2 cells. (With cells
+    // of size R the ball can span 3 per axis, and photons beyond the 8 buckets visited were
+    // lost, dimming caustics by an amount that depended on where a pixel's visible point fell
+    // on the grid.) Buckets visited twice (hash collisions) are skipped so that no photon is
+    // counted twice.
     ivec3 lo = grid_cell(p - vec3(R)), hi = grid_cell(p + vec3(R));
-    uint visited[8];
+    uint visited[8];   // 2x2x2 cells at most (see above)
     uint n_visited = 0u;
     for (int z = lo.z; z <= hi.z; ++z)
     for (int y = lo.y; y <= hi.y; ++y)
@@ -28,7 +31,7 @@ void main() {
         uint bucket = grid_bucket(ivec3(x, y, z));
         bool seen = false;
         for (uint k = 0u; k < n_visited; ++k) seen = seen || visited[k] == bucket;
-        if (seen || n_visited >= 8u) continue;
+        if (seen || n_visited >= 8u) continue;   // never taken: the cells are slightly larger than 2 R0
         visited[n_visited++] = bucket;
         uint i = heads[bucket];
         for (uint guard = 0u; i != END_OF_LIST && guard < ref.photon.y; ++guard) {

@@ -273,7 +273,9 @@ impl Reference {
                 table,
                 (dispersion as u32 * FLAG_DISPERSION) | (settings.jitter as u32 * FLAG_JITTER),
             ],
-            grid: [radius, radius, settings.alpha, 0.0],
+            // Cells twice the initial radius: a ball of radius R <= R0 then overlaps at most
+            // 2 cells per axis, the 8 buckets the gather visits (0.1% margin for rounding).
+            grid: [2.002 * radius, radius, settings.alpha, 0.0],
             lights: [RefLight::zeroed(); MAX_LIGHTS as usize],
             targets: [[0.0; 4]; REF_MAX_TARGETS as usize],
         };
@@ -576,6 +578,14 @@ impl Reference {
         let p: &[f32] = bytemuck::cast_slice(self.pixels.read());
         let d: &[f32] = bytemuck::cast_slice(self.debug.read());
         f.iter().chain(p).chain(&d[..4 * self.photons_per_iteration as usize]).filter(|v| !v.is_finite()).count()
+    }
+
+    /// The photon-mapping state of pixel `index`: tau (rgb) and N, visible point and radius R,
+    /// its normal and validity, its weight (for tests and debugging).
+    pub fn pixel_state(&self, index: usize) -> [[f32; 4]; 4] {
+        let pixels: &[PixelState] = bytemuck::cast_slice(self.pixels.read());
+        let p = pixels[index];
+        [p.tau_n, p.vp_pos, p.vp_normal, p.vp_weight]
     }
 
     /// (flux rgb, outcome) of every photon of the last iteration (PHOTON_* outcomes).
