@@ -92,7 +92,9 @@ pub fn run(args: ReportArgs) -> Result<()> {
         args.size, settings.spp, settings.photons
     )?;
 
-    for (index, e) in spec.entry.iter().enumerate().filter(|(_, e)| args.only.is_empty() || args.only.contains(&e.scene)) {
+    for (index, e) in
+        spec.entry.iter().enumerate().filter(|(_, e)| args.only.is_empty() || args.only.contains(&e.scene))
+    {
         // File names carry the entry's number: a scene may appear in several entries.
         let stem = format!("{:02}-{}", index + 1, e.scene);
         let params = parse_params(&e.params)?;
