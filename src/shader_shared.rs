@@ -25,6 +25,10 @@ shared_constants! {
     BINDING_ENVIRONMENT: u32 = 2;
     BINDING_SHADOW_CUBE: u32 = 3;
     BINDING_SHADOW_2D: u32 = 4;
+    // The caustic map atlas (src/passes/caustics_map.rs), laid out like the shadow atlas:
+    // flux per texel in W, looked up by the receivers as a cube or as layers.
+    BINDING_CAUSTIC_CUBE: u32 = 5;
+    BINDING_CAUSTIC_2D: u32 = 6;
 
     // Descriptor set 1 (G-buffer inputs) bindings.
     BINDING_GBUF_NORMAL: u32 = 0;
@@ -96,4 +100,25 @@ shared_constants! {
     // Probe modes: Hit() against a map, and the conductor Fresnel terms.
     IMPOSTOR_PROBE_HIT: u32 = 0;
     IMPOSTOR_PROBE_FRESNEL: u32 = 1;
+    // Caustics mapping (Shah et al. 2007; src/passes/caustics_map.rs). Set 1 of the splat
+    // pass: the source faces and lights, the materials, the receivers' distance atlas (as a
+    // cube array and as layers) and the refractor layers seen from the light.
+    CAUSTIC_BINDING_FACES: u32 = 0;
+    CAUSTIC_BINDING_MATERIALS: u32 = 1;
+    CAUSTIC_BINDING_RECEIVER_CUBE: u32 = 2;
+    CAUSTIC_BINDING_RECEIVER_2D: u32 = 3;
+    CAUSTIC_BINDING_FRONT_POSITION: u32 = 4;
+    CAUSTIC_BINDING_FRONT_NORMAL: u32 = 5;
+    CAUSTIC_BINDING_BACK_POSITION: u32 = 6;
+    CAUSTIC_BINDING_BACK_NORMAL: u32 = 7;
+    // Intersection estimate (§III.D): the paper's approximate Newton-Raphson or the true one
+    // of the appendix (with the bisection fallback of §III.D against oscillation).
+    NEWTON_APPROXIMATE: u32 = 0;
+    NEWTON_TRUE: u32 = 1;
+    // Refractor layer passes (specialisation constant 0 of caustics/refractor.frag).
+    CAUSTIC_LAYER_FRONT: u32 = 0;
+    CAUSTIC_LAYER_BACK: u32 = 1;
+    // Source-face kinds of the vertex grid.
+    CAUSTIC_FACE_PERSPECTIVE: u32 = 0;
+    CAUSTIC_FACE_ORTHOGRAPHIC: u32 = 1;
 }

@@ -54,6 +54,39 @@ fn image_space_refraction_replaces_the_baseline() {
     }
 }
 
+/// Caustics mapping (Shah et al. 2007) needs a light, a specular object and a diffuse
+/// receiver, and `render.caustics = "caustics_map"`; its passes run after the shadow map.
+#[test]
+fn caustic_passes_only_with_light_specular_object_and_receiver() {
+    const CAUSTIC: [&str; 3] = ["caustics_map_receivers", "caustics_map_refractors", "caustics_map"];
+    let on = "render.caustics=caustics_map";
+    assert_eq!(
+        names("caustic_sphere", &[on]),
+        [
+            "shadow_map",
+            "caustics_map_receivers",
+            "caustics_map_refractors",
+            "caustics_map",
+            "gbuffer",
+            "deferred_shading",
+            "refraction_single",
+            "tonemap"
+        ]
+    );
+    // A mirror forms reflective caustics.
+    assert!(names("metal_ring", &[on]).iter().any(|p| *p == "caustics_map"));
+    let absent = |scene: &str, o: &[&str]| {
+        let n = names(scene, o);
+        assert!(!n.iter().any(|p| CAUSTIC.contains(p)), "{scene} {o:?}: {n:?}");
+    };
+    // caustics = none (the default).
+    absent("caustic_sphere", &[]);
+    // No light (sphere_env), no diffuse receiver, no specular object.
+    absent("sphere_env", &[on]);
+    absent("caustic_sphere", &[on, "objects.0.material=\"glass\""]);
+    absent("caustic_sphere", &[on, "objects.1.material=\"floor\""]);
+}
+
 #[test]
 fn distance_impostors_replace_the_baselines() {
     assert_eq!(
@@ -93,6 +126,8 @@ fn renderer_records_exactly_the_planned_passes() {
         ("sphere_nearby", "render.refraction=hu_qin"),
         ("room_mirror", "render.reflection=impostor"),
         ("room_glass", "render.refraction=impostor"),
+        ("caustic_sphere", "render.caustics=caustics_map"),
+        ("metal_ring", "render.caustics=caustics_map"),
     ] {
         let o: Vec<&str> = [o].into_iter().filter(|o| !o.is_empty()).collect();
         let s = common::scene(name, 32, &o);

@@ -33,6 +33,10 @@ layout(set = 0, binding = BINDING_MATERIALS, std430) readonly buffer Materials {
 layout(set = 0, binding = BINDING_ENVIRONMENT) uniform sampler2D environment_map;
 layout(set = 0, binding = BINDING_SHADOW_CUBE) uniform samplerCubeArray shadow_cubes;
 layout(set = 0, binding = BINDING_SHADOW_2D) uniform sampler2DArray shadow_layers;
+// Caustic-map atlas (Shah et al. 2007; src/passes/caustics_map.rs): flux per texel in W,
+// laid out like the shadow atlas.
+layout(set = 0, binding = BINDING_CAUSTIC_CUBE) uniform samplerCubeArray caustic_cubes;
+layout(set = 0, binding = BINDING_CAUSTIC_2D) uniform sampler2DArray caustic_layers;
 
 uint material_kind(uint m) { return kind_of(materials[m]); }
 

@@ -8,8 +8,57 @@
 layout(set = 1, binding = BINDING_GBUF_NORMAL) uniform sampler2D gbuf_normal;
 layout(set = 1, binding = BINDING_GBUF_ALBEDO) uniform sampler2D gbuf_albedo;
 layout(set = 1, binding = BINDING_GBUF_DEPTH) uniform sampler2D gbuf_depth;
+// Caustics mapping (Shah et al. 2007, §III.B step 5): 1 when a caustic map is rendered;
+// the radius in texels of the optional box low-pass filter of the map (§III.F).
+layout(constant_id = 0) const uint CAUSTICS = 0;
+layout(constant_id = 1) const uint CAUSTIC_FILTER = 0;
 layout(location = 0) in vec2 in_uv;
 layout(location = 0) out vec4 out_radiance;
+
+// Caustic irradiance (W/m^2) at p from light i: "each point of the receiver surface is
+// projected into the light's view" (§III.B step 5) and the caustic map's flux per texel is
+// divided by the receiver area that texel covers there: r^2 dOmega / |cos| for a cube
+// texel of solid angle dOmega at distance r, (texel size)^2 / |cos| for the orthographic
+// map, cos between the receiver normal and the light direction.
+vec3 caustic_irradiance(uint i, vec3 p, vec3 n) {
+    Light l = frame.lights[i];
+    float layer = l.intensity.w;
+    float size = float(textureSize(caustic_layers, 0).x);
+    int k = int(CAUSTIC_FILTER);
+    float taps = float((2 * k + 1) * (2 * k + 1));
+    vec3 flux = vec3(0.0);
+    if (uint(l.position.w + 0.5) == LIGHT_POINT) {
+        vec3 d = p - l.position.xyz;
+        float r2 = dot(d, d);
+        vec3 a = abs(d);
+        float m = max(a.x, max(a.y, a.z));
+        if (!(m > 0.0)) return vec3(0.0);
+        vec3 u = d / m;   // on the cube: the major coordinate is +-1
+        vec3 e1 = a.x == m ? vec3(0, 1, 0) : vec3(1, 0, 0);
+        vec3 e2 = a.z == m ? vec3(0, 1, 0) : vec3(0, 0, 1);
+        for (int y = -k; y <= k; ++y) {
+            for (int x = -k; x <= k; ++x) {
+                vec3 q = u + (float(x) * e1 + float(y) * e2) * (2.0 / size);
+                flux += textureLod(caustic_cubes, vec4(q, layer / float(SHADOW_LAYERS_PER_LIGHT)), 0.0).rgb;
+            }
+        }
+        float q = dot(u, u);   // 1 + a^2 + b^2 of the texel's face coordinates (a, b)
+        float d_omega = (2.0 / size) * (2.0 / size) / (q * sqrt(q));
+        float cosine = abs(dot(n, d)) * inversesqrt(max(r2, 1e-30));
+        return flux / taps * cosine / max(d_omega * r2, 1e-30);
+    }
+    vec4 clip = l.view_proj * vec4(p, 1.0);
+    vec2 uv = clip.xy * 0.5 + 0.5;
+    if (any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0)))) return vec3(0.0);
+    for (int y = -k; y <= k; ++y) {
+        for (int x = -k; x <= k; ++x) {
+            flux += textureLod(caustic_layers, vec3(uv + vec2(x, y) / size, layer), 0.0).rgb;
+        }
+    }
+    // The orthographic map spans 2 * far/2 metres (GpuLight.shadow.y = 2r, the map's side).
+    float texel = l.shadow.y / size;
+    return flux / taps * abs(dot(n, l.position.xyz)) / (texel * texel);
+}
 
 void main() {
     ivec2 px = ivec2(gl_FragCoord.xy);
@@ -31,5 +80,12 @@ void main() {
     // Two-sided diffuse: shade the side the camera sees.
     if (dot(n, ray) > 0.0) n = -n;
     vec3 albedo = texelFetch(gbuf_albedo, px, 0).rgb;
-    out_radiance = vec4(diffuse_radiance(p, n, albedo), 1.0);
+    vec3 radiance = diffuse_radiance(p, n, albedo);
+    if (CAUSTICS != 0u) {
+        // Caustics mapping (Shah et al. 2007): the caustic map's irradiance, Lambertian.
+        vec3 caustic = vec3(0.0);
+        for (uint i = 0u; i < frame.info.x; ++i) caustic += caustic_irradiance(i, p, n);
+        radiance += albedo / PI * caustic;
+    }
+    out_radiance = vec4(finite_or_zero(radiance), 1.0);
 }

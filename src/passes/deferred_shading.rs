@@ -15,6 +15,8 @@ pub struct DeferredShadingPass {
     pass: FullscreenPass,
     /// Whether a shadow_map pass writes the atlas this frame (then it is a declared read).
     shadowed: bool,
+    /// Whether a caustics_map pass writes the caustic atlas this frame.
+    caustics: bool,
 }
 
 impl DeferredShadingPass {
@@ -24,6 +26,7 @@ impl DeferredShadingPass {
         targets: &Targets,
         nearest: &Sampler,
         shadowed: bool,
+        caustic_filter: Option<u32>,
     ) -> GpuResult<Self> {
         let pass = FullscreenPass::new(
             ctx,
@@ -37,12 +40,13 @@ impl DeferredShadingPass {
                 ],
                 target: (&targets.hdr, targets.hdr_id),
                 clear: true,
-                specialization: &[],
+                // Caustics mapping on/off and its low-pass filter radius (deferred.frag).
+                specialization: &[u32::from(caustic_filter.is_some()), caustic_filter.unwrap_or(0)],
             },
             frame_layout,
             nearest,
         )?;
-        Ok(DeferredShadingPass { pass, shadowed })
+        Ok(DeferredShadingPass { pass, shadowed, caustics: caustic_filter.is_some() })
     }
 
     pub fn record<'a>(
@@ -55,6 +59,9 @@ impl DeferredShadingPass {
         let mut reads = vec![targets.gbuf_normal_id, targets.gbuf_albedo_id, targets.depth_id, scene.environment_id];
         if self.shadowed {
             reads.push(targets.shadow_atlas_id);
+        }
+        if self.caustics {
+            reads.push(targets.caustic_atlas_id);
         }
         self.pass.record(frame, frame_set, &reads);
     }

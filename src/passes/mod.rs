@@ -1,6 +1,7 @@
 //! One file per technique (../shared/DESIGN.md, rule 10). Each pass owns its pipelines and
 //! render pass, declares its reads and writes to the frame graph and records its commands.
 //! None of them touches raw Vulkan or records a barrier.
+pub mod caustics_map;
 pub mod deferred_shading;
 pub mod distance_impostor;
 pub mod fullscreen;

@@ -16,6 +16,7 @@ use crate::gpu::{
     MemoryLocation, Sampler, SamplerDesc, SubmitSync, TimestampPool, TimestampQuery,
 };
 use crate::graph::{Frame, FrameGraph, ImageId};
+use crate::passes::caustics_map::CausticsMapPass;
 use crate::passes::deferred_shading::DeferredShadingPass;
 use crate::passes::distance_impostor::{object_bounds, ImpostorMap, ImpostorReflection, ImpostorRefraction};
 use crate::passes::gbuffer::GBufferPass;
@@ -25,9 +26,12 @@ use crate::passes::refractor_layers::DebugTarget;
 use crate::passes::shadow_map::{ShadowMapPass, FAR_DISTANCE};
 use crate::passes::specular_single::{Mode, SpecularSinglePass};
 use crate::passes::tonemap::TonemapPass;
-use crate::scene::techniques::{HuQinParams, ImpostorParams, WymanParams};
+use crate::scene::techniques::{CausticsMapParams, HuQinParams, ImpostorParams, WymanParams};
 use crate::scene::{Camera, Scene};
-use crate::{BINDING_ENVIRONMENT, BINDING_FRAME, BINDING_MATERIALS, BINDING_SHADOW_2D, BINDING_SHADOW_CUBE};
+use crate::{
+    BINDING_CAUSTIC_2D, BINDING_CAUSTIC_CUBE, BINDING_ENVIRONMENT, BINDING_FRAME, BINDING_MATERIALS, BINDING_SHADOW_2D,
+    BINDING_SHADOW_CUBE,
+};
 
 use gpu_scene::GpuScene;
 use gpu_types::FrameUniforms;
@@ -96,6 +100,7 @@ impl FrameTiming {
 
 struct Passes {
     shadow_map: Option<ShadowMapPass>,
+    caustics_map: Option<CausticsMapPass>,
     gbuffer: GBufferPass,
     deferred: DeferredShadingPass,
     refraction_single: Option<SpecularSinglePass>,
@@ -175,6 +180,14 @@ impl Renderer {
         let shadow_size = scene.render.shadow_map_size;
         let shadowed = plan::has(&plan, plan::SHADOW_MAP);
         let gpu_scene = GpuScene::new(ctx, scene, &mut graph, shadow_size)?;
+        let caustics_params = if plan::has(&plan, plan::CAUSTICS_MAP) {
+            Some(
+                CausticsMapParams::from_settings(&scene.render)
+                    .map_err(|error| RenderError::Param { technique: "caustics_map", error })?,
+            )
+        } else {
+            None
+        };
         let targets = Targets::new(
             ctx,
             &mut graph,
@@ -182,6 +195,7 @@ impl Renderer {
             scene.camera.height,
             if shadowed { scene.lights.len() as u32 } else { 0 },
             shadow_size,
+            caustics_params.map(|p| p.map_size),
         )?;
 
         let nearest = Sampler::new(ctx, "nearest_clamp", SamplerDesc::NEAREST_CLAMP)?;
@@ -196,6 +210,8 @@ impl Renderer {
                 (BINDING_ENVIRONMENT, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, stages),
                 (BINDING_SHADOW_CUBE, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, stages),
                 (BINDING_SHADOW_2D, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, stages),
+                (BINDING_CAUSTIC_CUBE, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, stages),
+                (BINDING_CAUSTIC_2D, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, stages),
             ],
             FRAMES_IN_FLIGHT as u32,
         )?;
@@ -232,6 +248,18 @@ impl Renderer {
                         &nearest,
                         vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
                     ),
+                    DescriptorWrite::Sampled(
+                        BINDING_CAUSTIC_CUBE,
+                        targets.caustic_atlas.view(),
+                        &nearest,
+                        vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                    ),
+                    DescriptorWrite::Sampled(
+                        BINDING_CAUSTIC_2D,
+                        targets.caustic_atlas.array_view(),
+                        &nearest,
+                        vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                    ),
                 ],
             )?;
             frame_buffers.push(ubo);
@@ -246,6 +274,17 @@ impl Renderer {
             cmd.clear_color_image(&targets.shadow_atlas, [FAR_DISTANCE; 4]);
             graph.access_now(cmd, &[(atlas_id, Access::FragmentSampled)], &[]);
         })?;
+        // Likewise the caustic atlas: "no caustic light".
+        let caustic_id = targets.caustic_atlas_id;
+        ctx.one_shot(|cmd| {
+            graph.access_now(cmd, &[(caustic_id, Access::TransferWrite)], &[]);
+            cmd.clear_color_image(&targets.caustic_atlas, [0.0; 4]);
+            graph.access_now(cmd, &[(caustic_id, Access::FragmentSampled)], &[]);
+        })?;
+        let caustics_map = match caustics_params {
+            Some(p) => Some(CausticsMapPass::new(ctx, p, scene, &gpu_scene, &mut graph, &targets)?),
+            None => None,
+        };
 
         let refraction_wyman = if plan::has(&plan, plan::REFRACTION_WYMAN) {
             let params = WymanParams::from_settings(&scene.render)
@@ -287,8 +326,16 @@ impl Renderer {
             .collect();
         let passes = Passes {
             shadow_map: if shadowed { Some(ShadowMapPass::new(ctx, &gpu_scene, &targets)?) } else { None },
+            caustics_map,
             gbuffer: GBufferPass::new(ctx, &frame_layout, &targets)?,
-            deferred: DeferredShadingPass::new(ctx, &frame_layout, &targets, &nearest, shadowed)?,
+            deferred: DeferredShadingPass::new(
+                ctx,
+                &frame_layout,
+                &targets,
+                &nearest,
+                shadowed,
+                caustics_params.map(|p| p.filter),
+            )?,
             refraction_single: if plan::has(&plan, plan::REFRACTION_SINGLE) {
                 Some(SpecularSinglePass::new(ctx, Mode::Refraction, &frame_layout, &targets, &nearest)?)
             } else {
@@ -450,6 +497,9 @@ impl Renderer {
         if let Some(p) = &passes.shadow_map {
             p.record(&mut frame, scene, targets);
         }
+        if let Some(p) = &passes.caustics_map {
+            p.record(&mut frame, scene, targets);
+        }
         passes.gbuffer.record(&mut frame, scene, targets, frame_set);
         passes.deferred.record(&mut frame, scene, targets, frame_set);
         if let Some(p) = &passes.refraction_single {
@@ -532,6 +582,41 @@ impl Renderer {
     /// Tone-mapped sRGB, RGBA u8, row 0 at the top.
     pub fn read_ldr(&mut self) -> Result<Vec<u8>, RenderError> {
         self.read_image(self.targets.ldr_id, 4)
+    }
+
+    /// Total flux in the caustic map (W per channel), summed over every texel of every layer
+    /// (the map holds flux per texel, src/passes/caustics_map.rs); `None` without a
+    /// caustics_map pass.
+    pub fn caustic_map_flux(&mut self) -> Result<Option<[f64; 3]>, RenderError> {
+        if self.passes.caustics_map.is_none() {
+            return Ok(None);
+        }
+        self.finish()?;
+        let atlas = &self.targets.caustic_atlas;
+        let texels = atlas.desc.width as u64 * atlas.desc.height as u64 * atlas.layers() as u64;
+        let buffer = Buffer::new(
+            &self.ctx,
+            "caustic_readback",
+            texels * 16,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuToCpu,
+        )?;
+        let buffer_id = self.graph.register_buffer(&buffer);
+        let id = self.targets.caustic_atlas_id;
+        let graph = &mut self.graph;
+        self.ctx.one_shot(|cmd| {
+            graph.access_now(cmd, &[(id, Access::TransferRead)], &[(buffer_id, Access::TransferWrite)]);
+            cmd.copy_image_to_buffer(atlas, &buffer);
+            graph.access_now(cmd, &[(id, Access::FragmentSampled)], &[(buffer_id, Access::HostRead)]);
+        })?;
+        let values: &[[f32; 4]] = bytemuck::cast_slice(buffer.read());
+        let mut sum = [0f64; 3];
+        for v in values {
+            for c in 0..3 {
+                sum[c] += v[c] as f64;
+            }
+        }
+        Ok(Some(sum))
     }
 
     /// Names of the debug targets [`Renderer::read_target`] can read (e.g.

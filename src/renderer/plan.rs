@@ -23,6 +23,11 @@ pub const REFLECTION_IMPOSTOR: &str = "reflection_impostor";
 pub const REFRACTION_IMPOSTOR_MAP: &str = "refraction_impostor_map";
 pub const REFRACTION_IMPOSTOR_REFRACTOR_MAP: &str = "refraction_impostor_refractor_map";
 pub const REFRACTION_IMPOSTOR: &str = "refraction_impostor";
+/// Shah et al. 2007 (src/passes/caustics_map.rs): the receivers' positions and the
+/// refractors' positions and normals from the light, then the splatted caustic map.
+pub const CAUSTICS_MAP_RECEIVERS: &str = "caustics_map_receivers";
+pub const CAUSTICS_MAP_REFRACTORS: &str = "caustics_map_refractors";
+pub const CAUSTICS_MAP: &str = "caustics_map";
 
 #[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
 pub struct PlannedPass {
@@ -64,6 +69,7 @@ pub fn plan(scene: &Scene) -> Vec<PlannedPass> {
             reason: format!("{} cast shadows on the diffuse receivers {}", lights.join(" and "), list(&diffuse)),
         });
     }
+    passes.extend(caustics(scene, &diffuse, &dielectric, &metal));
     passes.push(PlannedPass {
         name: GBUFFER,
         reason: if scene.objects.is_empty() {
@@ -115,6 +121,36 @@ pub fn plan(scene: &Scene) -> Vec<PlannedPass> {
     }
     passes.push(PlannedPass { name: TONEMAP, reason: "linear radiance -> sRGB PNG output".into() });
     passes
+}
+
+/// The caustic passes: only with a light, a specular object, a diffuse receiver and
+/// `render.caustics = "caustics_map"`.
+fn caustics(scene: &Scene, diffuse: &[String], dielectric: &[String], metal: &[String]) -> Vec<PlannedPass> {
+    if scene.render.caustics != "caustics_map" || scene.lights.is_empty() || diffuse.is_empty() {
+        return Vec::new();
+    }
+    let specular: Vec<String> = dielectric.iter().chain(metal).cloned().collect();
+    if specular.is_empty() {
+        return Vec::new();
+    }
+    let lights = scene.lights.len();
+    vec![
+        PlannedPass {
+            name: CAUSTICS_MAP_RECEIVERS,
+            reason: format!("positions of the diffuse receivers {} seen from {lights} light(s)", list(diffuse)),
+        },
+        PlannedPass {
+            name: CAUSTICS_MAP_REFRACTORS,
+            reason: format!("positions and normals of the specular {} seen from the light(s)", list(&specular)),
+        },
+        PlannedPass {
+            name: CAUSTICS_MAP,
+            reason: format!(
+                "vertex grid splatted onto the receivers through {} (render.caustics = \"caustics_map\")",
+                list(&specular)
+            ),
+        },
+    ]
 }
 
 /// The passes of the two-interface image-space refraction techniques, if one is selected.

@@ -15,6 +15,8 @@ pub const GBUF_NORMAL_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
 pub const GBUF_ALBEDO_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
 pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
 pub const SHADOW_FORMAT: vk::Format = vk::Format::R32_SFLOAT;
+/// Caustic map: flux per texel in W, RGB (Shah et al. 2007; src/passes/caustics_map.rs).
+pub const CAUSTIC_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 
 pub struct Targets {
     pub width: u32,
@@ -28,6 +30,9 @@ pub struct Targets {
     pub shadow_atlas: Image,
     /// One depth layer per atlas layer, so faces never wait on each other's depth buffer.
     pub shadow_depth: Image,
+    /// Caustic-map atlas, laid out like `shadow_atlas` (six cube-compatible layers per light);
+    /// a cleared 1x1 placeholder when no caustic pass writes it.
+    pub caustic_atlas: Image,
     pub gbuf_normal_id: ImageId,
     pub gbuf_albedo_id: ImageId,
     pub depth_id: ImageId,
@@ -35,6 +40,7 @@ pub struct Targets {
     pub ldr_id: ImageId,
     pub shadow_atlas_id: ImageId,
     pub shadow_depth_id: ImageId,
+    pub caustic_atlas_id: ImageId,
 }
 
 impl Targets {
@@ -45,6 +51,7 @@ impl Targets {
         height: u32,
         lights: u32,
         shadow_size: u32,
+        caustic_size: Option<u32>,
     ) -> Result<Targets, RenderError> {
         let max = ctx.limits().max_image_dimension2_d;
         if width == 0 || height == 0 || width > max || height > max {
@@ -93,6 +100,28 @@ impl Targets {
                 view: ImageViewKind::D2Array,
             },
         )?;
+        let (csize, clayers) = match caustic_size {
+            Some(c) if lights > 0 => (c, lights * SHADOW_LAYERS_PER_LIGHT),
+            _ => (1, SHADOW_LAYERS_PER_LIGHT),
+        };
+        if csize > ctx.limits().max_image_dimension_cube {
+            return Err(RenderError::Limit(format!(
+                "render.caustics_map.map_size = {csize} is above the device's maximum cube size {}",
+                ctx.limits().max_image_dimension_cube
+            )));
+        }
+        let caustic_atlas = Image::new(
+            ctx,
+            &ImageDesc {
+                name: "caustic_atlas".into(),
+                format: CAUSTIC_FORMAT,
+                width: csize,
+                height: csize,
+                layers: clayers,
+                usage: U::COLOR_ATTACHMENT | U::SAMPLED | U::TRANSFER_DST | U::TRANSFER_SRC,
+                view: ImageViewKind::CubeArray,
+            },
+        )?;
         Ok(Targets {
             width,
             height,
@@ -103,6 +132,7 @@ impl Targets {
             ldr_id: graph.register_image(&ldr),
             shadow_atlas_id: graph.register_image(&shadow_atlas),
             shadow_depth_id: graph.register_image(&shadow_depth),
+            caustic_atlas_id: graph.register_image(&caustic_atlas),
             gbuf_normal,
             gbuf_albedo,
             depth,
@@ -110,6 +140,7 @@ impl Targets {
             ldr,
             shadow_atlas,
             shadow_depth,
+            caustic_atlas,
         })
     }
 

@@ -1,5 +1,5 @@
-//! Typed, validated parameters of the refraction techniques: the `[render.wyman]`,
-//! `[render.hu_qin]` and `[render.impostor]` tables (docs/scene-format.md lists every key with its default).
+//! Typed, validated parameters of the techniques: the `[render.wyman]`, `[render.hu_qin]`,
+//! `[render.impostor]` and `[render.caustics_map]` tables (docs/scene-format.md lists every key with its default).
 //!
 //! The scene loader checks a table when it reads it, so that a misspelt key or an absurd
 //! value is an error naming `file:line` or the `--set` that put it there; the passes parse
@@ -117,6 +117,51 @@ impl Default for ImpostorParams {
             fresnel: ImpostorFresnel::Approximate,
             update: ImpostorUpdate::OnMove,
             regenerate_distance: 0.25,
+        }
+    }
+}
+
+/// How caustics mapping estimates where a refracted or reflected ray meets the receivers
+/// (Shah et al. 2007, §III.C-D).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Newton {
+    /// The paper's approximation (§III.C, Eq. 1-2): the next distance is the distance from
+    /// the ray origin to the receiver point looked up at the current estimate (one texture
+    /// fetch per iteration, no derivative).
+    Approximate,
+    /// The true Newton-Raphson iteration of the appendix (Eq. 4, derivative by the finite
+    /// difference of Eq. 5), falling back to bisection when it oscillates (§III.D).
+    True,
+}
+
+/// `[render.caustics_map]` (Shah et al. 2007).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CausticsMapParams {
+    /// Vertices per side of the refractor grid, which is also the resolution of the
+    /// refractor textures rendered from the light (§III.B step 2; §III.F uses 128 x 128).
+    pub grid: u32,
+    /// Iterations of the intersection estimate (§III.D: "a single iteration is sufficient",
+    /// Fig. 6 uses 3).
+    pub iterations: u32,
+    pub newton: Newton,
+    /// Standard deviation of the Gaussian point splats, in caustic-map texels (§III.F).
+    pub splat_sigma: f32,
+    /// Radius in texels of the optional box low-pass filter applied at lookup (§III.F,
+    /// "the caustic-map texture can also be low-pass filtered"); 0 = off.
+    pub filter: u32,
+    /// Texels per side of each caustic-map face (and of the receivers' positions map).
+    pub map_size: u32,
+}
+
+impl Default for CausticsMapParams {
+    fn default() -> Self {
+        CausticsMapParams {
+            grid: 128,
+            iterations: 3,
+            newton: Newton::Approximate,
+            splat_sigma: 1.0,
+            filter: 0,
+            map_size: 512,
         }
     }
 }
@@ -266,11 +311,51 @@ impl ImpostorParams {
     }
 }
 
+impl CausticsMapParams {
+    pub const KEYS: &'static [&'static str] = &["grid", "iterations", "newton", "splat_sigma", "filter", "map_size"];
+
+    pub fn from_table(t: Option<&toml::Table>) -> Result<Self, ParamError> {
+        let mut p = CausticsMapParams::default();
+        for (key, v) in t.into_iter().flatten() {
+            match key.as_str() {
+                // 4096^2 vertices per face is already 16M splats per face on a CPU device.
+                "grid" => p.grid = integer(key, v, 2, 4096)?,
+                "iterations" => p.iterations = integer(key, v, 0, 64)?,
+                "newton" => {
+                    p.newton = match v.as_str() {
+                        Some("approximate") => Newton::Approximate,
+                        Some("true") => Newton::True,
+                        _ => {
+                            return Err(ParamError {
+                                key: key.clone(),
+                                message: format!("`newton` must be \"approximate\" or \"true\", not {v}"),
+                                hint: "Shah et al. 2007: the approximate iteration of §III.C or the appendix's".into(),
+                            })
+                        }
+                    }
+                }
+                // Below half a texel a splat no longer covers the texel grid evenly, and the
+                // point size (6 sigma + 1) must stay within lavapipe's point-size range.
+                "splat_sigma" => p.splat_sigma = number(key, v, 0.5, 16.0)?,
+                "filter" => p.filter = integer(key, v, 0, 16)?,
+                "map_size" => p.map_size = integer(key, v, 8, 4096)?,
+                _ => return Err(unknown("caustics_map", key, Self::KEYS)),
+            }
+        }
+        Ok(p)
+    }
+
+    pub fn from_settings(r: &RenderSettings) -> Result<Self, ParamError> {
+        Self::from_table(r.params.get("caustics_map"))
+    }
+}
+
 /// Check the parameter table `[render.<technique>]` if the technique is one of these.
 pub fn check(technique: &str, t: &toml::Table) -> Result<(), ParamError> {
     match technique {
         "wyman" => WymanParams::from_table(Some(t)).map(|_| ()),
         "hu_qin" => HuQinParams::from_table(Some(t)).map(|_| ()),
+        "caustics_map" => CausticsMapParams::from_table(Some(t)).map(|_| ()),
         "impostor" => ImpostorParams::from_table(Some(t)).map(|_| ()),
         _ => Ok(()),
     }
@@ -318,6 +403,13 @@ mod tests {
             let e = ImpostorParams::from_table(Some(&table(t))).unwrap_err();
             assert_eq!(e.key, key, "{t}");
         }
+        for (t, key) in [("grid = 1", "grid"), ("newton = \"secant\"", "newton"), ("splat_sigma = 0.1", "splat_sigma")]
+        {
+            let e = CausticsMapParams::from_table(Some(&table(t))).unwrap_err();
+            assert_eq!(e.key, key, "{t}");
+        }
+        let c = CausticsMapParams::from_table(Some(&table("grid = 64\nnewton = \"true\"\nfilter = 1"))).unwrap();
+        assert_eq!((c.grid, c.newton, c.filter), (64, Newton::True, 1));
         let e = WymanParams::from_table(Some(&table("back_surface = \"first\""))).unwrap_err();
         assert!(e.message.contains("back_surface"), "{e}");
     }

@@ -1,0 +1,606 @@
+//! Caustics mapping: Shah, Konttinen & Pattanaik 2007, "Caustics Mapping: An Image-space
+//! Technique for Real-time Caustics" (../shared/papers/shah2007-caustics-mapping.md).
+//!
+//! Three graph passes, each timed under its own name:
+//!
+//! 1. `caustics_map_receivers` (§III.B step 1): the diffuse receivers seen from each light,
+//!    stored like the shadow maps as distances to the light (a cube for a point light, the
+//!    light's orthographic map for a directional one), from which the vertex shader recovers
+//!    the receivers' positions. Refractors are left out, so the receivers under them are seen.
+//! 2. `caustics_map_refractors` (§III.B step 2): the specular objects from the light as MRT,
+//!    positions and normals, into textures of the grid's resolution: the surface nearest the
+//!    light, and the nearest surface facing away from it (the exit surface of double-surface
+//!    refraction, §III.E / §IV with Wyman 2005). One source face fitted to the specular
+//!    objects' bounding sphere (a perspective frustum for a point light outside it, an
+//!    orthographic box for a directional light), or six cube faces for a point light inside.
+//! 3. `caustics_map` (§III.C-E): the vertex grid drawn as points, G x G per source face. The
+//!    vertex shader (glsl/caustics/splat.vert) fetches the refractor textures, refracts or
+//!    reflects, estimates the receiver hit with the approximate (§III.C, Eq. 1-2) or true
+//!    (appendix, Eq. 4-5) Newton-Raphson iteration, and splats the vertex's flux (Eq. 6-7)
+//!    with a Gaussian point sprite and additive blending into the caustic-map atlas: six cube
+//!    faces per point light (§III.F "environment caustic map"), the orthographic map for a
+//!    directional light. With an RGB ior the grid is drawn as three instances, one per
+//!    channel (dispersion, Fig. 13).
+//!
+//! Units: the map holds flux per texel (W). Deferred shading divides by the receiver area a
+//! texel covers (glsl/shading/deferred.frag, `caustic_irradiance`), giving irradiance in
+//! W/m^2 comparable with the reference's photon-mapped caustics.
+use std::sync::Arc;
+
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Vec3};
+
+use crate::gpu::{
+    vk, Access, Attachment, Blend, Buffer, Clear, DepthState, DescriptorSet, DescriptorSetLayout, DescriptorWrite,
+    Framebuffer, GpuContext, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc, ImageViewKind,
+    PipelineLayout, RenderPass, RenderPassDesc, Sampler, SamplerDesc, VertexLayout,
+};
+use crate::graph::{Frame, FrameGraph, ImageId};
+use crate::passes::shadow_map::FAR_DISTANCE;
+use crate::renderer::gpu_scene::{cube_face_views, Draw, GpuScene};
+use crate::renderer::gpu_types::ShadowPush;
+use crate::renderer::plan::{CAUSTICS_MAP, CAUSTICS_MAP_RECEIVERS, CAUSTICS_MAP_REFRACTORS};
+use crate::renderer::targets::{Targets, CAUSTIC_FORMAT, DEPTH_FORMAT, SHADOW_FORMAT};
+use crate::scene::techniques::{CausticsMapParams, Newton};
+use crate::scene::{Light, Material, Scene};
+use crate::{
+    CAUSTIC_BINDING_BACK_NORMAL, CAUSTIC_BINDING_BACK_POSITION, CAUSTIC_BINDING_FACES, CAUSTIC_BINDING_FRONT_NORMAL,
+    CAUSTIC_BINDING_FRONT_POSITION, CAUSTIC_BINDING_MATERIALS, CAUSTIC_BINDING_RECEIVER_2D,
+    CAUSTIC_BINDING_RECEIVER_CUBE, CAUSTIC_FACE_ORTHOGRAPHIC, CAUSTIC_FACE_PERSPECTIVE, CAUSTIC_LAYER_BACK,
+    CAUSTIC_LAYER_FRONT, LIGHT_DIRECTIONAL, LIGHT_POINT, NEWTON_APPROXIMATE, NEWTON_TRUE, SHADOW_LAYERS_PER_LIGHT,
+};
+
+/// Refractor textures: 32-bit float positions and normals, so that the estimate's error is
+/// the technique's, not the storage's.
+const LAYER_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
+
+/// A point light closer to the specular objects' bounding sphere than this fraction of its
+/// radius (or inside it) sees them over too wide an angle for one frustum: six cube faces.
+const FITTED_FRUSTUM_LIMIT: f32 = 0.9;
+
+/// One source face of the vertex grid (mirrors `Face` in glsl/caustics/splat.vert, std430).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct GpuCausticFace {
+    pub view_proj: [[f32; 4]; 4],
+    pub receiver_view_proj: [[f32; 4]; 4],
+    pub light: [f32; 4],
+    pub intensity: [f32; 4],
+    pub measure: [f32; 4],
+    pub origin: [f32; 4],
+}
+const _: () = assert!(std::mem::size_of::<GpuCausticFace>() == 192);
+
+/// Push constants of glsl/caustics/refractor.{vert,frag}.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct RefractorPush {
+    view_proj: [[f32; 4]; 4],
+    light: [f32; 4],
+    info: [u32; 4],
+}
+const _: () = assert!(std::mem::size_of::<RefractorPush>() <= 128);
+
+/// Push constants of glsl/caustics/splat.vert.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct SplatPush {
+    dest_view_proj: [[f32; 4]; 4],
+    face: [u32; 4],
+    params: [f32; 4],
+}
+const _: () = assert!(std::mem::size_of::<SplatPush>() <= 128);
+
+/// One layer of the caustic atlas to splat into, with the source faces of its light.
+struct Destination {
+    framebuffer: Framebuffer,
+    push: SplatPush,
+}
+
+/// A face of the receivers' distance atlas.
+struct ReceiverFace {
+    framebuffer: Framebuffer,
+    push: ShadowPush,
+}
+
+struct SourceFace {
+    front: Framebuffer,
+    back: Framebuffer,
+    view_proj: Mat4,
+    light: [f32; 4],
+}
+
+/// Where the light sees the specular objects from: the faces of its vertex grid.
+fn source_faces(light: &Light, center: Vec3, radius: f32, grid: u32) -> Vec<GpuCausticFace> {
+    let g = grid as f32;
+    let v4 = |v: Vec3, w: f32| [v.x, v.y, v.z, w];
+    match light {
+        Light::Point { position, intensity } => {
+            let to = center - *position;
+            let d = to.length();
+            let far = (d + radius) * 1.5;
+            let face = |view_proj: Mat4, tan_half: f32| GpuCausticFace {
+                view_proj: view_proj.to_cols_array_2d(),
+                receiver_view_proj: Mat4::IDENTITY.to_cols_array_2d(),
+                light: v4(*position, LIGHT_POINT as f32),
+                intensity: v4(*intensity, 0.0),
+                measure: [CAUSTIC_FACE_PERSPECTIVE as f32, tan_half, g, 2.0 * radius],
+                origin: [0.0; 4],
+            };
+            if d * FITTED_FRUSTUM_LIMIT > radius {
+                // The cone around the bounding sphere, with a margin of 2% for the
+                // tessellation's outermost vertices.
+                let tan_half = (radius / d).asin().tan() * 1.02;
+                let dir = to / d;
+                let up = if dir.y.abs() > 0.99 { Vec3::Z } else { Vec3::Y };
+                let view = Mat4::look_at_rh(*position, center, up);
+                let near = ((d - radius) * 0.5).max(d * 1e-4);
+                let proj = Mat4::perspective_rh(2.0 * tan_half.atan(), 1.0, near, far);
+                vec![face(proj * view, tan_half)]
+            } else {
+                let near = (far * 1e-4).max(1e-9);
+                let proj = Mat4::perspective_rh(std::f32::consts::FRAC_PI_2, 1.0, near, far);
+                cube_face_views(*position).iter().map(|v| face(proj * *v, 1.0)).collect()
+            }
+        }
+        Light::Directional { direction, irradiance } => {
+            let dir = direction.normalize();
+            let r = radius * 1.02;
+            let origin = center - dir * 2.0 * r;
+            let up = if dir.y.abs() > 0.99 { Vec3::Z } else { Vec3::Y };
+            let view = Mat4::look_at_rh(origin, origin + dir, up);
+            let proj = Mat4::orthographic_rh(-r, r, -r, r, 0.0, 4.0 * r);
+            vec![GpuCausticFace {
+                view_proj: (proj * view).to_cols_array_2d(),
+                receiver_view_proj: Mat4::IDENTITY.to_cols_array_2d(),
+                light: v4(dir, LIGHT_DIRECTIONAL as f32),
+                intensity: v4(*irradiance, 0.0),
+                measure: [CAUSTIC_FACE_ORTHOGRAPHIC as f32, r, g, 2.0 * radius],
+                origin: [0.0; 4],
+            }]
+        }
+    }
+}
+
+fn is_specular(m: &Material) -> bool {
+    matches!(m, Material::Dielectric { .. } | Material::Mirror { .. } | Material::Conductor { .. })
+}
+
+/// Centre and radius of a sphere bounding every specular object.
+fn specular_bounds(scene: &Scene) -> (Vec3, f32) {
+    let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+    for o in scene.objects.iter().filter(|o| is_specular(&scene.materials[o.material])) {
+        for p in &o.mesh.positions {
+            lo = lo.min(*p);
+            hi = hi.max(*p);
+        }
+    }
+    let center = (lo + hi) * 0.5;
+    (center, ((hi - lo).length() * 0.5).max(1e-6))
+}
+
+pub struct CausticsMapPass {
+    params: CausticsMapParams,
+    // Receivers.
+    receiver_pass: RenderPass,
+    _receiver_layout: PipelineLayout,
+    receiver_pipeline: GraphicsPipeline,
+    _receiver_atlas: Image,
+    _receiver_depth: Image,
+    receiver_atlas_id: ImageId,
+    receiver_depth_id: ImageId,
+    receiver_faces: Vec<ReceiverFace>,
+    receiver_draws: Vec<Draw>,
+    // Refractors.
+    refractor_pass: RenderPass,
+    _refractor_layout: PipelineLayout,
+    front_pipeline: GraphicsPipeline,
+    back_pipeline: GraphicsPipeline,
+    /// front position, front normal, back position, back normal, front depth, back depth.
+    layers: Vec<(Image, ImageId)>,
+    sources: Vec<SourceFace>,
+    specular_draws: Vec<Draw>,
+    // Splats.
+    splat_pass: RenderPass,
+    _set_layout: DescriptorSetLayout,
+    set: DescriptorSet,
+    _splat_layout: PipelineLayout,
+    splat_pipeline: GraphicsPipeline,
+    destinations: Vec<Destination>,
+    /// Splat instances: 3 with a dispersive (RGB ior) dielectric, one per channel; else 1.
+    channels: u32,
+    _faces: Buffer,
+    _samplers: [Sampler; 2],
+}
+
+impl CausticsMapPass {
+    pub fn new(
+        ctx: &Arc<GpuContext>,
+        params: CausticsMapParams,
+        scene: &Scene,
+        gpu: &GpuScene,
+        graph: &mut FrameGraph,
+        targets: &Targets,
+    ) -> GpuResult<Self> {
+        use vk::ImageUsageFlags as U;
+        let size = params.map_size;
+        let grid = params.grid;
+        let lights = gpu.lights.len() as u32;
+        let layers = lights * SHADOW_LAYERS_PER_LIGHT;
+
+        // 1. Receivers: the shadow pass's shaders, the diffuse draws only.
+        let receiver_pass = RenderPass::new(
+            ctx,
+            CAUSTICS_MAP_RECEIVERS,
+            &RenderPassDesc {
+                colors: vec![Attachment { format: SHADOW_FORMAT, clear: true }],
+                depth: Some(Attachment { format: DEPTH_FORMAT, clear: true }),
+                depth_read_only: false,
+            },
+        )?;
+        let receiver_layout =
+            PipelineLayout::new(ctx, CAUSTICS_MAP_RECEIVERS, &[], std::mem::size_of::<ShadowPush>() as u32)?;
+        let receiver_pipeline = GraphicsPipeline::new(
+            ctx,
+            &GraphicsPipelineDesc {
+                name: CAUSTICS_MAP_RECEIVERS,
+                vertex_shader: "shadow/shadow.vert",
+                fragment_shader: "shadow/shadow.frag",
+                vertex: VertexLayout::Mesh,
+                topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+                cull: vk::CullModeFlags::NONE,
+                depth: DepthState::LESS,
+                blend: &[Blend::Off],
+                specialization: &[],
+            },
+            &receiver_layout,
+            &receiver_pass,
+        )?;
+        let receiver_atlas = Image::new(
+            ctx,
+            &ImageDesc {
+                name: "caustic_receivers".into(),
+                format: SHADOW_FORMAT,
+                width: size,
+                height: size,
+                layers,
+                usage: U::COLOR_ATTACHMENT | U::SAMPLED,
+                view: ImageViewKind::CubeArray,
+            },
+        )?;
+        let receiver_depth = Image::new(
+            ctx,
+            &ImageDesc {
+                name: "caustic_receivers_depth".into(),
+                format: DEPTH_FORMAT,
+                width: size,
+                height: size,
+                layers,
+                usage: U::DEPTH_STENCIL_ATTACHMENT,
+                view: ImageViewKind::D2Array,
+            },
+        )?;
+        let mut receiver_faces = Vec::new();
+        for face in &gpu.shadow_faces {
+            receiver_faces.push(ReceiverFace {
+                framebuffer: Framebuffer::new(
+                    ctx,
+                    &format!("caustic_receivers_{}", face.layer),
+                    &receiver_pass,
+                    &[receiver_atlas.layer_view(face.layer), receiver_depth.layer_view(face.layer)],
+                    receiver_atlas.extent(),
+                )?,
+                push: ShadowPush {
+                    view_proj: face.view_proj.to_cols_array_2d(),
+                    light: face.light,
+                    origin: face.origin,
+                },
+            });
+        }
+        let draws_where = |pred: fn(&Material) -> bool| -> Vec<Draw> {
+            gpu.draws.iter().filter(|d| pred(&scene.materials[d.material as usize])).copied().collect()
+        };
+        let receiver_draws = draws_where(Material::is_diffuse);
+        let specular_draws = draws_where(is_specular);
+
+        // 2. Source faces of every light, and the refractor textures.
+        let (center, radius) = specular_bounds(scene);
+        let mut faces: Vec<GpuCausticFace> = Vec::new();
+        let mut light_sources = Vec::new();
+        for (i, l) in scene.lights.iter().enumerate() {
+            let base = i as u32 * SHADOW_LAYERS_PER_LIGHT;
+            let first = faces.len() as u32;
+            for mut f in source_faces(l, center, radius, grid) {
+                f.intensity[3] = base as f32;
+                f.receiver_view_proj = gpu.lights[i].view_proj;
+                f.origin = gpu.lights[i].origin;
+                faces.push(f);
+            }
+            light_sources.push((first, faces.len() as u32 - first));
+        }
+        let refractor_pass = RenderPass::new(
+            ctx,
+            CAUSTICS_MAP_REFRACTORS,
+            &RenderPassDesc {
+                colors: vec![
+                    Attachment { format: LAYER_FORMAT, clear: true },
+                    Attachment { format: LAYER_FORMAT, clear: true },
+                ],
+                depth: Some(Attachment { format: DEPTH_FORMAT, clear: true }),
+                depth_read_only: false,
+            },
+        )?;
+        let refractor_layout =
+            PipelineLayout::new(ctx, CAUSTICS_MAP_REFRACTORS, &[], std::mem::size_of::<RefractorPush>() as u32)?;
+        let refractor_pipeline = |mode: u32, name: &str| {
+            GraphicsPipeline::new(
+                ctx,
+                &GraphicsPipelineDesc {
+                    name,
+                    vertex_shader: "caustics/refractor.vert",
+                    fragment_shader: "caustics/refractor.frag",
+                    vertex: VertexLayout::Mesh,
+                    topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+                    cull: vk::CullModeFlags::NONE,
+                    depth: DepthState::LESS,
+                    blend: &[Blend::Off, Blend::Off],
+                    specialization: &[mode],
+                },
+                &refractor_layout,
+                &refractor_pass,
+            )
+        };
+        let front_pipeline = refractor_pipeline(CAUSTIC_LAYER_FRONT, "caustics_map_front")?;
+        let back_pipeline = refractor_pipeline(CAUSTIC_LAYER_BACK, "caustics_map_back")?;
+        let n_faces = faces.len() as u32;
+        let mut layer_images = Vec::new();
+        for (name, format, usage) in [
+            ("caustic_front_position", LAYER_FORMAT, U::COLOR_ATTACHMENT | U::SAMPLED),
+            ("caustic_front_normal", LAYER_FORMAT, U::COLOR_ATTACHMENT | U::SAMPLED),
+            ("caustic_back_position", LAYER_FORMAT, U::COLOR_ATTACHMENT | U::SAMPLED),
+            ("caustic_back_normal", LAYER_FORMAT, U::COLOR_ATTACHMENT | U::SAMPLED),
+            ("caustic_front_depth", DEPTH_FORMAT, U::DEPTH_STENCIL_ATTACHMENT),
+            ("caustic_back_depth", DEPTH_FORMAT, U::DEPTH_STENCIL_ATTACHMENT),
+        ] {
+            let image = Image::new(
+                ctx,
+                &ImageDesc {
+                    name: name.into(),
+                    format,
+                    width: grid,
+                    height: grid,
+                    layers: n_faces,
+                    usage,
+                    view: ImageViewKind::D2Array,
+                },
+            )?;
+            let id = graph.register_image(&image);
+            layer_images.push((image, id));
+        }
+        let extent = vk::Extent2D { width: grid, height: grid };
+        let mut sources = Vec::new();
+        for (s, f) in faces.iter().enumerate() {
+            let s = s as u32;
+            let views = |a: usize, b: usize, depth: usize| {
+                [layer_images[a].0.layer_view(s), layer_images[b].0.layer_view(s), layer_images[depth].0.layer_view(s)]
+            };
+            sources.push(SourceFace {
+                front: Framebuffer::new(ctx, &format!("caustic_front_{s}"), &refractor_pass, &views(0, 1, 4), extent)?,
+                back: Framebuffer::new(ctx, &format!("caustic_back_{s}"), &refractor_pass, &views(2, 3, 5), extent)?,
+                view_proj: Mat4::from_cols_array_2d(&f.view_proj),
+                light: f.light,
+            });
+        }
+
+        // 3. The splat pass.
+        let faces_buffer = Buffer::with_data(
+            ctx,
+            "caustic_faces",
+            bytemuck::cast_slice(&faces),
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+        )?;
+        // Linear filtering of the receivers' distances makes f(d) (Eq. 3) piecewise linear
+        // instead of piecewise constant, so that the finite difference of Eq. 5 is not zero.
+        let linear = Sampler::new(ctx, "caustic_linear", SamplerDesc::LINEAR_CLAMP)?;
+        let nearest = Sampler::new(ctx, "caustic_nearest", SamplerDesc::NEAREST_CLAMP)?;
+        let vs = vk::ShaderStageFlags::VERTEX;
+        let sampled = vk::DescriptorType::COMBINED_IMAGE_SAMPLER;
+        let set_layout = DescriptorSetLayout::new(
+            ctx,
+            CAUSTICS_MAP,
+            &[
+                (CAUSTIC_BINDING_FACES, vk::DescriptorType::STORAGE_BUFFER, vs),
+                (CAUSTIC_BINDING_MATERIALS, vk::DescriptorType::STORAGE_BUFFER, vs),
+                (CAUSTIC_BINDING_RECEIVER_CUBE, sampled, vs),
+                (CAUSTIC_BINDING_RECEIVER_2D, sampled, vs),
+                (CAUSTIC_BINDING_FRONT_POSITION, sampled, vs),
+                (CAUSTIC_BINDING_FRONT_NORMAL, sampled, vs),
+                (CAUSTIC_BINDING_BACK_POSITION, sampled, vs),
+                (CAUSTIC_BINDING_BACK_NORMAL, sampled, vs),
+            ],
+            1,
+        )?;
+        let read_only = Access::VertexSampled.info(false).layout;
+        let set = set_layout.allocate(
+            CAUSTICS_MAP,
+            &[
+                DescriptorWrite::Storage(CAUSTIC_BINDING_FACES, &faces_buffer),
+                DescriptorWrite::Storage(CAUSTIC_BINDING_MATERIALS, &gpu.materials),
+                DescriptorWrite::Sampled(CAUSTIC_BINDING_RECEIVER_CUBE, receiver_atlas.view(), &linear, read_only),
+                DescriptorWrite::Sampled(CAUSTIC_BINDING_RECEIVER_2D, receiver_atlas.array_view(), &linear, read_only),
+                DescriptorWrite::Sampled(CAUSTIC_BINDING_FRONT_POSITION, layer_images[0].0.view(), &nearest, read_only),
+                DescriptorWrite::Sampled(CAUSTIC_BINDING_FRONT_NORMAL, layer_images[1].0.view(), &nearest, read_only),
+                DescriptorWrite::Sampled(CAUSTIC_BINDING_BACK_POSITION, layer_images[2].0.view(), &nearest, read_only),
+                DescriptorWrite::Sampled(CAUSTIC_BINDING_BACK_NORMAL, layer_images[3].0.view(), &nearest, read_only),
+            ],
+        )?;
+        let splat_pass = RenderPass::new(
+            ctx,
+            CAUSTICS_MAP,
+            &RenderPassDesc {
+                colors: vec![Attachment { format: CAUSTIC_FORMAT, clear: true }],
+                depth: None,
+                depth_read_only: false,
+            },
+        )?;
+        let splat_layout =
+            PipelineLayout::new(ctx, CAUSTICS_MAP, &[&set_layout], std::mem::size_of::<SplatPush>() as u32)?;
+        let splat_pipeline = GraphicsPipeline::new(
+            ctx,
+            &GraphicsPipelineDesc {
+                name: CAUSTICS_MAP,
+                vertex_shader: "caustics/splat.vert",
+                fragment_shader: "caustics/splat.frag",
+                vertex: VertexLayout::None,
+                topology: vk::PrimitiveTopology::POINT_LIST,
+                cull: vk::CullModeFlags::NONE,
+                depth: DepthState::OFF,
+                blend: &[Blend::Additive],
+                specialization: &[],
+            },
+            &splat_layout,
+            &splat_pass,
+        )?;
+        let dispersive = scene.materials.iter().any(|m| match m {
+            Material::Dielectric { ior, .. } => ior.x != ior.y || ior.y != ior.z,
+            _ => false,
+        });
+        let channels = if dispersive { 3 } else { 1 };
+        let newton = match params.newton {
+            Newton::Approximate => NEWTON_APPROXIMATE,
+            Newton::True => NEWTON_TRUE,
+        };
+        let splat_params = [params.splat_sigma, params.iterations as f32, newton as f32, size as f32];
+        let mut destinations = Vec::new();
+        for (i, l) in scene.lights.iter().enumerate() {
+            let base = i as u32 * SHADOW_LAYERS_PER_LIGHT;
+            let (first, count) = light_sources[i];
+            let dest: Vec<(u32, Mat4, u32)> = match l {
+                Light::Point { .. } => gpu
+                    .shadow_faces
+                    .iter()
+                    .filter(|f| f.layer >= base && f.layer < base + 6)
+                    .map(|f| (f.layer, f.view_proj, f.layer - base))
+                    .collect(),
+                Light::Directional { .. } => {
+                    vec![(base, Mat4::from_cols_array_2d(&gpu.lights[i].view_proj), 6)]
+                }
+            };
+            for (layer, view_proj, cube_face) in dest {
+                destinations.push(Destination {
+                    framebuffer: Framebuffer::new(
+                        ctx,
+                        &format!("caustic_map_{layer}"),
+                        &splat_pass,
+                        &[targets.caustic_atlas.layer_view(layer)],
+                        targets.caustic_atlas.extent(),
+                    )?,
+                    push: SplatPush {
+                        dest_view_proj: view_proj.to_cols_array_2d(),
+                        face: [first, count, cube_face, channels],
+                        params: splat_params,
+                    },
+                });
+            }
+        }
+
+        Ok(CausticsMapPass {
+            params,
+            receiver_pass,
+            _receiver_layout: receiver_layout,
+            receiver_pipeline,
+            receiver_atlas_id: graph.register_image(&receiver_atlas),
+            receiver_depth_id: graph.register_image(&receiver_depth),
+            _receiver_atlas: receiver_atlas,
+            _receiver_depth: receiver_depth,
+            receiver_faces,
+            receiver_draws,
+            refractor_pass,
+            _refractor_layout: refractor_layout,
+            front_pipeline,
+            back_pipeline,
+            layers: layer_images,
+            sources,
+            specular_draws,
+            splat_pass,
+            _set_layout: set_layout,
+            set,
+            _splat_layout: splat_layout,
+            splat_pipeline,
+            destinations,
+            channels,
+            _faces: faces_buffer,
+            _samplers: [linear, nearest],
+        })
+    }
+
+    pub fn params(&self) -> &CausticsMapParams {
+        &self.params
+    }
+
+    pub fn record<'a>(&'a self, frame: &mut Frame<'_, 'a>, scene: &'a GpuScene, targets: &Targets) {
+        frame
+            .pass(CAUSTICS_MAP_RECEIVERS)
+            .write(self.receiver_atlas_id, Access::ColorAttachment)
+            .write(self.receiver_depth_id, Access::DepthAttachment)
+            .record(move |cmd| {
+                for face in &self.receiver_faces {
+                    cmd.begin_render_pass(
+                        &self.receiver_pass,
+                        &face.framebuffer,
+                        &[Clear::Color([FAR_DISTANCE; 4]), Clear::Depth(1.0)],
+                    );
+                    cmd.bind_graphics(&self.receiver_pipeline, &[]);
+                    cmd.push_graphics(&self.receiver_pipeline, &face.push);
+                    cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
+                    for d in &self.receiver_draws {
+                        cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
+                    }
+                    cmd.end_render_pass();
+                }
+            });
+
+        let mut pass = frame.pass(CAUSTICS_MAP_REFRACTORS);
+        for (i, (_, id)) in self.layers.iter().enumerate() {
+            pass = pass.write(*id, if i < 4 { Access::ColorAttachment } else { Access::DepthAttachment });
+        }
+        pass.record(move |cmd| {
+            for s in &self.sources {
+                for (fb, pipeline) in [(&s.front, &self.front_pipeline), (&s.back, &self.back_pipeline)] {
+                    cmd.begin_render_pass(
+                        &self.refractor_pass,
+                        fb,
+                        &[Clear::Color([0.0; 4]), Clear::Color([0.0; 4]), Clear::Depth(1.0)],
+                    );
+                    cmd.bind_graphics(pipeline, &[]);
+                    cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
+                    for d in &self.specular_draws {
+                        let push = RefractorPush {
+                            view_proj: s.view_proj.to_cols_array_2d(),
+                            light: s.light,
+                            info: [d.material, 0, 0, 0],
+                        };
+                        cmd.push_graphics(pipeline, &push);
+                        cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
+                    }
+                    cmd.end_render_pass();
+                }
+            }
+        });
+
+        let mut pass = frame.pass(CAUSTICS_MAP).read(self.receiver_atlas_id, Access::VertexSampled);
+        for (_, id) in &self.layers[..4] {
+            pass = pass.read(*id, Access::VertexSampled);
+        }
+        let grid = self.params.grid;
+        pass.write(targets.caustic_atlas_id, Access::ColorAttachment).record(move |cmd| {
+            for d in &self.destinations {
+                cmd.begin_render_pass(&self.splat_pass, &d.framebuffer, &[Clear::Color([0.0; 4])]);
+                cmd.bind_graphics(&self.splat_pipeline, &[self.set]);
+                cmd.push_graphics(&self.splat_pipeline, &d.push);
+                cmd.draw(d.push.face[1] * grid * grid, self.channels);
+                cmd.end_render_pass();
+            }
+        });
+    }
+}
