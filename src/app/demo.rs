@@ -5,6 +5,7 @@
 //! `--set`-style overrides and rebuilding the renderer; errors while running (a bad scene
 //! edit, a lost surface) are shown or recovered from, never a panic.
 mod camera;
+mod drag;
 mod ui;
 
 use std::path::{Path, PathBuf};
@@ -13,7 +14,7 @@ use std::time::{Duration, Instant, SystemTime};
 
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
-use glam::Vec2;
+use glam::{Vec2, Vec3};
 use winit::application::ApplicationHandler;
 use winit::dpi::PhysicalSize;
 use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
@@ -63,6 +64,11 @@ pub struct DemoArgs {
     /// to WxH.
     #[arg(long, hide = true, num_args = 2, value_names = ["FRAME", "WxH"])]
     pub resize_at: Vec<String>,
+    /// Test hook: after FRAME presented frames, behave as if the window surface had been
+    /// lost (VK_ERROR_SURFACE_LOST_KHR, which X11 cannot be asked to produce): destroy the
+    /// surface and swapchain and create new ones, as the error path does.
+    #[arg(long, hide = true, value_name = "FRAME")]
+    pub lose_surface_at: Option<u64>,
 }
 
 /// `--resize-at FRAME WxH`.
@@ -109,6 +115,14 @@ struct App {
     result: Result<()>,
 }
 
+/// What a Ctrl or Shift drag holds: the override it edits, the point grabbed (moves with
+/// the cursor in the plane facing the camera) and the value it writes (moves with it).
+struct Grab {
+    key: String,
+    anchor: Vec3,
+    value: Vec3,
+}
+
 /// Everything that exists while the window is open. Field order is drop order: GPU objects
 /// before the context, the surface (in the swapchain) before the window.
 struct Running {
@@ -130,6 +144,10 @@ struct Running {
     ui: ui::UiState,
     stats: ui::Stats,
     cursor: Option<Vec2>,
+    /// Keyboard modifiers: Ctrl + drag moves an object, Shift + drag the light.
+    modifiers: winit::keyboard::ModifiersState,
+    /// An object or the light being dragged in the view.
+    grab: Option<Grab>,
     start: Instant,
     last_frame: Instant,
     scene_mtime: Option<SystemTime>,
@@ -157,6 +175,11 @@ impl ApplicationHandler for App {
                     Ok(true) => {}
                     Ok(false) => return self.finish(event_loop),
                     Err(e) => return self.fail(event_loop, e),
+                }
+                if self.args.lose_surface_at == Some(r.frames) {
+                    if let Err(e) = r.recreate_surface() {
+                        return self.fail(event_loop, e);
+                    }
                 }
                 if let Some((at, w, h)) = self.resize_at {
                     if r.frames == at {
@@ -293,6 +316,8 @@ impl Running {
             ui: ui::UiState::new(!args.no_overlay),
             stats: ui::Stats::default(),
             cursor: None,
+            modifiers: Default::default(),
+            grab: None,
             start: now,
             last_frame: now,
             scene_mtime: mtime(path),
@@ -412,9 +437,20 @@ impl Running {
                     self.move_light(code);
                 }
             }
+            WindowEvent::ModifiersChanged(m) => self.modifiers = m.state(),
             WindowEvent::MouseInput { state, button, .. } => {
                 let pressed = state == ElementState::Pressed;
                 if pressed && (response.consumed || egui_ctx.wants_pointer_input()) {
+                    return false;
+                }
+                if button == MouseButton::Left && !pressed && self.grab.take().is_some() {
+                    return false;
+                }
+                if button == MouseButton::Left
+                    && pressed
+                    && (self.modifiers.control_key() || self.modifiers.shift_key())
+                {
+                    self.grab = self.start_grab();
                     return false;
                 }
                 let drag = match button {
@@ -428,7 +464,14 @@ impl Running {
             }
             WindowEvent::CursorMoved { position, .. } => {
                 let p = Vec2::new(position.x as f32, position.y as f32);
-                if let Some(last) = self.cursor {
+                if let (Some(last), Some(grab)) = (self.cursor, self.grab.as_mut()) {
+                    let (w, h) = (self.renderer.width(), self.renderer.height());
+                    let delta = drag::drag_delta(&self.camera.camera(w, h), grab.anchor, last, p, w, h);
+                    grab.anchor += delta;
+                    grab.value += delta;
+                    self.ui.overrides.insert(grab.key.clone(), ui::format_vec(grab.value));
+                    self.needs_rebuild = true;
+                } else if let Some(last) = self.cursor {
                     if self.camera.dragging() {
                         self.camera.mouse_moved(p - last);
                     }
@@ -449,6 +492,24 @@ impl Running {
             _ => {}
         }
         false
+    }
+
+    /// Ctrl + click grabs the object under the cursor (one whose scene entry has a `center`),
+    /// Shift + click grabs point light 0.
+    fn start_grab(&mut self) -> Option<Grab> {
+        let cursor = self.cursor?;
+        let (w, h) = (self.renderer.width(), self.renderer.height());
+        let cam = self.camera.camera(w, h);
+        if self.modifiers.shift_key() {
+            let scene::Light::Point { position, .. } = self.scene.lights.first()? else { return None };
+            return Some(Grab { key: "lights.0.position".into(), anchor: *position, value: *position });
+        }
+        let centers = ui::object_centers(&self.scene);
+        let candidates: Vec<usize> = centers.iter().map(|c| c.0).collect();
+        let (o, d) = drag::cursor_ray(&cam, cursor, w, h);
+        let (index, t) = drag::pick(&self.scene, &candidates, o, d)?;
+        let center = centers.iter().find(|c| c.0 == index)?.2;
+        Some(Grab { key: format!("objects.{index}.center"), anchor: o + d * t, value: center })
     }
 
     /// Arrow keys move light 0 in the horizontal plane, Page Up/Down along up (a point

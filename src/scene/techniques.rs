@@ -322,9 +322,11 @@ impl CausticsMapParams {
                 "grid" => p.grid = integer(key, v, 2, 4096)?,
                 "iterations" => p.iterations = integer(key, v, 0, 64)?,
                 "newton" => {
-                    p.newton = match v.as_str() {
-                        Some("approximate") => Newton::Approximate,
-                        Some("true") => Newton::True,
+                    // `--set render.caustics_map.newton=true` arrives as the TOML boolean
+                    // true: accept it as the value "true" it spells.
+                    p.newton = match (v.as_str(), v.as_bool()) {
+                        (Some("approximate"), _) => Newton::Approximate,
+                        (Some("true"), _) | (None, Some(true)) => Newton::True,
                         _ => {
                             return Err(ParamError {
                                 key: key.clone(),
@@ -410,6 +412,10 @@ mod tests {
         }
         let c = CausticsMapParams::from_table(Some(&table("grid = 64\nnewton = \"true\"\nfilter = 1"))).unwrap();
         assert_eq!((c.grid, c.newton, c.filter), (64, Newton::True, 1));
+        // As `--set render.caustics_map.newton=true` gives it: a boolean.
+        let c = CausticsMapParams::from_table(Some(&table("newton = true"))).unwrap();
+        assert_eq!(c.newton, Newton::True);
+        assert!(CausticsMapParams::from_table(Some(&table("newton = false"))).is_err());
         let e = WymanParams::from_table(Some(&table("back_surface = \"first\""))).unwrap_err();
         assert!(e.message.contains("back_surface"), "{e}");
     }

@@ -152,7 +152,7 @@ fn technique_value<'a>(scene: &'a Scene, key: &str, accepted: &'a [&'a str]) -> 
     }
 }
 
-fn format_vec(v: glam::Vec3) -> String {
+pub fn format_vec(v: glam::Vec3) -> String {
     format!("[{}, {}, {}]", v.x, v.y, v.z)
 }
 
