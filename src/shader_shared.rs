@@ -121,4 +121,16 @@ shared_constants! {
     // Source-face kinds of the vertex grid.
     CAUSTIC_FACE_PERSPECTIVE: u32 = 0;
     CAUSTIC_FACE_ORTHOGRAPHIC: u32 = 1;
+    // Eikonal rendering (Ihrke et al. 2007; src/passes/eikonal.rs). The volume compute
+    // passes read EIKONAL_BINDING_SRC and write EIKONAL_BINDING_DST (storage images); set 1
+    // of eikonal_view samples the field (grad n, n - 1) at BINDING_EIKONAL_FIELD besides
+    // BINDING_GBUF_DEPTH.
+    EIKONAL_BINDING_SRC: u32 = 0;
+    EIKONAL_BINDING_DST: u32 = 1;
+    BINDING_EIKONAL_FIELD: u32 = 13;
+    // render.eikonal.integrator: Euler (Eqs. 11-12) or classical Runge-Kutta of Eqs. 9-10.
+    EIKONAL_EULER: u32 = 0;
+    EIKONAL_RK4: u32 = 1;
+    // Compute workgroup edge of the volume passes (4^3 invocations).
+    EIKONAL_GROUP: u32 = 4;
 }

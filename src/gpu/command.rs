@@ -22,7 +22,7 @@ fn whole_image_region(image: &Image) -> vk::BufferImageCopy {
             layer_count: image.layers(),
         },
         image_offset: vk::Offset3D::default(),
-        image_extent: vk::Extent3D { width: image.desc.width, height: image.desc.height, depth: 1 },
+        image_extent: vk::Extent3D { width: image.desc.width, height: image.desc.height, depth: image.depth() },
     }
 }
 

@@ -15,6 +15,10 @@ pub enum ImageViewKind {
     D2Array,
     Cube,
     CubeArray,
+    /// A 3D image of `depth` slices (volume textures); `layers` stays 1.
+    D3 {
+        depth: u32,
+    },
 }
 
 #[derive(Clone, Debug)]
@@ -29,6 +33,20 @@ pub struct ImageDesc {
 }
 
 impl ImageDesc {
+    /// A 3D image (volume texture) of `width` x `height` x `depth` texels.
+    pub fn d3(name: &str, format: vk::Format, extent: [u32; 3], usage: vk::ImageUsageFlags) -> Self {
+        let [width, height, depth] = extent;
+        ImageDesc { name: name.into(), format, width, height, layers: 1, usage, view: ImageViewKind::D3 { depth } }
+    }
+
+    /// Texels along z: the depth of a 3D image, 1 otherwise.
+    pub fn depth(&self) -> u32 {
+        match self.view {
+            ImageViewKind::D3 { depth } => depth.max(1),
+            _ => 1,
+        }
+    }
+
     pub fn d2(name: &str, format: vk::Format, width: u32, height: u32, usage: vk::ImageUsageFlags) -> Self {
         ImageDesc { name: name.into(), format, width, height, layers: 1, usage, view: ImageViewKind::D2 }
     }
@@ -61,10 +79,11 @@ impl Image {
     pub fn new(ctx: &Arc<GpuContext>, desc: &ImageDesc) -> GpuResult<Image> {
         let device = ctx.raw();
         let cube = matches!(desc.view, ImageViewKind::Cube | ImageViewKind::CubeArray);
+        let d3 = matches!(desc.view, ImageViewKind::D3 { .. });
         let info = vk::ImageCreateInfo::default()
-            .image_type(vk::ImageType::TYPE_2D)
+            .image_type(if d3 { vk::ImageType::TYPE_3D } else { vk::ImageType::TYPE_2D })
             .format(desc.format)
-            .extent(vk::Extent3D { width: desc.width.max(1), height: desc.height.max(1), depth: 1 })
+            .extent(vk::Extent3D { width: desc.width.max(1), height: desc.height.max(1), depth: desc.depth() })
             .mip_levels(1)
             .array_layers(desc.layers.max(1))
             .samples(vk::SampleCountFlags::TYPE_1)
@@ -119,6 +138,7 @@ impl Image {
             ImageViewKind::D2Array => vk::ImageViewType::TYPE_2D_ARRAY,
             ImageViewKind::Cube => vk::ImageViewType::CUBE,
             ImageViewKind::CubeArray => vk::ImageViewType::CUBE_ARRAY,
+            ImageViewKind::D3 { .. } => vk::ImageViewType::TYPE_3D,
         };
         let view = make_view(view_type, 0, layers)?;
         ctx.set_name(view, &desc.name);
@@ -154,6 +174,10 @@ impl Image {
     }
     pub fn layers(&self) -> u32 {
         self.desc.layers.max(1)
+    }
+    /// Texels along z (1 unless the image is 3D).
+    pub fn depth(&self) -> u32 {
+        self.desc.depth()
     }
     /// The view over all layers.
     pub fn view(&self) -> vk::ImageView {

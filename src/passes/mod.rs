@@ -4,6 +4,7 @@
 pub mod caustics_map;
 pub mod deferred_shading;
 pub mod distance_impostor;
+pub mod eikonal;
 pub mod fullscreen;
 pub mod gbuffer;
 pub mod refraction_hu_qin;

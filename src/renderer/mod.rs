@@ -19,6 +19,7 @@ use crate::graph::{Frame, FrameGraph, ImageId};
 use crate::passes::caustics_map::CausticsMapPass;
 use crate::passes::deferred_shading::DeferredShadingPass;
 use crate::passes::distance_impostor::{object_bounds, ImpostorMap, ImpostorReflection, ImpostorRefraction};
+use crate::passes::eikonal::EikonalPass;
 use crate::passes::gbuffer::GBufferPass;
 use crate::passes::refraction_hu_qin::HuQinPass;
 use crate::passes::refraction_wyman::WymanPass;
@@ -26,7 +27,7 @@ use crate::passes::refractor_layers::DebugTarget;
 use crate::passes::shadow_map::{ShadowMapPass, FAR_DISTANCE};
 use crate::passes::specular_single::{Mode, SpecularSinglePass};
 use crate::passes::tonemap::TonemapPass;
-use crate::scene::techniques::{CausticsMapParams, HuQinParams, ImpostorParams, WymanParams};
+use crate::scene::techniques::{CausticsMapParams, EikonalParams, HuQinParams, ImpostorParams, WymanParams};
 use crate::scene::{Camera, Scene};
 use crate::{
     BINDING_CAUSTIC_2D, BINDING_CAUSTIC_CUBE, BINDING_ENVIRONMENT, BINDING_FRAME, BINDING_MATERIALS, BINDING_SHADOW_2D,
@@ -109,6 +110,7 @@ struct Passes {
     refraction_hu_qin: Option<HuQinPass>,
     refraction_impostor: Option<ImpostorRefraction>,
     reflection_impostor: Option<ImpostorReflection>,
+    eikonal: Option<EikonalPass>,
     tonemap: TonemapPass,
 }
 
@@ -316,6 +318,14 @@ impl Renderer {
         } else {
             None
         };
+        let eikonal = match (&scene.volume, plan::has(&plan, plan::EIKONAL_VIEW)) {
+            (Some(volume), true) => {
+                let p = EikonalParams::from_settings(&scene.render)
+                    .map_err(|error| RenderError::Param { technique: "eikonal", error })?;
+                Some(EikonalPass::new(ctx, p, volume, &mut graph, &frame_layout, &targets, &nearest)?)
+            }
+            _ => None,
+        };
         let objects = (0..scene.objects.len())
             .map(|i| ObjectState {
                 name: scene.objects[i].name.clone(),
@@ -350,6 +360,7 @@ impl Renderer {
             refraction_hu_qin,
             refraction_impostor,
             reflection_impostor,
+            eikonal,
             tonemap: TonemapPass::new(ctx, &frame_layout, &targets, &nearest)?,
         };
 
@@ -519,6 +530,9 @@ impl Renderer {
         }
         if let Some(p) = &passes.reflection_impostor {
             p.record(&mut frame, scene, targets, frame_set, shadow_atlas);
+        }
+        if let Some(p) = &passes.eikonal {
+            p.record(&mut frame, scene, targets, frame_set);
         }
         passes.tonemap.record(&mut frame, targets, frame_set);
         debug_assert_eq!(frame.pass_names(), self.plan.iter().map(|p| p.name).collect::<Vec<_>>());

@@ -28,6 +28,8 @@ pub const REFRACTION_IMPOSTOR: &str = "refraction_impostor";
 pub const CAUSTICS_MAP_RECEIVERS: &str = "caustics_map_receivers";
 pub const CAUSTICS_MAP_REFRACTORS: &str = "caustics_map_refractors";
 pub const CAUSTICS_MAP: &str = "caustics_map";
+/// Ihrke et al. 2007 (src/passes/eikonal.rs): curved view rays through the `[volume]`.
+pub const EIKONAL_VIEW: &str = "eikonal_view";
 
 #[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
 pub struct PlannedPass {
@@ -117,6 +119,13 @@ pub fn plan(scene: &Scene) -> Vec<PlannedPass> {
         passes.push(PlannedPass {
             name: REFLECTION_IMPOSTOR,
             reason: format!("localized reflection of {} (Hit(), Szirmay-Kalos et al. 2005)", list(&metal)),
+        });
+    }
+    if let Some(v) = &scene.volume {
+        let [nx, ny, nz] = v.resolution;
+        passes.push(PlannedPass {
+            name: EIKONAL_VIEW,
+            reason: format!("volume {} ({nx}x{ny}x{nz}): curved view rays, Ihrke et al. 2007 §4.1, §5.3", v.name),
         });
     }
     passes.push(PlannedPass { name: TONEMAP, reason: "linear radiance -> sRGB PNG output".into() });

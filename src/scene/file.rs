@@ -69,6 +69,8 @@ pub(crate) struct FileScene {
     pub materials: BTreeMap<String, FileMaterial>,
     #[serde(default)]
     pub objects: Vec<FileObject>,
+    /// An inhomogeneous refractive volume (src/scene/volume.rs, eikonal rendering).
+    pub volume: Option<FileVolume>,
     /// Checked by hand in `mod.rs`: besides the known keys it holds technique
     /// parameter tables (`[render.<technique>]`) that the techniques validate.
     pub render: Option<toml::Table>,
@@ -230,6 +232,48 @@ impl FileObject {
             ("time", self.time.is_some()),
             ("file", self.file.is_some()),
             ("fit", self.fit.is_some()),
+        ])
+    }
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct FileBounds {
+    pub min: [f32; 3],
+    pub max: [f32; 3],
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct FileVolume {
+    pub name: Option<String>,
+    pub bounds: FileBounds,
+    pub resolution: [u32; 3],
+    pub index: FileIndex,
+    pub attenuation: Option<Rgb>,
+}
+
+/// `volume.index`: one flat struct for every profile `type`, like the shapes.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct FileIndex {
+    #[serde(rename = "type")]
+    pub kind: String,
+    pub n: Option<f32>,
+    pub center: Option<[f32; 3]>,
+    pub radius: Option<f32>,
+    pub n0: Option<f32>,
+    pub gradient: Option<[f32; 3]>,
+}
+
+impl FileIndex {
+    pub fn present(&self) -> Vec<&'static str> {
+        present(&[
+            ("n", self.n.is_some()),
+            ("center", self.center.is_some()),
+            ("radius", self.radius.is_some()),
+            ("n0", self.n0.is_some()),
+            ("gradient", self.gradient.is_some()),
         ])
     }
 }

@@ -12,6 +12,7 @@ mod file;
 mod mesh;
 mod shapes;
 pub mod techniques;
+mod volume;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -25,6 +26,7 @@ pub use environment::{
 pub use error::{line_col, ErrorKind, Location, SceneError};
 pub use mesh::Mesh;
 pub use shapes::{wave_height, wave_normal, Wave};
+pub use volume::{IndexProfile, Volume, MAX_VOLUME_RESOLUTION};
 
 use file::{check_keys, list, FileObject, FileScene, Rgb, Source};
 
@@ -86,6 +88,8 @@ pub struct Scene {
     /// `materials[i]` is `[materials.<material_names[i]>]`.
     pub material_names: Vec<String>,
     pub objects: Vec<Object>,
+    /// The `[volume]` table: an inhomogeneous refractive volume (eikonal rendering).
+    pub volume: Option<Volume>,
     pub render: RenderSettings,
     /// The effective scene after overrides as normalized TOML (keys sorted, comments
     /// dropped): equal scenes give equal strings, for hashing, caching and metadata.
@@ -298,6 +302,7 @@ fn build(f: FileScene, src: &Source) -> Result<Scene, SceneError> {
         .enumerate()
         .map(|(i, o)| object(o, i, &material_names, &render, src))
         .collect::<Result<Vec<_>, _>>()?;
+    let volume = f.volume.as_ref().map(|v| volume::volume(v, src)).transpose()?;
     let name = f.name.clone().unwrap_or_else(|| {
         src.file.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "scene".to_string())
     });
@@ -310,6 +315,7 @@ fn build(f: FileScene, src: &Source) -> Result<Scene, SceneError> {
         materials,
         material_names,
         objects,
+        volume,
         render,
         canonical: file::canonical(src),
     })

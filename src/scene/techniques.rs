@@ -359,7 +359,69 @@ pub fn check(technique: &str, t: &toml::Table) -> Result<(), ParamError> {
         "hu_qin" => HuQinParams::from_table(Some(t)).map(|_| ()),
         "caustics_map" => CausticsMapParams::from_table(Some(t)).map(|_| ()),
         "impostor" => ImpostorParams::from_table(Some(t)).map(|_| ()),
+        "eikonal" => EikonalParams::from_table(Some(t)).map(|_| ()),
         _ => Ok(()),
+    }
+}
+
+/// How eikonal_view integrates the ray equation (Ihrke et al. 2007, section 4.1).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Integrator {
+    /// Forward Euler, Eqs. 11-12 (the paper's view renderer).
+    Euler,
+    /// Classical fourth-order Runge-Kutta of Eqs. 9-10.
+    Rk4,
+}
+
+/// `[render.eikonal]`: eikonal rendering of a `[volume]` (src/passes/eikonal.rs).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EikonalParams {
+    /// Standard deviation of the Gaussian pre-smoothing in voxels (section 5.1: "typically
+    /// 0.5 - 1.0 voxels"); 0 keeps the sharp field.
+    pub sigma: f32,
+    pub integrator: Integrator,
+    /// Arc length per step, in voxels (of the smallest voxel edge).
+    pub step: f32,
+}
+
+impl Default for EikonalParams {
+    fn default() -> Self {
+        EikonalParams { sigma: 0.75, integrator: Integrator::Euler, step: 0.5 }
+    }
+}
+
+impl EikonalParams {
+    pub const KEYS: &'static [&'static str] = &["sigma", "integrator", "step"];
+
+    pub fn from_table(t: Option<&toml::Table>) -> Result<Self, ParamError> {
+        let mut p = EikonalParams::default();
+        for (key, v) in t.into_iter().flatten() {
+            match key.as_str() {
+                // 8 voxels already blur a 64^3 volume to a third of its width.
+                "sigma" => p.sigma = number(key, v, 0.0, 8.0)?,
+                "integrator" => {
+                    p.integrator = match v.as_str() {
+                        Some("euler") => Integrator::Euler,
+                        Some("rk4") => Integrator::Rk4,
+                        _ => {
+                            return Err(ParamError {
+                                key: key.clone(),
+                                message: format!("`integrator` must be \"euler\" or \"rk4\", not {v}"),
+                                hint: "Euler of Eqs. 11-12 (Ihrke et al. 2007) or fourth-order Runge-Kutta".into(),
+                            })
+                        }
+                    }
+                }
+                // Below 0.01 voxel a 256^3 volume needs more than 10^5 steps per ray.
+                "step" => p.step = number(key, v, 0.01, 4.0)?,
+                _ => return Err(unknown("eikonal", key, Self::KEYS)),
+            }
+        }
+        Ok(p)
+    }
+
+    pub fn from_settings(r: &RenderSettings) -> Result<Self, ParamError> {
+        Self::from_table(r.params.get("eikonal"))
     }
 }
 

@@ -1,0 +1,320 @@
+//! Eikonal rendering (Ihrke et al. 2007, ../shared/papers/ihrke2007-eikonal-rendering.md):
+//! the view renderer of sections 4.1 and 5.3 for scenes with a `[volume]`.
+//!
+//! - Section 5.1: the analytic index profile is sampled at the voxel centres on the CPU
+//!   ([`Volume::sample`], as n - 1), uploaded to a 3D texture, smoothed by a separable
+//!   Gaussian (`render.eikonal.sigma` voxels; glsl/eikonal/smooth.comp) and differentiated by
+//!   central differences into a (grad n, n - 1) texture (glsl/eikonal/gradient.comp). This
+//!   runs once, when the renderer is created, as frame-graph passes.
+//! - Sections 4.1, 5.3: `eikonal_view` (glsl/eikonal/view.frag) marches every camera ray that
+//!   enters the volume's box with the ray equation, Eqs. 9-10, by Euler (Eqs. 11-12) or RK4,
+//!   absorbs along the curved path (Eq. 5) and looks up the environment in the exit
+//!   direction, over the deferred result.
+//!
+//! The CPU integrators here ([`euler_step`], [`rk4_step`], [`trace`]) are the same equations
+//! in f64 on the analytic profile: the tests check the Luneburg focus and RK4's order with
+//! them, and they document what the shader does.
+use std::sync::Arc;
+
+use glam::{DVec3, Vec3};
+
+use crate::gpu::{
+    vk, Access, ComputePipeline, DescriptorSet, DescriptorSetLayout, DescriptorWrite, GpuContext, GpuResult, Image,
+    ImageDesc, PipelineLayout, Sampler,
+};
+use crate::graph::{Frame, FrameGraph, ImageId};
+use crate::renderer::gpu_scene::GpuScene;
+use crate::renderer::plan::EIKONAL_VIEW;
+use crate::renderer::targets::Targets;
+use crate::scene::techniques::{EikonalParams, Integrator};
+use crate::scene::{IndexProfile, Volume};
+use crate::{
+    BINDING_EIKONAL_FIELD, BINDING_GBUF_DEPTH, EIKONAL_BINDING_DST, EIKONAL_BINDING_SRC, EIKONAL_EULER, EIKONAL_GROUP,
+    EIKONAL_RK4,
+};
+
+use super::fullscreen::{FullscreenDesc, FullscreenPass};
+
+/// Most steps a view ray may take (a ray that circles inside a lens stops here).
+pub const MAX_VIEW_STEPS: u32 = 8192;
+
+/// A refractive-index field with its gradient, for the CPU integrators.
+pub trait IndexField {
+    fn n(&self, x: DVec3) -> f64;
+    fn gradient(&self, x: DVec3) -> DVec3;
+}
+
+impl IndexField for IndexProfile {
+    fn n(&self, x: DVec3) -> f64 {
+        IndexProfile::n(self, x)
+    }
+    fn gradient(&self, x: DVec3) -> DVec3 {
+        IndexProfile::gradient(self, x)
+    }
+}
+
+/// A point of a ray: position and optical direction v (|v| = n, Eq. 9: dx/ds = v / n).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RayState {
+    pub x: DVec3,
+    pub v: DVec3,
+}
+
+impl RayState {
+    /// A ray at `x` heading along the unit direction `d`: v = n(x) d.
+    pub fn new(field: &impl IndexField, x: DVec3, d: DVec3) -> Self {
+        RayState { x, v: d.normalize() * field.n(x) }
+    }
+}
+
+/// (dx/ds, dv/ds) = (v / n, grad n): Eqs. 9-10.
+fn rhs(field: &impl IndexField, s: RayState) -> (DVec3, DVec3) {
+    (s.v / field.n(s.x), field.gradient(s.x))
+}
+
+/// One forward-Euler step of arc length `h`: Eqs. 11-12.
+pub fn euler_step(field: &impl IndexField, s: RayState, h: f64) -> RayState {
+    let (dx, dv) = rhs(field, s);
+    RayState { x: s.x + h * dx, v: s.v + h * dv }
+}
+
+/// One classical fourth-order Runge-Kutta step of arc length `h` of Eqs. 9-10.
+pub fn rk4_step(field: &impl IndexField, s: RayState, h: f64) -> RayState {
+    let at = |k: (DVec3, DVec3), f: f64| RayState { x: s.x + f * k.0, v: s.v + f * k.1 };
+    let k1 = rhs(field, s);
+    let k2 = rhs(field, at(k1, 0.5 * h));
+    let k3 = rhs(field, at(k2, 0.5 * h));
+    let k4 = rhs(field, at(k3, h));
+    RayState {
+        x: s.x + h / 6.0 * (k1.0 + 2.0 * k2.0 + 2.0 * k3.0 + k4.0),
+        v: s.v + h / 6.0 * (k1.1 + 2.0 * k2.1 + 2.0 * k3.1 + k4.1),
+    }
+}
+
+/// One step with `integrator`.
+pub fn step(field: &impl IndexField, integrator: Integrator, s: RayState, h: f64) -> RayState {
+    match integrator {
+        Integrator::Euler => euler_step(field, s, h),
+        Integrator::Rk4 => rk4_step(field, s, h),
+    }
+}
+
+/// March from `start` with steps of `h` while `inside(x)` holds (at most `max_steps`);
+/// returns every state, the first being `start` and the last the first one outside (or the
+/// last one taken).
+pub fn trace(
+    field: &impl IndexField,
+    integrator: Integrator,
+    start: RayState,
+    h: f64,
+    max_steps: usize,
+    inside: impl Fn(DVec3) -> bool,
+) -> Vec<RayState> {
+    let mut path = vec![start];
+    let mut s = start;
+    for _ in 0..max_steps {
+        s = step(field, integrator, s, h);
+        path.push(s);
+        if !inside(s.x) {
+            break;
+        }
+    }
+    path
+}
+
+/// Where the segment from `a` (inside) to `b` (outside) crosses the sphere (`center`,
+/// `radius`): the linear interpolation of the distance to the surface.
+pub fn sphere_crossing(a: DVec3, b: DVec3, center: DVec3, radius: f64) -> DVec3 {
+    let (da, db) = (a.distance(center) - radius, b.distance(center) - radius);
+    let t = if db != da { (da / (da - db)).clamp(0.0, 1.0) } else { 0.0 };
+    a.lerp(b, t)
+}
+
+/// The volume's GPU textures: the sampled field, a scratch texture of the separable blur,
+/// and (grad n, n - 1) after smoothing and differentiation.
+struct VolumeTextures {
+    _raw: Image,
+    _scratch: Image,
+    field: Image,
+    field_id: ImageId,
+}
+
+/// The `eikonal_view` pass and the volume it renders.
+pub struct EikonalPass {
+    volume: VolumeTextures,
+    view: FullscreenPass,
+}
+
+fn f(x: f32) -> u32 {
+    x.to_bits()
+}
+
+impl EikonalPass {
+    /// Sample, upload, smooth and differentiate `volume`, and create the view pass.
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        ctx: &Arc<GpuContext>,
+        params: EikonalParams,
+        volume: &Volume,
+        graph: &mut FrameGraph,
+        frame_layout: &DescriptorSetLayout,
+        targets: &Targets,
+        nearest: &Sampler,
+    ) -> GpuResult<Self> {
+        let textures = prepare_volume(ctx, params, volume, graph)?;
+        let voxel = volume.voxel_size();
+        let h = params.step * voxel.min_element();
+        // Enough steps for four crossings of the box diagonal (curved and internally
+        // reflected rays are longer than straight ones).
+        let steps = (4.0 * (volume.max - volume.min).length() / h).ceil().min(MAX_VIEW_STEPS as f32) as u32;
+        let (center, radius) = volume.index.region().unwrap_or((Vec3::ZERO, 0.0));
+        let sigma = volume.attenuation;
+        let integrator = match params.integrator {
+            Integrator::Euler => EIKONAL_EULER,
+            Integrator::Rk4 => EIKONAL_RK4,
+        };
+        let spec = [
+            integrator,
+            f(h),
+            steps.max(1),
+            f(volume.min.x),
+            f(volume.min.y),
+            f(volume.min.z),
+            f(volume.max.x),
+            f(volume.max.y),
+            f(volume.max.z),
+            f(sigma.x),
+            f(sigma.y),
+            f(sigma.z),
+            f(center.x),
+            f(center.y),
+            f(center.z),
+            f(radius),
+        ];
+        let view = FullscreenPass::new(
+            ctx,
+            &FullscreenDesc {
+                name: EIKONAL_VIEW,
+                fragment_shader: "eikonal/view.frag",
+                inputs: &[(BINDING_GBUF_DEPTH, &targets.depth), (BINDING_EIKONAL_FIELD, &textures.field)],
+                target: (&targets.hdr, targets.hdr_id),
+                // Keeps the deferred result and overwrites the pixels whose ray enters the box.
+                clear: false,
+                specialization: &spec,
+            },
+            frame_layout,
+            nearest,
+        )?;
+        Ok(EikonalPass { volume: textures, view })
+    }
+
+    pub fn record<'a>(
+        &'a self,
+        frame: &mut Frame<'_, 'a>,
+        scene: &GpuScene,
+        targets: &Targets,
+        frame_set: DescriptorSet,
+    ) {
+        self.view.record(frame, frame_set, &[targets.depth_id, self.volume.field_id, scene.environment_id]);
+    }
+
+    /// The (grad n, n - 1) texture, for inspection.
+    pub fn field(&self) -> &Image {
+        &self.volume.field
+    }
+}
+
+/// Section 5.1 on the GPU: upload n - 1, blur along x, y, z, differentiate.
+fn prepare_volume(
+    ctx: &Arc<GpuContext>,
+    params: EikonalParams,
+    volume: &Volume,
+    graph: &mut FrameGraph,
+) -> GpuResult<VolumeTextures> {
+    let extent = volume.resolution;
+    let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_DST;
+    let raw = Image::new(ctx, &ImageDesc::d3("eikonal_index", vk::Format::R32_SFLOAT, extent, usage))?;
+    let scratch = Image::new(ctx, &ImageDesc::d3("eikonal_smoothed", vk::Format::R32_SFLOAT, extent, usage))?;
+    let field = Image::new(
+        ctx,
+        &ImageDesc::d3(
+            "eikonal_field",
+            vk::Format::R32G32B32A32_SFLOAT,
+            extent,
+            vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED,
+        ),
+    )?;
+    let (raw_id, scratch_id, field_id) =
+        (graph.register_image(&raw), graph.register_image(&scratch), graph.register_image(&field));
+
+    let storage = vk::DescriptorType::STORAGE_IMAGE;
+    let stage = vk::ShaderStageFlags::COMPUTE;
+    let layout = DescriptorSetLayout::new(
+        ctx,
+        "eikonal_volume",
+        &[(EIKONAL_BINDING_SRC, storage, stage), (EIKONAL_BINDING_DST, storage, stage)],
+        4,
+    )?;
+    let set = |name: &str, src: &Image, dst: &Image| {
+        layout.allocate(
+            name,
+            &[
+                DescriptorWrite::StorageImage(EIKONAL_BINDING_SRC, src.view()),
+                DescriptorWrite::StorageImage(EIKONAL_BINDING_DST, dst.view()),
+            ],
+        )
+    };
+    // The blur ping-pongs raw -> scratch -> raw -> scratch; the gradient reads scratch.
+    let sets = [
+        set("eikonal_smooth_x", &raw, &scratch)?,
+        set("eikonal_smooth_y", &scratch, &raw)?,
+        set("eikonal_smooth_z", &raw, &scratch)?,
+        set("eikonal_gradient", &scratch, &field)?,
+    ];
+    let pipeline_layout = PipelineLayout::new(ctx, "eikonal_volume", &[&layout], 0)?;
+    let smooth: Vec<ComputePipeline> = (0..3u32)
+        .map(|axis| {
+            ComputePipeline::new(
+                ctx,
+                &format!("eikonal_smooth_{axis}"),
+                "eikonal/smooth.comp",
+                &pipeline_layout,
+                &[axis, f(params.sigma)],
+            )
+        })
+        .collect::<GpuResult<_>>()?;
+    let voxel = volume.voxel_size();
+    let gradient = ComputePipeline::new(
+        ctx,
+        "eikonal_gradient",
+        "eikonal/gradient.comp",
+        &pipeline_layout,
+        &[f(voxel.x), f(voxel.y), f(voxel.z)],
+    )?;
+
+    let samples = volume.sample();
+    let staging = crate::gpu::Buffer::with_data(
+        ctx,
+        "eikonal_index_upload",
+        bytemuck::cast_slice(&samples),
+        vk::BufferUsageFlags::TRANSFER_SRC,
+    )?;
+    let groups = extent.map(|n| n.div_ceil(EIKONAL_GROUP));
+    let ids = [(raw_id, scratch_id), (scratch_id, raw_id), (raw_id, scratch_id), (scratch_id, field_id)];
+    let names = ["eikonal_smooth_x", "eikonal_smooth_y", "eikonal_smooth_z", "eikonal_gradient"];
+    ctx.one_shot(|cmd| {
+        graph.access_now(cmd, &[(raw_id, Access::TransferWrite)], &[]);
+        cmd.copy_buffer_to_image(&staging, &raw);
+        let mut frame = graph.frame();
+        for (i, &(src, dst)) in ids.iter().enumerate() {
+            let pipeline = if i < 3 { &smooth[i] } else { &gradient };
+            let set = sets[i];
+            frame.pass(names[i]).read(src, Access::ComputeRead).write(dst, Access::ComputeWrite).record(move |cmd| {
+                cmd.bind_compute(pipeline, &[set]);
+                cmd.dispatch(groups[0], groups[1], groups[2]);
+            });
+        }
+        frame.execute(cmd, None);
+    })?;
+    Ok(VolumeTextures { _raw: raw, _scratch: scratch, field, field_id })
+}
