@@ -157,3 +157,18 @@ fn prism_passes_prints_the_passes_and_why() {
     let names: Vec<_> = json.as_array().unwrap().iter().map(|p| p["name"].as_str().unwrap().to_string()).collect();
     assert_eq!(names, ["gbuffer", "deferred_shading", "refraction_single", "tonemap"]);
 }
+
+/// Eikonal rendering (Ihrke et al. 2007): its view pass runs only when the scene has a
+/// `[volume]`, after the surface techniques and before the tone map.
+#[test]
+fn eikonal_passes_only_with_a_volume() {
+    assert_eq!(names("eikonal_luneburg", &[]), ["gbuffer", "deferred_shading", "eikonal_view", "tonemap"]);
+    assert_eq!(names("eikonal_sphere", &[]), ["gbuffer", "deferred_shading", "eikonal_view", "tonemap"]);
+    for scene in prism::scene::BENCHMARK_SCENES {
+        let n = names(scene, &[]);
+        assert!(!n.iter().any(|p| p.starts_with("eikonal")), "{scene}: {n:?}");
+    }
+    let mut no_volume = common::scene("eikonal_luneburg", 64, &[]);
+    no_volume.volume = None;
+    assert!(!plan(&no_volume).iter().any(|p| p.name.starts_with("eikonal")));
+}

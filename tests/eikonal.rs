@@ -1,0 +1,231 @@
+//! Eikonal rendering (Ihrke et al. 2007; src/passes/eikonal.rs): the integrators of the ray
+//! equation on the CPU (straight rays, the Luneburg focus, fourth-order convergence of RK4),
+//! the GPU view renderer on the volume scenes and their edge cases, and the scene checks.
+mod common;
+
+use glam::DVec3;
+use prism::passes::eikonal::{euler_step, rk4_step, sphere_crossing, trace, RayState};
+use prism::scene::techniques::Integrator;
+use prism::scene::{self, IndexProfile};
+
+const LENS: IndexProfile = IndexProfile::Luneburg { center: glam::Vec3::ZERO, radius: 1.0 };
+
+/// A unit vector orthogonal to `d`.
+fn orthogonal(d: DVec3) -> DVec3 {
+    let a = if d.x.abs() < 0.9 { DVec3::X } else { DVec3::Y };
+    d.cross(a).normalize()
+}
+
+#[test]
+fn rays_in_a_homogeneous_volume_are_straight() {
+    let field = IndexProfile::Constant { n: 1.33, sphere: None };
+    let d = DVec3::new(0.3, -0.5, 0.8).normalize();
+    for integrator in [Integrator::Euler, Integrator::Rk4] {
+        let start = RayState::new(&field, DVec3::new(0.1, 0.2, -0.3), d);
+        let path = trace(&field, integrator, start, 0.01, 200, |_| true);
+        let end = path.last().unwrap();
+        // Arc length 2: the ray moves 2 along d (Appendix: constant spatial step), v unchanged.
+        assert!((end.x - (start.x + 2.0 * d)).length() < 1e-12, "{integrator:?}: {:?}", end.x);
+        assert!((end.v - start.v).length() < 1e-12);
+    }
+}
+
+/// Parallel rays entering a Luneburg lens meet its far surface at the point diametrically
+/// opposite the entry direction (c + R d), within a voxel of the 64^3 grid of
+/// eikonal_luneburg, for impact parameters up to 0.95 R and several directions.
+#[test]
+fn luneburg_lens_focuses_parallel_rays_on_the_far_surface() {
+    let voxel = 2.1 / 64.0;
+    let h = 0.25 * voxel;
+    let mut worst: f64 = 0.0;
+    for d in [DVec3::Z, -DVec3::X, DVec3::new(1.0, 2.0, -0.5).normalize()] {
+        let (u, w) = (orthogonal(d), d.cross(orthogonal(d)));
+        let focus = d; // c + R d with c = 0, R = 1
+        for (b, angle) in [(0.05, 0.0), (0.3, 1.0), (0.5, 2.0), (0.7, 3.0), (0.85, 4.0), (0.95, 5.0)] {
+            let offset = b * (u * f64::cos(angle) + w * f64::sin(angle));
+            // The straight ray outside meets the sphere at offset - sqrt(1 - b^2) d.
+            let entry = offset - (1.0 - b * b).sqrt() * d;
+            let start = RayState::new(&LENS, entry, d);
+            assert!((start.v.length() - 1.0).abs() < 1e-9, "n = 1 on the rim");
+            // Step once inside, then march until the ray leaves the lens.
+            let path = trace(&LENS, Integrator::Rk4, start, h, 10_000, |x| x.length() < 1.0);
+            let (a, z) = (path[path.len() - 2].x, path[path.len() - 1].x);
+            assert!(z.length() >= 1.0, "the ray never left the lens");
+            let exit = sphere_crossing(a, z, DVec3::ZERO, 1.0);
+            let miss = exit.distance(focus);
+            worst = worst.max(miss);
+            assert!(miss < voxel, "b = {b}, d = {d}: exit {exit} is {miss} from the focus {focus} (voxel {voxel})");
+        }
+    }
+    eprintln!("Luneburg: worst distance to the analytic focus {worst:.2e} (voxel {voxel:.2e})");
+    // A homogeneous ball of the same size does not focus there: the test can fail.
+    let ball = IndexProfile::Constant { n: 1.5, sphere: Some((glam::Vec3::ZERO, 1.0)) };
+    let entry = DVec3::new(0.5, 0.0, -(0.75f64).sqrt());
+    let path = trace(&ball, Integrator::Rk4, RayState::new(&ball, entry, DVec3::Z), h, 10_000, |x| x.length() < 1.0);
+    let exit = path.last().unwrap().x;
+    assert!(exit.distance(DVec3::Z) > voxel, "a ray without bending should miss the focus");
+}
+
+/// Error of integrating arc length `s` with `n` steps, against a tiny-step RK4 solution.
+fn error(
+    step: fn(&IndexProfile, RayState, f64) -> RayState,
+    start: RayState,
+    s: f64,
+    n: usize,
+    exact: RayState,
+) -> f64 {
+    let mut state = start;
+    for _ in 0..n {
+        state = step(&LENS, state, s / n as f64);
+    }
+    (state.x - exact.x).length() + (state.v - exact.v).length()
+}
+
+#[test]
+fn rk4_converges_at_fourth_order_and_euler_at_first() {
+    // A ray inside the lens (n smooth there) over arc length 0.6.
+    let start = RayState::new(&LENS, DVec3::new(0.2, -0.1, 0.1), DVec3::new(0.3, 0.8, 0.5).normalize());
+    let s = 0.6;
+    let mut exact = start;
+    let fine = 1 << 14;
+    for _ in 0..fine {
+        exact = rk4_step(&LENS, exact, s / fine as f64);
+    }
+    assert!(exact.x.length() < 0.95, "the test ray must stay inside the lens");
+    let rk = |n| error(|f, x, h| rk4_step(f, x, h), start, s, n, exact);
+    let eu = |n| error(|f, x, h| euler_step(f, x, h), start, s, n, exact);
+    for n in [8, 16, 32] {
+        let ratio = rk(n) / rk(2 * n);
+        eprintln!("RK4 {n} -> {} steps: error {:.3e} -> {:.3e}, ratio {ratio:.2}", 2 * n, rk(n), rk(2 * n));
+        assert!((13.0..19.0).contains(&ratio), "RK4 error ratio {ratio} when halving the step ({n} steps)");
+        let ratio = eu(n) / eu(2 * n);
+        assert!((1.7..2.3).contains(&ratio), "Euler error ratio {ratio} ({n} steps)");
+    }
+}
+
+fn no_nan(name: &str, hdr: &[f32]) {
+    let bad = hdr.iter().filter(|v| !v.is_finite()).count();
+    assert_eq!(bad, 0, "{name}: {bad} non-finite values");
+}
+
+/// Pixels whose RGB differ by more than `tol` in any channel.
+fn differing(a: &[f32], b: &[f32], tol: f32) -> usize {
+    a.chunks(4).zip(b.chunks(4)).filter(|(p, q)| (0..3).any(|c| (p[c] - q[c]).abs() > tol)).count()
+}
+
+#[test]
+fn a_volume_of_index_one_leaves_the_view_unchanged() {
+    let ctx = common::context(false);
+    let one = common::scene("eikonal_luneburg", 64, &["volume.index.type=\"constant\"", "volume.index.n=1.0"]);
+    assert!(common::render_on(&ctx, &one).passes.contains(&"eikonal_view".to_string()));
+    let mut without = one.clone();
+    without.volume = None;
+    let with = common::render_on(&ctx, &one);
+    let without = common::render_on(&ctx, &without);
+    let n = differing(&with.hdr, &without.hdr, 1e-4);
+    assert_eq!(n, 0, "{n} pixels changed by a volume of n = 1");
+    // n = 1.5 in the same sphere bends the rays: the comparison can fail.
+    let glass = common::scene("eikonal_luneburg", 64, &["volume.index.type=\"constant\"", "volume.index.n=1.5"]);
+    let bent = common::render_on(&ctx, &glass);
+    assert!(differing(&bent.hdr, &without.hdr, 1e-4) > 200, "n = 1.5 should change the view");
+}
+
+#[test]
+fn the_view_renderer_renders_the_volume_scenes() {
+    let ctx = common::context(true);
+    for name in ["eikonal_luneburg", "eikonal_sphere"] {
+        for integrator in ["euler", "rk4"] {
+            let s = common::scene(name, 64, &[&format!("render.eikonal.integrator=\"{integrator}\"")]);
+            let r = common::render_on(&ctx, &s);
+            no_nan(name, &r.hdr);
+            assert!(r.passes.contains(&"eikonal_view".to_string()), "{:?}", r.passes);
+            // The lens inverts the view: the centre column's top shows the ground (dark),
+            // the sky (bright blue) is at the bottom, unlike the environment around it.
+            let blue = |rows: std::ops::Range<u32>| {
+                let px: Vec<f32> =
+                    rows.flat_map(|j| (26..38).map(move |i| (i, j))).map(|(i, j)| r.radiance(i, j)[2]).collect();
+                px.iter().sum::<f32>() / px.len() as f32
+            };
+            let (top, bottom) = (blue(20..28), blue(36..44));
+            assert!(bottom > 1.3 * top, "{name} {integrator}: not inverted: top {top}, bottom {bottom}");
+        }
+    }
+}
+
+#[test]
+fn sharp_single_voxel_and_non_cubic_volumes_give_no_nan() {
+    let ctx = common::context(false);
+    let cases: &[&[&str]] = &[
+        &["render.eikonal.sigma=0"],
+        &["render.eikonal.sigma=0", "render.eikonal.integrator=\"euler\"", "render.eikonal.step=4"],
+        &["volume.resolution=[1, 1, 1]"],
+        &["volume.resolution=[17, 40, 5]", "render.eikonal.sigma=2.5"],
+        &["volume.resolution=[3, 64, 1]", "render.eikonal.sigma=0"],
+        &["volume.index.type=\"linear\"", "volume.index.n0=1.3", "volume.index.gradient=[0, 0.2, 0]"],
+        &["volume.attenuation=[0.5, 1, 2]"],
+    ];
+    for overrides in cases {
+        for name in ["eikonal_luneburg", "eikonal_sphere"] {
+            let mut o = overrides.to_vec();
+            if o.iter().any(|s| s.contains("linear")) {
+                // The linear profile takes neither centre nor radius.
+                o.insert(0, "volume.index={ type = \"linear\", n0 = 1.3, gradient = [0, 0.2, 0] }");
+                o.retain(|s| !s.starts_with("volume.index."));
+            }
+            let s = common::scene(name, 32, &o);
+            let r = common::render_on(&ctx, &s);
+            no_nan(&format!("{name} {o:?}"), &r.hdr);
+        }
+    }
+}
+
+#[test]
+fn absorption_darkens_the_volume() {
+    let ctx = common::context(false);
+    let clear = common::render_on(&ctx, &common::scene("eikonal_luneburg", 32, &[]));
+    let dark = common::render_on(&ctx, &common::scene("eikonal_luneburg", 32, &["volume.attenuation=[0, 0, 2]"]));
+    // The central ray crosses 2 m of the lens: blue falls by e^-4, red and green do not.
+    let (c, d) = (clear.radiance(16, 16), dark.radiance(16, 16));
+    assert!((d[0] - c[0]).abs() < 1e-5 && (d[1] - c[1]).abs() < 1e-5, "{c:?} {d:?}");
+    let ratio = d[2] / c[2];
+    assert!((ratio - (-4.0f32).exp()).abs() < 0.01, "blue transmittance {ratio}, expected e^-4");
+}
+
+fn load_error(volume: &str, render: &str) -> String {
+    let text = format!(
+        "[camera]\nposition = [0, 0, 4]\ntarget = [0, 0, 0]\n[environment]\ntype = \"grid\"\n{volume}\n[render]\n{render}\n"
+    );
+    match scene::load_str(&text, std::path::Path::new("bad.toml"), &[]) {
+        Ok(_) => panic!("accepted:\n{text}"),
+        Err(e) => e.to_string(),
+    }
+}
+
+const GOOD: &str = "[volume]\nbounds = { min = [-1, -1, -1], max = [1, 1, 1] }\nresolution = [8, 8, 8]\n";
+
+#[test]
+fn invalid_volumes_and_parameters_give_clear_errors() {
+    let lens = "index = { type = \"luneburg\", center = [0, 0, 0], radius = 1 }";
+    let cases = [
+        (format!("{GOOD}{lens}").replace("[8, 8, 8]", "[0, 8, 8]"), "", "resolution"),
+        (format!("{GOOD}{lens}").replace("[8, 8, 8]", "[8, 300, 8]"), "", "256"),
+        (format!("{GOOD}{lens}").replace("max = [1, 1, 1]", "max = [1, -1, 1]"), "", "bounds.min"),
+        (format!("{GOOD}index = {{ type = \"luneburg\", center = [0, 0, 0], radius = -1 }}"), "", "radius"),
+        (format!("{GOOD}index = {{ type = \"luneburg\", center = [0, 0, 0] }}"), "", "radius"),
+        (format!("{GOOD}index = {{ type = \"cubic\" }}"), "", "unknown index type `cubic`"),
+        (format!("{GOOD}index = {{ type = \"constant\", n = 0 }}"), "", "refractive index"),
+        (format!("{GOOD}index = {{ type = \"constant\", n = 1.5, radius = 1 }}"), "", "center"),
+        (format!("{GOOD}index = {{ type = \"constant\", n = 1.5, n0 = 1 }}"), "", "n0"),
+        (format!("{GOOD}index = {{ type = \"linear\", n0 = 1, gradient = [0, 2, 0] }}"), "", "refractive index"),
+        (format!("{GOOD}{lens}\nattenuation = [-1, 0, 0]"), "", "attenuation"),
+        (format!("{GOOD}{lens}"), "[render.eikonal]\nintegrator = \"midpoint\"", "integrator"),
+        (format!("{GOOD}{lens}"), "[render.eikonal]\nstep = 0", "step"),
+        (format!("{GOOD}{lens}"), "[render.eikonal]\nsigma = -1", "sigma"),
+        (format!("{GOOD}{lens}"), "[render.eikonal]\nsteps = 1", "unknown parameter `steps`"),
+    ];
+    for (volume, render, expected) in cases {
+        let e = load_error(&volume, render);
+        assert!(e.contains(expected), "expected `{expected}` in:\n{e}");
+        assert!(e.contains("bad.toml"), "the error should name the file:\n{e}");
+    }
+}
