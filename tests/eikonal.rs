@@ -92,8 +92,8 @@ fn rk4_converges_at_fourth_order_and_euler_at_first() {
         exact = rk4_step(&LENS, exact, s / fine as f64);
     }
     assert!(exact.x.length() < 0.95, "the test ray must stay inside the lens");
-    let rk = |n| error(|f, x, h| rk4_step(f, x, h), start, s, n, exact);
-    let eu = |n| error(|f, x, h| euler_step(f, x, h), start, s, n, exact);
+    let rk = |n| error(rk4_step, start, s, n, exact);
+    let eu = |n| error(euler_step, start, s, n, exact);
     for n in [8, 16, 32] {
         let ratio = rk(n) / rk(2 * n);
         eprintln!("RK4 {n} -> {} steps: error {:.3e} -> {:.3e}, ratio {ratio:.2}", 2 * n, rk(n), rk(2 * n));
