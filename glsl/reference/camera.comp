@@ -7,12 +7,18 @@
 // (one cosine-weighted sample), and (3) leaves a visible point for the photon gathering that
 // adds caustics (gather.comp).
 #include "sppm.glsl"
+#include "volume.glsl"
 
 // Environment radiance reaching a diffuse point along d through specular interactions only.
 vec3 environment_through_specular(vec3 o, vec3 d, int channel, inout uint rng) {
     vec3 beta = vec3(1.0);
     for (uint bounce = 0u; bounce <= ref.counts.w; ++bounce) {
         Hit h = trace(o, d, 3.4e38);
+        float tv;
+        if (region_entry(o, d, h.kind == 0u ? 3.4e38 : h.t, tv)) {
+            if (!volume_cross(o, d, tv, beta, rng)) return vec3(0.0);
+            continue;
+        }
         if (h.kind == 0u) return beta * environment(d);
         Surface s = surface_at(o, d, h);
         if (kind_of(materials[s.material]) == MATERIAL_DIFFUSE) return vec3(0.0);   // a second diffuse vertex
@@ -46,6 +52,12 @@ void main() {
     bool visible_point = false;
     for (uint bounce = 0u; bounce <= ref.counts.w; ++bounce) {
         Hit h = trace(o, d, 3.4e38);
+        // A graded-index volume in front of the surface (or the environment): cross it.
+        float tv;
+        if (region_entry(o, d, h.kind == 0u ? 3.4e38 : h.t, tv)) {
+            if (!volume_cross(o, d, tv, beta, rng)) break;
+            continue;
+        }
         if (h.kind == 0u) {
             L += beta * environment(d);
             break;

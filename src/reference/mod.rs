@@ -11,9 +11,13 @@
 //! which converges as the photon count grows. Triangles are found through a SAH BVH built on
 //! the CPU ([`bvh`]); spheres are intersected exactly.
 //!
-//! Graded-index media (the eikonal issue) will add an RK4 integration of the ray equation
-//! between surface hits inside volumes; the hook is `specular_step` in
-//! glsl/reference/scene.glsl, the one place where a path crosses a medium.
+//! Graded-index media (`[volume]`, the eikonal issue): camera paths that meet the volume's
+//! region (its sphere, or its box) before any surface cross it exactly
+//! (glsl/reference/volume.glsl): Fresnel reflection or Snell refraction where the index
+//! jumps at the region's boundary, and inside classical RK4 of the ray equation
+//! dx/ds = v/n, dv/ds = grad n on the analytic profile with a step of 1/2000 of the box
+//! diagonal, Beer-Lambert absorption along the curved path. Surfaces inside the region are
+//! not seen, and photons do not enter volumes (no volume caustics yet).
 pub mod bvh;
 
 use std::sync::Arc;
@@ -118,10 +122,38 @@ struct RefUniforms {
     grid: [f32; 4],
     lights: [RefLight; MAX_LIGHTS as usize],
     targets: [[f32; 4]; REF_MAX_TARGETS as usize],
+    /// The scene's `[volume]` for glsl/reference/volume.glsl (zero: none).
+    volume: [[f32; 4]; 5],
 }
 const _: () = assert!(
-    std::mem::size_of::<RefUniforms>() == 64 + 6 * 16 + 32 * MAX_LIGHTS as usize + 16 * REF_MAX_TARGETS as usize
+    std::mem::size_of::<RefUniforms>()
+        == 64 + 6 * 16 + 32 * MAX_LIGHTS as usize + 16 * REF_MAX_TARGETS as usize + 5 * 16
 );
+
+/// Kinds of volume.glsl (`ref.volume[0].w`).
+const REF_VOLUME_LUNEBURG: f32 = 1.0;
+const REF_VOLUME_LINEAR: f32 = 2.0;
+const REF_VOLUME_CONSTANT: f32 = 3.0;
+
+/// The uniform rows of volume.glsl for `volume`: the exact analytic profile (not the voxels
+/// the eikonal view renderer samples), marched with RK4 steps of 1/2000 of the box diagonal.
+fn volume_uniforms(volume: &crate::scene::Volume) -> [[f32; 4]; 5] {
+    use crate::scene::IndexProfile;
+    let h = (volume.max - volume.min).length() / 2000.0;
+    let (kind, params) = match volume.index {
+        IndexProfile::Luneburg { center, radius } => (REF_VOLUME_LUNEBURG, center.extend(radius)),
+        IndexProfile::Linear { n0, gradient, .. } => (REF_VOLUME_LINEAR, gradient.extend(n0)),
+        IndexProfile::Constant { n, .. } => (REF_VOLUME_CONSTANT, Vec3::ZERO.extend(n)),
+    };
+    let (center, radius) = volume.index.region().unwrap_or(((volume.min + volume.max) * 0.5, 0.0));
+    [
+        volume.min.extend(kind).to_array(),
+        volume.max.extend(h).to_array(),
+        center.extend(radius).to_array(),
+        params.to_array(),
+        volume.attenuation.extend(20_000.0).to_array(),
+    ]
+}
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
@@ -278,6 +310,7 @@ impl Reference {
             grid: [2.002 * radius, radius, settings.alpha, 0.0],
             lights: [RefLight::zeroed(); MAX_LIGHTS as usize],
             targets: [[0.0; 4]; REF_MAX_TARGETS as usize],
+            volume: scene.volume.as_ref().map(volume_uniforms).unwrap_or_default(),
         };
         for (i, l) in scene.lights.iter().enumerate() {
             uniforms.lights[i] = match l {
