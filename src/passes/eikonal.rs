@@ -151,7 +151,6 @@ fn f(x: f32) -> u32 {
 
 impl EikonalPass {
     /// Sample, upload, smooth and differentiate `volume`, and create the view pass.
-    #[allow(clippy::too_many_arguments)]
     pub fn new(
         ctx: &Arc<GpuContext>,
         params: EikonalParams,
@@ -216,11 +215,6 @@ impl EikonalPass {
         frame_set: DescriptorSet,
     ) {
         self.view.record(frame, frame_set, &[targets.depth_id, self.volume.field_id, scene.environment_id]);
-    }
-
-    /// The (grad n, n - 1) texture, for inspection.
-    pub fn field(&self) -> &Image {
-        &self.volume.field
     }
 }
 
