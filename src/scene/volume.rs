@@ -103,6 +103,21 @@ impl Volume {
         self.min + (Vec3::new(i as f32, j as f32, k as f32) + 0.5) * self.voxel_size()
     }
 
+    /// n - 1 as voxel (centre `x`) stores it. A constant sphere is rasterized from its
+    /// implicit function (section 5.1) with a one-voxel linear ramp of the signed distance
+    /// across the surface, its coverage, instead of a staircase of inside/outside voxels
+    /// whose gradients would scatter the rays.
+    fn sample_at(&self, x: DVec3) -> f64 {
+        match self.index {
+            IndexProfile::Constant { n, sphere: Some((c, r)) } => {
+                let h = self.voxel_size().as_dvec3().element_sum() / 3.0;
+                let distance = x.distance(c.as_dvec3()) - r as f64;
+                (n as f64 - 1.0) * (0.5 - distance / h).clamp(0.0, 1.0)
+            }
+            _ => self.index.n(x) - 1.0,
+        }
+    }
+
     /// n - 1 at every voxel centre, x fastest then y then z (the layout of a 3D texture
     /// upload). Stored as the deviation from 1 so that smoothing with the padding of the
     /// surrounding air (n = 1) is exact for n = 1.
@@ -112,7 +127,7 @@ impl Volume {
         for k in 0..nz {
             for j in 0..ny {
                 for i in 0..nx {
-                    out.push((self.index.n(self.voxel_center(i, j, k).as_dvec3()) - 1.0) as f32);
+                    out.push(self.sample_at(self.voxel_center(i, j, k).as_dvec3()) as f32);
                 }
             }
         }
