@@ -176,8 +176,7 @@ fn conductor_fresnel_approximation_is_close_to_exact() {
         let out = r.probe_impostor(ImpostorEffect::Reflection, true, 0, &recs).unwrap().unwrap();
         let mut worst = 0f32;
         for (i, rec) in out.iter().enumerate() {
-            for c in 0..3 {
-                let (approx, exact) = (rec[0][c], rec[1][c]);
+            for (&approx, &exact) in rec[0][..3].iter().zip(&rec[1][..3]) {
                 assert!(approx.is_finite() && exact.is_finite());
                 worst = worst.max((approx - exact).abs());
                 // Exact at normal incidence (cos = 1) and at grazing incidence (F = 1).

@@ -74,7 +74,7 @@ fn caustic_passes_only_with_light_specular_object_and_receiver() {
         ]
     );
     // A mirror forms reflective caustics.
-    assert!(names("metal_ring", &[on]).iter().any(|p| *p == "caustics_map"));
+    assert!(names("metal_ring", &[on]).contains(&"caustics_map"));
     let absent = |scene: &str, o: &[&str]| {
         let n = names(scene, o);
         assert!(!n.iter().any(|p| CAUSTIC.contains(p)), "{scene} {o:?}: {n:?}");

@@ -168,7 +168,7 @@ impl ApplicationHandler for App {
     fn window_event(&mut self, event_loop: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
         let Some(r) = self.running.as_mut() else { return };
         match event {
-            WindowEvent::CloseRequested => return self.finish(event_loop),
+            WindowEvent::CloseRequested => self.finish(event_loop),
             WindowEvent::RedrawRequested => {
                 let outcome = r.frame(&self.args);
                 match outcome {
@@ -188,12 +188,12 @@ impl ApplicationHandler for App {
                     }
                 }
                 if self.args.frames.is_some_and(|n| r.frames >= n) {
-                    return self.finish(event_loop);
+                    self.finish(event_loop)
                 }
             }
             event => {
                 if r.input(event) {
-                    return self.finish(event_loop);
+                    self.finish(event_loop)
                 }
             }
         }

@@ -81,7 +81,8 @@ fn transition(state: &mut State, access: Access, depth: bool, is_image: bool) ->
     let new_layout = if is_image { info.layout } else { vk::ImageLayout::UNDEFINED };
     let layout_change = is_image && state.layout != new_layout;
     let (w_stages, w_access) = state.last_write.unwrap_or((vk::PipelineStageFlags::empty(), vk::AccessFlags::empty()));
-    let barrier = if info.writes || layout_change {
+
+    if info.writes || layout_change {
         // Write-after-write, write-after-read, or a layout transition: wait for every earlier
         // write and read, and make the last write available.
         let src = w_stages | state.reads;
@@ -123,8 +124,7 @@ fn transition(state: &mut State, access: Access, depth: bool, is_image: bool) ->
         } else {
             None
         }
-    };
-    barrier
+    }
 }
 
 impl FrameGraph {

@@ -580,8 +580,8 @@ impl Reference {
             let r = p.vp_pos[3];
             let caustic =
                 if self.iterations_done > 0 && r > 0.0 { 1.0 / (std::f32::consts::PI * r * r * k) } else { 0.0 };
-            for c in 0..3 {
-                let v = a[c] / n + p.tau_n[c] * caustic;
+            for (sum, tau) in a[..3].iter().zip(&p.tau_n[..3]) {
+                let v = sum / n + tau * caustic;
                 out.push(if v.is_finite() { v } else { 0.0 });
             }
             out.push(1.0);

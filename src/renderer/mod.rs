@@ -537,8 +537,8 @@ impl Renderer {
         passes.tonemap.record(&mut frame, targets, frame_set);
         debug_assert_eq!(frame.pass_names(), self.plan.iter().map(|p| p.name).collect::<Vec<_>>());
         extra(&mut frame, FinalImage { ldr: &targets.ldr, ldr_id: targets.ldr_id });
+        // `cmd` borrows `commands` until its last use here.
         let queries = frame.execute(&cmd, Some(&timestamps[slot]));
-        drop(cmd);
         commands.submit_with(slot, sync)?;
         self.pending[slot] = Some((self.frame_index, queries));
         self.frame_index += 1;

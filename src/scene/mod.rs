@@ -363,6 +363,8 @@ fn finite(src: &Source, path: &str, v: f32) -> Result<f32, SceneError> {
     Ok(v)
 }
 
+// `!(v > 0.0)` rather than `v <= 0.0`: it also rejects NaN.
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
 fn positive(src: &Source, path: &str, v: f32) -> Result<f32, SceneError> {
     if !(finite(src, path, v)? > 0.0) {
         return Err(value_err(
@@ -875,6 +877,8 @@ fn profile(o: &FileObject, path: &str, src: &Source) -> Result<Vec<Vec2>, SceneE
 /// Loads an OBJ object and places it: with `fit`, the transform's rotation, then a
 /// uniform scale to the fit's extent and a move to its centre (and floor); without,
 /// the caller applies the full transform.
+// `!(x > 0.0)` rather than `x <= 0.0`: it also rejects NaN.
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
 fn mesh_object(o: &FileObject, path: &str, rotation: Quat, src: &Source) -> Result<Mesh, SceneError> {
     let rel = o.file.as_deref().unwrap_or_default();
     let file = relative_to(&src.file, rel);
