@@ -92,7 +92,7 @@ pub struct RefractorLayers {
     pub layers: Vec<Layer>,
     /// The draws of dielectric objects.
     draws: Vec<Draw>,
-    /// Per scene vertex d_N (Wyman) or a placeholder; bound at BINDING_REFR_DN.
+    /// Per scene vertex d_N (Wyman) or a one-float stand-in; bound at BINDING_REFR_DN.
     _d_n: Buffer,
     reads_gbuffer_depth: bool,
 }
@@ -139,7 +139,7 @@ impl RefractorLayers {
             ],
             1,
         )?;
-        // A placeholder of one float where the technique has no d_N (the shader never reads it).
+        // A one-float stand-in where the technique has no d_N (the shader never reads it).
         let data: Vec<f32> = d_n.map(|d| d.to_vec()).filter(|d| !d.is_empty()).unwrap_or_else(|| vec![0.0]);
         let d_n_buffer = Buffer::with_data(
             ctx,

@@ -31,7 +31,7 @@ pub struct Targets {
     /// One depth layer per atlas layer, so faces never wait on each other's depth buffer.
     pub shadow_depth: Image,
     /// Caustic-map atlas, laid out like `shadow_atlas` (six cube-compatible layers per light);
-    /// a cleared 1x1 placeholder when no caustic pass writes it.
+    /// a cleared 1x1 stand-in when no caustic pass writes it.
     pub caustic_atlas: Image,
     pub gbuf_normal_id: ImageId,
     pub gbuf_albedo_id: ImageId,
@@ -73,7 +73,7 @@ impl Targets {
         let depth = mk("depth", DEPTH_FORMAT, U::DEPTH_STENCIL_ATTACHMENT | U::SAMPLED | U::TRANSFER_SRC)?;
         let hdr = mk("hdr", HDR_FORMAT, attach_sampled | U::STORAGE)?;
         let ldr = mk("ldr", LDR_FORMAT, U::COLOR_ATTACHMENT | U::TRANSFER_SRC)?;
-        // Without lights the atlas is a 1x1 placeholder that is still bound (and cleared).
+        // Without lights the atlas is a 1x1 stand-in that is still bound (and cleared).
         let (size, layers) =
             if lights == 0 { (1, SHADOW_LAYERS_PER_LIGHT) } else { (shadow_size, lights * SHADOW_LAYERS_PER_LIGHT) };
         let shadow_atlas = Image::new(
