@@ -1,34 +1,28 @@
 //! Error between two images of the same size.
 
-/// Root-mean-square error over the RGB channels of two RGBA f32 images.
-pub fn rmse_rgba(a: &[f32], b: &[f32]) -> f64 {
+/// Mean squared error over the RGB channels of two RGBA images (alpha is ignored).
+fn mse_rgb<T: Copy + Into<f64>>(a: &[T], b: &[T]) -> f64 {
     assert_eq!(a.len(), b.len(), "images differ in size");
-    let mut sum = 0.0f64;
-    let mut n = 0usize;
+    let (mut sum, mut n) = (0.0f64, 0usize);
     for (pa, pb) in a.chunks_exact(4).zip(b.chunks_exact(4)) {
-        for c in 0..3 {
-            let d = pa[c] as f64 - pb[c] as f64;
+        for (&x, &y) in pa[..3].iter().zip(&pb[..3]) {
+            let d = x.into() - y.into();
             sum += d * d;
             n += 1;
         }
     }
-    (sum / n.max(1) as f64).sqrt()
+    sum / n.max(1) as f64
+}
+
+/// Root-mean-square error over the RGB channels of two RGBA f32 images.
+pub fn rmse_rgba(a: &[f32], b: &[f32]) -> f64 {
+    mse_rgb(a, b).sqrt()
 }
 
 /// Peak signal-to-noise ratio in dB for 8-bit RGBA images (peak 255), over RGB.
 /// Infinite for identical images.
 pub fn psnr_rgba8(a: &[u8], b: &[u8]) -> f64 {
-    assert_eq!(a.len(), b.len(), "images differ in size");
-    let mut sum = 0.0f64;
-    let mut n = 0usize;
-    for (pa, pb) in a.chunks_exact(4).zip(b.chunks_exact(4)) {
-        for c in 0..3 {
-            let d = pa[c] as f64 - pb[c] as f64;
-            sum += d * d;
-            n += 1;
-        }
-    }
-    let mse = sum / n.max(1) as f64;
+    let mse = mse_rgb(a, b);
     if mse == 0.0 {
         f64::INFINITY
     } else {
