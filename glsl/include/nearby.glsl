@@ -26,6 +26,10 @@ layout(set = 1, binding = BINDING_NEARBY_RECTS, std430) readonly buffer NearbyRe
 // TEX_i (rgb: radiance) and TEX_DEPTH_i (a: axial distance dot(p - O_R, n_i)), layer i.
 layout(set = 1, binding = BINDING_NEARBY_TEXTURE) uniform sampler2DArray nearby_tex;
 
+// A rectangle to leave out of nearby_radiance (an impostor's own, when a mirror's texture is
+// rendered); none by default.
+uint nearby_skip = 0xffffffffu;
+
 // Fig. 13's intersect() and UV(): the hit t > 0 of P + t Ray with RECT_k and its (u, v).
 // Rays parallel to the plane (|cos| <= 1e-6) miss: no division by ~0. Mirrors
 // NearbyRect::intersect (CPU, unit-tested).
@@ -130,7 +134,7 @@ vec3 nearby_radiance(vec3 P, vec3 Ray) {
         for (uint i = 0u; i < n; ++i) {
             float t;
             vec2 uv;
-            if (nearby_rect_hit(i, P, Ray, t, uv) && t > last && t < t_k) {
+            if (i != nearby_skip && nearby_rect_hit(i, P, Ray, t, uv) && t > last && t < t_k) {
                 k = i;
                 t_k = t;
                 uv_k = uv;
