@@ -6,7 +6,7 @@
 //! - O_R: the mean of the refractors' vertices ("the average value of object's vertices is
 //!   used in our implementation"); with several dielectric objects their vertices are pooled,
 //!   so one set of rectangles serves all of them (exact for the paper's single OBJ_R).
-//! - For each diffuse object OBJ_i: O_i = mean of its vertices, d_i = largest vertex distance
+//! - For each other object OBJ_i (diffuse, mirror or conductor): O_i = mean of its vertices, d_i = largest vertex distance
 //!   from O_i; RECT_i is the square of side 2 d_i centred at O_i perpendicular to O_R O_i.
 //! - TEX_i is OBJ_i rendered from O_R towards O_i with the parallel projection
 //!   `glOrtho(-d_i, d_i, -d_i, d_i, near, far)`, with the same up vector as the rectangle, so
@@ -19,9 +19,17 @@
 //! along the projection direction n_i (linear in the ortho z of Fig. 16, in world units).
 //! Texels where no surface was drawn hold the far plane's axial distance.
 //!
+//! Recursion (§2.2.1, Fig. 24g; [`NearbyDesc::recursion_depth`]): a mirror or conductor's
+//! TEX_k shows it reflecting the projection's view direction: the environment at level 0,
+//! the other impostors of level n - 1 at level n (glsl/nearby/impostor_recursive.frag), one
+//! graph pass per level ([`RECURSION_PASSES`]), ping-ponging between two arrays so that the
+//! last level lands in [`NearbyImpostors::texture`]. OBJ_R itself is never drawn into a
+//! texture.
+//!
 //! Limits (stated rule, not an error): at most [`MAX_NEARBY_RECTS`] rectangles; with more
 //! diffuse objects the ones whose bounding spheres come closest to O_R are kept and the others
-//! are seen through the environment map only (`prism passes` names them).
+//! are seen through the environment map only (`prism passes` names them). Recursion depth at
+//! most [`MAX_RECURSION`].
 //!
 //! This module is also used by the photon-buffer caustics (Hu & Qin §3): keep
 //! [`NearbyRect`], [`nearby_rects`] and [`NearbyImpostors`]' public fields stable.
@@ -31,15 +39,16 @@ use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
 
 use crate::gpu::{
-    vk, Access, Attachment, Blend, Buffer, Clear, DepthState, DescriptorSet, DescriptorSetLayout, Framebuffer,
-    GpuContext, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc, ImageViewKind, PipelineLayout,
-    RenderPass, RenderPassDesc, VertexLayout,
+    vk, Access, Attachment, Blend, Buffer, Clear, DepthState, DescriptorSet, DescriptorSetLayout, DescriptorWrite,
+    Framebuffer, GpuContext, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc, ImageViewKind,
+    PipelineLayout, RenderPass, RenderPassDesc, Sampler, SamplerDesc, VertexLayout,
 };
 use crate::graph::{Frame, FrameGraph, ImageId};
 use crate::renderer::gpu_scene::GpuScene;
 use crate::renderer::targets::DEPTH_FORMAT;
 use crate::scene::{Material, Scene};
 pub use crate::MAX_NEARBY_RECTS;
+use crate::{BINDING_NEARBY_RECTS, BINDING_NEARBY_TEXTURE};
 
 /// TEX_i (rgb radiance) and TEX_DEPTH_i (a: axial distance from O_R) in one layer.
 pub const NEARBY_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
@@ -157,11 +166,12 @@ pub fn refractor_center(scene: &Scene) -> Option<Vec3> {
     (n > 0).then(|| (sum / n as f64).as_vec3())
 }
 
-/// The diffuse objects that get a rectangle, nearest first (by the gap between O_R and their
+/// The objects that get a rectangle (every one but the dielectrics, which make up OBJ_R:
+/// diffuse ones, and mirrors and conductors for §2.2.1's recursive reflections), nearest first (by the gap between O_R and their
 /// bounding sphere), at most [`MAX_NEARBY_RECTS`]; and those left out by that limit.
 pub fn nearby_objects(scene: &Scene, origin_r: Vec3) -> (Vec<usize>, Vec<usize>) {
     let mut all: Vec<(f32, usize)> = (0..scene.objects.len())
-        .filter(|&i| scene.materials[scene.objects[i].material].is_diffuse())
+        .filter(|&i| !matches!(scene.materials[scene.objects[i].material], Material::Dielectric { .. }))
         .filter_map(|i| {
             object_center_extent(scene, i).filter(|(_, d)| *d > 0.0).map(|(c, d)| (c.distance(origin_r) - d, i))
         })
@@ -239,7 +249,7 @@ pub fn rect_buffer_bytes(origin_r: Vec3, rects: &[NearbyRect]) -> Vec<u8> {
     bytes
 }
 
-/// Push constants of glsl/nearby/impostor.{vert,frag}.
+/// Push constants of glsl/nearby/impostor.vert and impostor_body.glsl.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 struct ImpostorPush {
@@ -248,15 +258,52 @@ struct ImpostorPush {
     origin: [f32; 4],
     /// xyz n_i.
     axis: [f32; 4],
-    /// x material index.
+    /// x material index, y the rectangle's layer (left out of its own reflection).
     material: [u32; 4],
 }
 const _: () = assert!(std::mem::size_of::<ImpostorPush>() == 112);
 
-struct Layer {
-    rect: NearbyRect,
-    framebuffer: Framebuffer,
-    draw: usize,
+/// Whether OBJ_k's texture shows a reflection (§2.2.1's recursive case).
+fn is_metal(scene: &Scene, object: usize) -> bool {
+    matches!(scene.materials[scene.objects[object].material], Material::Mirror { .. } | Material::Conductor { .. })
+}
+
+/// How the impostor textures are made beyond [`NearbyImpostors::new`]'s defaults.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NearbyDesc {
+    /// Edge of each TEX_i in texels.
+    pub resolution: u32,
+    /// §2.2.1 recursion: 0 = mirrors and conductors in the textures reflect the environment
+    /// only; n = they reflect the other impostors of level n - 1 (one extra pass per level).
+    pub recursion_depth: u32,
+    /// The lookup used by the recursive levels (as `[render.hu_qin]`'s).
+    pub correction_iterations: u32,
+    pub correction_tolerance: f32,
+    pub seed_samples: u32,
+}
+
+/// Passes of the recursion levels 1..=MAX_RECURSION (level 0 is `name` itself).
+pub const RECURSION_PASSES: [&str; 3] =
+    ["refraction_hu_qin_nearby_r1", "refraction_hu_qin_nearby_r2", "refraction_hu_qin_nearby_r3"];
+/// Deepest recursion: each level is one more rendering of every texture.
+pub const MAX_RECURSION: u32 = RECURSION_PASSES.len() as u32;
+
+/// How many recursion levels beyond 0 the scene's rectangles need: none without a mirror or
+/// conductor among them (nothing would change from level to level).
+pub fn recursion_levels(scene: &Scene, rects: &[NearbyRect], depth: u32) -> u32 {
+    if rects.iter().any(|r| is_metal(scene, r.object)) {
+        depth.min(MAX_RECURSION)
+    } else {
+        0
+    }
+}
+
+/// One array of textures (recursion levels ping-pong between two).
+struct TextureArray {
+    _image: Image,
+    id: ImageId,
+    /// One per rectangle.
+    framebuffers: Vec<Framebuffer>,
 }
 
 /// TEX_i / TEX_DEPTH_i of every rectangle, rendered each frame (the paper's "Rendering
@@ -268,21 +315,40 @@ pub struct NearbyImpostors {
     pub rects: Vec<NearbyRect>,
     /// Edge of each TEX_i in texels.
     pub resolution: u32,
-    /// 2D array, one layer per rectangle (one cleared stand-in layer without rectangles).
+    /// 2D array, one layer per rectangle (one cleared stand-in layer without rectangles): the
+    /// last recursion level's.
     pub texture: Image,
     pub texture_id: ImageId,
     /// `NearbyRects` of glsl/include/nearby.glsl.
     pub rect_buffer: Buffer,
+    /// Recursion levels beyond 0 actually rendered.
+    pub levels: u32,
+    /// The other array of the ping-pong (with recursion levels).
+    other: Option<TextureArray>,
+    framebuffers: Vec<Framebuffer>,
     _depth: Image,
     depth_id: ImageId,
     render_pass: RenderPass,
     _layout: PipelineLayout,
     pipeline: GraphicsPipeline,
-    layers: Vec<Layer>,
+    /// Recursive levels: pipeline, layout, set-1 layout, and the sets reading array 0 / 1.
+    recursive: Option<Recursive>,
+    draws: Vec<usize>,
+    metal: Vec<bool>,
+}
+
+struct Recursive {
+    _set_layout: DescriptorSetLayout,
+    _layout: PipelineLayout,
+    pipeline: GraphicsPipeline,
+    _sampler: Sampler,
+    /// [reads `texture`, reads `other`].
+    sets: [DescriptorSet; 2],
 }
 
 impl NearbyImpostors {
-    /// The rectangles of [`nearby_rects`] and their textures, `resolution`^2 texels each.
+    /// The rectangles of [`nearby_rects`] and their textures, `resolution`^2 texels each, no
+    /// recursion.
     pub fn new(
         ctx: &Arc<GpuContext>,
         name: &'static str,
@@ -292,8 +358,31 @@ impl NearbyImpostors {
         graph: &mut FrameGraph,
         frame_layout: &DescriptorSetLayout,
     ) -> GpuResult<Self> {
+        let desc = NearbyDesc {
+            resolution,
+            recursion_depth: 0,
+            correction_iterations: 3,
+            correction_tolerance: 1e-3,
+            seed_samples: 8,
+        };
+        Self::with_desc(ctx, name, &desc, scene, gpu, graph, frame_layout)
+    }
+
+    /// As [`Self::new`], with recursion levels and their lookup settings.
+    pub fn with_desc(
+        ctx: &Arc<GpuContext>,
+        name: &'static str,
+        desc: &NearbyDesc,
+        scene: &Scene,
+        gpu: &GpuScene,
+        graph: &mut FrameGraph,
+        frame_layout: &DescriptorSetLayout,
+    ) -> GpuResult<Self> {
         let (origin, rects) = nearby_rects(scene);
-        Self::with_rects(ctx, name, resolution, origin, rects, gpu, graph, frame_layout)
+        let rects: Vec<NearbyRect> = rects.into_iter().filter(|r| r.object < gpu.draws.len()).collect();
+        let metal = rects.iter().map(|r| is_metal(scene, r.object)).collect();
+        let levels = recursion_levels(scene, &rects, desc.recursion_depth);
+        Self::build(ctx, name, desc, origin, rects, metal, levels, graph, frame_layout)
     }
 
     /// No rectangles: a cleared 1x1 stand-in texture and an empty rectangle buffer, for
@@ -301,11 +390,18 @@ impl NearbyImpostors {
     pub fn stand_in(
         ctx: &Arc<GpuContext>,
         name: &'static str,
-        gpu: &GpuScene,
+        _gpu: &GpuScene,
         graph: &mut FrameGraph,
         frame_layout: &DescriptorSetLayout,
     ) -> GpuResult<Self> {
-        Self::with_rects(ctx, name, 1, Vec3::ZERO, Vec::new(), gpu, graph, frame_layout)
+        let desc = NearbyDesc {
+            resolution: 1,
+            recursion_depth: 0,
+            correction_iterations: 0,
+            correction_tolerance: 1e-3,
+            seed_samples: 1,
+        };
+        Self::build(ctx, name, &desc, Vec3::ZERO, Vec::new(), Vec::new(), 0, graph, frame_layout)
     }
 
     /// Whether any rectangle exists (otherwise [`Self::record`] must not be called).
@@ -314,32 +410,30 @@ impl NearbyImpostors {
     }
 
     #[allow(clippy::too_many_arguments)]
-    fn with_rects(
+    fn build(
         ctx: &Arc<GpuContext>,
         name: &'static str,
-        resolution: u32,
+        desc: &NearbyDesc,
         origin: Vec3,
         rects: Vec<NearbyRect>,
-        gpu: &GpuScene,
+        metal: Vec<bool>,
+        levels: u32,
         graph: &mut FrameGraph,
         frame_layout: &DescriptorSetLayout,
     ) -> GpuResult<Self> {
-        let rects: Vec<NearbyRect> = rects.into_iter().filter(|r| r.object < gpu.draws.len()).collect();
         let layers_n = rects.len().max(1) as u32;
-        let size = if rects.is_empty() { 1 } else { resolution };
+        let size = if rects.is_empty() { 1 } else { desc.resolution };
         use vk::ImageUsageFlags as U;
-        let texture = Image::new(
-            ctx,
-            &ImageDesc {
-                name: format!("{name}_texture"),
-                format: NEARBY_FORMAT,
-                width: size,
-                height: size,
-                layers: layers_n,
-                usage: U::COLOR_ATTACHMENT | U::SAMPLED | U::TRANSFER_SRC | U::TRANSFER_DST,
-                view: ImageViewKind::D2Array,
-            },
-        )?;
+        let array_desc = |label: String| ImageDesc {
+            name: label,
+            format: NEARBY_FORMAT,
+            width: size,
+            height: size,
+            layers: layers_n,
+            usage: U::COLOR_ATTACHMENT | U::SAMPLED | U::TRANSFER_SRC | U::TRANSFER_DST,
+            view: ImageViewKind::D2Array,
+        };
+        let texture = Image::new(ctx, &array_desc(format!("{name}_texture")))?;
         let texture_id = graph.register_image(&texture);
         let depth = Image::new(
             ctx,
@@ -377,35 +471,84 @@ impl NearbyImpostors {
                 depth_read_only: false,
             },
         )?;
-        let layout = PipelineLayout::new(ctx, name, &[frame_layout], std::mem::size_of::<ImpostorPush>() as u32)?;
-        let pipeline = GraphicsPipeline::new(
-            ctx,
-            &GraphicsPipelineDesc {
-                name,
-                vertex_shader: "nearby/impostor.vert",
-                fragment_shader: "nearby/impostor.frag",
-                vertex: VertexLayout::Mesh,
-                topology: vk::PrimitiveTopology::TRIANGLE_LIST,
-                // Quads are one-sided; O_R may see either side.
-                cull: vk::CullModeFlags::NONE,
-                depth: DepthState::LESS,
-                blend: &[Blend::Off],
-                specialization: &[],
-            },
-            &layout,
-            &render_pass,
-        )?;
-        let mut layers = Vec::new();
-        for r in &rects {
-            let framebuffer = Framebuffer::new(
+        let push_size = std::mem::size_of::<ImpostorPush>() as u32;
+        let pipeline_desc = |fragment_shader, specialization| GraphicsPipelineDesc {
+            name,
+            vertex_shader: "nearby/impostor.vert",
+            fragment_shader,
+            vertex: VertexLayout::Mesh,
+            topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+            // Quads are one-sided; O_R may see either side.
+            cull: vk::CullModeFlags::NONE,
+            depth: DepthState::LESS,
+            blend: &[Blend::Off],
+            specialization,
+        };
+        let layout = PipelineLayout::new(ctx, name, &[frame_layout], push_size)?;
+        let pipeline = GraphicsPipeline::new(ctx, &pipeline_desc("nearby/impostor.frag", &[]), &layout, &render_pass)?;
+        let framebuffers_of = |image: &Image, label: &str| -> GpuResult<Vec<Framebuffer>> {
+            rects
+                .iter()
+                .map(|r| {
+                    Framebuffer::new(
+                        ctx,
+                        &format!("{label}_{}", r.layer),
+                        &render_pass,
+                        &[image.layer_view(r.layer), depth.layer_view(r.layer)],
+                        image.extent(),
+                    )
+                })
+                .collect()
+        };
+        let framebuffers = framebuffers_of(&texture, name)?;
+        let (other, recursive) = if levels > 0 {
+            let image = Image::new(ctx, &array_desc(format!("{name}_texture_b")))?;
+            let id = graph.register_image(&image);
+            let fbs = framebuffers_of(&image, &format!("{name}_b"))?;
+            let stage = vk::ShaderStageFlags::FRAGMENT;
+            let set_layout = DescriptorSetLayout::new(
                 ctx,
-                &format!("{name}_{}", r.layer),
-                &render_pass,
-                &[texture.layer_view(r.layer), depth.layer_view(r.layer)],
-                texture.extent(),
+                name,
+                &[
+                    (BINDING_NEARBY_RECTS, vk::DescriptorType::STORAGE_BUFFER, stage),
+                    (BINDING_NEARBY_TEXTURE, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, stage),
+                ],
+                2,
             )?;
-            layers.push(Layer { rect: *r, framebuffer, draw: r.object });
-        }
+            let sampler = Sampler::new(ctx, &format!("{name}_nearest"), SamplerDesc::NEAREST_CLAMP)?;
+            let sampled = Access::FragmentSampled.info(false).layout;
+            let set_reading = |view| {
+                set_layout.allocate(
+                    name,
+                    &[
+                        DescriptorWrite::Storage(BINDING_NEARBY_RECTS, &rect_buffer),
+                        DescriptorWrite::Sampled(BINDING_NEARBY_TEXTURE, view, &sampler, sampled),
+                    ],
+                )
+            };
+            let sets = [set_reading(texture.view())?, set_reading(image.view())?];
+            let rlayout = PipelineLayout::new(ctx, name, &[frame_layout, &set_layout], push_size)?;
+            let spec = [desc.correction_iterations, desc.correction_tolerance.to_bits(), desc.seed_samples];
+            let rpipeline = GraphicsPipeline::new(
+                ctx,
+                &pipeline_desc("nearby/impostor_recursive.frag", &spec),
+                &rlayout,
+                &render_pass,
+            )?;
+            (
+                Some(TextureArray { _image: image, id, framebuffers: fbs }),
+                Some(Recursive {
+                    _set_layout: set_layout,
+                    _layout: rlayout,
+                    pipeline: rpipeline,
+                    _sampler: sampler,
+                    sets,
+                }),
+            )
+        } else {
+            (None, None)
+        };
+        let draws = rects.iter().map(|r| r.object).collect();
         Ok(NearbyImpostors {
             name,
             origin,
@@ -414,16 +557,23 @@ impl NearbyImpostors {
             texture,
             texture_id,
             rect_buffer,
+            levels,
+            other,
+            framebuffers,
             _depth: depth,
             depth_id,
             render_pass,
             _layout: layout,
             pipeline,
-            layers,
+            recursive,
+            draws,
+            metal,
         })
     }
 
-    /// Render every TEX_i (after the shadow maps, which it reads through the frame set).
+    /// Render every TEX_i (after the shadow maps, which it reads through the frame set): level
+    /// 0 as the graph pass `name`, then each recursion level l as `RECURSION_PASSES[l - 1]`.
+    /// Levels ping-pong between two arrays so that the last one lands in `texture`.
     pub fn record<'a>(
         &'a self,
         frame: &mut Frame<'_, 'a>,
@@ -431,32 +581,54 @@ impl NearbyImpostors {
         frame_set: DescriptorSet,
         shadow_atlas: Option<ImageId>,
     ) {
-        let mut pass = frame.pass(self.name);
-        pass = pass.write(self.texture_id, Access::ColorAttachment).write(self.depth_id, Access::DepthAttachment);
-        if let Some(atlas) = shadow_atlas {
-            pass = pass.read(atlas, Access::FragmentSampled);
-        }
         let origin = self.origin.extend(1.0).to_array();
-        pass.record(move |cmd| {
-            for l in &self.layers {
-                let r = &l.rect;
-                // Empty texels: TEX_DEPTH = the far plane (never a surface, see DEPTH_MARGIN).
-                let clears = [Clear::Color([0.0, 0.0, 0.0, r.far]), Clear::Depth(1.0)];
-                cmd.begin_render_pass(&self.render_pass, &l.framebuffer, &clears);
-                cmd.bind_graphics(&self.pipeline, &[frame_set]);
-                cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
-                let d = &scene.draws[l.draw];
-                let push = ImpostorPush {
-                    view_proj: r.view_proj.to_cols_array_2d(),
-                    origin,
-                    axis: r.axis.extend(0.0).to_array(),
-                    material: [d.material, 0, 0, 0],
-                };
-                cmd.push_graphics(&self.pipeline, &push);
-                cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
-                cmd.end_render_pass();
+        for level in 0..=self.levels {
+            // Level `level` writes array (levels - level) % 2: 0 is `texture`, 1 `other`.
+            let dst = ((self.levels - level) % 2) as usize;
+            let (dst_id, dst_fbs) = match (dst, &self.other) {
+                (1, Some(o)) => (o.id, &o.framebuffers),
+                _ => (self.texture_id, &self.framebuffers),
+            };
+            let name = if level == 0 { self.name } else { RECURSION_PASSES[level as usize - 1] };
+            let mut pass = frame.pass(name);
+            pass = pass.write(dst_id, Access::ColorAttachment).write(self.depth_id, Access::DepthAttachment);
+            if let Some(atlas) = shadow_atlas {
+                pass = pass.read(atlas, Access::FragmentSampled);
             }
-        });
+            let recursive = if level > 0 { self.recursive.as_ref() } else { None };
+            if let (Some(_), Some(o)) = (recursive, &self.other) {
+                pass = pass.read(if dst == 0 { o.id } else { self.texture_id }, Access::FragmentSampled);
+            }
+            pass.record(move |cmd| {
+                for (i, (r, fb)) in self.rects.iter().zip(dst_fbs).enumerate() {
+                    // Empty texels: TEX_DEPTH = the far plane (never a surface, see DEPTH_MARGIN).
+                    let clears = [Clear::Color([0.0, 0.0, 0.0, r.far]), Clear::Depth(1.0)];
+                    cmd.begin_render_pass(&self.render_pass, fb, &clears);
+                    let pipeline = match recursive {
+                        // Diffuse layers are the same at every level; mirrors read the other array.
+                        Some(rec) if self.metal[i] => {
+                            cmd.bind_graphics(&rec.pipeline, &[frame_set, rec.sets[1 - dst]]);
+                            &rec.pipeline
+                        }
+                        _ => {
+                            cmd.bind_graphics(&self.pipeline, &[frame_set]);
+                            &self.pipeline
+                        }
+                    };
+                    cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
+                    let d = &scene.draws[self.draws[i]];
+                    let push = ImpostorPush {
+                        view_proj: r.view_proj.to_cols_array_2d(),
+                        origin,
+                        axis: r.axis.extend(0.0).to_array(),
+                        material: [d.material, r.layer, 0, 0],
+                    };
+                    cmd.push_graphics(pipeline, &push);
+                    cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
+                    cmd.end_render_pass();
+                }
+            });
+        }
     }
 }
 

@@ -31,7 +31,7 @@ use crate::{
     BINDING_REFR_BACK_NORMAL, BINDING_REFR_FRONT_DEPTH, BINDING_REFR_FRONT_NORMAL,
 };
 
-use super::nearby_impostors::NearbyImpostors;
+use super::nearby_impostors::{NearbyDesc, NearbyImpostors};
 use super::refractor_layers::{DebugTarget, LayerKind, RefractorLayers, ShadeDesc, ShadePass};
 
 pub struct HuQinPass {
@@ -56,15 +56,14 @@ impl HuQinPass {
     ) -> GpuResult<Self> {
         // The same rule as plan.rs (REFRACTION_HU_QIN_NEARBY): rectangles only when asked for.
         let nearby = if params.nearby {
-            NearbyImpostors::new(
-                ctx,
-                REFRACTION_HU_QIN_NEARBY,
-                params.impostor_resolution,
-                scene,
-                gpu,
-                graph,
-                frame_layout,
-            )?
+            let desc = NearbyDesc {
+                resolution: params.impostor_resolution,
+                recursion_depth: params.recursion_depth,
+                correction_iterations: params.correction_iterations,
+                correction_tolerance: params.correction_tolerance,
+                seed_samples: params.seed_samples,
+            };
+            NearbyImpostors::with_desc(ctx, REFRACTION_HU_QIN_NEARBY, &desc, scene, gpu, graph, frame_layout)?
         } else {
             NearbyImpostors::stand_in(ctx, REFRACTION_HU_QIN_NEARBY, gpu, graph, frame_layout)?
         };

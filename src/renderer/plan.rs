@@ -200,20 +200,18 @@ fn image_space_refraction(scene: &Scene, dielectric: &[String]) -> Vec<PlannedPa
 
 /// Hu & Qin 2007 §2.2: the impostor textures, when `render.hu_qin.nearby` is on and there are
 /// diffuse objects to stand in for.
-fn hu_qin_nearby(scene: &Scene) -> Option<PlannedPass> {
-    use crate::passes::nearby_impostors::{nearby_objects, refractor_center};
+fn hu_qin_nearby(scene: &Scene) -> Vec<PlannedPass> {
+    use crate::passes::nearby_impostors::RECURSION_PASSES;
+    use crate::passes::nearby_impostors::{nearby_objects, nearby_rects, recursion_levels, refractor_center};
     let params = crate::scene::techniques::HuQinParams::from_settings(&scene.render).unwrap_or_default();
-    if !params.nearby {
-        return None;
-    }
-    let origin = refractor_center(scene)?;
+    let Some(origin) = refractor_center(scene).filter(|_| params.nearby) else { return Vec::new() };
     let (kept, dropped) = nearby_objects(scene, origin);
     if kept.is_empty() {
-        return None;
+        return Vec::new();
     }
     let names = |v: &[usize]| v.iter().map(|&i| scene.objects[i].name.clone()).collect::<Vec<_>>();
     let mut reason = format!(
-        "impostor rectangles + textures of nearby diffuse {} for the refracted and reflected rays (Hu & Qin 2007 §2.2)",
+        "impostor rectangles + textures of nearby {} for the refracted and reflected rays (Hu & Qin 2007 §2.2)",
         list(&names(&kept))
     );
     if !dropped.is_empty() {
@@ -223,7 +221,20 @@ fn hu_qin_nearby(scene: &Scene) -> Option<PlannedPass> {
             crate::MAX_NEARBY_RECTS
         );
     }
-    Some(PlannedPass { name: REFRACTION_HU_QIN_NEARBY, reason })
+    let mut passes = vec![PlannedPass { name: REFRACTION_HU_QIN_NEARBY, reason }];
+    let (_, rects) = nearby_rects(scene);
+    for level in 1..=recursion_levels(scene, &rects, params.recursion_depth) {
+        passes.push(PlannedPass {
+            name: RECURSION_PASSES[level as usize - 1],
+            reason: format!(
+                "recursion level {level} of {} (render.hu_qin.recursion_depth): mirrors/conductors among them reflect \
+                 the impostors of level {} (Hu & Qin 2007 §2.2.1)",
+                params.recursion_depth,
+                level - 1
+            ),
+        });
+    }
+    passes
 }
 
 /// The passes of double refraction with distance impostors (Szirmay-Kalos et al. 2005, §4).

@@ -75,6 +75,9 @@ pub struct HuQinParams {
     pub correction_tolerance: f32,
     /// Points P + alpha_j Ray, 0 < alpha_j <= d_far, tried as seeds of the correction (Fig. 17).
     pub seed_samples: u32,
+    /// §2.2.1 recursive reflections: mirrors/conductors in the impostor textures reflect the
+    /// environment only (0) or the impostors of the level below (1, 2, 3).
+    pub recursion_depth: u32,
 }
 
 impl Default for HuQinParams {
@@ -92,6 +95,7 @@ impl Default for HuQinParams {
             correction_iterations: 3,
             correction_tolerance: 1e-3,
             seed_samples: 8,
+            recursion_depth: 1,
         }
     }
 }
@@ -273,6 +277,7 @@ impl HuQinParams {
         "correction_iterations",
         "correction_tolerance",
         "seed_samples",
+        "recursion_depth",
     ];
 
     pub fn from_table(t: Option<&toml::Table>) -> Result<Self, ParamError> {
@@ -294,6 +299,8 @@ impl HuQinParams {
                 "correction_tolerance" => p.correction_tolerance = number(key, v, 1e-7, 0.5)?,
                 // Each seed is one texture fetch per rectangle per ray.
                 "seed_samples" => p.seed_samples = integer(key, v, 1, 256)?,
+                // One pass per level (src/passes/nearby_impostors.rs, MAX_RECURSION).
+                "recursion_depth" => p.recursion_depth = integer(key, v, 0, 3)?,
                 _ => return Err(unknown("hu_qin", key, Self::KEYS)),
             }
         }
@@ -503,6 +510,7 @@ mod tests {
             ("correction_tolerance = nan", "correction_tolerance"),
             ("seed_samples = 0", "seed_samples"),
             ("nearby = 3", "nearby"),
+            ("recursion_depth = 4", "recursion_depth"),
         ] {
             let e = HuQinParams::from_table(Some(&table(t))).unwrap_err();
             assert_eq!(e.key, key, "{t}");
