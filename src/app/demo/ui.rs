@@ -417,6 +417,31 @@ fn technique_parameters(ui: &mut egui::Ui, state: &mut UiState, scene: &Scene, r
                 state.set(req, "render.hu_qin.assume_back_facing".into(), back.to_string());
             }
             ui.end_row();
+            // §2.2 nearby geometry (src/passes/nearby_impostors.rs).
+            ui.label("hu_qin.nearby");
+            let mut nearby = p.nearby;
+            if ui.checkbox(&mut nearby, "").changed() {
+                state.set(req, "render.hu_qin.nearby".into(), nearby.to_string());
+            }
+            ui.end_row();
+            for (key, value, max) in [
+                ("correction_iterations", p.correction_iterations, 64),
+                ("seed_samples", p.seed_samples, 256),
+                ("recursion_depth", p.recursion_depth, 3),
+                ("impostor_resolution", p.impostor_resolution, 2048),
+            ] {
+                ui.label(format!("hu_qin.{key}"));
+                let mut v = value;
+                let min = match key {
+                    "seed_samples" => 1,
+                    "impostor_resolution" => 4,
+                    _ => 0,
+                };
+                if ui.add(egui::Slider::new(&mut v, min..=max)).changed() {
+                    state.set(req, format!("render.hu_qin.{key}"), v.to_string());
+                }
+                ui.end_row();
+            }
         }
         _ => {}
     }
