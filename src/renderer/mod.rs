@@ -494,11 +494,10 @@ impl Renderer {
         self.frame_buffers[slot].write(0, bytemuck::bytes_of(&self.uniforms));
 
         if let Some(p) = &mut self.passes.refraction_impostor {
-            p.map.begin_frame();
-            p.refractor.begin_frame();
+            p.begin_frame();
         }
         if let Some(p) = &mut self.passes.reflection_impostor {
-            p.map.begin_frame();
+            p.begin_frame();
         }
         let Renderer { passes, frame_sets, scene, targets, timestamps, commands, graph, .. } = self;
         let shadow_atlas = passes.shadow_map.as_ref().map(|_| targets.shadow_atlas_id);
@@ -694,17 +693,24 @@ impl Renderer {
             p.objects_moved(&bounds);
         }
         if let Some(p) = &mut self.passes.reflection_impostor {
-            p.map.objects_moved(&bounds);
+            p.objects_moved(&bounds);
         }
         Ok(true)
     }
 
-    /// A distance impostor or refractor map of this renderer, if its technique is selected.
+    /// A distance impostor or refractor map of this renderer, if its technique is selected
+    /// (the first one with `render.impostor.maps = "per_object"`).
     pub fn impostor_map(&self, effect: ImpostorEffect) -> Option<&ImpostorMap> {
+        self.impostor_maps(effect).into_iter().next()
+    }
+
+    /// Every map of an effect: one shared, or one per object in scene order.
+    pub fn impostor_maps(&self, effect: ImpostorEffect) -> Vec<&ImpostorMap> {
+        let (reflection, refraction) = (&self.passes.reflection_impostor, &self.passes.refraction_impostor);
         match effect {
-            ImpostorEffect::Reflection => self.passes.reflection_impostor.as_ref().map(|p| &p.map),
-            ImpostorEffect::Refraction => self.passes.refraction_impostor.as_ref().map(|p| &p.map),
-            ImpostorEffect::Refractor => self.passes.refraction_impostor.as_ref().map(|p| &p.refractor),
+            ImpostorEffect::Reflection => reflection.iter().flat_map(|p| &p.maps).collect(),
+            ImpostorEffect::Refraction => refraction.iter().flat_map(|p| &p.instances).map(|i| &i.map).collect(),
+            ImpostorEffect::Refractor => refraction.iter().flat_map(|p| &p.instances).map(|i| &i.refractor).collect(),
         }
     }
 
@@ -719,10 +725,11 @@ impl Renderer {
         records: &[[[f32; 4]; 3]],
     ) -> Result<Option<Vec<[[f32; 4]; 3]>>, RenderError> {
         self.finish()?;
+        let (reflection, refraction) = (&self.passes.reflection_impostor, &self.passes.refraction_impostor);
         let map = match effect {
-            ImpostorEffect::Reflection => self.passes.reflection_impostor.as_ref().map(|p| &p.map),
-            ImpostorEffect::Refraction => self.passes.refraction_impostor.as_ref().map(|p| &p.map),
-            ImpostorEffect::Refractor => self.passes.refraction_impostor.as_ref().map(|p| &p.refractor),
+            ImpostorEffect::Reflection => reflection.as_ref().and_then(|p| p.maps.first()),
+            ImpostorEffect::Refraction => refraction.as_ref().and_then(|p| p.instances.first()).map(|i| &i.map),
+            ImpostorEffect::Refractor => refraction.as_ref().and_then(|p| p.instances.first()).map(|i| &i.refractor),
         };
         match map {
             Some(m) => Ok(Some(m.probe(&self.ctx, &mut self.graph, fresnel, iterations, records)?)),

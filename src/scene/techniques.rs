@@ -91,6 +91,18 @@ pub enum ImpostorUpdate {
     EveryFrame,
 }
 
+/// Which distance impostors the specular objects of an effect share (Szirmay-Kalos et al.
+/// 2005, §6: "one map per dynamic object or one shared").
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ImpostorMaps {
+    /// One map per effect around the mean centre of its objects, without any of them.
+    Shared,
+    /// One map per specular object, centred on it, holding everything but that object (the
+    /// other specular objects appear in it, black as in deferred shading), each regenerated
+    /// independently when its own object moves.
+    PerObject,
+}
+
 /// `[render.impostor]`: distance impostors, `render.reflection = "impostor"` and
 /// `render.refraction = "impostor"`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -106,6 +118,7 @@ pub struct ImpostorParams {
     /// How far an object's centre may move from its map's reference point before the map is
     /// rendered again, as a fraction of the object's bounding radius (scale-free).
     pub regenerate_distance: f32,
+    pub maps: ImpostorMaps,
 }
 
 impl Default for ImpostorParams {
@@ -117,6 +130,7 @@ impl Default for ImpostorParams {
             fresnel: ImpostorFresnel::Approximate,
             update: ImpostorUpdate::OnMove,
             regenerate_distance: 0.25,
+            maps: ImpostorMaps::Shared,
         }
     }
 }
@@ -263,7 +277,7 @@ impl HuQinParams {
 
 impl ImpostorParams {
     pub const KEYS: &'static [&'static str] =
-        &["resolution", "iterations", "separate_distance", "fresnel", "update", "regenerate_distance"];
+        &["resolution", "iterations", "separate_distance", "fresnel", "update", "regenerate_distance", "maps"];
 
     pub fn from_table(t: Option<&toml::Table>) -> Result<Self, ParamError> {
         let mut p = ImpostorParams::default();
@@ -300,6 +314,19 @@ impl ImpostorParams {
                     }
                 }
                 "regenerate_distance" => p.regenerate_distance = number(key, v, 0.0, 1e6)?,
+                "maps" => {
+                    p.maps = match v.as_str() {
+                        Some("shared") => ImpostorMaps::Shared,
+                        Some("per_object") => ImpostorMaps::PerObject,
+                        _ => {
+                            return Err(ParamError {
+                                key: key.clone(),
+                                message: format!("`maps` must be \"shared\" or \"per_object\", not {v}"),
+                                hint: "one map for all specular objects of an effect, or one per object (§6)".into(),
+                            })
+                        }
+                    }
+                }
                 _ => return Err(unknown("impostor", key, Self::KEYS)),
             }
         }
@@ -463,6 +490,8 @@ mod tests {
             ("update = \"never\"", "update"),
             ("regenerate_distance = -1", "regenerate_distance"),
             ("iteration = 3", "iteration"),
+            ("maps = \"one\"", "maps"),
+            ("maps = 2", "maps"),
         ] {
             let e = ImpostorParams::from_table(Some(&table(t))).unwrap_err();
             assert_eq!(e.key, key, "{t}");
