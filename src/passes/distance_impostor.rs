@@ -66,8 +66,11 @@ struct MapPush {
     view_proj: [[f32; 4]; 4],
     reference: [f32; 4],
     material: [u32; 4],
+    chart_u: [f32; 4],
+    chart_v: [f32; 4],
 }
-const _: () = assert!(std::mem::size_of::<MapPush>() == 96);
+// 128 bytes: Vulkan's guaranteed minimum maxPushConstantsSize.
+const _: () = assert!(std::mem::size_of::<MapPush>() == 128);
 
 /// Push constants of the shading passes (glsl/impostor/shade_common.glsl).
 #[repr(C)]
@@ -115,6 +118,9 @@ pub enum MapContent {
     Environment,
     /// §4: outward normal and distance of the map's own objects only.
     Refractor,
+    /// §5: the uv map of light-map caustics: light-map (u, v), light-map slot + 1 and distance
+    /// of everything but the map's own objects (src/passes/impostor_lightmap.rs).
+    LightmapUv,
 }
 
 /// A cube map around a reference point: a distance impostor or a refractor map.
@@ -142,6 +148,9 @@ pub struct ImpostorMap {
     radius: f32,
     update: ImpostorUpdate,
     regenerate_distance: f32,
+    /// Per object: light-map slot + 1 (0: none) and its chart, (u, v) = (a.p + a_w, b.p + b_w)
+    /// for world position p (`MapContent::LightmapUv`; see glsl/impostor/uv_map.frag).
+    pub charts: Vec<(u32, [f32; 4], [f32; 4])>,
     /// Render the map in the next frame.
     pending: bool,
     /// Render the map in the frame being recorded.
@@ -215,6 +224,7 @@ impl ImpostorMap {
             (MapContent::Refractor, _) => "impostor/refractor.frag",
             (MapContent::Environment, false) => "impostor/map.frag",
             (MapContent::Environment, true) => "impostor/map_separate.frag",
+            (MapContent::LightmapUv, _) => "impostor/uv_map.frag",
         };
         let blend = vec![Blend::Off; if separate { 2 } else { 1 }];
         let pipeline = GraphicsPipeline::new(
@@ -271,6 +281,7 @@ impl ImpostorMap {
             radius: 0.0,
             update: params.update,
             regenerate_distance: params.regenerate_distance,
+            charts: vec![(0, [0.0; 4], [0.0; 4]); scene.objects.len()],
             pending: true,
             regenerating: false,
             generations: 0,
@@ -281,7 +292,7 @@ impl ImpostorMap {
         Ok(map)
     }
 
-    fn center_of(&self, bounds: &[(Vec3, f32)]) -> Vec3 {
+    pub fn center_of(&self, bounds: &[(Vec3, f32)]) -> Vec3 {
         let sum: Vec3 = self.objects.iter().map(|&i| bounds[i].0).sum();
         sum / self.objects.len().max(1) as f32
     }
@@ -377,10 +388,13 @@ impl ImpostorMap {
             cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
             for &i in &self.draws {
                 let d = &scene.draws[i];
+                let (slot, chart_u, chart_v) = self.charts.get(i).copied().unwrap_or_default();
                 let push = MapPush {
                     view_proj: (proj * *view).to_cols_array_2d(),
                     reference,
-                    material: [d.material, 0, 0, 0],
+                    material: [d.material, slot, 0, 0],
+                    chart_u,
+                    chart_v,
                 };
                 cmd.push_graphics(&self.pipeline, &push);
                 cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
@@ -467,7 +481,7 @@ impl ImpostorMap {
 /// One frame-graph pass rendering every map of `maps` that is due this frame (§6: a map whose
 /// objects did not move far enough keeps the earlier frame's content; with none due the pass
 /// records nothing).
-fn record_maps<'a>(
+pub(crate) fn record_maps<'a>(
     frame: &mut Frame<'_, 'a>,
     name: &str,
     maps: Vec<&'a ImpostorMap>,
