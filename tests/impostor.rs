@@ -397,3 +397,23 @@ fn moving_one_object_regenerates_only_its_map() {
     drop(r);
     common::assert_no_validation_errors(&ctx);
 }
+
+/// With one specular object a per-object map is the shared map (same reference point, same
+/// draws): the images must agree exactly, for reflection (room_mirror) and for refraction
+/// (room_glass, whose per-object path also has its own refractor map and picks its pixels by
+/// the G-buffer's object index).
+#[test]
+fn per_object_equals_shared_with_one_object() {
+    let ctx = common::context(false);
+    for (scene, effect) in [("room_mirror", "reflection"), ("room_glass", "refraction")] {
+        let render = |maps: &str| {
+            let o = [format!("render.{effect}=impostor"), format!("render.impostor.maps={maps}")];
+            let o: Vec<&str> = o.iter().map(String::as_str).collect();
+            common::render_on(&ctx, &common::scene(scene, 32, &o)).hdr
+        };
+        let (shared, per_object) = (render("shared"), render("per_object"));
+        assert_eq!(non_finite_count(&per_object), 0);
+        assert_eq!(shared, per_object, "{scene}");
+    }
+    common::assert_no_validation_errors(&ctx);
+}

@@ -194,3 +194,35 @@ fn stable_at_degenerate_lights_and_parameters() {
     }
     common::assert_no_validation_errors(&ctx);
 }
+
+/// Moving the ball with `Renderer::move_object` re-centres the uv map (§6) and refits the
+/// caustic map's frustum: the light maps then match a renderer made for the moved scene.
+#[test]
+fn moving_the_refractor_moves_the_caustic() {
+    let ctx = common::context(false);
+    let peak = |texels: &[[f32; 4]]| -> (usize, f64) {
+        let i = (0..texels.len()).max_by(|&a, &b| texels[a][1].total_cmp(&texels[b][1])).unwrap();
+        (i, texels.iter().map(|t| t[1] as f64).sum())
+    };
+    let s = common::scene("caustic_sphere", 48, &refs(&lightmap(&[])));
+    let mut r = Renderer::new(&ctx, &s).unwrap();
+    r.render_frame().unwrap();
+    let (before, _) = r.read_lightmaps().unwrap().unwrap();
+    assert!(r.move_object("ball", glam::Vec3::new(0.8, 1.2, 0.3)).unwrap());
+    r.render_frame().unwrap();
+    let (moved, _) = r.read_lightmaps().unwrap().unwrap();
+    drop(r);
+    let s = common::scene("caustic_sphere", 48, &refs(&lightmap(&["objects.1.center=[0.8, 1.2, 0.3]"])));
+    let mut r = Renderer::new(&ctx, &s).unwrap();
+    r.render_frame().unwrap();
+    let (fresh, _) = r.read_lightmaps().unwrap().unwrap();
+    drop(r);
+    common::assert_no_validation_errors(&ctx);
+    let (p_before, p_moved, p_fresh) = (peak(&before), peak(&moved), peak(&fresh));
+    eprintln!("peak texel / light-map sum: before {p_before:?}, moved {p_moved:?}, fresh {p_fresh:?}");
+    assert_ne!(p_before.0, p_moved.0, "the caustic did not move");
+    let n = (moved.len() as f64).sqrt() as i64;
+    let (a, b) = (p_moved.0 as i64, p_fresh.0 as i64);
+    assert!((a % n - b % n).abs() <= 1 && (a / n - b / n).abs() <= 1, "moved {a} vs fresh {b}");
+    assert!((p_moved.1 / p_fresh.1 - 1.0).abs() < 1e-3, "{p_moved:?} vs {p_fresh:?}");
+}
