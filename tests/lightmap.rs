@@ -136,9 +136,22 @@ fn brightest(img: &[f32], w: usize, h: usize) -> (usize, usize) {
 /// the caustic alone) lies where the reference's is. Measured: see the test output.
 #[test]
 fn impostor_lightmap_approaches_the_reference_on_caustic_sphere() {
+    approaches_the_reference("caustic_sphere", 0.7);
+}
+
+/// The same on metal_ring: the reflective caustic of a mirror ring under a directional light
+/// (a mirror needs no refractor map). Measured: RMSE none 0.3021, caustic map 32^2 0.3264
+/// (the thin ring covers few texels: few, strong photons), 128^2 0.1741; focus (20, 31) in
+/// both at 128^2, one pixel apart at 32^2.
+#[test]
+fn impostor_lightmap_approaches_the_reference_on_metal_ring() {
+    approaches_the_reference("metal_ring", 0.7);
+}
+
+fn approaches_the_reference(scene: &str, ratio: f64) {
     let ctx = common::context(false);
     let size = 64;
-    let s = common::scene("caustic_sphere", size, &[]);
+    let s = common::scene(scene, size, &[]);
     let settings = ReferenceSettings { spp: 16, photons: 1 << 21, ..Default::default() };
     let mut r = Reference::new(&ctx, &s, &settings).unwrap();
     r.run_all(|_, _| {}).unwrap();
@@ -150,7 +163,7 @@ fn impostor_lightmap_approaches_the_reference_on_caustic_sphere() {
     let mut errors = Vec::new();
     for map in [32, 128] {
         let c = common::scene(
-            "caustic_sphere",
+            scene,
             size,
             &refs(&lightmap(&[&format!("render.impostor_lightmap.caustic_map_size={map}")])),
         );
@@ -160,11 +173,11 @@ fn impostor_lightmap_approaches_the_reference_on_caustic_sphere() {
         let caustic: Vec<f32> = img.hdr.iter().zip(&none.hdr).map(|(a, b)| a - b).collect();
         let (w, h) = (size as usize, size as usize);
         let (ours, theirs) = (brightest(&caustic, w, h), brightest(&reference_caustic, w, h));
-        eprintln!("caustic map {map}^2: RMSE {e:.4} (none {e_none:.4}); focus {ours:?}, reference {theirs:?}");
+        eprintln!("{scene}, caustic map {map}^2: RMSE {e:.4} (none {e_none:.4}); focus {ours:?}, reference {theirs:?}");
         let dist = ((ours.0 as f32 - theirs.0 as f32).powi(2) + (ours.1 as f32 - theirs.1 as f32).powi(2)).sqrt();
         assert!(dist <= 3.0, "focus {ours:?} vs reference {theirs:?}");
     }
-    assert!(errors[1] < 0.7 * e_none, "impostor_lightmap must beat no caustics: {errors:?} vs {e_none}");
+    assert!(errors[1] < ratio * e_none, "{scene}: impostor_lightmap must beat no caustics: {errors:?} vs {e_none}");
 }
 
 /// No NaN or Inf: the light grazing the ball (level with its centre, beside it), the light
