@@ -239,3 +239,51 @@ fn moving_the_refractor_moves_the_caustic() {
     assert!((a % n - b % n).abs() <= 1 && (a / n - b / n).abs() <= 1, "moved {a} vs fresh {b}");
     assert!((p_moved.1 / p_fresh.1 - 1.0).abs() < 1e-3, "{p_moved:?} vs {p_fresh:?}");
 }
+
+/// A box receiver gets one chart and light map per face: caustic_sphere with its floor made a
+/// box whose top face is the floor catches the same flux (the analytic 9.2395 W, as above).
+#[test]
+fn box_receivers_catch_the_caustic_on_their_faces() {
+    let ctx = common::context(false);
+    let base = std::fs::read_to_string(prism::scene::benchmark_scene_path("caustic_sphere")).unwrap();
+    let text = base.replacen(
+        "shape = \"quad\"\ncenter = [0, 0, 0]\nsize = [8, 8]\nnormal = [0, 1, 0]",
+        "shape = \"box\"\ncenter = [0, -0.5, 0]\nsize = [8, 1, 8]",
+        1,
+    );
+    assert_ne!(text, base, "caustic_sphere's floor is no longer the expected quad");
+    let path = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("lightmap_box_floor.toml");
+    std::fs::write(&path, text).unwrap();
+    let o: Vec<String> = ["camera.width=64", "camera.height=64", "render.caustics=impostor_lightmap"]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    let s = prism::scene::load(&path, &o).unwrap();
+    let mut r = Renderer::new(&ctx, &s).unwrap();
+    r.render_frame().unwrap();
+    let hdr = r.read_hdr().unwrap();
+    let (texels, charts) = r.read_lightmaps().unwrap().unwrap();
+    drop(r);
+    common::assert_no_validation_errors(&ctx);
+    assert_eq!(non_finite_count(&hdr), 0);
+    assert_eq!(charts.len(), 6, "one light map per face");
+    let per_layer = texels.len() / 6;
+    let fluxes: Vec<f64> = (0..6)
+        .map(|f| {
+            let texel_area = charts[f].1 as f64 / per_layer as f64;
+            texels[f * per_layer..(f + 1) * per_layer].iter().map(|t| t[1] as f64 * texel_area).sum()
+        })
+        .collect();
+    eprintln!("box faces' flux: {fluxes:?} W");
+    let total: f64 = fluxes.iter().sum();
+    let expected = sphere_transmitted_flux(50.0, 3.8, 1.0, 1.5);
+    assert!((total / expected - 1.0).abs() < 0.02, "flux {total} W, expected {expected} W");
+    // All of it on the top face (the face whose normal is +Y).
+    assert!(fluxes.iter().filter(|&&f| f > 0.0).count() == 1, "{fluxes:?}");
+    let without = common::render_on(&ctx, &prism::scene::load(&path, &o[..2]).unwrap());
+    assert!(total_radiance(&hdr) > 1.01 * total_radiance(&without.hdr), "the caustic is not applied");
+}
+
+fn total_radiance(hdr: &[f32]) -> f64 {
+    total(hdr)
+}

@@ -22,10 +22,17 @@ void main() {
     if (depth <= 0.0) discard;
     vec4 albedo = texelFetch(gbuf_albedo, px, 0);
     if (uint(albedo.a + 0.5) != uint(pc.edge_u.w + 0.5)) discard;
-    if (material_kind(uint(texelFetch(gbuf_normal, px, 0).w + 0.5)) != MATERIAL_DIFFUSE) discard;
+    vec4 nm = texelFetch(gbuf_normal, px, 0);
+    if (material_kind(uint(nm.w + 0.5)) != MATERIAL_DIFFUSE) discard;
+    // A box has one chart per face: the pixel belongs to the face whose outward normal
+    // (e_u x e_v, src/scene/shapes.rs) it has; the G-buffer keeps the interpolated normal
+    // unflipped, so opposite faces differ in sign.
+    vec3 face_normal = cross(pc.edge_u.xyz, pc.edge_v.xyz);
+    if (dot(nm.xyz, face_normal) < 0.7 * length(nm.xyz) * length(face_normal)) discard;
     vec3 d = world_from_depth(in_uv, depth) - pc.origin.xyz;
     vec2 uv = vec2(dot(d, pc.edge_u.xyz) / dot(pc.edge_u.xyz, pc.edge_u.xyz),
                    dot(d, pc.edge_v.xyz) / dot(pc.edge_v.xyz, pc.edge_v.xyz));
+    if (any(lessThan(uv, vec2(-1e-3))) || any(greaterThan(uv, vec2(1.0 + 1e-3)))) discard;
     vec3 e = textureLod(lightmaps, vec3(uv, pc.origin.w), 0.0).rgb;
     out_radiance = vec4(finite_or_zero(e * albedo.rgb * (1.0 / PI)), 0.0);
 }

@@ -111,6 +111,10 @@ pub fn object_bounds(scene: &Scene, object: usize) -> (Vec3, f32) {
     ((lo + hi) * 0.5, (hi - lo).length() * 0.5)
 }
 
+/// One light-mapped part of an object in the uv map: (first index within the object's
+/// indices, index count, light-map slot + 1, chart row a, chart row b).
+pub type UvChart = (u32, u32, u32, [f32; 4], [f32; 4]);
+
 /// What a map stores.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum MapContent {
@@ -148,9 +152,11 @@ pub struct ImpostorMap {
     radius: f32,
     update: ImpostorUpdate,
     regenerate_distance: f32,
-    /// Per object: light-map slot + 1 (0: none) and its chart, (u, v) = (a.p + a_w, b.p + b_w)
-    /// for world position p (`MapContent::LightmapUv`; see glsl/impostor/uv_map.frag).
-    pub charts: Vec<(u32, [f32; 4], [f32; 4])>,
+    /// Per object, its light-mapped parts (`MapContent::LightmapUv`; see
+    /// glsl/impostor/uv_map.frag): (first index within the object's indices, index count,
+    /// light-map slot + 1, chart rows a and b with (u, v) = (a.p + a_w, b.p + b_w) for world
+    /// position p). Empty: drawn whole with slot 0 (no light map).
+    pub charts: Vec<Vec<UvChart>>,
     /// Render the map in the next frame.
     pending: bool,
     /// Render the map in the frame being recorded.
@@ -281,7 +287,7 @@ impl ImpostorMap {
             radius: 0.0,
             update: params.update,
             regenerate_distance: params.regenerate_distance,
-            charts: vec![(0, [0.0; 4], [0.0; 4]); scene.objects.len()],
+            charts: vec![Vec::new(); scene.objects.len()],
             pending: true,
             regenerating: false,
             generations: 0,
@@ -388,16 +394,22 @@ impl ImpostorMap {
             cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
             for &i in &self.draws {
                 let d = &scene.draws[i];
-                let (slot, chart_u, chart_v) = self.charts.get(i).copied().unwrap_or_default();
-                let push = MapPush {
-                    view_proj: (proj * *view).to_cols_array_2d(),
-                    reference,
-                    material: [d.material, slot, 0, 0],
-                    chart_u,
-                    chart_v,
+                let whole = [(0, d.index_count, 0, [0.0; 4], [0.0; 4])];
+                let parts = match self.charts.get(i) {
+                    Some(c) if !c.is_empty() => c.as_slice(),
+                    _ => &whole,
                 };
-                cmd.push_graphics(&self.pipeline, &push);
-                cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
+                for &(first, count, slot, chart_u, chart_v) in parts {
+                    let push = MapPush {
+                        view_proj: (proj * *view).to_cols_array_2d(),
+                        reference,
+                        material: [d.material, slot, 0, 0],
+                        chart_u,
+                        chart_v,
+                    };
+                    cmd.push_graphics(&self.pipeline, &push);
+                    cmd.draw_indexed(count, d.first_index + first, d.vertex_offset);
+                }
             }
             cmd.end_render_pass();
         }

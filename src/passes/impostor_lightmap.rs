@@ -27,11 +27,12 @@
 //! 5. `impostor_lightmap_apply` (right after deferred shading): every receiver pixel adds
 //!    light-map irradiance x albedo / pi.
 //!
-//! Light maps: one layer of a 2D array per receiver (`lightmap_size`^2 each). Receivers: the
-//! diffuse quads (plan::lightmap_receivers); their unique chart is the planar projection
-//! onto their own edges, (u, v) in [0, 1]^2, evaluated per pixel from the world position in
-//! the uv map and in the apply pass alike. Other diffuse objects (boxes, meshes) get no
-//! light map: photons that reach them are dropped, and they show no caustic from this
+//! Light maps: one layer of a 2D array per chart (`lightmap_size`^2 each). Receivers: the
+//! diffuse quads and boxes (plan::lightmap_receivers); a quad's unique chart is the planar
+//! projection onto its own edges, (u, v) in [0, 1]^2, a box has one such chart (and light
+//! map) per face; (u, v) is evaluated per pixel from the world position in the uv map and in
+//! the apply pass alike (which also matches the face by its normal). Other diffuse objects
+//! (spheres, tori, lathes, meshes, heightfields) get no light map: photons that reach them are dropped, and they show no caustic from this
 //! technique (docs/scene-format.md). Every light has its own caustic map; a point light
 //! closer to the specular objects than their bounding radius sees them through a 120-degree
 //! frustum only (photons outside it are lost).
@@ -123,10 +124,13 @@ pub fn splat_weights(center: [f32; 2], radius: f32) -> Vec<([i32; 2], f32)> {
 }
 
 /// A receiver's planar chart: (u, v) = ((p - origin).e_u / |e_u|^2, (p - origin).e_v / |e_v|^2),
-/// from its quad's corners (the quad's own edges: a unique chart onto [0, 1]^2).
+/// from a quad's corners (the quad's own edges: a unique chart onto [0, 1]^2): a quad
+/// object, or one face of a box (six charts, six light maps).
 #[derive(Clone, Copy, Debug)]
 pub struct Chart {
     pub object: usize,
+    /// The face's quad within the object's mesh (0 for a quad; 0..6 for a box).
+    pub face: u32,
     pub origin: Vec3,
     pub edge_u: Vec3,
     pub edge_v: Vec3,
@@ -135,9 +139,16 @@ pub struct Chart {
 impl Chart {
     /// The chart of a quad object (plan::lightmap_receivers: shape "quad", corners 0, 1, 2, 3
     /// counter-clockwise, src/scene/shapes.rs).
-    pub fn of_quad(scene: &Scene, object: usize) -> Chart {
-        let p = &scene.objects[object].mesh.positions;
-        Chart { object, origin: p[0], edge_u: p[1] - p[0], edge_v: p[3] - p[0] }
+    pub fn of_quad(scene: &Scene, object: usize, face: u32) -> Chart {
+        let p = &scene.objects[object].mesh.positions[4 * face as usize..];
+        Chart { object, face, origin: p[0], edge_u: p[1] - p[0], edge_v: p[3] - p[0] }
+    }
+
+    /// Every chart of a light-mapped receiver: a quad's one, a box's six faces (src/scene/
+    /// shapes.rs `cuboid`: six quads of four vertices and six indices each).
+    pub fn of_receiver(scene: &Scene, object: usize) -> Vec<Chart> {
+        let faces = if scene.objects[object].shape == "box" { 6 } else { 1 };
+        (0..faces).map(|f| Chart::of_quad(scene, object, f)).collect()
     }
 
     /// (u, v) = (a.p + a_w, b.p + b_w) for world position p: the uv map's push constants.
@@ -242,10 +253,11 @@ impl ImpostorLightmap {
             graph,
             frame_layout,
         )?;
-        let charts: Vec<Chart> = lightmap_receivers(scene).into_iter().map(|i| Chart::of_quad(scene, i)).collect();
+        let charts: Vec<Chart> =
+            lightmap_receivers(scene).into_iter().flat_map(|i| Chart::of_receiver(scene, i)).collect();
         for (slot, c) in charts.iter().enumerate() {
             let (a, b) = c.affine();
-            uv_map.charts[c.object] = (slot as u32 + 1, a, b);
+            uv_map.charts[c.object].push((6 * c.face, 6, slot as u32 + 1, a, b));
         }
         let refractor = if dielectric.is_empty() {
             None

@@ -174,16 +174,19 @@ fn caustics(scene: &Scene, diffuse: &[String], dielectric: &[String], metal: &[S
     ]
 }
 
-/// The diffuse receivers that get a light map (`render.caustics = "impostor_lightmap"`):
-/// quads, whose planar chart is their own (s, t) (src/passes/impostor_lightmap.rs).
+/// The diffuse receivers that get light maps (`render.caustics = "impostor_lightmap"`):
+/// quads (one planar chart) and boxes (one per face) (src/passes/impostor_lightmap.rs).
 pub fn lightmap_receivers(scene: &Scene) -> Vec<usize> {
     (0..scene.objects.len())
-        .filter(|&i| scene.materials[scene.objects[i].material].is_diffuse() && scene.objects[i].shape == "quad")
+        .filter(|&i| {
+            let o = &scene.objects[i];
+            scene.materials[o.material].is_diffuse() && (o.shape == "quad" || o.shape == "box")
+        })
         .collect()
 }
 
 /// Light-map caustics with distance impostors (Szirmay-Kalos et al. 2005, §5): only with a
-/// light, a specular object, a quad receiver and `render.caustics = "impostor_lightmap"`.
+/// light, a specular object, a quad or box receiver and `render.caustics = "impostor_lightmap"`.
 fn impostor_lightmap(scene: &Scene, dielectric: &[String], metal: &[String]) -> Vec<PlannedPass> {
     let receivers: Vec<String> = lightmap_receivers(scene).iter().map(|&i| scene.objects[i].name.clone()).collect();
     if scene.render.caustics != "impostor_lightmap" || scene.lights.is_empty() || receivers.is_empty() {
