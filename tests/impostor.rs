@@ -303,16 +303,16 @@ fn two_balls(size: u32, overrides: &[&str]) -> prism::scene::Scene {
     prism::scene::load(&path, &o).unwrap()
 }
 
-/// §6, "one map per dynamic object or one shared": with two mirror balls, one map per object
-/// (centred on each ball) against one shared map around their mean centre, over the balls'
-/// pixels against the exact reference (64^2, 64 spp without photons). Measured RMSE, shared /
-/// per_object: Hit() iterations 0 (d_l of Eq. 4 only): 0.0442 / 0.0276; 1: 0.0305 / 0.0287;
-/// 4: 0.0263 / 0.0286; the small ball alone (ball2, far from the mean centre) at 4
-/// iterations: 0.0179 / 0.0141. The initial guesses are good only near the reference point
-/// (§2.1), so per-object maps win where Hit() is cheap, and for the object far from the
-/// shared centre at any iteration count. With converged iterations the large ball is closer
-/// with the shared map on this scene: its per-object map holds the other mirror ball black
-/// (as deferred shading leaves it) where the shared map leaves it out and shows the room
+/// §6, "a single environment map for all of them, or ... a separate map for each": with two
+/// mirror balls, one map per object (centred on each ball) against one shared map around their
+/// mean centre, over the balls' pixels against the exact reference (64^2, 64 spp without
+/// photons). Measured RMSE, shared / per_object: Hit() iterations 0 (d_l of Eq. 4 only): 0.0442
+/// / 0.0276; 1: 0.0305 / 0.0287; 4: 0.0263 / 0.0286; the small ball alone (ball2, far from the
+/// mean centre) at 4 iterations: 0.0179 / 0.0141. The initial guesses are good only near the
+/// reference point (§2.1), so per-object maps win where Hit() is cheap, and for the object far
+/// from the shared centre at any iteration count. With converged iterations the large ball is
+/// closer with the shared map on this scene: its per-object map holds the other mirror ball
+/// black (as deferred shading leaves it) where the shared map leaves it out and shows the room
 /// behind it, which is closer to what that ball reflects.
 #[test]
 fn per_object_maps_are_closer_to_the_reference_than_a_shared_map() {

@@ -1,12 +1,16 @@
 #version 450
-// The caustic map of light-map caustics (Szirmay-Kalos et al. 2005, §5, Fig. 9): "the
-// caustic map is rendered from the light ... for each pixel where the refractor is visible"
-// the light's ray is refracted (twice, through the refractor map of §4) or reflected, the
-// hit of the outgoing ray with the environment is found with Hit() in the uv map (§3), and
-// the pixel stores the hit's light-map (u, v), the receiver's texture id and the photon's
-// power: the light's intensity times the texel's solid angle (point light) or its
-// irradiance times the texel's area (directional light), times the Fresnel factors.
-// Texels without a hit keep the cleared alpha -1 (the splat pass drops them).
+// The caustic map of light-map caustics (Szirmay-Kalos et al. 2005, §5, Fig. 9): rendered
+// "from the point of view of the light source, the view plane is placed between the light
+// and the refractor". Per pixel where a specular object is visible, the paper's pixel shader
+// (R = refract(L, N, 1/n) or reflect; l = Hit(x, R, envmap); hituv = texCUBE(uvmap, l)):
+// the light's ray is refracted (through both surfaces, the exit from the refractor map of
+// §4) or reflected, Hit() finds the photon hit in the uv map (§3), and the pixel stores the
+// hit's light-map (u, v), the texture id and the photon's power, "computed from the power of
+// the light source and the solid angle subtended by the caustic map pixel" (a point light:
+// intensity x solid angle; a directional light: irradiance x texel area), times the Fresnel
+// factors. The paper stores the power's luminance; here RGB power goes to a second target.
+// Texels without a hit keep the cleared alpha -1 ("we initialize the caustic map with -1
+// alpha values"; the splat pass drops them).
 #include "frame.glsl"
 #include "fresnel.glsl"
 #include "impostor.glsl"
@@ -86,7 +90,7 @@ void main() {
         no_hit();
         return;
     }
-    // Hit() in the uv map (§5: "l = Hit(x, R, envmap), hituv = texCUBE(uvmap, l)").
+    // Hit() in the uv map (§5: "float3 l = Hit(x, R, envmap); float3 hituv = texCUBE(uvmap, l).xyz;").
     vec3 x = q - pc.reference.xyz;
     vec3 h = impostor_hit(uv_linear, 3u, x, normalize(dir), ITERATIONS);
     if (!(dot(h, h) > 0.0) || impostor_missed(uv_linear, 3u, h)) { no_hit(); return; }

@@ -1,6 +1,7 @@
 #version 450
-// Gaussian filter weight of a photon splat (Szirmay-Kalos et al. 2005, §5: "the fragment
-// shader ... a Gaussian filter"), additively blended into the light map: irradiance in W/m^2.
+// Gaussian filter weight of a photon splat (Szirmay-Kalos et al. 2005, §5: "The filter
+// texture corresponds to Gaussian filtering in texture space"), additively blended into the
+// light map: irradiance in W/m^2 (the BRDF is applied when the light map is read).
 layout(push_constant) uniform Push {
     vec4 params;   // x: filter radius (light-map texels)
     uvec4 info;

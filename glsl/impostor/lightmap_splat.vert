@@ -1,11 +1,12 @@
 #version 450
-// Light-map caustics (Szirmay-Kalos et al. 2005, §5): "the caustic map is used as a
-// texture: one small quad per texel ... positioned by the vertex shader, which reads the
-// caustic map (vertex texture fetch) ... moved out of the clip volume if the texel has no
-// hit", drawn into the receiver's light map in texture space. One point sprite per caustic-
-// map texel; the Gaussian weights are normalized here over exactly the texels the fragment
-// shader keeps (centres within `radius`), so each photon deposits all of its power
-// (src/passes/impostor_lightmap.rs, `splat_weights`, checks the same sum on the CPU).
+// Light-map caustics (Szirmay-Kalos et al. 2005, §5): "we render as many small quadrilaterals
+// ... or point sprites as texels the caustic map has"; the vertex shader reads the caustic map
+// (vertex texture fetch), centres the sprite at the photon hit's (u, v) in the receiver's
+// texture space and "moves the quadrilateral out of the clipping region if the alpha is
+// negative". One point sprite per caustic-map texel; the Gaussian weights are normalized here
+// over exactly the texels the fragment shader keeps (centres within `radius`), so each photon
+// deposits all of its power (src/passes/impostor_lightmap.rs, `splat_weights`, checks the same
+// sum on the CPU).
 #include "common.glsl"
 layout(set = 0, binding = LIGHTMAP_BINDING_PHOTON_HIT) uniform sampler2D photon_hit;
 layout(set = 0, binding = LIGHTMAP_BINDING_PHOTON_POWER) uniform sampler2D photon_power;

@@ -1,8 +1,9 @@
 #version 450
-// The uv cube map of light-map caustics (Szirmay-Kalos et al. 2005, §5, Fig. 9): "a uv
-// cube map ... rendered with the environment distance impostor from the same reference
-// point", storing per texel the visible receiver's light-map (u, v) and texture id, and (for
-// Hit(), §3) the distance of the visible surface from the reference point, per pixel.
+// The uv map of light-map caustics (Szirmay-Kalos et al. 2005, §5): "together with the
+// environment map, we also render another map, called uvmap, which has the same structure,
+// but stores the u, v coordinates and the texture id in its pixels". Here: the visible
+// receiver's light-map (u, v) and slot + 1, and (for Hit(), §3) the distance of the visible
+// surface from the reference point, per pixel, in the same cube.
 // Surfaces without a light map store id 0: photons that hit them are dropped.
 #include "map_push.glsl"
 layout(location = 0) in vec3 in_position;

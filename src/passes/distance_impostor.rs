@@ -21,14 +21,14 @@
 //! the object movements are large enough"): [`ImpostorMap::objects_moved`] re-centres a map and
 //! marks it for rendering when its objects' centre left the reference point by more than
 //! `regenerate_distance` bounding radii; otherwise the map pass records nothing that frame.
-//! `render.impostor.maps` (§6: "one map per dynamic object or one shared"): `"shared"` gives
-//! an effect one map for all its specular objects (the paper's "single environment map for
-//! all of them"), with its reference point at their mean centre and all of them left out;
-//! `"per_object"` gives each specular object its own map (and refractor map) centred on it,
-//! holding everything but that object, each regenerated only when its own object moves. The
-//! map and shading passes stay one pass each: the map pass renders every map due this frame,
-//! the shading pass draws once per object, picking the object's pixels by the G-buffer's
-//! object index (glsl/gbuffer/gbuffer.frag).
+//! `render.impostor.maps` (§6: "a single environment map for all of them, or ... a separate
+//! map for each of them"): `"shared"` gives an effect one map for all its specular objects,
+//! with its reference point at their mean centre and all of them left out; `"per_object"`
+//! gives each specular object its own map (and refractor map) centred on it, holding
+//! everything but that object, each regenerated only when its own object moves. The map and
+//! shading passes stay one pass each: the map pass renders every map due this frame, the
+//! shading pass draws once per object, picking the object's pixels by the G-buffer's object
+//! index (glsl/gbuffer/gbuffer.frag).
 use std::sync::Arc;
 
 use bytemuck::{Pod, Zeroable};

@@ -3,8 +3,9 @@
 //! `render.caustics = "impostor_lightmap"`, parameters `[render.impostor_lightmap]`
 //! ([`ImpostorLightmapParams`]).
 //!
-//! 1. `impostor_lightmap_uv_map`: the *uv cube map* around the specular objects' centre, "rendered
-//!    with the environment distance impostor from the same reference point": per texel the
+//! 1. `impostor_lightmap_uv_map`: the *uvmap* around the specular objects' centre, which "has
+//!    the same structure" as the environment map "but stores the u, v coordinates and the
+//!    texture id in its pixels": per texel the
 //!    visible receiver's light-map (u, v), its light-map slot + 1 (the paper's texture id; 0
 //!    where the visible surface has no light map) and the surface's distance from the
 //!    reference point (for Hit(), §3, in the same cube: alpha). An [`ImpostorMap`] with
@@ -29,13 +30,13 @@
 //!
 //! Light maps: one layer of a 2D array per chart (`lightmap_size`^2 each). Receivers: the
 //! diffuse quads and boxes (plan::lightmap_receivers); a quad's unique chart is the planar
-//! projection onto its own edges, (u, v) in [0, 1]^2, a box has one such chart (and light
-//! map) per face; (u, v) is evaluated per pixel from the world position in the uv map and in
-//! the apply pass alike (which also matches the face by its normal). Other diffuse objects
-//! (spheres, tori, lathes, meshes, heightfields) get no light map: photons that reach them are dropped, and they show no caustic from this
-//! technique (docs/scene-format.md). Every light has its own caustic map; a point light
-//! closer to the specular objects than their bounding radius sees them through a 120-degree
-//! frustum only (photons outside it are lost).
+//! projection onto its own edges, (u, v) in [0, 1]^2, a box has one such chart (and light map)
+//! per face; (u, v) is evaluated per pixel from the world position in the uv map and in the
+//! apply pass alike (which also matches the face by its normal). Other diffuse objects
+//! (spheres, tori, lathes, meshes, heightfields) get no light map: photons that reach them are
+//! dropped, and they show no caustic from this technique (docs/scene-format.md). Every light
+//! has its own caustic map; a point light closer to the specular objects than their bounding
+//! radius sees them through a 120-degree frustum only (photons outside it are lost).
 use std::sync::Arc;
 
 use bytemuck::{Pod, Zeroable};

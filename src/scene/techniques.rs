@@ -92,7 +92,8 @@ pub enum ImpostorUpdate {
 }
 
 /// Which distance impostors the specular objects of an effect share (Szirmay-Kalos et al.
-/// 2005, §6: "one map per dynamic object or one shared").
+/// 2005, §6: "we may generate only a single environment map for all of them, or we may
+/// maintain a separate map for each of them").
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ImpostorMaps {
     /// One map per effect around the mean centre of its objects, without any of them.
