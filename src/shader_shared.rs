@@ -121,6 +121,17 @@ shared_constants! {
     // Source-face kinds of the vertex grid.
     CAUSTIC_FACE_PERSPECTIVE: u32 = 0;
     CAUSTIC_FACE_ORTHOGRAPHIC: u32 = 1;
+    // Light-map caustics with distance impostors (Szirmay-Kalos et al. 2005 §5;
+    // src/passes/impostor_lightmap.rs). Set 1 of the caustic-map pass: the uv cube map,
+    // filtered (its distance, for Hit()) and unfiltered (uv and receiver id), and the refractor
+    // map; of the splat pass: the caustic map's two targets; of the apply pass (besides
+    // BINDING_GBUF_*): the light maps.
+    LIGHTMAP_BINDING_UV_LINEAR: u32 = 0;
+    LIGHTMAP_BINDING_UV_NEAREST: u32 = 1;
+    LIGHTMAP_BINDING_REFRACTOR: u32 = 2;
+    LIGHTMAP_BINDING_PHOTON_HIT: u32 = 3;
+    LIGHTMAP_BINDING_PHOTON_POWER: u32 = 4;
+    BINDING_LIGHTMAPS: u32 = 14;
     // Eikonal rendering (Ihrke et al. 2007; src/passes/eikonal.rs). The volume compute
     // passes read EIKONAL_BINDING_SRC and write EIKONAL_BINDING_DST (storage images); set 1
     // of eikonal_view samples the field (grad n, n - 1) at BINDING_EIKONAL_FIELD besides

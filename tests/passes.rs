@@ -108,6 +108,38 @@ fn caustic_passes_only_with_light_specular_object_and_receiver() {
 }
 
 #[test]
+fn impostor_lightmap_passes_only_with_light_specular_object_and_quad_receiver() {
+    let on = "render.caustics=impostor_lightmap";
+    assert_eq!(
+        names("caustic_sphere", &[on]),
+        [
+            "shadow_map",
+            "impostor_lightmap_uv_map",
+            "impostor_lightmap_refractor_map",
+            "impostor_lightmap_caustic_map",
+            "impostor_lightmap_splat",
+            "gbuffer",
+            "deferred_shading",
+            "impostor_lightmap_apply",
+            "refraction_single",
+            "tonemap"
+        ]
+    );
+    // A mirror needs no refractor map.
+    let ring = names("metal_ring", &[on]);
+    assert!(ring.contains(&"impostor_lightmap_splat") && !ring.contains(&"impostor_lightmap_refractor_map"));
+    let absent = |scene: &str, o: &[&str]| {
+        let n = names(scene, o);
+        assert!(!n.iter().any(|p| p.starts_with("impostor_lightmap")), "{scene} {o:?}: {n:?}");
+    };
+    absent("caustic_sphere", &[]);
+    // No light, no specular object, no quad receiver (the floor made glass).
+    absent("sphere_env", &[on]);
+    absent("caustic_sphere", &[on, "objects.1.material=\"floor\""]);
+    absent("caustic_sphere", &[on, "objects.0.material=\"glass\""]);
+}
+
+#[test]
 fn distance_impostors_replace_the_baselines() {
     assert_eq!(
         names("room_mirror", &["render.reflection=impostor"]),

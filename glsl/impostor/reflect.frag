@@ -14,6 +14,7 @@ void main() {
     uint mat = uint(nm.w + 0.5);
     uint kind = material_kind(mat);
     if (kind != MATERIAL_MIRROR && kind != MATERIAL_CONDUCTOR) discard;
+    if (!impostor_owns(px)) discard;
     vec3 V = camera_ray(in_uv);
     vec3 N = normalize(nm.xyz);
     if (dot(V, N) > 0.0) N = -N;

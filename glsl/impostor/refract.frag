@@ -20,6 +20,7 @@ void main() {
     vec4 nm = texelFetch(gbuf_normal, px, 0);
     uint mat = uint(nm.w + 0.5);
     if (material_kind(mat) != MATERIAL_DIELECTRIC) discard;
+    if (!impostor_owns(px)) discard;
     Material m = materials[mat];
     vec3 V = camera_ray(in_uv);
     vec3 N = normalize(nm.xyz);

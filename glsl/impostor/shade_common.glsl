@@ -12,13 +12,24 @@ layout(constant_id = 1) const uint DISTANCE_CHANNEL = 3;
 layout(constant_id = 2) const uint FRESNEL_EXACT = 0;
 layout(set = 1, binding = BINDING_GBUF_NORMAL) uniform sampler2D gbuf_normal;
 layout(set = 1, binding = BINDING_GBUF_DEPTH) uniform sampler2D gbuf_depth;
+// a: object index (glsl/gbuffer/gbuffer.frag).
+layout(set = 1, binding = BINDING_GBUF_ALBEDO) uniform sampler2D gbuf_albedo;
 layout(set = 1, binding = BINDING_IMPOSTOR_RADIANCE) uniform samplerCube impostor_radiance;
 // The radiance cube itself unless the distance is separate (DISTANCE_CHANNEL picks).
 layout(set = 1, binding = BINDING_IMPOSTOR_DISTANCE) uniform samplerCube impostor_dist;
 layout(push_constant) uniform Push {
     vec4 env_reference;     // xyz: reference point o of the environment impostor
     vec4 refractor_center;  // xyz: centre of the refractor map (refraction only)
+    uvec4 object;           // x: the object whose map this draw uses, or ALL_OBJECTS (shared map)
 } pc;
+
+const uint ALL_OBJECTS = 0xffffffffu;
+
+// Whether this draw shades pixel px: every pixel with a shared map; with one map per object
+// (`render.impostor.maps = "per_object"`, §6) only the pixels of the map's own object.
+bool impostor_owns(ivec2 px) {
+    return pc.object.x == ALL_OBJECTS || uint(texelFetch(gbuf_albedo, px, 0).a + 0.5) == pc.object.x;
+}
 
 // Radiance arriving at world point p from unit direction R: Hit() in the environment
 // impostor, then its radiance in the direction of the hit (§3: "looks up cube map envmap

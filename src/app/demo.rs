@@ -121,6 +121,10 @@ struct Grab {
     key: String,
     anchor: Vec3,
     value: Vec3,
+    /// The object dragged (Ctrl): moved in place by `Renderer::move_object`, so its distance
+    /// impostors regenerate only past `render.impostor.regenerate_distance` (Szirmay-Kalos et
+    /// al. 2005, §6) instead of with every rebuilt renderer.
+    object: Option<String>,
 }
 
 /// Everything that exists while the window is open. Field order is drop order: GPU objects
@@ -138,6 +142,9 @@ struct Running {
     swap_ids: Vec<ImageId>,
     swapchain_stale: bool,
     needs_rebuild: bool,
+    /// An object was moved in the renderer (Ctrl + drag): reload the CPU scene (picking, the
+    /// overlay's fields) from the overrides once the drag ends, without a new renderer.
+    scene_stale: bool,
     /// The scene file changed on disk: report the outcome of the rebuild.
     reloading: bool,
     camera: CameraController,
@@ -312,6 +319,7 @@ impl Running {
             swap_ids: Vec::new(),
             swapchain_stale: false,
             needs_rebuild: false,
+            scene_stale: false,
             reloading: false,
             ui: ui::UiState::new(!args.no_overlay),
             stats: ui::Stats::default(),
@@ -470,7 +478,15 @@ impl Running {
                     grab.anchor += delta;
                     grab.value += delta;
                     self.ui.overrides.insert(grab.key.clone(), ui::format_vec(grab.value));
-                    self.needs_rebuild = true;
+                    let moved = match &grab.object {
+                        Some(name) => self.renderer.move_object(name, grab.value),
+                        None => Ok(false),
+                    };
+                    match moved {
+                        Ok(true) => self.scene_stale = true,
+                        // The light, or a failed move: rebuild from the overrides.
+                        Ok(false) | Err(_) => self.needs_rebuild = true,
+                    }
                 } else if let Some(last) = self.cursor {
                     if self.camera.dragging() {
                         self.camera.mouse_moved(p - last);
@@ -502,14 +518,14 @@ impl Running {
         let cam = self.camera.camera(w, h);
         if self.modifiers.shift_key() {
             let scene::Light::Point { position, .. } = self.scene.lights.first()? else { return None };
-            return Some(Grab { key: "lights.0.position".into(), anchor: *position, value: *position });
+            return Some(Grab { key: "lights.0.position".into(), anchor: *position, value: *position, object: None });
         }
         let centers = ui::object_centers(&self.scene);
         let candidates: Vec<usize> = centers.iter().map(|c| c.0).collect();
         let (o, d) = drag::cursor_ray(&cam, cursor, w, h);
         let (index, t) = drag::pick(&self.scene, &candidates, o, d)?;
-        let center = centers.iter().find(|c| c.0 == index)?.2;
-        Some(Grab { key: format!("objects.{index}.center"), anchor: o + d * t, value: center })
+        let (_, name, center) = centers.iter().find(|c| c.0 == index)?.clone();
+        Some(Grab { key: format!("objects.{index}.center"), anchor: o + d * t, value: center, object: Some(name) })
     }
 
     /// Arrow keys move light 0 in the horizontal plane, Page Up/Down along up (a point
@@ -634,7 +650,17 @@ impl Running {
         let animating = self.ui.animate && self.has_heightfield();
         if self.needs_rebuild || resized || animating {
             self.needs_rebuild = false;
+            self.scene_stale = false;
             self.rebuild(args, &path, (extent.width, extent.height))?;
+        } else if self.scene_stale && self.grab.is_none() {
+            // After a Ctrl + drag: the renderer already has the object where the override
+            // puts it; only the CPU scene follows.
+            self.scene_stale = false;
+            let size = (self.renderer.width(), self.renderer.height());
+            match scene::load(&path, &self.overrides(args, size)) {
+                Ok(s) => self.scene = s,
+                Err(_) => self.needs_rebuild = true,
+            }
         }
         self.camera.update(dt);
         let camera = self.camera.camera(self.renderer.width(), self.renderer.height());

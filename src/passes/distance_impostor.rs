@@ -21,29 +21,35 @@
 //! the object movements are large enough"): [`ImpostorMap::objects_moved`] re-centres a map and
 //! marks it for rendering when its objects' centre left the reference point by more than
 //! `regenerate_distance` bounding radii; otherwise the map pass records nothing that frame.
-//! One map is shared by all specular objects of an effect (the paper's "single environment
-//! map for all of them"), with its reference point at their mean centre.
+//! `render.impostor.maps` (§6: "a single environment map for all of them, or ... a separate
+//! map for each of them"): `"shared"` gives an effect one map for all its specular objects,
+//! with its reference point at their mean centre and all of them left out; `"per_object"`
+//! gives each specular object its own map (and refractor map) centred on it, holding
+//! everything but that object, each regenerated only when its own object moves. The map and
+//! shading passes stay one pass each: the map pass renders every map due this frame, the
+//! shading pass draws once per object, picking the object's pixels by the G-buffer's object
+//! index (glsl/gbuffer/gbuffer.frag).
 use std::sync::Arc;
 
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
 
 use crate::gpu::{
-    vk, Access, Attachment, Blend, Buffer, Clear, ComputePipeline, DepthState, DescriptorSet, DescriptorSetLayout,
+    vk, Access, Attachment, Blend, Buffer, Clear, Cmd, ComputePipeline, DepthState, DescriptorSet, DescriptorSetLayout,
     DescriptorWrite, Framebuffer, GpuContext, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc,
     ImageViewKind, PipelineLayout, RenderPass, RenderPassDesc, Sampler, SamplerDesc, VertexLayout,
 };
-use crate::graph::{Frame, FrameGraph, ImageId};
+use crate::graph::{Frame, FrameGraph, ImageId, PassBuilder};
 use crate::renderer::gpu_scene::{cube_face_views, GpuScene};
 use crate::renderer::plan::{
     REFLECTION_IMPOSTOR, REFLECTION_IMPOSTOR_MAP, REFRACTION_IMPOSTOR, REFRACTION_IMPOSTOR_MAP,
     REFRACTION_IMPOSTOR_REFRACTOR_MAP,
 };
 use crate::renderer::targets::{Targets, DEPTH_FORMAT};
-use crate::scene::techniques::{ImpostorFresnel, ImpostorParams, ImpostorUpdate};
+use crate::scene::techniques::{ImpostorFresnel, ImpostorMaps, ImpostorParams, ImpostorUpdate};
 use crate::scene::{Analytic, Material, Scene};
 use crate::{
-    BINDING_GBUF_DEPTH, BINDING_GBUF_NORMAL, BINDING_IMPOSTOR_DISTANCE, BINDING_IMPOSTOR_PROBE,
+    BINDING_GBUF_ALBEDO, BINDING_GBUF_DEPTH, BINDING_GBUF_NORMAL, BINDING_IMPOSTOR_DISTANCE, BINDING_IMPOSTOR_PROBE,
     BINDING_IMPOSTOR_RADIANCE, BINDING_IMPOSTOR_REFRACTOR, IMPOSTOR_PROBE_FRESNEL, IMPOSTOR_PROBE_HIT, WORKGROUP_2D,
 };
 
@@ -60,8 +66,11 @@ struct MapPush {
     view_proj: [[f32; 4]; 4],
     reference: [f32; 4],
     material: [u32; 4],
+    chart_u: [f32; 4],
+    chart_v: [f32; 4],
 }
-const _: () = assert!(std::mem::size_of::<MapPush>() == 96);
+// 128 bytes: Vulkan's guaranteed minimum maxPushConstantsSize.
+const _: () = assert!(std::mem::size_of::<MapPush>() == 128);
 
 /// Push constants of the shading passes (glsl/impostor/shade_common.glsl).
 #[repr(C)]
@@ -69,8 +78,13 @@ const _: () = assert!(std::mem::size_of::<MapPush>() == 96);
 struct ShadePush {
     env_reference: [f32; 4],
     refractor_center: [f32; 4],
+    /// x: the object whose pixels this draw shades, or [`ALL_OBJECTS`].
+    object: [u32; 4],
 }
-const _: () = assert!(std::mem::size_of::<ShadePush>() == 32);
+const _: () = assert!(std::mem::size_of::<ShadePush>() == 48);
+
+/// `ShadePush::object` of a shared map: every pixel of the pass's materials.
+const ALL_OBJECTS: u32 = u32::MAX;
 
 /// Push constants of glsl/impostor/probe.comp.
 #[repr(C)]
@@ -97,6 +111,10 @@ pub fn object_bounds(scene: &Scene, object: usize) -> (Vec3, f32) {
     ((lo + hi) * 0.5, (hi - lo).length() * 0.5)
 }
 
+/// One light-mapped part of an object in the uv map: (first index within the object's
+/// indices, index count, light-map slot + 1, chart row a, chart row b).
+pub type UvChart = (u32, u32, u32, [f32; 4], [f32; 4]);
+
 /// What a map stores.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum MapContent {
@@ -104,11 +122,13 @@ pub enum MapContent {
     Environment,
     /// §4: outward normal and distance of the map's own objects only.
     Refractor,
+    /// §5: the uv map of light-map caustics: light-map (u, v), light-map slot + 1 and distance
+    /// of everything but the map's own objects (src/passes/impostor_lightmap.rs).
+    LightmapUv,
 }
 
 /// A cube map around a reference point: a distance impostor or a refractor map.
 pub struct ImpostorMap {
-    name: &'static str,
     content: MapContent,
     render_pass: RenderPass,
     _layout: PipelineLayout,
@@ -132,6 +152,11 @@ pub struct ImpostorMap {
     radius: f32,
     update: ImpostorUpdate,
     regenerate_distance: f32,
+    /// Per object, its light-mapped parts (`MapContent::LightmapUv`; see
+    /// glsl/impostor/uv_map.frag): (first index within the object's indices, index count,
+    /// light-map slot + 1, chart rows a and b with (u, v) = (a.p + a_w, b.p + b_w) for world
+    /// position p). Empty: drawn whole with slot 0 (no light map).
+    pub charts: Vec<Vec<UvChart>>,
     /// Render the map in the next frame.
     pending: bool,
     /// Render the map in the frame being recorded.
@@ -144,6 +169,7 @@ impl ImpostorMap {
     pub fn new(
         ctx: &Arc<GpuContext>,
         name: &'static str,
+        label: &str,
         content: MapContent,
         objects: Vec<usize>,
         params: &ImpostorParams,
@@ -164,10 +190,10 @@ impl ImpostorMap {
             usage: U::COLOR_ATTACHMENT | U::SAMPLED | U::TRANSFER_SRC,
             view: ImageViewKind::Cube,
         };
-        let cube = Image::new(ctx, &cube_desc(name.to_string(), CUBE_FORMAT))?;
+        let cube = Image::new(ctx, &cube_desc(label.to_string(), CUBE_FORMAT))?;
         let cube_id = graph.register_image(&cube);
         let distance = if separate {
-            let image = Image::new(ctx, &cube_desc(format!("{name}_distance"), DISTANCE_FORMAT))?;
+            let image = Image::new(ctx, &cube_desc(format!("{label}_distance"), DISTANCE_FORMAT))?;
             let id = graph.register_image(&image);
             Some((image, id))
         } else {
@@ -176,7 +202,7 @@ impl ImpostorMap {
         let depth = Image::new(
             ctx,
             &ImageDesc {
-                name: format!("{name}_depth"),
+                name: format!("{label}_depth"),
                 format: DEPTH_FORMAT,
                 width: size,
                 height: size,
@@ -192,18 +218,19 @@ impl ImpostorMap {
         }
         let render_pass = RenderPass::new(
             ctx,
-            name,
+            label,
             &RenderPassDesc {
                 colors,
                 depth: Some(Attachment { format: DEPTH_FORMAT, clear: true }),
                 depth_read_only: false,
             },
         )?;
-        let layout = PipelineLayout::new(ctx, name, &[frame_layout], std::mem::size_of::<MapPush>() as u32)?;
+        let layout = PipelineLayout::new(ctx, label, &[frame_layout], std::mem::size_of::<MapPush>() as u32)?;
         let fragment_shader = match (content, separate) {
             (MapContent::Refractor, _) => "impostor/refractor.frag",
             (MapContent::Environment, false) => "impostor/map.frag",
             (MapContent::Environment, true) => "impostor/map_separate.frag",
+            (MapContent::LightmapUv, _) => "impostor/uv_map.frag",
         };
         let blend = vec![Blend::Off; if separate { 2 } else { 1 }];
         let pipeline = GraphicsPipeline::new(
@@ -232,7 +259,7 @@ impl ImpostorMap {
             views.push(depth.layer_view(face));
             framebuffers.push(Framebuffer::new(
                 ctx,
-                &format!("{name}_face_{face}"),
+                &format!("{label}_face_{face}"),
                 &render_pass,
                 &views,
                 cube.extent(),
@@ -243,7 +270,6 @@ impl ImpostorMap {
             .filter(|&i| i < gpu.draws.len())
             .collect();
         let mut map = ImpostorMap {
-            name,
             content,
             render_pass,
             _layout: layout,
@@ -261,6 +287,7 @@ impl ImpostorMap {
             radius: 0.0,
             update: params.update,
             regenerate_distance: params.regenerate_distance,
+            charts: vec![Vec::new(); scene.objects.len()],
             pending: true,
             regenerating: false,
             generations: 0,
@@ -271,7 +298,7 @@ impl ImpostorMap {
         Ok(map)
     }
 
-    fn center_of(&self, bounds: &[(Vec3, f32)]) -> Vec3 {
+    pub fn center_of(&self, bounds: &[(Vec3, f32)]) -> Vec3 {
         let sum: Vec3 = self.objects.iter().map(|&i| bounds[i].0).sum();
         sum / self.objects.len().max(1) as f32
     }
@@ -321,18 +348,19 @@ impl ImpostorMap {
         }
     }
 
-    pub fn record<'a>(
-        &'a self,
-        frame: &mut Frame<'_, 'a>,
-        scene: &'a GpuScene,
-        frame_set: DescriptorSet,
+    /// Whether the frame being recorded renders this map.
+    pub fn regenerating(&self) -> bool {
+        self.regenerating
+    }
+
+    /// The images the map pass writes (and reads) when this map is rendered this frame.
+    fn accesses<'f, 'g, 'a>(
+        &self,
+        mut pass: PassBuilder<'f, 'g, 'a>,
         shadow_atlas: Option<ImageId>,
-    ) {
-        let mut pass = frame.pass(self.name);
+    ) -> PassBuilder<'f, 'g, 'a> {
         if !self.regenerating {
-            // Nothing moved far enough: the map of an earlier frame stays valid (§6).
-            pass.record(|_| {});
-            return;
+            return pass;
         }
         pass = pass.write(self.cube_id, Access::ColorAttachment).write(self.depth_id, Access::DepthAttachment);
         if let Some((_, id)) = &self.distance {
@@ -341,35 +369,50 @@ impl ImpostorMap {
         if let (Some(atlas), MapContent::Environment) = (shadow_atlas, self.content) {
             pass = pass.read(atlas, Access::FragmentSampled);
         }
+        pass
+    }
+
+    /// Render the six faces (if the map is due this frame).
+    fn draw(&self, cmd: &Cmd, scene: &GpuScene, frame_set: DescriptorSet) {
+        if !self.regenerating {
+            return;
+        }
         // Near and far planes bound the whole scene from the reference point; the depth only
         // orders surfaces, the stored distance is computed exactly per pixel.
         let far = (self.reference.distance(self.bounds.0) + self.bounds.1) * 1.01;
         let proj = Mat4::perspective_rh(std::f32::consts::FRAC_PI_2, 1.0, far * 1e-5, far);
         let views = cube_face_views(self.reference);
         let reference = self.reference.extend(1.0).to_array();
-        pass.record(move |cmd| {
-            let mut clears = vec![Clear::Color([0.0, 0.0, 0.0, NO_SURFACE])];
-            if self.distance.is_some() {
-                clears.push(Clear::Color([NO_SURFACE; 4]));
-            }
-            clears.push(Clear::Depth(1.0));
-            for (view, fb) in views.iter().zip(&self.framebuffers) {
-                cmd.begin_render_pass(&self.render_pass, fb, &clears);
-                cmd.bind_graphics(&self.pipeline, &[frame_set]);
-                cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
-                for &i in &self.draws {
-                    let d = &scene.draws[i];
+        let mut clears = vec![Clear::Color([0.0, 0.0, 0.0, NO_SURFACE])];
+        if self.distance.is_some() {
+            clears.push(Clear::Color([NO_SURFACE; 4]));
+        }
+        clears.push(Clear::Depth(1.0));
+        for (view, fb) in views.iter().zip(&self.framebuffers) {
+            cmd.begin_render_pass(&self.render_pass, fb, &clears);
+            cmd.bind_graphics(&self.pipeline, &[frame_set]);
+            cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
+            for &i in &self.draws {
+                let d = &scene.draws[i];
+                let whole = [(0, d.index_count, 0, [0.0; 4], [0.0; 4])];
+                let parts = match self.charts.get(i) {
+                    Some(c) if !c.is_empty() => c.as_slice(),
+                    _ => &whole,
+                };
+                for &(first, count, slot, chart_u, chart_v) in parts {
                     let push = MapPush {
                         view_proj: (proj * *view).to_cols_array_2d(),
                         reference,
-                        material: [d.material, 0, 0, 0],
+                        material: [d.material, slot, 0, 0],
+                        chart_u,
+                        chart_v,
                     };
                     cmd.push_graphics(&self.pipeline, &push);
-                    cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
+                    cmd.draw_indexed(count, d.first_index + first, d.vertex_offset);
                 }
-                cmd.end_render_pass();
             }
-        });
+            cmd.end_render_pass();
+        }
     }
 
     /// Run glsl/impostor/probe.comp against this map: the shader's own `Hit()` with
@@ -447,12 +490,35 @@ impl ImpostorMap {
     }
 }
 
-/// A full-screen pass shading the specular pixels of the G-buffer with the impostors.
+/// One frame-graph pass rendering every map of `maps` that is due this frame (§6: a map whose
+/// objects did not move far enough keeps the earlier frame's content; with none due the pass
+/// records nothing).
+pub(crate) fn record_maps<'a>(
+    frame: &mut Frame<'_, 'a>,
+    name: &str,
+    maps: Vec<&'a ImpostorMap>,
+    scene: &'a GpuScene,
+    frame_set: DescriptorSet,
+    shadow_atlas: Option<ImageId>,
+) {
+    let mut pass = frame.pass(name);
+    for m in &maps {
+        pass = m.accesses(pass, shadow_atlas);
+    }
+    pass.record(move |cmd| {
+        for m in maps {
+            m.draw(cmd, scene, frame_set);
+        }
+    });
+}
+
+/// A full-screen pass shading the specular pixels of the G-buffer with the impostors: one
+/// draw per (environment map, refractor map) instance, each with its own descriptor set.
 struct ShadePass {
     name: &'static str,
     render_pass: RenderPass,
     _set_layout: DescriptorSetLayout,
-    set: DescriptorSet,
+    sets: Vec<DescriptorSet>,
     _layout: PipelineLayout,
     pipeline: GraphicsPipeline,
     framebuffer: Framebuffer,
@@ -467,8 +533,7 @@ impl ShadePass {
         name: &'static str,
         fragment_shader: &str,
         params: &ImpostorParams,
-        env: &ImpostorMap,
-        refractor: Option<&ImpostorMap>,
+        instances: &[(&ImpostorMap, Option<&ImpostorMap>)],
         gpu: &GpuScene,
         frame_layout: &DescriptorSetLayout,
         targets: &Targets,
@@ -486,36 +551,46 @@ impl ShadePass {
         // Cube maps are filtered: bilinear distances follow planar walls between texels
         // (§2.1 assumes the surface planar between samples); the G-buffer is fetched per texel.
         let linear = Sampler::new(ctx, &format!("{name}_linear"), SamplerDesc::LINEAR_CLAMP)?;
-        let (dist_image, dist_id, channel) = env.distance_view();
-        let sampled = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
-        let depth_layout = vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL;
-        let mut writes = vec![
-            DescriptorWrite::Sampled(BINDING_GBUF_NORMAL, targets.gbuf_normal.view(), nearest, sampled),
-            DescriptorWrite::Sampled(BINDING_GBUF_DEPTH, targets.depth.view(), nearest, depth_layout),
-            DescriptorWrite::Sampled(BINDING_IMPOSTOR_RADIANCE, env.cube.view(), &linear, sampled),
-            DescriptorWrite::Sampled(BINDING_IMPOSTOR_DISTANCE, dist_image.view(), &linear, sampled),
-        ];
-        let mut reads = vec![targets.gbuf_normal_id, targets.depth_id, gpu.environment_id, env.cube_id];
-        if dist_id != env.cube_id {
-            reads.push(dist_id);
-        }
-        if let Some(r) = refractor {
-            writes.push(DescriptorWrite::Sampled(BINDING_IMPOSTOR_REFRACTOR, r.cube.view(), &linear, sampled));
-            reads.push(r.cube_id);
-        }
+        let with_refractor = instances.iter().any(|(_, r)| r.is_some());
         let frag = vk::ShaderStageFlags::FRAGMENT;
         let sampler_binding = |b: u32| (b, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, frag);
         let mut bindings = vec![
             sampler_binding(BINDING_GBUF_NORMAL),
             sampler_binding(BINDING_GBUF_DEPTH),
+            sampler_binding(BINDING_GBUF_ALBEDO),
             sampler_binding(BINDING_IMPOSTOR_RADIANCE),
             sampler_binding(BINDING_IMPOSTOR_DISTANCE),
         ];
-        if refractor.is_some() {
+        if with_refractor {
             bindings.push(sampler_binding(BINDING_IMPOSTOR_REFRACTOR));
         }
-        let set_layout = DescriptorSetLayout::new(ctx, name, &bindings, 1)?;
-        let set = set_layout.allocate(name, &writes)?;
+        let set_layout = DescriptorSetLayout::new(ctx, name, &bindings, instances.len().max(1) as u32)?;
+        let sampled = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
+        let depth_layout = vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL;
+        let mut reads = vec![targets.gbuf_normal_id, targets.gbuf_albedo_id, targets.depth_id, gpu.environment_id];
+        let mut sets = Vec::new();
+        // All instances share one distance channel: they come from the same parameters.
+        let mut channel = 3;
+        for (env, refractor) in instances {
+            let (dist_image, dist_id, c) = env.distance_view();
+            channel = c;
+            let mut writes = vec![
+                DescriptorWrite::Sampled(BINDING_GBUF_NORMAL, targets.gbuf_normal.view(), nearest, sampled),
+                DescriptorWrite::Sampled(BINDING_GBUF_DEPTH, targets.depth.view(), nearest, depth_layout),
+                DescriptorWrite::Sampled(BINDING_GBUF_ALBEDO, targets.gbuf_albedo.view(), nearest, sampled),
+                DescriptorWrite::Sampled(BINDING_IMPOSTOR_RADIANCE, env.cube.view(), &linear, sampled),
+                DescriptorWrite::Sampled(BINDING_IMPOSTOR_DISTANCE, dist_image.view(), &linear, sampled),
+            ];
+            reads.push(env.cube_id);
+            if dist_id != env.cube_id {
+                reads.push(dist_id);
+            }
+            if let Some(r) = refractor {
+                writes.push(DescriptorWrite::Sampled(BINDING_IMPOSTOR_REFRACTOR, r.cube.view(), &linear, sampled));
+                reads.push(r.cube_id);
+            }
+            sets.push(set_layout.allocate(name, &writes)?);
+        }
         let layout =
             PipelineLayout::new(ctx, name, &[frame_layout, &set_layout], std::mem::size_of::<ShadePush>() as u32)?;
         let pipeline = GraphicsPipeline::new(
@@ -540,7 +615,7 @@ impl ShadePass {
             name,
             render_pass,
             _set_layout: set_layout,
-            set,
+            sets,
             _layout: layout,
             pipeline,
             framebuffer,
@@ -549,17 +624,27 @@ impl ShadePass {
         })
     }
 
-    fn record<'a>(&'a self, frame: &mut Frame<'_, 'a>, targets: &Targets, frame_set: DescriptorSet, push: ShadePush) {
+    /// One full-screen draw per instance (`pushes[i]` with `sets[i]`).
+    fn record<'a>(
+        &'a self,
+        frame: &mut Frame<'_, 'a>,
+        targets: &Targets,
+        frame_set: DescriptorSet,
+        pushes: Vec<ShadePush>,
+    ) {
         let mut pass = frame.pass(self.name);
         for &id in &self.reads {
             pass = pass.read(id, Access::FragmentSampled);
         }
         pass.write(targets.hdr_id, Access::ColorAttachment).record(move |cmd| {
-            // Keeps the deferred result and overwrites only the pixels of its materials.
+            // Keeps the deferred result and overwrites only the pixels of its materials (and,
+            // per object, of the instance's object).
             cmd.begin_render_pass(&self.render_pass, &self.framebuffer, &[Clear::None]);
-            cmd.bind_graphics(&self.pipeline, &[frame_set, self.set]);
-            cmd.push_graphics(&self.pipeline, &push);
-            cmd.draw(3, 1);
+            for (set, push) in self.sets.iter().zip(&pushes) {
+                cmd.bind_graphics(&self.pipeline, &[frame_set, *set]);
+                cmd.push_graphics(&self.pipeline, push);
+                cmd.draw(3, 1);
+            }
             cmd.end_render_pass();
         });
     }
@@ -569,9 +654,27 @@ fn objects_where(scene: &Scene, pred: impl Fn(&Material) -> bool) -> Vec<usize> 
     (0..scene.objects.len()).filter(|&i| pred(&scene.materials[scene.objects[i].material])).collect()
 }
 
+/// The object groups that get a map each: all of `objects` together (`"shared"`), or one group
+/// per object (`"per_object"`).
+fn map_groups(params: &ImpostorParams, objects: Vec<usize>) -> Vec<Vec<usize>> {
+    match params.maps {
+        ImpostorMaps::Shared => vec![objects],
+        ImpostorMaps::PerObject => objects.into_iter().map(|i| vec![i]).collect(),
+    }
+}
+
+/// The shading push constant's object: the group's only object per object, all when shared.
+fn shaded_object(params: &ImpostorParams, objects: &[usize]) -> u32 {
+    match (params.maps, objects) {
+        (ImpostorMaps::PerObject, [i]) => *i as u32,
+        _ => ALL_OBJECTS,
+    }
+}
+
 /// `render.reflection = "impostor"`: localized reflections of mirrors and conductors (§3).
 pub struct ImpostorReflection {
-    pub map: ImpostorMap,
+    /// One shared map, or one per mirror/conductor object (`render.impostor.maps`).
+    pub maps: Vec<ImpostorMap>,
     shade: ShadePass,
     pub params: ImpostorParams,
 }
@@ -589,30 +692,51 @@ impl ImpostorReflection {
         nearest: &Sampler,
     ) -> GpuResult<Self> {
         let metals = objects_where(scene, |m| matches!(m, Material::Mirror { .. } | Material::Conductor { .. }));
-        let map = ImpostorMap::new(
-            ctx,
-            REFLECTION_IMPOSTOR_MAP,
-            MapContent::Environment,
-            metals,
-            &params,
-            scene,
-            gpu,
-            graph,
-            frame_layout,
-        )?;
+        let mut maps = Vec::new();
+        for group in map_groups(&params, metals) {
+            let label = match params.maps {
+                ImpostorMaps::Shared => REFLECTION_IMPOSTOR_MAP.to_string(),
+                ImpostorMaps::PerObject => format!("{REFLECTION_IMPOSTOR_MAP}_{}", scene.objects[group[0]].name),
+            };
+            maps.push(ImpostorMap::new(
+                ctx,
+                REFLECTION_IMPOSTOR_MAP,
+                &label,
+                MapContent::Environment,
+                group,
+                &params,
+                scene,
+                gpu,
+                graph,
+                frame_layout,
+            )?);
+        }
+        let instances: Vec<_> = maps.iter().map(|m| (m, None)).collect();
         let shade = ShadePass::new(
             ctx,
             REFLECTION_IMPOSTOR,
             "impostor/reflect.frag",
             &params,
-            &map,
-            None,
+            &instances,
             gpu,
             frame_layout,
             targets,
             nearest,
         )?;
-        Ok(ImpostorReflection { map, shade, params })
+        Ok(ImpostorReflection { maps, shade, params })
+    }
+
+    /// Objects moved (`bounds[i]`: object i's centre and radius): each map decides (§6).
+    pub fn objects_moved(&mut self, bounds: &[(Vec3, f32)]) {
+        for m in &mut self.maps {
+            m.objects_moved(bounds);
+        }
+    }
+
+    pub fn begin_frame(&mut self) {
+        for m in &mut self.maps {
+            m.begin_frame();
+        }
     }
 
     pub fn record<'a>(
@@ -623,19 +747,33 @@ impl ImpostorReflection {
         frame_set: DescriptorSet,
         shadow_atlas: Option<ImageId>,
     ) {
-        self.map.record(frame, scene, frame_set, shadow_atlas);
-        let push = ShadePush { env_reference: self.map.reference.extend(1.0).to_array(), refractor_center: [0.0; 4] };
-        self.shade.record(frame, targets, frame_set, push);
+        record_maps(frame, REFLECTION_IMPOSTOR_MAP, self.maps.iter().collect(), scene, frame_set, shadow_atlas);
+        let pushes = self
+            .maps
+            .iter()
+            .map(|m| ShadePush {
+                env_reference: m.reference.extend(1.0).to_array(),
+                refractor_center: [0.0; 4],
+                object: [shaded_object(&self.params, &m.objects), 0, 0, 0],
+            })
+            .collect();
+        self.shade.record(frame, targets, frame_set, pushes);
     }
+}
+
+/// One refractor (or all of them, shared): its environment impostor, its refractor map, and
+/// where the refractors' centre is now (the refractor map moves with them).
+pub struct RefractionInstance {
+    pub map: ImpostorMap,
+    pub refractor: ImpostorMap,
+    refractor_center: Vec3,
 }
 
 /// `render.refraction = "impostor"`: double refraction through a refractor map (§4).
 pub struct ImpostorRefraction {
-    pub map: ImpostorMap,
-    pub refractor: ImpostorMap,
+    /// One shared instance, or one per dielectric object (`render.impostor.maps`).
+    pub instances: Vec<RefractionInstance>,
     shade: ShadePass,
-    /// Where the refractors' centre is now (the refractor map moves with them).
-    refractor_center: Vec3,
     pub params: ImpostorParams,
 }
 
@@ -652,47 +790,67 @@ impl ImpostorRefraction {
         nearest: &Sampler,
     ) -> GpuResult<Self> {
         let glass = objects_where(scene, |m| matches!(m, Material::Dielectric { .. }));
-        let map = ImpostorMap::new(
-            ctx,
-            REFRACTION_IMPOSTOR_MAP,
-            MapContent::Environment,
-            glass.clone(),
-            &params,
-            scene,
-            gpu,
-            graph,
-            frame_layout,
-        )?;
-        let refractor = ImpostorMap::new(
-            ctx,
-            REFRACTION_IMPOSTOR_REFRACTOR_MAP,
-            MapContent::Refractor,
-            glass,
-            &params,
-            scene,
-            gpu,
-            graph,
-            frame_layout,
-        )?;
+        let mut instances = Vec::new();
+        for group in map_groups(&params, glass) {
+            let suffix = match params.maps {
+                ImpostorMaps::Shared => String::new(),
+                ImpostorMaps::PerObject => format!("_{}", scene.objects[group[0]].name),
+            };
+            let map = ImpostorMap::new(
+                ctx,
+                REFRACTION_IMPOSTOR_MAP,
+                &format!("{REFRACTION_IMPOSTOR_MAP}{suffix}"),
+                MapContent::Environment,
+                group.clone(),
+                &params,
+                scene,
+                gpu,
+                graph,
+                frame_layout,
+            )?;
+            let refractor = ImpostorMap::new(
+                ctx,
+                REFRACTION_IMPOSTOR_REFRACTOR_MAP,
+                &format!("{REFRACTION_IMPOSTOR_REFRACTOR_MAP}{suffix}"),
+                MapContent::Refractor,
+                group,
+                &params,
+                scene,
+                gpu,
+                graph,
+                frame_layout,
+            )?;
+            let refractor_center = refractor.reference;
+            instances.push(RefractionInstance { map, refractor, refractor_center });
+        }
+        let pairs: Vec<_> = instances.iter().map(|i| (&i.map, Some(&i.refractor))).collect();
         let shade = ShadePass::new(
             ctx,
             REFRACTION_IMPOSTOR,
             "impostor/refract.frag",
             &params,
-            &map,
-            Some(&refractor),
+            &pairs,
             gpu,
             frame_layout,
             targets,
             nearest,
         )?;
-        let refractor_center = refractor.reference;
-        Ok(ImpostorRefraction { map, refractor, shade, refractor_center, params })
+        Ok(ImpostorRefraction { instances, shade, params })
     }
 
     pub fn objects_moved(&mut self, bounds: &[(Vec3, f32)]) {
-        self.map.objects_moved(bounds);
-        self.refractor_center = self.refractor.center_of(bounds);
+        for i in &mut self.instances {
+            i.map.objects_moved(bounds);
+            i.refractor.objects_moved(bounds);
+            i.refractor_center = i.refractor.center_of(bounds);
+        }
+    }
+
+    pub fn begin_frame(&mut self) {
+        for i in &mut self.instances {
+            i.map.begin_frame();
+            i.refractor.begin_frame();
+        }
     }
 
     pub fn record<'a>(
@@ -703,12 +861,19 @@ impl ImpostorRefraction {
         frame_set: DescriptorSet,
         shadow_atlas: Option<ImageId>,
     ) {
-        self.map.record(frame, scene, frame_set, shadow_atlas);
-        self.refractor.record(frame, scene, frame_set, None);
-        let push = ShadePush {
-            env_reference: self.map.reference.extend(1.0).to_array(),
-            refractor_center: self.refractor_center.extend(1.0).to_array(),
-        };
-        self.shade.record(frame, targets, frame_set, push);
+        let envs = self.instances.iter().map(|i| &i.map).collect();
+        record_maps(frame, REFRACTION_IMPOSTOR_MAP, envs, scene, frame_set, shadow_atlas);
+        let refractors = self.instances.iter().map(|i| &i.refractor).collect();
+        record_maps(frame, REFRACTION_IMPOSTOR_REFRACTOR_MAP, refractors, scene, frame_set, None);
+        let pushes = self
+            .instances
+            .iter()
+            .map(|i| ShadePush {
+                env_reference: i.map.reference.extend(1.0).to_array(),
+                refractor_center: i.refractor_center.extend(1.0).to_array(),
+                object: [shaded_object(&self.params, &i.map.objects), 0, 0, 0],
+            })
+            .collect();
+        self.shade.record(frame, targets, frame_set, pushes);
     }
 }

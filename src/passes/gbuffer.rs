@@ -32,7 +32,8 @@ impl GBufferPass {
                 depth_read_only: false,
             },
         )?;
-        let layout = PipelineLayout::new(ctx, GBUFFER, &[frame_layout], 4)?;
+        // Push constants: material index, object index (glsl/gbuffer/gbuffer.frag).
+        let layout = PipelineLayout::new(ctx, GBUFFER, &[frame_layout], 8)?;
         let pipeline = GraphicsPipeline::new(
             ctx,
             &GraphicsPipelineDesc {
@@ -81,8 +82,9 @@ impl GBufferPass {
                 );
                 cmd.bind_graphics(&self.pipeline, &[frame_set]);
                 cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
-                for d in &scene.draws {
-                    cmd.push_graphics(&self.pipeline, &d.material);
+                // `draws[i]` is object i.
+                for (object, d) in scene.draws.iter().enumerate() {
+                    cmd.push_graphics(&self.pipeline, &[d.material, object as u32]);
                     cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
                 }
                 cmd.end_render_pass();

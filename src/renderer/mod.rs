@@ -21,13 +21,16 @@ use crate::passes::deferred_shading::DeferredShadingPass;
 use crate::passes::distance_impostor::{object_bounds, ImpostorMap, ImpostorReflection, ImpostorRefraction};
 use crate::passes::eikonal::EikonalPass;
 use crate::passes::gbuffer::GBufferPass;
+use crate::passes::impostor_lightmap::ImpostorLightmap;
 use crate::passes::refraction_hu_qin::HuQinPass;
 use crate::passes::refraction_wyman::WymanPass;
 use crate::passes::refractor_layers::DebugTarget;
 use crate::passes::shadow_map::{ShadowMapPass, FAR_DISTANCE};
 use crate::passes::specular_single::{Mode, SpecularSinglePass};
 use crate::passes::tonemap::TonemapPass;
-use crate::scene::techniques::{CausticsMapParams, EikonalParams, HuQinParams, ImpostorParams, WymanParams};
+use crate::scene::techniques::{
+    CausticsMapParams, EikonalParams, HuQinParams, ImpostorLightmapParams, ImpostorParams, WymanParams,
+};
 use crate::scene::{Camera, Scene};
 use crate::{
     BINDING_CAUSTIC_2D, BINDING_CAUSTIC_CUBE, BINDING_ENVIRONMENT, BINDING_FRAME, BINDING_MATERIALS, BINDING_SHADOW_2D,
@@ -110,6 +113,7 @@ struct Passes {
     refraction_hu_qin: Option<HuQinPass>,
     refraction_impostor: Option<ImpostorRefraction>,
     reflection_impostor: Option<ImpostorReflection>,
+    impostor_lightmap: Option<ImpostorLightmap>,
     eikonal: Option<EikonalPass>,
     tonemap: TonemapPass,
 }
@@ -318,6 +322,13 @@ impl Renderer {
         } else {
             None
         };
+        let impostor_lightmap = if plan::has(&plan, plan::IMPOSTOR_LIGHTMAP_SPLAT) {
+            let p = ImpostorLightmapParams::from_settings(&scene.render)
+                .map_err(|error| RenderError::Param { technique: "impostor_lightmap", error })?;
+            Some(ImpostorLightmap::new(ctx, p, scene, &gpu_scene, &mut graph, &frame_layout, &targets)?)
+        } else {
+            None
+        };
         let eikonal = match (&scene.volume, plan::has(&plan, plan::EIKONAL_VIEW)) {
             (Some(volume), true) => {
                 let p = EikonalParams::from_settings(&scene.render)
@@ -360,6 +371,7 @@ impl Renderer {
             refraction_hu_qin,
             refraction_impostor,
             reflection_impostor,
+            impostor_lightmap,
             eikonal,
             tonemap: TonemapPass::new(ctx, &frame_layout, &targets, &nearest)?,
         };
@@ -494,11 +506,13 @@ impl Renderer {
         self.frame_buffers[slot].write(0, bytemuck::bytes_of(&self.uniforms));
 
         if let Some(p) = &mut self.passes.refraction_impostor {
-            p.map.begin_frame();
-            p.refractor.begin_frame();
+            p.begin_frame();
         }
         if let Some(p) = &mut self.passes.reflection_impostor {
-            p.map.begin_frame();
+            p.begin_frame();
+        }
+        if let Some(p) = &mut self.passes.impostor_lightmap {
+            p.begin_frame();
         }
         let Renderer { passes, frame_sets, scene, targets, timestamps, commands, graph, .. } = self;
         let shadow_atlas = passes.shadow_map.as_ref().map(|_| targets.shadow_atlas_id);
@@ -511,8 +525,14 @@ impl Renderer {
         if let Some(p) = &passes.caustics_map {
             p.record(&mut frame, scene, targets);
         }
+        if let Some(p) = &passes.impostor_lightmap {
+            p.record(&mut frame, scene, frame_set);
+        }
         passes.gbuffer.record(&mut frame, scene, targets, frame_set);
         passes.deferred.record(&mut frame, scene, targets, frame_set);
+        if let Some(p) = &passes.impostor_lightmap {
+            p.record_apply(&mut frame, targets, frame_set);
+        }
         if let Some(p) = &passes.refraction_single {
             p.record(&mut frame, scene, targets, frame_set);
         }
@@ -633,6 +653,17 @@ impl Renderer {
         Ok(Some(sum))
     }
 
+    /// The light maps of `render.caustics = "impostor_lightmap"` (irradiance in W/m^2, RGBA f32,
+    /// one layer per receiver in the order of the charts) and each receiver's (object index,
+    /// area in m^2); `None` without that technique.
+    #[allow(clippy::type_complexity)]
+    pub fn read_lightmaps(&mut self) -> Result<Option<(Vec<[f32; 4]>, Vec<(usize, f32)>)>, RenderError> {
+        self.finish()?;
+        let Some(p) = &self.passes.impostor_lightmap else { return Ok(None) };
+        let texels = p.read_lightmaps(&self.ctx, &mut self.graph)?;
+        Ok(Some((texels, p.charts.iter().map(|c| (c.object, c.area())).collect())))
+    }
+
     /// Names of the debug targets [`Renderer::read_target`] can read (e.g.
     /// `refraction_hu_qin_p2`, `refraction_hu_qin_t2` with `render.hu_qin.debug = true`).
     pub fn debug_targets(&self) -> Vec<String> {
@@ -694,17 +725,27 @@ impl Renderer {
             p.objects_moved(&bounds);
         }
         if let Some(p) = &mut self.passes.reflection_impostor {
-            p.map.objects_moved(&bounds);
+            p.objects_moved(&bounds);
+        }
+        if let Some(p) = &mut self.passes.impostor_lightmap {
+            p.objects_moved(&bounds);
         }
         Ok(true)
     }
 
-    /// A distance impostor or refractor map of this renderer, if its technique is selected.
+    /// A distance impostor or refractor map of this renderer, if its technique is selected
+    /// (the first one with `render.impostor.maps = "per_object"`).
     pub fn impostor_map(&self, effect: ImpostorEffect) -> Option<&ImpostorMap> {
+        self.impostor_maps(effect).into_iter().next()
+    }
+
+    /// Every map of an effect: one shared, or one per object in scene order.
+    pub fn impostor_maps(&self, effect: ImpostorEffect) -> Vec<&ImpostorMap> {
+        let (reflection, refraction) = (&self.passes.reflection_impostor, &self.passes.refraction_impostor);
         match effect {
-            ImpostorEffect::Reflection => self.passes.reflection_impostor.as_ref().map(|p| &p.map),
-            ImpostorEffect::Refraction => self.passes.refraction_impostor.as_ref().map(|p| &p.map),
-            ImpostorEffect::Refractor => self.passes.refraction_impostor.as_ref().map(|p| &p.refractor),
+            ImpostorEffect::Reflection => reflection.iter().flat_map(|p| &p.maps).collect(),
+            ImpostorEffect::Refraction => refraction.iter().flat_map(|p| &p.instances).map(|i| &i.map).collect(),
+            ImpostorEffect::Refractor => refraction.iter().flat_map(|p| &p.instances).map(|i| &i.refractor).collect(),
         }
     }
 
@@ -719,10 +760,11 @@ impl Renderer {
         records: &[[[f32; 4]; 3]],
     ) -> Result<Option<Vec<[[f32; 4]; 3]>>, RenderError> {
         self.finish()?;
+        let (reflection, refraction) = (&self.passes.reflection_impostor, &self.passes.refraction_impostor);
         let map = match effect {
-            ImpostorEffect::Reflection => self.passes.reflection_impostor.as_ref().map(|p| &p.map),
-            ImpostorEffect::Refraction => self.passes.refraction_impostor.as_ref().map(|p| &p.map),
-            ImpostorEffect::Refractor => self.passes.refraction_impostor.as_ref().map(|p| &p.refractor),
+            ImpostorEffect::Reflection => reflection.as_ref().and_then(|p| p.maps.first()),
+            ImpostorEffect::Refraction => refraction.as_ref().and_then(|p| p.instances.first()).map(|i| &i.map),
+            ImpostorEffect::Refractor => refraction.as_ref().and_then(|p| p.instances.first()).map(|i| &i.refractor),
         };
         match map {
             Some(m) => Ok(Some(m.probe(&self.ctx, &mut self.graph, fresnel, iterations, records)?)),

@@ -31,6 +31,14 @@ pub const REFRACTION_IMPOSTOR: &str = "refraction_impostor";
 pub const CAUSTICS_MAP_RECEIVERS: &str = "caustics_map_receivers";
 pub const CAUSTICS_MAP_REFRACTORS: &str = "caustics_map_refractors";
 pub const CAUSTICS_MAP: &str = "caustics_map";
+/// Szirmay-Kalos et al. 2005 §5 (src/passes/impostor_lightmap.rs): the uv cube map, the
+/// refractor map (dielectrics only), the caustic map from the light, the splats into the
+/// receivers' light maps, and the light maps added in deferred shading.
+pub const IMPOSTOR_LIGHTMAP_UV_MAP: &str = "impostor_lightmap_uv_map";
+pub const IMPOSTOR_LIGHTMAP_REFRACTOR_MAP: &str = "impostor_lightmap_refractor_map";
+pub const IMPOSTOR_LIGHTMAP_CAUSTIC_MAP: &str = "impostor_lightmap_caustic_map";
+pub const IMPOSTOR_LIGHTMAP_SPLAT: &str = "impostor_lightmap_splat";
+pub const IMPOSTOR_LIGHTMAP_APPLY: &str = "impostor_lightmap_apply";
 /// Ihrke et al. 2007 (src/passes/eikonal.rs): curved view rays through the `[volume]`.
 pub const EIKONAL_VIEW: &str = "eikonal_view";
 
@@ -75,6 +83,9 @@ pub fn plan(scene: &Scene) -> Vec<PlannedPass> {
         });
     }
     passes.extend(caustics(scene, &diffuse, &dielectric, &metal));
+    let lightmap = impostor_lightmap(scene, &dielectric, &metal);
+    let lightmap_apply = lightmap.last().cloned();
+    passes.extend(lightmap.into_iter().filter(|p| p.name != IMPOSTOR_LIGHTMAP_APPLY));
     passes.push(PlannedPass {
         name: GBUFFER,
         reason: if scene.objects.is_empty() {
@@ -93,6 +104,7 @@ pub fn plan(scene: &Scene) -> Vec<PlannedPass> {
             format!("environment background; diffuse {} lit by {} light(s)", list(&diffuse), scene.lights.len())
         },
     });
+    passes.extend(lightmap_apply);
     if !dielectric.is_empty() && scene.render.refraction == "single" {
         passes.push(PlannedPass {
             name: REFRACTION_SINGLE,
@@ -163,6 +175,60 @@ fn caustics(scene: &Scene, diffuse: &[String], dielectric: &[String], metal: &[S
             ),
         },
     ]
+}
+
+/// The diffuse receivers that get light maps (`render.caustics = "impostor_lightmap"`):
+/// quads (one planar chart) and boxes (one per face) (src/passes/impostor_lightmap.rs).
+pub fn lightmap_receivers(scene: &Scene) -> Vec<usize> {
+    (0..scene.objects.len())
+        .filter(|&i| {
+            let o = &scene.objects[i];
+            scene.materials[o.material].is_diffuse() && (o.shape == "quad" || o.shape == "box")
+        })
+        .collect()
+}
+
+/// Light-map caustics with distance impostors (Szirmay-Kalos et al. 2005, §5): only with a
+/// light, a specular object, a quad or box receiver and `render.caustics = "impostor_lightmap"`.
+fn impostor_lightmap(scene: &Scene, dielectric: &[String], metal: &[String]) -> Vec<PlannedPass> {
+    let receivers: Vec<String> = lightmap_receivers(scene).iter().map(|&i| scene.objects[i].name.clone()).collect();
+    if scene.render.caustics != "impostor_lightmap" || scene.lights.is_empty() || receivers.is_empty() {
+        return Vec::new();
+    }
+    let specular: Vec<String> = dielectric.iter().chain(metal).cloned().collect();
+    if specular.is_empty() {
+        return Vec::new();
+    }
+    let (receivers, specular) = (list(&receivers), list(&specular));
+    let mut passes = vec![PlannedPass {
+        name: IMPOSTOR_LIGHTMAP_UV_MAP,
+        reason: format!(
+            "uv cube map (light-map uv + receiver id + distance) around {specular} of receivers {receivers}"
+        ),
+    }];
+    if !dielectric.is_empty() {
+        passes.push(PlannedPass {
+            name: IMPOSTOR_LIGHTMAP_REFRACTOR_MAP,
+            reason: format!("refractor map of {} for the photons' exit points", list(dielectric)),
+        });
+    }
+    passes.extend([
+        PlannedPass {
+            name: IMPOSTOR_LIGHTMAP_CAUSTIC_MAP,
+            reason: format!("caustic map of {specular} from {} light(s): Hit() into the uv map", scene.lights.len()),
+        },
+        PlannedPass {
+            name: IMPOSTOR_LIGHTMAP_SPLAT,
+            reason: format!(
+                "Gaussian splats into the light maps of {receivers} (render.caustics = \"impostor_lightmap\")"
+            ),
+        },
+        PlannedPass {
+            name: IMPOSTOR_LIGHTMAP_APPLY,
+            reason: format!("caustic irradiance of the light maps on {receivers}"),
+        },
+    ]);
+    passes
 }
 
 /// The passes of the two-interface image-space refraction techniques, if one is selected.

@@ -120,6 +120,19 @@ pub enum ImpostorUpdate {
     EveryFrame,
 }
 
+/// Which distance impostors the specular objects of an effect share (Szirmay-Kalos et al.
+/// 2005, §6: "we may generate only a single environment map for all of them, or we may
+/// maintain a separate map for each of them").
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ImpostorMaps {
+    /// One map per effect around the mean centre of its objects, without any of them.
+    Shared,
+    /// One map per specular object, centred on it, holding everything but that object (the
+    /// other specular objects appear in it, black as in deferred shading), each regenerated
+    /// independently when its own object moves.
+    PerObject,
+}
+
 /// `[render.impostor]`: distance impostors, `render.reflection = "impostor"` and
 /// `render.refraction = "impostor"`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -135,6 +148,7 @@ pub struct ImpostorParams {
     /// How far an object's centre may move from its map's reference point before the map is
     /// rendered again, as a fraction of the object's bounding radius (scale-free).
     pub regenerate_distance: f32,
+    pub maps: ImpostorMaps,
 }
 
 impl Default for ImpostorParams {
@@ -146,7 +160,65 @@ impl Default for ImpostorParams {
             fresnel: ImpostorFresnel::Approximate,
             update: ImpostorUpdate::OnMove,
             regenerate_distance: 0.25,
+            maps: ImpostorMaps::Shared,
         }
+    }
+}
+
+/// `[render.impostor_lightmap]`: light-map caustics with distance impostors (Szirmay-Kalos
+/// et al. 2005, §5, Fig. 9), `render.caustics = "impostor_lightmap"`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ImpostorLightmapParams {
+    /// Texels per side of the caustic map rendered from the light (one photon per texel).
+    pub caustic_map_size: u32,
+    /// Texels per side of each receiver's light map.
+    pub lightmap_size: u32,
+    /// Support radius of the Gaussian splat in light-map texels (sigma = radius / 2).
+    pub filter_radius: f32,
+    /// Hit() refinement steps (§2.2) of the photons' rays, in the refractor map and the uv map.
+    pub iterations: u32,
+    /// Texels per uv cube-map face edge.
+    pub uv_map_size: u32,
+}
+
+impl Default for ImpostorLightmapParams {
+    fn default() -> Self {
+        ImpostorLightmapParams {
+            caustic_map_size: 128,
+            lightmap_size: 256,
+            filter_radius: 2.0,
+            iterations: 4,
+            uv_map_size: 256,
+        }
+    }
+}
+
+impl ImpostorLightmapParams {
+    pub const KEYS: &'static [&'static str] =
+        &["caustic_map_size", "lightmap_size", "filter_radius", "iterations", "uv_map_size"];
+
+    pub fn from_table(t: Option<&toml::Table>) -> Result<Self, ParamError> {
+        let mut p = ImpostorLightmapParams::default();
+        for (key, v) in t.into_iter().flatten() {
+            match key.as_str() {
+                // 2048^2 = 4M photons, each a point sprite: far beyond a CPU device's budget.
+                "caustic_map_size" => p.caustic_map_size = integer(key, v, 4, 2048)?,
+                // 4096^2 x 16 bytes = 256 MB per receiver.
+                "lightmap_size" => p.lightmap_size = integer(key, v, 4, 4096)?,
+                // Below sqrt(2)/2 texels a splat centred at a texel corner covers no texel
+                // centre and its power would be lost; the point sprite (2 ceil(radius) + 3
+                // texels) must stay within the point-size range.
+                "filter_radius" => p.filter_radius = number(key, v, 0.75, 16.0)?,
+                "iterations" => p.iterations = integer(key, v, 0, 64)?,
+                "uv_map_size" => p.uv_map_size = integer(key, v, 4, 4096)?,
+                _ => return Err(unknown("impostor_lightmap", key, Self::KEYS)),
+            }
+        }
+        Ok(p)
+    }
+
+    pub fn from_settings(r: &RenderSettings) -> Result<Self, ParamError> {
+        Self::from_table(r.params.get("impostor_lightmap"))
     }
 }
 
@@ -314,7 +386,7 @@ impl HuQinParams {
 
 impl ImpostorParams {
     pub const KEYS: &'static [&'static str] =
-        &["resolution", "iterations", "separate_distance", "fresnel", "update", "regenerate_distance"];
+        &["resolution", "iterations", "separate_distance", "fresnel", "update", "regenerate_distance", "maps"];
 
     pub fn from_table(t: Option<&toml::Table>) -> Result<Self, ParamError> {
         let mut p = ImpostorParams::default();
@@ -351,6 +423,19 @@ impl ImpostorParams {
                     }
                 }
                 "regenerate_distance" => p.regenerate_distance = number(key, v, 0.0, 1e6)?,
+                "maps" => {
+                    p.maps = match v.as_str() {
+                        Some("shared") => ImpostorMaps::Shared,
+                        Some("per_object") => ImpostorMaps::PerObject,
+                        _ => {
+                            return Err(ParamError {
+                                key: key.clone(),
+                                message: format!("`maps` must be \"shared\" or \"per_object\", not {v}"),
+                                hint: "one map for all specular objects of an effect, or one per object (§6)".into(),
+                            })
+                        }
+                    }
+                }
                 _ => return Err(unknown("impostor", key, Self::KEYS)),
             }
         }
@@ -410,6 +495,7 @@ pub fn check(technique: &str, t: &toml::Table) -> Result<(), ParamError> {
         "hu_qin" => HuQinParams::from_table(Some(t)).map(|_| ()),
         "caustics_map" => CausticsMapParams::from_table(Some(t)).map(|_| ()),
         "impostor" => ImpostorParams::from_table(Some(t)).map(|_| ()),
+        "impostor_lightmap" => ImpostorLightmapParams::from_table(Some(t)).map(|_| ()),
         "eikonal" => EikonalParams::from_table(Some(t)).map(|_| ()),
         _ => Ok(()),
     }
@@ -523,8 +609,21 @@ mod tests {
             ("update = \"never\"", "update"),
             ("regenerate_distance = -1", "regenerate_distance"),
             ("iteration = 3", "iteration"),
+            ("maps = \"one\"", "maps"),
+            ("maps = 2", "maps"),
         ] {
             let e = ImpostorParams::from_table(Some(&table(t))).unwrap_err();
+            assert_eq!(e.key, key, "{t}");
+        }
+        for (t, key) in [
+            ("caustic_map_size = 2", "caustic_map_size"),
+            ("lightmap_size = 100000", "lightmap_size"),
+            ("filter_radius = 0.1", "filter_radius"),
+            ("filter_radius = nan", "filter_radius"),
+            ("iterations = -1", "iterations"),
+            ("size = 3", "size"),
+        ] {
+            let e = ImpostorLightmapParams::from_table(Some(&table(t))).unwrap_err();
             assert_eq!(e.key, key, "{t}");
         }
         for (t, key) in [("grid = 1", "grid"), ("newton = \"secant\"", "newton"), ("splat_sigma = 0.1", "splat_sigma")]

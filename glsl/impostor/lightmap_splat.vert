@@ -1,0 +1,52 @@
+#version 450
+// Light-map caustics (Szirmay-Kalos et al. 2005, §5): "we render as many small quadrilaterals
+// ... or point sprites as texels the caustic map has"; the vertex shader reads the caustic map
+// (vertex texture fetch), centres the sprite at the photon hit's (u, v) in the receiver's
+// texture space and "moves the quadrilateral out of the clipping region if the alpha is
+// negative". One point sprite per caustic-map texel; the Gaussian weights are normalized here
+// over exactly the texels the fragment shader keeps (centres within `radius`), so each photon
+// deposits all of its power (src/passes/impostor_lightmap.rs, `splat_weights`, checks the same
+// sum on the CPU).
+#include "common.glsl"
+layout(set = 0, binding = LIGHTMAP_BINDING_PHOTON_HIT) uniform sampler2D photon_hit;
+layout(set = 0, binding = LIGHTMAP_BINDING_PHOTON_POWER) uniform sampler2D photon_power;
+layout(push_constant) uniform Push {
+    vec4 params;   // x: filter radius (light-map texels), y: light-map size, z: 1 / texel area (m^-2)
+    uvec4 info;    // x: this light map's slot, y: caustic map size
+} pc;
+layout(location = 0) flat out vec3 out_irradiance;   // power / texel area / weight sum
+layout(location = 1) flat out vec2 out_center;       // splat centre in light-map pixels
+
+void drop_vertex() {
+    gl_Position = vec4(2.0, 2.0, 2.0, 1.0);   // outside the clip volume: culled
+    gl_PointSize = 1.0;
+    out_irradiance = vec3(0.0);
+    out_center = vec2(0.0);
+}
+
+void main() {
+    uint size = pc.info.y;
+    ivec2 texel = ivec2(uint(gl_VertexIndex) % size, uint(gl_VertexIndex) / size);
+    vec4 hit = texelFetch(photon_hit, texel, 0);
+    if (!(hit.a > 0.0) || uint(hit.b + 0.5) != pc.info.x) { drop_vertex(); return; }
+    vec3 power = texelFetch(photon_power, texel, 0).rgb;
+    float n = pc.params.y;
+    vec2 center = hit.rg * n;   // light-map pixels
+    float radius = pc.params.x;
+    float sigma = radius * 0.5;
+    float sum = 0.0;
+    int r = int(ceil(radius));
+    ivec2 base = ivec2(floor(center));
+    for (int y = -r - 1; y <= r + 1; ++y) {
+        for (int x = -r - 1; x <= r + 1; ++x) {
+            vec2 d = vec2(base + ivec2(x, y)) + 0.5 - center;
+            float d2 = dot(d, d);
+            if (d2 <= radius * radius) sum += exp(-d2 / (2.0 * sigma * sigma));
+        }
+    }
+    if (!(sum > 0.0)) { drop_vertex(); return; }
+    out_irradiance = power * pc.params.z / sum;
+    out_center = center;
+    gl_Position = vec4(hit.rg * 2.0 - 1.0, 0.0, 1.0);
+    gl_PointSize = 2.0 * float(r) + 3.0;
+}

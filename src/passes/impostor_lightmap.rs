@@ -1,0 +1,748 @@
+//! Light-map caustics with distance impostors: Szirmay-Kalos, Aszódi, Lazányi, Premecz 2005,
+//! "Approximate Ray-Tracing on the GPU with Distance Impostors", §5 and Fig. 9.
+//! `render.caustics = "impostor_lightmap"`, parameters `[render.impostor_lightmap]`
+//! ([`ImpostorLightmapParams`]).
+//!
+//! 1. `impostor_lightmap_uv_map`: the *uvmap* around the specular objects' centre, which "has
+//!    the same structure" as the environment map "but stores the u, v coordinates and the
+//!    texture id in its pixels": per texel the
+//!    visible receiver's light-map (u, v), its light-map slot + 1 (the paper's texture id; 0
+//!    where the visible surface has no light map) and the surface's distance from the
+//!    reference point (for Hit(), §3, in the same cube: alpha). An [`ImpostorMap`] with
+//!    [`MapContent::LightmapUv`], regenerated like the environment impostors (§6).
+//! 2. `impostor_lightmap_refractor_map` (dielectrics only): the refractor map of §4.
+//! 3. `impostor_lightmap_caustic_map`: the *caustic map*, the specular objects seen from the
+//!    light through a frustum fitted to their bounding sphere (a point light) or an
+//!    orthographic box (a directional light), `caustic_map_size`^2 texels. Per texel where a
+//!    specular object is visible (glsl/impostor/lightmap_caustic.frag): the light direction
+//!    refracted through two surfaces (the second from the refractor map) or reflected,
+//!    `l = Hit(x, R, uv map)`, the hit's (u, v, slot) from the uv map, and the photon's power
+//!    (intensity x texel solid angle, or irradiance x texel area, times Fresnel and
+//!    absorption); alpha -1 where there is no hit on a light-mapped receiver.
+//! 4. `impostor_lightmap_splat`: one point sprite per caustic-map texel, positioned in the
+//!    receiver's light map by vertex texture fetch (moved out of the clip volume for alpha < 0
+//!    or another receiver), Gaussian weight in the fragment shader, additive blending. Each
+//!    splat deposits power / (light-map texel area) spread by weights that sum to exactly 1
+//!    over the texels it covers ([`splat_weights`]), so the light map holds irradiance in
+//!    W/m^2, comparable with the reference.
+//! 5. `impostor_lightmap_apply` (right after deferred shading): every receiver pixel adds
+//!    light-map irradiance x albedo / pi.
+//!
+//! Light maps: one layer of a 2D array per chart (`lightmap_size`^2 each). Receivers: the
+//! diffuse quads and boxes (plan::lightmap_receivers); a quad's unique chart is the planar
+//! projection onto its own edges, (u, v) in [0, 1]^2, a box has one such chart (and light map)
+//! per face; (u, v) is evaluated per pixel from the world position in the uv map and in the
+//! apply pass alike (which also matches the face by its normal). Other diffuse objects
+//! (spheres, tori, lathes, meshes, heightfields) get no light map: photons that reach them are
+//! dropped, and they show no caustic from this technique (docs/scene-format.md). Every light
+//! has its own caustic map; a point light closer to the specular objects than their bounding
+//! radius sees them through a 120-degree frustum only (photons outside it are lost).
+use std::sync::Arc;
+
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Vec3};
+
+use crate::gpu::{
+    vk, Access, Attachment, Blend, Buffer, Clear, DepthState, DescriptorSet, DescriptorSetLayout, DescriptorWrite,
+    Framebuffer, GpuContext, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc, ImageViewKind,
+    MemoryLocation, PipelineLayout, RenderPass, RenderPassDesc, Sampler, SamplerDesc, VertexLayout,
+};
+use crate::graph::{Frame, FrameGraph, ImageId};
+use crate::passes::distance_impostor::{object_bounds, record_maps, ImpostorMap, MapContent};
+use crate::renderer::gpu_scene::GpuScene;
+use crate::renderer::plan::{
+    lightmap_receivers, IMPOSTOR_LIGHTMAP_APPLY, IMPOSTOR_LIGHTMAP_CAUSTIC_MAP, IMPOSTOR_LIGHTMAP_REFRACTOR_MAP,
+    IMPOSTOR_LIGHTMAP_SPLAT, IMPOSTOR_LIGHTMAP_UV_MAP,
+};
+use crate::renderer::targets::{Targets, DEPTH_FORMAT};
+use crate::scene::techniques::{ImpostorLightmapParams, ImpostorParams};
+use crate::scene::{Light, Material, Scene};
+use crate::{
+    BINDING_GBUF_ALBEDO, BINDING_GBUF_DEPTH, BINDING_GBUF_NORMAL, BINDING_LIGHTMAPS, LIGHTMAP_BINDING_PHOTON_HIT,
+    LIGHTMAP_BINDING_PHOTON_POWER, LIGHTMAP_BINDING_REFRACTOR, LIGHTMAP_BINDING_UV_LINEAR, LIGHTMAP_BINDING_UV_NEAREST,
+    LIGHT_DIRECTIONAL, LIGHT_POINT,
+};
+
+/// Caustic map and light maps: 32-bit float, so sums of many small splats stay exact.
+const MAP_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
+/// Half-angle tangent for a point light inside (or nearly inside) the specular objects'
+/// bounding sphere: a 120-degree frustum towards their centre.
+const INSIDE_TAN_HALF: f32 = 1.732_050_8;
+
+/// Push constants of glsl/impostor/lightmap_caustic.{vert,frag} (lightmap_push.glsl).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct CausticPush {
+    view_proj: [[f32; 4]; 4],
+    light: [f32; 4],
+    intensity: [f32; 4],
+    reference: [f32; 4],
+    refractor: [f32; 4],
+}
+const _: () = assert!(std::mem::size_of::<CausticPush>() == 128);
+
+/// Push constants of glsl/impostor/lightmap_splat.{vert,frag}.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct SplatPush {
+    params: [f32; 4],
+    info: [u32; 4],
+}
+
+/// Push constants of glsl/impostor/lightmap_apply.frag.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct ApplyPush {
+    origin: [f32; 4],
+    edge_u: [f32; 4],
+    edge_v: [f32; 4],
+}
+
+/// The Gaussian weights of a splat centred at `center` (light-map pixels; pixel (i, j) has its
+/// centre at (i + 0.5, j + 0.5)) with support `radius`: sigma = radius / 2, every pixel whose
+/// centre lies within `radius`, normalized to sum 1. The CPU twin of
+/// glsl/impostor/lightmap_splat.vert (normalization) and .frag (weights).
+pub fn splat_weights(center: [f32; 2], radius: f32) -> Vec<([i32; 2], f32)> {
+    let sigma = radius * 0.5;
+    let r = radius.ceil() as i32;
+    let base = [center[0].floor() as i32, center[1].floor() as i32];
+    let mut out = Vec::new();
+    for y in -r - 1..=r + 1 {
+        for x in -r - 1..=r + 1 {
+            let p = [base[0] + x, base[1] + y];
+            let d = [p[0] as f32 + 0.5 - center[0], p[1] as f32 + 0.5 - center[1]];
+            let d2 = d[0] * d[0] + d[1] * d[1];
+            if d2 <= radius * radius {
+                out.push((p, (-d2 / (2.0 * sigma * sigma)).exp()));
+            }
+        }
+    }
+    let sum: f32 = out.iter().map(|w| w.1).sum();
+    for w in &mut out {
+        w.1 /= sum;
+    }
+    out
+}
+
+/// A receiver's planar chart: (u, v) = ((p - origin).e_u / |e_u|^2, (p - origin).e_v / |e_v|^2),
+/// from a quad's corners (the quad's own edges: a unique chart onto [0, 1]^2): a quad
+/// object, or one face of a box (six charts, six light maps).
+#[derive(Clone, Copy, Debug)]
+pub struct Chart {
+    pub object: usize,
+    /// The face's quad within the object's mesh (0 for a quad; 0..6 for a box).
+    pub face: u32,
+    pub origin: Vec3,
+    pub edge_u: Vec3,
+    pub edge_v: Vec3,
+}
+
+impl Chart {
+    /// The chart of a quad object (plan::lightmap_receivers: shape "quad", corners 0, 1, 2, 3
+    /// counter-clockwise, src/scene/shapes.rs).
+    pub fn of_quad(scene: &Scene, object: usize, face: u32) -> Chart {
+        let p = &scene.objects[object].mesh.positions[4 * face as usize..];
+        Chart { object, face, origin: p[0], edge_u: p[1] - p[0], edge_v: p[3] - p[0] }
+    }
+
+    /// Every chart of a light-mapped receiver: a quad's one, a box's six faces (src/scene/
+    /// shapes.rs `cuboid`: six quads of four vertices and six indices each).
+    pub fn of_receiver(scene: &Scene, object: usize) -> Vec<Chart> {
+        let faces = if scene.objects[object].shape == "box" { 6 } else { 1 };
+        (0..faces).map(|f| Chart::of_quad(scene, object, f)).collect()
+    }
+
+    /// (u, v) = (a.p + a_w, b.p + b_w) for world position p: the uv map's push constants.
+    pub fn affine(&self) -> ([f32; 4], [f32; 4]) {
+        let row = |e: Vec3| {
+            let a = e / e.length_squared().max(1e-30);
+            [a.x, a.y, a.z, -a.dot(self.origin)]
+        };
+        (row(self.edge_u), row(self.edge_v))
+    }
+
+    pub fn area(&self) -> f32 {
+        self.edge_u.cross(self.edge_v).length()
+    }
+}
+
+/// One light's caustic map.
+struct CausticMap {
+    _hit: Image,
+    hit_id: ImageId,
+    _power: Image,
+    power_id: ImageId,
+    _depth: Image,
+    depth_id: ImageId,
+    framebuffer: Framebuffer,
+    splat_set: DescriptorSet,
+    light: Light,
+}
+
+/// `render.caustics = "impostor_lightmap"` (§5).
+pub struct ImpostorLightmap {
+    pub params: ImpostorLightmapParams,
+    pub uv_map: ImpostorMap,
+    pub refractor: Option<ImpostorMap>,
+    refractor_center: Vec3,
+    /// The specular objects (drawn into the caustic maps) and their current bounds.
+    specular: Vec<usize>,
+    bounds: Vec<(Vec3, f32)>,
+    pub charts: Vec<Chart>,
+    maps: Vec<CausticMap>,
+    caustic_pass: RenderPass,
+    _caustic_set_layout: DescriptorSetLayout,
+    caustic_set: DescriptorSet,
+    _caustic_layout: PipelineLayout,
+    caustic_pipeline: GraphicsPipeline,
+    /// One layer per receiver (`charts[i]` in layer i): irradiance in W/m^2.
+    pub lightmaps: Image,
+    lightmaps_id: ImageId,
+    splat_pass: RenderPass,
+    splat_framebuffers: Vec<Framebuffer>,
+    _splat_set_layout: DescriptorSetLayout,
+    _splat_layout: PipelineLayout,
+    splat_pipeline: GraphicsPipeline,
+    apply_pass: RenderPass,
+    apply_framebuffer: Framebuffer,
+    _apply_set_layout: DescriptorSetLayout,
+    apply_set: DescriptorSet,
+    _apply_layout: PipelineLayout,
+    apply_pipeline: GraphicsPipeline,
+    _linear: Sampler,
+    _nearest: Sampler,
+}
+
+fn specular_objects(scene: &Scene) -> Vec<usize> {
+    (0..scene.objects.len())
+        .filter(|&i| {
+            matches!(
+                scene.materials[scene.objects[i].material],
+                Material::Dielectric { .. } | Material::Mirror { .. } | Material::Conductor { .. }
+            )
+        })
+        .collect()
+}
+
+impl ImpostorLightmap {
+    pub fn new(
+        ctx: &Arc<GpuContext>,
+        params: ImpostorLightmapParams,
+        scene: &Scene,
+        gpu: &GpuScene,
+        graph: &mut FrameGraph,
+        frame_layout: &DescriptorSetLayout,
+        targets: &Targets,
+    ) -> GpuResult<Self> {
+        use vk::ImageUsageFlags as U;
+        let specular = specular_objects(scene);
+        let dielectric: Vec<usize> = specular
+            .iter()
+            .copied()
+            .filter(|&i| matches!(scene.materials[scene.objects[i].material], Material::Dielectric { .. }))
+            .collect();
+        let map_params = ImpostorParams { resolution: params.uv_map_size, ..Default::default() };
+        let mut uv_map = ImpostorMap::new(
+            ctx,
+            IMPOSTOR_LIGHTMAP_UV_MAP,
+            IMPOSTOR_LIGHTMAP_UV_MAP,
+            MapContent::LightmapUv,
+            specular.clone(),
+            &map_params,
+            scene,
+            gpu,
+            graph,
+            frame_layout,
+        )?;
+        let charts: Vec<Chart> =
+            lightmap_receivers(scene).into_iter().flat_map(|i| Chart::of_receiver(scene, i)).collect();
+        for (slot, c) in charts.iter().enumerate() {
+            let (a, b) = c.affine();
+            uv_map.charts[c.object].push((6 * c.face, 6, slot as u32 + 1, a, b));
+        }
+        let refractor = if dielectric.is_empty() {
+            None
+        } else {
+            Some(ImpostorMap::new(
+                ctx,
+                IMPOSTOR_LIGHTMAP_REFRACTOR_MAP,
+                IMPOSTOR_LIGHTMAP_REFRACTOR_MAP,
+                MapContent::Refractor,
+                dielectric,
+                &map_params,
+                scene,
+                gpu,
+                graph,
+                frame_layout,
+            )?)
+        };
+        let refractor_center = refractor.as_ref().map_or(Vec3::ZERO, |r| r.reference());
+        let linear = Sampler::new(ctx, "impostor_lightmap_linear", SamplerDesc::LINEAR_CLAMP)?;
+        let nearest = Sampler::new(ctx, "impostor_lightmap_nearest", SamplerDesc::NEAREST_CLAMP)?;
+        let sampled = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
+        let frag = vk::ShaderStageFlags::FRAGMENT;
+        let vert = vk::ShaderStageFlags::VERTEX;
+        let sampler = vk::DescriptorType::COMBINED_IMAGE_SAMPLER;
+
+        // The caustic maps.
+        let size = params.caustic_map_size;
+        let caustic_pass = RenderPass::new(
+            ctx,
+            IMPOSTOR_LIGHTMAP_CAUSTIC_MAP,
+            &RenderPassDesc {
+                colors: vec![
+                    Attachment { format: MAP_FORMAT, clear: true },
+                    Attachment { format: MAP_FORMAT, clear: true },
+                ],
+                depth: Some(Attachment { format: DEPTH_FORMAT, clear: true }),
+                depth_read_only: false,
+            },
+        )?;
+        let caustic_set_layout = DescriptorSetLayout::new(
+            ctx,
+            IMPOSTOR_LIGHTMAP_CAUSTIC_MAP,
+            &[
+                (LIGHTMAP_BINDING_UV_LINEAR, sampler, frag),
+                (LIGHTMAP_BINDING_UV_NEAREST, sampler, frag),
+                (LIGHTMAP_BINDING_REFRACTOR, sampler, frag),
+            ],
+            1,
+        )?;
+        // Without dielectrics the refractor map is never read: the uv map stands in.
+        let refractor_view = refractor.as_ref().map_or(uv_map.cube.view(), |r| r.cube.view());
+        let caustic_set = caustic_set_layout.allocate(
+            IMPOSTOR_LIGHTMAP_CAUSTIC_MAP,
+            &[
+                DescriptorWrite::Sampled(LIGHTMAP_BINDING_UV_LINEAR, uv_map.cube.view(), &linear, sampled),
+                DescriptorWrite::Sampled(LIGHTMAP_BINDING_UV_NEAREST, uv_map.cube.view(), &nearest, sampled),
+                DescriptorWrite::Sampled(LIGHTMAP_BINDING_REFRACTOR, refractor_view, &linear, sampled),
+            ],
+        )?;
+        let caustic_layout = PipelineLayout::new(
+            ctx,
+            IMPOSTOR_LIGHTMAP_CAUSTIC_MAP,
+            &[frame_layout, &caustic_set_layout],
+            std::mem::size_of::<CausticPush>() as u32,
+        )?;
+        let caustic_pipeline = GraphicsPipeline::new(
+            ctx,
+            &GraphicsPipelineDesc {
+                name: IMPOSTOR_LIGHTMAP_CAUSTIC_MAP,
+                vertex_shader: "impostor/lightmap_caustic.vert",
+                fragment_shader: "impostor/lightmap_caustic.frag",
+                vertex: VertexLayout::Mesh,
+                topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+                cull: vk::CullModeFlags::NONE,
+                depth: DepthState::LESS,
+                blend: &[Blend::Off, Blend::Off],
+                specialization: &[params.iterations],
+            },
+            &caustic_layout,
+            &caustic_pass,
+        )?;
+
+        // The light maps and the splat pass.
+        let n = params.lightmap_size;
+        let lightmaps = Image::new(
+            ctx,
+            &ImageDesc {
+                name: "impostor_lightmaps".into(),
+                format: MAP_FORMAT,
+                width: n,
+                height: n,
+                layers: charts.len().max(1) as u32,
+                usage: U::COLOR_ATTACHMENT | U::SAMPLED | U::TRANSFER_SRC,
+                view: ImageViewKind::D2Array,
+            },
+        )?;
+        let lightmaps_id = graph.register_image(&lightmaps);
+        let splat_pass = RenderPass::new(
+            ctx,
+            IMPOSTOR_LIGHTMAP_SPLAT,
+            &RenderPassDesc {
+                colors: vec![Attachment { format: MAP_FORMAT, clear: true }],
+                depth: None,
+                depth_read_only: false,
+            },
+        )?;
+        let mut splat_framebuffers = Vec::new();
+        for layer in 0..charts.len() as u32 {
+            splat_framebuffers.push(Framebuffer::new(
+                ctx,
+                &format!("impostor_lightmap_{layer}"),
+                &splat_pass,
+                &[lightmaps.layer_view(layer)],
+                lightmaps.extent(),
+            )?);
+        }
+        let splat_set_layout = DescriptorSetLayout::new(
+            ctx,
+            IMPOSTOR_LIGHTMAP_SPLAT,
+            &[(LIGHTMAP_BINDING_PHOTON_HIT, sampler, vert), (LIGHTMAP_BINDING_PHOTON_POWER, sampler, vert)],
+            scene.lights.len().max(1) as u32,
+        )?;
+        let splat_layout = PipelineLayout::new(
+            ctx,
+            IMPOSTOR_LIGHTMAP_SPLAT,
+            &[&splat_set_layout],
+            std::mem::size_of::<SplatPush>() as u32,
+        )?;
+        let splat_pipeline = GraphicsPipeline::new(
+            ctx,
+            &GraphicsPipelineDesc {
+                name: IMPOSTOR_LIGHTMAP_SPLAT,
+                vertex_shader: "impostor/lightmap_splat.vert",
+                fragment_shader: "impostor/lightmap_splat.frag",
+                vertex: VertexLayout::None,
+                topology: vk::PrimitiveTopology::POINT_LIST,
+                cull: vk::CullModeFlags::NONE,
+                depth: DepthState::OFF,
+                blend: &[Blend::Additive],
+                specialization: &[],
+            },
+            &splat_layout,
+            &splat_pass,
+        )?;
+        let mut maps = Vec::new();
+        for (i, light) in scene.lights.iter().enumerate() {
+            let image = |name: String, format, usage| {
+                Image::new(
+                    ctx,
+                    &ImageDesc { name, format, width: size, height: size, layers: 1, usage, view: ImageViewKind::D2 },
+                )
+            };
+            let hit = image(format!("impostor_lightmap_hit_{i}"), MAP_FORMAT, U::COLOR_ATTACHMENT | U::SAMPLED)?;
+            let power = image(format!("impostor_lightmap_power_{i}"), MAP_FORMAT, U::COLOR_ATTACHMENT | U::SAMPLED)?;
+            let depth = image(format!("impostor_lightmap_depth_{i}"), DEPTH_FORMAT, U::DEPTH_STENCIL_ATTACHMENT)?;
+            let framebuffer = Framebuffer::new(
+                ctx,
+                &format!("impostor_lightmap_caustic_{i}"),
+                &caustic_pass,
+                &[hit.view(), power.view(), depth.view()],
+                hit.extent(),
+            )?;
+            let splat_set = splat_set_layout.allocate(
+                IMPOSTOR_LIGHTMAP_SPLAT,
+                &[
+                    DescriptorWrite::Sampled(LIGHTMAP_BINDING_PHOTON_HIT, hit.view(), &nearest, sampled),
+                    DescriptorWrite::Sampled(LIGHTMAP_BINDING_PHOTON_POWER, power.view(), &nearest, sampled),
+                ],
+            )?;
+            maps.push(CausticMap {
+                hit_id: graph.register_image(&hit),
+                power_id: graph.register_image(&power),
+                depth_id: graph.register_image(&depth),
+                _hit: hit,
+                _power: power,
+                _depth: depth,
+                framebuffer,
+                splat_set,
+                light: *light,
+            });
+        }
+
+        // The apply pass: additive onto the deferred result.
+        let apply_pass = RenderPass::new(
+            ctx,
+            IMPOSTOR_LIGHTMAP_APPLY,
+            &RenderPassDesc {
+                colors: vec![Attachment { format: targets.hdr.format(), clear: false }],
+                depth: None,
+                depth_read_only: false,
+            },
+        )?;
+        let apply_set_layout = DescriptorSetLayout::new(
+            ctx,
+            IMPOSTOR_LIGHTMAP_APPLY,
+            &[
+                (BINDING_GBUF_NORMAL, sampler, frag),
+                (BINDING_GBUF_ALBEDO, sampler, frag),
+                (BINDING_GBUF_DEPTH, sampler, frag),
+                (BINDING_LIGHTMAPS, sampler, frag),
+            ],
+            1,
+        )?;
+        let apply_set = apply_set_layout.allocate(
+            IMPOSTOR_LIGHTMAP_APPLY,
+            &[
+                DescriptorWrite::Sampled(BINDING_GBUF_NORMAL, targets.gbuf_normal.view(), &nearest, sampled),
+                DescriptorWrite::Sampled(BINDING_GBUF_ALBEDO, targets.gbuf_albedo.view(), &nearest, sampled),
+                DescriptorWrite::Sampled(
+                    BINDING_GBUF_DEPTH,
+                    targets.depth.view(),
+                    &nearest,
+                    vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL,
+                ),
+                DescriptorWrite::Sampled(BINDING_LIGHTMAPS, lightmaps.view(), &linear, sampled),
+            ],
+        )?;
+        let apply_layout = PipelineLayout::new(
+            ctx,
+            IMPOSTOR_LIGHTMAP_APPLY,
+            &[frame_layout, &apply_set_layout],
+            std::mem::size_of::<ApplyPush>() as u32,
+        )?;
+        let apply_pipeline = GraphicsPipeline::new(
+            ctx,
+            &GraphicsPipelineDesc {
+                name: IMPOSTOR_LIGHTMAP_APPLY,
+                vertex_shader: "common/fullscreen.vert",
+                fragment_shader: "impostor/lightmap_apply.frag",
+                vertex: VertexLayout::None,
+                topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+                cull: vk::CullModeFlags::NONE,
+                depth: DepthState::OFF,
+                blend: &[Blend::Additive],
+                specialization: &[],
+            },
+            &apply_layout,
+            &apply_pass,
+        )?;
+        let apply_framebuffer =
+            Framebuffer::new(ctx, IMPOSTOR_LIGHTMAP_APPLY, &apply_pass, &[targets.hdr.view()], targets.extent())?;
+        let bounds = (0..scene.objects.len()).map(|i| object_bounds(scene, i)).collect();
+        Ok(ImpostorLightmap {
+            params,
+            uv_map,
+            refractor,
+            refractor_center,
+            specular,
+            bounds,
+            charts,
+            maps,
+            caustic_pass,
+            _caustic_set_layout: caustic_set_layout,
+            caustic_set,
+            _caustic_layout: caustic_layout,
+            caustic_pipeline,
+            lightmaps,
+            lightmaps_id,
+            splat_pass,
+            splat_framebuffers,
+            _splat_set_layout: splat_set_layout,
+            _splat_layout: splat_layout,
+            splat_pipeline,
+            apply_pass,
+            apply_framebuffer,
+            _apply_set_layout: apply_set_layout,
+            apply_set,
+            _apply_layout: apply_layout,
+            apply_pipeline,
+            _linear: linear,
+            _nearest: nearest,
+        })
+    }
+
+    /// Objects moved (`bounds[i]`: object i's centre and radius): the uv map follows (§6), the
+    /// refractor map moves with its objects, the caustic maps' frusta are refitted.
+    pub fn objects_moved(&mut self, bounds: &[(Vec3, f32)]) {
+        self.uv_map.objects_moved(bounds);
+        if let Some(r) = &mut self.refractor {
+            r.objects_moved(bounds);
+            self.refractor_center = r.center_of(bounds);
+        }
+        self.bounds = bounds.to_vec();
+    }
+
+    pub fn begin_frame(&mut self) {
+        self.uv_map.begin_frame();
+        if let Some(r) = &mut self.refractor {
+            r.begin_frame();
+        }
+    }
+
+    /// The specular objects' bounding sphere.
+    fn specular_sphere(&self) -> (Vec3, f32) {
+        let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+        for &i in &self.specular {
+            let (c, r) = self.bounds[i];
+            lo = lo.min(c - Vec3::splat(r));
+            hi = hi.max(c + Vec3::splat(r));
+        }
+        let center = (lo + hi) * 0.5;
+        let radius =
+            self.specular.iter().map(|&i| self.bounds[i].0.distance(center) + self.bounds[i].1).fold(0.0, f32::max);
+        (center, radius.max(1e-6))
+    }
+
+    /// The light's clip transform and its texel measure (tan of the half angle, or the half
+    /// side in metres), and the push constant's light vector.
+    fn light_view(&self, light: &Light) -> (Mat4, f32, [f32; 4], [f32; 3]) {
+        let (center, radius) = self.specular_sphere();
+        match light {
+            Light::Point { position, intensity } => {
+                let to = center - *position;
+                let d = to.length();
+                let dir = if d > 0.0 { to / d } else { Vec3::NEG_Y };
+                let tan_half = if d * 0.9 > radius {
+                    ((radius / d).asin().tan() * 1.02).min(INSIDE_TAN_HALF)
+                } else {
+                    INSIDE_TAN_HALF
+                };
+                let up = if dir.y.abs() > 0.99 { Vec3::Z } else { Vec3::Y };
+                let view = Mat4::look_to_rh(*position, dir, up);
+                let far = (d + radius) * 1.5;
+                let near = ((d - radius) * 0.5).max(far * 1e-5);
+                let proj = Mat4::perspective_rh(2.0 * tan_half.atan(), 1.0, near, far);
+                (proj * view, tan_half, position.extend(LIGHT_POINT as f32).to_array(), intensity.to_array())
+            }
+            Light::Directional { direction, irradiance } => {
+                let dir = direction.normalize();
+                let r = radius * 1.02;
+                let origin = center - dir * 2.0 * r;
+                let up = if dir.y.abs() > 0.99 { Vec3::Z } else { Vec3::Y };
+                let view = Mat4::look_to_rh(origin, dir, up);
+                let proj = Mat4::orthographic_rh(-r, r, -r, r, 0.0, 4.0 * r);
+                (proj * view, r, dir.extend(LIGHT_DIRECTIONAL as f32).to_array(), irradiance.to_array())
+            }
+        }
+    }
+
+    /// The maps, the caustic maps and the splats: before the G-buffer.
+    pub fn record<'a>(&'a self, frame: &mut Frame<'_, 'a>, scene: &'a GpuScene, frame_set: DescriptorSet) {
+        record_maps(frame, IMPOSTOR_LIGHTMAP_UV_MAP, vec![&self.uv_map], scene, frame_set, None);
+        if let Some(r) = &self.refractor {
+            record_maps(frame, IMPOSTOR_LIGHTMAP_REFRACTOR_MAP, vec![r], scene, frame_set, None);
+        }
+        let mut pass = frame.pass(IMPOSTOR_LIGHTMAP_CAUSTIC_MAP).read(self.uv_map.cube_id, Access::FragmentSampled);
+        if let Some(r) = &self.refractor {
+            pass = pass.read(r.cube_id, Access::FragmentSampled);
+        }
+        for m in &self.maps {
+            pass = pass
+                .write(m.hit_id, Access::ColorAttachment)
+                .write(m.power_id, Access::ColorAttachment)
+                .write(m.depth_id, Access::DepthAttachment);
+        }
+        let size = self.params.caustic_map_size as f32;
+        let pushes: Vec<(CausticPush, Vec<usize>)> = self
+            .maps
+            .iter()
+            .map(|m| {
+                let (view_proj, measure, light, intensity) = self.light_view(&m.light);
+                let push = CausticPush {
+                    view_proj: view_proj.to_cols_array_2d(),
+                    light,
+                    intensity: [intensity[0], intensity[1], intensity[2], 0.0],
+                    reference: self.uv_map.reference().extend(measure).to_array(),
+                    refractor: self.refractor_center.extend(size).to_array(),
+                };
+                (push, self.specular.clone())
+            })
+            .collect();
+        pass.record(move |cmd| {
+            for (m, (push, objects)) in self.maps.iter().zip(pushes) {
+                cmd.begin_render_pass(
+                    &self.caustic_pass,
+                    &m.framebuffer,
+                    &[Clear::Color([0.0, 0.0, 0.0, -1.0]), Clear::Color([0.0; 4]), Clear::Depth(1.0)],
+                );
+                cmd.bind_graphics(&self.caustic_pipeline, &[frame_set, self.caustic_set]);
+                cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
+                for i in objects {
+                    let Some(d) = scene.draws.get(i) else { continue };
+                    let mut p = push;
+                    p.intensity[3] = d.material as f32;
+                    cmd.push_graphics(&self.caustic_pipeline, &p);
+                    cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
+                }
+                cmd.end_render_pass();
+            }
+        });
+
+        let mut pass = frame.pass(IMPOSTOR_LIGHTMAP_SPLAT).write(self.lightmaps_id, Access::ColorAttachment);
+        for m in &self.maps {
+            pass = pass.read(m.hit_id, Access::VertexSampled).read(m.power_id, Access::VertexSampled);
+        }
+        let n = self.params.lightmap_size;
+        let photons = self.params.caustic_map_size * self.params.caustic_map_size;
+        pass.record(move |cmd| {
+            for (slot, (chart, fb)) in self.charts.iter().zip(&self.splat_framebuffers).enumerate() {
+                cmd.begin_render_pass(&self.splat_pass, fb, &[Clear::Color([0.0; 4])]);
+                let texel_area = chart.area() / (n as f32 * n as f32);
+                let push = SplatPush {
+                    params: [self.params.filter_radius, n as f32, 1.0 / texel_area.max(1e-30), 0.0],
+                    info: [slot as u32, self.params.caustic_map_size, 0, 0],
+                };
+                for m in &self.maps {
+                    cmd.bind_graphics(&self.splat_pipeline, &[m.splat_set]);
+                    cmd.push_graphics(&self.splat_pipeline, &push);
+                    cmd.draw(photons, 1);
+                }
+                cmd.end_render_pass();
+            }
+        });
+    }
+
+    /// Light-map irradiance x albedo / pi on the receivers: right after deferred shading.
+    pub fn record_apply<'a>(&'a self, frame: &mut Frame<'_, 'a>, targets: &Targets, frame_set: DescriptorSet) {
+        frame
+            .pass(IMPOSTOR_LIGHTMAP_APPLY)
+            .read(targets.gbuf_normal_id, Access::FragmentSampled)
+            .read(targets.gbuf_albedo_id, Access::FragmentSampled)
+            .read(targets.depth_id, Access::FragmentSampled)
+            .read(self.lightmaps_id, Access::FragmentSampled)
+            .write(targets.hdr_id, Access::ColorAttachment)
+            .record(move |cmd| {
+                cmd.begin_render_pass(&self.apply_pass, &self.apply_framebuffer, &[Clear::None]);
+                cmd.bind_graphics(&self.apply_pipeline, &[frame_set, self.apply_set]);
+                for (slot, c) in self.charts.iter().enumerate() {
+                    let push = ApplyPush {
+                        origin: c.origin.extend(slot as f32).to_array(),
+                        edge_u: c.edge_u.extend(c.object as f32).to_array(),
+                        edge_v: c.edge_v.extend(0.0).to_array(),
+                    };
+                    cmd.push_graphics(&self.apply_pipeline, &push);
+                    cmd.draw(3, 1);
+                }
+                cmd.end_render_pass();
+            });
+    }
+
+    /// Read the light maps back (RGBA f32, layer after layer; `charts[i]` is layer i). For
+    /// tests; waits for the GPU.
+    pub fn read_lightmaps(&self, ctx: &Arc<GpuContext>, graph: &mut FrameGraph) -> GpuResult<Vec<[f32; 4]>> {
+        let texels =
+            self.lightmaps.desc.width as u64 * self.lightmaps.desc.height as u64 * self.lightmaps.layers() as u64;
+        let buffer = Buffer::new(
+            ctx,
+            "impostor_lightmap_readback",
+            texels * 16,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuToCpu,
+        )?;
+        let buffer_id = graph.register_buffer(&buffer);
+        let id = self.lightmaps_id;
+        ctx.one_shot(|cmd| {
+            graph.access_now(cmd, &[(id, Access::TransferRead)], &[(buffer_id, Access::TransferWrite)]);
+            cmd.copy_image_to_buffer(&self.lightmaps, &buffer);
+            graph.access_now(cmd, &[(id, Access::FragmentSampled)], &[(buffer_id, Access::HostRead)]);
+        })?;
+        ctx.wait_idle()?;
+        Ok(bytemuck::cast_slice(buffer.read()).to_vec())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::splat_weights;
+
+    /// Every splat deposits exactly its power: the weights sum to 1 wherever the centre falls
+    /// and whatever the support, and they fall off with distance (CPU twin of the shaders).
+    #[test]
+    fn splat_weights_are_normalized() {
+        for radius in [0.75f32, 1.0, 1.5, 2.0, 3.7, 8.0, 16.0] {
+            for (cx, cy) in [(10.0f32, 10.0f32), (10.5, 10.5), (10.25, 10.9), (10.999, 10.001)] {
+                let w = splat_weights([cx, cy], radius);
+                assert!(!w.is_empty(), "radius {radius} at ({cx}, {cy}) covers no texel");
+                let sum: f32 = w.iter().map(|w| w.1).sum();
+                assert!((sum - 1.0).abs() < 1e-5, "radius {radius}: sum {sum}");
+                assert!(w.iter().all(|w| w.1.is_finite() && w.1 > 0.0));
+                // The texel holding the centre has the largest weight.
+                let max = w.iter().map(|w| w.1).fold(0.0, f32::max);
+                let own = w.iter().find(|w| w.0 == [cx.floor() as i32, cy.floor() as i32]).map(|w| w.1);
+                assert_eq!(own, Some(max), "radius {radius} at ({cx}, {cy})");
+            }
+        }
+    }
+}
