@@ -29,6 +29,11 @@ shared_constants! {
     // flux per texel in W, looked up by the receivers as a cube or as layers.
     BINDING_CAUSTIC_CUBE: u32 = 5;
     BINDING_CAUSTIC_2D: u32 = 6;
+    // Photon-buffer caustics (Hu & Qin 2007 §3; src/passes/photon_buffer.rs): the filtered
+    // caustic textures TEX_CAUSTICS_i (one array layer per receiver rectangle) and the
+    // rectangles; a 1x1 stand-in and one zero rectangle when no photon pass runs.
+    BINDING_PHOTON_CAUSTICS: u32 = 7;
+    BINDING_PHOTON_RECTS: u32 = 8;
 
     // Descriptor set 1 (G-buffer inputs) bindings.
     BINDING_GBUF_NORMAL: u32 = 0;
@@ -121,6 +126,13 @@ shared_constants! {
     // Source-face kinds of the vertex grid.
     CAUSTIC_FACE_PERSPECTIVE: u32 = 0;
     CAUSTIC_FACE_ORTHOGRAPHIC: u32 = 1;
+    // Photon buffer (Hu & Qin 2007 §3.1): the receiver rectangles, besides the caustic
+    // bindings above (faces, materials, refractor layers).
+    PHOTON_BINDING_RECTS: u32 = 8;
+    // render.photon_buffer.normalization: irradiance from the photons' power through the
+    // normalised filter, or the paper's s * (filtered photon count).
+    PHOTON_PHYSICAL: u32 = 0;
+    PHOTON_PAPER: u32 = 1;
     // Eikonal rendering (Ihrke et al. 2007; src/passes/eikonal.rs). The volume compute
     // passes read EIKONAL_BINDING_SRC and write EIKONAL_BINDING_DST (storage images); set 1
     // of eikonal_view samples the field (grad n, n - 1) at BINDING_EIKONAL_FIELD besides

@@ -162,12 +162,12 @@ fn source_faces(light: &Light, center: Vec3, radius: f32, grid: u32) -> Vec<GpuC
     }
 }
 
-fn is_specular(m: &Material) -> bool {
+pub(crate) fn is_specular(m: &Material) -> bool {
     matches!(m, Material::Dielectric { .. } | Material::Mirror { .. } | Material::Conductor { .. })
 }
 
 /// Centre and radius of a sphere bounding every specular object.
-fn specular_bounds(scene: &Scene) -> (Vec3, f32) {
+pub(crate) fn specular_bounds(scene: &Scene) -> (Vec3, f32) {
     let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
     for o in scene.objects.iter().filter(|o| is_specular(&scene.materials[o.material])) {
         for p in &o.mesh.positions {
@@ -192,14 +192,7 @@ pub struct CausticsMapPass {
     receiver_faces: Vec<ReceiverFace>,
     receiver_draws: Vec<Draw>,
     // Refractors.
-    refractor_pass: RenderPass,
-    _refractor_layout: PipelineLayout,
-    front_pipeline: GraphicsPipeline,
-    back_pipeline: GraphicsPipeline,
-    /// front position, front normal, back position, back normal, front depth, back depth.
-    layers: Vec<(Image, ImageId)>,
-    sources: Vec<SourceFace>,
-    specular_draws: Vec<Draw>,
+    refractors: RefractorLayers,
     // Splats.
     splat_pass: RenderPass,
     _set_layout: DescriptorSetLayout,
@@ -301,96 +294,11 @@ impl CausticsMapPass {
             gpu.draws.iter().filter(|d| pred(&scene.materials[d.material as usize])).copied().collect()
         };
         let receiver_draws = draws_where(Material::is_diffuse);
-        let specular_draws = draws_where(is_specular);
 
         // 2. Source faces of every light, and the refractor textures.
-        let (center, radius) = specular_bounds(scene);
-        let mut faces: Vec<GpuCausticFace> = Vec::new();
-        let mut light_sources = Vec::new();
-        for (i, l) in scene.lights.iter().enumerate() {
-            let base = i as u32 * SHADOW_LAYERS_PER_LIGHT;
-            let first = faces.len() as u32;
-            for mut f in source_faces(l, center, radius, grid) {
-                f.intensity[3] = base as f32;
-                f.receiver_view_proj = gpu.lights[i].view_proj;
-                f.origin = gpu.lights[i].origin;
-                faces.push(f);
-            }
-            light_sources.push((first, faces.len() as u32 - first));
-        }
-        let refractor_pass = RenderPass::new(
-            ctx,
-            CAUSTICS_MAP_REFRACTORS,
-            &RenderPassDesc {
-                colors: vec![
-                    Attachment { format: LAYER_FORMAT, clear: true },
-                    Attachment { format: LAYER_FORMAT, clear: true },
-                ],
-                depth: Some(Attachment { format: DEPTH_FORMAT, clear: true }),
-                depth_read_only: false,
-            },
-        )?;
-        let refractor_layout =
-            PipelineLayout::new(ctx, CAUSTICS_MAP_REFRACTORS, &[], std::mem::size_of::<RefractorPush>() as u32)?;
-        let refractor_pipeline = |mode: u32, name: &str| {
-            GraphicsPipeline::new(
-                ctx,
-                &GraphicsPipelineDesc {
-                    name,
-                    vertex_shader: "caustics/refractor.vert",
-                    fragment_shader: "caustics/refractor.frag",
-                    vertex: VertexLayout::Mesh,
-                    topology: vk::PrimitiveTopology::TRIANGLE_LIST,
-                    cull: vk::CullModeFlags::NONE,
-                    depth: DepthState::LESS,
-                    blend: &[Blend::Off, Blend::Off],
-                    specialization: &[mode],
-                },
-                &refractor_layout,
-                &refractor_pass,
-            )
-        };
-        let front_pipeline = refractor_pipeline(CAUSTIC_LAYER_FRONT, "caustics_map_front")?;
-        let back_pipeline = refractor_pipeline(CAUSTIC_LAYER_BACK, "caustics_map_back")?;
-        let n_faces = faces.len() as u32;
-        let mut layer_images = Vec::new();
-        for (name, format, usage) in [
-            ("caustic_front_position", LAYER_FORMAT, U::COLOR_ATTACHMENT | U::SAMPLED),
-            ("caustic_front_normal", LAYER_FORMAT, U::COLOR_ATTACHMENT | U::SAMPLED),
-            ("caustic_back_position", LAYER_FORMAT, U::COLOR_ATTACHMENT | U::SAMPLED),
-            ("caustic_back_normal", LAYER_FORMAT, U::COLOR_ATTACHMENT | U::SAMPLED),
-            ("caustic_front_depth", DEPTH_FORMAT, U::DEPTH_STENCIL_ATTACHMENT),
-            ("caustic_back_depth", DEPTH_FORMAT, U::DEPTH_STENCIL_ATTACHMENT),
-        ] {
-            let image = Image::new(
-                ctx,
-                &ImageDesc {
-                    name: name.into(),
-                    format,
-                    width: grid,
-                    height: grid,
-                    layers: n_faces,
-                    usage,
-                    view: ImageViewKind::D2Array,
-                },
-            )?;
-            let id = graph.register_image(&image);
-            layer_images.push((image, id));
-        }
-        let extent = vk::Extent2D { width: grid, height: grid };
-        let mut sources = Vec::new();
-        for (s, f) in faces.iter().enumerate() {
-            let s = s as u32;
-            let views = |a: usize, b: usize, depth: usize| {
-                [layer_images[a].0.layer_view(s), layer_images[b].0.layer_view(s), layer_images[depth].0.layer_view(s)]
-            };
-            sources.push(SourceFace {
-                front: Framebuffer::new(ctx, &format!("caustic_front_{s}"), &refractor_pass, &views(0, 1, 4), extent)?,
-                back: Framebuffer::new(ctx, &format!("caustic_back_{s}"), &refractor_pass, &views(2, 3, 5), extent)?,
-                view_proj: Mat4::from_cols_array_2d(&f.view_proj),
-                light: f.light,
-            });
-        }
+        let (refractors, faces, light_sources) =
+            RefractorLayers::new(ctx, CAUSTICS_MAP_REFRACTORS, scene, gpu, graph, grid)?;
+        let layer_images = &refractors.layers;
 
         // 3. The splat pass.
         let faces_buffer = Buffer::with_data(
@@ -515,13 +423,7 @@ impl CausticsMapPass {
             _receiver_depth: receiver_depth,
             receiver_faces,
             receiver_draws,
-            refractor_pass,
-            _refractor_layout: refractor_layout,
-            front_pipeline,
-            back_pipeline,
-            layers: layer_images,
-            sources,
-            specular_draws,
+            refractors,
             splat_pass,
             _set_layout: set_layout,
             set,
@@ -560,7 +462,158 @@ impl CausticsMapPass {
                 }
             });
 
-        let mut pass = frame.pass(CAUSTICS_MAP_REFRACTORS);
+        self.refractors.record(frame, scene);
+
+        let mut pass = frame.pass(CAUSTICS_MAP).read(self.receiver_atlas_id, Access::VertexSampled);
+        for (_, id) in &self.refractors.layers[..4] {
+            pass = pass.read(*id, Access::VertexSampled);
+        }
+        let grid = self.params.grid;
+        pass.write(targets.caustic_atlas_id, Access::ColorAttachment).record(move |cmd| {
+            for d in &self.destinations {
+                cmd.begin_render_pass(&self.splat_pass, &d.framebuffer, &[Clear::Color([0.0; 4])]);
+                cmd.bind_graphics(&self.splat_pipeline, &[self.set]);
+                cmd.push_graphics(&self.splat_pipeline, &d.push);
+                cmd.draw(d.push.face[1] * grid * grid, self.channels);
+                cmd.end_render_pass();
+            }
+        });
+    }
+}
+
+/// The specular objects seen from every light as MRT (Shah et al. 2007, §III.B step 2):
+/// positions and normals of the surface nearest the light and of the nearest surface facing
+/// away from it, one array layer per source face (`source_faces`). Caustics mapping splats
+/// its vertex grid from them; the photon buffer of Hu & Qin 2007 (§3.1,
+/// src/passes/photon_buffer.rs) traces its photons from them.
+pub struct RefractorLayers {
+    name: &'static str,
+    pass: RenderPass,
+    _layout: PipelineLayout,
+    front_pipeline: GraphicsPipeline,
+    back_pipeline: GraphicsPipeline,
+    /// front position, front normal, back position, back normal, front depth, back depth.
+    pub layers: Vec<(Image, ImageId)>,
+    sources: Vec<SourceFace>,
+    specular_draws: Vec<Draw>,
+}
+
+impl RefractorLayers {
+    /// The layers at `grid`^2 texels per face, recorded as the pass `name`. Returns the
+    /// source faces of every light and, per light, (its first face, its number of faces).
+    #[allow(clippy::type_complexity)] // reason: the three results are built together
+    pub fn new(
+        ctx: &Arc<GpuContext>,
+        name: &'static str,
+        scene: &Scene,
+        gpu: &GpuScene,
+        graph: &mut FrameGraph,
+        grid: u32,
+    ) -> GpuResult<(Self, Vec<GpuCausticFace>, Vec<(u32, u32)>)> {
+        use vk::ImageUsageFlags as U;
+        let (center, radius) = specular_bounds(scene);
+        let mut faces: Vec<GpuCausticFace> = Vec::new();
+        let mut light_sources = Vec::new();
+        for (i, l) in scene.lights.iter().enumerate() {
+            let base = i as u32 * SHADOW_LAYERS_PER_LIGHT;
+            let first = faces.len() as u32;
+            for mut f in source_faces(l, center, radius, grid) {
+                f.intensity[3] = base as f32;
+                f.receiver_view_proj = gpu.lights[i].view_proj;
+                f.origin = gpu.lights[i].origin;
+                faces.push(f);
+            }
+            light_sources.push((first, faces.len() as u32 - first));
+        }
+        let refractor_pass = RenderPass::new(
+            ctx,
+            name,
+            &RenderPassDesc {
+                colors: vec![
+                    Attachment { format: LAYER_FORMAT, clear: true },
+                    Attachment { format: LAYER_FORMAT, clear: true },
+                ],
+                depth: Some(Attachment { format: DEPTH_FORMAT, clear: true }),
+                depth_read_only: false,
+            },
+        )?;
+        let refractor_layout = PipelineLayout::new(ctx, name, &[], std::mem::size_of::<RefractorPush>() as u32)?;
+        let refractor_pipeline = |mode: u32, name: &str| {
+            GraphicsPipeline::new(
+                ctx,
+                &GraphicsPipelineDesc {
+                    name,
+                    vertex_shader: "caustics/refractor.vert",
+                    fragment_shader: "caustics/refractor.frag",
+                    vertex: VertexLayout::Mesh,
+                    topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+                    cull: vk::CullModeFlags::NONE,
+                    depth: DepthState::LESS,
+                    blend: &[Blend::Off, Blend::Off],
+                    specialization: &[mode],
+                },
+                &refractor_layout,
+                &refractor_pass,
+            )
+        };
+        let front_pipeline = refractor_pipeline(CAUSTIC_LAYER_FRONT, &format!("{name}_front"))?;
+        let back_pipeline = refractor_pipeline(CAUSTIC_LAYER_BACK, &format!("{name}_back"))?;
+        let n_faces = faces.len() as u32;
+        let mut layer_images = Vec::new();
+        for (image_name, format, usage) in [
+            ("front_position", LAYER_FORMAT, U::COLOR_ATTACHMENT | U::SAMPLED),
+            ("front_normal", LAYER_FORMAT, U::COLOR_ATTACHMENT | U::SAMPLED),
+            ("back_position", LAYER_FORMAT, U::COLOR_ATTACHMENT | U::SAMPLED),
+            ("back_normal", LAYER_FORMAT, U::COLOR_ATTACHMENT | U::SAMPLED),
+            ("front_depth", DEPTH_FORMAT, U::DEPTH_STENCIL_ATTACHMENT),
+            ("back_depth", DEPTH_FORMAT, U::DEPTH_STENCIL_ATTACHMENT),
+        ] {
+            let image = Image::new(
+                ctx,
+                &ImageDesc {
+                    name: format!("{name}_{image_name}"),
+                    format,
+                    width: grid,
+                    height: grid,
+                    layers: n_faces,
+                    usage,
+                    view: ImageViewKind::D2Array,
+                },
+            )?;
+            let id = graph.register_image(&image);
+            layer_images.push((image, id));
+        }
+        let extent = vk::Extent2D { width: grid, height: grid };
+        let mut sources = Vec::new();
+        for (s, f) in faces.iter().enumerate() {
+            let s = s as u32;
+            let views = |a: usize, b: usize, depth: usize| {
+                [layer_images[a].0.layer_view(s), layer_images[b].0.layer_view(s), layer_images[depth].0.layer_view(s)]
+            };
+            sources.push(SourceFace {
+                front: Framebuffer::new(ctx, &format!("{name}_front_{s}"), &refractor_pass, &views(0, 1, 4), extent)?,
+                back: Framebuffer::new(ctx, &format!("{name}_back_{s}"), &refractor_pass, &views(2, 3, 5), extent)?,
+                view_proj: Mat4::from_cols_array_2d(&f.view_proj),
+                light: f.light,
+            });
+        }
+        let specular_draws =
+            gpu.draws.iter().filter(|d| is_specular(&scene.materials[d.material as usize])).copied().collect();
+        let layers = RefractorLayers {
+            name,
+            pass: refractor_pass,
+            _layout: refractor_layout,
+            front_pipeline,
+            back_pipeline,
+            layers: layer_images,
+            sources,
+            specular_draws,
+        };
+        Ok((layers, faces, light_sources))
+    }
+
+    pub fn record<'a>(&'a self, frame: &mut Frame<'_, 'a>, scene: &'a GpuScene) {
+        let mut pass = frame.pass(self.name);
         for (i, (_, id)) in self.layers.iter().enumerate() {
             pass = pass.write(*id, if i < 4 { Access::ColorAttachment } else { Access::DepthAttachment });
         }
@@ -568,7 +621,7 @@ impl CausticsMapPass {
             for s in &self.sources {
                 for (fb, pipeline) in [(&s.front, &self.front_pipeline), (&s.back, &self.back_pipeline)] {
                     cmd.begin_render_pass(
-                        &self.refractor_pass,
+                        &self.pass,
                         fb,
                         &[Clear::Color([0.0; 4]), Clear::Color([0.0; 4]), Clear::Depth(1.0)],
                     );
@@ -585,21 +638,6 @@ impl CausticsMapPass {
                     }
                     cmd.end_render_pass();
                 }
-            }
-        });
-
-        let mut pass = frame.pass(CAUSTICS_MAP).read(self.receiver_atlas_id, Access::VertexSampled);
-        for (_, id) in &self.layers[..4] {
-            pass = pass.read(*id, Access::VertexSampled);
-        }
-        let grid = self.params.grid;
-        pass.write(targets.caustic_atlas_id, Access::ColorAttachment).record(move |cmd| {
-            for d in &self.destinations {
-                cmd.begin_render_pass(&self.splat_pass, &d.framebuffer, &[Clear::Color([0.0; 4])]);
-                cmd.bind_graphics(&self.splat_pipeline, &[self.set]);
-                cmd.push_graphics(&self.splat_pipeline, &d.push);
-                cmd.draw(d.push.face[1] * grid * grid, self.channels);
-                cmd.end_render_pass();
             }
         });
     }
