@@ -116,6 +116,11 @@ shared_constants! {
     CAUSTIC_BINDING_FRONT_NORMAL: u32 = 5;
     CAUSTIC_BINDING_BACK_POSITION: u32 = 6;
     CAUSTIC_BINDING_BACK_NORMAL: u32 = 7;
+    // Eq. 6's V per source face (occlusion-query sample counts, u32), and how the splat
+    // pass weighs each vertex's flux (render.caustics_map.flux).
+    CAUSTIC_BINDING_VISIBLE: u32 = 9;
+    FLUX_SOLID_ANGLE: u32 = 0;
+    FLUX_OCCLUSION_QUERY: u32 = 1;
     // Intersection estimate (§III.D): the paper's approximate Newton-Raphson or the true one
     // of the appendix (with the bisection fallback of §III.D against oscillation).
     NEWTON_APPROXIMATE: u32 = 0;

@@ -47,13 +47,25 @@ float texel_measure(Face f, ivec2 ij, int grid) {
     return (2.0 * f.measure.y / float(grid)) * (2.0 * f.measure.y / float(grid));
 }
 
+// The mean of texel_measure over the face: its solid angle over G^2 (a square pyramid of
+// half-angle tangent t subtends 4 asin(t^2 / (1 + t^2))), or its area over G^2.
+float mean_texel_measure(Face f, int grid) {
+    float t = f.measure.y;
+    if (uint(f.measure.x + 0.5) == CAUSTIC_FACE_PERSPECTIVE) {
+        return 4.0 * asin(t * t / (1.0 + t * t)) / float(grid * grid);
+    }
+    return (2.0 * t / float(grid)) * (2.0 * t / float(grid));
+}
+
 // The light leaving the specular surface seen at texel ij of face f (layer `layer`) for
 // colour channel c of `channels` (3: dispersion, one ior per channel): its origin, unit
 // direction, the surface's transmittance or reflectance `weight`, and the absorption
 // coefficient still to apply over the distance to the receiver (single-surface refraction).
-// Returns false where no specular surface is seen or the light stays inside the object.
+// cos_in: N . L at the entry point (Shah et al.'s Eq. 6). Returns false where no specular
+// surface is seen or the light stays inside the object.
 bool light_path(Face f, int layer, ivec2 ij, int grid, int c, uint channels, out vec3 origin, out vec3 dir,
-                out vec3 weight, out vec3 absorb_to_receiver) {
+                out vec3 weight, out vec3 absorb_to_receiver, out float cos_in) {
+    cos_in = 0.0;
     origin = vec3(0.0);
     dir = vec3(0.0);
     weight = vec3(0.0);
@@ -69,6 +81,7 @@ bool light_path(Face f, int layer, ivec2 ij, int grid, int c, uint channels, out
     Material m = materials[uint(fn.w + 0.5)];
     uint kind = kind_of(m);
     float cos1 = clamp(dot(-l, n1), 0.0, 1.0);
+    cos_in = cos1;
     origin = p1;
     // Single-surface refraction (water): "attenuation is performed over the distance between
     // the surface and the receiver geometry" (Shah et al. 2007, §III.E).

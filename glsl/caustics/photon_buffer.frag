@@ -47,9 +47,10 @@ void main() {
     ivec2 ij = ivec2(gl_FragCoord.xy);
     Face f = faces[layer];
     vec3 origin, dir, weight, absorb;
+    float cos_in;
     // Dispersion is not modelled by the photon buffer: the paper's photons carry no
     // wavelength; a dispersive (RGB) ior is taken at green (channel 1).
-    if (!light_path(f, layer, ij, grid, 1, 3u, origin, dir, weight, absorb)) return;
+    if (!light_path(f, layer, ij, grid, 1, 3u, origin, dir, weight, absorb, cos_in)) return;
     // Fig. 13's ray tracing pass: the rectangle whose intersection is nearest to startP.
     float best = 1.0 / 0.0;
     int k = 0;

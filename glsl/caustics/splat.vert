@@ -26,6 +26,9 @@ layout(set = 0, binding = CAUSTIC_BINDING_FRONT_POSITION) uniform sampler2DArray
 layout(set = 0, binding = CAUSTIC_BINDING_FRONT_NORMAL) uniform sampler2DArray front_normal;
 layout(set = 0, binding = CAUSTIC_BINDING_BACK_POSITION) uniform sampler2DArray back_position;
 layout(set = 0, binding = CAUSTIC_BINDING_BACK_NORMAL) uniform sampler2DArray back_normal;
+// Eq. 6's V per source face: occlusion-query sample counts copied on the GPU.
+layout(set = 0, binding = CAUSTIC_BINDING_VISIBLE, std430) readonly buffer Visible { uint visible[]; };
+layout(constant_id = 0) const uint FLUX = FLUX_SOLID_ANGLE;
 #include "light_path.glsl"
 
 layout(push_constant) uniform Push {
@@ -145,11 +148,27 @@ void main() {
     uint channels = pc.face.w;
     int c = gl_InstanceIndex;
     vec3 origin, dir, weight, absorb_to_receiver;
-    if (!light_path(f, layer, ij, grid, c, channels, origin, dir, weight, absorb_to_receiver)) {
+    float cos_in;
+    if (!light_path(f, layer, ij, grid, c, channels, origin, dir, weight, absorb_to_receiver, cos_in)) {
         drop_vertex();
         return;
     }
-    vec3 flux = f.intensity.rgb * texel_measure(f, ij, grid);
+    vec3 flux;
+    if (FLUX == FLUX_OCCLUSION_QUERY) {
+        // Eq. 6: Phi_i = (N_i . L_i) / V of "the total flux through the surface of the
+        // caustic-forming object visible to the light source", V the occlusion query's count
+        // of rasterized pixels. That total, in W, is the light's flux through those V pixels,
+        // V times a pixel's mean solid angle (or area): in physical units V cancels, and what
+        // remains of Eq. 6 is the face's mean texel measure and the factor N . L.
+        float v = float(visible[s]);
+        if (!(v >= 1.0)) {
+            drop_vertex();
+            return;
+        }
+        flux = f.intensity.rgb * (v * mean_texel_measure(f, grid)) * cos_in / v;
+    } else {
+        flux = f.intensity.rgb * texel_measure(f, ij, grid);
+    }
     if (channels == 3u) {
         vec3 mask = vec3(0.0);
         mask[c] = 1.0;

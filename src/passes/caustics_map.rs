@@ -33,21 +33,22 @@ use glam::{Mat4, Vec3};
 use crate::gpu::{
     vk, Access, Attachment, Blend, Buffer, Clear, DepthState, DescriptorSet, DescriptorSetLayout, DescriptorWrite,
     Framebuffer, GpuContext, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc, ImageViewKind,
-    PipelineLayout, RenderPass, RenderPassDesc, Sampler, SamplerDesc, VertexLayout,
+    MemoryLocation, OcclusionQueryPool, PipelineLayout, RenderPass, RenderPassDesc, Sampler, SamplerDesc, VertexLayout,
 };
-use crate::graph::{Frame, FrameGraph, ImageId};
+use crate::graph::{BufferId, Frame, FrameGraph, ImageId};
 use crate::passes::shadow_map::FAR_DISTANCE;
 use crate::renderer::gpu_scene::{cube_face_views, Draw, GpuScene};
 use crate::renderer::gpu_types::ShadowPush;
 use crate::renderer::plan::{CAUSTICS_MAP, CAUSTICS_MAP_RECEIVERS, CAUSTICS_MAP_REFRACTORS};
 use crate::renderer::targets::{Targets, CAUSTIC_FORMAT, DEPTH_FORMAT, SHADOW_FORMAT};
-use crate::scene::techniques::{CausticsMapParams, Newton};
+use crate::scene::techniques::{CausticsMapParams, Flux, Newton};
 use crate::scene::{Light, Material, Scene};
 use crate::{
     CAUSTIC_BINDING_BACK_NORMAL, CAUSTIC_BINDING_BACK_POSITION, CAUSTIC_BINDING_FACES, CAUSTIC_BINDING_FRONT_NORMAL,
     CAUSTIC_BINDING_FRONT_POSITION, CAUSTIC_BINDING_MATERIALS, CAUSTIC_BINDING_RECEIVER_2D,
-    CAUSTIC_BINDING_RECEIVER_CUBE, CAUSTIC_FACE_ORTHOGRAPHIC, CAUSTIC_FACE_PERSPECTIVE, CAUSTIC_LAYER_BACK,
-    CAUSTIC_LAYER_FRONT, LIGHT_DIRECTIONAL, LIGHT_POINT, NEWTON_APPROXIMATE, NEWTON_TRUE, SHADOW_LAYERS_PER_LIGHT,
+    CAUSTIC_BINDING_RECEIVER_CUBE, CAUSTIC_BINDING_VISIBLE, CAUSTIC_FACE_ORTHOGRAPHIC, CAUSTIC_FACE_PERSPECTIVE,
+    CAUSTIC_LAYER_BACK, CAUSTIC_LAYER_FRONT, FLUX_OCCLUSION_QUERY, FLUX_SOLID_ANGLE, LIGHT_DIRECTIONAL, LIGHT_POINT,
+    NEWTON_APPROXIMATE, NEWTON_TRUE, SHADOW_LAYERS_PER_LIGHT,
 };
 
 /// Refractor textures: 32-bit float positions and normals, so that the estimate's error is
@@ -218,6 +219,7 @@ impl CausticsMapPass {
         use vk::ImageUsageFlags as U;
         let size = params.map_size;
         let grid = params.grid;
+        let occlusion = params.flux == Flux::OcclusionQuery;
         let lights = gpu.lights.len() as u32;
         let layers = lights * SHADOW_LAYERS_PER_LIGHT;
 
@@ -297,7 +299,7 @@ impl CausticsMapPass {
 
         // 2. Source faces of every light, and the refractor textures.
         let (refractors, faces, light_sources) =
-            RefractorLayers::new(ctx, CAUSTICS_MAP_REFRACTORS, scene, gpu, graph, grid)?;
+            RefractorLayers::new(ctx, CAUSTICS_MAP_REFRACTORS, scene, gpu, graph, grid, occlusion)?;
         let layer_images = &refractors.layers;
 
         // 3. The splat pass.
@@ -325,6 +327,7 @@ impl CausticsMapPass {
                 (CAUSTIC_BINDING_FRONT_NORMAL, sampled, vs),
                 (CAUSTIC_BINDING_BACK_POSITION, sampled, vs),
                 (CAUSTIC_BINDING_BACK_NORMAL, sampled, vs),
+                (CAUSTIC_BINDING_VISIBLE, vk::DescriptorType::STORAGE_BUFFER, vs),
             ],
             1,
         )?;
@@ -340,6 +343,7 @@ impl CausticsMapPass {
                 DescriptorWrite::Sampled(CAUSTIC_BINDING_FRONT_NORMAL, layer_images[1].0.view(), &nearest, read_only),
                 DescriptorWrite::Sampled(CAUSTIC_BINDING_BACK_POSITION, layer_images[2].0.view(), &nearest, read_only),
                 DescriptorWrite::Sampled(CAUSTIC_BINDING_BACK_NORMAL, layer_images[3].0.view(), &nearest, read_only),
+                DescriptorWrite::Storage(CAUSTIC_BINDING_VISIBLE, &refractors.visible),
             ],
         )?;
         let splat_pass = RenderPass::new(
@@ -364,7 +368,8 @@ impl CausticsMapPass {
                 cull: vk::CullModeFlags::NONE,
                 depth: DepthState::OFF,
                 blend: &[Blend::Additive],
-                specialization: &[],
+                // Eq. 6's flux weight: FLUX_SOLID_ANGLE or FLUX_OCCLUSION_QUERY.
+                specialization: &[if occlusion { FLUX_OCCLUSION_QUERY } else { FLUX_SOLID_ANGLE }],
             },
             &splat_layout,
             &splat_pass,
@@ -468,6 +473,9 @@ impl CausticsMapPass {
         for (_, id) in &self.refractors.layers[..4] {
             pass = pass.read(*id, Access::VertexSampled);
         }
+        if self.params.flux == Flux::OcclusionQuery {
+            pass = pass.read_buffer(self.refractors.visible_id, Access::VertexStorageRead);
+        }
         let grid = self.params.grid;
         pass.write(targets.caustic_atlas_id, Access::ColorAttachment).record(move |cmd| {
             for d in &self.destinations {
@@ -496,6 +504,12 @@ pub struct RefractorLayers {
     pub layers: Vec<(Image, ImageId)>,
     sources: Vec<SourceFace>,
     specular_draws: Vec<Draw>,
+    /// Shah et al. 2007 Eq. 6's V: one occlusion query per source face around the front
+    /// surface's draws (samples that pass the depth test), copied on the GPU into `visible`
+    /// (one u32 per face), which the splat pass reads in the same frame.
+    queries: Option<OcclusionQueryPool>,
+    pub visible: Buffer,
+    pub visible_id: BufferId,
 }
 
 impl RefractorLayers {
@@ -509,6 +523,7 @@ impl RefractorLayers {
         gpu: &GpuScene,
         graph: &mut FrameGraph,
         grid: u32,
+        occlusion_queries: bool,
     ) -> GpuResult<(Self, Vec<GpuCausticFace>, Vec<(u32, u32)>)> {
         use vk::ImageUsageFlags as U;
         let (center, radius) = specular_bounds(scene);
@@ -599,7 +614,23 @@ impl RefractorLayers {
         }
         let specular_draws =
             gpu.draws.iter().filter(|d| is_specular(&scene.materials[d.material as usize])).copied().collect();
+        let queries = if occlusion_queries {
+            Some(OcclusionQueryPool::new(ctx, &format!("{name}_visible"), n_faces)?)
+        } else {
+            None
+        };
+        let visible = Buffer::new(
+            ctx,
+            &format!("{name}_visible"),
+            4 * n_faces.max(1) as u64,
+            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuOnly,
+        )?;
+        let visible_id = graph.register_buffer(&visible);
         let layers = RefractorLayers {
+            queries,
+            visible,
+            visible_id,
             name,
             pass: refractor_pass,
             _layout: refractor_layout,
@@ -617,14 +648,26 @@ impl RefractorLayers {
         for (i, (_, id)) in self.layers.iter().enumerate() {
             pass = pass.write(*id, if i < 4 { Access::ColorAttachment } else { Access::DepthAttachment });
         }
+        if self.queries.is_some() {
+            pass = pass.write_buffer(self.visible_id, Access::TransferWrite);
+        }
         pass.record(move |cmd| {
-            for s in &self.sources {
-                for (fb, pipeline) in [(&s.front, &self.front_pipeline), (&s.back, &self.back_pipeline)] {
+            if let Some(q) = &self.queries {
+                cmd.reset_occlusion_queries(q);
+            }
+            for (face, s) in self.sources.iter().enumerate() {
+                let layers = [(&s.front, &self.front_pipeline), (&s.back, &self.back_pipeline)];
+                for (layer, (fb, pipeline)) in layers.into_iter().enumerate() {
                     cmd.begin_render_pass(
                         &self.pass,
                         fb,
                         &[Clear::Color([0.0; 4]), Clear::Color([0.0; 4]), Clear::Depth(1.0)],
                     );
+                    // V of Eq. 6: "the number of rasterized pixels" of the front surface.
+                    let query = self.queries.as_ref().filter(|_| layer == 0);
+                    if let Some(q) = query {
+                        cmd.begin_occlusion_query(q, face as u32);
+                    }
                     cmd.bind_graphics(pipeline, &[]);
                     cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
                     for d in &self.specular_draws {
@@ -636,8 +679,14 @@ impl RefractorLayers {
                         cmd.push_graphics(pipeline, &push);
                         cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
                     }
+                    if let Some(q) = query {
+                        cmd.end_occlusion_query(q, face as u32);
+                    }
                     cmd.end_render_pass();
                 }
+            }
+            if let Some(q) = &self.queries {
+                cmd.copy_occlusion_results(q, &self.visible);
             }
         });
     }

@@ -234,7 +234,8 @@ impl PhotonBufferPass {
     ) -> GpuResult<Self> {
         use vk::ImageUsageFlags as U;
         let size = params.size;
-        let (refractors, faces, _) = RefractorLayers::new(ctx, PHOTON_BUFFER_REFRACTORS, scene, gpu, graph, size)?;
+        let (refractors, faces, _) =
+            RefractorLayers::new(ctx, PHOTON_BUFFER_REFRACTORS, scene, gpu, graph, size, false)?;
         let n_faces = faces.len() as u32;
         let faces_buffer =
             Buffer::with_data(ctx, "photon_faces", bytemuck::cast_slice(&faces), vk::BufferUsageFlags::STORAGE_BUFFER)?;

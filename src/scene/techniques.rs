@@ -134,6 +134,17 @@ pub enum Newton {
     True,
 }
 
+/// The flux each caustics-mapping vertex carries (Shah et al. 2007, §III.E).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Flux {
+    /// The light's intensity times the grid texel's own solid angle (or irradiance times its
+    /// area): the flux through the texel, exact for any grid.
+    SolidAngle,
+    /// Eq. 6: Phi_i = (N_i . L_i) / V of the flux through the object's visible surface, V
+    /// counted by an occlusion query on the refractor pass.
+    OcclusionQuery,
+}
+
 /// `[render.caustics_map]` (Shah et al. 2007).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CausticsMapParams {
@@ -151,6 +162,7 @@ pub struct CausticsMapParams {
     pub filter: u32,
     /// Texels per side of each caustic-map face (and of the receivers' positions map).
     pub map_size: u32,
+    pub flux: Flux,
 }
 
 impl Default for CausticsMapParams {
@@ -162,6 +174,7 @@ impl Default for CausticsMapParams {
             splat_sigma: 1.0,
             filter: 0,
             map_size: 512,
+            flux: Flux::SolidAngle,
         }
     }
 }
@@ -198,7 +211,7 @@ impl Default for PhotonBufferParams {
     fn default() -> Self {
         PhotonBufferParams {
             size: 128,
-            texture_size: 256,
+            texture_size: 512,
             filter_k: 2,
             filter_s: 0.01,
             normalization: PhotonNormalization::Physical,
@@ -390,7 +403,8 @@ impl ImpostorParams {
 }
 
 impl CausticsMapParams {
-    pub const KEYS: &'static [&'static str] = &["grid", "iterations", "newton", "splat_sigma", "filter", "map_size"];
+    pub const KEYS: &'static [&'static str] =
+        &["grid", "iterations", "newton", "splat_sigma", "filter", "map_size", "flux"];
 
     pub fn from_table(t: Option<&toml::Table>) -> Result<Self, ParamError> {
         let mut p = CausticsMapParams::default();
@@ -419,6 +433,20 @@ impl CausticsMapParams {
                 "splat_sigma" => p.splat_sigma = number(key, v, 0.5, 16.0)?,
                 "filter" => p.filter = integer(key, v, 0, 16)?,
                 "map_size" => p.map_size = integer(key, v, 8, 4096)?,
+                "flux" => {
+                    p.flux =
+                        match v.as_str() {
+                            Some("solid_angle") => Flux::SolidAngle,
+                            Some("occlusion_query") => Flux::OcclusionQuery,
+                            _ => return Err(ParamError {
+                                key: key.clone(),
+                                message: format!("`flux` must be \"solid_angle\" or \"occlusion_query\", not {v}"),
+                                hint: "each vertex's flux: its texel's solid angle, or Eq. 6's (N.L)/V with V counted \
+                                       by an occlusion query"
+                                    .into(),
+                            }),
+                        }
+                }
                 _ => return Err(unknown("caustics_map", key, Self::KEYS)),
             }
         }
@@ -546,8 +574,12 @@ mod tests {
             let e = ImpostorParams::from_table(Some(&table(t))).unwrap_err();
             assert_eq!(e.key, key, "{t}");
         }
-        for (t, key) in [("grid = 1", "grid"), ("newton = \"secant\"", "newton"), ("splat_sigma = 0.1", "splat_sigma")]
-        {
+        for (t, key) in [
+            ("grid = 1", "grid"),
+            ("newton = \"secant\"", "newton"),
+            ("splat_sigma = 0.1", "splat_sigma"),
+            ("flux = \"area\"", "flux"),
+        ] {
             let e = CausticsMapParams::from_table(Some(&table(t))).unwrap_err();
             assert_eq!(e.key, key, "{t}");
         }
