@@ -445,6 +445,11 @@ impl CausticsMapPass {
         &self.params
     }
 
+    /// The refractor layers seen from the light(s) and Eq. 6's V.
+    pub fn refractors(&self) -> &RefractorLayers {
+        &self.refractors
+    }
+
     pub fn record<'a>(&'a self, frame: &mut Frame<'_, 'a>, scene: &'a GpuScene, targets: &Targets) {
         frame
             .pass(CAUSTICS_MAP_RECEIVERS)
@@ -576,7 +581,7 @@ impl RefractorLayers {
         let n_faces = faces.len() as u32;
         let mut layer_images = Vec::new();
         for (image_name, format, usage) in [
-            ("front_position", LAYER_FORMAT, U::COLOR_ATTACHMENT | U::SAMPLED),
+            ("front_position", LAYER_FORMAT, U::COLOR_ATTACHMENT | U::SAMPLED | U::TRANSFER_SRC),
             ("front_normal", LAYER_FORMAT, U::COLOR_ATTACHMENT | U::SAMPLED),
             ("back_position", LAYER_FORMAT, U::COLOR_ATTACHMENT | U::SAMPLED),
             ("back_normal", LAYER_FORMAT, U::COLOR_ATTACHMENT | U::SAMPLED),
@@ -624,7 +629,8 @@ impl RefractorLayers {
             &format!("{name}_visible"),
             4 * n_faces.max(1) as u64,
             vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
-            MemoryLocation::GpuOnly,
+            // Host-visible so that tests can check V against the layer's covered texels.
+            MemoryLocation::GpuToCpu,
         )?;
         let visible_id = graph.register_buffer(&visible);
         let layers = RefractorLayers {

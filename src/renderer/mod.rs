@@ -29,7 +29,7 @@ use crate::passes::shadow_map::{ShadowMapPass, FAR_DISTANCE};
 use crate::passes::specular_single::{Mode, SpecularSinglePass};
 use crate::passes::tonemap::TonemapPass;
 use crate::scene::techniques::{
-    CausticsMapParams, EikonalParams, HuQinParams, ImpostorParams, PhotonBufferParams, WymanParams,
+    CausticsMapParams, EikonalParams, Flux, HuQinParams, ImpostorParams, PhotonBufferParams, WymanParams,
 };
 use crate::scene::{Camera, Scene};
 use crate::{
@@ -665,6 +665,49 @@ impl Renderer {
             }
         }
         Ok(Some(sum))
+    }
+
+    /// Shah et al. 2007 Eq. 6's V per source face, as the occlusion queries counted it, and
+    /// the texels of the front refractor layer that see a specular surface (what V should
+    /// count); `None` without caustics_map and `flux = "occlusion_query"`.
+    pub fn caustics_map_visible(&mut self) -> Result<Option<(Vec<u32>, Vec<u32>)>, RenderError> {
+        let on = self.passes.caustics_map.as_ref().is_some_and(|p| p.params().flux == Flux::OcclusionQuery);
+        if !on {
+            return Ok(None);
+        }
+        self.finish()?;
+        let Some(p) = &self.passes.caustics_map else {
+            return Ok(None);
+        };
+        let r = p.refractors();
+        let (image, id) = (&r.layers[0].0, r.layers[0].1);
+        let texels = image.desc.width as u64 * image.desc.height as u64 * image.layers() as u64;
+        let buffer = Buffer::new(
+            &self.ctx,
+            "visible_readback",
+            texels * 16,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuToCpu,
+        )?;
+        let buffer_id = self.graph.register_buffer(&buffer);
+        let graph = &mut self.graph;
+        let visible_id = r.visible_id;
+        self.ctx.one_shot(|cmd| {
+            graph.access_now(
+                cmd,
+                &[(id, Access::TransferRead)],
+                &[(buffer_id, Access::TransferWrite), (visible_id, Access::HostRead)],
+            );
+            cmd.copy_image_to_buffer(image, &buffer);
+            graph.access_now(cmd, &[], &[(buffer_id, Access::HostRead)]);
+        })?;
+        let faces = image.layers() as usize;
+        let per_face = (image.desc.width * image.desc.height) as usize;
+        let front: &[[f32; 4]] = bytemuck::cast_slice(buffer.read());
+        let covered =
+            (0..faces).map(|f| front[f * per_face..(f + 1) * per_face].iter().filter(|t| t[3] > 0.0).count() as u32);
+        let visible: &[u32] = bytemuck::cast_slice(r.visible.read());
+        Ok(Some((visible[..faces].to_vec(), covered.collect())))
     }
 
     /// The photon-buffer caustics' intermediate images (Hu & Qin 2007 §3,
