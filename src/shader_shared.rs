@@ -150,4 +150,11 @@ shared_constants! {
     EIKONAL_RK4: u32 = 1;
     // Compute workgroup edge of the volume passes (4^3 invocations).
     EIKONAL_GROUP: u32 = 4;
+    // Hu & Qin 2007 §2.2 nearby geometry (src/passes/nearby_impostors.rs): set 1 of
+    // refraction_hu_qin also holds the impostor rectangles (storage buffer) and TEX_i /
+    // TEX_DEPTH_i (2D array: rgb radiance, a axial depth). At most MAX_NEARBY_RECTS
+    // rectangles (the nearest objects are kept); the shader loops over them per ray.
+    BINDING_NEARBY_RECTS: u32 = 14;
+    BINDING_NEARBY_TEXTURE: u32 = 15;
+    MAX_NEARBY_RECTS: u32 = 8;
 }

@@ -41,10 +41,30 @@ fn image_space_refraction_replaces_the_baseline() {
         names("sphere_env", &["render.refraction=wyman"]),
         ["gbuffer", "deferred_shading", "refraction_wyman_layers", "refraction_wyman", "tonemap"]
     );
+    // Hu & Qin §2.2: nearby diffuse objects get impostor textures first.
     assert_eq!(
         names("sphere_nearby", &["render.refraction=hu_qin"]),
+        [
+            "shadow_map",
+            "gbuffer",
+            "deferred_shading",
+            "refraction_hu_qin_nearby",
+            "refraction_hu_qin_layers",
+            "refraction_hu_qin",
+            "tonemap"
+        ]
+    );
+    // Switched off, or nothing to stand in for (sphere_env has no diffuse object): no pass.
+    assert_eq!(
+        names("sphere_nearby", &["render.refraction=hu_qin", "render.hu_qin.nearby=false"]),
         ["shadow_map", "gbuffer", "deferred_shading", "refraction_hu_qin_layers", "refraction_hu_qin", "tonemap"]
     );
+    assert_eq!(
+        names("sphere_env", &["render.refraction=hu_qin"]),
+        ["gbuffer", "deferred_shading", "refraction_hu_qin_layers", "refraction_hu_qin", "tonemap"]
+    );
+    // Only hu_qin has impostor rectangles.
+    assert!(!names("sphere_nearby", &["render.refraction=wyman"]).contains(&"refraction_hu_qin_nearby"));
     // Without a refractor, none of their passes.
     for t in ["wyman", "hu_qin"] {
         let n = names("sphere_nearby", &[&format!("render.refraction={t}"), "objects.3.material=\"bunny\""]);

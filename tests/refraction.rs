@@ -285,6 +285,10 @@ fn bad_parameters_are_clear_errors() {
         ("render.hu_qin.tolerance=-1", "`tolerance`"),
         ("render.hu_qin.max_iterations=1e9", "`max_iterations`"),
         ("render.hu_qin.steps=3", "unknown parameter `steps`"),
+        ("render.hu_qin.correction_iterations=1000", "`correction_iterations` must be an integer from 0 to 64"),
+        ("render.hu_qin.impostor_resolution=1", "`impostor_resolution`"),
+        ("render.hu_qin.seed_samples=0", "`seed_samples`"),
+        ("render.hu_qin.correction_tolerance=-1", "`correction_tolerance`"),
         ("render.wyman.back_surface=\"first\"", "`back_surface` must be \"furthest\" or \"second\""),
     ] {
         let e = run(&["sphere_env", "--set", set]);

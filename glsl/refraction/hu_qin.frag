@@ -8,6 +8,9 @@
 //   layer (§2.1.3, Fig. 8, 9); N2 from the matching normal layer (§2.1.4); T2; environment.
 // Section 4's acceleration (ASSUME_BACK_FACING): skip the binary search, assume back-facing,
 // and switch to the front-facing layer when P2 leaves the refractor's silhouette.
+// §2.2: R (at P1) and T2 (at P2) see the nearby objects through their impostor rectangles
+// (glsl/include/nearby.glsl, Figs. 13, 16, 17), the environment map where none is hit; the
+// two are weighted by the dielectric Fresnel term.
 #include "frame.glsl"
 #include "environment.glsl"
 #include "fresnel.glsl"
@@ -17,6 +20,12 @@ layout(constant_id = 1) const uint SEARCH_STEPS = 8;
 layout(constant_id = 2) const float TOLERANCE = 1e-4;
 layout(constant_id = 3) const uint MAX_ITERATIONS = 32;
 layout(constant_id = 4) const uint ASSUME_BACK_FACING = 0;
+// §2.2.2: correction iterations of Fig. 16 (0 = Fig. 13), tolerance (fraction of d_i), and
+// the seeds of Fig. 17.
+layout(constant_id = 5) const uint NEARBY_ITERATIONS = 3;
+layout(constant_id = 6) const float NEARBY_TOLERANCE = 1e-3;
+layout(constant_id = 7) const uint NEARBY_SEEDS = 8;
+#include "nearby.glsl"
 layout(set = 1, binding = BINDING_GBUF_NORMAL) uniform sampler2D gbuf_normal;
 layout(set = 1, binding = BINDING_GBUF_DEPTH) uniform sampler2D gbuf_depth;
 layout(set = 1, binding = BINDING_REFR_BACK_NORMAL) uniform sampler2D back_normal;
@@ -93,7 +102,7 @@ void main() {
     float dist1 = length(P1 - frame.camera_position.xyz);
     float tol = TOLERANCE * dist1;
     float cos_i = clamp(-dot(V, N1), 0.0, 1.0);
-    vec3 L_reflected = environment(reflect(V, N1));
+    vec3 L_reflected = nearby_radiance(P1, reflect(V, N1));
     // The back layer's thickness along the view ray: the first step of a back-facing search
     // (the paper's "small positive value" would need more iterations to reach the far side).
     float d_V = max(layer_view_depth(back_depth, in_uv) - view_depth(P1), tol);
@@ -147,7 +156,7 @@ void main() {
             // Leaving the object: the normal facing T1 is -N2 and eta = n_refractor / n_outside;
             // TIR at P2 is clamped to the critical angle as in Wyman 2005 §3.3.
             T2 = refract_clamped(T1, -N2, ior[k]);
-            L_t = environment(T2) * exp(-m.spec_b.rgb * d_T);
+            L_t = nearby_radiance(P2, T2) * exp(-m.spec_b.rgb * d_T);
         }
         if (channels == 1) {
             L = F * L_reflected + (1.0 - F) * L_t;

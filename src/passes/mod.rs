@@ -7,6 +7,7 @@ pub mod distance_impostor;
 pub mod eikonal;
 pub mod fullscreen;
 pub mod gbuffer;
+pub mod nearby_impostors;
 pub mod photon_buffer;
 pub mod refraction_hu_qin;
 pub mod refraction_wyman;

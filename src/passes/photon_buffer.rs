@@ -36,11 +36,11 @@
 //! The rectangles: the receivers (diffuse objects) as §2.2.1 builds them, a square of side
 //! 2 d_i centred at the object's centre O_i (mean of its vertices), perpendicular to O_R O_i
 //! (O_R: the mean of the specular objects' vertices), with the parallel projection from O_R
-//! along O_R O_i of glOrtho(-d_i, d_i, -d_i, d_i, near, far) (`receiver_rectangles`).
+//! along O_R O_i of glOrtho(-d_i, d_i, -d_i, d_i, near, far): the nearby-geometry impostors'
+//! rectangles (src/passes/nearby_impostors.rs, `rect_for`), see `receiver_rectangles`.
 use std::sync::Arc;
 
 use bytemuck::{Pod, Zeroable};
-use glam::{Mat4, Vec3};
 
 use crate::gpu::{
     vk, Access, Attachment, Blend, Buffer, Clear, DepthState, DescriptorSet, DescriptorSetLayout, DescriptorWrite,
@@ -49,10 +49,11 @@ use crate::gpu::{
 };
 use crate::graph::{Frame, FrameGraph, ImageId};
 use crate::passes::caustics_map::{is_specular, RefractorLayers};
+use crate::passes::nearby_impostors::{nearby_objects, rect_for};
 use crate::renderer::gpu_scene::GpuScene;
 use crate::renderer::plan::{PHOTON_BUFFER, PHOTON_BUFFER_FILTER, PHOTON_BUFFER_REFRACTORS, PHOTON_BUFFER_SCATTER};
 use crate::scene::techniques::{PhotonBufferParams, PhotonNormalization};
-use crate::scene::{Material, Scene};
+use crate::scene::Scene;
 use crate::{
     CAUSTIC_BINDING_BACK_NORMAL, CAUSTIC_BINDING_BACK_POSITION, CAUSTIC_BINDING_FACES, CAUSTIC_BINDING_FRONT_NORMAL,
     CAUSTIC_BINDING_FRONT_POSITION, CAUSTIC_BINDING_MATERIALS, PHOTON_BINDING_RECTS, PHOTON_PAPER, PHOTON_PHYSICAL,
@@ -77,42 +78,33 @@ pub struct GpuPhotonRect {
 }
 const _: () = assert!(std::mem::size_of::<GpuPhotonRect>() == 96);
 
-/// Hu & Qin 2007 §2.2.1 (Fig. 12): RECT_i for every diffuse object OBJ_i, seen from O_R.
+/// Hu & Qin 2007 §2.2.1 (Fig. 12): RECT_i for the diffuse objects OBJ_i seen from O_R, as
+/// the nearby-geometry impostors build them (src/passes/nearby_impostors.rs: same O_i, d_i,
+/// square, up vector and parallel projection; at most MAX_NEARBY_RECTS, the nearest first).
+/// O_R is the mean of the vertices of every specular object (dielectric, mirror or
+/// conductor): caustics also form by reflection (metal_ring), which nearby_impostors' O_R
+/// (dielectrics only) does not cover.
 pub fn receiver_rectangles(scene: &Scene) -> Vec<GpuPhotonRect> {
-    let mean = |pred: &dyn Fn(&Material) -> bool| {
-        let (mut sum, mut n) = (Vec3::ZERO, 0usize);
-        for o in scene.objects.iter().filter(|o| pred(&scene.materials[o.material])) {
-            for p in &o.mesh.positions {
-                sum += *p;
-                n += 1;
-            }
-        }
-        sum / n.max(1) as f32
-    };
+    let (mut sum, mut n) = (glam::DVec3::ZERO, 0usize);
+    for o in scene.objects.iter().filter(|o| is_specular(&scene.materials[o.material])) {
+        sum += o.mesh.positions.iter().map(|v| v.as_dvec3()).sum::<glam::DVec3>();
+        n += o.mesh.positions.len();
+    }
+    if n == 0 {
+        return Vec::new();
+    }
     // "The average value of object's vertices is used in our implementation" (Fig. 13).
-    let o_r = mean(&is_specular);
+    let o_r = (sum / n as f64).as_vec3();
+    let (kept, _) = nearby_objects(scene, o_r);
     let mut rects = Vec::new();
-    for o in scene.objects.iter().filter(|o| scene.materials[o.material].is_diffuse()) {
-        let n = o.mesh.positions.len().max(1) as f32;
-        let o_i = o.mesh.positions.iter().copied().sum::<Vec3>() / n;
-        // "The largest distance (d) between OBJ_i's vertices and O_i".
-        let d = o.mesh.positions.iter().map(|p| p.distance(o_i)).fold(0.0f32, f32::max).max(1e-6);
-        let to = o_i - o_r;
-        let dist = to.length();
-        // A receiver centred on the refractor has no direction O_R O_i: look down (-y, the
-        // scenes' gravity) at it.
-        let axis = if dist > 1e-6 * d { to / dist } else { Vec3::NEG_Y };
-        // "The up vectors of determining rectangle and rendering texture should be the same":
-        // one view matrix serves both.
-        let up = if axis.y.abs() > 0.99 { Vec3::Z } else { Vec3::Y };
-        let eye = o_i - axis * dist.max(d);
-        let view = Mat4::look_at_rh(eye, o_i, up);
-        let proj = Mat4::orthographic_rh(-d, d, -d, d, 0.0, 2.0 * dist.max(d));
-        rects.push(GpuPhotonRect {
-            view_proj: (proj * view).to_cols_array_2d(),
-            axis: [axis.x, axis.y, axis.z, d],
-            centre: [o_i.x, o_i.y, o_i.z, d],
-        });
+    for i in kept {
+        if let Some(r) = rect_for(scene, i, o_r, rects.len() as u32) {
+            rects.push(GpuPhotonRect {
+                view_proj: r.view_proj.to_cols_array_2d(),
+                axis: [r.axis.x, r.axis.y, r.axis.z, r.half_size],
+                centre: [r.center.x, r.center.y, r.center.z, r.half_size],
+            });
+        }
     }
     rects
 }

@@ -3,29 +3,40 @@
 //! interfaces without preprocessing. `render.refraction = "hu_qin"`, parameters
 //! `[render.hu_qin]` ([`HuQinParams`]).
 //!
+//! - `refraction_hu_qin_nearby` (with `nearby = true` and diffuse objects in the scene): §2.2,
+//!   the impostor rectangles and textures TEX_i of the nearby objects
+//!   (src/passes/nearby_impostors.rs).
 //! - `refraction_hu_qin_layers`: depth and normal of the refractors' nearest back faces and
 //!   nearest front faces (Fig. 4, "initial pass").
 //! - `refraction_hu_qin`: glsl/refraction/hu_qin.frag: T1, the binary search for the dividing
 //!   pixel p_e (Fig. 7, `search_steps`), the theta_1/theta_2 test for a front- or back-facing
 //!   exit (Fig. 5), the iterative d_T search (Fig. 9, `tolerance`, `max_iterations`), N2 from
-//!   the matching normal layer, T2; or section 4's shortcut (`assume_back_facing`).
+//!   the matching normal layer, T2; or section 4's shortcut (`assume_back_facing`). R at P1
+//!   and T2 at P2 then look up the nearby rectangles (Fig. 13) with the seed search of Fig. 17
+//!   (`seed_samples`) and the iterative correction of Fig. 16 (`correction_iterations`,
+//!   `correction_tolerance`), the environment map where no rectangle is hit
+//!   (glsl/include/nearby.glsl); reflection and refraction are weighted by Fresnel.
 use std::sync::Arc;
 
 use crate::gpu::{DescriptorSet, DescriptorSetLayout, GpuContext, GpuResult, Sampler};
+use crate::graph::ImageId;
 use crate::graph::{Frame, FrameGraph};
 use crate::renderer::gpu_scene::GpuScene;
-use crate::renderer::plan::{REFRACTION_HU_QIN, REFRACTION_HU_QIN_LAYERS};
+use crate::renderer::plan::{REFRACTION_HU_QIN, REFRACTION_HU_QIN_LAYERS, REFRACTION_HU_QIN_NEARBY};
 use crate::renderer::targets::Targets;
 use crate::scene::techniques::HuQinParams;
 use crate::scene::Scene;
 use crate::{
-    BINDING_GBUF_DEPTH, BINDING_GBUF_NORMAL, BINDING_REFR_BACK_DEPTH, BINDING_REFR_BACK_NORMAL,
-    BINDING_REFR_FRONT_DEPTH, BINDING_REFR_FRONT_NORMAL,
+    BINDING_GBUF_DEPTH, BINDING_GBUF_NORMAL, BINDING_NEARBY_RECTS, BINDING_NEARBY_TEXTURE, BINDING_REFR_BACK_DEPTH,
+    BINDING_REFR_BACK_NORMAL, BINDING_REFR_FRONT_DEPTH, BINDING_REFR_FRONT_NORMAL,
 };
 
+use super::nearby_impostors::NearbyImpostors;
 use super::refractor_layers::{DebugTarget, LayerKind, RefractorLayers, ShadeDesc, ShadePass};
 
 pub struct HuQinPass {
+    /// The impostors (a stand-in without nearby objects or with `nearby = false`).
+    pub nearby: NearbyImpostors,
     layers: RefractorLayers,
     shade: ShadePass,
     pub params: HuQinParams,
@@ -43,6 +54,20 @@ impl HuQinPass {
         targets: &Targets,
         nearest: &Sampler,
     ) -> GpuResult<Self> {
+        // The same rule as plan.rs (REFRACTION_HU_QIN_NEARBY): rectangles only when asked for.
+        let nearby = if params.nearby {
+            NearbyImpostors::new(
+                ctx,
+                REFRACTION_HU_QIN_NEARBY,
+                params.impostor_resolution,
+                scene,
+                gpu,
+                graph,
+                frame_layout,
+            )?
+        } else {
+            NearbyImpostors::stand_in(ctx, REFRACTION_HU_QIN_NEARBY, gpu, graph, frame_layout)?
+        };
         let layers = RefractorLayers::new(
             ctx,
             REFRACTION_HU_QIN_LAYERS,
@@ -68,13 +93,18 @@ impl HuQinPass {
                     (BINDING_REFR_BACK_DEPTH, &b.depth, b.depth_id),
                     (BINDING_REFR_FRONT_NORMAL, &f.normal, f.normal_id),
                     (BINDING_REFR_FRONT_DEPTH, &f.depth, f.depth_id),
+                    (BINDING_NEARBY_TEXTURE, &nearby.texture, nearby.texture_id),
                 ],
-                // Specialisation constants 1..4 of hu_qin.frag.
+                buffers: &[(BINDING_NEARBY_RECTS, &nearby.rect_buffer)],
+                // Specialisation constants 1..7 of hu_qin.frag.
                 specialization: &[
                     params.search_steps,
                     params.tolerance.to_bits(),
                     params.max_iterations,
                     u32::from(params.assume_back_facing),
+                    params.correction_iterations,
+                    params.correction_tolerance.to_bits(),
+                    params.seed_samples,
                 ],
                 debug: params.debug,
             },
@@ -83,7 +113,7 @@ impl HuQinPass {
             targets,
             nearest,
         )?;
-        Ok(HuQinPass { layers, shade, params })
+        Ok(HuQinPass { nearby, layers, shade, params })
     }
 
     pub fn record<'a>(
@@ -92,7 +122,11 @@ impl HuQinPass {
         scene: &'a GpuScene,
         targets: &Targets,
         frame_set: DescriptorSet,
+        shadow_atlas: Option<ImageId>,
     ) {
+        if !self.nearby.is_empty() {
+            self.nearby.record(frame, scene, frame_set, shadow_atlas);
+        }
         self.layers.record(frame, scene, targets, frame_set);
         self.shade.record(frame, scene.environment_id, frame_set);
     }

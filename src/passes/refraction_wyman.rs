@@ -89,6 +89,7 @@ impl WymanPass {
                     (BINDING_REFR_BACK_DEPTH, &b.depth, b.depth_id),
                     (BINDING_REFR_FRONT_NORMAL, &f.normal, f.normal_id),
                 ],
+                buffers: &[],
                 specialization: &[],
                 debug: params.debug,
             },

@@ -289,6 +289,8 @@ pub struct ShadeDesc<'a> {
     pub fragment_shader: &'a str,
     /// Set-1 inputs: (binding, image, graph id), sampled with the nearest sampler.
     pub inputs: &'a [(u32, &'a Image, ImageId)],
+    /// Set-1 storage buffers read by the fragment shader: (binding, buffer).
+    pub buffers: &'a [(u32, &'a Buffer)],
     /// Specialisation constants 1, 2, ... (constant 0 is the debug flag).
     pub specialization: &'a [u32],
     pub debug: bool,
@@ -324,13 +326,16 @@ impl ShadePass {
             }
         }
         let render_pass = RenderPass::new(ctx, name, &RenderPassDesc { colors, depth: None, depth_read_only: false })?;
-        let bindings: Vec<_> = desc
+        let mut bindings: Vec<_> = desc
             .inputs
             .iter()
             .map(|&(b, _, _)| (b, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, vk::ShaderStageFlags::FRAGMENT))
             .collect();
+        bindings.extend(
+            desc.buffers.iter().map(|&(b, _)| (b, vk::DescriptorType::STORAGE_BUFFER, vk::ShaderStageFlags::FRAGMENT)),
+        );
         let set_layout = DescriptorSetLayout::new(ctx, name, &bindings, 1)?;
-        let writes: Vec<_> = desc
+        let mut writes: Vec<_> = desc
             .inputs
             .iter()
             .map(|&(b, image, _)| {
@@ -338,6 +343,8 @@ impl ShadePass {
                 DescriptorWrite::Sampled(b, image.view(), nearest, layout)
             })
             .collect();
+        // Host-written once at creation (the graph tracks images only): visible at submission.
+        writes.extend(desc.buffers.iter().map(|&(b, buffer)| DescriptorWrite::Storage(b, buffer)));
         let set = set_layout.allocate(name, &writes)?;
         let layout = PipelineLayout::new(ctx, name, &[frame_layout, &set_layout], 0)?;
         let mut specialization = vec![u32::from(desc.debug)];

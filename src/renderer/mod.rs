@@ -554,7 +554,7 @@ impl Renderer {
             p.record(&mut frame, scene, targets, frame_set);
         }
         if let Some(p) = &passes.refraction_hu_qin {
-            p.record(&mut frame, scene, targets, frame_set);
+            p.record(&mut frame, scene, targets, frame_set, shadow_atlas);
         }
         if let Some(p) = &passes.refraction_impostor {
             p.record(&mut frame, scene, targets, frame_set, shadow_atlas);

@@ -16,6 +16,9 @@ pub const REFRACTION_WYMAN: &str = "refraction_wyman";
 /// Hu & Qin 2007 (src/passes/refraction_hu_qin.rs): the refractor layers, then the shading.
 pub const REFRACTION_HU_QIN_LAYERS: &str = "refraction_hu_qin_layers";
 pub const REFRACTION_HU_QIN: &str = "refraction_hu_qin";
+/// Hu & Qin 2007 §2.2 (src/passes/nearby_impostors.rs): TEX_i of the nearby objects' impostor
+/// rectangles, before the shading that looks them up.
+pub const REFRACTION_HU_QIN_NEARBY: &str = "refraction_hu_qin_nearby";
 /// Szirmay-Kalos et al. 2005 (src/passes/distance_impostor.rs): the environment distance
 /// impostor around the specular objects, the refractor map, then the shading.
 pub const REFLECTION_IMPOSTOR_MAP: &str = "reflection_impostor_map";
@@ -210,13 +213,47 @@ fn image_space_refraction(scene: &Scene, dielectric: &[String]) -> Vec<PlannedPa
         _ => return Vec::new(),
     };
     let technique = &scene.render.refraction;
-    vec![
-        PlannedPass {
-            name: layers,
-            reason: format!("{what} of dielectric {} (render.refraction = \"{technique}\")", list(dielectric)),
-        },
-        PlannedPass { name: shade, reason: format!("two-interface refraction of {} ({exit})", list(dielectric)) },
-    ]
+    let mut passes = Vec::new();
+    if technique == "hu_qin" {
+        passes.extend(hu_qin_nearby(scene));
+    }
+    passes.push(PlannedPass {
+        name: layers,
+        reason: format!("{what} of dielectric {} (render.refraction = \"{technique}\")", list(dielectric)),
+    });
+    passes.push(PlannedPass {
+        name: shade,
+        reason: format!("two-interface refraction of {} ({exit})", list(dielectric)),
+    });
+    passes
+}
+
+/// Hu & Qin 2007 §2.2: the impostor textures, when `render.hu_qin.nearby` is on and there are
+/// diffuse objects to stand in for.
+fn hu_qin_nearby(scene: &Scene) -> Option<PlannedPass> {
+    use crate::passes::nearby_impostors::{nearby_objects, refractor_center};
+    let params = crate::scene::techniques::HuQinParams::from_settings(&scene.render).unwrap_or_default();
+    if !params.nearby {
+        return None;
+    }
+    let origin = refractor_center(scene)?;
+    let (kept, dropped) = nearby_objects(scene, origin);
+    if kept.is_empty() {
+        return None;
+    }
+    let names = |v: &[usize]| v.iter().map(|&i| scene.objects[i].name.clone()).collect::<Vec<_>>();
+    let mut reason = format!(
+        "impostor rectangles + textures of nearby diffuse {} for the refracted and reflected rays (Hu & Qin 2007 §2.2)",
+        list(&names(&kept))
+    );
+    if !dropped.is_empty() {
+        reason += &format!(
+            "; {} left to the environment map (at most {} rectangles, the nearest are kept)",
+            list(&names(&dropped)),
+            crate::MAX_NEARBY_RECTS
+        );
+    }
+    Some(PlannedPass { name: REFRACTION_HU_QIN_NEARBY, reason })
 }
 
 /// The passes of double refraction with distance impostors (Szirmay-Kalos et al. 2005, §4).

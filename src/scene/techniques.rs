@@ -63,11 +63,36 @@ pub struct HuQinParams {
     pub assume_back_facing: bool,
     /// Also write P2 and T2 to the debug targets `refraction_hu_qin_p2` / `_t2`.
     pub debug: bool,
+    /// §2.2: look R and T2 up in the impostor rectangles of the nearby diffuse objects
+    /// (src/passes/nearby_impostors.rs) before the environment map.
+    pub nearby: bool,
+    /// Edge of each impostor texture TEX_i in texels (§2.2.1).
+    pub impostor_resolution: u32,
+    /// Iterations of the lookup correction (§2.2.2, Fig. 16); 0 = the plain lookup of Fig. 13.
+    pub correction_iterations: u32,
+    /// Stop correcting when |depth - z| < tolerance x d_i (the rectangle's half side), so that
+    /// it means the same at every object size.
+    pub correction_tolerance: f32,
+    /// Points P + alpha_j Ray, 0 < alpha_j <= d_far, tried as seeds of the correction (Fig. 17).
+    pub seed_samples: u32,
 }
 
 impl Default for HuQinParams {
     fn default() -> Self {
-        HuQinParams { search_steps: 8, tolerance: 1e-4, max_iterations: 32, assume_back_facing: false, debug: false }
+        HuQinParams {
+            search_steps: 8,
+            tolerance: 1e-4,
+            max_iterations: 32,
+            assume_back_facing: false,
+            debug: false,
+            nearby: true,
+            impostor_resolution: 256,
+            // "using a good initial point ... we can obtain a satisfactory result after two or
+            // three iteration steps" (§2.2.2).
+            correction_iterations: 3,
+            correction_tolerance: 1e-3,
+            seed_samples: 8,
+        }
     }
 }
 
@@ -328,8 +353,18 @@ impl WymanParams {
 }
 
 impl HuQinParams {
-    pub const KEYS: &'static [&'static str] =
-        &["search_steps", "tolerance", "max_iterations", "assume_back_facing", "debug"];
+    pub const KEYS: &'static [&'static str] = &[
+        "search_steps",
+        "tolerance",
+        "max_iterations",
+        "assume_back_facing",
+        "debug",
+        "nearby",
+        "impostor_resolution",
+        "correction_iterations",
+        "correction_tolerance",
+        "seed_samples",
+    ];
 
     pub fn from_table(t: Option<&toml::Table>) -> Result<Self, ParamError> {
         let mut p = HuQinParams::default();
@@ -341,6 +376,15 @@ impl HuQinParams {
                 "max_iterations" => p.max_iterations = integer(key, v, 1, 1024)?,
                 "assume_back_facing" => p.assume_back_facing = boolean(key, v)?,
                 "debug" => p.debug = boolean(key, v)?,
+                "nearby" => p.nearby = boolean(key, v)?,
+                // 2048^2 texels x 16 bytes x MAX_NEARBY_RECTS (8) layers = 512 MiB, a quarter of
+                // lavapipe's 2 GiB allocation limit.
+                "impostor_resolution" => p.impostor_resolution = integer(key, v, 4, 2048)?,
+                // Fig. 16 converges in "two or three" steps; beyond 64 it only burns time.
+                "correction_iterations" => p.correction_iterations = integer(key, v, 0, 64)?,
+                "correction_tolerance" => p.correction_tolerance = number(key, v, 1e-7, 0.5)?,
+                // Each seed is one texture fetch per rectangle per ray.
+                "seed_samples" => p.seed_samples = integer(key, v, 1, 256)?,
                 _ => return Err(unknown("hu_qin", key, Self::KEYS)),
             }
         }
@@ -558,6 +602,14 @@ mod tests {
             ("tolerance = -1.0", "tolerance"),
             ("max_iterations = 0", "max_iterations"),
             ("steps = 3", "steps"),
+            ("impostor_resolution = 1", "impostor_resolution"),
+            ("impostor_resolution = 100000", "impostor_resolution"),
+            ("correction_iterations = -1", "correction_iterations"),
+            ("correction_iterations = 1000", "correction_iterations"),
+            ("correction_tolerance = 0", "correction_tolerance"),
+            ("correction_tolerance = nan", "correction_tolerance"),
+            ("seed_samples = 0", "seed_samples"),
+            ("nearby = 3", "nearby"),
         ] {
             let e = HuQinParams::from_table(Some(&table(t))).unwrap_err();
             assert_eq!(e.key, key, "{t}");

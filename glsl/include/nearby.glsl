@@ -1,0 +1,151 @@
+// Hu & Qin 2007 §2.2: reflection and refraction of nearby geometry through impostor
+// rectangles (src/passes/nearby_impostors.rs builds them). nearby_radiance(P, Ray) is the
+// "Ray Tracing Pass" of Fig. 13 with the seed selection of Fig. 17 and the iterative lookup
+// of Fig. 16. The including shader declares, before including this file:
+//   NEARBY_ITERATIONS (uint; 0 = the plain lookup of Fig. 13), NEARBY_TOLERANCE (float, a
+//   fraction of d_i), NEARBY_SEEDS (uint), and set-1 bindings BINDING_NEARBY_RECTS /
+//   BINDING_NEARBY_TEXTURE.
+#ifndef PRISM_NEARBY_GLSL
+#define PRISM_NEARBY_GLSL
+#include "frame.glsl"
+#include "environment.glsl"
+
+struct NearbyRect {
+    mat4 view_proj;  // world -> clip of glOrtho(-d_i, d_i, -d_i, d_i, near, far) from O_R to O_i
+    vec4 center;     // xyz: O_i; w: d_i (half the square's side)
+    vec4 axis;       // xyz: unit O_R -> O_i (rectangle normal, projection direction); w: near
+    vec4 axis_u;     // xyz: world direction of growing u; w: far (TEX_DEPTH of empty texels)
+    vec4 axis_v;     // xyz: world direction of growing v (the shared up vector); w: layer
+};
+
+layout(set = 1, binding = BINDING_NEARBY_RECTS, std430) readonly buffer NearbyRects {
+    uvec4 nearby_info;   // x: rectangle count (0: environment only)
+    vec4 nearby_origin;  // xyz: O_R
+    NearbyRect nearby_rects[];
+};
+// TEX_i (rgb: radiance) and TEX_DEPTH_i (a: axial distance dot(p - O_R, n_i)), layer i.
+layout(set = 1, binding = BINDING_NEARBY_TEXTURE) uniform sampler2DArray nearby_tex;
+
+// A rectangle to leave out of nearby_radiance (an impostor's own, when a mirror's texture is
+// rendered); none by default.
+uint nearby_skip = 0xffffffffu;
+
+// Fig. 13's intersect() and UV(): the hit t > 0 of P + t Ray with RECT_k and its (u, v).
+// Rays parallel to the plane (|cos| <= 1e-6) miss: no division by ~0. Mirrors
+// NearbyRect::intersect (CPU, unit-tested).
+bool nearby_rect_hit(uint k, vec3 P, vec3 Ray, out float t, out vec2 uv) {
+    NearbyRect r = nearby_rects[k];
+    t = 0.0;
+    uv = vec2(0.0);
+    float c = dot(Ray, r.axis.xyz);
+    if (!(abs(c) > 1e-6)) return false;
+    t = dot(r.center.xyz - P, r.axis.xyz) / c;
+    if (!(t > 0.0)) return false;
+    vec3 q = P + t * Ray - r.center.xyz;
+    uv = vec2(dot(q, r.axis_u.xyz), dot(q, r.axis_v.xyz)) / (2.0 * r.center.w) + 0.5;
+    return all(greaterThanEqual(uv, vec2(0.0))) && all(lessThanEqual(uv, vec2(1.0)));
+}
+
+// Fig. 16's projection of P_new into TEX_DEPTH_k: (u, v) of the parallel projection and the
+// point's own depth z (axial distance from O_R, the same quantity the texture stores).
+vec3 nearby_project(uint k, vec3 p) {
+    vec4 clip = nearby_rects[k].view_proj * vec4(p, 1.0);
+    return vec3(clip.xy * 0.5 + 0.5, dot(p - nearby_origin.xyz, nearby_rects[k].axis.xyz));
+}
+
+bool nearby_inside(vec2 uv) {
+    return all(greaterThanEqual(uv, vec2(0.0))) && all(lessThanEqual(uv, vec2(1.0)));
+}
+
+// TEX_k at uv: rgb radiance, a depth (the far plane outside the texture).
+vec4 nearby_texel(uint k, vec2 uv) {
+    if (!nearby_inside(uv)) return vec4(0.0, 0.0, 0.0, nearby_rects[k].axis_u.w);
+    return textureLod(nearby_tex, vec3(uv, nearby_rects[k].axis_v.w), 0.0);
+}
+
+// A texel holds a surface when its depth is in front of the far plane it was cleared to.
+bool nearby_covered(uint k, vec4 texel) {
+    return texel.a < nearby_rects[k].axis_u.w - 1e-4 * nearby_rects[k].center.w;
+}
+
+// The colour of RECT_k along the ray, found by Figs. 16-17 from the rectangle hit t_rect =
+// d_far. False where the texel finally looked up is empty (the ray passes beside OBJ_k).
+bool nearby_lookup(uint k, vec3 P, vec3 Ray, float t_rect, vec2 uv_rect, out vec3 color, out float dist) {
+    NearbyRect r = nearby_rects[k];
+    float d_i = r.center.w;
+    vec2 uv = uv_rect;
+    dist = t_rect;
+    if (NEARBY_ITERATIONS > 0u) {
+        // Fig. 17: seeds P + alpha_j Ray, alpha_j = d_far (j + 1) / NEARBY_SEEDS. "The
+        // highest priority: the z-value of the initial point should be larger than the
+        // z-value of the corresponding P_select" (the point lies behind the surface seen
+        // from O_R): the first such alpha_j along the ray; otherwise the one whose z is
+        // closest to P_select's. P_rect itself is the last seed.
+        float best = t_rect, best_err = 1e30;
+        bool behind = false;
+        for (uint j = 0u; j < NEARBY_SEEDS && !behind; ++j) {
+            float alpha = t_rect * float(j + 1u) / float(NEARBY_SEEDS);
+            vec3 s = nearby_project(k, P + alpha * Ray);
+            vec4 texel = nearby_texel(k, s.xy);
+            if (!nearby_covered(k, texel)) continue;
+            float err = s.z - texel.a;
+            if (err > 0.0) {
+                best = alpha;
+                behind = true;
+            } else if (-err < best_err) {
+                best = alpha;
+                best_err = -err;
+            }
+        }
+        dist = best;
+        // Fig. 16: distance += (depth - z) / cos(theta), theta between Ray and the projection
+        // direction. |cos| is kept >= 0.05 (rays grazing the rectangle: one step then moves at
+        // most 20 depth differences instead of dividing by ~0), each step is bounded by the
+        // object's size 2 d_i, and the point never goes behind P.
+        float cos_t = dot(Ray, r.axis.xyz);
+        cos_t = cos_t >= 0.0 ? max(cos_t, 0.05) : min(cos_t, -0.05);
+        float tol = NEARBY_TOLERANCE * d_i;
+        for (uint i = 0u; i < NEARBY_ITERATIONS; ++i) {
+            vec3 s = nearby_project(k, P + dist * Ray);
+            float depth = nearby_texel(k, s.xy).a;
+            float diff = depth - s.z;
+            if (abs(diff) <= tol) break;
+            dist = max(dist + clamp(diff / cos_t, -2.0 * d_i, 2.0 * d_i), 0.0);
+        }
+        uv = nearby_project(k, P + dist * Ray).xy;
+    }
+    vec4 texel = nearby_texel(k, uv);
+    color = texel.rgb;
+    return nearby_covered(k, texel);
+}
+
+// Radiance arriving at P from direction Ray (unit): Fig. 13 picks the rectangle whose hit is
+// closest to P. Where that texel is empty (the square is larger than the object's
+// silhouette), the next-closest rectangle is tried instead of showing TEX_k's background,
+// then the environment map ("If there is no rectangle intersected ... index into the
+// environment map").
+vec3 nearby_radiance(vec3 P, vec3 Ray) {
+    uint n = min(nearby_info.x, MAX_NEARBY_RECTS);
+    float last = -1.0;
+    for (uint pass = 0u; pass < n; ++pass) {
+        uint k = n;
+        float t_k = 1e30;
+        vec2 uv_k = vec2(0.0);
+        for (uint i = 0u; i < n; ++i) {
+            float t;
+            vec2 uv;
+            if (i != nearby_skip && nearby_rect_hit(i, P, Ray, t, uv) && t > last && t < t_k) {
+                k = i;
+                t_k = t;
+                uv_k = uv;
+            }
+        }
+        if (k == n) break;
+        last = t_k;
+        vec3 color;
+        float dist;
+        if (nearby_lookup(k, P, Ray, t_k, uv_k, color, dist)) return finite_or_zero(color);
+    }
+    return environment(Ray);
+}
+#endif

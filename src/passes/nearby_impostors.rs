@@ -1,0 +1,528 @@
+//! Hu & Qin 2007, "Interactive Approximate Rendering of Reflections, Refractions, and
+//! Caustics" (IEEE TVCG 13(1)), §2.2 and §2.2.1 (Figs. 12, 13): nearby geometry seen through
+//! the refractor stands in as one textured square per object, its *impostor rectangle*.
+//!
+//! Initial pass (Fig. 13), on the CPU ([`nearby_rects`]):
+//! - O_R: the mean of the refractors' vertices ("the average value of object's vertices is
+//!   used in our implementation"); with several dielectric objects their vertices are pooled,
+//!   so one set of rectangles serves all of them (exact for the paper's single OBJ_R).
+//! - For each diffuse object OBJ_i: O_i = mean of its vertices, d_i = largest vertex distance
+//!   from O_i; RECT_i is the square of side 2 d_i centred at O_i perpendicular to O_R O_i.
+//! - TEX_i is OBJ_i rendered from O_R towards O_i with the parallel projection
+//!   `glOrtho(-d_i, d_i, -d_i, d_i, near, far)`, with the same up vector as the rectangle, so
+//!   that a point of RECT_i and its texel share (u, v): [`NearbyRect::view_proj`].
+//!
+//! Rendering pass ([`NearbyImpostors`], `refraction_hu_qin_nearby`): every TEX_i into one
+//! layer of a 2D array texture (RGBA32F): rgb = the object's shaded radiance (direct light with
+//! shadow maps + environment irradiance, glsl/include/lighting.glsl, exactly as deferred
+//! shading computes it), a = TEX_DEPTH_i as the *axial* distance dot(p - O_R, n_i) from O_R
+//! along the projection direction n_i (linear in the ortho z of Fig. 16, in world units).
+//! Texels where no surface was drawn hold the far plane's axial distance.
+//!
+//! Limits (stated rule, not an error): at most [`MAX_NEARBY_RECTS`] rectangles; with more
+//! diffuse objects the ones whose bounding spheres come closest to O_R are kept and the others
+//! are seen through the environment map only (`prism passes` names them).
+//!
+//! This module is also used by the photon-buffer caustics (Hu & Qin §3): keep
+//! [`NearbyRect`], [`nearby_rects`] and [`NearbyImpostors`]' public fields stable.
+use std::sync::Arc;
+
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Vec3};
+
+use crate::gpu::{
+    vk, Access, Attachment, Blend, Buffer, Clear, DepthState, DescriptorSet, DescriptorSetLayout, Framebuffer,
+    GpuContext, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc, ImageViewKind, PipelineLayout,
+    RenderPass, RenderPassDesc, VertexLayout,
+};
+use crate::graph::{Frame, FrameGraph, ImageId};
+use crate::renderer::gpu_scene::GpuScene;
+use crate::renderer::targets::DEPTH_FORMAT;
+use crate::scene::{Material, Scene};
+pub use crate::MAX_NEARBY_RECTS;
+
+/// TEX_i (rgb radiance) and TEX_DEPTH_i (a: axial distance from O_R) in one layer.
+pub const NEARBY_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
+/// The ortho near and far planes sit this much beyond the bounding sphere (d_i), so that no
+/// vertex is clipped and the cleared far value is never a surface's depth.
+const DEPTH_MARGIN: f32 = 1.01;
+
+/// One impostor rectangle RECT_i and the parallel projection of its texture TEX_i.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NearbyRect {
+    /// Index into `Scene::objects` of OBJ_i.
+    pub object: usize,
+    /// Layer of TEX_i in [`NearbyImpostors::texture`].
+    pub layer: u32,
+    /// O_i: mean of the object's vertices, the rectangle's centre.
+    pub center: Vec3,
+    /// Unit O_R -> O_i: the rectangle's normal and the direction of projection.
+    pub axis: Vec3,
+    /// Unit world direction in which the texture coordinate u grows (the camera's right).
+    pub axis_u: Vec3,
+    /// Unit world direction in which v grows (the "up vector" of Fig. 13; Vulkan's clip y).
+    pub axis_v: Vec3,
+    /// d_i: half the side of the square, the largest vertex distance from O_i.
+    pub half_size: f32,
+    /// Axial distances from O_R of the ortho near and far planes.
+    pub near: f32,
+    pub far: f32,
+    /// World -> clip of `glOrtho(-d_i, d_i, -d_i, d_i, near, far)` looking from O_R at O_i:
+    /// clip.xy * 0.5 + 0.5 = (u, v) of TEX_i, clip.z = (axial - near) / (far - near).
+    pub view_proj: Mat4,
+}
+
+/// Where a ray meets a rectangle: distance along the (unit) ray and texture coordinates.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RectHit {
+    pub t: f32,
+    pub u: f32,
+    pub v: f32,
+}
+
+impl NearbyRect {
+    /// The square of side 2 `half_size` centred at O_i = `center`, perpendicular to O_R O_i,
+    /// and the parallel projection from O_R towards O_i (Fig. 13).
+    pub fn new(object: usize, layer: u32, origin_r: Vec3, center: Vec3, half_size: f32) -> Self {
+        let to = center - origin_r;
+        let dist = to.length();
+        // O_i at O_R leaves O_R O_i undefined: look along -z (any direction is as good).
+        let axis = if dist > 1e-6 * half_size { to / dist } else { -Vec3::Z };
+        // The up vector shared by the rectangle and the texture: world y, or -z when the
+        // projection looks (nearly) straight up or down.
+        let up = if axis.y.abs() < 0.99 { Vec3::Y } else { -Vec3::Z };
+        let axis_u = axis.cross(up).normalize();
+        let axis_v = axis_u.cross(axis);
+        let near = dist - DEPTH_MARGIN * half_size;
+        let far = dist + DEPTH_MARGIN * half_size;
+        let view = Mat4::look_at_rh(origin_r, origin_r + axis, axis_v);
+        let proj = Mat4::orthographic_rh(-half_size, half_size, -half_size, half_size, near, far);
+        NearbyRect { object, layer, center, axis, axis_u, axis_v, half_size, near, far, view_proj: proj * view }
+    }
+
+    /// Fig. 13's `intersect(startP, Ray, RECT_i, P_rect)` and `UV(P_rect, RECT_i)`: the hit of
+    /// the ray `origin + t dir` (t > 0) with the square, or None when it misses the square, runs
+    /// parallel to its plane or points away. glsl/include/nearby.glsl (`nearby_rect_hit`) is
+    /// the same computation.
+    pub fn intersect(&self, origin: Vec3, dir: Vec3) -> Option<RectHit> {
+        let cos = dir.dot(self.axis);
+        // Parallel rays (and degenerate directions) never hit: no division by ~0.
+        if cos.is_nan() || cos.abs() <= 1e-6 {
+            return None;
+        }
+        let t = (self.center - origin).dot(self.axis) / cos;
+        if !t.is_finite() || t <= 0.0 {
+            return None;
+        }
+        let q = origin + t * dir - self.center;
+        let (u, v) =
+            (0.5 + q.dot(self.axis_u) / (2.0 * self.half_size), 0.5 + q.dot(self.axis_v) / (2.0 * self.half_size));
+        ((0.0..=1.0).contains(&u) && (0.0..=1.0).contains(&v)).then_some(RectHit { t, u, v })
+    }
+
+    /// Fig. 16's projection of a point into TEX_DEPTH_i: (u, v, axial distance from O_R).
+    pub fn project(&self, origin_r: Vec3, p: Vec3) -> Vec3 {
+        let clip = self.view_proj * p.extend(1.0);
+        Vec3::new(clip.x * 0.5 + 0.5, clip.y * 0.5 + 0.5, (p - origin_r).dot(self.axis))
+    }
+
+    /// The four corners, (u, v) = (0,0), (1,0), (1,1), (0,1).
+    pub fn corners(&self) -> [Vec3; 4] {
+        let (a, b) = (self.axis_u * self.half_size, self.axis_v * self.half_size);
+        [self.center - a - b, self.center + a - b, self.center + a + b, self.center - a + b]
+    }
+}
+
+/// O_i and d_i of an object: the mean of its vertices and the largest vertex distance from it.
+pub fn object_center_extent(scene: &Scene, object: usize) -> Option<(Vec3, f32)> {
+    let p = &scene.objects[object].mesh.positions;
+    if p.is_empty() {
+        return None;
+    }
+    let sum: glam::DVec3 = p.iter().map(|v| v.as_dvec3()).sum();
+    let c = (sum / p.len() as f64).as_vec3();
+    let d = p.iter().map(|v| v.distance(c)).fold(0.0, f32::max);
+    Some((c, d))
+}
+
+/// O_R: the mean of the vertices of every dielectric object (None without one).
+pub fn refractor_center(scene: &Scene) -> Option<Vec3> {
+    let (mut sum, mut n) = (glam::DVec3::ZERO, 0usize);
+    for o in &scene.objects {
+        if matches!(scene.materials[o.material], Material::Dielectric { .. }) {
+            sum += o.mesh.positions.iter().map(|v| v.as_dvec3()).sum::<glam::DVec3>();
+            n += o.mesh.positions.len();
+        }
+    }
+    (n > 0).then(|| (sum / n as f64).as_vec3())
+}
+
+/// The diffuse objects that get a rectangle, nearest first (by the gap between O_R and their
+/// bounding sphere), at most [`MAX_NEARBY_RECTS`]; and those left out by that limit.
+pub fn nearby_objects(scene: &Scene, origin_r: Vec3) -> (Vec<usize>, Vec<usize>) {
+    let mut all: Vec<(f32, usize)> = (0..scene.objects.len())
+        .filter(|&i| scene.materials[scene.objects[i].material].is_diffuse())
+        .filter_map(|i| {
+            object_center_extent(scene, i).filter(|(_, d)| *d > 0.0).map(|(c, d)| (c.distance(origin_r) - d, i))
+        })
+        .collect();
+    all.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    let kept = all.iter().take(MAX_NEARBY_RECTS as usize).map(|&(_, i)| i).collect();
+    let dropped = all.iter().skip(MAX_NEARBY_RECTS as usize).map(|&(_, i)| i).collect();
+    (kept, dropped)
+}
+
+/// RECT_i for OBJ_i seen from O_R (Fig. 13, "Rendering Pass"), layer `layer`.
+pub fn rect_for(scene: &Scene, object: usize, origin_r: Vec3, layer: u32) -> Option<NearbyRect> {
+    let (center, half_size) = object_center_extent(scene, object)?;
+    (half_size > 0.0).then(|| NearbyRect::new(object, layer, origin_r, center, half_size))
+}
+
+/// O_R and the rectangles of `scene` (empty without a dielectric or a diffuse object).
+pub fn nearby_rects(scene: &Scene) -> (Vec3, Vec<NearbyRect>) {
+    let Some(origin_r) = refractor_center(scene) else { return (Vec3::ZERO, Vec::new()) };
+    let (kept, _) = nearby_objects(scene, origin_r);
+    let mut rects = Vec::new();
+    for i in kept {
+        if let Some(r) = rect_for(scene, i, origin_r, rects.len() as u32) {
+            rects.push(r);
+        }
+    }
+    (origin_r, rects)
+}
+
+/// std430 record of one rectangle (glsl/include/nearby.glsl, `NearbyRect`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct GpuNearbyRect {
+    pub view_proj: [[f32; 4]; 4],
+    /// xyz O_i, w d_i.
+    pub center: [f32; 4],
+    /// xyz n_i (O_R -> O_i), w near.
+    pub axis: [f32; 4],
+    /// xyz axis_u, w far (the cleared TEX_DEPTH value).
+    pub axis_u: [f32; 4],
+    /// xyz axis_v, w layer.
+    pub axis_v: [f32; 4],
+}
+const _: () = assert!(std::mem::size_of::<GpuNearbyRect>() == 128);
+
+/// Header of the rectangle buffer: count, then O_R.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct GpuNearbyHeader {
+    info: [u32; 4],
+    origin: [f32; 4],
+}
+const _: () = assert!(std::mem::size_of::<GpuNearbyHeader>() == 32);
+
+impl From<&NearbyRect> for GpuNearbyRect {
+    fn from(r: &NearbyRect) -> Self {
+        let v4 = |v: Vec3, w: f32| [v.x, v.y, v.z, w];
+        GpuNearbyRect {
+            view_proj: r.view_proj.to_cols_array_2d(),
+            center: v4(r.center, r.half_size),
+            axis: v4(r.axis, r.near),
+            axis_u: v4(r.axis_u, r.far),
+            axis_v: v4(r.axis_v, r.layer as f32),
+        }
+    }
+}
+
+/// Bytes of the storage buffer `NearbyRects` (header + one record per rectangle).
+pub fn rect_buffer_bytes(origin_r: Vec3, rects: &[NearbyRect]) -> Vec<u8> {
+    let header = GpuNearbyHeader { info: [rects.len() as u32, 0, 0, 0], origin: origin_r.extend(1.0).to_array() };
+    let mut bytes = bytemuck::bytes_of(&header).to_vec();
+    for r in rects {
+        bytes.extend_from_slice(bytemuck::bytes_of(&GpuNearbyRect::from(r)));
+    }
+    bytes
+}
+
+/// Push constants of glsl/nearby/impostor.{vert,frag}.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct ImpostorPush {
+    view_proj: [[f32; 4]; 4],
+    /// xyz O_R.
+    origin: [f32; 4],
+    /// xyz n_i.
+    axis: [f32; 4],
+    /// x material index.
+    material: [u32; 4],
+}
+const _: () = assert!(std::mem::size_of::<ImpostorPush>() == 112);
+
+struct Layer {
+    rect: NearbyRect,
+    framebuffer: Framebuffer,
+    draw: usize,
+}
+
+/// TEX_i / TEX_DEPTH_i of every rectangle, rendered each frame (the paper's "Rendering
+/// Pass": nothing is precomputed, so the scene may change from frame to frame), and the
+/// rectangle buffer the shading reads.
+pub struct NearbyImpostors {
+    name: &'static str,
+    pub origin: Vec3,
+    pub rects: Vec<NearbyRect>,
+    /// Edge of each TEX_i in texels.
+    pub resolution: u32,
+    /// 2D array, one layer per rectangle (one cleared stand-in layer without rectangles).
+    pub texture: Image,
+    pub texture_id: ImageId,
+    /// `NearbyRects` of glsl/include/nearby.glsl.
+    pub rect_buffer: Buffer,
+    _depth: Image,
+    depth_id: ImageId,
+    render_pass: RenderPass,
+    _layout: PipelineLayout,
+    pipeline: GraphicsPipeline,
+    layers: Vec<Layer>,
+}
+
+impl NearbyImpostors {
+    /// The rectangles of [`nearby_rects`] and their textures, `resolution`^2 texels each.
+    pub fn new(
+        ctx: &Arc<GpuContext>,
+        name: &'static str,
+        resolution: u32,
+        scene: &Scene,
+        gpu: &GpuScene,
+        graph: &mut FrameGraph,
+        frame_layout: &DescriptorSetLayout,
+    ) -> GpuResult<Self> {
+        let (origin, rects) = nearby_rects(scene);
+        Self::with_rects(ctx, name, resolution, origin, rects, gpu, graph, frame_layout)
+    }
+
+    /// No rectangles: a cleared 1x1 stand-in texture and an empty rectangle buffer, for
+    /// shaders that bind them but are told (count 0) to use the environment only.
+    pub fn stand_in(
+        ctx: &Arc<GpuContext>,
+        name: &'static str,
+        gpu: &GpuScene,
+        graph: &mut FrameGraph,
+        frame_layout: &DescriptorSetLayout,
+    ) -> GpuResult<Self> {
+        Self::with_rects(ctx, name, 1, Vec3::ZERO, Vec::new(), gpu, graph, frame_layout)
+    }
+
+    /// Whether any rectangle exists (otherwise [`Self::record`] must not be called).
+    pub fn is_empty(&self) -> bool {
+        self.rects.is_empty()
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn with_rects(
+        ctx: &Arc<GpuContext>,
+        name: &'static str,
+        resolution: u32,
+        origin: Vec3,
+        rects: Vec<NearbyRect>,
+        gpu: &GpuScene,
+        graph: &mut FrameGraph,
+        frame_layout: &DescriptorSetLayout,
+    ) -> GpuResult<Self> {
+        let rects: Vec<NearbyRect> = rects.into_iter().filter(|r| r.object < gpu.draws.len()).collect();
+        let layers_n = rects.len().max(1) as u32;
+        let size = if rects.is_empty() { 1 } else { resolution };
+        use vk::ImageUsageFlags as U;
+        let texture = Image::new(
+            ctx,
+            &ImageDesc {
+                name: format!("{name}_texture"),
+                format: NEARBY_FORMAT,
+                width: size,
+                height: size,
+                layers: layers_n,
+                usage: U::COLOR_ATTACHMENT | U::SAMPLED | U::TRANSFER_SRC | U::TRANSFER_DST,
+                view: ImageViewKind::D2Array,
+            },
+        )?;
+        let texture_id = graph.register_image(&texture);
+        let depth = Image::new(
+            ctx,
+            &ImageDesc {
+                name: format!("{name}_depth"),
+                format: DEPTH_FORMAT,
+                width: size,
+                height: size,
+                layers: layers_n,
+                usage: U::DEPTH_STENCIL_ATTACHMENT,
+                view: ImageViewKind::D2Array,
+            },
+        )?;
+        let depth_id = graph.register_image(&depth);
+        if rects.is_empty() {
+            // Nothing renders the stand-in: give it defined contents and the sampled layout.
+            ctx.one_shot(|cmd| {
+                graph.access_now(cmd, &[(texture_id, Access::TransferWrite)], &[]);
+                cmd.clear_color_image(&texture, [0.0; 4]);
+                graph.access_now(cmd, &[(texture_id, Access::FragmentSampled)], &[]);
+            })?;
+        }
+        let rect_buffer = Buffer::with_data(
+            ctx,
+            &format!("{name}_rects"),
+            &rect_buffer_bytes(origin, &rects),
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+        )?;
+        let render_pass = RenderPass::new(
+            ctx,
+            name,
+            &RenderPassDesc {
+                colors: vec![Attachment { format: NEARBY_FORMAT, clear: true }],
+                depth: Some(Attachment { format: DEPTH_FORMAT, clear: true }),
+                depth_read_only: false,
+            },
+        )?;
+        let layout = PipelineLayout::new(ctx, name, &[frame_layout], std::mem::size_of::<ImpostorPush>() as u32)?;
+        let pipeline = GraphicsPipeline::new(
+            ctx,
+            &GraphicsPipelineDesc {
+                name,
+                vertex_shader: "nearby/impostor.vert",
+                fragment_shader: "nearby/impostor.frag",
+                vertex: VertexLayout::Mesh,
+                topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+                // Quads are one-sided; O_R may see either side.
+                cull: vk::CullModeFlags::NONE,
+                depth: DepthState::LESS,
+                blend: &[Blend::Off],
+                specialization: &[],
+            },
+            &layout,
+            &render_pass,
+        )?;
+        let mut layers = Vec::new();
+        for r in &rects {
+            let framebuffer = Framebuffer::new(
+                ctx,
+                &format!("{name}_{}", r.layer),
+                &render_pass,
+                &[texture.layer_view(r.layer), depth.layer_view(r.layer)],
+                texture.extent(),
+            )?;
+            layers.push(Layer { rect: *r, framebuffer, draw: r.object });
+        }
+        Ok(NearbyImpostors {
+            name,
+            origin,
+            rects,
+            resolution: size,
+            texture,
+            texture_id,
+            rect_buffer,
+            _depth: depth,
+            depth_id,
+            render_pass,
+            _layout: layout,
+            pipeline,
+            layers,
+        })
+    }
+
+    /// Render every TEX_i (after the shadow maps, which it reads through the frame set).
+    pub fn record<'a>(
+        &'a self,
+        frame: &mut Frame<'_, 'a>,
+        scene: &'a GpuScene,
+        frame_set: DescriptorSet,
+        shadow_atlas: Option<ImageId>,
+    ) {
+        let mut pass = frame.pass(self.name);
+        pass = pass.write(self.texture_id, Access::ColorAttachment).write(self.depth_id, Access::DepthAttachment);
+        if let Some(atlas) = shadow_atlas {
+            pass = pass.read(atlas, Access::FragmentSampled);
+        }
+        let origin = self.origin.extend(1.0).to_array();
+        pass.record(move |cmd| {
+            for l in &self.layers {
+                let r = &l.rect;
+                // Empty texels: TEX_DEPTH = the far plane (never a surface, see DEPTH_MARGIN).
+                let clears = [Clear::Color([0.0, 0.0, 0.0, r.far]), Clear::Depth(1.0)];
+                cmd.begin_render_pass(&self.render_pass, &l.framebuffer, &clears);
+                cmd.bind_graphics(&self.pipeline, &[frame_set]);
+                cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
+                let d = &scene.draws[l.draw];
+                let push = ImpostorPush {
+                    view_proj: r.view_proj.to_cols_array_2d(),
+                    origin,
+                    axis: r.axis.extend(0.0).to_array(),
+                    material: [d.material, 0, 0, 0],
+                };
+                cmd.push_graphics(&self.pipeline, &push);
+                cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
+                cmd.end_render_pass();
+            }
+        });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn rect(origin_r: Vec3, center: Vec3, half_size: f32) -> NearbyRect {
+        NearbyRect::new(0, 0, origin_r, center, half_size)
+    }
+
+    /// Analytic case: the square at z = -4 seen from the origin, d = 2. A ray from (0.5, 1, 0)
+    /// towards (x, y, -4) hits at t = |(x - 0.5, y - 1, -4)| with u = (x + 2) / 4 and
+    /// v = (y + 2) / 4 (u grows along +x, v along +y, the up vector).
+    #[test]
+    fn ray_rectangle_hit_and_uv() {
+        let r = rect(Vec3::ZERO, Vec3::new(0.0, 0.0, -4.0), 2.0);
+        assert!((r.axis - Vec3::new(0.0, 0.0, -1.0)).length() < 1e-6);
+        assert!((r.axis_u - Vec3::X).length() < 1e-6 && (r.axis_v - Vec3::Y).length() < 1e-6);
+        let o = Vec3::new(0.5, 1.0, 0.0);
+        for (x, y) in [(0.0, 0.0), (1.5, -0.5), (-1.99, 1.99), (1.999, 1.999), (-1.999, -1.999)] {
+            let target = Vec3::new(x, y, -4.0);
+            let d = (target - o).normalize();
+            let h = r.intersect(o, d).expect("inside the square");
+            assert!((h.t - (target - o).length()).abs() < 1e-5, "{x},{y}: t {}", h.t);
+            assert!((h.u - (x + 2.0) / 4.0).abs() < 1e-5 && (h.v - (y + 2.0) / 4.0).abs() < 1e-5, "{h:?}");
+            // The parallel projection of the hit lands on the same (u, v) (Fig. 13: "the up
+            // vectors of determining rectangle and rendering texture should be the same").
+            let p = r.project(Vec3::ZERO, o + h.t * d);
+            assert!((p.x - h.u).abs() < 1e-5 && (p.y - h.v).abs() < 1e-5, "{p} vs {h:?}");
+            assert!((p.z - 4.0).abs() < 1e-5);
+        }
+        // Outside the square, behind the origin, parallel to the plane: no hit, no NaN.
+        assert_eq!(r.intersect(o, (Vec3::new(2.6, 0.0, -4.0) - o).normalize()), None);
+        assert_eq!(r.intersect(o, Vec3::new(0.0, 0.0, 1.0)), None);
+        assert_eq!(r.intersect(o, Vec3::X), None);
+        assert_eq!(r.intersect(o, Vec3::ZERO), None);
+        assert_eq!(r.intersect(o, Vec3::splat(f32::NAN)), None);
+        // Corners carry the paper's texture coordinates {0,0}, {1,0}, {1,1}, {0,1}.
+        for (c, uv) in r.corners().iter().zip([(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)]) {
+            let p = r.project(Vec3::ZERO, *c);
+            assert!((p.x - uv.0).abs() < 1e-5 && (p.y - uv.1).abs() < 1e-5, "{c}: {p}");
+        }
+    }
+
+    /// A tilted rectangle (O_R O_i not along an axis): the hit lies in the plane through O_i
+    /// perpendicular to O_R O_i, within d of O_i along both axes, and the ortho projection's
+    /// z is linear in the axial distance (Fig. 16 compares such depths).
+    #[test]
+    fn tilted_rectangle_is_perpendicular_and_ortho_is_linear() {
+        let o_r = Vec3::new(0.3, -0.2, 0.1);
+        let r = rect(o_r, Vec3::new(1.6, 0.1, -1.5), 0.7);
+        assert!(r.axis.dot(r.axis_u).abs() < 1e-6 && r.axis.dot(r.axis_v).abs() < 1e-6);
+        assert!(r.axis_u.dot(r.axis_v).abs() < 1e-6);
+        let h = r.intersect(o_r, r.axis).expect("the axis hits the centre");
+        assert!((h.u - 0.5).abs() < 1e-5 && (h.v - 0.5).abs() < 1e-5);
+        assert!((h.t - r.center.distance(o_r)).abs() < 1e-5);
+        for a in [r.near, 0.5 * (r.near + r.far), r.far] {
+            let clip = r.view_proj * (o_r + a * r.axis + 0.3 * r.axis_u).extend(1.0);
+            let expect = (a - r.near) / (r.far - r.near);
+            assert!((clip.z / clip.w - expect).abs() < 1e-5, "{a}: {}", clip.z);
+        }
+        // Straight down (the floor below the refractor): the up vector switches to -z.
+        let f = rect(Vec3::ZERO, Vec3::new(0.0, -1.0, 0.0), 7.0);
+        assert!(f.axis_u.is_finite() && f.axis_v.is_finite() && (f.axis_u.length() - 1.0).abs() < 1e-5);
+        let h = f.intersect(Vec3::ZERO, Vec3::new(0.6, -0.8, 0.0)).unwrap();
+        assert!((h.t - 1.25).abs() < 1e-5);
+    }
+}

@@ -1,0 +1,165 @@
+//! Hu & Qin 2007 §2.2: reflection and refraction of nearby geometry through impostor
+//! rectangles (src/passes/nearby_impostors.rs, glsl/include/nearby.glsl): sphere_nearby
+//! renders with them, with finite radiance at every extreme; the iterative correction
+//! (Fig. 16) lowers the error against prism's exact reference; and Fig. 18's experiment:
+//! behind a refractor of ior 1 the corrected lookup shows the scene as it is without it.
+//! The CPU check of the ray/rectangle intersection and (u, v) is the unit test in
+//! src/passes/nearby_impostors.rs.
+mod common;
+
+use common::{context, render_on, scene};
+use prism::metrics::image::rmse_rgba;
+use prism::reference::{Reference, ReferenceSettings};
+use prism::renderer::Renderer;
+
+fn assert_finite(what: &str, hdr: &[f32]) {
+    let bad = hdr.iter().filter(|v| !v.is_finite()).count();
+    assert_eq!(bad, 0, "{what}: {bad} non-finite HDR values");
+}
+
+/// sphere_nearby with hu_qin records the impostor pass, has no validation error and only
+/// finite radiance, and the impostors change what the ball shows (the environment is a flat
+/// 0.05, so without them the whole ball is 0.05).
+#[test]
+fn sphere_nearby_renders_through_impostors() {
+    let ctx = context(false);
+    let with = render_on(&ctx, &scene("sphere_nearby", 96, &["render.refraction=hu_qin"]));
+    assert!(with.passes.iter().any(|p| p == "refraction_hu_qin_nearby"), "{:?}", with.passes);
+    assert_finite("hu_qin nearby", &with.hdr);
+    let without =
+        render_on(&ctx, &scene("sphere_nearby", 96, &["render.refraction=hu_qin", "render.hu_qin.nearby=false"]));
+    assert!(!without.passes.iter().any(|p| p == "refraction_hu_qin_nearby"));
+    // Pixels that changed by more than 0.02 (40% of the environment's 0.05): the ball covers
+    // about 10% of the image; at least half of it must now show nearby geometry.
+    let changed = with
+        .hdr
+        .chunks(4)
+        .zip(without.hdr.chunks(4))
+        .filter(|(a, b)| (0..3).any(|c| (a[c] - b[c]).abs() > 0.02))
+        .count();
+    let fraction = changed as f64 / (96.0 * 96.0);
+    eprintln!("nearby impostors changed {:.1}% of the pixels", fraction * 100.0);
+    assert!(fraction > 0.05, "only {:.2}% of pixels changed", fraction * 100.0);
+}
+
+/// The extremes of the feature: ior 1 and its neighbours, a bubble, a diamond-like ior,
+/// no/many corrections, one/many seeds, a 4-texel impostor, the loosest and tightest
+/// tolerance, the ball inside the bunny's impostor (O_i next to O_R) and grazing views.
+#[test]
+fn impostor_lookup_is_finite_at_the_extremes() {
+    let ctx = context(false);
+    for extra in [
+        &["materials.glass.ior=1.0"][..],
+        &["materials.glass.ior=1.0001"],
+        &["materials.glass.ior=0.5"],
+        &["materials.glass.ior=4.0"],
+        &["materials.glass.ior=[1.45, 1.5, 1.55]"],
+        &["render.hu_qin.correction_iterations=0"],
+        &["render.hu_qin.correction_iterations=64", "render.hu_qin.correction_tolerance=1e-7"],
+        &["render.hu_qin.correction_tolerance=0.5"],
+        &["render.hu_qin.seed_samples=1"],
+        &["render.hu_qin.seed_samples=256"],
+        &["render.hu_qin.impostor_resolution=4"],
+        &["render.hu_qin.assume_back_facing=true"],
+        // The ball at the bunny's centre: O_R O_i of almost zero length.
+        &["objects.3.center=[1.6, -0.45, -1.5]", "objects.3.radius=0.3"],
+        // Grazing: the camera in the floor's plane and in the wall's.
+        &["camera.position=[0, -0.999, 5]"],
+        &["camera.position=[0, 0.5, -2.999]", "camera.target=[0, 0, 3]"],
+    ] {
+        let mut o = vec!["render.refraction=hu_qin"];
+        o.extend_from_slice(extra);
+        let r = render_on(&ctx, &scene("sphere_nearby", 48, &o));
+        assert_finite(&format!("{extra:?}"), &r.hdr);
+    }
+}
+
+/// Fig. 16-17 against the exact reference on sphere_nearby: the corrected lookup
+/// (3 iterations, the default) has a lower RMSE than the plain Fig. 13 lookup. Measured
+/// at 96^2 (spp 64, no photons): RMSE 0.0307 (0 iterations) -> 0.0225 (3); the environment
+/// alone (`nearby = false`) 0.0284. At 128^2 `prism sweep` gives 0.0301 -> 0.0211.
+#[test]
+fn correction_lowers_the_error_against_the_reference() {
+    let ctx = context(false);
+    let s = scene("sphere_nearby", 96, &["render.refraction=hu_qin"]);
+    let mut r = Reference::new(&ctx, &s, &ReferenceSettings { spp: 64, photons: 0, ..Default::default() }).unwrap();
+    r.run_all(|_, _| {}).unwrap();
+    let reference = r.image();
+    drop(r);
+    let error = |iterations: u32| {
+        let set = format!("render.hu_qin.correction_iterations={iterations}");
+        let s = scene("sphere_nearby", 96, &["render.refraction=hu_qin", &set]);
+        rmse_rgba(&render_on(&ctx, &s).hdr, &reference)
+    };
+    let (e0, e3) = (error(0), error(3));
+    let env = {
+        let s = scene("sphere_nearby", 96, &["render.refraction=hu_qin", "render.hu_qin.nearby=false"]);
+        rmse_rgba(&render_on(&ctx, &s).hdr, &reference)
+    };
+    eprintln!("sphere_nearby RMSE: environment only {env:.5}, uncorrected {e0:.5}, corrected {e3:.5}");
+    // The margin (10%) is well inside the measured gap (27%) and the reference's noise is
+    // the same image for all three. Note the plain Fig. 13 lookup alone is *worse* than the
+    // environment (it shows the wrong texels); the corrected one is better.
+    assert!(e3 < 0.9 * e0, "correction should lower the error: {e0} -> {e3}");
+    assert!(e3 < env, "impostors should beat the environment alone: {env} vs {e3}");
+}
+
+/// RMSE of linear radiance over the pixels where `mask` is set.
+fn masked_rmse(a: &[f32], b: &[f32], mask: &[bool]) -> f64 {
+    let (mut sum, mut n) = (0.0f64, 0usize);
+    for (k, &m) in mask.iter().enumerate() {
+        if m {
+            for c in 0..3 {
+                let d = (a[4 * k + c] - b[4 * k + c]) as f64;
+                sum += d * d;
+            }
+            n += 3;
+        }
+    }
+    (sum / n.max(1) as f64).sqrt()
+}
+
+/// Hu & Qin Fig. 18: with the refractor's ior set to 1.0 nothing bends, so the ball must show
+/// the scene behind it as if it were not there. Lit by the environment only (light 0 off,
+/// environment radiance 1), so that the ball casts no shadow and the scene without it is
+/// the exact answer. Compared over the ball's pixels (the debug target P2 marks them).
+#[test]
+fn ior_one_corrected_lookup_matches_the_scene_without_the_ball() {
+    let ctx = context(false);
+    let lit = ["lights.0.intensity=0", "environment.radiance=1"];
+    let mut o = vec!["render.refraction=hu_qin", "materials.glass.ior=1.0", "render.hu_qin.debug=true"];
+    o.extend_from_slice(&lit);
+    let render = |extra: &str| {
+        let mut o = o.clone();
+        o.push(extra);
+        let mut r = Renderer::new(&ctx, &scene("sphere_nearby", 96, &o)).unwrap();
+        r.render_frame().unwrap();
+        let hdr = r.read_hdr().unwrap();
+        let p2 = r.read_target("refraction_hu_qin_p2").unwrap().expect("P2 debug target");
+        (hdr, p2)
+    };
+    let (corrected, p2) = render("render.hu_qin.correction_iterations=3");
+    let (uncorrected, _) = render("render.hu_qin.correction_iterations=0");
+    let mut o = vec!["objects.3.radius=0.001"];
+    o.extend_from_slice(&lit);
+    let without = render_on(&ctx, &scene("sphere_nearby", 96, &o));
+    common::assert_no_validation_errors(&ctx);
+    // The ball's pixels: P2's w is the exit kind, > 0 wherever the ray went through.
+    let mask: Vec<bool> = p2.chunks(4).map(|p| p[3] > 0.5).collect();
+    let pixels = mask.iter().filter(|&&m| m).count();
+    assert!(pixels > 500, "the ball covers only {pixels} pixels");
+    let e_corr = masked_rmse(&corrected, &without.hdr, &mask);
+    let e_plain = masked_rmse(&uncorrected, &without.hdr, &mask);
+    eprintln!("ior 1 over {pixels} ball pixels: RMSE uncorrected {e_plain:.4}, corrected {e_corr:.4}");
+    // Threshold: measured 0.109 corrected vs 0.448 uncorrected (96^2, lavapipe). The
+    // checkers' radiances are 0.8 and 0.2 (albedo x the environment's irradiance / pi), so a
+    // texel of the wrong colour costs 0.6; what remains after the correction is a thin band
+    // at the floor/wall junction: the floor's rectangle extends behind the wall (the floor
+    // reaches z = -5, the wall stands at z = -3) and each texture holds its own object only,
+    // so rays there see the floor behind the wall - the paper's assumption that "the
+    // visibility of each object stays constant over the refractor" (§2.2.1). 0.15 leaves
+    // room for another rasteriser's rounding of those edges; a broken correction gives the
+    // uncorrected 0.45.
+    assert!(e_corr < 0.15, "ior 1 corrected lookup RMSE {e_corr}");
+    assert!(e_plain > 2.0 * e_corr, "the uncorrected lookup should be measurably worse: {e_plain} vs {e_corr}");
+}
