@@ -670,7 +670,7 @@ impl Renderer {
     /// Shah et al. 2007 Eq. 6's V per source face, as the occlusion queries counted it, and
     /// the texels of the front refractor layer that see a specular surface (what V should
     /// count); `None` without caustics_map and `flux = "occlusion_query"`.
-    pub fn caustics_map_visible(&mut self) -> Result<Option<(Vec<u32>, Vec<u32>)>, RenderError> {
+    pub fn caustics_map_visible(&mut self) -> Result<Option<VisibleCounts>, RenderError> {
         let on = self.passes.caustics_map.as_ref().is_some_and(|p| p.params().flux == Flux::OcclusionQuery);
         if !on {
             return Ok(None);
@@ -707,7 +707,7 @@ impl Renderer {
         let covered =
             (0..faces).map(|f| front[f * per_face..(f + 1) * per_face].iter().filter(|t| t[3] > 0.0).count() as u32);
         let visible: &[u32] = bytemuck::cast_slice(r.visible.read());
-        Ok(Some((visible[..faces].to_vec(), covered.collect())))
+        Ok(Some(VisibleCounts { visible: visible[..faces].to_vec(), covered: covered.collect() }))
     }
 
     /// The photon-buffer caustics' intermediate images (Hu & Qin 2007 §3,
@@ -774,6 +774,14 @@ impl Renderer {
         let bytes = self.read_image(id, 16)?;
         Ok(Some(bytemuck::pod_collect_to_vec(&bytes)))
     }
+}
+
+/// What [`Renderer::caustics_map_visible`] reads back, per source face.
+pub struct VisibleCounts {
+    /// Eq. 6's V as the occlusion query counted it.
+    pub visible: Vec<u32>,
+    /// Texels of the front refractor layer that see a specular surface.
+    pub covered: Vec<u32>,
 }
 
 /// What [`Renderer::photon_buffer_images`] reads back.
