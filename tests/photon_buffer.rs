@@ -336,3 +336,29 @@ fn extremes_stay_finite() {
         assert_finite(name, &img.hdr);
     }
 }
+
+/// Synchronization validation over frames in flight for the photon-buffer passes (vertex
+/// texture fetch of the photon buffer, additive counting, the filter, the deferred lookup)
+/// and for caustics mapping's occlusion query (query copy into a buffer the splat pass reads
+/// in the same frame): no hazard reported.
+#[test]
+fn sync_validation_is_clean_over_frames_in_flight() {
+    let ctx = common::context(true);
+    assert!(!ctx.info.validation || ctx.info.sync_validation);
+    for o in [
+        vec!["render.caustics=photon_buffer"],
+        vec!["render.caustics=caustics_map", "render.caustics_map.flux=\"occlusion_query\""],
+    ] {
+        let s = common::scene("caustic_sphere", 32, &o);
+        let mut r = Renderer::new(&ctx, &s).unwrap();
+        for _ in 0..4 {
+            r.render_frame().unwrap();
+        }
+        r.finish().unwrap();
+        assert_eq!(r.take_timings().len(), 4);
+        let hdr = r.read_hdr().unwrap();
+        assert_finite(&format!("{o:?}"), &hdr);
+        drop(r);
+        common::assert_no_validation_errors(&ctx);
+    }
+}
