@@ -210,8 +210,8 @@ fn sphere_transmitted_flux(intensity: f64, d: f64, r: f64, ior: f64) -> f64 {
 
 /// The physical normalisation: the caustic textures hold the light's flux through the ball
 /// times both surfaces' Fresnel transmittance, independently of the photon buffer's size.
-/// Tolerance 2%: measured 9.154 / 9.117 / 9.177 / 9.222 W at 32 / 64 / 128 / 256 against the
-/// closed form 9.239 W (-1.3% at most); the deficit is
+/// Tolerance 2%: measured 9.107 / 9.199 / 9.218 / 9.230 W at 32 / 64 / 128 / 256 against the
+/// closed form 9.239 W (-1.4% at most); the deficit is
 /// grazing rays whose exit estimate ends in spurious total internal reflection (as for
 /// caustics mapping, tests/caustics.rs) and the tessellated ball.
 #[test]
@@ -253,8 +253,8 @@ fn brightest(img: &[f32], w: usize, h: usize) -> (usize, usize) {
 /// the image, which the filter's blur does not change) within 3% and the reference's within
 /// 15%, its focus lies within 3 pixels of the reference's, and it lowers the error compared
 /// with no caustics. Measured (texture 512, k = 2): photon buffer 64 / 128 / 256: RMSE
-/// 0.179 / 0.173 / 0.176 (none 0.737, caustics_map grid 128 0.156), caustic radiance 621.3 /
-/// 603.3 / 609.9 against caustics_map's 611.9 and the reference's 670.6 (-9%, as caustics_map:
+/// 0.180 / 0.174 / 0.174 (none 0.737, caustics_map grid 128 0.156), caustic radiance 603.2 /
+/// 613.0 / 612.8 against caustics_map's 611.9 and the reference's 670.6 (-9%, as caustics_map:
 /// the reference's caustic also holds the light the ball reflects onto the floor and light
 /// reflected inside it, which one refracted path per photon leaves out), foci 0-1 pixel from
 /// the reference's.
@@ -365,8 +365,8 @@ fn sync_validation_is_clean_over_frames_in_flight() {
 
 /// The caustic's brightest spot against the reference's on caustic_bunny (a coloured caustic
 /// through a concave double surface) and metal_ring (the reflective cardioid), at 64^2.
-/// Measured: caustic_bunny 3.2 pixels from the reference's (caustics mapping: 3.0),
-/// metal_ring 0. Tolerance 4 pixels: on the bunny caustics mapping, which shares the light's
+/// Measured: caustic_bunny 3.0 pixels from the reference's (caustics mapping: 3.0),
+/// metal_ring 1.0 (caustics mapping: 0). Tolerance 4 pixels: on the bunny caustics mapping, which shares the light's
 /// refractor layers and the double-surface exit estimate (caustics/light_path.glsl), is 3.0
 /// pixels off as well, so the offset is not the photon buffer's own.
 #[test]

@@ -167,8 +167,9 @@ pub(crate) fn is_specular(m: &Material) -> bool {
     matches!(m, Material::Dielectric { .. } | Material::Mirror { .. } | Material::Conductor { .. })
 }
 
-/// Centre and radius of a sphere bounding every specular object.
-pub(crate) fn specular_bounds(scene: &Scene) -> (Vec3, f32) {
+/// Centre and radius of a sphere bounding every specular object (around their bounding
+/// box: for a ball, sqrt(3) times its radius).
+fn specular_bounds(scene: &Scene) -> (Vec3, f32) {
     let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
     for o in scene.objects.iter().filter(|o| is_specular(&scene.materials[o.material])) {
         for p in &o.mesh.positions {
@@ -298,8 +299,16 @@ impl CausticsMapPass {
         let receiver_draws = draws_where(Material::is_diffuse);
 
         // 2. Source faces of every light, and the refractor textures.
-        let (refractors, faces, light_sources) =
-            RefractorLayers::new(ctx, CAUSTICS_MAP_REFRACTORS, scene, gpu, graph, grid, occlusion)?;
+        let (refractors, faces, light_sources) = RefractorLayers::new(
+            ctx,
+            CAUSTICS_MAP_REFRACTORS,
+            scene,
+            gpu,
+            graph,
+            grid,
+            specular_bounds(scene),
+            occlusion,
+        )?;
         let layer_images = &refractors.layers;
 
         // 3. The splat pass.
@@ -518,8 +527,10 @@ pub struct RefractorLayers {
 }
 
 impl RefractorLayers {
-    /// The layers at `grid`^2 texels per face, recorded as the pass `name`. Returns the
-    /// source faces of every light and, per light, (its first face, its number of faces).
+    /// The layers at `grid`^2 texels per face, recorded as the pass `name`, with the light's
+    /// faces fitted to the sphere `bounds` (centre, radius) around the specular objects.
+    /// Returns the source faces of every light and, per light, (its first face, its number
+    /// of faces).
     #[allow(clippy::type_complexity)] // reason: the three results are built together
     pub fn new(
         ctx: &Arc<GpuContext>,
@@ -528,10 +539,11 @@ impl RefractorLayers {
         gpu: &GpuScene,
         graph: &mut FrameGraph,
         grid: u32,
+        bounds: (Vec3, f32),
         occlusion_queries: bool,
     ) -> GpuResult<(Self, Vec<GpuCausticFace>, Vec<(u32, u32)>)> {
         use vk::ImageUsageFlags as U;
-        let (center, radius) = specular_bounds(scene);
+        let (center, radius) = bounds;
         let mut faces: Vec<GpuCausticFace> = Vec::new();
         let mut light_sources = Vec::new();
         for (i, l) in scene.lights.iter().enumerate() {

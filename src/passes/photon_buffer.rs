@@ -109,6 +109,23 @@ pub fn receiver_rectangles(scene: &Scene) -> Vec<GpuPhotonRect> {
     rects
 }
 
+/// The sphere the photon buffer's frustum is fitted to: centred at the mean of the specular
+/// objects' vertices, through the farthest vertex. Tighter than caustics mapping's sphere
+/// around their bounding box (sqrt(3) times a ball's radius), so that the refractor fills
+/// the photon buffer ("render the reflector/refractor from the light position", §3.1) and
+/// about three times as many of its pixels are photons on caustic_sphere.
+fn tight_bounds(scene: &Scene) -> (glam::Vec3, f32) {
+    let specular = || scene.objects.iter().filter(|o| is_specular(&scene.materials[o.material]));
+    let (mut sum, mut n) = (glam::DVec3::ZERO, 0usize);
+    for o in specular() {
+        sum += o.mesh.positions.iter().map(|v| v.as_dvec3()).sum::<glam::DVec3>();
+        n += o.mesh.positions.len();
+    }
+    let c = (sum / n.max(1) as f64).as_vec3();
+    let r = specular().flat_map(|o| o.mesh.positions.iter()).map(|p| p.distance(c)).fold(0.0f32, f32::max);
+    (c, r.max(1e-6))
+}
+
 /// The filtered caustic textures and the rectangles, bound in the frame set (set 0,
 /// BINDING_PHOTON_CAUSTICS / BINDING_PHOTON_RECTS): a 1x1 cleared stand-in and one zero
 /// rectangle when the scene has no photon-buffer caustics.
@@ -227,7 +244,7 @@ impl PhotonBufferPass {
         use vk::ImageUsageFlags as U;
         let size = params.size;
         let (refractors, faces, _) =
-            RefractorLayers::new(ctx, PHOTON_BUFFER_REFRACTORS, scene, gpu, graph, size, false)?;
+            RefractorLayers::new(ctx, PHOTON_BUFFER_REFRACTORS, scene, gpu, graph, size, tight_bounds(scene), false)?;
         let n_faces = faces.len() as u32;
         let faces_buffer =
             Buffer::with_data(ctx, "photon_faces", bytemuck::cast_slice(&faces), vk::BufferUsageFlags::STORAGE_BUFFER)?;
