@@ -531,7 +531,8 @@ impl RefractorLayers {
     /// faces fitted to the sphere `bounds` (centre, radius) around the specular objects.
     /// Returns the source faces of every light and, per light, (its first face, its number
     /// of faces).
-    #[allow(clippy::type_complexity)] // reason: the three results are built together
+    #[allow(clippy::type_complexity, clippy::too_many_arguments)] // reason: the three results are built together; the
+                                                                  // arguments are the scene, the graph and the three settings each caller differs in
     pub fn new(
         ctx: &Arc<GpuContext>,
         name: &'static str,
