@@ -29,6 +29,11 @@ shared_constants! {
     // flux per texel in W, looked up by the receivers as a cube or as layers.
     BINDING_CAUSTIC_CUBE: u32 = 5;
     BINDING_CAUSTIC_2D: u32 = 6;
+    // Photon-buffer caustics (Hu & Qin 2007 §3; src/passes/photon_buffer.rs): the filtered
+    // caustic textures TEX_CAUSTICS_i (one array layer per receiver rectangle) and the
+    // rectangles; a 1x1 stand-in and one zero rectangle when no photon pass runs.
+    BINDING_PHOTON_CAUSTICS: u32 = 7;
+    BINDING_PHOTON_RECTS: u32 = 8;
 
     // Descriptor set 1 (G-buffer inputs) bindings.
     BINDING_GBUF_NORMAL: u32 = 0;
@@ -111,6 +116,11 @@ shared_constants! {
     CAUSTIC_BINDING_FRONT_NORMAL: u32 = 5;
     CAUSTIC_BINDING_BACK_POSITION: u32 = 6;
     CAUSTIC_BINDING_BACK_NORMAL: u32 = 7;
+    // Eq. 6's V per source face (occlusion-query sample counts, u32), and how the splat
+    // pass weighs each vertex's flux (render.caustics_map.flux).
+    CAUSTIC_BINDING_VISIBLE: u32 = 9;
+    FLUX_SOLID_ANGLE: u32 = 0;
+    FLUX_OCCLUSION_QUERY: u32 = 1;
     // Intersection estimate (§III.D): the paper's approximate Newton-Raphson or the true one
     // of the appendix (with the bisection fallback of §III.D against oscillation).
     NEWTON_APPROXIMATE: u32 = 0;
@@ -132,6 +142,13 @@ shared_constants! {
     LIGHTMAP_BINDING_PHOTON_HIT: u32 = 3;
     LIGHTMAP_BINDING_PHOTON_POWER: u32 = 4;
     BINDING_LIGHTMAPS: u32 = 14;
+    // Photon buffer (Hu & Qin 2007 §3.1): the receiver rectangles, besides the caustic
+    // bindings above (faces, materials, refractor layers).
+    PHOTON_BINDING_RECTS: u32 = 8;
+    // render.photon_buffer.normalization: irradiance from the photons' power through the
+    // normalised filter, or the paper's s * (filtered photon count).
+    PHOTON_PHYSICAL: u32 = 0;
+    PHOTON_PAPER: u32 = 1;
     // Eikonal rendering (Ihrke et al. 2007; src/passes/eikonal.rs). The volume compute
     // passes read EIKONAL_BINDING_SRC and write EIKONAL_BINDING_DST (storage images); set 1
     // of eikonal_view samples the field (grad n, n - 1) at BINDING_EIKONAL_FIELD besides

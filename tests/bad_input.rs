@@ -228,3 +228,26 @@ fn unknown_benchmark_scene_and_bad_override() {
     let e = c.render_fails(&scene, &["--set", "render.shadow_map_size=0"], &[]);
     assert!(e.contains("shadow_map_size"), "{e}");
 }
+
+#[test]
+fn absurd_photon_buffer_and_caustics_map_parameters() {
+    // Hu & Qin 2007 §3 (render.photon_buffer) and Shah et al.'s Eq. 6 weight
+    // (render.caustics_map.flux): the key, the allowed values, no output file.
+    let c = Case::new("photon_buffer");
+    let scene = c.file(
+        "scene.toml",
+        &format!("{GOOD}\n[render]\ncaustics = \"photon_buffer\"\n[render.photon_buffer]\nfilter_k = 99\n"),
+    );
+    let e = c.render_fails(&scene, &[], &[]);
+    assert!(e.contains("filter_k") && e.contains("scene.toml:") && e.contains("0 to 16"), "{e}");
+    let scene = c.file("ok.toml", GOOD);
+    for (set, key) in [
+        ("render.photon_buffer.size=0", "size"),
+        ("render.photon_buffer.normalization=\"none\"", "normalization"),
+        ("render.photon_buffer.filter_s=-1", "filter_s"),
+        ("render.caustics_map.flux=\"area\"", "flux"),
+    ] {
+        let e = c.render_fails(&scene, &["--set", set], &[]);
+        assert!(e.contains(key), "{set}: {e}");
+    }
+}

@@ -107,6 +107,41 @@ fn caustic_passes_only_with_light_specular_object_and_receiver() {
     absent("caustic_sphere", &[on, "objects.1.material=\"floor\""]);
 }
 
+/// Photon-buffer caustics (Hu & Qin 2007 §3) likewise: only with `render.caustics =
+/// "photon_buffer"`, a light, a specular object and a diffuse receiver.
+#[test]
+fn photon_buffer_passes_only_with_light_specular_object_and_receiver() {
+    const PHOTON: [&str; 4] =
+        ["photon_buffer_refractors", "photon_buffer", "photon_buffer_scatter", "photon_buffer_filter"];
+    let on = "render.caustics=photon_buffer";
+    assert_eq!(
+        names("caustic_sphere", &[on]),
+        [
+            "shadow_map",
+            "photon_buffer_refractors",
+            "photon_buffer",
+            "photon_buffer_scatter",
+            "photon_buffer_filter",
+            "gbuffer",
+            "deferred_shading",
+            "refraction_single",
+            "tonemap"
+        ]
+    );
+    assert!(names("metal_ring", &[on]).contains(&"photon_buffer"));
+    let absent = |scene: &str, o: &[&str]| {
+        let n = names(scene, o);
+        assert!(!n.iter().any(|p| PHOTON.contains(p)), "{scene} {o:?}: {n:?}");
+    };
+    absent("caustic_sphere", &[]);
+    absent("caustic_sphere", &["render.caustics=caustics_map"]);
+    absent("sphere_env", &[on]);
+    absent("caustic_sphere", &[on, "objects.0.material=\"glass\""]);
+    absent("caustic_sphere", &[on, "objects.1.material=\"floor\""]);
+    // And caustics mapping's passes are not recorded with photon_buffer.
+    assert!(!names("caustic_sphere", &[on]).contains(&"caustics_map"));
+}
+
 #[test]
 fn impostor_lightmap_passes_only_with_light_specular_object_and_quad_receiver() {
     let on = "render.caustics=impostor_lightmap";

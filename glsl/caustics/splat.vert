@@ -26,6 +26,10 @@ layout(set = 0, binding = CAUSTIC_BINDING_FRONT_POSITION) uniform sampler2DArray
 layout(set = 0, binding = CAUSTIC_BINDING_FRONT_NORMAL) uniform sampler2DArray front_normal;
 layout(set = 0, binding = CAUSTIC_BINDING_BACK_POSITION) uniform sampler2DArray back_position;
 layout(set = 0, binding = CAUSTIC_BINDING_BACK_NORMAL) uniform sampler2DArray back_normal;
+// Eq. 6's V per source face: occlusion-query sample counts copied on the GPU.
+layout(set = 0, binding = CAUSTIC_BINDING_VISIBLE, std430) readonly buffer Visible { uint visible[]; };
+layout(constant_id = 0) const uint FLUX = FLUX_SOLID_ANGLE;
+#include "light_path.glsl"
 
 layout(push_constant) uniform Push {
     mat4 dest_view_proj;   // world -> destination caustic-map face clip space
@@ -124,28 +128,6 @@ bool intersect(Face f, vec3 o, vec3 dir, out vec3 hit) {
     return true;
 }
 
-// The 2D texel of `f` that x projects to, or (-1, -1) outside the face.
-ivec2 source_texel(Face f, vec3 x, int grid) {
-    vec4 clip = f.view_proj * vec4(x, 1.0);
-    if (!(clip.w > 0.0)) return ivec2(-1);
-    vec2 t = (clip.xy / clip.w * 0.5 + 0.5) * float(grid);
-    if (any(lessThan(t, vec2(0.0))) || any(greaterThanEqual(t, vec2(grid)))) return ivec2(-1);
-    return ivec2(t);
-}
-
-// Whether x is still inside the object: in front of the back face the light sees at x's
-// texel of source face f (distances from the light, or along a directional light).
-bool inside(Face f, vec3 x, int grid, int layer) {
-    ivec2 t = source_texel(f, x, grid);
-    if (t.x < 0) return false;
-    vec4 b = texelFetch(back_position, ivec3(t, layer), 0);
-    if (b.w <= 0.0) return false;
-    if (uint(f.light.w + 0.5) == LIGHT_POINT) {
-        return distance(x, f.light.xyz) < distance(b.xyz, f.light.xyz);
-    }
-    return dot(x - b.xyz, f.light.xyz) < 0.0;
-}
-
 // Vulkan cube face (+X, -X, +Y, -Y, +Z, -Z) whose major axis holds v.
 uint cube_face(vec3 v) {
     vec3 a = abs(v);
@@ -163,119 +145,35 @@ void main() {
     ivec2 ij = ivec2(texel % grid, texel / grid);
     Face f = faces[s];
     int layer = int(s);
-    vec4 fp = texelFetch(front_position, ivec3(ij, layer), 0);
-    if (fp.w <= 0.0) {
+    uint channels = pc.face.w;
+    int c = gl_InstanceIndex;
+    vec3 origin, dir, weight, absorb_to_receiver;
+    float cos_in;
+    if (!light_path(f, layer, ij, grid, c, channels, origin, dir, weight, absorb_to_receiver, cos_in)) {
         drop_vertex();
         return;
     }
-    vec4 fn = texelFetch(front_normal, ivec3(ij, layer), 0);
-    vec3 p1 = fp.xyz;
-    vec3 n1 = normalize(fn.xyz);
-    bool point_light = uint(f.light.w + 0.5) == LIGHT_POINT;
-    vec3 l = point_light ? normalize(p1 - f.light.xyz) : f.light.xyz;
-
-    // The flux through this grid texel, in W: the light's intensity times the texel's solid
-    // angle (perspective face), or its irradiance times the texel's area (orthographic).
-    // This is Eq. 6 in physical units: the paper's weight 1/V is the texel's share of the
-    // flux through the visible area of the object, here measured directly, so the total
-    // does not depend on the grid resolution.
-    vec2 ndc = (vec2(ij) + 0.5) / float(grid) * 2.0 - 1.0;
-    float measure;
-    if (uint(f.measure.x + 0.5) == CAUSTIC_FACE_PERSPECTIVE) {
-        float t = f.measure.y;
-        float q = 1.0 + t * t * dot(ndc, ndc);
-        measure = (2.0 * t / float(grid)) * (2.0 * t / float(grid)) / (q * sqrt(q));
+    vec3 flux;
+    if (FLUX == FLUX_OCCLUSION_QUERY) {
+        // Eq. 6: Phi_i = (N_i . L_i) / V of "the total flux through the surface of the
+        // caustic-forming object visible to the light source", V the occlusion query's count
+        // of rasterized pixels. That total, in W, is the light's flux through those V pixels,
+        // V times a pixel's mean solid angle (or area): in physical units V cancels, and what
+        // remains of Eq. 6 is the face's mean texel measure and the factor N . L.
+        float v = float(visible[s]);
+        if (!(v >= 1.0)) {
+            drop_vertex();
+            return;
+        }
+        flux = f.intensity.rgb * (v * mean_texel_measure(f, grid)) * cos_in / v;
     } else {
-        measure = (2.0 * f.measure.y / float(grid)) * (2.0 * f.measure.y / float(grid));
+        flux = f.intensity.rgb * texel_measure(f, ij, grid);
     }
-    uint channels = pc.face.w;
-    int c = gl_InstanceIndex;
-    vec3 flux = f.intensity.rgb * measure;
     if (channels == 3u) {
         vec3 mask = vec3(0.0);
         mask[c] = 1.0;
         flux *= mask;
     }
-
-    Material m = materials[uint(fn.w + 0.5)];
-    uint kind = kind_of(m);
-    float cos1 = clamp(dot(-l, n1), 0.0, 1.0);
-    vec3 origin = p1;
-    vec3 dir;
-    vec3 weight;
-    // Single-surface refraction (water): "attenuation is performed over the distance between
-    // the surface and the receiver geometry" (§III.E).
-    vec3 absorb_to_receiver = vec3(0.0);
-    if (kind == MATERIAL_DIELECTRIC) {
-        float ior = (channels == 3u) ? m.spec_a[c] : m.spec_a.x;
-        dir = refract(l, n1, 1.0 / ior);
-        weight = vec3(1.0 - fresnel_dielectric(cos1, 1.0 / ior));
-        vec4 bp = texelFetch(back_position, ivec3(ij, layer), 0);
-        if (bp.w > 0.0) {
-            // Double-surface refraction (§IV): the exit point P2 where P1 + d T1 leaves the
-            // object. The back faces seen from the light are a depth map, so the exit is the
-            // root of the same signed function as the receiver's (Eq. 3): the back face's
-            // distance from the light at the point's texel minus the point's own distance,
-            // positive inside. The paper's derivative-free iteration (Eq. 1-2) converges
-            // slowly near the silhouette, where T1 runs almost along the back surface, and
-            // a wrong exit normal there turns into spurious total internal reflection; so
-            // as Hu & Qin 2007 (§2.1) do for the exit, a linear search over the object's
-            // largest chord brackets the first exit and a binary search refines it.
-            float chord = f.measure.w;
-            float lo = 0.0, hi = chord;
-            const int MARCH = 16, BISECT = 10;
-            bool found = false;
-            for (int k = 1; k <= MARCH && !found; ++k) {
-                float d = chord * float(k) / float(MARCH);
-                if (!inside(f, p1 + d * dir, grid, layer)) {
-                    hi = d;
-                    found = true;
-                } else {
-                    lo = d;
-                }
-            }
-            for (int k = 0; k < BISECT; ++k) {
-                float mid = 0.5 * (lo + hi);
-                if (inside(f, p1 + mid * dir, grid, layer)) lo = mid; else hi = mid;
-            }
-            float d = 0.5 * (lo + hi);
-            vec3 exit_p = p1 + d * dir;
-            ivec2 exit_t = source_texel(f, exit_p, grid);
-            if (exit_t.x < 0 || texelFetch(back_position, ivec3(exit_t, layer), 0).w <= 0.0) {
-                // Left through the silhouette: the back face at the last texel inside.
-                exit_t = source_texel(f, p1 + lo * dir, grid);
-                if (exit_t.x < 0) exit_t = ij;
-            }
-            vec3 n2 = normalize(texelFetch(back_normal, ivec3(exit_t, layer), 0).xyz);
-            vec3 t2 = refract(dir, -n2, ior);
-            if (dot(t2, t2) == 0.0) {
-                // Total internal reflection: the light stays inside the object.
-                drop_vertex();
-                return;
-            }
-            weight *= 1.0 - fresnel_dielectric(clamp(dot(dir, n2), 0.0, 1.0), ior);
-            // Beer-Lambert along the path inside the object (Eq. 7).
-            weight *= exp(-m.spec_b.rgb * d);
-            origin = exit_p;
-            dir = t2;
-        } else {
-            absorb_to_receiver = m.spec_b.rgb;
-        }
-    } else if (kind == MATERIAL_MIRROR) {
-        dir = reflect(l, n1);
-        weight = m.spec_a.rgb;
-    } else if (kind == MATERIAL_CONDUCTOR) {
-        dir = reflect(l, n1);
-        weight = fresnel_conductor(cos1, m.spec_a.rgb, m.spec_b.rgb);
-    } else {
-        drop_vertex();
-        return;
-    }
-    if (dot(dir, dir) == 0.0) {
-        drop_vertex();
-        return;
-    }
-    dir = normalize(dir);
     vec3 hit;
     if (!intersect(f, origin, dir, hit)) {
         drop_vertex();

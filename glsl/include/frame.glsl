@@ -37,6 +37,11 @@ layout(set = 0, binding = BINDING_SHADOW_2D) uniform sampler2DArray shadow_layer
 // laid out like the shadow atlas.
 layout(set = 0, binding = BINDING_CAUSTIC_CUBE) uniform samplerCubeArray caustic_cubes;
 layout(set = 0, binding = BINDING_CAUSTIC_2D) uniform sampler2DArray caustic_layers;
+// Photon-buffer caustic textures (Hu & Qin 2007 §3; src/passes/photon_buffer.rs): one layer
+// per receiver rectangle, and the rectangles.
+#include "photon_rect.glsl"
+layout(set = 0, binding = BINDING_PHOTON_CAUSTICS) uniform sampler2DArray photon_caustics;
+layout(set = 0, binding = BINDING_PHOTON_RECTS, std430) readonly buffer PhotonRects { PhotonRect photon_rects[]; };
 
 uint material_kind(uint m) { return kind_of(materials[m]); }
 

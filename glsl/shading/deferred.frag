@@ -12,6 +12,10 @@ layout(set = 1, binding = BINDING_GBUF_DEPTH) uniform sampler2D gbuf_depth;
 // the radius in texels of the optional box low-pass filter of the map (§III.F).
 layout(constant_id = 0) const uint CAUSTICS = 0;
 layout(constant_id = 1) const uint CAUSTIC_FILTER = 0;
+// Photon-buffer caustics (Hu & Qin 2007 §3.3): the number of receiver rectangles (0: off)
+// and PHOTON_PHYSICAL or PHOTON_PAPER.
+layout(constant_id = 2) const uint PHOTON_RECTS = 0;
+layout(constant_id = 3) const uint PHOTON_MODE = 0;
 layout(location = 0) in vec2 in_uv;
 layout(location = 0) out vec4 out_radiance;
 
@@ -60,6 +64,36 @@ vec3 caustic_irradiance(uint i, vec3 p, vec3 n) {
     return flux / taps * abs(dot(n, l.position.xyz)) / (texel * texel);
 }
 
+// Photon-buffer caustics at p (Hu & Qin 2007 §3.3, Fig. 23): p is projected with the
+// parallel projection of its object's rectangle RECT_i into TEX_CAUSTICS_i. The G-buffer
+// does not say which object p belongs to, so RECT_i is the rectangle whose object's bounding
+// sphere holds p and whose plane is nearest to p (exact for the planar receivers, whose
+// rectangle lies in their plane). PHOTON_PHYSICAL: irradiance on the rectangle (W/m^2) times
+// |n . axis|, the footprint of a texel projected along the axis onto a receiver tilted
+// against it; returned as irradiance. PHOTON_PAPER: the paper's intensity c, "blended with
+// the object's own colour" (returned as is, multiplied by the albedo by the caller).
+vec3 photon_caustic(vec3 p, vec3 n) {
+    int best = -1;
+    float best_d = 1.0 / 0.0;
+    vec2 best_uv = vec2(0.0);
+    for (uint i = 0u; i < PHOTON_RECTS; ++i) {
+        PhotonRect r = photon_rects[i];
+        if (distance(p, r.centre.xyz) > r.centre.w * 1.001 + 1e-6) continue;
+        vec2 uv = rect_uv(r, p);
+        if (any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0)))) continue;
+        float d = abs(dot(p - r.centre.xyz, r.axis.xyz));
+        if (d < best_d) {
+            best = int(i);
+            best_d = d;
+            best_uv = uv;
+        }
+    }
+    if (best < 0) return vec3(0.0);
+    vec3 c = textureLod(photon_caustics, vec3(best_uv, float(best)), 0.0).rgb;
+    if (PHOTON_MODE == PHOTON_PAPER) return c;
+    return c * abs(dot(n, photon_rects[best].axis.xyz));
+}
+
 void main() {
     ivec2 px = ivec2(gl_FragCoord.xy);
     float depth = texelFetch(gbuf_depth, px, 0).r;
@@ -86,6 +120,10 @@ void main() {
         vec3 caustic = vec3(0.0);
         for (uint i = 0u; i < frame.info.x; ++i) caustic += caustic_irradiance(i, p, n);
         radiance += albedo / PI * caustic;
+    }
+    if (PHOTON_RECTS != 0u) {
+        vec3 c = photon_caustic(p, n);
+        radiance += PHOTON_MODE == PHOTON_PAPER ? albedo * c : albedo / PI * c;
     }
     out_radiance = vec4(finite_or_zero(radiance), 1.0);
 }

@@ -7,7 +7,10 @@ use ash::vk;
 use super::context::GpuContext;
 use super::error::{GpuResult, VkContext};
 use super::sync::{BufferBarrier, ImageBarrier};
-use super::{Buffer, ComputePipeline, DescriptorSet, Framebuffer, GraphicsPipeline, Image, RenderPass, TimestampPool};
+use super::{
+    Buffer, ComputePipeline, DescriptorSet, Framebuffer, GraphicsPipeline, Image, OcclusionQueryPool, RenderPass,
+    TimestampPool,
+};
 
 /// A tightly packed copy of every layer of `image` to or from a buffer.
 fn whole_image_region(image: &Image) -> vk::BufferImageCopy {
@@ -236,6 +239,43 @@ impl<'a> Cmd<'a> {
     pub fn reset_queries(&self, pool: &TimestampPool) {
         // SAFETY: recording outside a render pass.
         unsafe { self.dev().cmd_reset_query_pool(self.raw, pool.raw, 0, pool.capacity) };
+    }
+
+    /// Reset every query of `pool` (outside a render pass, before the queries begin).
+    pub fn reset_occlusion_queries(&self, pool: &OcclusionQueryPool) {
+        // SAFETY: recording outside a render pass.
+        unsafe { self.dev().cmd_reset_query_pool(self.raw, pool.raw, 0, pool.capacity) };
+    }
+
+    pub fn begin_occlusion_query(&self, pool: &OcclusionQueryPool, query: u32) {
+        assert!(query < pool.capacity, "occlusion query {query} of {}", pool.capacity);
+        // SAFETY: query < capacity, reset earlier in this command buffer; PRECISE only when
+        // the feature is enabled (OcclusionQueryPool::new).
+        unsafe { self.dev().cmd_begin_query(self.raw, pool.raw, query, pool.flags) };
+    }
+
+    pub fn end_occlusion_query(&self, pool: &OcclusionQueryPool, query: u32) {
+        // SAFETY: matches a begin_occlusion_query in the same render pass instance.
+        unsafe { self.dev().cmd_end_query(self.raw, pool.raw, query) };
+    }
+
+    /// Copy every query's sample count of `pool` into `buffer` as u32s, waiting on the GPU
+    /// (WAIT flag) for each to be available: a transfer write to `buffer`, outside a render
+    /// pass, after the queries ended.
+    pub fn copy_occlusion_results(&self, pool: &OcclusionQueryPool, buffer: &Buffer) {
+        // SAFETY: buffer holds capacity u32s and has TRANSFER_DST usage (caller); outside a render pass.
+        unsafe {
+            self.dev().cmd_copy_query_pool_results(
+                self.raw,
+                pool.raw,
+                0,
+                pool.capacity,
+                buffer.raw,
+                0,
+                4,
+                vk::QueryResultFlags::WAIT,
+            )
+        };
     }
 
     /// Copy every layer of `image` (in TRANSFER_SRC_OPTIMAL) tightly into `buffer`.

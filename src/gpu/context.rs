@@ -48,6 +48,9 @@ pub struct DeviceInfo {
     pub timestamp_valid_bits: u32,
     pub validation: bool,
     pub sync_validation: bool,
+    /// Whether occlusion queries can count samples exactly (`occlusionQueryPrecise`);
+    /// without it a query only tells zero from non-zero.
+    pub occlusion_query_precise: bool,
 }
 
 /// A resource waiting for the GPU to finish with it before it is destroyed.
@@ -199,6 +202,7 @@ impl GpuContext {
             shader_float64: supported.shader_float64,
             sampler_anisotropy: supported.sampler_anisotropy,
             shader_storage_image_write_without_format: supported.shader_storage_image_write_without_format,
+            occlusion_query_precise: supported.occlusion_query_precise,
             ..Default::default()
         };
         if features.image_cube_array == vk::FALSE {
@@ -255,6 +259,7 @@ impl GpuContext {
             timestamp_valid_bits: queue_props[queue_family as usize].timestamp_valid_bits,
             validation,
             sync_validation,
+            occlusion_query_precise: supported.occlusion_query_precise == vk::TRUE,
         };
 
         let pool_info = vk::CommandPoolCreateInfo::default()

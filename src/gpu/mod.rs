@@ -34,7 +34,7 @@ pub use pipeline::{
 pub use render_pass::{Attachment, Framebuffer, RenderPass, RenderPassDesc};
 pub use swapchain::{Acquired, Presented, Semaphore, Swapchain, SwapchainImage};
 pub use sync::{Access, BufferBarrier, ImageBarrier};
-pub use timing::{TimestampPool, TimestampQuery};
+pub use timing::{OcclusionQueryPool, TimestampPool, TimestampQuery};
 
 pub use gpu_allocator::MemoryLocation;
 

@@ -79,3 +79,48 @@ impl Drop for TimestampPool {
         unsafe { self.ctx.raw().destroy_query_pool(self.raw, None) };
     }
 }
+
+/// Occlusion queries (samples that pass the depth test), for the visible area V of Shah et
+/// al. 2007 Eq. 6. Results are never read on the host: [`Cmd::copy_occlusion_results`]
+/// copies them into a buffer on the GPU timeline, which later passes read in the same
+/// frame, so the frame does not stall and needs no previous frame's value.
+///
+/// [`Cmd::copy_occlusion_results`]: super::Cmd::copy_occlusion_results
+pub struct OcclusionQueryPool {
+    ctx: Arc<GpuContext>,
+    pub(crate) raw: vk::QueryPool,
+    pub(crate) capacity: u32,
+    /// PRECISE control flag when the device supports exact counts.
+    pub(crate) flags: vk::QueryControlFlags,
+}
+
+impl OcclusionQueryPool {
+    pub fn new(ctx: &Arc<GpuContext>, name: &str, capacity: u32) -> GpuResult<OcclusionQueryPool> {
+        let info = vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::OCCLUSION).query_count(capacity.max(1));
+        // SAFETY: valid create info.
+        let raw = unsafe { ctx.raw().create_query_pool(&info, None) }.vk("vkCreateQueryPool")?;
+        ctx.set_name(raw, name);
+        let flags = if ctx.info.occlusion_query_precise {
+            vk::QueryControlFlags::PRECISE
+        } else {
+            vk::QueryControlFlags::empty()
+        };
+        Ok(OcclusionQueryPool { ctx: ctx.clone(), raw, capacity: capacity.max(1), flags })
+    }
+
+    pub fn capacity(&self) -> u32 {
+        self.capacity
+    }
+
+    /// Whether the counts are exact (occlusionQueryPrecise).
+    pub fn precise(&self) -> bool {
+        self.flags.contains(vk::QueryControlFlags::PRECISE)
+    }
+}
+
+impl Drop for OcclusionQueryPool {
+    fn drop(&mut self) {
+        // SAFETY: dropped with the renderer after the device is idle.
+        unsafe { self.ctx.raw().destroy_query_pool(self.raw, None) };
+    }
+}

@@ -33,21 +33,22 @@ use glam::{Mat4, Vec3};
 use crate::gpu::{
     vk, Access, Attachment, Blend, Buffer, Clear, DepthState, DescriptorSet, DescriptorSetLayout, DescriptorWrite,
     Framebuffer, GpuContext, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc, ImageViewKind,
-    PipelineLayout, RenderPass, RenderPassDesc, Sampler, SamplerDesc, VertexLayout,
+    MemoryLocation, OcclusionQueryPool, PipelineLayout, RenderPass, RenderPassDesc, Sampler, SamplerDesc, VertexLayout,
 };
-use crate::graph::{Frame, FrameGraph, ImageId};
+use crate::graph::{BufferId, Frame, FrameGraph, ImageId};
 use crate::passes::shadow_map::FAR_DISTANCE;
 use crate::renderer::gpu_scene::{cube_face_views, Draw, GpuScene};
 use crate::renderer::gpu_types::ShadowPush;
 use crate::renderer::plan::{CAUSTICS_MAP, CAUSTICS_MAP_RECEIVERS, CAUSTICS_MAP_REFRACTORS};
 use crate::renderer::targets::{Targets, CAUSTIC_FORMAT, DEPTH_FORMAT, SHADOW_FORMAT};
-use crate::scene::techniques::{CausticsMapParams, Newton};
+use crate::scene::techniques::{CausticsMapParams, Flux, Newton};
 use crate::scene::{Light, Material, Scene};
 use crate::{
     CAUSTIC_BINDING_BACK_NORMAL, CAUSTIC_BINDING_BACK_POSITION, CAUSTIC_BINDING_FACES, CAUSTIC_BINDING_FRONT_NORMAL,
     CAUSTIC_BINDING_FRONT_POSITION, CAUSTIC_BINDING_MATERIALS, CAUSTIC_BINDING_RECEIVER_2D,
-    CAUSTIC_BINDING_RECEIVER_CUBE, CAUSTIC_FACE_ORTHOGRAPHIC, CAUSTIC_FACE_PERSPECTIVE, CAUSTIC_LAYER_BACK,
-    CAUSTIC_LAYER_FRONT, LIGHT_DIRECTIONAL, LIGHT_POINT, NEWTON_APPROXIMATE, NEWTON_TRUE, SHADOW_LAYERS_PER_LIGHT,
+    CAUSTIC_BINDING_RECEIVER_CUBE, CAUSTIC_BINDING_VISIBLE, CAUSTIC_FACE_ORTHOGRAPHIC, CAUSTIC_FACE_PERSPECTIVE,
+    CAUSTIC_LAYER_BACK, CAUSTIC_LAYER_FRONT, FLUX_OCCLUSION_QUERY, FLUX_SOLID_ANGLE, LIGHT_DIRECTIONAL, LIGHT_POINT,
+    NEWTON_APPROXIMATE, NEWTON_TRUE, SHADOW_LAYERS_PER_LIGHT,
 };
 
 /// Refractor textures: 32-bit float positions and normals, so that the estimate's error is
@@ -162,11 +163,12 @@ fn source_faces(light: &Light, center: Vec3, radius: f32, grid: u32) -> Vec<GpuC
     }
 }
 
-fn is_specular(m: &Material) -> bool {
+pub(crate) fn is_specular(m: &Material) -> bool {
     matches!(m, Material::Dielectric { .. } | Material::Mirror { .. } | Material::Conductor { .. })
 }
 
-/// Centre and radius of a sphere bounding every specular object.
+/// Centre and radius of a sphere bounding every specular object (around their bounding
+/// box: for a ball, sqrt(3) times its radius).
 fn specular_bounds(scene: &Scene) -> (Vec3, f32) {
     let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
     for o in scene.objects.iter().filter(|o| is_specular(&scene.materials[o.material])) {
@@ -192,14 +194,7 @@ pub struct CausticsMapPass {
     receiver_faces: Vec<ReceiverFace>,
     receiver_draws: Vec<Draw>,
     // Refractors.
-    refractor_pass: RenderPass,
-    _refractor_layout: PipelineLayout,
-    front_pipeline: GraphicsPipeline,
-    back_pipeline: GraphicsPipeline,
-    /// front position, front normal, back position, back normal, front depth, back depth.
-    layers: Vec<(Image, ImageId)>,
-    sources: Vec<SourceFace>,
-    specular_draws: Vec<Draw>,
+    refractors: RefractorLayers,
     // Splats.
     splat_pass: RenderPass,
     _set_layout: DescriptorSetLayout,
@@ -225,6 +220,7 @@ impl CausticsMapPass {
         use vk::ImageUsageFlags as U;
         let size = params.map_size;
         let grid = params.grid;
+        let occlusion = params.flux == Flux::OcclusionQuery;
         let lights = gpu.lights.len() as u32;
         let layers = lights * SHADOW_LAYERS_PER_LIGHT;
 
@@ -301,96 +297,19 @@ impl CausticsMapPass {
             gpu.draws.iter().filter(|d| pred(&scene.materials[d.material as usize])).copied().collect()
         };
         let receiver_draws = draws_where(Material::is_diffuse);
-        let specular_draws = draws_where(is_specular);
 
         // 2. Source faces of every light, and the refractor textures.
-        let (center, radius) = specular_bounds(scene);
-        let mut faces: Vec<GpuCausticFace> = Vec::new();
-        let mut light_sources = Vec::new();
-        for (i, l) in scene.lights.iter().enumerate() {
-            let base = i as u32 * SHADOW_LAYERS_PER_LIGHT;
-            let first = faces.len() as u32;
-            for mut f in source_faces(l, center, radius, grid) {
-                f.intensity[3] = base as f32;
-                f.receiver_view_proj = gpu.lights[i].view_proj;
-                f.origin = gpu.lights[i].origin;
-                faces.push(f);
-            }
-            light_sources.push((first, faces.len() as u32 - first));
-        }
-        let refractor_pass = RenderPass::new(
+        let (refractors, faces, light_sources) = RefractorLayers::new(
             ctx,
             CAUSTICS_MAP_REFRACTORS,
-            &RenderPassDesc {
-                colors: vec![
-                    Attachment { format: LAYER_FORMAT, clear: true },
-                    Attachment { format: LAYER_FORMAT, clear: true },
-                ],
-                depth: Some(Attachment { format: DEPTH_FORMAT, clear: true }),
-                depth_read_only: false,
-            },
+            scene,
+            gpu,
+            graph,
+            grid,
+            specular_bounds(scene),
+            occlusion,
         )?;
-        let refractor_layout =
-            PipelineLayout::new(ctx, CAUSTICS_MAP_REFRACTORS, &[], std::mem::size_of::<RefractorPush>() as u32)?;
-        let refractor_pipeline = |mode: u32, name: &str| {
-            GraphicsPipeline::new(
-                ctx,
-                &GraphicsPipelineDesc {
-                    name,
-                    vertex_shader: "caustics/refractor.vert",
-                    fragment_shader: "caustics/refractor.frag",
-                    vertex: VertexLayout::Mesh,
-                    topology: vk::PrimitiveTopology::TRIANGLE_LIST,
-                    cull: vk::CullModeFlags::NONE,
-                    depth: DepthState::LESS,
-                    blend: &[Blend::Off, Blend::Off],
-                    specialization: &[mode],
-                },
-                &refractor_layout,
-                &refractor_pass,
-            )
-        };
-        let front_pipeline = refractor_pipeline(CAUSTIC_LAYER_FRONT, "caustics_map_front")?;
-        let back_pipeline = refractor_pipeline(CAUSTIC_LAYER_BACK, "caustics_map_back")?;
-        let n_faces = faces.len() as u32;
-        let mut layer_images = Vec::new();
-        for (name, format, usage) in [
-            ("caustic_front_position", LAYER_FORMAT, U::COLOR_ATTACHMENT | U::SAMPLED),
-            ("caustic_front_normal", LAYER_FORMAT, U::COLOR_ATTACHMENT | U::SAMPLED),
-            ("caustic_back_position", LAYER_FORMAT, U::COLOR_ATTACHMENT | U::SAMPLED),
-            ("caustic_back_normal", LAYER_FORMAT, U::COLOR_ATTACHMENT | U::SAMPLED),
-            ("caustic_front_depth", DEPTH_FORMAT, U::DEPTH_STENCIL_ATTACHMENT),
-            ("caustic_back_depth", DEPTH_FORMAT, U::DEPTH_STENCIL_ATTACHMENT),
-        ] {
-            let image = Image::new(
-                ctx,
-                &ImageDesc {
-                    name: name.into(),
-                    format,
-                    width: grid,
-                    height: grid,
-                    layers: n_faces,
-                    usage,
-                    view: ImageViewKind::D2Array,
-                },
-            )?;
-            let id = graph.register_image(&image);
-            layer_images.push((image, id));
-        }
-        let extent = vk::Extent2D { width: grid, height: grid };
-        let mut sources = Vec::new();
-        for (s, f) in faces.iter().enumerate() {
-            let s = s as u32;
-            let views = |a: usize, b: usize, depth: usize| {
-                [layer_images[a].0.layer_view(s), layer_images[b].0.layer_view(s), layer_images[depth].0.layer_view(s)]
-            };
-            sources.push(SourceFace {
-                front: Framebuffer::new(ctx, &format!("caustic_front_{s}"), &refractor_pass, &views(0, 1, 4), extent)?,
-                back: Framebuffer::new(ctx, &format!("caustic_back_{s}"), &refractor_pass, &views(2, 3, 5), extent)?,
-                view_proj: Mat4::from_cols_array_2d(&f.view_proj),
-                light: f.light,
-            });
-        }
+        let layer_images = &refractors.layers;
 
         // 3. The splat pass.
         let faces_buffer = Buffer::with_data(
@@ -417,6 +336,7 @@ impl CausticsMapPass {
                 (CAUSTIC_BINDING_FRONT_NORMAL, sampled, vs),
                 (CAUSTIC_BINDING_BACK_POSITION, sampled, vs),
                 (CAUSTIC_BINDING_BACK_NORMAL, sampled, vs),
+                (CAUSTIC_BINDING_VISIBLE, vk::DescriptorType::STORAGE_BUFFER, vs),
             ],
             1,
         )?;
@@ -432,6 +352,7 @@ impl CausticsMapPass {
                 DescriptorWrite::Sampled(CAUSTIC_BINDING_FRONT_NORMAL, layer_images[1].0.view(), &nearest, read_only),
                 DescriptorWrite::Sampled(CAUSTIC_BINDING_BACK_POSITION, layer_images[2].0.view(), &nearest, read_only),
                 DescriptorWrite::Sampled(CAUSTIC_BINDING_BACK_NORMAL, layer_images[3].0.view(), &nearest, read_only),
+                DescriptorWrite::Storage(CAUSTIC_BINDING_VISIBLE, &refractors.visible),
             ],
         )?;
         let splat_pass = RenderPass::new(
@@ -456,7 +377,8 @@ impl CausticsMapPass {
                 cull: vk::CullModeFlags::NONE,
                 depth: DepthState::OFF,
                 blend: &[Blend::Additive],
-                specialization: &[],
+                // Eq. 6's flux weight: FLUX_SOLID_ANGLE or FLUX_OCCLUSION_QUERY.
+                specialization: &[if occlusion { FLUX_OCCLUSION_QUERY } else { FLUX_SOLID_ANGLE }],
             },
             &splat_layout,
             &splat_pass,
@@ -515,13 +437,7 @@ impl CausticsMapPass {
             _receiver_depth: receiver_depth,
             receiver_faces,
             receiver_draws,
-            refractor_pass,
-            _refractor_layout: refractor_layout,
-            front_pipeline,
-            back_pipeline,
-            layers: layer_images,
-            sources,
-            specular_draws,
+            refractors,
             splat_pass,
             _set_layout: set_layout,
             set,
@@ -536,6 +452,11 @@ impl CausticsMapPass {
 
     pub fn params(&self) -> &CausticsMapParams {
         &self.params
+    }
+
+    /// The refractor layers seen from the light(s) and Eq. 6's V.
+    pub fn refractors(&self) -> &RefractorLayers {
+        &self.refractors
     }
 
     pub fn record<'a>(&'a self, frame: &mut Frame<'_, 'a>, scene: &'a GpuScene, targets: &Targets) {
@@ -560,18 +481,212 @@ impl CausticsMapPass {
                 }
             });
 
-        let mut pass = frame.pass(CAUSTICS_MAP_REFRACTORS);
+        self.refractors.record(frame, scene);
+
+        let mut pass = frame.pass(CAUSTICS_MAP).read(self.receiver_atlas_id, Access::VertexSampled);
+        for (_, id) in &self.refractors.layers[..4] {
+            pass = pass.read(*id, Access::VertexSampled);
+        }
+        if self.params.flux == Flux::OcclusionQuery {
+            pass = pass.read_buffer(self.refractors.visible_id, Access::VertexStorageRead);
+        }
+        let grid = self.params.grid;
+        pass.write(targets.caustic_atlas_id, Access::ColorAttachment).record(move |cmd| {
+            for d in &self.destinations {
+                cmd.begin_render_pass(&self.splat_pass, &d.framebuffer, &[Clear::Color([0.0; 4])]);
+                cmd.bind_graphics(&self.splat_pipeline, &[self.set]);
+                cmd.push_graphics(&self.splat_pipeline, &d.push);
+                cmd.draw(d.push.face[1] * grid * grid, self.channels);
+                cmd.end_render_pass();
+            }
+        });
+    }
+}
+
+/// The specular objects seen from every light as MRT (Shah et al. 2007, §III.B step 2):
+/// positions and normals of the surface nearest the light and of the nearest surface facing
+/// away from it, one array layer per source face (`source_faces`). Caustics mapping splats
+/// its vertex grid from them; the photon buffer of Hu & Qin 2007 (§3.1,
+/// src/passes/photon_buffer.rs) traces its photons from them.
+pub struct RefractorLayers {
+    name: &'static str,
+    pass: RenderPass,
+    _layout: PipelineLayout,
+    front_pipeline: GraphicsPipeline,
+    back_pipeline: GraphicsPipeline,
+    /// front position, front normal, back position, back normal, front depth, back depth.
+    pub layers: Vec<(Image, ImageId)>,
+    sources: Vec<SourceFace>,
+    specular_draws: Vec<Draw>,
+    /// Shah et al. 2007 Eq. 6's V: one occlusion query per source face around the front
+    /// surface's draws (samples that pass the depth test), copied on the GPU into `visible`
+    /// (one u32 per face), which the splat pass reads in the same frame.
+    queries: Option<OcclusionQueryPool>,
+    pub visible: Buffer,
+    pub visible_id: BufferId,
+}
+
+impl RefractorLayers {
+    /// The layers at `grid`^2 texels per face, recorded as the pass `name`, with the light's
+    /// faces fitted to the sphere `bounds` (centre, radius) around the specular objects.
+    /// Returns the source faces of every light and, per light, (its first face, its number
+    /// of faces).
+    #[allow(clippy::type_complexity, clippy::too_many_arguments)] // reason: the three results are built together; the
+                                                                  // arguments are the scene, the graph and the three settings each caller differs in
+    pub fn new(
+        ctx: &Arc<GpuContext>,
+        name: &'static str,
+        scene: &Scene,
+        gpu: &GpuScene,
+        graph: &mut FrameGraph,
+        grid: u32,
+        bounds: (Vec3, f32),
+        occlusion_queries: bool,
+    ) -> GpuResult<(Self, Vec<GpuCausticFace>, Vec<(u32, u32)>)> {
+        use vk::ImageUsageFlags as U;
+        let (center, radius) = bounds;
+        let mut faces: Vec<GpuCausticFace> = Vec::new();
+        let mut light_sources = Vec::new();
+        for (i, l) in scene.lights.iter().enumerate() {
+            let base = i as u32 * SHADOW_LAYERS_PER_LIGHT;
+            let first = faces.len() as u32;
+            for mut f in source_faces(l, center, radius, grid) {
+                f.intensity[3] = base as f32;
+                f.receiver_view_proj = gpu.lights[i].view_proj;
+                f.origin = gpu.lights[i].origin;
+                faces.push(f);
+            }
+            light_sources.push((first, faces.len() as u32 - first));
+        }
+        let refractor_pass = RenderPass::new(
+            ctx,
+            name,
+            &RenderPassDesc {
+                colors: vec![
+                    Attachment { format: LAYER_FORMAT, clear: true },
+                    Attachment { format: LAYER_FORMAT, clear: true },
+                ],
+                depth: Some(Attachment { format: DEPTH_FORMAT, clear: true }),
+                depth_read_only: false,
+            },
+        )?;
+        let refractor_layout = PipelineLayout::new(ctx, name, &[], std::mem::size_of::<RefractorPush>() as u32)?;
+        let refractor_pipeline = |mode: u32, name: &str| {
+            GraphicsPipeline::new(
+                ctx,
+                &GraphicsPipelineDesc {
+                    name,
+                    vertex_shader: "caustics/refractor.vert",
+                    fragment_shader: "caustics/refractor.frag",
+                    vertex: VertexLayout::Mesh,
+                    topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+                    cull: vk::CullModeFlags::NONE,
+                    depth: DepthState::LESS,
+                    blend: &[Blend::Off, Blend::Off],
+                    specialization: &[mode],
+                },
+                &refractor_layout,
+                &refractor_pass,
+            )
+        };
+        let front_pipeline = refractor_pipeline(CAUSTIC_LAYER_FRONT, &format!("{name}_front"))?;
+        let back_pipeline = refractor_pipeline(CAUSTIC_LAYER_BACK, &format!("{name}_back"))?;
+        let n_faces = faces.len() as u32;
+        let mut layer_images = Vec::new();
+        for (image_name, format, usage) in [
+            ("front_position", LAYER_FORMAT, U::COLOR_ATTACHMENT | U::SAMPLED | U::TRANSFER_SRC),
+            ("front_normal", LAYER_FORMAT, U::COLOR_ATTACHMENT | U::SAMPLED),
+            ("back_position", LAYER_FORMAT, U::COLOR_ATTACHMENT | U::SAMPLED),
+            ("back_normal", LAYER_FORMAT, U::COLOR_ATTACHMENT | U::SAMPLED),
+            ("front_depth", DEPTH_FORMAT, U::DEPTH_STENCIL_ATTACHMENT),
+            ("back_depth", DEPTH_FORMAT, U::DEPTH_STENCIL_ATTACHMENT),
+        ] {
+            let image = Image::new(
+                ctx,
+                &ImageDesc {
+                    name: format!("{name}_{image_name}"),
+                    format,
+                    width: grid,
+                    height: grid,
+                    layers: n_faces,
+                    usage,
+                    view: ImageViewKind::D2Array,
+                },
+            )?;
+            let id = graph.register_image(&image);
+            layer_images.push((image, id));
+        }
+        let extent = vk::Extent2D { width: grid, height: grid };
+        let mut sources = Vec::new();
+        for (s, f) in faces.iter().enumerate() {
+            let s = s as u32;
+            let views = |a: usize, b: usize, depth: usize| {
+                [layer_images[a].0.layer_view(s), layer_images[b].0.layer_view(s), layer_images[depth].0.layer_view(s)]
+            };
+            sources.push(SourceFace {
+                front: Framebuffer::new(ctx, &format!("{name}_front_{s}"), &refractor_pass, &views(0, 1, 4), extent)?,
+                back: Framebuffer::new(ctx, &format!("{name}_back_{s}"), &refractor_pass, &views(2, 3, 5), extent)?,
+                view_proj: Mat4::from_cols_array_2d(&f.view_proj),
+                light: f.light,
+            });
+        }
+        let specular_draws =
+            gpu.draws.iter().filter(|d| is_specular(&scene.materials[d.material as usize])).copied().collect();
+        let queries = if occlusion_queries {
+            Some(OcclusionQueryPool::new(ctx, &format!("{name}_visible"), n_faces)?)
+        } else {
+            None
+        };
+        let visible = Buffer::new(
+            ctx,
+            &format!("{name}_visible"),
+            4 * n_faces.max(1) as u64,
+            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            // Host-visible so that tests can check V against the layer's covered texels.
+            MemoryLocation::GpuToCpu,
+        )?;
+        let visible_id = graph.register_buffer(&visible);
+        let layers = RefractorLayers {
+            queries,
+            visible,
+            visible_id,
+            name,
+            pass: refractor_pass,
+            _layout: refractor_layout,
+            front_pipeline,
+            back_pipeline,
+            layers: layer_images,
+            sources,
+            specular_draws,
+        };
+        Ok((layers, faces, light_sources))
+    }
+
+    pub fn record<'a>(&'a self, frame: &mut Frame<'_, 'a>, scene: &'a GpuScene) {
+        let mut pass = frame.pass(self.name);
         for (i, (_, id)) in self.layers.iter().enumerate() {
             pass = pass.write(*id, if i < 4 { Access::ColorAttachment } else { Access::DepthAttachment });
         }
+        if self.queries.is_some() {
+            pass = pass.write_buffer(self.visible_id, Access::TransferWrite);
+        }
         pass.record(move |cmd| {
-            for s in &self.sources {
-                for (fb, pipeline) in [(&s.front, &self.front_pipeline), (&s.back, &self.back_pipeline)] {
+            if let Some(q) = &self.queries {
+                cmd.reset_occlusion_queries(q);
+            }
+            for (face, s) in self.sources.iter().enumerate() {
+                let layers = [(&s.front, &self.front_pipeline), (&s.back, &self.back_pipeline)];
+                for (layer, (fb, pipeline)) in layers.into_iter().enumerate() {
                     cmd.begin_render_pass(
-                        &self.refractor_pass,
+                        &self.pass,
                         fb,
                         &[Clear::Color([0.0; 4]), Clear::Color([0.0; 4]), Clear::Depth(1.0)],
                     );
+                    // V of Eq. 6: "the number of rasterized pixels" of the front surface.
+                    let query = self.queries.as_ref().filter(|_| layer == 0);
+                    if let Some(q) = query {
+                        cmd.begin_occlusion_query(q, face as u32);
+                    }
                     cmd.bind_graphics(pipeline, &[]);
                     cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
                     for d in &self.specular_draws {
@@ -583,23 +698,14 @@ impl CausticsMapPass {
                         cmd.push_graphics(pipeline, &push);
                         cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
                     }
+                    if let Some(q) = query {
+                        cmd.end_occlusion_query(q, face as u32);
+                    }
                     cmd.end_render_pass();
                 }
             }
-        });
-
-        let mut pass = frame.pass(CAUSTICS_MAP).read(self.receiver_atlas_id, Access::VertexSampled);
-        for (_, id) in &self.layers[..4] {
-            pass = pass.read(*id, Access::VertexSampled);
-        }
-        let grid = self.params.grid;
-        pass.write(targets.caustic_atlas_id, Access::ColorAttachment).record(move |cmd| {
-            for d in &self.destinations {
-                cmd.begin_render_pass(&self.splat_pass, &d.framebuffer, &[Clear::Color([0.0; 4])]);
-                cmd.bind_graphics(&self.splat_pipeline, &[self.set]);
-                cmd.push_graphics(&self.splat_pipeline, &d.push);
-                cmd.draw(d.push.face[1] * grid * grid, self.channels);
-                cmd.end_render_pass();
+            if let Some(q) = &self.queries {
+                cmd.copy_occlusion_results(q, &self.visible);
             }
         });
     }

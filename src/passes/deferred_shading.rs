@@ -3,7 +3,7 @@
 use std::sync::Arc;
 
 use crate::gpu::{DescriptorSet, DescriptorSetLayout, GpuContext, GpuResult, Sampler};
-use crate::graph::Frame;
+use crate::graph::{Frame, ImageId};
 use crate::renderer::gpu_scene::GpuScene;
 use crate::renderer::plan::DEFERRED_SHADING;
 use crate::renderer::targets::Targets;
@@ -17,6 +17,8 @@ pub struct DeferredShadingPass {
     shadowed: bool,
     /// Whether a caustics_map pass writes the caustic atlas this frame.
     caustics: bool,
+    /// The photon-buffer caustic textures, when a photon_buffer pass writes them.
+    photon: Option<ImageId>,
 }
 
 impl DeferredShadingPass {
@@ -27,6 +29,7 @@ impl DeferredShadingPass {
         nearest: &Sampler,
         shadowed: bool,
         caustic_filter: Option<u32>,
+        photon: Option<(u32, u32, ImageId)>,
     ) -> GpuResult<Self> {
         let pass = FullscreenPass::new(
             ctx,
@@ -40,13 +43,19 @@ impl DeferredShadingPass {
                 ],
                 target: (&targets.hdr, targets.hdr_id),
                 clear: true,
-                // Caustics mapping on/off and its low-pass filter radius (deferred.frag).
-                specialization: &[u32::from(caustic_filter.is_some()), caustic_filter.unwrap_or(0)],
+                // Caustics mapping on/off and its low-pass filter radius; photon-buffer
+                // caustics' rectangle count (0: off) and normalisation (deferred.frag).
+                specialization: &[
+                    u32::from(caustic_filter.is_some()),
+                    caustic_filter.unwrap_or(0),
+                    photon.map_or(0, |p| p.0),
+                    photon.map_or(0, |p| p.1),
+                ],
             },
             frame_layout,
             nearest,
         )?;
-        Ok(DeferredShadingPass { pass, shadowed, caustics: caustic_filter.is_some() })
+        Ok(DeferredShadingPass { pass, shadowed, caustics: caustic_filter.is_some(), photon: photon.map(|p| p.2) })
     }
 
     pub fn record<'a>(
@@ -62,6 +71,9 @@ impl DeferredShadingPass {
         }
         if self.caustics {
             reads.push(targets.caustic_atlas_id);
+        }
+        if let Some(id) = self.photon {
+            reads.push(id);
         }
         self.pass.record(frame, frame_set, &reads);
     }

@@ -9,6 +9,7 @@ pub mod fullscreen;
 pub mod gbuffer;
 pub mod impostor_lightmap;
 pub mod nearby_impostors;
+pub mod photon_buffer;
 pub mod refraction_hu_qin;
 pub mod refraction_wyman;
 pub mod refractor_layers;

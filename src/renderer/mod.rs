@@ -22,6 +22,7 @@ use crate::passes::distance_impostor::{object_bounds, ImpostorMap, ImpostorRefle
 use crate::passes::eikonal::EikonalPass;
 use crate::passes::gbuffer::GBufferPass;
 use crate::passes::impostor_lightmap::ImpostorLightmap;
+use crate::passes::photon_buffer::{PhotonBufferPass, PhotonCaustics};
 use crate::passes::refraction_hu_qin::HuQinPass;
 use crate::passes::refraction_wyman::WymanPass;
 use crate::passes::refractor_layers::DebugTarget;
@@ -29,12 +30,13 @@ use crate::passes::shadow_map::{ShadowMapPass, FAR_DISTANCE};
 use crate::passes::specular_single::{Mode, SpecularSinglePass};
 use crate::passes::tonemap::TonemapPass;
 use crate::scene::techniques::{
-    CausticsMapParams, EikonalParams, HuQinParams, ImpostorLightmapParams, ImpostorParams, WymanParams,
+    CausticsMapParams, EikonalParams, Flux, HuQinParams, ImpostorLightmapParams, ImpostorParams, PhotonBufferParams,
+    WymanParams,
 };
 use crate::scene::{Camera, Scene};
 use crate::{
-    BINDING_CAUSTIC_2D, BINDING_CAUSTIC_CUBE, BINDING_ENVIRONMENT, BINDING_FRAME, BINDING_MATERIALS, BINDING_SHADOW_2D,
-    BINDING_SHADOW_CUBE,
+    BINDING_CAUSTIC_2D, BINDING_CAUSTIC_CUBE, BINDING_ENVIRONMENT, BINDING_FRAME, BINDING_MATERIALS,
+    BINDING_PHOTON_CAUSTICS, BINDING_PHOTON_RECTS, BINDING_SHADOW_2D, BINDING_SHADOW_CUBE,
 };
 
 use gpu_scene::GpuScene;
@@ -105,6 +107,9 @@ impl FrameTiming {
 struct Passes {
     shadow_map: Option<ShadowMapPass>,
     caustics_map: Option<CausticsMapPass>,
+    photon_buffer: Option<PhotonBufferPass>,
+    /// Hu & Qin 2007 §3's caustic textures and rectangles (a stand-in without photon_buffer).
+    photon_caustics: PhotonCaustics,
     gbuffer: GBufferPass,
     deferred: DeferredShadingPass,
     refraction_single: Option<SpecularSinglePass>,
@@ -194,6 +199,15 @@ impl Renderer {
         } else {
             None
         };
+        let photon_params = if plan::has(&plan, plan::PHOTON_BUFFER) {
+            Some(
+                PhotonBufferParams::from_settings(&scene.render)
+                    .map_err(|error| RenderError::Param { technique: "photon_buffer", error })?,
+            )
+        } else {
+            None
+        };
+        let photon_caustics = PhotonCaustics::new(ctx, &mut graph, scene, photon_params.as_ref())?;
         let targets = Targets::new(
             ctx,
             &mut graph,
@@ -218,6 +232,8 @@ impl Renderer {
                 (BINDING_SHADOW_2D, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, stages),
                 (BINDING_CAUSTIC_CUBE, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, stages),
                 (BINDING_CAUSTIC_2D, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, stages),
+                (BINDING_PHOTON_CAUSTICS, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, stages),
+                (BINDING_PHOTON_RECTS, vk::DescriptorType::STORAGE_BUFFER, stages),
             ],
             FRAMES_IN_FLIGHT as u32,
         )?;
@@ -266,6 +282,13 @@ impl Renderer {
                         &nearest,
                         vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
                     ),
+                    DescriptorWrite::Sampled(
+                        BINDING_PHOTON_CAUSTICS,
+                        photon_caustics.textures.view(),
+                        &nearest,
+                        vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                    ),
+                    DescriptorWrite::Storage(BINDING_PHOTON_RECTS, &photon_caustics.rects),
                 ],
             )?;
             frame_buffers.push(ubo);
@@ -289,6 +312,10 @@ impl Renderer {
         })?;
         let caustics_map = match caustics_params {
             Some(p) => Some(CausticsMapPass::new(ctx, p, scene, &gpu_scene, &mut graph, &targets)?),
+            None => None,
+        };
+        let photon_buffer = match photon_params {
+            Some(p) => Some(PhotonBufferPass::new(ctx, p, scene, &gpu_scene, &mut graph, &photon_caustics)?),
             None => None,
         };
 
@@ -356,6 +383,7 @@ impl Renderer {
                 &nearest,
                 shadowed,
                 caustics_params.map(|p| p.filter),
+                photon_buffer.as_ref().map(|_| (photon_caustics.count, photon_caustics.mode, photon_caustics.id)),
             )?,
             refraction_single: if plan::has(&plan, plan::REFRACTION_SINGLE) {
                 Some(SpecularSinglePass::new(ctx, Mode::Refraction, &frame_layout, &targets, &nearest)?)
@@ -373,6 +401,8 @@ impl Renderer {
             reflection_impostor,
             impostor_lightmap,
             eikonal,
+            photon_buffer,
+            photon_caustics,
             tonemap: TonemapPass::new(ctx, &frame_layout, &targets, &nearest)?,
         };
 
@@ -528,6 +558,9 @@ impl Renderer {
         if let Some(p) = &passes.impostor_lightmap {
             p.record(&mut frame, scene, frame_set);
         }
+        if let Some(p) = &passes.photon_buffer {
+            p.record(&mut frame, scene, &passes.photon_caustics);
+        }
         passes.gbuffer.record(&mut frame, scene, targets, frame_set);
         passes.deferred.record(&mut frame, scene, targets, frame_set);
         if let Some(p) = &passes.impostor_lightmap {
@@ -662,6 +695,98 @@ impl Renderer {
         let Some(p) = &self.passes.impostor_lightmap else { return Ok(None) };
         let texels = p.read_lightmaps(&self.ctx, &mut self.graph)?;
         Ok(Some((texels, p.charts.iter().map(|c| (c.object, c.area())).collect())))
+        }
+    /// Shah et al. 2007 Eq. 6's V per source face, as the occlusion queries counted it, and
+    /// the texels of the front refractor layer that see a specular surface (what V should
+    /// count); `None` without caustics_map and `flux = "occlusion_query"`.
+    pub fn caustics_map_visible(&mut self) -> Result<Option<VisibleCounts>, RenderError> {
+        let on = self.passes.caustics_map.as_ref().is_some_and(|p| p.params().flux == Flux::OcclusionQuery);
+        if !on {
+            return Ok(None);
+        }
+        self.finish()?;
+        let Some(p) = &self.passes.caustics_map else {
+            return Ok(None);
+        };
+        let r = p.refractors();
+        let (image, id) = (&r.layers[0].0, r.layers[0].1);
+        let texels = image.desc.width as u64 * image.desc.height as u64 * image.layers() as u64;
+        let buffer = Buffer::new(
+            &self.ctx,
+            "visible_readback",
+            texels * 16,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuToCpu,
+        )?;
+        let buffer_id = self.graph.register_buffer(&buffer);
+        let graph = &mut self.graph;
+        let visible_id = r.visible_id;
+        self.ctx.one_shot(|cmd| {
+            graph.access_now(
+                cmd,
+                &[(id, Access::TransferRead)],
+                &[(buffer_id, Access::TransferWrite), (visible_id, Access::HostRead)],
+            );
+            cmd.copy_image_to_buffer(image, &buffer);
+            graph.access_now(cmd, &[], &[(buffer_id, Access::HostRead)]);
+        })?;
+        let faces = image.layers() as usize;
+        let per_face = (image.desc.width * image.desc.height) as usize;
+        let front: &[[f32; 4]] = bytemuck::cast_slice(buffer.read());
+        let covered =
+            (0..faces).map(|f| front[f * per_face..(f + 1) * per_face].iter().filter(|t| t[3] > 0.0).count() as u32);
+        let visible: &[u32] = bytemuck::cast_slice(r.visible.read());
+        Ok(Some(VisibleCounts { visible: visible[..faces].to_vec(), covered: covered.collect() }))
+    }
+
+    /// The photon-buffer caustics' intermediate images (Hu & Qin 2007 §3,
+    /// src/passes/photon_buffer.rs), RGBA f32 with all layers one after another; `None`
+    /// without a photon_buffer pass.
+    pub fn photon_buffer_images(&mut self) -> Result<Option<PhotonBufferImages>, RenderError> {
+        if self.passes.photon_buffer.is_none() {
+            return Ok(None);
+        }
+        self.finish()?;
+        let Some(p) = &self.passes.photon_buffer else {
+            return Ok(None);
+        };
+        let c = &self.passes.photon_caustics;
+        let images =
+            [(&p.photons.0, p.photons.1), (&p.flux.0, p.flux.1), (&p.counts.0, p.counts.1), (&c.textures, c.id)];
+        let mut out = Vec::new();
+        for (image, id) in images {
+            let texels = image.desc.width as u64 * image.desc.height as u64 * image.layers() as u64;
+            let buffer = Buffer::new(
+                &self.ctx,
+                "photon_readback",
+                texels * 16,
+                vk::BufferUsageFlags::TRANSFER_DST,
+                MemoryLocation::GpuToCpu,
+            )?;
+            let buffer_id = self.graph.register_buffer(&buffer);
+            let graph = &mut self.graph;
+            self.ctx.one_shot(|cmd| {
+                graph.access_now(cmd, &[(id, Access::TransferRead)], &[(buffer_id, Access::TransferWrite)]);
+                cmd.copy_image_to_buffer(image, &buffer);
+                graph.access_now(cmd, &[(id, Access::FragmentSampled)], &[(buffer_id, Access::HostRead)]);
+            })?;
+            out.push((image.desc.width, bytemuck::pod_collect_to_vec::<u8, [f32; 4]>(buffer.read())));
+        }
+        let mut it = out.into_iter();
+        let mut next = || it.next().unwrap();
+        let (photon_size, photons) = next();
+        let (_, flux) = next();
+        let (texture_size, counts) = next();
+        let (_, caustics) = next();
+        Ok(Some(PhotonBufferImages {
+            photon_size,
+            texture_size,
+            photons,
+            flux,
+            counts,
+            caustics,
+            rectangles: c.rectangles().to_vec(),
+        }))
     }
 
     /// Names of the debug targets [`Renderer::read_target`] can read (e.g.
@@ -678,6 +803,29 @@ impl Renderer {
         let bytes = self.read_image(id, 16)?;
         Ok(Some(bytemuck::pod_collect_to_vec(&bytes)))
     }
+}
+
+/// What [`Renderer::caustics_map_visible`] reads back, per source face.
+pub struct VisibleCounts {
+    /// Eq. 6's V as the occlusion query counted it.
+    pub visible: Vec<u32>,
+    /// Texels of the front refractor layer that see a specular surface.
+    pub covered: Vec<u32>,
+}
+
+/// What [`Renderer::photon_buffer_images`] reads back.
+pub struct PhotonBufferImages {
+    /// Pixels per side of the photon buffer, and texels per side of the caustic textures.
+    pub photon_size: u32,
+    pub texture_size: u32,
+    /// The photon buffer (u, v, k, 0) and the photons' power (rgb), one layer per source face.
+    pub photons: Vec<[f32; 4]>,
+    pub flux: Vec<[f32; 4]>,
+    /// Power (rgb, W) and photon count (a) per caustic-texture texel, one layer per rectangle.
+    pub counts: Vec<[f32; 4]>,
+    /// The filtered caustic textures, one layer per rectangle.
+    pub caustics: Vec<[f32; 4]>,
+    pub rectangles: Vec<crate::passes::photon_buffer::GpuPhotonRect>,
 }
 
 /// View, projection and position uniforms for `cam`, with the near plane scaled to the

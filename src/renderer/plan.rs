@@ -39,6 +39,12 @@ pub const IMPOSTOR_LIGHTMAP_REFRACTOR_MAP: &str = "impostor_lightmap_refractor_m
 pub const IMPOSTOR_LIGHTMAP_CAUSTIC_MAP: &str = "impostor_lightmap_caustic_map";
 pub const IMPOSTOR_LIGHTMAP_SPLAT: &str = "impostor_lightmap_splat";
 pub const IMPOSTOR_LIGHTMAP_APPLY: &str = "impostor_lightmap_apply";
+/// Hu & Qin 2007 §3 (src/passes/photon_buffer.rs): the specular objects from the light, the
+/// photon buffer, the caustic textures (photons scattered per rectangle), and their filter.
+pub const PHOTON_BUFFER_REFRACTORS: &str = "photon_buffer_refractors";
+pub const PHOTON_BUFFER: &str = "photon_buffer";
+pub const PHOTON_BUFFER_SCATTER: &str = "photon_buffer_scatter";
+pub const PHOTON_BUFFER_FILTER: &str = "photon_buffer_filter";
 /// Ihrke et al. 2007 (src/passes/eikonal.rs): curved view rays through the `[volume]`.
 pub const EIKONAL_VIEW: &str = "eikonal_view";
 
@@ -148,9 +154,9 @@ pub fn plan(scene: &Scene) -> Vec<PlannedPass> {
 }
 
 /// The caustic passes: only with a light, a specular object, a diffuse receiver and
-/// `render.caustics = "caustics_map"`.
+/// `render.caustics = "caustics_map"` or `"photon_buffer"`.
 fn caustics(scene: &Scene, diffuse: &[String], dielectric: &[String], metal: &[String]) -> Vec<PlannedPass> {
-    if scene.render.caustics != "caustics_map" || scene.lights.is_empty() || diffuse.is_empty() {
+    if scene.lights.is_empty() || diffuse.is_empty() {
         return Vec::new();
     }
     let specular: Vec<String> = dielectric.iter().chain(metal).cloned().collect();
@@ -158,6 +164,30 @@ fn caustics(scene: &Scene, diffuse: &[String], dielectric: &[String], metal: &[S
         return Vec::new();
     }
     let lights = scene.lights.len();
+    if scene.render.caustics == "photon_buffer" {
+        return vec![
+            PlannedPass {
+                name: PHOTON_BUFFER_REFRACTORS,
+                reason: format!("positions and normals of the specular {} seen from the light(s)", list(&specular)),
+            },
+            PlannedPass {
+                name: PHOTON_BUFFER,
+                reason: format!(
+                    "photons through {} onto the rectangles of the receivers {} (render.caustics = \"photon_buffer\")",
+                    list(&specular),
+                    list(diffuse)
+                ),
+            },
+            PlannedPass {
+                name: PHOTON_BUFFER_SCATTER,
+                reason: format!("photon counts in the caustic textures of {}", list(diffuse)),
+            },
+            PlannedPass { name: PHOTON_BUFFER_FILTER, reason: "filter of Hu & Qin 2007 §3.2".into() },
+        ];
+    }
+    if scene.render.caustics != "caustics_map" {
+        return Vec::new();
+    }
     vec![
         PlannedPass {
             name: CAUSTICS_MAP_RECEIVERS,

@@ -36,7 +36,7 @@ pub const REFRACTION_TECHNIQUES: &[&str] = &["single", "wyman", "hu_qin", "impos
 /// Accepted values of `render.reflection`; the first is the default.
 pub const REFLECTION_TECHNIQUES: &[&str] = &["single", "impostor"];
 /// Accepted values of `render.caustics`; the first is the default.
-pub const CAUSTICS_TECHNIQUES: &[&str] = &["none", "caustics_map", "impostor_lightmap"];
+pub const CAUSTICS_TECHNIQUES: &[&str] = &["none", "caustics_map", "photon_buffer", "impostor_lightmap"];
 
 /// The technique keys of `[render]` and their accepted values.
 pub const TECHNIQUE_KEYS: &[(&str, &[&str])] =

@@ -235,6 +235,17 @@ pub enum Newton {
     True,
 }
 
+/// The flux each caustics-mapping vertex carries (Shah et al. 2007, §III.E).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Flux {
+    /// The light's intensity times the grid texel's own solid angle (or irradiance times its
+    /// area): the flux through the texel, exact for any grid.
+    SolidAngle,
+    /// Eq. 6: Phi_i = (N_i . L_i) / V of the flux through the object's visible surface, V
+    /// counted by an occlusion query on the refractor pass.
+    OcclusionQuery,
+}
+
 /// `[render.caustics_map]` (Shah et al. 2007).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CausticsMapParams {
@@ -252,6 +263,7 @@ pub struct CausticsMapParams {
     pub filter: u32,
     /// Texels per side of each caustic-map face (and of the receivers' positions map).
     pub map_size: u32,
+    pub flux: Flux,
 }
 
 impl Default for CausticsMapParams {
@@ -263,7 +275,86 @@ impl Default for CausticsMapParams {
             splat_sigma: 1.0,
             filter: 0,
             map_size: 512,
+            flux: Flux::SolidAngle,
         }
+    }
+}
+
+/// What the photon-buffer caustic textures hold (Hu & Qin 2007 §3.2).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PhotonNormalization {
+    /// Irradiance in W/m^2: each photon carries its share of the light's flux (and its
+    /// Fresnel and absorption weights), the filter kernel is divided by its sum, and the
+    /// result by a texel's area on the rectangle. Comparable with the reference.
+    Physical,
+    /// The paper's c(u, v) = s * (filtered photon count), a brightness blended with the
+    /// receiver's colour: s is an arbitrary scale, so the result is not in physical units.
+    Paper,
+}
+
+/// `[render.photon_buffer]`: photon-buffer caustics (Hu & Qin 2007 §3,
+/// src/passes/photon_buffer.rs).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PhotonBufferParams {
+    /// Pixels per side of the photon buffer rendered from the light (§3.1; one photon per
+    /// pixel). The issue asks for 128 by default.
+    pub size: u32,
+    /// Texels per side of each caustic texture TEX_CAUSTICS_i (§3.2).
+    pub texture_size: u32,
+    /// The filter's k (§3.2: "k is equal to 2").
+    pub filter_k: u32,
+    /// The filter's s (§3.2: "s is equal to 0.01"); used by `normalization = "paper"` only.
+    pub filter_s: f32,
+    pub normalization: PhotonNormalization,
+}
+
+impl Default for PhotonBufferParams {
+    fn default() -> Self {
+        PhotonBufferParams {
+            size: 128,
+            texture_size: 512,
+            filter_k: 2,
+            filter_s: 0.01,
+            normalization: PhotonNormalization::Physical,
+        }
+    }
+}
+
+impl PhotonBufferParams {
+    pub const KEYS: &'static [&'static str] = &["size", "texture_size", "filter_k", "filter_s", "normalization"];
+
+    pub fn from_table(t: Option<&toml::Table>) -> Result<Self, ParamError> {
+        let mut p = PhotonBufferParams::default();
+        for (key, v) in t.into_iter().flatten() {
+            match key.as_str() {
+                // 4096^2 photons is 16M points per rectangle per frame on a CPU device.
+                "size" => p.size = integer(key, v, 1, 4096)?,
+                "texture_size" => p.texture_size = integer(key, v, 1, 4096)?,
+                // (2k+1)^2 taps per texel: k = 16 is already 1089.
+                "filter_k" => p.filter_k = integer(key, v, 0, 16)?,
+                "filter_s" => p.filter_s = number(key, v, 1e-12, 1e12)?,
+                "normalization" => {
+                    p.normalization = match v.as_str() {
+                        Some("physical") => PhotonNormalization::Physical,
+                        Some("paper") => PhotonNormalization::Paper,
+                        _ => {
+                            return Err(ParamError {
+                                key: key.clone(),
+                                message: format!("`normalization` must be \"physical\" or \"paper\", not {v}"),
+                                hint: "irradiance in W/m^2 (comparable with the reference) or the paper's s * count"
+                                    .into(),
+                            })
+                        }
+                    }
+                }
+                _ => return Err(unknown("photon_buffer", key, Self::KEYS)),
+            }
+        }
+        Ok(p)
+    }
+
+    pub fn from_settings(r: &RenderSettings) -> Result<Self, ParamError> {
+        Self::from_table(r.params.get("photon_buffer"))
     }
 }
 
@@ -448,7 +539,8 @@ impl ImpostorParams {
 }
 
 impl CausticsMapParams {
-    pub const KEYS: &'static [&'static str] = &["grid", "iterations", "newton", "splat_sigma", "filter", "map_size"];
+    pub const KEYS: &'static [&'static str] =
+        &["grid", "iterations", "newton", "splat_sigma", "filter", "map_size", "flux"];
 
     pub fn from_table(t: Option<&toml::Table>) -> Result<Self, ParamError> {
         let mut p = CausticsMapParams::default();
@@ -477,6 +569,20 @@ impl CausticsMapParams {
                 "splat_sigma" => p.splat_sigma = number(key, v, 0.5, 16.0)?,
                 "filter" => p.filter = integer(key, v, 0, 16)?,
                 "map_size" => p.map_size = integer(key, v, 8, 4096)?,
+                "flux" => {
+                    p.flux =
+                        match v.as_str() {
+                            Some("solid_angle") => Flux::SolidAngle,
+                            Some("occlusion_query") => Flux::OcclusionQuery,
+                            _ => return Err(ParamError {
+                                key: key.clone(),
+                                message: format!("`flux` must be \"solid_angle\" or \"occlusion_query\", not {v}"),
+                                hint: "each vertex's flux: its texel's solid angle, or Eq. 6's (N.L)/V with V counted \
+                                       by an occlusion query"
+                                    .into(),
+                            }),
+                        }
+                }
                 _ => return Err(unknown("caustics_map", key, Self::KEYS)),
             }
         }
@@ -494,6 +600,7 @@ pub fn check(technique: &str, t: &toml::Table) -> Result<(), ParamError> {
         "wyman" => WymanParams::from_table(Some(t)).map(|_| ()),
         "hu_qin" => HuQinParams::from_table(Some(t)).map(|_| ()),
         "caustics_map" => CausticsMapParams::from_table(Some(t)).map(|_| ()),
+        "photon_buffer" => PhotonBufferParams::from_table(Some(t)).map(|_| ()),
         "impostor" => ImpostorParams::from_table(Some(t)).map(|_| ()),
         "impostor_lightmap" => ImpostorLightmapParams::from_table(Some(t)).map(|_| ()),
         "eikonal" => EikonalParams::from_table(Some(t)).map(|_| ()),
@@ -626,8 +733,12 @@ mod tests {
             let e = ImpostorLightmapParams::from_table(Some(&table(t))).unwrap_err();
             assert_eq!(e.key, key, "{t}");
         }
-        for (t, key) in [("grid = 1", "grid"), ("newton = \"secant\"", "newton"), ("splat_sigma = 0.1", "splat_sigma")]
-        {
+        for (t, key) in [
+            ("grid = 1", "grid"),
+            ("newton = \"secant\"", "newton"),
+            ("splat_sigma = 0.1", "splat_sigma"),
+            ("flux = \"area\"", "flux"),
+        ] {
             let e = CausticsMapParams::from_table(Some(&table(t))).unwrap_err();
             assert_eq!(e.key, key, "{t}");
         }
@@ -637,6 +748,21 @@ mod tests {
         let c = CausticsMapParams::from_table(Some(&table("newton = true"))).unwrap();
         assert_eq!(c.newton, Newton::True);
         assert!(CausticsMapParams::from_table(Some(&table("newton = false"))).is_err());
+        for (t, key) in [
+            ("size = 0", "size"),
+            ("texture_size = 0", "texture_size"),
+            ("filter_k = 17", "filter_k"),
+            ("filter_s = 0", "filter_s"),
+            ("normalization = \"none\"", "normalization"),
+            ("k = 2", "k"),
+        ] {
+            let e = PhotonBufferParams::from_table(Some(&table(t))).unwrap_err();
+            assert_eq!(e.key, key, "{t}");
+        }
+        let p =
+            PhotonBufferParams::from_table(Some(&table("size = 64\nfilter_k = 3\nnormalization = \"paper\""))).unwrap();
+        assert_eq!((p.size, p.filter_k, p.normalization), (64, 3, PhotonNormalization::Paper));
+        assert_eq!(PhotonBufferParams::from_table(None).unwrap(), PhotonBufferParams::default());
         let e = WymanParams::from_table(Some(&table("back_surface = \"first\""))).unwrap_err();
         assert!(e.message.contains("back_surface"), "{e}");
     }

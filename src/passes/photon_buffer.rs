@@ -1,0 +1,528 @@
+//! Photon-buffer caustics: Hu & Qin 2007, "Interactive Approximate Rendering of
+//! Reflections, Refractions, and Caustics", section 3
+//! (../shared/papers/hu-qin2007-reflections-refractions-caustics.md).
+//!
+//! Four graph passes, each timed under its own name:
+//!
+//! 1. `photon_buffer_refractors`: the specular objects seen from each light, front and back
+//!    surfaces with positions and normals (the refractor layers caustics mapping renders too,
+//!    `caustics_map::RefractorLayers`), at the photon buffer's resolution.
+//! 2. `photon_buffer` (§3.1, Fig. 19b): "we render the reflector/refractor from the light
+//!    position"; each pixel is one photon. glsl/caustics/photon_buffer.frag refracts through
+//!    both interfaces (the double-surface exit estimate shared with caustics mapping,
+//!    glsl/caustics/light_path.glsl) or reflects, intersects the ray with the receiver
+//!    rectangles RECT_i (§2.2.1, Fig. 13) and writes (u, v, k) of the nearest, k = i + 1,
+//!    k = 0 for no photon, plus the photon's power (see below).
+//! 3. `photon_buffer_scatter` (§3.2): the caustic textures TEX_CAUSTICS_i, one layer of a 2D
+//!    array per rectangle. The paper reads the photon buffer back (glReadPixels) and counts
+//!    on the CPU; here, all on the GPU as the paper suggests, one point is drawn per
+//!    photon-buffer pixel, its vertex shader fetches (u, v, k) (vertex texture fetch) and
+//!    additive blending counts the photons on texel (u, v) of layer k - 1.
+//! 4. `photon_buffer_filter` (§3.2): c(u, v) = s sum_{i,j=-k..k} p(u+i, v+j)
+//!    sqrt(1 + 2k^2 - (i^2 + j^2)) per layer (glsl/caustics/photon_filter.frag).
+//!
+//! Deferred shading then looks the caustic up (§3.3, Fig. 23): the receiver's position is
+//! projected with its rectangle's parallel projection into TEX_CAUSTICS_i
+//! (glsl/shading/deferred.frag, `photon_caustic`).
+//!
+//! Units (`render.photon_buffer.normalization`): the paper counts photons and scales the
+//! filtered count by an arbitrary s ("paper"). The default, "physical", gives each photon its
+//! share of the light's flux (the light's intensity times the pixel's solid angle, or its
+//! irradiance times the pixel's area: the photon buffer is a uniform sampling of the light's
+//! view of the objects) times its Fresnel and Beer-Lambert weights, divides the kernel by its
+//! sum so that the filter conserves energy, and divides by a texel's area on the rectangle:
+//! irradiance in W/m^2, which `prism compare` can hold against the reference.
+//!
+//! The rectangles: the receivers (diffuse objects) as §2.2.1 builds them, a square of side
+//! 2 d_i centred at the object's centre O_i (mean of its vertices), perpendicular to O_R O_i
+//! (O_R: the mean of the specular objects' vertices), with the parallel projection from O_R
+//! along O_R O_i of glOrtho(-d_i, d_i, -d_i, d_i, near, far): the nearby-geometry impostors'
+//! rectangles (src/passes/nearby_impostors.rs, `rect_for`), see `receiver_rectangles`.
+use std::sync::Arc;
+
+use bytemuck::{Pod, Zeroable};
+
+use crate::gpu::{
+    vk, Access, Attachment, Blend, Buffer, Clear, DepthState, DescriptorSet, DescriptorSetLayout, DescriptorWrite,
+    Framebuffer, GpuContext, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc, ImageViewKind,
+    PipelineLayout, RenderPass, RenderPassDesc, Sampler, SamplerDesc, VertexLayout,
+};
+use crate::graph::{Frame, FrameGraph, ImageId};
+use crate::passes::caustics_map::{is_specular, RefractorLayers};
+use crate::passes::nearby_impostors::{nearby_objects, rect_for};
+use crate::renderer::gpu_scene::GpuScene;
+use crate::renderer::plan::{PHOTON_BUFFER, PHOTON_BUFFER_FILTER, PHOTON_BUFFER_REFRACTORS, PHOTON_BUFFER_SCATTER};
+use crate::scene::techniques::{PhotonBufferParams, PhotonNormalization};
+use crate::scene::Scene;
+use crate::{
+    CAUSTIC_BINDING_BACK_NORMAL, CAUSTIC_BINDING_BACK_POSITION, CAUSTIC_BINDING_FACES, CAUSTIC_BINDING_FRONT_NORMAL,
+    CAUSTIC_BINDING_FRONT_POSITION, CAUSTIC_BINDING_MATERIALS, PHOTON_BINDING_RECTS, PHOTON_PAPER, PHOTON_PHYSICAL,
+};
+
+/// Photon buffer and caustic textures: 32-bit float, so that counts stay exact to 2^24
+/// photons per texel and (u, v) resolves far below a texel of the largest texture.
+pub const PHOTON_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
+
+/// One receiver rectangle RECT_i (mirrors `PhotonRect` in glsl/include/photon_rect.glsl,
+/// std430).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct GpuPhotonRect {
+    /// World -> RECT_i's parallel projection (clip xy in [-1, 1] on the rectangle).
+    pub view_proj: [[f32; 4]; 4],
+    /// xyz: unit O_R -> O_i, the rectangle's normal and the projection's direction; w: d_i.
+    pub axis: [f32; 4],
+    /// xyz: O_i; w: the receiver object's radius around O_i (deferred shading picks the
+    /// rectangle of the object whose bounding sphere holds the fragment).
+    pub centre: [f32; 4],
+}
+const _: () = assert!(std::mem::size_of::<GpuPhotonRect>() == 96);
+
+/// Hu & Qin 2007 §2.2.1 (Fig. 12): RECT_i for the diffuse objects OBJ_i seen from O_R, as
+/// the nearby-geometry impostors build them (src/passes/nearby_impostors.rs: same O_i, d_i,
+/// square, up vector and parallel projection; at most MAX_NEARBY_RECTS, the nearest first).
+/// O_R is the mean of the vertices of every specular object (dielectric, mirror or
+/// conductor): caustics also form by reflection (metal_ring), which nearby_impostors' O_R
+/// (dielectrics only) does not cover.
+pub fn receiver_rectangles(scene: &Scene) -> Vec<GpuPhotonRect> {
+    let (mut sum, mut n) = (glam::DVec3::ZERO, 0usize);
+    for o in scene.objects.iter().filter(|o| is_specular(&scene.materials[o.material])) {
+        sum += o.mesh.positions.iter().map(|v| v.as_dvec3()).sum::<glam::DVec3>();
+        n += o.mesh.positions.len();
+    }
+    if n == 0 {
+        return Vec::new();
+    }
+    // "The average value of object's vertices is used in our implementation" (Fig. 13).
+    let o_r = (sum / n as f64).as_vec3();
+    let (kept, _) = nearby_objects(scene, o_r);
+    let mut rects = Vec::new();
+    for i in kept {
+        if let Some(r) = rect_for(scene, i, o_r, rects.len() as u32) {
+            rects.push(GpuPhotonRect {
+                view_proj: r.view_proj.to_cols_array_2d(),
+                axis: [r.axis.x, r.axis.y, r.axis.z, r.half_size],
+                centre: [r.center.x, r.center.y, r.center.z, r.half_size],
+            });
+        }
+    }
+    rects
+}
+
+/// The sphere the photon buffer's frustum is fitted to: centred at the mean of the specular
+/// objects' vertices, through the farthest vertex. Tighter than caustics mapping's sphere
+/// around their bounding box (sqrt(3) times a ball's radius), so that the refractor fills
+/// the photon buffer ("render the reflector/refractor from the light position", §3.1) and
+/// about three times as many of its pixels are photons on caustic_sphere.
+fn tight_bounds(scene: &Scene) -> (glam::Vec3, f32) {
+    let specular = || scene.objects.iter().filter(|o| is_specular(&scene.materials[o.material]));
+    let (mut sum, mut n) = (glam::DVec3::ZERO, 0usize);
+    for o in specular() {
+        sum += o.mesh.positions.iter().map(|v| v.as_dvec3()).sum::<glam::DVec3>();
+        n += o.mesh.positions.len();
+    }
+    let c = (sum / n.max(1) as f64).as_vec3();
+    let r = specular().flat_map(|o| o.mesh.positions.iter()).map(|p| p.distance(c)).fold(0.0f32, f32::max);
+    (c, r.max(1e-6))
+}
+
+/// The filtered caustic textures and the rectangles, bound in the frame set (set 0,
+/// BINDING_PHOTON_CAUSTICS / BINDING_PHOTON_RECTS): a 1x1 cleared stand-in and one zero
+/// rectangle when the scene has no photon-buffer caustics.
+pub struct PhotonCaustics {
+    pub textures: Image,
+    pub id: ImageId,
+    pub rects: Buffer,
+    /// Receiver rectangles (0: the stand-in).
+    pub count: u32,
+    /// PHOTON_PHYSICAL or PHOTON_PAPER.
+    pub mode: u32,
+    rect_data: Vec<GpuPhotonRect>,
+}
+
+impl PhotonCaustics {
+    pub fn new(
+        ctx: &Arc<GpuContext>,
+        graph: &mut FrameGraph,
+        scene: &Scene,
+        params: Option<&PhotonBufferParams>,
+    ) -> GpuResult<Self> {
+        use vk::ImageUsageFlags as U;
+        let rect_data = if params.is_some() { receiver_rectangles(scene) } else { Vec::new() };
+        let count = rect_data.len() as u32;
+        let size = match params {
+            Some(p) if count > 0 => p.texture_size,
+            _ => 1,
+        };
+        let textures = Image::new(
+            ctx,
+            &ImageDesc {
+                name: "photon_caustics".into(),
+                format: PHOTON_FORMAT,
+                width: size,
+                height: size,
+                layers: count.max(1),
+                usage: U::COLOR_ATTACHMENT | U::SAMPLED | U::TRANSFER_DST | U::TRANSFER_SRC,
+                view: ImageViewKind::D2Array,
+            },
+        )?;
+        let stand_in = [GpuPhotonRect::zeroed()];
+        let data: &[GpuPhotonRect] = if rect_data.is_empty() { &stand_in } else { &rect_data };
+        let rects =
+            Buffer::with_data(ctx, "photon_rects", bytemuck::cast_slice(data), vk::BufferUsageFlags::STORAGE_BUFFER)?;
+        let id = graph.register_image(&textures);
+        // Defined contents ("no caustic") and the layout the shaders expect.
+        ctx.one_shot(|cmd| {
+            graph.access_now(cmd, &[(id, Access::TransferWrite)], &[]);
+            cmd.clear_color_image(&textures, [0.0; 4]);
+            graph.access_now(cmd, &[(id, Access::FragmentSampled)], &[]);
+        })?;
+        let mode = match params.map(|p| p.normalization) {
+            Some(PhotonNormalization::Paper) => PHOTON_PAPER,
+            _ => PHOTON_PHYSICAL,
+        };
+        Ok(PhotonCaustics { textures, id, rects, count, mode, rect_data })
+    }
+
+    pub fn rectangles(&self) -> &[GpuPhotonRect] {
+        &self.rect_data
+    }
+}
+
+/// Push constants of glsl/caustics/photon_filter.frag.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct FilterPush {
+    info: [i32; 4],
+    params: [f32; 4],
+}
+
+pub struct PhotonBufferPass {
+    params: PhotonBufferParams,
+    refractors: RefractorLayers,
+    // §3.1 photon buffer.
+    photon_pass: RenderPass,
+    _photon_set_layout: DescriptorSetLayout,
+    photon_set: DescriptorSet,
+    _photon_layout: PipelineLayout,
+    photon_pipeline: GraphicsPipeline,
+    /// (u, v, k, 0) and the photons' power (rgb), one layer per source face.
+    pub photons: (Image, ImageId),
+    pub flux: (Image, ImageId),
+    photon_framebuffers: Vec<Framebuffer>,
+    faces: u32,
+    // §3.2 counting.
+    /// Photon power (rgb, W) and count (a) per texel, one layer per rectangle.
+    pub counts: (Image, ImageId),
+    scatter_pass: RenderPass,
+    _scatter_set_layout: DescriptorSetLayout,
+    scatter_set: DescriptorSet,
+    _scatter_layout: PipelineLayout,
+    scatter_pipeline: GraphicsPipeline,
+    scatter_framebuffers: Vec<Framebuffer>,
+    // §3.2 filter.
+    filter_pass: RenderPass,
+    _filter_set_layout: DescriptorSetLayout,
+    filter_set: DescriptorSet,
+    _filter_layout: PipelineLayout,
+    filter_pipeline: GraphicsPipeline,
+    /// Per rectangle: its framebuffer into the caustic textures and its push constants.
+    filter_layers: Vec<(Framebuffer, FilterPush)>,
+    _faces: Buffer,
+    _sampler: Sampler,
+}
+
+impl PhotonBufferPass {
+    pub fn new(
+        ctx: &Arc<GpuContext>,
+        params: PhotonBufferParams,
+        scene: &Scene,
+        gpu: &GpuScene,
+        graph: &mut FrameGraph,
+        caustics: &PhotonCaustics,
+    ) -> GpuResult<Self> {
+        use vk::ImageUsageFlags as U;
+        let size = params.size;
+        let (refractors, faces, _) =
+            RefractorLayers::new(ctx, PHOTON_BUFFER_REFRACTORS, scene, gpu, graph, size, tight_bounds(scene), false)?;
+        let n_faces = faces.len() as u32;
+        let faces_buffer =
+            Buffer::with_data(ctx, "photon_faces", bytemuck::cast_slice(&faces), vk::BufferUsageFlags::STORAGE_BUFFER)?;
+        let sampler = Sampler::new(ctx, "photon_nearest", SamplerDesc::NEAREST_CLAMP)?;
+        let read_only = Access::FragmentSampled.info(false).layout;
+        let fs = vk::ShaderStageFlags::FRAGMENT;
+        let vs = vk::ShaderStageFlags::VERTEX;
+        let sampled = vk::DescriptorType::COMBINED_IMAGE_SAMPLER;
+        let storage = vk::DescriptorType::STORAGE_BUFFER;
+
+        // 1. The photon buffer: a full-screen triangle per source face.
+        let image = |name: &str, width: u32, layers: u32| {
+            Image::new(
+                ctx,
+                &ImageDesc {
+                    name: name.into(),
+                    format: PHOTON_FORMAT,
+                    width,
+                    height: width,
+                    layers,
+                    usage: U::COLOR_ATTACHMENT | U::SAMPLED | U::TRANSFER_SRC,
+                    view: ImageViewKind::D2Array,
+                },
+            )
+        };
+        let photons = image("photon_buffer", size, n_faces)?;
+        let flux = image("photon_buffer_flux", size, n_faces)?;
+        let photon_pass = RenderPass::new(
+            ctx,
+            PHOTON_BUFFER,
+            &RenderPassDesc {
+                colors: vec![
+                    Attachment { format: PHOTON_FORMAT, clear: true },
+                    Attachment { format: PHOTON_FORMAT, clear: true },
+                ],
+                depth: None,
+                depth_read_only: false,
+            },
+        )?;
+        let photon_set_layout = DescriptorSetLayout::new(
+            ctx,
+            PHOTON_BUFFER,
+            &[
+                (CAUSTIC_BINDING_FACES, storage, fs),
+                (CAUSTIC_BINDING_MATERIALS, storage, fs),
+                (CAUSTIC_BINDING_FRONT_POSITION, sampled, fs),
+                (CAUSTIC_BINDING_FRONT_NORMAL, sampled, fs),
+                (CAUSTIC_BINDING_BACK_POSITION, sampled, fs),
+                (CAUSTIC_BINDING_BACK_NORMAL, sampled, fs),
+                (PHOTON_BINDING_RECTS, storage, fs),
+            ],
+            1,
+        )?;
+        let layers = &refractors.layers;
+        let photon_set = photon_set_layout.allocate(
+            PHOTON_BUFFER,
+            &[
+                DescriptorWrite::Storage(CAUSTIC_BINDING_FACES, &faces_buffer),
+                DescriptorWrite::Storage(CAUSTIC_BINDING_MATERIALS, &gpu.materials),
+                DescriptorWrite::Sampled(CAUSTIC_BINDING_FRONT_POSITION, layers[0].0.view(), &sampler, read_only),
+                DescriptorWrite::Sampled(CAUSTIC_BINDING_FRONT_NORMAL, layers[1].0.view(), &sampler, read_only),
+                DescriptorWrite::Sampled(CAUSTIC_BINDING_BACK_POSITION, layers[2].0.view(), &sampler, read_only),
+                DescriptorWrite::Sampled(CAUSTIC_BINDING_BACK_NORMAL, layers[3].0.view(), &sampler, read_only),
+                DescriptorWrite::Storage(PHOTON_BINDING_RECTS, &caustics.rects),
+            ],
+        )?;
+        let photon_layout = PipelineLayout::new(ctx, PHOTON_BUFFER, &[&photon_set_layout], 16)?;
+        let photon_pipeline = GraphicsPipeline::new(
+            ctx,
+            &GraphicsPipelineDesc {
+                name: PHOTON_BUFFER,
+                vertex_shader: "common/fullscreen.vert",
+                fragment_shader: "caustics/photon_buffer.frag",
+                vertex: VertexLayout::None,
+                topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+                cull: vk::CullModeFlags::NONE,
+                depth: DepthState::OFF,
+                blend: &[Blend::Off, Blend::Off],
+                specialization: &[],
+            },
+            &photon_layout,
+            &photon_pass,
+        )?;
+        let extent = vk::Extent2D { width: size, height: size };
+        let photon_framebuffers = (0..n_faces)
+            .map(|s| {
+                Framebuffer::new(
+                    ctx,
+                    &format!("photon_buffer_{s}"),
+                    &photon_pass,
+                    &[photons.layer_view(s), flux.layer_view(s)],
+                    extent,
+                )
+            })
+            .collect::<GpuResult<Vec<_>>>()?;
+
+        // 2. Counting: points into the caustic textures, additively.
+        let t = caustics.textures.desc.width;
+        let n_rects = caustics.count;
+        let counts = Image::new(
+            ctx,
+            &ImageDesc {
+                name: "photon_counts".into(),
+                format: PHOTON_FORMAT,
+                width: t,
+                height: t,
+                layers: n_rects.max(1),
+                usage: U::COLOR_ATTACHMENT | U::SAMPLED | U::TRANSFER_SRC,
+                view: ImageViewKind::D2Array,
+            },
+        )?;
+        let single = |name: &str, target: &Image, layer: u32, pass: &RenderPass| {
+            Framebuffer::new(ctx, &format!("{name}_{layer}"), pass, &[target.layer_view(layer)], target.extent())
+        };
+        let one_target = |name: &str| {
+            RenderPass::new(
+                ctx,
+                name,
+                &RenderPassDesc {
+                    colors: vec![Attachment { format: PHOTON_FORMAT, clear: true }],
+                    depth: None,
+                    depth_read_only: false,
+                },
+            )
+        };
+        let scatter_pass = one_target(PHOTON_BUFFER_SCATTER)?;
+        let scatter_set_layout =
+            DescriptorSetLayout::new(ctx, PHOTON_BUFFER_SCATTER, &[(0, sampled, vs), (1, sampled, vs)], 1)?;
+        let vertex_read = Access::VertexSampled.info(false).layout;
+        let scatter_set = scatter_set_layout.allocate(
+            PHOTON_BUFFER_SCATTER,
+            &[
+                DescriptorWrite::Sampled(0, photons.view(), &sampler, vertex_read),
+                DescriptorWrite::Sampled(1, flux.view(), &sampler, vertex_read),
+            ],
+        )?;
+        let scatter_layout = PipelineLayout::new(ctx, PHOTON_BUFFER_SCATTER, &[&scatter_set_layout], 16)?;
+        let scatter_pipeline = GraphicsPipeline::new(
+            ctx,
+            &GraphicsPipelineDesc {
+                name: PHOTON_BUFFER_SCATTER,
+                vertex_shader: "caustics/photon_scatter.vert",
+                fragment_shader: "caustics/photon_scatter.frag",
+                vertex: VertexLayout::None,
+                topology: vk::PrimitiveTopology::POINT_LIST,
+                cull: vk::CullModeFlags::NONE,
+                depth: DepthState::OFF,
+                blend: &[Blend::Additive],
+                specialization: &[],
+            },
+            &scatter_layout,
+            &scatter_pass,
+        )?;
+        let scatter_framebuffers =
+            (0..n_rects).map(|i| single("photon_counts", &counts, i, &scatter_pass)).collect::<GpuResult<Vec<_>>>()?;
+
+        // 3. The filter, one full-screen triangle per rectangle.
+        let filter_pass = one_target(PHOTON_BUFFER_FILTER)?;
+        let filter_set_layout = DescriptorSetLayout::new(ctx, PHOTON_BUFFER_FILTER, &[(0, sampled, fs)], 1)?;
+        let filter_set = filter_set_layout
+            .allocate(PHOTON_BUFFER_FILTER, &[DescriptorWrite::Sampled(0, counts.view(), &sampler, read_only)])?;
+        let filter_layout = PipelineLayout::new(
+            ctx,
+            PHOTON_BUFFER_FILTER,
+            &[&filter_set_layout],
+            std::mem::size_of::<FilterPush>() as u32,
+        )?;
+        let filter_pipeline = GraphicsPipeline::new(
+            ctx,
+            &GraphicsPipelineDesc {
+                name: PHOTON_BUFFER_FILTER,
+                vertex_shader: "common/fullscreen.vert",
+                fragment_shader: "caustics/photon_filter.frag",
+                vertex: VertexLayout::None,
+                topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+                cull: vk::CullModeFlags::NONE,
+                depth: DepthState::OFF,
+                blend: &[Blend::Off],
+                specialization: &[],
+            },
+            &filter_layout,
+            &filter_pass,
+        )?;
+        let mut filter_layers = Vec::new();
+        for (i, r) in caustics.rectangles().iter().enumerate() {
+            // A texel of TEX_CAUSTICS_i covers (2 d_i / T)^2 of the rectangle.
+            let texel = 2.0 * r.axis[3] / t as f32;
+            let push = FilterPush {
+                info: [i as i32, params.filter_k as i32, caustics.mode as i32, 0],
+                params: [params.filter_s, texel * texel, 0.0, 0.0],
+            };
+            filter_layers.push((single("photon_caustics", &caustics.textures, i as u32, &filter_pass)?, push));
+        }
+
+        let photons_id = graph.register_image(&photons);
+        let flux_id = graph.register_image(&flux);
+        let counts_id = graph.register_image(&counts);
+        Ok(PhotonBufferPass {
+            params,
+            refractors,
+            photon_pass,
+            _photon_set_layout: photon_set_layout,
+            photon_set,
+            _photon_layout: photon_layout,
+            photon_pipeline,
+            photons: (photons, photons_id),
+            flux: (flux, flux_id),
+            photon_framebuffers,
+            faces: n_faces,
+            counts: (counts, counts_id),
+            scatter_pass,
+            _scatter_set_layout: scatter_set_layout,
+            scatter_set,
+            _scatter_layout: scatter_layout,
+            scatter_pipeline,
+            scatter_framebuffers,
+            filter_pass,
+            _filter_set_layout: filter_set_layout,
+            filter_set,
+            _filter_layout: filter_layout,
+            filter_pipeline,
+            filter_layers,
+            _faces: faces_buffer,
+            _sampler: sampler,
+        })
+    }
+
+    pub fn params(&self) -> &PhotonBufferParams {
+        &self.params
+    }
+
+    pub fn record<'a>(&'a self, frame: &mut Frame<'_, 'a>, scene: &'a GpuScene, caustics: &'a PhotonCaustics) {
+        self.refractors.record(frame, scene);
+
+        let mut pass = frame.pass(PHOTON_BUFFER);
+        for (_, id) in &self.refractors.layers[..4] {
+            pass = pass.read(*id, Access::FragmentSampled);
+        }
+        let (size, rects) = (self.params.size, caustics.count);
+        pass.write(self.photons.1, Access::ColorAttachment).write(self.flux.1, Access::ColorAttachment).record(
+            move |cmd| {
+                for (s, fb) in self.photon_framebuffers.iter().enumerate() {
+                    cmd.begin_render_pass(&self.photon_pass, fb, &[Clear::Color([0.0; 4]), Clear::Color([0.0; 4])]);
+                    cmd.bind_graphics(&self.photon_pipeline, &[self.photon_set]);
+                    cmd.push_graphics(&self.photon_pipeline, &[s as u32, size, rects, 0]);
+                    cmd.draw(3, 1);
+                    cmd.end_render_pass();
+                }
+            },
+        );
+
+        frame
+            .pass(PHOTON_BUFFER_SCATTER)
+            .read(self.photons.1, Access::VertexSampled)
+            .read(self.flux.1, Access::VertexSampled)
+            .write(self.counts.1, Access::ColorAttachment)
+            .record(move |cmd| {
+                for (i, fb) in self.scatter_framebuffers.iter().enumerate() {
+                    cmd.begin_render_pass(&self.scatter_pass, fb, &[Clear::Color([0.0; 4])]);
+                    cmd.bind_graphics(&self.scatter_pipeline, &[self.scatter_set]);
+                    cmd.push_graphics(&self.scatter_pipeline, &[size, self.faces, i as u32 + 1, 0]);
+                    cmd.draw(size * size * self.faces, 1);
+                    cmd.end_render_pass();
+                }
+            });
+
+        frame
+            .pass(PHOTON_BUFFER_FILTER)
+            .read(self.counts.1, Access::FragmentSampled)
+            .write(caustics.id, Access::ColorAttachment)
+            .record(move |cmd| {
+                for (fb, push) in &self.filter_layers {
+                    cmd.begin_render_pass(&self.filter_pass, fb, &[Clear::Color([0.0; 4])]);
+                    cmd.bind_graphics(&self.filter_pipeline, &[self.filter_set]);
+                    cmd.push_graphics(&self.filter_pipeline, push);
+                    cmd.draw(3, 1);
+                    cmd.end_render_pass();
+                }
+            });
+    }
+}
