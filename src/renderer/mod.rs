@@ -695,7 +695,8 @@ impl Renderer {
         let Some(p) = &self.passes.impostor_lightmap else { return Ok(None) };
         let texels = p.read_lightmaps(&self.ctx, &mut self.graph)?;
         Ok(Some((texels, p.charts.iter().map(|c| (c.object, c.area())).collect())))
-        }
+    }
+
     /// Shah et al. 2007 Eq. 6's V per source face, as the occlusion queries counted it, and
     /// the texels of the front refractor layer that see a specular surface (what V should
     /// count); `None` without caustics_map and `flux = "occlusion_query"`.
