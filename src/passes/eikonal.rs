@@ -10,6 +10,11 @@
 //!   enters the volume's box with the ray equation, Eqs. 9-10, by Euler (Eqs. 11-12) or RK4,
 //!   absorbs along the curved path (Eq. 5) and looks up the environment in the exit
 //!   direction, over the deferred result.
+//! - Volume sources (issue 7; src/scene/volume_sources.rs): the fields of `[[volume.region]]`s
+//!   are evaluated on the CPU; a per-channel index is uploaded as three slabs stacked along z
+//!   and smoothed/differentiated slab by slab (dispersion: one march per channel), and the
+//!   materials go to three RGBA16F volumes ([`VolumeTextures`]) for RGB extinction, emission
+//!   and Fresnel reflection at the boundary indicator's band.
 //!
 //! The CPU integrators here ([`euler_step`], [`rk4_step`], [`trace`]) are the same equations
 //! in f64 on the analytic profile: the tests check the Luneburg focus and RK4's order with

@@ -18,6 +18,14 @@
 //! dx/ds = v/n, dv/ds = grad n on the analytic profile with a step of 1/2000 of the box
 //! diagonal, Beer-Lambert absorption along the curved path. Surfaces inside the region are
 //! not seen, and photons do not enter volumes (no volume caustics yet).
+//!
+//! A volume with `[[volume.region]]`s (volume sources, issue 7) is traced instead through
+//! the same voxel fields the view renderer gets (src/scene/volume_sources.rs): the index per
+//! channel (one channel per path when dispersive), the extinction and the emission,
+//! unsmoothed and trilinear, RK4 steps of 1/8 voxel, stochastic exact Fresnel at the index
+//! jumps marked by the boundary indicator (glsl/reference/volume.glsl, VOLUME_FIELDS).
+//! Scattering there only attenuates (in-scattering is the light simulator's), and emission
+//! is counted on camera paths only.
 pub mod bvh;
 
 use std::sync::Arc;
