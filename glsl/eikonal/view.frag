@@ -216,7 +216,8 @@ vec3 march(vec3 o, vec3 d, float t_enter, int c) {
             }
             if (abs(n_cur - r.n_a) > abs(r.n_peak - r.n_a)) r.n_peak = n_cur;
             r.grad_sum += s.xyz;
-            r.rho = max(r.rho, band_reflectance(x));
+            // Only band voxels carry their surface's factor (the step may have left the band).
+            if (in_band(x)) r.rho = max(r.rho, band_reflectance(x));
         }
         if (MATERIALS != 0u) {
             vec3 mid = 0.5 * (x0 + x);

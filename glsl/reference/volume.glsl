@@ -317,7 +317,7 @@ bool volume_cross_fields(inout vec3 o, inout vec3 d, float t, inout vec3 beta, i
         if (banded) {
             if (abs(n - n_a) > abs(n_peak - n_a)) n_peak = n;
             grad_sum += g;
-            rho = max(rho, field_reflectance(x));
+            if (field_band(x)) rho = max(rho, field_reflectance(x));
         }
         // Eq. 1 and Eq. 5 over the segment (constant coefficients at its midpoint).
         vec3 mid = 0.5 * (x_prev + x);
