@@ -56,6 +56,8 @@ shared_constants! {
     REF_BINDING_GRID: u32 = 11;
     REF_BINDING_COUNTERS: u32 = 12;
     REF_BINDING_DEBUG: u32 = 13;
+    // volsrc (issue 7): a volume's voxel fields (glsl/reference/volume.glsl).
+    REF_BINDING_VOLUME: u32 = 14;
     // Specular objects photons are aimed at, at most.
     REF_MAX_TARGETS: u32 = 16;
     // Traversal stack depth (a SAH BVH over 1e6 triangles is far shallower).
@@ -156,6 +158,11 @@ shared_constants! {
     EIKONAL_BINDING_SRC: u32 = 0;
     EIKONAL_BINDING_DST: u32 = 1;
     BINDING_EIKONAL_FIELD: u32 = 13;
+    // volsrc (issue 7): the material volumes of eikonal_view (src/scene/volume_sources.rs):
+    // (extinction RGB, HG g), (albedo RGB, reflectance), (emission RGB, boundary band).
+    BINDING_EIKONAL_EXTINCTION: u32 = 20;
+    BINDING_EIKONAL_ALBEDO: u32 = 21;
+    BINDING_EIKONAL_EMISSION: u32 = 22;
     // render.eikonal.integrator: Euler (Eqs. 11-12) or classical Runge-Kutta of Eqs. 9-10.
     EIKONAL_EULER: u32 = 0;
     EIKONAL_RK4: u32 = 1;

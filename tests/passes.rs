@@ -251,6 +251,14 @@ fn prism_passes_prints_the_passes_and_why() {
 fn eikonal_passes_only_with_a_volume() {
     assert_eq!(names("eikonal_luneburg", &[]), ["gbuffer", "deferred_shading", "eikonal_view", "tonemap"]);
     assert_eq!(names("eikonal_sphere", &[]), ["gbuffer", "deferred_shading", "eikonal_view", "tonemap"]);
+    // The volume-source scenes (issue 7): the wine glass's table adds only its shadow map.
+    for scene in ["eikonal_amber_bunny", "eikonal_dispersion_cube"] {
+        assert_eq!(names(scene, &[]), ["gbuffer", "deferred_shading", "eikonal_view", "tonemap"]);
+    }
+    assert_eq!(
+        names("eikonal_wine_glass", &[]),
+        ["shadow_map", "gbuffer", "deferred_shading", "eikonal_view", "tonemap"]
+    );
     for scene in prism::scene::BENCHMARK_SCENES {
         let n = names(scene, &[]);
         assert!(!n.iter().any(|p| p.starts_with("eikonal")), "{scene}: {n:?}");

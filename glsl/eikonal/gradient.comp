@@ -8,11 +8,14 @@ layout(local_size_x = EIKONAL_GROUP, local_size_y = EIKONAL_GROUP, local_size_z 
 layout(constant_id = 0) const float VOXEL_X = 1.0;
 layout(constant_id = 1) const float VOXEL_Y = 1.0;
 layout(constant_id = 2) const float VOXEL_Z = 1.0;
+// Slices per index slab (3 slabs stacked along z with dispersion; see smooth.comp).
+layout(constant_id = 3) const int SLAB = 1 << 30;
 layout(set = 0, binding = EIKONAL_BINDING_SRC, r32f) uniform readonly image3D src;
 layout(set = 0, binding = EIKONAL_BINDING_DST, rgba32f) uniform writeonly image3D dst;
 
-float deviation(ivec3 q, ivec3 size) {
-    return all(greaterThanEqual(q, ivec3(0))) && all(lessThan(q, size)) ? imageLoad(src, q).r : 0.0;
+float deviation(ivec3 q, ivec3 size, int slab) {
+    bool inside = all(greaterThanEqual(q, ivec3(0))) && all(lessThan(q, size)) && q.z / SLAB == slab;
+    return inside ? imageLoad(src, q).r : 0.0;
 }
 
 void main() {
@@ -24,7 +27,7 @@ void main() {
     for (int a = 0; a < 3; ++a) {
         ivec3 e = ivec3(0);
         e[a] = 1;
-        g[a] = (deviation(p + e, size) - deviation(p - e, size)) / (2.0 * h[a]);
+        g[a] = (deviation(p + e, size, p.z / SLAB) - deviation(p - e, size, p.z / SLAB)) / (2.0 * h[a]);
     }
-    imageStore(dst, p, vec4(g, deviation(p, size)));
+    imageStore(dst, p, vec4(g, deviation(p, size, p.z / SLAB)));
 }

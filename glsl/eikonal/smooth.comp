@@ -7,6 +7,9 @@
 layout(local_size_x = EIKONAL_GROUP, local_size_y = EIKONAL_GROUP, local_size_z = EIKONAL_GROUP) in;
 layout(constant_id = 0) const uint AXIS = 0;
 layout(constant_id = 1) const float SIGMA = 0.75;  // voxels; 0 copies the field
+// Slices per index slab: a per-channel index (dispersion) stacks 3 slabs along z, and the
+// blur never mixes two channels (each slab is padded by air on its own).
+layout(constant_id = 2) const int SLAB = 1 << 30;
 layout(set = 0, binding = EIKONAL_BINDING_SRC, r32f) uniform readonly image3D src;
 layout(set = 0, binding = EIKONAL_BINDING_DST, r32f) uniform writeonly image3D dst;
 
@@ -21,7 +24,8 @@ void main() {
         float w = SIGMA > 0.0 ? exp(-float(k * k) / (2.0 * SIGMA * SIGMA)) : 1.0;
         ivec3 q = p + k * axis;
         // Outside the box the deviation n - 1 is exactly 0 (air): it only adds weight.
-        if (all(greaterThanEqual(q, ivec3(0))) && all(lessThan(q, size))) sum += w * imageLoad(src, q).r;
+        bool same_slab = q.z >= 0 && q.z / SLAB == p.z / SLAB;
+        if (all(greaterThanEqual(q, ivec3(0))) && all(lessThan(q, size)) && same_slab) sum += w * imageLoad(src, q).r;
         weights += w;
     }
     imageStore(dst, p, vec4(sum / weights));

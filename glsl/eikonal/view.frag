@@ -2,12 +2,17 @@
 // Eikonal view renderer (Ihrke et al. 2007, sections 4.1 and 5.3): the camera ray enters
 // the volume's proxy box (ray-box intersection; section 5.1's "suitable proxy geometry to
 // start the ray casting"), is marched through the smoothed index field with the ray
-// equation dx/ds = v/n, dv/ds = grad n (Eqs. 9-10; Euler Eqs. 11-12 or classical RK4),
-// loses radiance by Beer-Lambert absorption along the curved path (Eq. 5 with T = 1), and
+// equation dx/ds = v/n, dv/ds = grad n (Eqs. 9-10; Euler Eqs. 11-12 or classical RK4), and
 // its exit direction looks up the environment (the background radiance L_bg of Eq. 1).
 // No explicit ray-surface intersection: the bending comes from grad n alone.
+// Along the path (volsrc, issue 7; the material volumes of src/scene/volume_sources.rs):
+// RGB extinction (Eq. 5), emission (L_e of Eq. 2, integrated with Eq. 1), Fresnel reflection
+// at the boundary indicator (delta rho L_r of Eq. 2, the reflected ray looks up the
+// environment: section 5.3's "first reflection"; T of Eq. 5 takes the transmitted part),
+// and dispersion: one march per RGB channel through its own index field (section 5.3).
 #include "frame.glsl"
 #include "environment.glsl"
+#include "fresnel.glsl"
 layout(constant_id = 0) const uint INTEGRATOR = EIKONAL_EULER;
 layout(constant_id = 1) const float STEP = 0.01;      // metres of arc length per step
 layout(constant_id = 2) const uint MAX_STEPS = 1024u;
@@ -17,47 +22,88 @@ layout(constant_id = 5) const float BOX_MIN_Z = -1.0;
 layout(constant_id = 6) const float BOX_MAX_X = 1.0;
 layout(constant_id = 7) const float BOX_MAX_Y = 1.0;
 layout(constant_id = 8) const float BOX_MAX_Z = 1.0;
-layout(constant_id = 9) const float SIGMA_R = 0.0;     // sigma_a per metre
-layout(constant_id = 10) const float SIGMA_G = 0.0;
-layout(constant_id = 11) const float SIGMA_B = 0.0;
-layout(constant_id = 12) const float REGION_X = 0.0;   // absorbing sphere (radius 0: the whole box)
-layout(constant_id = 13) const float REGION_Y = 0.0;
-layout(constant_id = 14) const float REGION_Z = 0.0;
-layout(constant_id = 15) const float REGION_RADIUS = 0.0;
+// ---- volsrc (issue 7): channels and materials ----
+layout(constant_id = 9) const uint CHANNELS = 1u;    // index slabs: 3 = per-channel index
+layout(constant_id = 10) const uint MATERIALS = 0u;  // 0: the material volumes are stand-ins
+// ---- end volsrc ----
 layout(set = 1, binding = BINDING_GBUF_DEPTH) uniform sampler2D gbuf_depth;
-// xyz: grad n per metre, w: n - 1, at the voxel centres.
+// xyz: grad n per metre, w: n - 1, at the voxel centres; CHANNELS slabs stacked along z.
 layout(set = 1, binding = BINDING_EIKONAL_FIELD) uniform sampler3D field;
+// ---- volsrc (issue 7): material volumes ----
+layout(set = 1, binding = BINDING_EIKONAL_EXTINCTION) uniform sampler3D extinction_map;  // sigma_a + sigma_s, g
+layout(set = 1, binding = BINDING_EIKONAL_ALBEDO) uniform sampler3D albedo_map;          // albedo, reflectance
+layout(set = 1, binding = BINDING_EIKONAL_EMISSION) uniform sampler3D emission_map;      // emission, boundary band
+// ---- end volsrc ----
 layout(location = 0) in vec2 in_uv;
 layout(location = 0) out vec4 out_radiance;
 
 const vec3 BOX_MIN = vec3(BOX_MIN_X, BOX_MIN_Y, BOX_MIN_Z);
 const vec3 BOX_MAX = vec3(BOX_MAX_X, BOX_MAX_Y, BOX_MAX_Z);
 
-// One voxel; beyond the box the air has n = 1 and no gradient.
-vec4 voxel(ivec3 q, ivec3 size) {
-    return all(greaterThanEqual(q, ivec3(0))) && all(lessThan(q, size)) ? texelFetch(field, q, 0) : vec4(0.0);
+// The size of one index slab (the field holds CHANNELS of them along z).
+ivec3 slab_size() {
+    ivec3 s = textureSize(field, 0);
+    return ivec3(s.xy, s.z / int(CHANNELS));
+}
+
+// One voxel of slab `c`; beyond the box the air has n = 1 and no gradient.
+vec4 voxel(ivec3 q, ivec3 size, int c) {
+    bool inside = all(greaterThanEqual(q, ivec3(0))) && all(lessThan(q, size));
+    return inside ? texelFetch(field, q + ivec3(0, 0, c * size.z), 0) : vec4(0.0);
 }
 
 // Trilinear interpolation in full precision (the same on every device), (grad n, n - 1).
-vec4 sample_field(vec3 x) {
-    ivec3 size = textureSize(field, 0);
+vec4 sample_field(vec3 x, int c) {
+    ivec3 size = slab_size();
     vec3 u = (x - BOX_MIN) / (BOX_MAX - BOX_MIN) * vec3(size) - 0.5;
     u = clamp(u, vec3(-1.0), vec3(size));
     vec3 f = fract(u);
     ivec3 i = ivec3(floor(u));
-    vec4 c00 = mix(voxel(i, size), voxel(i + ivec3(1, 0, 0), size), f.x);
-    vec4 c10 = mix(voxel(i + ivec3(0, 1, 0), size), voxel(i + ivec3(1, 1, 0), size), f.x);
-    vec4 c01 = mix(voxel(i + ivec3(0, 0, 1), size), voxel(i + ivec3(1, 0, 1), size), f.x);
-    vec4 c11 = mix(voxel(i + ivec3(0, 1, 1), size), voxel(i + ivec3(1, 1, 1), size), f.x);
+    vec4 c00 = mix(voxel(i, size, c), voxel(i + ivec3(1, 0, 0), size, c), f.x);
+    vec4 c10 = mix(voxel(i + ivec3(0, 1, 0), size, c), voxel(i + ivec3(1, 1, 0), size, c), f.x);
+    vec4 c01 = mix(voxel(i + ivec3(0, 0, 1), size, c), voxel(i + ivec3(1, 0, 1), size, c), f.x);
+    vec4 c11 = mix(voxel(i + ivec3(0, 1, 1), size, c), voxel(i + ivec3(1, 1, 1), size, c), f.x);
     return mix(mix(c00, c10, f.y), mix(c01, c11, f.y), f.z);
 }
 
 // The right-hand side of Eqs. 9-10 at (x, v): (dx/ds, dv/ds) = (v / n, grad n).
-void rhs(vec3 x, vec3 v, out vec3 dx, out vec3 dv) {
-    vec4 s = sample_field(x);
+void rhs(vec3 x, vec3 v, int c, out vec3 dx, out vec3 dv) {
+    vec4 s = sample_field(x, c);
     dx = v / max(1.0 + s.w, 1e-3);
     dv = s.xyz;
 }
+
+// ---- volsrc (issue 7): material lookups ----
+// Trilinear interpolation of a material volume (clamped to the box's voxels).
+vec4 sample_material(sampler3D map, vec3 x) {
+    ivec3 size = textureSize(map, 0);
+    vec3 u = clamp((x - BOX_MIN) / (BOX_MAX - BOX_MIN) * vec3(size) - 0.5, vec3(0.0), vec3(size - 1));
+    ivec3 i = ivec3(floor(u));
+    ivec3 j = min(i + 1, size - 1);
+    vec3 f = u - vec3(i);
+    vec4 c00 = mix(texelFetch(map, i, 0), texelFetch(map, ivec3(j.x, i.y, i.z), 0), f.x);
+    vec4 c10 = mix(texelFetch(map, ivec3(i.x, j.y, i.z), 0), texelFetch(map, ivec3(j.x, j.y, i.z), 0), f.x);
+    vec4 c01 = mix(texelFetch(map, ivec3(i.x, i.y, j.z), 0), texelFetch(map, ivec3(j.x, i.y, j.z), 0), f.x);
+    vec4 c11 = mix(texelFetch(map, ivec3(i.x, j.y, j.z), 0), texelFetch(map, j, 0), f.x);
+    return mix(mix(c00, c10, f.y), mix(c01, c11, f.y), f.z);
+}
+
+// The boundary band (nearest voxel): inside it the smoothed index crosses a jump.
+bool in_band(vec3 x) {
+    ivec3 size = textureSize(emission_map, 0);
+    vec3 u = (x - BOX_MIN) / (BOX_MAX - BOX_MIN) * vec3(size);
+    if (any(lessThan(u, vec3(0.0))) || any(greaterThanEqual(u, vec3(size)))) return false;
+    return texelFetch(emission_map, ivec3(u), 0).a > 0.5;
+}
+
+// The reflectance factor of the band at x (nearest voxel; the CPU spreads each surface's
+// factor over its band).
+float band_reflectance(vec3 x) {
+    ivec3 size = textureSize(albedo_map, 0);
+    ivec3 q = clamp(ivec3((x - BOX_MIN) / (BOX_MAX - BOX_MIN) * vec3(size)), ivec3(0), size - 1);
+    return texelFetch(albedo_map, q, 0).a;
+}
+// ---- end volsrc ----
 
 // Slab test; (t_near, t_far) with t_near > t_far on a miss.
 vec2 ray_box(vec3 o, vec3 d) {
@@ -71,6 +117,131 @@ bool in_box(vec3 x, float margin) {
     return all(greaterThanEqual(x, BOX_MIN - margin)) && all(lessThanEqual(x, BOX_MAX + margin));
 }
 
+
+// ---- volsrc (issue 7): one march through index slab `c` (all of RGB when CHANNELS = 1) ----
+// Fresnel at a boundary (Eq. 2's delta rho L_r with T of Eq. 5). Inside the band of the
+// boundary indicator the smoothed index crosses a jump; the march splits the index along
+// the path into monotone runs (a thin layer such as a glass wall, or two faces whose bands
+// merge, is two runs: up, then down). At the end of a run (the index turns back, or the
+// band ends) the jump n_a -> n_peak is known; the normal is the direction of grad n summed
+// over the run. The reflected fraction F (exact Fresnel for unpolarised light, times the
+// region's reflectance factor) looks up the environment in the mirror direction, weighted
+// by the transmittance where the run began; the march carries 1 - F. A ray that the ray
+// equation turned back inside the band (total internal reflection, section 4.1) has been
+// reflected already: neither its turning run nor the run back out adds a reflection.
+struct Run {
+    float n_a, n_peak, rho;
+    vec3 d_a, grad_sum, T_a;
+    bool turned;
+};
+
+void run_start(inout Run r, float n, vec3 v, vec3 T) {
+    r.n_a = n;
+    r.n_peak = n;
+    r.d_a = normalize(v);
+    r.grad_sum = vec3(0.0);
+    r.T_a = T;
+    r.rho = 0.0;
+}
+
+// The Fresnel event at the end of run r; v is the ray's current optical direction.
+void run_end(inout Run r, vec3 v, inout vec3 L, inout vec3 T) {
+    vec3 N = dot(r.grad_sum, r.grad_sum) > 1e-20 ? normalize(r.grad_sum) : -r.d_a;
+    bool crossed = dot(normalize(v), N) * dot(r.d_a, N) > 0.0;
+    if (!crossed || r.turned) {
+        r.turned = !crossed;
+        return;
+    }
+    float F = r.rho * fresnel_dielectric(abs(dot(r.d_a, N)), r.n_a / max(r.n_peak, 1e-3));
+    F = clamp(F, 0.0, 1.0);
+    L += r.T_a * F * environment(reflect(r.d_a, N));
+    T *= 1.0 - F;
+}
+
+vec3 march(vec3 o, vec3 d, float t_enter, int c) {
+    vec3 x = o + d * t_enter;
+    float n_cur = 1.0 + sample_field(x, c).w;
+    vec3 v = d * n_cur;  // |v| = n: v is the ray's optical direction
+    vec3 T = vec3(1.0), L = vec3(0.0);
+    // A ray that enters the box inside a band comes from the air (n = 1).
+    Run r;
+    r.turned = false;
+    bool banded = MATERIALS != 0u && in_band(x);
+    run_start(r, 1.0, d, T);
+    if (banded) r.rho = band_reflectance(x);
+    // Rays that leave the box stop one step past its face at most.
+    float margin = STEP;
+    for (uint i = 0u; i <= MAX_STEPS; ++i) {
+        bool inside = i < MAX_STEPS && in_box(x, margin);
+        bool band = inside && MATERIALS != 0u && in_band(x);
+        if (banded && !band) {
+            // Leaving the band (into the air beyond the box when outside it).
+            if (!inside && abs(1.0 - r.n_a) > abs(r.n_peak - r.n_a)) r.n_peak = 1.0;
+            banded = false;
+            run_end(r, v, L, T);
+            r.turned = false;
+        }
+        if (!inside) break;
+        if (band && !banded) {
+            banded = true;
+            r.turned = false;
+            run_start(r, n_cur, v, T);
+        }
+        vec3 x0 = x;
+        float h = STEP;
+        if (INTEGRATOR == EIKONAL_RK4) {
+            vec3 k1x, k1v, k2x, k2v, k3x, k3v, k4x, k4v;
+            rhs(x, v, c, k1x, k1v);
+            rhs(x + 0.5 * h * k1x, v + 0.5 * h * k1v, c, k2x, k2v);
+            rhs(x + 0.5 * h * k2x, v + 0.5 * h * k2v, c, k3x, k3v);
+            rhs(x + h * k3x, v + h * k3v, c, k4x, k4v);
+            x += h / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x);
+            v += h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
+        } else {
+            // Eqs. 11-12.
+            vec3 dx, dv;
+            rhs(x, v, c, dx, dv);
+            x += h * dx;
+            v += h * dv;
+        }
+        vec4 s = sample_field(x, c);
+        n_cur = 1.0 + s.w;
+        if (banded) {
+            float up = r.n_peak - r.n_a;
+            if (up * (n_cur - r.n_peak) < 0.0 && abs(n_cur - r.n_peak) > 0.02 * abs(up) + 1e-4) {
+                // The index turns back: the run ends at its peak, a new one begins.
+                run_end(r, v, L, T);
+                float peak = r.n_peak;
+                run_start(r, peak, v, T);
+            }
+            if (abs(n_cur - r.n_a) > abs(r.n_peak - r.n_a)) r.n_peak = n_cur;
+            r.grad_sum += s.xyz;
+            // Only band voxels carry their surface's factor (the step may have left the band).
+            if (in_band(x)) r.rho = max(r.rho, band_reflectance(x));
+        }
+        if (MATERIALS != 0u) {
+            vec3 mid = 0.5 * (x0 + x);
+            if (in_box(mid, 0.0)) {
+                // Eq. 1 over one segment of length len with constant extinction sigma and
+                // emission E: int_0^len E e^{-sigma s} ds = E (1 - e^{-sigma len}) / sigma
+                // (E len where sigma len is tiny); then Eq. 5's e^{-sigma len}.
+                float len = distance(x0, x);
+                vec3 sigma = sample_material(extinction_map, mid).rgb;
+                vec3 E = sample_material(emission_map, mid).rgb;
+                vec3 tau = sigma * len;
+                vec3 trans = exp(-tau);
+                vec3 path = mix(vec3(len), (1.0 - trans) / max(sigma, vec3(1e-30)), greaterThan(tau, vec3(1e-4)));
+                L += T * E * path;
+                T *= trans;
+            }
+        }
+    }
+    // A degenerate momentum (never for n > 0) keeps the incoming direction.
+    vec3 exit_dir = dot(v, v) > 1e-20 ? normalize(v) : d;
+    return L + T * environment(exit_dir);
+}
+// ---- end volsrc ----
+
 void main() {
     vec3 o = frame.camera_position.xyz;
     vec3 d = camera_ray(in_uv);
@@ -81,40 +252,12 @@ void main() {
     float depth = texelFetch(gbuf_depth, ivec2(gl_FragCoord.xy), 0).r;
     if (depth > 0.0 && distance(world_from_depth(in_uv, depth), o) < t_enter) discard;
 
-    vec3 x = o + d * t_enter;
-    vec3 v = d * (1.0 + sample_field(x).w);  // |v| = n: v is the ray's optical direction
-    vec3 sigma = vec3(SIGMA_R, SIGMA_G, SIGMA_B);
-    bool absorbs = any(greaterThan(sigma, vec3(0.0)));
-    vec3 optical_depth = vec3(0.0);
-    // Rays that leave the box stop one step past its face at most.
-    float margin = STEP;
-    for (uint i = 0u; i < MAX_STEPS && in_box(x, margin); ++i) {
-        vec3 x0 = x;
-        float h = STEP;
-        if (INTEGRATOR == EIKONAL_RK4) {
-            vec3 k1x, k1v, k2x, k2v, k3x, k3v, k4x, k4v;
-            rhs(x, v, k1x, k1v);
-            rhs(x + 0.5 * h * k1x, v + 0.5 * h * k1v, k2x, k2v);
-            rhs(x + 0.5 * h * k2x, v + 0.5 * h * k2v, k3x, k3v);
-            rhs(x + h * k3x, v + h * k3v, k4x, k4v);
-            x += h / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x);
-            v += h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
-        } else {
-            // Eqs. 11-12.
-            vec3 dx, dv;
-            rhs(x, v, dx, dv);
-            x += h * dx;
-            v += h * dv;
-        }
-        if (absorbs) {
-            // Eq. 5: sigma integrated along the curved path, midpoint rule per segment.
-            vec3 mid = 0.5 * (x0 + x);
-            bool inside = REGION_RADIUS <= 0.0 || distance(mid, vec3(REGION_X, REGION_Y, REGION_Z)) <= REGION_RADIUS;
-            if (inside && in_box(mid, 0.0)) optical_depth += sigma * distance(x0, x);
-        }
+    vec3 L;
+    if (CHANNELS == 3u) {
+        // Dispersion (section 5.3): each channel follows its own index field.
+        for (int c = 0; c < 3; ++c) L[c] = march(o, d, t_enter, c)[c];
+    } else {
+        L = march(o, d, t_enter, 0);
     }
-    // A degenerate momentum (never for n > 0) keeps the incoming direction.
-    vec3 exit_dir = dot(v, v) > 1e-20 ? normalize(v) : d;
-    vec3 L = exp(-optical_depth) * environment(exit_dir);
     out_radiance = vec4(finite_or_zero(L), 1.0);
 }

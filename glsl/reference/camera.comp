@@ -16,7 +16,9 @@ vec3 environment_through_specular(vec3 o, vec3 d, int channel, inout uint rng) {
         Hit h = trace(o, d, 3.4e38);
         float tv;
         if (region_entry(o, d, h.kind == 0u ? 3.4e38 : h.t, tv)) {
-            if (!volume_cross(o, d, tv, beta, rng)) return vec3(0.0);
+            // Emission in the volume is counted on camera paths only.
+            vec3 unused = vec3(0.0);
+            if (!volume_cross(o, d, tv, beta, unused, channel, rng)) return vec3(0.0);
             continue;
         }
         if (h.kind == 0u) return beta * environment(d);
@@ -55,7 +57,7 @@ void main() {
         // A graded-index volume in front of the surface (or the environment): cross it.
         float tv;
         if (region_entry(o, d, h.kind == 0u ? 3.4e38 : h.t, tv)) {
-            if (!volume_cross(o, d, tv, beta, rng)) break;
+            if (!volume_cross(o, d, tv, beta, L, channel, rng)) break;
             continue;
         }
         if (h.kind == 0u) {

@@ -23,7 +23,7 @@ layout(set = 0, binding = REF_BINDING_UNIFORMS, std140) uniform RefUniforms {
     vec4 grid;            // x: cell size, y: initial radius, z: SPPM alpha
     RefLight lights[MAX_LIGHTS];
     vec4 targets[REF_MAX_TARGETS];   // specular objects' bounding spheres (centre, radius)
-    vec4 volume[5];                  // the [volume], see volume.glsl (volume[0].w = 0: none)
+    vec4 volume[6];                  // the [volume], see volume.glsl (volume[0].w = 0: none)
 } ref;
 
 // photon.w flags

@@ -10,13 +10,18 @@
 //!   enters the volume's box with the ray equation, Eqs. 9-10, by Euler (Eqs. 11-12) or RK4,
 //!   absorbs along the curved path (Eq. 5) and looks up the environment in the exit
 //!   direction, over the deferred result.
+//! - Volume sources (issue 7; src/scene/volume_sources.rs): the fields of `[[volume.region]]`s
+//!   are evaluated on the CPU; a per-channel index is uploaded as three slabs stacked along z
+//!   and smoothed/differentiated slab by slab (dispersion: one march per channel), and the
+//!   materials go to three RGBA16F volumes ([`VolumeTextures`]) for RGB extinction, emission
+//!   and Fresnel reflection at the boundary indicator's band.
 //!
 //! The CPU integrators here ([`euler_step`], [`rk4_step`], [`trace`]) are the same equations
 //! in f64 on the analytic profile: the tests check the Luneburg focus and RK4's order with
 //! them, and they document what the shader does.
 use std::sync::Arc;
 
-use glam::{DVec3, Vec3};
+use glam::DVec3;
 
 use crate::gpu::{
     vk, Access, ComputePipeline, DescriptorSet, DescriptorSetLayout, DescriptorWrite, GpuContext, GpuResult, Image,
@@ -29,8 +34,8 @@ use crate::renderer::targets::Targets;
 use crate::scene::techniques::{EikonalParams, Integrator};
 use crate::scene::{IndexProfile, Volume};
 use crate::{
-    BINDING_EIKONAL_FIELD, BINDING_GBUF_DEPTH, EIKONAL_BINDING_DST, EIKONAL_BINDING_SRC, EIKONAL_EULER, EIKONAL_GROUP,
-    EIKONAL_RK4,
+    BINDING_EIKONAL_ALBEDO, BINDING_EIKONAL_EMISSION, BINDING_EIKONAL_EXTINCTION, BINDING_EIKONAL_FIELD,
+    BINDING_GBUF_DEPTH, EIKONAL_BINDING_DST, EIKONAL_BINDING_SRC, EIKONAL_EULER, EIKONAL_GROUP, EIKONAL_RK4,
 };
 
 use super::fullscreen::{FullscreenDesc, FullscreenPass};
@@ -130,13 +135,33 @@ pub fn sphere_crossing(a: DVec3, b: DVec3, center: DVec3, radius: f64) -> DVec3 
     a.lerp(b, t)
 }
 
-/// The volume's GPU textures: the sampled field, a scratch texture of the separable blur,
-/// and (grad n, n - 1) after smoothing and differentiation.
-struct VolumeTextures {
+/// The volume's GPU textures: the sampled index (n - 1, one slab of `nz` slices per channel,
+/// stacked along z: 1 slab, or 3 with dispersion), a scratch texture of the separable blur,
+/// (grad n, n - 1) per slab after smoothing and differentiation, and the three material
+/// volumes of src/scene/volume_sources.rs (issue 7).
+///
+/// Bytes per voxel: 24 per index slab (R32F raw + R32F scratch + RGBA32F field), so 24 or
+/// 72, plus 24 for the materials (3 x RGBA16F: extinction + g, albedo + reflectance,
+/// emission + boundary band), or a 1x1x1 stand-in of each when the volume has no material
+/// (no extinction, emission or index jump anywhere).
+pub struct VolumeTextures {
     _raw: Image,
     _scratch: Image,
     field: Image,
     field_id: ImageId,
+    /// (sigma_a + sigma_s RGB per metre, Henyey-Greenstein g).
+    pub extinction: Image,
+    pub extinction_id: ImageId,
+    /// (sigma_s / extinction RGB, surface reflectance factor).
+    pub albedo: Image,
+    pub albedo_id: ImageId,
+    /// (emission RGB per metre, boundary band 0/1).
+    pub emission: Image,
+    pub emission_id: ImageId,
+    /// Index slabs in `field` (3: a per-channel index, dispersion).
+    pub channels: u32,
+    /// Whether the material volumes are real (not stand-ins).
+    pub materials: bool,
 }
 
 /// The `eikonal_view` pass and the volume it renders.
@@ -166,8 +191,6 @@ impl EikonalPass {
         // Enough steps for four crossings of the box diagonal (curved and internally
         // reflected rays are longer than straight ones).
         let steps = (4.0 * (volume.max - volume.min).length() / h).ceil().min(MAX_VIEW_STEPS as f32) as u32;
-        let (center, radius) = volume.index.region().unwrap_or((Vec3::ZERO, 0.0));
-        let sigma = volume.attenuation;
         let integrator = match params.integrator {
             Integrator::Euler => EIKONAL_EULER,
             Integrator::Rk4 => EIKONAL_RK4,
@@ -182,20 +205,22 @@ impl EikonalPass {
             f(volume.max.x),
             f(volume.max.y),
             f(volume.max.z),
-            f(sigma.x),
-            f(sigma.y),
-            f(sigma.z),
-            f(center.x),
-            f(center.y),
-            f(center.z),
-            f(radius),
+            // volsrc (issue 7): index slabs (3: dispersion) and whether materials are bound.
+            textures.channels,
+            textures.materials as u32,
         ];
         let view = FullscreenPass::new(
             ctx,
             &FullscreenDesc {
                 name: EIKONAL_VIEW,
                 fragment_shader: "eikonal/view.frag",
-                inputs: &[(BINDING_GBUF_DEPTH, &targets.depth), (BINDING_EIKONAL_FIELD, &textures.field)],
+                inputs: &[
+                    (BINDING_GBUF_DEPTH, &targets.depth),
+                    (BINDING_EIKONAL_FIELD, &textures.field),
+                    (BINDING_EIKONAL_EXTINCTION, &textures.extinction),
+                    (BINDING_EIKONAL_ALBEDO, &textures.albedo),
+                    (BINDING_EIKONAL_EMISSION, &textures.emission),
+                ],
                 target: (&targets.hdr, targets.hdr_id),
                 // Keeps the deferred result and overwrites the pixels whose ray enters the box.
                 clear: false,
@@ -214,18 +239,64 @@ impl EikonalPass {
         targets: &Targets,
         frame_set: DescriptorSet,
     ) {
-        self.view.record(frame, frame_set, &[targets.depth_id, self.volume.field_id, scene.environment_id]);
+        let v = &self.volume;
+        self.view.record(
+            frame,
+            frame_set,
+            &[targets.depth_id, v.field_id, v.extinction_id, v.albedo_id, v.emission_id, scene.environment_id],
+        );
     }
 }
 
-/// Section 5.1 on the GPU: upload n - 1, blur along x, y, z, differentiate.
+/// IEEE half precision of `x` (round to nearest even; overflow to infinity, which the scene
+/// checks rule out: coefficients are at most 10^4).
+pub fn f16_bits(x: f32) -> u16 {
+    let b = x.to_bits();
+    let sign = ((b >> 16) & 0x8000) as u16;
+    let exp = ((b >> 23) & 0xff) as i32;
+    let man = b & 0x7f_ffff;
+    if exp == 0xff {
+        return sign | 0x7c00 | if man != 0 { 0x200 } else { 0 };
+    }
+    let e = exp - 127 + 15;
+    if e >= 31 {
+        return sign | 0x7c00;
+    }
+    if e <= 0 {
+        if e < -10 {
+            return sign;
+        }
+        // Subnormal: shift the mantissa with its implicit bit, rounding to nearest even.
+        let m = man | 0x80_0000;
+        let shift = (14 - e) as u32;
+        let half = 1u32 << (shift - 1);
+        let rest = m & ((1u32 << shift) - 1);
+        let mut h = m >> shift;
+        if rest > half || (rest == half && h & 1 == 1) {
+            h += 1;
+        }
+        return sign | h as u16;
+    }
+    let mut h = ((e as u32) << 10) | (man >> 13);
+    let rest = man & 0x1fff;
+    if rest > 0x1000 || (rest == 0x1000 && h & 1 == 1) {
+        h += 1; // may carry into the exponent, which is still correct rounding
+    }
+    sign | h as u16
+}
+
+/// Section 5.1 on the GPU: upload n - 1 (per channel slab), blur along x, y, z,
+/// differentiate; upload the material volumes.
 fn prepare_volume(
     ctx: &Arc<GpuContext>,
     params: EikonalParams,
     volume: &Volume,
     graph: &mut FrameGraph,
 ) -> GpuResult<VolumeTextures> {
-    let extent = volume.resolution;
+    let fields = volume.fields();
+    let channels: u32 = if fields.dispersive { 3 } else { 1 };
+    let [nx, ny, nz] = volume.resolution;
+    let extent = [nx, ny, nz * channels];
     let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_DST;
     let raw = Image::new(ctx, &ImageDesc::d3("eikonal_index", vk::Format::R32_SFLOAT, extent, usage))?;
     let scratch = Image::new(ctx, &ImageDesc::d3("eikonal_smoothed", vk::Format::R32_SFLOAT, extent, usage))?;
@@ -240,6 +311,33 @@ fn prepare_volume(
     )?;
     let (raw_id, scratch_id, field_id) =
         (graph.register_image(&raw), graph.register_image(&scratch), graph.register_image(&field));
+
+    // The material volumes: real when anything in them is non-zero.
+    // The boundary indicator widened to the band in which the smoothed index still changes
+    // (3 sigma of the Gaussian plus the one-voxel coverage ramp), see view.frag.
+    let (band, band_reflectance) = fields.boundary_band((3.0 * params.sigma).ceil() as u32 + 1);
+    let materials = band.iter().any(|&b| b > 0.0)
+        || fields.extinction.iter().any(|e| e[0] > 0.0 || e[1] > 0.0 || e[2] > 0.0)
+        || fields.emission.iter().any(|e| e[0] > 0.0 || e[1] > 0.0 || e[2] > 0.0);
+    let material_extent = if materials { volume.resolution } else { [1, 1, 1] };
+    let material_usage = vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST;
+    let half = |name: &str| {
+        Image::new(ctx, &ImageDesc::d3(name, vk::Format::R16G16B16A16_SFLOAT, material_extent, material_usage))
+    };
+    let (extinction, albedo, emission) =
+        (half("eikonal_extinction")?, half("eikonal_albedo")?, half("eikonal_emission")?);
+    let (extinction_id, albedo_id, emission_id) =
+        (graph.register_image(&extinction), graph.register_image(&albedo), graph.register_image(&emission));
+    let pack = |texels: &mut dyn Iterator<Item = [f32; 4]>| -> Vec<u16> {
+        if materials {
+            texels.flat_map(|t| t.map(f16_bits)).collect()
+        } else {
+            vec![0; 4]
+        }
+    };
+    let ext_data = pack(&mut fields.extinction.iter().copied());
+    let alb_data = pack(&mut fields.albedo.iter().zip(&band_reflectance).map(|(a, &r)| [a[0], a[1], a[2], r]));
+    let emi_data = pack(&mut fields.emission.iter().zip(&band).map(|(e, &b)| [e[0], e[1], e[2], b]));
 
     let storage = vk::DescriptorType::STORAGE_IMAGE;
     let stage = vk::ShaderStageFlags::COMPUTE;
@@ -273,7 +371,7 @@ fn prepare_volume(
                 &format!("eikonal_smooth_{axis}"),
                 "eikonal/smooth.comp",
                 &pipeline_layout,
-                &[axis, f(params.sigma)],
+                &[axis, f(params.sigma), nz],
             )
         })
         .collect::<GpuResult<_>>()?;
@@ -283,22 +381,39 @@ fn prepare_volume(
         "eikonal_gradient",
         "eikonal/gradient.comp",
         &pipeline_layout,
-        &[f(voxel.x), f(voxel.y), f(voxel.z)],
+        &[f(voxel.x), f(voxel.y), f(voxel.z), nz],
     )?;
 
-    let samples = volume.sample();
-    let staging = crate::gpu::Buffer::with_data(
-        ctx,
-        "eikonal_index_upload",
-        bytemuck::cast_slice(&samples),
-        vk::BufferUsageFlags::TRANSFER_SRC,
-    )?;
+    let mut samples: Vec<f32> = Vec::with_capacity(fields.voxels() * channels as usize);
+    for c in 0..channels as usize {
+        samples.extend_from_slice(&fields.index[c]);
+    }
+    let upload =
+        |name: &str, bytes: &[u8]| crate::gpu::Buffer::with_data(ctx, name, bytes, vk::BufferUsageFlags::TRANSFER_SRC);
+    let staging = upload("eikonal_index_upload", bytemuck::cast_slice(&samples))?;
+    let staging_materials = [
+        upload("eikonal_extinction_upload", bytemuck::cast_slice(&ext_data))?,
+        upload("eikonal_albedo_upload", bytemuck::cast_slice(&alb_data))?,
+        upload("eikonal_emission_upload", bytemuck::cast_slice(&emi_data))?,
+    ];
     let groups = extent.map(|n| n.div_ceil(EIKONAL_GROUP));
     let ids = [(raw_id, scratch_id), (scratch_id, raw_id), (raw_id, scratch_id), (scratch_id, field_id)];
     let names = ["eikonal_smooth_x", "eikonal_smooth_y", "eikonal_smooth_z", "eikonal_gradient"];
     ctx.one_shot(|cmd| {
-        graph.access_now(cmd, &[(raw_id, Access::TransferWrite)], &[]);
+        graph.access_now(
+            cmd,
+            &[
+                (raw_id, Access::TransferWrite),
+                (extinction_id, Access::TransferWrite),
+                (albedo_id, Access::TransferWrite),
+                (emission_id, Access::TransferWrite),
+            ],
+            &[],
+        );
         cmd.copy_buffer_to_image(&staging, &raw);
+        for (buffer, image) in staging_materials.iter().zip([&extinction, &albedo, &emission]) {
+            cmd.copy_buffer_to_image(buffer, image);
+        }
         let mut frame = graph.frame();
         for (i, &(src, dst)) in ids.iter().enumerate() {
             let pipeline = if i < 3 { &smooth[i] } else { &gradient };
@@ -310,5 +425,18 @@ fn prepare_volume(
         }
         frame.execute(cmd, None);
     })?;
-    Ok(VolumeTextures { _raw: raw, _scratch: scratch, field, field_id })
+    Ok(VolumeTextures {
+        _raw: raw,
+        _scratch: scratch,
+        field,
+        field_id,
+        extinction,
+        extinction_id,
+        albedo,
+        albedo_id,
+        emission,
+        emission_id,
+        channels,
+        materials,
+    })
 }

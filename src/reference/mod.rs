@@ -18,6 +18,14 @@
 //! dx/ds = v/n, dv/ds = grad n on the analytic profile with a step of 1/2000 of the box
 //! diagonal, Beer-Lambert absorption along the curved path. Surfaces inside the region are
 //! not seen, and photons do not enter volumes (no volume caustics yet).
+//!
+//! A volume with `[[volume.region]]`s (volume sources, issue 7) is traced instead through
+//! the same voxel fields the view renderer gets (src/scene/volume_sources.rs): the index per
+//! channel (one channel per path when dispersive), the extinction and the emission,
+//! unsmoothed and trilinear, RK4 steps of 1/8 voxel, stochastic exact Fresnel at the index
+//! jumps marked by the boundary indicator (glsl/reference/volume.glsl, VOLUME_FIELDS).
+//! Scattering there only attenuates (in-scattering is the light simulator's), and emission
+//! is counted on camera paths only.
 pub mod bvh;
 
 use std::sync::Arc;
@@ -123,21 +131,45 @@ struct RefUniforms {
     lights: [RefLight; MAX_LIGHTS as usize],
     targets: [[f32; 4]; REF_MAX_TARGETS as usize],
     /// The scene's `[volume]` for glsl/reference/volume.glsl (zero: none).
-    volume: [[f32; 4]; 5],
+    volume: [[f32; 4]; 6],
 }
 const _: () = assert!(
     std::mem::size_of::<RefUniforms>()
-        == 64 + 6 * 16 + 32 * MAX_LIGHTS as usize + 16 * REF_MAX_TARGETS as usize + 5 * 16
+        == 64 + 6 * 16 + 32 * MAX_LIGHTS as usize + 16 * REF_MAX_TARGETS as usize + 6 * 16
 );
 
 /// Kinds of volume.glsl (`ref.volume[0].w`).
 const REF_VOLUME_LUNEBURG: f32 = 1.0;
 const REF_VOLUME_LINEAR: f32 = 2.0;
 const REF_VOLUME_CONSTANT: f32 = 3.0;
+/// volsrc (issue 7): a volume with regions, traced through its voxel fields.
+const REF_VOLUME_FIELDS: f32 = 4.0;
+
+/// The voxel fields of a volume with regions for volume.glsl's VOLUME_FIELDS: 3 vec4 per
+/// voxel, (n - 1 RGB, boundary band), (extinction RGB, 0), (emission RGB, reflectance), the
+/// same fields as the view renderer's (src/scene/volume_sources.rs), unsmoothed; the band is
+/// the boundary indicator widened by the one-voxel coverage ramp. A 1-texel stand-in
+/// without regions (the analytic profile is traced exactly).
+fn volume_voxels(volume: Option<&crate::scene::Volume>) -> (Vec<[f32; 4]>, bool) {
+    let Some(volume) = volume.filter(|v| !v.regions.is_empty()) else {
+        return (vec![[0.0; 4]], false);
+    };
+    let f = volume.fields();
+    let (band, reflectance) = f.boundary_band(1);
+    let mut out = Vec::with_capacity(3 * f.voxels());
+    for v in 0..f.voxels() {
+        out.push([f.index[0][v], f.index[1][v], f.index[2][v], band[v]]);
+        let e = f.extinction[v];
+        out.push([e[0], e[1], e[2], 0.0]);
+        let m = f.emission[v];
+        out.push([m[0], m[1], m[2], reflectance[v]]);
+    }
+    (out, f.dispersive)
+}
 
 /// The uniform rows of volume.glsl for `volume`: the exact analytic profile (not the voxels
 /// the eikonal view renderer samples), marched with RK4 steps of 1/2000 of the box diagonal.
-fn volume_uniforms(volume: &crate::scene::Volume) -> [[f32; 4]; 5] {
+fn volume_uniforms(volume: &crate::scene::Volume) -> [[f32; 4]; 6] {
     use crate::scene::IndexProfile;
     let h = (volume.max - volume.min).length() / 2000.0;
     let (kind, params) = match volume.index {
@@ -146,12 +178,29 @@ fn volume_uniforms(volume: &crate::scene::Volume) -> [[f32; 4]; 5] {
         IndexProfile::Constant { n, .. } => (REF_VOLUME_CONSTANT, Vec3::ZERO.extend(n)),
     };
     let (center, radius) = volume.index.region().unwrap_or(((volume.min + volume.max) * 0.5, 0.0));
+    if !volume.regions.is_empty() {
+        // The fields fill the box: the region is the box; steps of 1/8 voxel (the fields
+        // are trilinear within a voxel), and enough of them for ten crossings of the
+        // diagonal (internal reflections).
+        let [nx, ny, nz] = volume.resolution;
+        let h = volume.voxel_size().min_element() / 8.0;
+        let steps = (10.0 * (volume.max - volume.min).length() / h).ceil().min(200_000.0);
+        return [
+            volume.min.extend(REF_VOLUME_FIELDS).to_array(),
+            volume.max.extend(h).to_array(),
+            [0.0; 4],
+            [0.0; 4],
+            [0.0, 0.0, 0.0, steps],
+            [1.0, nx as f32, ny as f32, nz as f32],
+        ];
+    }
     [
         volume.min.extend(kind).to_array(),
         volume.max.extend(h).to_array(),
         center.extend(radius).to_array(),
         params.to_array(),
         volume.attenuation.extend(20_000.0).to_array(),
+        [0.0; 4],
     ]
 }
 
@@ -282,10 +331,12 @@ impl Reference {
         }
         let has_photons = settings.photons > 0 && !targets.is_empty() && !scene.lights.is_empty();
         let photons_per_iteration = if has_photons { settings.photons_per_iteration() } else { 0 };
-        let dispersion = scene
-            .materials
-            .iter()
-            .any(|m| matches!(m, Material::Dielectric { ior, .. } if ior.x != ior.y || ior.y != ior.z));
+        let (voxels, volume_dispersive) = volume_voxels(scene.volume.as_ref());
+        let dispersion = volume_dispersive
+            || scene
+                .materials
+                .iter()
+                .any(|m| matches!(m, Material::Dielectric { ior, .. } if ior.x != ior.y || ior.y != ior.z));
 
         let scene_radius = gpu_scene.bounds_radius.max(1e-20);
         let radius = settings.radius.unwrap_or(0.01 * scene_radius);
@@ -335,6 +386,7 @@ impl Reference {
         let nodes = storage("reference_bvh", bytemuck::cast_slice(&bvh.nodes))?;
         let sphere_buf = storage("reference_spheres", bytemuck::cast_slice(&spheres))?;
         let object_buf = storage("reference_objects", bytemuck::cast_slice(&objects))?;
+        let voxel_buf = storage("reference_volume_voxels", bytemuck::cast_slice(&voxels))?;
         let pixels_n = (width * height) as usize;
         let accum =
             Buffer::new(ctx, "reference_accum", (pixels_n * 16) as u64, U::STORAGE_BUFFER, MemoryLocation::CpuToGpu)?;
@@ -389,6 +441,7 @@ impl Reference {
                 (REF_BINDING_GRID, sb, c),
                 (REF_BINDING_COUNTERS, sb, c),
                 (REF_BINDING_DEBUG, sb, c),
+                (REF_BINDING_VOLUME, sb, c),
             ],
             1,
         )?;
@@ -414,6 +467,7 @@ impl Reference {
                 DescriptorWrite::Storage(REF_BINDING_GRID, &grid),
                 DescriptorWrite::Storage(REF_BINDING_COUNTERS, &counters),
                 DescriptorWrite::Storage(REF_BINDING_DEBUG, &debug),
+                DescriptorWrite::Storage(REF_BINDING_VOLUME, &voxel_buf),
             ],
         )?;
         let layout = PipelineLayout::new(ctx, "reference", &[&set_layout], std::mem::size_of::<RefPush>() as u32)?;
@@ -450,7 +504,7 @@ impl Reference {
             counters,
             debug,
             ids,
-            _static: vec![ubo, triangles, nodes, sphere_buf, object_buf],
+            _static: vec![ubo, triangles, nodes, sphere_buf, object_buf, voxel_buf],
             _sampler: sampler,
             _scene: gpu_scene,
             has_photons,

@@ -160,7 +160,7 @@ impl FileMaterial {
     }
 }
 
-#[derive(Debug, Default, Deserialize)]
+#[derive(Debug, Default, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct FileTransform {
     pub translation: Option<[f32; 3]>,
@@ -168,7 +168,7 @@ pub(crate) struct FileTransform {
     pub scale: Option<f32>,
 }
 
-#[derive(Debug, Deserialize)]
+#[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct FileFit {
     pub extent: f32,
@@ -249,8 +249,55 @@ pub(crate) struct FileVolume {
     pub name: Option<String>,
     pub bounds: FileBounds,
     pub resolution: [u32; 3],
-    pub index: FileIndex,
+    /// Optional since the sources (issue 7): without it the box holds air (n = 1).
+    pub index: Option<FileIndex>,
     pub attenuation: Option<Rgb>,
+    // The base material of the profile's region (src/scene/volume_sources.rs).
+    pub sigma_s: Option<Rgb>,
+    pub hg_g: Option<f32>,
+    pub emission: Option<Rgb>,
+    pub reflectance: Option<f32>,
+    /// `[[volume.region]]`: material regions rasterized over the profile, later ones on top.
+    #[serde(default)]
+    pub region: Vec<FileRegion>,
+}
+
+/// One `[[volume.region]]`: a shape (flat keys, like the objects) and its material.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct FileRegion {
+    pub name: Option<String>,
+    pub shape: String,
+    pub transform: Option<FileTransform>,
+    pub center: Option<[f32; 3]>,
+    pub radius: Option<f32>,
+    pub size: Option<[f32; 3]>,
+    pub height: Option<f32>,
+    pub profile: Option<Vec<[f32; 2]>>,
+    pub file: Option<String>,
+    pub fit: Option<FileFit>,
+    pub n: Option<Rgb>,
+    pub sigma_a: Option<Rgb>,
+    pub sigma_s: Option<Rgb>,
+    pub hg_g: Option<f32>,
+    pub emission: Option<Rgb>,
+    pub reflectance: Option<f32>,
+}
+
+impl FileRegion {
+    /// The shape-specific keys present (name, shape, transform and the material keys are
+    /// accepted by every shape).
+    pub fn present(&self) -> Vec<&'static str> {
+        present(&[
+            ("center", self.center.is_some()),
+            ("radius", self.radius.is_some()),
+            ("size", self.size.is_some()),
+            ("height", self.height.is_some()),
+            ("profile", self.profile.is_some()),
+            ("file", self.file.is_some()),
+            ("fit", self.fit.is_some()),
+        ])
+    }
 }
 
 /// `volume.index`: one flat struct for every profile `type`, like the shapes.

@@ -13,6 +13,7 @@ mod mesh;
 mod shapes;
 pub mod techniques;
 mod volume;
+pub mod volume_sources;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};

@@ -6,7 +6,7 @@
 use glam::{DVec3, Vec3};
 
 use super::file::{check_keys, FileIndex, FileVolume};
-use super::{finite, positive, rgb, value_err, vec3, SceneError, Source};
+use super::{finite, positive, value_err, vec3, SceneError, Source};
 
 /// Largest voxel count along one axis (256^3 f32 voxels are 64 MiB per volume texture).
 pub const MAX_VOLUME_RESOLUTION: u32 = 256;
@@ -89,6 +89,15 @@ pub struct Volume {
     pub index: IndexProfile,
     /// Absorption coefficient sigma_a per metre, RGB, inside the profile's region.
     pub attenuation: Vec3,
+    /// The rest of the base material of the profile's region (src/scene/volume_sources.rs):
+    /// scattering coefficient per metre, Henyey-Greenstein g, emitted radiance per metre and
+    /// the factor on the Fresnel reflectance at its boundary.
+    pub sigma_s: Vec3,
+    pub hg_g: f32,
+    pub emission: Vec3,
+    pub reflectance: f32,
+    /// `[[volume.region]]`s in file order (later ones override earlier ones).
+    pub regions: Vec<super::volume_sources::Region>,
 }
 
 impl Volume {
@@ -107,7 +116,7 @@ impl Volume {
     /// implicit function (section 5.1) with a one-voxel linear ramp of the signed distance
     /// across the surface, its coverage, instead of a staircase of inside/outside voxels
     /// whose gradients would scatter the rays.
-    fn sample_at(&self, x: DVec3) -> f64 {
+    pub(super) fn sample_at(&self, x: DVec3) -> f64 {
         match self.index {
             IndexProfile::Constant { n, sphere: Some((c, r)) } => {
                 let h = self.voxel_size().as_dvec3().element_sum() / 3.0;
@@ -156,7 +165,11 @@ pub(super) fn volume(v: &FileVolume, src: &Source) -> Result<Volume, SceneError>
             ));
         }
     }
-    let index = index(&v.index, (min + max) * 0.5, src)?;
+    let index = match &v.index {
+        Some(f) => index(f, (min + max) * 0.5, src)?,
+        // Without a profile the box holds air; regions put the media in.
+        None => IndexProfile::Constant { n: 1.0, sphere: None },
+    };
     let check_range = |n: f64, path: &str| {
         if n > 0.0 && n <= MAX_INDEX {
             Ok(())
@@ -182,10 +195,8 @@ pub(super) fn volume(v: &FileVolume, src: &Source) -> Result<Volume, SceneError>
     if let IndexProfile::Constant { n, .. } = index {
         check_range(n as f64, "volume.index.n")?;
     }
-    let attenuation = match v.attenuation {
-        Some(a) => rgb(src, "volume.attenuation", a, false)?,
-        None => Vec3::ZERO,
-    };
+    let attenuation = super::volume_sources::coefficient(src, "volume.attenuation", v.attenuation)?;
+    let sources = super::volume_sources::sources(v, src)?;
     Ok(Volume {
         name: v.name.clone().unwrap_or_else(|| "volume".into()),
         min,
@@ -193,6 +204,11 @@ pub(super) fn volume(v: &FileVolume, src: &Source) -> Result<Volume, SceneError>
         resolution: v.resolution,
         index,
         attenuation,
+        sigma_s: sources.sigma_s,
+        hg_g: sources.hg_g,
+        emission: sources.emission,
+        reflectance: sources.reflectance,
+        regions: sources.regions,
     })
 }
 
