@@ -24,7 +24,9 @@ pub struct ReportArgs {
     /// Image size for every scene.
     #[arg(long, default_value_t = 256)]
     pub size: u32,
-    /// Only the entries of these scenes (repeatable).
+    /// Only measure the entries whose scene is this name or whose title contains it
+    /// (repeatable); the other entries keep their sections from the existing file, each with
+    /// the revision and command that measured it.
     #[arg(long)]
     pub only: Vec<String>,
     #[command(flatten)]
@@ -54,6 +56,9 @@ pub fn run(args: ReportArgs) -> Result<()> {
     let spec: Spec = toml::from_str(&text).map_err(|e| anyhow::anyhow!("{}: {e}", args.spec.display()))?;
     let settings = args.measure.reference.settings();
     settings.validate()?;
+    // With --only, the sections of the entries not measured now are kept from the file as it is.
+    let previous = if args.only.is_empty() { None } else { std::fs::read_to_string(&args.out).ok() };
+    let previous = previous.as_deref().map(Previous::parse);
     let out = OutputFile::prepare(&args.out)?;
     let base = args.out.parent().map(|p| p.to_path_buf()).unwrap_or_default();
     let assets = base.join("accuracy");
@@ -86,17 +91,30 @@ pub fn run(args: ReportArgs) -> Result<()> {
             "On a CPU device (lavapipe) times are CPU time: compare them within a table, not across machines."
         )?;
     }
-    writeln!(
-        md,
-        "\nCommand: `prism report --size {} --spp {} --photons {}`\n",
-        args.size, settings.spp, settings.photons
-    )?;
+    let command = format!("prism report --size {} --spp {} --photons {}", args.size, settings.spp, settings.photons);
+    writeln!(md, "\nCommand: `{command}`\n")?;
+    if !args.only.is_empty() {
+        writeln!(
+            md,
+            "Sections were measured separately (`prism report --only`): each one names the revision \
+             and command that measured it.\n"
+        )?;
+    }
+    let provenance = format!("*Measured at git revision {} with `{command}`.*\n", super::bench::git_revision());
 
-    for (index, e) in
-        spec.entry.iter().enumerate().filter(|(_, e)| args.only.is_empty() || args.only.contains(&e.scene))
-    {
-        // File names carry the entry's number: a scene may appear in several entries.
-        let stem = format!("{:02}-{}", index + 1, e.scene);
+    for e in &spec.entry {
+        let heading = format!("## {}: {}", e.scene, e.title);
+        let selected = args.only.is_empty() || args.only.iter().any(|o| *o == e.scene || e.title.contains(o.as_str()));
+        if !selected {
+            match previous.as_ref().and_then(|p| p.section(&heading)) {
+                Some(section) => md.push_str(&section),
+                None => writeln!(md, "{heading}\n\nNot measured yet: run `prism report --only {}`.\n", e.scene)?,
+            }
+            continue;
+        }
+        // File names carry a hash of the entry: a scene may appear in several entries, and
+        // entries measured at different times must not overwrite each other's images.
+        let stem = format!("{}-{}", e.scene, entry_hash(e));
         let params = parse_params(&e.params)?;
         let mut rows = Vec::new();
         for setting in cartesian(&params) {
@@ -113,7 +131,7 @@ pub fn run(args: ReportArgs) -> Result<()> {
             rows.push((setting, scene, m, reference));
         }
         check_validation(&ctx)?;
-        writeln!(md, "## {}: {}\n", e.scene, e.title)?;
+        writeln!(md, "{heading}\n")?;
         let (s0, ..) = (&rows[0].1, ());
         writeln!(
             md,
@@ -171,8 +189,63 @@ pub fn run(args: ReportArgs) -> Result<()> {
             "![{}](accuracy/{name})\n\n*Left to right: the technique, the reference, the FLIP error map.*\n",
             e.scene
         )?;
+        writeln!(md, "{provenance}")?;
     }
     out.commit_bytes(md.as_bytes())?;
     eprintln!("wrote {}", args.out.display());
     Ok(())
+}
+
+/// A short stable name for an entry's files (FNV-1a of its scene, title and parameters).
+fn entry_hash(e: &Entry) -> String {
+    let mut h: u64 = 0xcbf29ce484222325;
+    for b in e.scene.bytes().chain(e.title.bytes()).chain(e.params.iter().flat_map(|p| p.bytes())) {
+        h = (h ^ b as u64).wrapping_mul(0x100000001b3);
+    }
+    format!("{:08x}", h as u32)
+}
+
+/// The sections of an existing report, to keep those that `--only` does not measure.
+struct Previous {
+    /// Heading line and the whole section (heading included, up to the next heading).
+    sections: Vec<(String, String)>,
+    /// "git revision X" of the file's header, for sections that do not name their own.
+    revision: Option<String>,
+    command: Option<String>,
+}
+
+impl Previous {
+    fn parse(text: &str) -> Previous {
+        let revision = text.lines().find_map(|l| {
+            let rest = &l[l.find("git revision ")? + "git revision ".len()..];
+            Some(rest.trim_end_matches('.').to_string())
+        });
+        let command = text.lines().find_map(|l| l.strip_prefix("Command: `")?.strip_suffix('`').map(str::to_string));
+        let mut sections: Vec<(String, String)> = Vec::new();
+        for line in text.lines() {
+            if line.starts_with("## ") {
+                sections.push((line.to_string(), String::new()));
+            }
+            if let Some((_, body)) = sections.last_mut() {
+                body.push_str(line);
+                body.push('\n');
+            }
+        }
+        Previous { sections, revision, command }
+    }
+
+    /// The section under `heading`, with a provenance line added if it has none.
+    fn section(&self, heading: &str) -> Option<String> {
+        let (_, body) = self.sections.iter().find(|(h, _)| h == heading)?;
+        if body.contains("*Measured at git revision") {
+            return Some(body.clone());
+        }
+        let mut body = body.trim_end().to_string();
+        body.push_str(&format!(
+            "\n\n*Measured at git revision {} with `{}`.*\n\n",
+            self.revision.as_deref().unwrap_or("unknown"),
+            self.command.as_deref().unwrap_or("prism report")
+        ));
+        Some(body)
+    }
 }
