@@ -132,11 +132,11 @@ pub fn sphere_crossing(a: DVec3, b: DVec3, center: DVec3, radius: f64) -> DVec3 
 
 /// The volume's GPU textures: the sampled field, a scratch texture of the separable blur,
 /// and (grad n, n - 1) after smoothing and differentiation.
-struct VolumeTextures {
+pub struct VolumeTextures {
     _raw: Image,
     _scratch: Image,
-    field: Image,
-    field_id: ImageId,
+    pub(crate) field: Image,
+    pub(crate) field_id: ImageId,
 }
 
 /// The `eikonal_view` pass and the volume it renders.
@@ -219,7 +219,7 @@ impl EikonalPass {
 }
 
 /// Section 5.1 on the GPU: upload n - 1, blur along x, y, z, differentiate.
-fn prepare_volume(
+pub(crate) fn prepare_volume(
     ctx: &Arc<GpuContext>,
     params: EikonalParams,
     volume: &Volume,

@@ -251,6 +251,10 @@ pub(crate) struct FileVolume {
     pub resolution: [u32; 3],
     pub index: FileIndex,
     pub attenuation: Option<Rgb>,
+    // --- branch `light` (issue 7): single scattering; branch `volsrc` owns these keys'
+    // spatially varying versions, this is the constant-over-the-medium stand-in. ---
+    pub sigma_s: Option<Rgb>,
+    pub hg_g: Option<f32>,
 }
 
 /// `volume.index`: one flat struct for every profile `type`, like the shapes.

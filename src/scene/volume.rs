@@ -89,6 +89,12 @@ pub struct Volume {
     pub index: IndexProfile,
     /// Absorption coefficient sigma_a per metre, RGB, inside the profile's region.
     pub attenuation: Vec3,
+    // --- branch `light` (issue 7): constant scattering over the profile's region until the
+    // `volsrc` branch's volumetric sigma_s / hg_g land. ---
+    /// Scattering coefficient sigma_s per metre, RGB (Eq. 5: sigma_r = sigma_a + sigma_s).
+    pub sigma_s: Vec3,
+    /// Henyey-Greenstein anisotropy g in (-1, 1) (section 5.1).
+    pub hg_g: f32,
 }
 
 impl Volume {
@@ -186,6 +192,21 @@ pub(super) fn volume(v: &FileVolume, src: &Source) -> Result<Volume, SceneError>
         Some(a) => rgb(src, "volume.attenuation", a, false)?,
         None => Vec3::ZERO,
     };
+    // --- branch `light` (issue 7): sigma_s and hg_g, constant over the medium. ---
+    let sigma_s = match v.sigma_s {
+        Some(a) => rgb(src, "volume.sigma_s", a, false)?,
+        None => Vec3::ZERO,
+    };
+    let hg_g = finite(src, "volume.hg_g", v.hg_g.unwrap_or(0.0))?;
+    if hg_g.abs() >= 0.99 {
+        return Err(value_err(
+            src,
+            "volume.hg_g",
+            format!("the Henyey-Greenstein `hg_g` must be in (-0.99, 0.99), not {hg_g}"),
+            "0 scatters isotropically, 0.9 strongly forward, -0.9 strongly backward",
+        ));
+    }
+    // --- end branch `light` ---
     Ok(Volume {
         name: v.name.clone().unwrap_or_else(|| "volume".into()),
         min,
@@ -193,6 +214,8 @@ pub(super) fn volume(v: &FileVolume, src: &Source) -> Result<Volume, SceneError>
         resolution: v.resolution,
         index,
         attenuation,
+        sigma_s,
+        hg_g,
     })
 }
 
