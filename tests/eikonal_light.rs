@@ -273,3 +273,126 @@ fn energy_balance_of_the_wavefront() {
     assert!(worst < 1e-4, "energy not conserved: worst relative imbalance {worst}");
     assert!(left > 0.5 * initial, "most light should leave the lens: {left} of {initial}");
 }
+
+fn finite(name: &str, v: &[f32]) {
+    let bad = v.iter().filter(|x| !x.is_finite()).count();
+    assert_eq!(bad, 0, "{name}: {bad} non-finite values");
+}
+
+/// Extremes of the light simulator: no NaN/Inf in the irradiance and direction volumes nor
+/// in the rendered image.
+#[test]
+fn light_simulation_extremes_give_no_nan() {
+    let ctx = common::context(false);
+    let linear = "volume.index={ type = \"linear\", n0 = 1.3, gradient = [0, 0.4, 0] }";
+    let cases: &[(&str, &[&str], Light)] = &[
+        // Zero energy: nothing is deposited, patches travel through and leave.
+        ("zero energy", &[], Light::Directional { direction: -Vec3::Y, irradiance: Vec3::ZERO }),
+        // Patches sliding along the box's faces (direction parallel to them).
+        ("along the faces", &[], directional(Vec3::X)),
+        // A sharp ball (no smoothing): grad n is a one-voxel spike, rays reflect totally at
+        // its inside surface.
+        (
+            "sharp ball",
+            &[
+                "volume.index={ type = \"constant\", n = 1.5, center = [0, 0, 0], radius = 1 }",
+                "render.eikonal.sigma=0",
+            ],
+            directional(Vec3::new(0.3, -1.0, 0.2)),
+        ),
+        // A strong linear gradient bends rays around (mirage-like total reflection).
+        ("gradient", &[linear], directional(Vec3::X)),
+        // A point light inside the box (the six-face start), with absorption and scattering.
+        (
+            "light inside, absorbing",
+            &["volume.attenuation=[0.5, 1, 2]", "volume.sigma_s=[1, 1, 1]", "volume.hg_g=0.9"],
+            Light::Point { position: Vec3::new(0.2, 0.1, 0.0), intensity: Vec3::ONE },
+        ),
+        // Tiny list: tessellation hits the clamp at once.
+        ("clamped", &["render.eikonal.max_patches=300"], directional(-Vec3::Y)),
+    ];
+    for (name, overrides, light) in cases {
+        let mut o = vec!["volume.resolution=[32, 32, 32]"];
+        o.extend_from_slice(overrides);
+        let mut scene = common::scene("eikonal_luneburg", 32, &o);
+        let params = EikonalParams::from_settings(&scene.render).unwrap();
+        let volume = scene.volume.clone().unwrap();
+        let mut sim = StandaloneLight::new(&ctx, &params, &volume, light).expect("light");
+        let stats = sim.run(&ctx).expect("run");
+        let (e, d) = sim.read_volumes(&ctx).expect("readback");
+        finite(name, &e);
+        finite(name, &d);
+        eprintln!(
+            "{name}: {} steps, peak {} patches, {} dropped, max irradiance {:.3}",
+            stats.steps,
+            stats.peak_patches,
+            stats.dropped_patches,
+            e.iter().cloned().fold(0.0f32, f32::max)
+        );
+        if *name == "clamped" {
+            // The capacity is raised to the initial wavefront's 32^2 patches (documented).
+            assert!(stats.dropped_patches > 0 && stats.peak_patches <= 1024, "{stats:?}");
+        }
+        if *name == "zero energy" {
+            assert!(e.iter().all(|&x| x == 0.0), "zero energy deposited light");
+        }
+        scene.lights = vec![*light];
+        let r = common::render_on(&ctx, &scene);
+        assert!(r.passes.iter().any(|p| p == "eikonal_light"), "{:?}", r.passes);
+        finite(name, &r.hdr);
+    }
+    common::assert_no_validation_errors(&ctx);
+}
+
+/// Section 5.3, Eq. 6: a scattering Luneburg lens lit from behind (light travelling towards
+/// the camera) glows by in-scatter; Henyey-Greenstein forward scattering (g = 0.8) sends
+/// more of it to the camera than backward scattering (g = -0.8); without the light
+/// simulation (render.eikonal.light = false) nothing is scattered in.
+#[test]
+fn single_scattering_follows_the_phase_function() {
+    let ctx = common::context(false);
+    let render = |g: f32, light: bool| {
+        let (g, on) = (format!("volume.hg_g={g}"), format!("render.eikonal.light={light}"));
+        let mut s = common::scene(
+            "eikonal_luneburg",
+            32,
+            &["volume.resolution=[32, 32, 32]", "volume.sigma_s=[0.5, 0.5, 0.5]", &g, &on],
+        );
+        s.lights = vec![directional(Vec3::Z)];
+        let r = common::render_on(&ctx, &s);
+        finite("scatter", &r.hdr);
+        let sum: f32 = (10..22).flat_map(|j| (10..22).map(move |i| (i, j))).map(|(i, j)| r.radiance(i, j)[1]).sum();
+        sum
+    };
+    let (forward, backward, off) = (render(0.8, true), render(-0.8, true), render(0.8, false));
+    eprintln!("centre green: forward {forward:.3}, backward {backward:.3}, no light simulation {off:.3}");
+    assert!(forward > off * 1.05, "no in-scattered light: {forward} vs {off}");
+    assert!(forward > backward * 1.05, "phase function not forward-peaked: {forward} vs {backward}");
+    assert!(backward >= off * 0.999, "in-scatter must not remove light: {backward} vs {off}");
+}
+
+/// Fig. 1 left: eikonal_sphere with the light simulation shows the ball's caustic on the
+/// floor: brighter than the unfocused direct light (render.eikonal.light = false, where the
+/// volume casts no shadow) and surrounded by the ball's shadow.
+#[test]
+fn eikonal_sphere_floor_shows_the_focused_light() {
+    let ctx = common::context(false);
+    let o = ["volume.resolution=[48, 48, 48]"];
+    let on = common::render_on(&ctx, &common::scene("eikonal_sphere", 64, &o));
+    let off = common::render_on(&ctx, &common::scene("eikonal_sphere", 64, &[o[0], "render.eikonal.light=false"]));
+    finite("eikonal_sphere", &on.hdr);
+    assert!(on.passes.iter().any(|p| p == "eikonal_light"));
+    // The floor below the ball, in the lower part of the image (rows 40..64).
+    let (mut brightest_on, mut brightest_off, mut darker) = (0.0f32, 0.0f32, 0);
+    for j in 40..64 {
+        for i in 0..64 {
+            let (a, b) = (on.radiance(i, j)[1], off.radiance(i, j)[1]);
+            brightest_on = brightest_on.max(a);
+            brightest_off = brightest_off.max(b);
+            darker += usize::from(a < 0.5 * b);
+        }
+    }
+    eprintln!("floor: brightest {brightest_on:.3} (direct light only: {brightest_off:.3}), {darker} pixels in shadow");
+    assert!(brightest_on > 2.0 * brightest_off, "no caustic: {brightest_on} vs {brightest_off}");
+    assert!(darker > 50, "no shadow of the ball: {darker} pixels");
+}

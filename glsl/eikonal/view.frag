@@ -24,6 +24,20 @@ layout(constant_id = 12) const float REGION_X = 0.0;   // absorbing sphere (radi
 layout(constant_id = 13) const float REGION_Y = 0.0;
 layout(constant_id = 14) const float REGION_Z = 0.0;
 layout(constant_id = 15) const float REGION_RADIUS = 0.0;
+// --- branch `light` (issue 7): single scattering from the light simulator (scatter.glsl).
+layout(constant_id = 16) const uint SCATTER = 0u;           // 1: a light simulation ran
+layout(constant_id = 17) const float SIGMA_S_R = 0.0;      // sigma_s per metre
+layout(constant_id = 18) const float SIGMA_S_G = 0.0;
+layout(constant_id = 19) const float SIGMA_S_B = 0.0;
+layout(constant_id = 20) const float HG_G = 0.0;
+layout(constant_id = 21) const float LIGHT_MIN_X = 0.0;    // the irradiance volume's box
+layout(constant_id = 22) const float LIGHT_MIN_Y = 0.0;
+layout(constant_id = 23) const float LIGHT_MIN_Z = 0.0;
+layout(constant_id = 24) const float LIGHT_MAX_X = 1.0;
+layout(constant_id = 25) const float LIGHT_MAX_Y = 1.0;
+layout(constant_id = 26) const float LIGHT_MAX_Z = 1.0;
+#include "scatter.glsl"
+// --- end branch `light`
 layout(set = 1, binding = BINDING_GBUF_DEPTH) uniform sampler2D gbuf_depth;
 // xyz: grad n per metre, w: n - 1, at the voxel centres.
 layout(set = 1, binding = BINDING_EIKONAL_FIELD) uniform sampler3D field;
@@ -86,6 +100,11 @@ void main() {
     vec3 sigma = vec3(SIGMA_R, SIGMA_G, SIGMA_B);
     bool absorbs = any(greaterThan(sigma, vec3(0.0)));
     vec3 optical_depth = vec3(0.0);
+    // --- branch `light`: in-scattered radiance, and whether the ray met the medium at all
+    // (a ray through the box's air only keeps what deferred shading drew, e.g. the floor).
+    vec3 scattered = vec3(0.0);
+    vec3 sigma_s = vec3(SIGMA_S_R, SIGMA_S_G, SIGMA_S_B);
+    bool touched = false;
     // Rays that leave the box stop one step past its face at most.
     float margin = STEP;
     for (uint i = 0u; i < MAX_STEPS && in_box(x, margin); ++i) {
@@ -110,11 +129,26 @@ void main() {
             // Eq. 5: sigma integrated along the curved path, midpoint rule per segment.
             vec3 mid = 0.5 * (x0 + x);
             bool inside = REGION_RADIUS <= 0.0 || distance(mid, vec3(REGION_X, REGION_Y, REGION_Z)) <= REGION_RADIUS;
-            if (inside && in_box(mid, 0.0)) optical_depth += sigma * distance(x0, x);
+            if (inside && in_box(mid, 0.0)) {
+                // --- branch `light`: Eq. 1's integral of T sigma_s p dE before this
+                // segment's extinction (sigma includes sigma_s, Eq. 5: sigma_r).
+                if (SCATTER != 0u && any(greaterThan(sigma_s, vec3(0.0)))) {
+                    vec3 light_min = vec3(LIGHT_MIN_X, LIGHT_MIN_Y, LIGHT_MIN_Z);
+                    vec3 light_max = vec3(LIGHT_MAX_X, LIGHT_MAX_Y, LIGHT_MAX_Z);
+                    vec3 to_eye = -normalize(x - x0);
+                    scattered += exp(-optical_depth) * sigma_s * distance(x0, x) *
+                                 inscatter(mid, to_eye, light_min, light_max, HG_G);
+                }
+                optical_depth += sigma * distance(x0, x);
+            }
         }
+        touched = touched || abs(sample_field(x).w) > 1e-4;
     }
+    // --- branch `light`: the ray crossed only air and no scattering medium: keep what is
+    // behind it in the G-buffer (deferred shading's floor) instead of the environment.
+    if (!touched && !(optical_depth.r + optical_depth.g + optical_depth.b > 0.0)) discard;
     // A degenerate momentum (never for n > 0) keeps the incoming direction.
     vec3 exit_dir = dot(v, v) > 1e-20 ? normalize(v) : d;
-    vec3 L = exp(-optical_depth) * environment(exit_dir);
+    vec3 L = exp(-optical_depth) * environment(exit_dir) + scattered;
     out_radiance = vec4(finite_or_zero(L), 1.0);
 }

@@ -143,6 +143,8 @@ pub struct VolumeTextures {
 pub struct EikonalPass {
     volume: VolumeTextures,
     view: FullscreenPass,
+    // --- branch `light` (issue 7): the light simulation and its receiver pass.
+    light: Option<super::eikonal_light::EikonalLight>,
 }
 
 fn f(x: f32) -> u32 {
@@ -151,27 +153,48 @@ fn f(x: f32) -> u32 {
 
 impl EikonalPass {
     /// Sample, upload, smooth and differentiate `volume`, and create the view pass.
+    #[allow(clippy::too_many_arguments)] // reason: the light is optional input next to the pass's own
     pub fn new(
         ctx: &Arc<GpuContext>,
         params: EikonalParams,
         volume: &Volume,
+        light: Option<&crate::scene::Light>,
         graph: &mut FrameGraph,
         frame_layout: &DescriptorSetLayout,
         targets: &Targets,
         nearest: &Sampler,
     ) -> GpuResult<Self> {
         let textures = prepare_volume(ctx, params, volume, graph)?;
+        // --- branch `light`: section 5.2's light simulation before the view pass is built.
+        let light = match light {
+            Some(l) if params.light => Some(super::eikonal_light::EikonalLight::new(
+                ctx,
+                &params,
+                volume,
+                l,
+                &textures,
+                graph,
+                frame_layout,
+                targets,
+                nearest,
+            )?),
+            _ => None,
+        };
         let voxel = volume.voxel_size();
         let h = params.step * voxel.min_element();
         // Enough steps for four crossings of the box diagonal (curved and internally
         // reflected rays are longer than straight ones).
         let steps = (4.0 * (volume.max - volume.min).length() / h).ceil().min(MAX_VIEW_STEPS as f32) as u32;
         let (center, radius) = volume.index.region().unwrap_or((Vec3::ZERO, 0.0));
-        let sigma = volume.attenuation;
+        // Eq. 5: extinction sigma_r = sigma_a + sigma_s.
+        let sigma = volume.attenuation + volume.sigma_s;
         let integrator = match params.integrator {
             Integrator::Euler => EIKONAL_EULER,
             Integrator::Rk4 => EIKONAL_RK4,
         };
+        let (light_min, light_max) = light.as_ref().map_or((Vec3::ZERO, Vec3::ONE), |l| l.light_box());
+        // Without a simulation the field stands in for the light volumes (never read).
+        let (irradiance, direction) = light.as_ref().map_or((&textures.field, &textures.field), |l| l.images());
         let spec = [
             integrator,
             f(h),
@@ -189,13 +212,30 @@ impl EikonalPass {
             f(center.y),
             f(center.z),
             f(radius),
+            // --- branch `light`: single scattering (glsl/eikonal/scatter.glsl).
+            u32::from(light.is_some()),
+            f(volume.sigma_s.x),
+            f(volume.sigma_s.y),
+            f(volume.sigma_s.z),
+            f(volume.hg_g),
+            f(light_min.x),
+            f(light_min.y),
+            f(light_min.z),
+            f(light_max.x),
+            f(light_max.y),
+            f(light_max.z),
         ];
         let view = FullscreenPass::new(
             ctx,
             &FullscreenDesc {
                 name: EIKONAL_VIEW,
                 fragment_shader: "eikonal/view.frag",
-                inputs: &[(BINDING_GBUF_DEPTH, &targets.depth), (BINDING_EIKONAL_FIELD, &textures.field)],
+                inputs: &[
+                    (BINDING_GBUF_DEPTH, &targets.depth),
+                    (BINDING_EIKONAL_FIELD, &textures.field),
+                    (crate::BINDING_EIKONAL_IRRADIANCE, irradiance),
+                    (crate::BINDING_EIKONAL_LIGHT_DIR, direction),
+                ],
                 target: (&targets.hdr, targets.hdr_id),
                 // Keeps the deferred result and overwrites the pixels whose ray enters the box.
                 clear: false,
@@ -204,7 +244,26 @@ impl EikonalPass {
             frame_layout,
             nearest,
         )?;
-        Ok(EikonalPass { volume: textures, view })
+        Ok(EikonalPass { volume: textures, view, light })
+    }
+
+    /// The light simulation's statistics (None without a simulation).
+    pub fn light_stats(&self) -> Option<&super::eikonal_light::LightStats> {
+        self.light.as_ref().map(|l| &l.stats)
+    }
+
+    /// `eikonal_light`: the diffuse receivers inside the irradiance volume (after deferred
+    /// shading). Records nothing without a light simulation.
+    pub fn record_light<'a>(
+        &'a self,
+        frame: &mut Frame<'_, 'a>,
+        scene: &GpuScene,
+        targets: &Targets,
+        set: DescriptorSet,
+    ) {
+        if let Some(l) = &self.light {
+            l.record(frame, scene, targets, set);
+        }
     }
 
     pub fn record<'a>(
@@ -214,7 +273,11 @@ impl EikonalPass {
         targets: &Targets,
         frame_set: DescriptorSet,
     ) {
-        self.view.record(frame, frame_set, &[targets.depth_id, self.volume.field_id, scene.environment_id]);
+        let mut reads = vec![targets.depth_id, self.volume.field_id, scene.environment_id];
+        if let Some(l) = &self.light {
+            reads.extend(l.image_ids());
+        }
+        self.view.record(frame, frame_set, &reads);
     }
 }
 

@@ -98,13 +98,15 @@ pub struct LightStats {
 }
 
 /// The irradiance volume's box and resolution: the volume's box and voxels, extended
-/// `below` metres (whole voxels) down.
-pub fn light_grid(volume: &Volume, below: f32) -> (Vec3, Vec3, [u32; 3]) {
+/// `below` metres down and `side` metres along -x, +x, -z, +z (whole voxels each).
+pub fn light_grid(volume: &Volume, below: f32, side: f32) -> (Vec3, Vec3, [u32; 3]) {
     let voxel = volume.voxel_size();
-    let extra = if below > 0.0 { (below / voxel.y).ceil() as u32 } else { 0 };
-    let min = volume.min - Vec3::new(0.0, extra as f32 * voxel.y, 0.0);
+    let whole = |m: f32, v: f32| if m > 0.0 { (m / v).ceil() as u32 } else { 0 };
+    let (ex, ey, ez) = (whole(side, voxel.x), whole(below, voxel.y), whole(side, voxel.z));
+    let lo = Vec3::new(ex as f32 * voxel.x, ey as f32 * voxel.y, ez as f32 * voxel.z);
+    let hi = Vec3::new(ex as f32 * voxel.x, 0.0, ez as f32 * voxel.z);
     let [rx, ry, rz] = volume.resolution;
-    (min, volume.max, [rx, ry + extra, rz])
+    (volume.min - lo, volume.max + hi, [rx + 2 * ex, ry + ey, rz + 2 * ez])
 }
 
 /// The largest refractive index of the volume (for the step budget).
@@ -265,7 +267,7 @@ impl LightSim {
         sampler: &Sampler,
         graph: &mut FrameGraph,
     ) -> GpuResult<Self> {
-        let (light_min, light_max, resolution) = light_grid(volume, params.light_below);
+        let (light_min, light_max, resolution) = light_grid(volume, params.light_below, params.light_side);
         let per_side = if params.light_patches > 0 {
             params.light_patches
         } else {
@@ -294,7 +296,11 @@ impl LightSim {
         let keys = Buffer::new(ctx, "eikonal_light_keys", 4 * voxels, storage, MemoryLocation::GpuOnly)?;
         let deposits =
             Buffer::new(ctx, "eikonal_light_deposits", 8 * capacity as u64, storage, MemoryLocation::GpuOnly)?;
-        let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST;
+        // TRANSFER_SRC: tests read the volumes back.
+        let usage = vk::ImageUsageFlags::STORAGE
+            | vk::ImageUsageFlags::SAMPLED
+            | vk::ImageUsageFlags::TRANSFER_DST
+            | vk::ImageUsageFlags::TRANSFER_SRC;
         let irradiance =
             Image::new(ctx, &ImageDesc::d3("eikonal_irradiance", vk::Format::R32G32B32A32_SFLOAT, resolution, usage))?;
         let direction =
@@ -623,4 +629,91 @@ pub fn light_rk4_step(field: &impl super::eikonal::IndexField, s: RayState, h: f
 /// every particle of one wavefront has covered the same S = t (Appendix, Eqs. 23-24).
 pub fn optical_path(field: &impl super::eikonal::IndexField, path: &[DVec3]) -> f64 {
     path.windows(2).map(|w| 0.5 * (field.n(w[0]) + field.n(w[1])) * w[0].distance(w[1])).sum()
+}
+
+/// The renderer's light simulation: run once when the renderer is created (the light and
+/// the volume are static), and the per-frame `eikonal_light` pass that lights the diffuse
+/// receivers inside the irradiance volume (glsl/eikonal/light_receiver.frag).
+pub struct EikonalLight {
+    sim: LightSim,
+    pub stats: LightStats,
+    receiver: super::fullscreen::FullscreenPass,
+}
+
+impl EikonalLight {
+    #[allow(clippy::too_many_arguments)] // reason: the volume's textures, the graph and the targets are separate owners
+    pub fn new(
+        ctx: &Arc<GpuContext>,
+        params: &EikonalParams,
+        volume: &Volume,
+        light: &Light,
+        textures: &super::eikonal::VolumeTextures,
+        graph: &mut FrameGraph,
+        frame_layout: &DescriptorSetLayout,
+        targets: &crate::renderer::targets::Targets,
+        nearest: &Sampler,
+    ) -> GpuResult<Self> {
+        let mut sim = LightSim::new(ctx, params, volume, light, &textures.field, textures.field_id, nearest, graph)?;
+        let stats = sim.run(ctx, graph)?;
+        if stats.dropped_patches > 0 {
+            eprintln!(
+                "warning: eikonal light simulation: {} patches dropped at the max_patches = {} clamp (raise render.eikonal.max_patches)",
+                stats.dropped_patches,
+                sim.hp.capacity
+            );
+        }
+        let (lo, hi) = (sim.light_min, sim.light_max);
+        let receiver = super::fullscreen::FullscreenPass::new(
+            ctx,
+            &super::fullscreen::FullscreenDesc {
+                name: crate::renderer::plan::EIKONAL_LIGHT,
+                fragment_shader: "eikonal/light_receiver.frag",
+                inputs: &[
+                    (crate::BINDING_GBUF_NORMAL, &targets.gbuf_normal),
+                    (crate::BINDING_GBUF_ALBEDO, &targets.gbuf_albedo),
+                    (crate::BINDING_GBUF_DEPTH, &targets.depth),
+                    (crate::BINDING_EIKONAL_IRRADIANCE, &sim.irradiance),
+                    (crate::BINDING_EIKONAL_LIGHT_DIR, &sim.direction),
+                ],
+                target: (&targets.hdr, targets.hdr_id),
+                // Overwrites deferred shading's receivers inside the irradiance volume only.
+                clear: false,
+                specialization: &[f(lo.x), f(lo.y), f(lo.z), f(hi.x), f(hi.y), f(hi.z)],
+            },
+            frame_layout,
+            nearest,
+        )?;
+        Ok(EikonalLight { sim, stats, receiver })
+    }
+
+    pub fn light_box(&self) -> (Vec3, Vec3) {
+        (self.sim.light_min, self.sim.light_max)
+    }
+
+    pub fn images(&self) -> (&Image, &Image) {
+        (&self.sim.irradiance, &self.sim.direction)
+    }
+
+    pub fn image_ids(&self) -> [ImageId; 2] {
+        [self.sim.irradiance_id, self.sim.direction_id]
+    }
+
+    pub fn record<'a>(
+        &'a self,
+        frame: &mut Frame<'_, 'a>,
+        scene: &crate::renderer::gpu_scene::GpuScene,
+        targets: &crate::renderer::targets::Targets,
+        frame_set: DescriptorSet,
+    ) {
+        let reads = [
+            targets.gbuf_normal_id,
+            targets.gbuf_albedo_id,
+            targets.depth_id,
+            scene.environment_id,
+            targets.shadow_atlas_id,
+            self.sim.irradiance_id,
+            self.sim.direction_id,
+        ];
+        self.receiver.record(frame, frame_set, &reads);
+    }
 }

@@ -397,6 +397,9 @@ pub struct EikonalParams {
     /// Metres below the volume's box that the irradiance volume also covers, so a floor
     /// just under the volume receives the caustic (issue 7, item 6).
     pub light_below: f32,
+    /// Metres the irradiance volume also covers beside the volume's box along x and z (the
+    /// receiver area that the volume's refracted light and shadow reach).
+    pub light_side: f32,
 }
 
 impl Default for EikonalParams {
@@ -411,6 +414,7 @@ impl Default for EikonalParams {
             max_patches: 1 << 19,
             light_patches: 0,
             light_below: 0.0,
+            light_side: 0.0,
         }
     }
 }
@@ -426,6 +430,7 @@ impl EikonalParams {
         "max_patches",
         "light_patches",
         "light_below",
+        "light_side",
     ];
 
     pub fn from_table(t: Option<&toml::Table>) -> Result<Self, ParamError> {
@@ -459,6 +464,7 @@ impl EikonalParams {
                 "max_patches" => p.max_patches = integer(key, v, 4, 900_000)?,
                 "light_patches" => p.light_patches = integer(key, v, 0, 1024)?,
                 "light_below" => p.light_below = number(key, v, 0.0, 100.0)?,
+                "light_side" => p.light_side = number(key, v, 0.0, 100.0)?,
                 _ => return Err(unknown("eikonal", key, Self::KEYS)),
             }
         }
