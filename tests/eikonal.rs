@@ -241,6 +241,15 @@ fn invalid_volumes_and_parameters_give_clear_errors() {
         (format!("{GOOD}{lens}"), "[render.eikonal]\nstep = 0", "step"),
         (format!("{GOOD}{lens}"), "[render.eikonal]\nsigma = -1", "sigma"),
         (format!("{GOOD}{lens}"), "[render.eikonal]\nsteps = 1", "unknown parameter `steps`"),
+        // The light simulator's keys (issue 7).
+        (format!("{GOOD}{lens}"), "[render.eikonal]\nenergy_threshold = 1", "energy_threshold"),
+        (format!("{GOOD}{lens}"), "[render.eikonal]\nlight_dt = 0", "light_dt"),
+        (format!("{GOOD}{lens}"), "[render.eikonal]\nmax_patches = 10000000", "max_patches"),
+        (format!("{GOOD}{lens}"), "[render.eikonal]\nlight_patches = -1", "light_patches"),
+        (format!("{GOOD}{lens}"), "[render.eikonal]\nlight_below = -1", "light_below"),
+        (format!("{GOOD}{lens}"), "[render.eikonal]\nlight = \"yes\"", "light"),
+        (format!("{GOOD}{lens}\nsigma_s = [0, -1, 0]"), "", "sigma_s"),
+        (format!("{GOOD}{lens}\nhg_g = 1"), "", "hg_g"),
     ];
     for (volume, render, expected) in cases {
         let e = load_error(&volume, render);
