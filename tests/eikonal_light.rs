@@ -76,18 +76,20 @@ fn appendix_constant_spatial_and_temporal_steps() {
     let h = 1e-3;
     let mut worst_ds: f64 = 0.0;
     let mut worst_s: f64 = 0.0;
-    for b in [0.0, 0.3, 0.6, 0.9] {
-        let start = DVec3::new(b, 0.0, -1.0);
+    // Inside the lens, where n is smooth (at its rim grad n jumps, and any integrator loses
+    // its order there); paths of length 0.5 from |start| <= 0.45 stay inside r < 0.95.
+    for b in [0.0, 0.15, 0.3, 0.45] {
+        let start = DVec3::new(b, 0.1, -0.05);
         // Constant spatial step: RK4 of Eqs. 9-10, |x_{i+1} - x_i| = h.
         let mut s = RayState::new(&LENS, start, d);
-        for _ in 0..1500 {
+        for _ in 0..500 {
             let next = rk4_step(&LENS, s, h);
             worst_ds = worst_ds.max(((next.x - s.x).length() - h).abs() / h);
             s = next;
         }
         // Constant temporal step: after time T every particle has optical path T.
-        let t = 1.8;
-        let steps = 1800;
+        let t = 0.6;
+        let steps = 600;
         let mut p = RayState::new(&LENS, start, d);
         let mut path = vec![p.x];
         for _ in 0..steps {
@@ -97,8 +99,10 @@ fn appendix_constant_spatial_and_temporal_steps() {
         worst_s = worst_s.max((optical_path(&LENS, &path) - t).abs());
     }
     eprintln!("Appendix: worst relative |dx| - ds {worst_ds:.2e}, worst |S - t| {worst_s:.2e}");
-    // RK4 with h = 1e-3 in a smooth field: errors of order h^4 per step; the trapezoid rule
-    // for S adds O(h^2) = 1e-6 over the path.
+    // Measured 3.8e-9 and 1.6e-8: |dx| is a chord, shorter than the arc h by the relative
+    // kappa^2 h^2 / 24 (curvature kappa <= 1 here: 4e-8), and the trapezoid rule for S errs by
+    // O(h^2) over the path; RK4's own error is O(h^4). With Eq. 14 as v / n instead of
+    // v / n^2, |S - t| would be about 0.1.
     assert!(worst_ds < 1e-6, "spatial step not constant: {worst_ds}");
     assert!(worst_s < 1e-5, "particles left the common wavefront: {worst_s}");
 }
