@@ -123,7 +123,9 @@ fn lens_volume(resolution: u32, overrides: &[&str]) -> prism::scene::Volume {
 /// profile started at the same place, and all have the same optical path.
 #[test]
 fn gpu_particles_follow_the_equal_time_ray_equation() {
-    let ctx = common::context(false);
+    // Synchronization validation over 96 steps in one command buffer (indirect dispatches,
+    // HistoPyramid levels, ping-pong lists).
+    let ctx = common::context(true);
     let volume = lens_volume(64, &[]);
     let params = EikonalParams {
         integrator: prism::scene::techniques::Integrator::Rk4,
@@ -354,7 +356,7 @@ fn light_simulation_extremes_give_no_nan() {
 /// simulation (render.eikonal.light = false) nothing is scattered in.
 #[test]
 fn single_scattering_follows_the_phase_function() {
-    let ctx = common::context(false);
+    let ctx = common::context(true);
     let render = |g: f32, light: bool| {
         let (g, on) = (format!("volume.hg_g={g}"), format!("render.eikonal.light={light}"));
         let mut s = common::scene(
