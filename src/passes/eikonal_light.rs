@@ -47,6 +47,10 @@ use super::histopyramid::{HistoPyramid, HpState};
 /// Simulation steps recorded per command buffer between two patch-count readbacks.
 pub const LIGHT_BATCH: u32 = 16;
 
+/// Most patches of an initial wavefront: a list of them (144 bytes each) fits one 128 MiB
+/// storage-buffer binding (lavapipe's maxStorageBufferRange), like `max_patches`.
+pub const MAX_INITIAL_PATCHES: u32 = 900_000;
+
 /// Most steps of one simulation (a wavefront trapped by total internal reflection stops here).
 pub const MAX_LIGHT_STEPS: u32 = 1 << 16;
 
@@ -153,7 +157,14 @@ pub fn initial_wavefront(volume: &Volume, min: Vec3, max: Vec3, light: &Light, p
         }
     };
     let mut patches = Vec::new();
-    let k = per_side.max(1);
+    // At most MAX_INITIAL_PATCHES in all (the list must fit one storage-buffer binding):
+    // fewer per side for the six faces of a point light inside the bounding sphere.
+    let faces = match *light {
+        Light::Point { position, .. } if (center - position).length() <= radius + voxel => 6,
+        _ => 1,
+    };
+    let most = ((MAX_INITIAL_PATCHES / faces) as f64).sqrt() as u32;
+    let k = per_side.clamp(1, most);
     // x[c].w numbers the initial particles (4 per patch; exact in f32 below 2^24) so that
     // tests can follow them; particles created by tessellation get -1.
     let make = |corners: [Vec3; 4], dirs: [Vec3; 4], e: Vec3, id: usize| -> Patch {
