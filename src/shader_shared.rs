@@ -175,4 +175,24 @@ shared_constants! {
     BINDING_NEARBY_RECTS: u32 = 14;
     BINDING_NEARBY_TEXTURE: u32 = 15;
     MAX_NEARBY_RECTS: u32 = 8;
+    // Eikonal light simulator (Ihrke et al. 2007 section 5.2; src/passes/eikonal_light.rs,
+    // src/passes/histopyramid.rs). One descriptor set for every light/HistoPyramid kernel.
+    LIGHT_BINDING_STATE: u32 = 0;
+    LIGHT_BINDING_CLASSES: u32 = 1;
+    LIGHT_BINDING_LEVELS: u32 = 2;
+    LIGHT_BINDING_PAIRS: u32 = 3;
+    LIGHT_BINDING_HISTORY: u32 = 4;
+    LIGHT_BINDING_SRC: u32 = 5;
+    LIGHT_BINDING_DST: u32 = 6;
+    LIGHT_BINDING_FIELD: u32 = 7;
+    LIGHT_BINDING_KEYS: u32 = 8;
+    LIGHT_BINDING_DEPOSIT: u32 = 9;
+    LIGHT_BINDING_IRRADIANCE: u32 = 10;
+    LIGHT_BINDING_DIRECTION: u32 = 11;
+    LIGHT_BINDING_EXTINCTION: u32 = 12;
+    // Invocations per workgroup of the 1D light/HistoPyramid kernels.
+    LIGHT_GROUP: u32 = 64;
+    // The irradiance and direction volumes in set 1 of eikonal_view and deferred_shading.
+    BINDING_EIKONAL_IRRADIANCE: u32 = 14;
+    BINDING_EIKONAL_LIGHT_DIR: u32 = 15;
 }

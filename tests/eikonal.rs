@@ -103,6 +103,25 @@ fn rk4_converges_at_fourth_order_and_euler_at_first() {
     }
 }
 
+/// The scenes as these view-renderer tests know them: "eikonal_sphere" is the constant
+/// n = 1.5 ball of radius 1 at the origin in the grid environment (sphere_env's ball; the
+/// layout of eikonal_sphere before it got caustic_sphere's floor and light, issue 7), built
+/// from eikonal_luneburg's camera and box at 128^3.
+fn view_scene(name: &str, size: u32, overrides: &[&str]) -> scene::Scene {
+    if name != "eikonal_sphere" {
+        return common::scene(name, size, overrides);
+    }
+    let mut o = vec![
+        "volume.index={ type = \"constant\", n = 1.5, center = [0, 0, 0], radius = 1 }",
+        "volume.resolution=[128, 128, 128]",
+        "volume.name=\"ball\"",
+    ];
+    o.extend_from_slice(overrides);
+    let mut s = common::scene("eikonal_luneburg", size, &o);
+    s.name = "eikonal_sphere".into();
+    s
+}
+
 fn no_nan(name: &str, hdr: &[f32]) {
     let bad = hdr.iter().filter(|v| !v.is_finite()).count();
     assert_eq!(bad, 0, "{name}: {bad} non-finite values");
@@ -135,7 +154,7 @@ fn the_view_renderer_renders_the_volume_scenes() {
     let ctx = common::context(true);
     for name in ["eikonal_luneburg", "eikonal_sphere"] {
         for integrator in ["euler", "rk4"] {
-            let s = common::scene(name, 64, &[&format!("render.eikonal.integrator=\"{integrator}\"")]);
+            let s = view_scene(name, 64, &[&format!("render.eikonal.integrator=\"{integrator}\"")]);
             let r = common::render_on(&ctx, &s);
             no_nan(name, &r.hdr);
             assert!(r.passes.contains(&"eikonal_view".to_string()), "{:?}", r.passes);
@@ -172,7 +191,7 @@ fn sharp_single_voxel_and_non_cubic_volumes_give_no_nan() {
                 o.insert(0, "volume.index={ type = \"linear\", n0 = 1.3, gradient = [0, 0.2, 0] }");
                 o.retain(|s| !s.starts_with("volume.index."));
             }
-            let s = common::scene(name, 32, &o);
+            let s = view_scene(name, 32, &o);
             let r = common::render_on(&ctx, &s);
             no_nan(&format!("{name} {o:?}"), &r.hdr);
         }
@@ -222,6 +241,15 @@ fn invalid_volumes_and_parameters_give_clear_errors() {
         (format!("{GOOD}{lens}"), "[render.eikonal]\nstep = 0", "step"),
         (format!("{GOOD}{lens}"), "[render.eikonal]\nsigma = -1", "sigma"),
         (format!("{GOOD}{lens}"), "[render.eikonal]\nsteps = 1", "unknown parameter `steps`"),
+        // The light simulator's keys (issue 7).
+        (format!("{GOOD}{lens}"), "[render.eikonal]\nenergy_threshold = 1", "energy_threshold"),
+        (format!("{GOOD}{lens}"), "[render.eikonal]\nlight_dt = 0", "light_dt"),
+        (format!("{GOOD}{lens}"), "[render.eikonal]\nmax_patches = 10000000", "max_patches"),
+        (format!("{GOOD}{lens}"), "[render.eikonal]\nlight_patches = -1", "light_patches"),
+        (format!("{GOOD}{lens}"), "[render.eikonal]\nlight_below = -1", "light_below"),
+        (format!("{GOOD}{lens}"), "[render.eikonal]\nlight = \"yes\"", "light"),
+        (format!("{GOOD}{lens}\nsigma_s = [0, -1, 0]"), "", "sigma_s"),
+        (format!("{GOOD}{lens}\nhg_g = 1"), "", "hg_g"),
     ];
     for (volume, render, expected) in cases {
         let e = load_error(&volume, render);
@@ -247,9 +275,9 @@ fn the_reference_sees_the_volumes() {
     let ctx = common::context(false);
     let size = 32;
     // The constant-index ball is sphere_env's glass ball: the same reference image.
-    let ball = reference(&ctx, &common::scene("eikonal_sphere", size, &[]), 64);
+    let ball = reference(&ctx, &view_scene("eikonal_sphere", size, &[]), 64);
     let glass = reference(&ctx, &common::scene("sphere_env", size, &[]), 64);
-    let mut empty = common::scene("eikonal_sphere", size, &[]);
+    let mut empty = view_scene("eikonal_sphere", size, &[]);
     empty.volume = None;
     let background = reference(&ctx, &empty, 4);
     let (same, none) = (rmse_rgba(&ball, &glass), rmse_rgba(&background, &glass));
@@ -260,7 +288,7 @@ fn the_reference_sees_the_volumes() {
     // sampled finer (at 64^2, 32 spp: RMSE 0.33 at 128^3, 0.24 at 256^3 with step 0.25;
     // sphere_env's single-interface baseline: 0.41).
     let sphere_view =
-        |o: &[&str]| rmse_rgba(&common::render_on(&ctx, &common::scene("eikonal_sphere", size, o)).hdr, &ball);
+        |o: &[&str]| rmse_rgba(&common::render_on(&ctx, &view_scene("eikonal_sphere", size, o)).hdr, &ball);
     let (coarse, fine) = (
         sphere_view(&["volume.resolution=[64, 64, 64]"]),
         sphere_view(&["volume.resolution=[256, 256, 256]", "render.eikonal.step=0.25"]),

@@ -250,15 +250,21 @@ fn prism_passes_prints_the_passes_and_why() {
 #[test]
 fn eikonal_passes_only_with_a_volume() {
     assert_eq!(names("eikonal_luneburg", &[]), ["gbuffer", "deferred_shading", "eikonal_view", "tonemap"]);
-    assert_eq!(names("eikonal_sphere", &[]), ["gbuffer", "deferred_shading", "eikonal_view", "tonemap"]);
-    // The volume-source scenes (issue 7): the wine glass's table adds only its shadow map.
+    // eikonal_sphere has a light (issue 7): the light simulation's receiver pass follows
+    // deferred shading; without the light, or with render.eikonal.light = false, it is gone.
+    let lit = ["shadow_map", "gbuffer", "deferred_shading", "eikonal_light", "eikonal_view", "tonemap"];
+    assert_eq!(names("eikonal_sphere", &[]), lit);
+    let off = ["shadow_map", "gbuffer", "deferred_shading", "eikonal_view", "tonemap"];
+    assert_eq!(names("eikonal_sphere", &["render.eikonal.light=false"]), off);
+    let mut unlit = common::scene("eikonal_sphere", 64, &[]);
+    unlit.lights.clear();
+    assert!(!plan(&unlit).iter().any(|p| p.name == "eikonal_light"));
+    // The volume-source scenes (issue 7): the wine glass's light adds its shadow map and the
+    // light simulation (the caustic on the table); the others have no light.
     for scene in ["eikonal_amber_bunny", "eikonal_dispersion_cube"] {
         assert_eq!(names(scene, &[]), ["gbuffer", "deferred_shading", "eikonal_view", "tonemap"]);
     }
-    assert_eq!(
-        names("eikonal_wine_glass", &[]),
-        ["shadow_map", "gbuffer", "deferred_shading", "eikonal_view", "tonemap"]
-    );
+    assert_eq!(names("eikonal_wine_glass", &[]), lit);
     for scene in prism::scene::BENCHMARK_SCENES {
         let n = names(scene, &[]);
         assert!(!n.iter().any(|p| p.starts_with("eikonal")), "{scene}: {n:?}");

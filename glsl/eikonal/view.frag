@@ -26,6 +26,16 @@ layout(constant_id = 8) const float BOX_MAX_Z = 1.0;
 layout(constant_id = 9) const uint CHANNELS = 1u;    // index slabs: 3 = per-channel index
 layout(constant_id = 10) const uint MATERIALS = 0u;  // 0: the material volumes are stand-ins
 // ---- end volsrc ----
+// ---- light (issue 7): single scattering from the light simulator (scatter.glsl) ----
+layout(constant_id = 11) const uint SCATTER = 0u;           // 1: a light simulation ran
+layout(constant_id = 12) const float LIGHT_MIN_X = 0.0;    // the irradiance volume's box
+layout(constant_id = 13) const float LIGHT_MIN_Y = 0.0;
+layout(constant_id = 14) const float LIGHT_MIN_Z = 0.0;
+layout(constant_id = 15) const float LIGHT_MAX_X = 1.0;
+layout(constant_id = 16) const float LIGHT_MAX_Y = 1.0;
+layout(constant_id = 17) const float LIGHT_MAX_Z = 1.0;
+#include "scatter.glsl"
+// ---- end light ----
 layout(set = 1, binding = BINDING_GBUF_DEPTH) uniform sampler2D gbuf_depth;
 // xyz: grad n per metre, w: n - 1, at the voxel centres; CHANNELS slabs stacked along z.
 layout(set = 1, binding = BINDING_EIKONAL_FIELD) uniform sampler3D field;
@@ -158,7 +168,7 @@ void run_end(inout Run r, vec3 v, inout vec3 L, inout vec3 T) {
     T *= 1.0 - F;
 }
 
-vec3 march(vec3 o, vec3 d, float t_enter, int c) {
+vec3 march(vec3 o, vec3 d, float t_enter, int c, inout bool touched) {
     vec3 x = o + d * t_enter;
     float n_cur = 1.0 + sample_field(x, c).w;
     vec3 v = d * n_cur;  // |v| = n: v is the ray's optical direction
@@ -206,6 +216,7 @@ vec3 march(vec3 o, vec3 d, float t_enter, int c) {
         }
         vec4 s = sample_field(x, c);
         n_cur = 1.0 + s.w;
+        touched = touched || abs(s.w) > 1e-4;
         if (banded) {
             float up = r.n_peak - r.n_a;
             if (up * (n_cur - r.n_peak) < 0.0 && abs(n_cur - r.n_peak) > 0.02 * abs(up) + 1e-4) {
@@ -232,6 +243,19 @@ vec3 march(vec3 o, vec3 d, float t_enter, int c) {
                 vec3 trans = exp(-tau);
                 vec3 path = mix(vec3(len), (1.0 - trans) / max(sigma, vec3(1e-30)), greaterThan(tau, vec3(1e-4)));
                 L += T * E * path;
+                // ---- light (issue 7): Eq. 1's in-scattering T sigma_s p dE_omega (Eq. 6)
+                // over the segment, with sigma_s = albedo * extinction and g from the
+                // material volumes; constant over the segment like E.
+                if (SCATTER != 0u) {
+                    vec4 ext = sample_material(extinction_map, mid);
+                    vec3 sigma_s = sample_material(albedo_map, mid).rgb * ext.rgb;
+                    if (any(greaterThan(sigma_s, vec3(0.0)))) {
+                        vec3 light_min = vec3(LIGHT_MIN_X, LIGHT_MIN_Y, LIGHT_MIN_Z);
+                        vec3 light_max = vec3(LIGHT_MAX_X, LIGHT_MAX_Y, LIGHT_MAX_Z);
+                        L += T * sigma_s * path * inscatter(mid, -normalize(x - x0), light_min, light_max, ext.a);
+                    }
+                }
+                touched = touched || any(greaterThan(sigma, vec3(0.0)));
                 T *= trans;
             }
         }
@@ -253,11 +277,16 @@ void main() {
     if (depth > 0.0 && distance(world_from_depth(in_uv, depth), o) < t_enter) discard;
 
     vec3 L;
+    bool touched = false;
     if (CHANNELS == 3u) {
         // Dispersion (section 5.3): each channel follows its own index field.
-        for (int c = 0; c < 3; ++c) L[c] = march(o, d, t_enter, c)[c];
+        for (int c = 0; c < 3; ++c) L[c] = march(o, d, t_enter, c, touched)[c];
     } else {
-        L = march(o, d, t_enter, 0);
+        L = march(o, d, t_enter, 0, touched);
     }
+    // ---- light (issue 7): a ray that crossed only air (no index change, no extinction)
+    // keeps what deferred shading drew behind it (the floor lit by the simulated light)
+    // instead of the environment.
+    if (SCATTER != 0u && !touched) discard;
     out_radiance = vec4(finite_or_zero(L), 1.0);
 }

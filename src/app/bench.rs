@@ -56,6 +56,10 @@ pub struct BenchReport {
     pub scene_toml: String,
     pub passes: Vec<PassStats>,
     pub frame: Stats,
+    /// The eikonal light simulation (run once when the renderer is created): steps, patch
+    /// count per step, peak, wall-clock seconds. Absent without one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub light_simulation: Option<crate::passes::eikonal_light::LightStats>,
     pub note: &'static str,
 }
 
@@ -177,6 +181,12 @@ pub fn run(args: BenchArgs) -> Result<()> {
         println!("{:width$}  {:>10.3}  {:>10.3}  {:>10.3}", p.name, p.stats.median_ms, p.stats.min_ms, p.stats.max_ms);
     }
     println!("{:width$}  {:>10.3}  {:>10.3}  {:>10.3}", "frame", frame.median_ms, frame.min_ms, frame.max_ms);
+    if let Some(l) = renderer.light_stats() {
+        println!(
+            "eikonal light simulation (once, at setup): {:.3} s wall clock, {} steps, {} initial patches, peak {}, {} dropped",
+            l.seconds, l.steps, l.initial_patches, l.peak_patches, l.dropped_patches
+        );
+    }
     if ctx.info.device_type == "CPU" {
         println!(
             "note: a CPU device (lavapipe): times are CPU time; compare ratios within one run, not absolute times."
@@ -197,6 +207,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
             scene_toml: scene.canonical.clone(),
             passes,
             frame,
+            light_simulation: renderer.light_stats().cloned(),
             note: "GPU timestamps; on a CPU device (lavapipe) these are CPU times: compare ratios, not absolute values",
         };
         out.commit_bytes(serde_json::to_string_pretty(&report)?.as_bytes())?;

@@ -103,6 +103,9 @@ pub struct RenderArgs {
     /// Also write linear radiance to this OpenEXR file.
     #[arg(long)]
     pub exr: Option<PathBuf>,
+    /// Print details: the eikonal light simulation's patch count after every step.
+    #[arg(short, long)]
+    pub verbose: bool,
     #[command(flatten)]
     pub gpu: GpuArgs,
 }
@@ -201,6 +204,15 @@ fn render(args: RenderArgs) -> Result<()> {
         let path = exr.path().to_path_buf();
         output::write_exr(exr, w, h, &hdr)?;
         eprintln!("wrote {}", path.display());
+    }
+    if let Some(l) = renderer.light_stats() {
+        eprintln!(
+            "eikonal light simulation: {} steps, {} initial patches, peak {}, {} dropped at max_patches, {:.2} s",
+            l.steps, l.initial_patches, l.peak_patches, l.dropped_patches, l.seconds
+        );
+        if args.verbose {
+            eprintln!("patches after each step: {:?}", l.patch_counts);
+        }
     }
     let total = timing.first().map(|t| t.total_ms()).unwrap_or(0.0);
     eprintln!(

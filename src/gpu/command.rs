@@ -231,6 +231,15 @@ impl<'a> Cmd<'a> {
         unsafe { self.dev().cmd_dispatch(self.raw, x, y, z) };
     }
 
+    /// A compute dispatch whose group counts (three u32) are read by the device from
+    /// `buffer` at byte `offset`: GPU-generated work sizes without a CPU round trip (the
+    /// HistoPyramid's output count, src/passes/histopyramid.rs).
+    pub fn dispatch_indirect(&self, buffer: &Buffer, offset: u64) {
+        // SAFETY: recording outside a render pass with a bound compute pipeline; the buffer
+        // has INDIRECT_BUFFER usage and holds a VkDispatchIndirectCommand at `offset`.
+        unsafe { self.dev().cmd_dispatch_indirect(self.raw, buffer.raw, offset) };
+    }
+
     pub fn write_timestamp(&self, pool: &TimestampPool, query: u32, stage: vk::PipelineStageFlags) {
         // SAFETY: query < pool size; the pool was reset this frame.
         unsafe { self.dev().cmd_write_timestamp(self.raw, stage, pool.raw, query) };

@@ -147,8 +147,8 @@ pub fn sphere_crossing(a: DVec3, b: DVec3, center: DVec3, radius: f64) -> DVec3 
 pub struct VolumeTextures {
     _raw: Image,
     _scratch: Image,
-    field: Image,
-    field_id: ImageId,
+    pub(crate) field: Image,
+    pub(crate) field_id: ImageId,
     /// (sigma_a + sigma_s RGB per metre, Henyey-Greenstein g).
     pub extinction: Image,
     pub extinction_id: ImageId,
@@ -168,6 +168,8 @@ pub struct VolumeTextures {
 pub struct EikonalPass {
     volume: VolumeTextures,
     view: FullscreenPass,
+    // --- branch `light` (issue 7): the light simulation and its receiver pass.
+    light: Option<super::eikonal_light::EikonalLight>,
 }
 
 fn f(x: f32) -> u32 {
@@ -176,16 +178,33 @@ fn f(x: f32) -> u32 {
 
 impl EikonalPass {
     /// Sample, upload, smooth and differentiate `volume`, and create the view pass.
+    #[allow(clippy::too_many_arguments)] // reason: the light is optional input next to the pass's own
     pub fn new(
         ctx: &Arc<GpuContext>,
         params: EikonalParams,
         volume: &Volume,
+        light: Option<&crate::scene::Light>,
         graph: &mut FrameGraph,
         frame_layout: &DescriptorSetLayout,
         targets: &Targets,
         nearest: &Sampler,
     ) -> GpuResult<Self> {
         let textures = prepare_volume(ctx, params, volume, graph)?;
+        // --- branch `light`: section 5.2's light simulation before the view pass is built.
+        let light = match light {
+            Some(l) if params.light => Some(super::eikonal_light::EikonalLight::new(
+                ctx,
+                &params,
+                volume,
+                l,
+                &textures,
+                graph,
+                frame_layout,
+                targets,
+                nearest,
+            )?),
+            _ => None,
+        };
         let voxel = volume.voxel_size();
         let h = params.step * voxel.min_element();
         // Enough steps for four crossings of the box diagonal (curved and internally
@@ -195,6 +214,9 @@ impl EikonalPass {
             Integrator::Euler => EIKONAL_EULER,
             Integrator::Rk4 => EIKONAL_RK4,
         };
+        let (light_min, light_max) = light.as_ref().map_or((glam::Vec3::ZERO, glam::Vec3::ONE), |l| l.light_box());
+        // Without a simulation the field stands in for the light volumes (never read).
+        let (irradiance, direction) = light.as_ref().map_or((&textures.field, &textures.field), |l| l.images());
         let spec = [
             integrator,
             f(h),
@@ -208,6 +230,15 @@ impl EikonalPass {
             // volsrc (issue 7): index slabs (3: dispersion) and whether materials are bound.
             textures.channels,
             textures.materials as u32,
+            // --- branch `light`: single scattering (glsl/eikonal/scatter.glsl) with the
+            // irradiance and direction volumes of the light simulation.
+            u32::from(light.is_some()),
+            f(light_min.x),
+            f(light_min.y),
+            f(light_min.z),
+            f(light_max.x),
+            f(light_max.y),
+            f(light_max.z),
         ];
         let view = FullscreenPass::new(
             ctx,
@@ -220,6 +251,8 @@ impl EikonalPass {
                     (BINDING_EIKONAL_EXTINCTION, &textures.extinction),
                     (BINDING_EIKONAL_ALBEDO, &textures.albedo),
                     (BINDING_EIKONAL_EMISSION, &textures.emission),
+                    (crate::BINDING_EIKONAL_IRRADIANCE, irradiance),
+                    (crate::BINDING_EIKONAL_LIGHT_DIR, direction),
                 ],
                 target: (&targets.hdr, targets.hdr_id),
                 // Keeps the deferred result and overwrites the pixels whose ray enters the box.
@@ -229,7 +262,26 @@ impl EikonalPass {
             frame_layout,
             nearest,
         )?;
-        Ok(EikonalPass { volume: textures, view })
+        Ok(EikonalPass { volume: textures, view, light })
+    }
+
+    /// The light simulation's statistics (None without a simulation).
+    pub fn light_stats(&self) -> Option<&super::eikonal_light::LightStats> {
+        self.light.as_ref().map(|l| &l.stats)
+    }
+
+    /// `eikonal_light`: the diffuse receivers inside the irradiance volume (after deferred
+    /// shading). Records nothing without a light simulation.
+    pub fn record_light<'a>(
+        &'a self,
+        frame: &mut Frame<'_, 'a>,
+        scene: &GpuScene,
+        targets: &Targets,
+        set: DescriptorSet,
+    ) {
+        if let Some(l) = &self.light {
+            l.record(frame, scene, targets, set);
+        }
     }
 
     pub fn record<'a>(
@@ -240,11 +292,12 @@ impl EikonalPass {
         frame_set: DescriptorSet,
     ) {
         let v = &self.volume;
-        self.view.record(
-            frame,
-            frame_set,
-            &[targets.depth_id, v.field_id, v.extinction_id, v.albedo_id, v.emission_id, scene.environment_id],
-        );
+        let mut reads =
+            vec![targets.depth_id, v.field_id, v.extinction_id, v.albedo_id, v.emission_id, scene.environment_id];
+        if let Some(l) = &self.light {
+            reads.extend(l.image_ids());
+        }
+        self.view.record(frame, frame_set, &reads);
     }
 }
 
@@ -287,7 +340,7 @@ pub fn f16_bits(x: f32) -> u16 {
 
 /// Section 5.1 on the GPU: upload n - 1 (per channel slab), blur along x, y, z,
 /// differentiate; upload the material volumes.
-fn prepare_volume(
+pub(crate) fn prepare_volume(
     ctx: &Arc<GpuContext>,
     params: EikonalParams,
     volume: &Volume,

@@ -360,7 +360,8 @@ impl Renderer {
             (Some(volume), true) => {
                 let p = EikonalParams::from_settings(&scene.render)
                     .map_err(|error| RenderError::Param { technique: "eikonal", error })?;
-                Some(EikonalPass::new(ctx, p, volume, &mut graph, &frame_layout, &targets, &nearest)?)
+                let light = if plan::has(&plan, plan::EIKONAL_LIGHT) { scene.lights.first() } else { None };
+                Some(EikonalPass::new(ctx, p, volume, light, &mut graph, &frame_layout, &targets, &nearest)?)
             }
             _ => None,
         };
@@ -444,6 +445,11 @@ impl Renderer {
 
     pub fn context(&self) -> &Arc<GpuContext> {
         &self.ctx
+    }
+
+    /// The eikonal light simulation's steps, patch counts and time (None without one).
+    pub fn light_stats(&self) -> Option<&crate::passes::eikonal_light::LightStats> {
+        self.passes.eikonal.as_ref().and_then(|p| p.light_stats())
     }
 
     /// The passes this renderer records, in order, with the reason for each.
@@ -565,6 +571,9 @@ impl Renderer {
         passes.deferred.record(&mut frame, scene, targets, frame_set);
         if let Some(p) = &passes.impostor_lightmap {
             p.record_apply(&mut frame, targets, frame_set);
+        }
+        if let Some(p) = &passes.eikonal {
+            p.record_light(&mut frame, scene, targets, frame_set);
         }
         if let Some(p) = &passes.refraction_single {
             p.record(&mut frame, scene, targets, frame_set);

@@ -47,6 +47,9 @@ pub const PHOTON_BUFFER_SCATTER: &str = "photon_buffer_scatter";
 pub const PHOTON_BUFFER_FILTER: &str = "photon_buffer_filter";
 /// Ihrke et al. 2007 (src/passes/eikonal.rs): curved view rays through the `[volume]`.
 pub const EIKONAL_VIEW: &str = "eikonal_view";
+/// Ihrke et al. 2007 section 5.2 (src/passes/eikonal_light.rs): the light simulation (run
+/// when the renderer is created) and the diffuse receivers inside its irradiance volume.
+pub const EIKONAL_LIGHT: &str = "eikonal_light";
 
 #[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
 pub struct PlannedPass {
@@ -111,6 +114,20 @@ pub fn plan(scene: &Scene) -> Vec<PlannedPass> {
         },
     });
     passes.extend(lightmap_apply);
+    // --- branch `light`: only with a volume, a light, and render.eikonal.light on.
+    if let (Some(v), Some(l)) = (&scene.volume, scene.lights.first()) {
+        let on = crate::scene::techniques::EikonalParams::from_settings(&scene.render).map_or(true, |p| p.light);
+        if on {
+            passes.push(PlannedPass {
+                name: EIKONAL_LIGHT,
+                reason: format!(
+                    "volume {} lit by {}: wavefront light simulation, Ihrke et al. 2007 §4.2, §5.2 (receivers in its irradiance volume)",
+                    v.name,
+                    describe_light(0, l)
+                ),
+            });
+        }
+    }
     if !dielectric.is_empty() && scene.render.refraction == "single" {
         passes.push(PlannedPass {
             name: REFRACTION_SINGLE,

@@ -626,16 +626,56 @@ pub struct EikonalParams {
     pub integrator: Integrator,
     /// Arc length per step, in voxels (of the smallest voxel edge).
     pub step: f32,
+    // --- light simulator (section 5.2; src/passes/eikonal_light.rs) ---
+    /// Run the wavefront light simulation when the scene has a light (`light`).
+    pub light: bool,
+    /// Patches whose flux falls below this fraction of an initial patch's flux are
+    /// eliminated (section 5.2.3, "patch termination").
+    pub energy_threshold: f32,
+    /// Time step of Eqs. 14-15 in voxels of optical path (dS/dt = 1, Eq. 23).
+    pub light_dt: f32,
+    /// Capacity of the patch list; tessellation beyond it drops the last outputs (counted).
+    pub max_patches: u32,
+    /// Initial wavefront patches per side (0: the largest volume resolution).
+    pub light_patches: u32,
+    /// Metres below the volume's box that the irradiance volume also covers, so a floor
+    /// just under the volume receives the caustic (issue 7, item 6).
+    pub light_below: f32,
+    /// Metres the irradiance volume also covers beside the volume's box along x and z (the
+    /// receiver area that the volume's refracted light and shadow reach).
+    pub light_side: f32,
 }
 
 impl Default for EikonalParams {
     fn default() -> Self {
-        EikonalParams { sigma: 0.75, integrator: Integrator::Euler, step: 0.5 }
+        EikonalParams {
+            sigma: 0.75,
+            integrator: Integrator::Euler,
+            step: 0.5,
+            light: true,
+            energy_threshold: 1e-4,
+            light_dt: 0.5,
+            max_patches: 1 << 19,
+            light_patches: 0,
+            light_below: 0.0,
+            light_side: 0.0,
+        }
     }
 }
 
 impl EikonalParams {
-    pub const KEYS: &'static [&'static str] = &["sigma", "integrator", "step"];
+    pub const KEYS: &'static [&'static str] = &[
+        "sigma",
+        "integrator",
+        "step",
+        "light",
+        "energy_threshold",
+        "light_dt",
+        "max_patches",
+        "light_patches",
+        "light_below",
+        "light_side",
+    ];
 
     pub fn from_table(t: Option<&toml::Table>) -> Result<Self, ParamError> {
         let mut p = EikonalParams::default();
@@ -658,6 +698,17 @@ impl EikonalParams {
                 }
                 // Below 0.01 voxel a 256^3 volume needs more than 10^5 steps per ray.
                 "step" => p.step = number(key, v, 0.01, 4.0)?,
+                "light" => p.light = boolean(key, v)?,
+                // 1 would eliminate every patch at its first step; 0 keeps them all.
+                "energy_threshold" => p.energy_threshold = number(key, v, 0.0, 0.99)?,
+                // Above 2 voxels a patch skips voxels between two depositions.
+                "light_dt" => p.light_dt = number(key, v, 0.01, 2.0)?,
+                // A list of 900 000 patches of 144 bytes is 124 MiB: one storage-buffer
+                // binding may span at most 128 MiB (lavapipe's maxStorageBufferRange).
+                "max_patches" => p.max_patches = integer(key, v, 4, 900_000)?,
+                "light_patches" => p.light_patches = integer(key, v, 0, 1024)?,
+                "light_below" => p.light_below = number(key, v, 0.0, 100.0)?,
+                "light_side" => p.light_side = number(key, v, 0.0, 100.0)?,
                 _ => return Err(unknown("eikonal", key, Self::KEYS)),
             }
         }

@@ -1,0 +1,120 @@
+// Shared by the eikonal light simulator's kernels (Ihrke et al. 2007, section 5.2;
+// src/passes/eikonal_light.rs): the wavefront patch list, the smoothed index field, the
+// irradiance and direction volumes. Set 0 is the HistoPyramid (histopyramid.glsl).
+#include "histopyramid.glsl"
+
+// Section 5.2: "patches ... hold the four corners' positions, their propagation directions
+// and a RGB energy value". Corners 0..3 go around the patch so that
+// cross(x2 - x0, x3 - x1) points along the propagation direction at birth. `flux` is the
+// patch's energy dE * A of Eq. 17 (W), constant unless absorbed (Eq. 18).
+struct Patch {
+    vec4 x[4];   // corner positions (w unused)
+    vec4 v[4];   // corner optical directions v = n dx/ds, |v| = n (w unused)
+    vec4 flux;   // rgb: flux (W), w unused
+};
+
+layout(std430, set = 1, binding = LIGHT_BINDING_SRC) buffer Src { Patch src[]; };
+layout(std430, set = 1, binding = LIGHT_BINDING_DST) buffer Dst { Patch dst[]; };
+// xyz: grad n per metre, w: n - 1 (glsl/eikonal/gradient.comp), over the VOLUME's box.
+layout(set = 1, binding = LIGHT_BINDING_FIELD) uniform sampler3D field;
+// (sigma_a + sigma_s RGB per metre, HG g) of src/scene/volume_sources.rs, over the VOLUME's box.
+layout(set = 1, binding = LIGHT_BINDING_EXTINCTION) uniform sampler3D extinction_map;
+// Per voxel of the irradiance volume: the largest irradiance key deposited so far.
+layout(std430, set = 1, binding = LIGHT_BINDING_KEYS) buffer Keys { uint keys[]; };
+// Per patch of this step: (voxel index or ~0, key) of its deposit.
+layout(std430, set = 1, binding = LIGHT_BINDING_DEPOSIT) buffer Deposits { uvec2 deposits[]; };
+// rgb: differential irradiance dE_omega (W/m^2) of the highest-energy ray; a: 1 where lit.
+layout(set = 1, binding = LIGHT_BINDING_IRRADIANCE, rgba32f) uniform image3D irradiance;
+// xyz: that ray's unit direction of travel.
+layout(set = 1, binding = LIGHT_BINDING_DIRECTION, rgba32f) uniform image3D direction;
+
+layout(constant_id = 2) const float DT = 0.01;             // time step of Eqs. 14-15
+layout(constant_id = 3) const float VOL_MIN_X = -1.0;      // the index field's box
+layout(constant_id = 4) const float VOL_MIN_Y = -1.0;
+layout(constant_id = 5) const float VOL_MIN_Z = -1.0;
+layout(constant_id = 6) const float VOL_MAX_X = 1.0;
+layout(constant_id = 7) const float VOL_MAX_Y = 1.0;
+layout(constant_id = 8) const float VOL_MAX_Z = 1.0;
+layout(constant_id = 9) const float LIGHT_MIN_X = -1.0;    // the irradiance volume's box
+layout(constant_id = 10) const float LIGHT_MIN_Y = -1.0;
+layout(constant_id = 11) const float LIGHT_MIN_Z = -1.0;
+layout(constant_id = 12) const float LIGHT_MAX_X = 1.0;
+layout(constant_id = 13) const float LIGHT_MAX_Y = 1.0;
+layout(constant_id = 14) const float LIGHT_MAX_Z = 1.0;
+layout(constant_id = 15) const uint CHANNELS = 1u;         // index slabs in `field` (3: dispersion)
+layout(constant_id = 16) const uint MATERIALS = 0u;        // 0: no extinction anywhere (stand-in)
+layout(constant_id = 17) const float MIN_FLUX = 0.0;       // energy threshold (W)
+layout(constant_id = 18) const uint INTEGRATOR = EIKONAL_EULER;
+
+const vec3 VOL_MIN = vec3(VOL_MIN_X, VOL_MIN_Y, VOL_MIN_Z);
+const vec3 VOL_MAX = vec3(VOL_MAX_X, VOL_MAX_Y, VOL_MAX_Z);
+const vec3 LIGHT_MIN = vec3(LIGHT_MIN_X, LIGHT_MIN_Y, LIGHT_MIN_Z);
+const vec3 LIGHT_MAX = vec3(LIGHT_MAX_X, LIGHT_MAX_Y, LIGHT_MAX_Z);
+
+// With a per-channel index (CHANNELS = 3, dispersion) the light travels through the green
+// slab: one wavefront, not three (a limitation; the view renderer marches each channel).
+vec4 field_voxel(ivec3 q, ivec3 size) {
+    int slab = CHANNELS == 3u ? 1 : 0;
+    return all(greaterThanEqual(q, ivec3(0))) && all(lessThan(q, size)) ? texelFetch(field, q + ivec3(0, 0, slab * size.z), 0)
+                                                                      : vec4(0.0);
+}
+
+// (grad n, n - 1) by trilinear interpolation in full precision, as eikonal_view samples it;
+// n = 1 and no gradient beyond the volume's box.
+vec4 sample_field(vec3 x) {
+    ivec3 size = textureSize(field, 0);
+    size.z /= int(CHANNELS);
+    vec3 u = (x - VOL_MIN) / (VOL_MAX - VOL_MIN) * vec3(size) - 0.5;
+    u = clamp(u, vec3(-1.0), vec3(size));
+    vec3 f = fract(u);
+    ivec3 i = ivec3(floor(u));
+    vec4 c00 = mix(field_voxel(i, size), field_voxel(i + ivec3(1, 0, 0), size), f.x);
+    vec4 c10 = mix(field_voxel(i + ivec3(0, 1, 0), size), field_voxel(i + ivec3(1, 1, 0), size), f.x);
+    vec4 c01 = mix(field_voxel(i + ivec3(0, 0, 1), size), field_voxel(i + ivec3(1, 0, 1), size), f.x);
+    vec4 c11 = mix(field_voxel(i + ivec3(0, 1, 1), size), field_voxel(i + ivec3(1, 1, 1), size), f.x);
+    return mix(mix(c00, c10, f.y), mix(c01, c11, f.y), f.z);
+}
+
+// Extinction sigma_a + sigma_s at x (trilinear, clamped to the box's voxels; 0 outside the
+// box and without materials), as eikonal_view samples it.
+vec3 extinction_at(vec3 x) {
+    if (MATERIALS == 0u || any(lessThan(x, VOL_MIN)) || any(greaterThan(x, VOL_MAX))) return vec3(0.0);
+    ivec3 size = textureSize(extinction_map, 0);
+    vec3 u = clamp((x - VOL_MIN) / (VOL_MAX - VOL_MIN) * vec3(size) - 0.5, vec3(0.0), vec3(size - 1));
+    ivec3 i = ivec3(floor(u));
+    ivec3 j = min(i + 1, size - 1);
+    vec3 f = u - vec3(i);
+    vec3 c00 = mix(texelFetch(extinction_map, i, 0).rgb, texelFetch(extinction_map, ivec3(j.x, i.y, i.z), 0).rgb, f.x);
+    vec3 c10 = mix(texelFetch(extinction_map, ivec3(i.x, j.y, i.z), 0).rgb, texelFetch(extinction_map, ivec3(j.x, j.y, i.z), 0).rgb, f.x);
+    vec3 c01 = mix(texelFetch(extinction_map, ivec3(i.x, i.y, j.z), 0).rgb, texelFetch(extinction_map, ivec3(j.x, i.y, j.z), 0).rgb, f.x);
+    vec3 c11 = mix(texelFetch(extinction_map, ivec3(i.x, j.y, j.z), 0).rgb, texelFetch(extinction_map, j, 0).rgb, f.x);
+    return mix(mix(c00, c10, f.y), mix(c01, c11, f.y), f.z);
+}
+
+float index_at(vec3 x) {
+    return max(1.0 + sample_field(x).w, 1e-3);
+}
+
+// The vector area of the quad (half the cross product of its diagonals): its length is the
+// area A of Eq. 17, its direction the patch orientation of section 5.2.3.
+vec3 patch_normal(Patch p) {
+    return 0.5 * cross(p.x[2].xyz - p.x[0].xyz, p.x[3].xyz - p.x[1].xyz);
+}
+
+vec3 patch_mid(Patch p) {
+    return 0.25 * (p.x[0].xyz + p.x[1].xyz + p.x[2].xyz + p.x[3].xyz);
+}
+
+vec3 patch_dir(Patch p) {
+    return p.v[0].xyz + p.v[1].xyz + p.v[2].xyz + p.v[3].xyz;
+}
+
+bool in_light_box(vec3 x) {
+    return all(greaterThanEqual(x, LIGHT_MIN)) && all(lessThan(x, LIGHT_MAX));
+}
+
+// The irradiance volume's voxel holding x (x inside the light box).
+ivec3 light_voxel(vec3 x) {
+    ivec3 size = imageSize(irradiance);
+    return clamp(ivec3(floor((x - LIGHT_MIN) / (LIGHT_MAX - LIGHT_MIN) * vec3(size))), ivec3(0), size - 1);
+}

@@ -1,0 +1,62 @@
+// Single scattering of the simulated light along a curved view ray (Ihrke et al. 2007,
+// Eqs. 2, 3 and 6, sections 4.1 and 5.3): with one incoming ray per voxel from the light
+// simulator (section 5.2.2, the highest-energy ray), the in-scatter integral of Eq. 3
+// becomes the sum of Eq. 6 with a single term, p(x, v, l) dE_omega, where dE_omega is the
+// irradiance volume and l the direction volume (src/passes/eikonal_light.rs). The phase
+// function is Henyey-Greenstein (section 5.1), evaluated "on-the-fly in the fragment
+// shader" (section 5.3). Per step of arc length ds the ray gains
+//     T(s) sigma_s p(cos theta) dE_omega ds,
+// T the transmittance so far (Eq. 5), theta between the light's direction of travel and
+// the direction towards the eye. Kept in this include so that view.frag's edit is small.
+#ifndef EIKONAL_SCATTER_GLSL
+#define EIKONAL_SCATTER_GLSL
+
+layout(set = 1, binding = BINDING_EIKONAL_IRRADIANCE) uniform sampler3D light_irradiance;
+layout(set = 1, binding = BINDING_EIKONAL_LIGHT_DIR) uniform sampler3D light_direction;
+
+// Henyey & Greenstein 1941: normalized over the sphere, mean cosine g.
+float henyey_greenstein(float cos_theta, float g) {
+    float d = 1.0 + g * g - 2.0 * g * cos_theta;
+    return (1.0 - g * g) / (4.0 * PI * d * sqrt(max(d, 1e-12)));
+}
+
+// The simulated light at x in the irradiance volume spanning light_min..light_max:
+// trilinear over the voxels that received a patch midpoint (alpha 1), renormalized by their
+// weight, so that a voxel the wavefront crossed between two midpoints (a hole of the
+// midpoint voxelization, section 4.2.3) takes its lit neighbours' value instead of 0.
+// Returns false where no voxel of the 2x2x2 neighbourhood was lit.
+bool light_at(vec3 x, vec3 light_min, vec3 light_max, out vec3 irradiance, out vec3 dir) {
+    irradiance = vec3(0.0);
+    dir = vec3(0.0);
+    if (any(lessThan(x, light_min)) || any(greaterThanEqual(x, light_max))) return false;
+    ivec3 size = textureSize(light_irradiance, 0);
+    vec3 u = (x - light_min) / (light_max - light_min) * vec3(size) - 0.5;
+    ivec3 i0 = ivec3(floor(u));
+    vec3 f = u - vec3(i0);
+    float weight = 0.0;
+    for (int c = 0; c < 8; ++c) {
+        ivec3 o = ivec3(c & 1, (c >> 1) & 1, (c >> 2) & 1);
+        ivec3 q = i0 + o;
+        if (any(lessThan(q, ivec3(0))) || any(greaterThanEqual(q, size))) continue;
+        vec4 e = texelFetch(light_irradiance, q, 0);
+        if (e.a <= 0.0) continue;
+        vec3 w3 = mix(1.0 - f, f, vec3(o));
+        float w = w3.x * w3.y * w3.z;
+        irradiance += w * e.rgb;
+        dir += w * texelFetch(light_direction, q, 0).xyz;
+        weight += w;
+    }
+    if (!(weight > 1e-6)) return false;
+    irradiance /= weight;
+    dir = dot(dir, dir) > 1e-20 ? normalize(dir) : vec3(0.0);
+    return true;
+}
+
+// In-scattered radiance per metre at x towards the eye (to_eye: unit), before sigma_s and
+// transmittance: p(cos theta) dE_omega.
+vec3 inscatter(vec3 x, vec3 to_eye, vec3 light_min, vec3 light_max, float g) {
+    vec3 e, l;
+    if (!light_at(x, light_min, light_max, e, l)) return vec3(0.0);
+    return henyey_greenstein(dot(l, to_eye), g) * e;
+}
+#endif

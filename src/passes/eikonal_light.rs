@@ -1,0 +1,733 @@
+//! The eikonal light simulator (Ihrke et al. 2007, sections 4.2 and 5.2,
+//! ../shared/papers/ihrke2007-eikonal-rendering.md): adaptive wavefront tracing of one light
+//! through the smoothed index field, producing the irradiance and direction volumes that
+//! the view renderer's single scattering (section 5.3, Eqs. 6-7, glsl/eikonal/scatter.glsl)
+//! and the floor under the volume (deferred shading) read.
+//!
+//! - Section 4.2 / 5.2: the wavefront is a list of patches of four particles each (corner
+//!   positions, directions v = n dx/ds, RGB flux), initialized on the CPU as a planar
+//!   wavefront (directional light) or a spherical one (point light) covering the box
+//!   ([`initial_wavefront`]).
+//! - Section 5.2.1 (glsl/eikonal/light_step.comp): every step advances the corners with the
+//!   equal-time ray equation, Eqs. 14-15, and absorbs with Eq. 18; the irradiance of a patch
+//!   is its flux over its area (Eq. 17, intensity law Eq. 16).
+//! - Section 5.2.2: the midpoint is voxelized into the irradiance volume, keeping the
+//!   highest-energy ray per voxel (atomicMax, then light_deposit.comp).
+//! - Section 5.2.3: each patch is classified 0/1/4 and the list is compacted and expanded by
+//!   the HistoPyramid (src/passes/histopyramid.rs) and glsl/eikonal/light_expand.comp.
+//!
+//! The irradiance volume covers the volume's box extended `light_below` metres down, so that
+//! a floor just under the volume lies inside it: the simplest honest way to get the caustic
+//! onto the table (Fig. 1 left). The patches keep propagating through the air (n = 1) of
+//! that extension, and deferred shading reads the irradiance at the floor (Lambert's cosine
+//! with the stored direction) in place of the light's unoccluded direct term.
+//!
+//! Steps run in batches of [`LIGHT_BATCH`] per command buffer with indirect dispatches sized
+//! by the device; only after a batch is the patch count read back to decide whether to go on.
+use std::sync::Arc;
+use std::time::Instant;
+
+use glam::{DVec3, Vec3};
+
+use crate::gpu::{
+    vk, Access, Buffer, ComputePipeline, DescriptorSet, DescriptorSetLayout, DescriptorWrite, GpuContext, GpuResult,
+    Image, ImageDesc, MemoryLocation, PipelineLayout, Sampler,
+};
+use crate::graph::{BufferId, Frame, FrameGraph, ImageId};
+use crate::scene::techniques::{EikonalParams, Integrator};
+use crate::scene::{IndexProfile, Light, Volume};
+use crate::{
+    EIKONAL_EULER, EIKONAL_RK4, LIGHT_BINDING_DEPOSIT, LIGHT_BINDING_DIRECTION, LIGHT_BINDING_DST, LIGHT_BINDING_FIELD,
+    LIGHT_BINDING_IRRADIANCE, LIGHT_BINDING_KEYS, LIGHT_BINDING_SRC,
+};
+
+use super::eikonal::RayState;
+use super::histopyramid::{HistoPyramid, HpState};
+
+/// Simulation steps recorded per command buffer between two patch-count readbacks.
+pub const LIGHT_BATCH: u32 = 16;
+
+/// Most patches of an initial wavefront: a list of them (144 bytes each) fits one 128 MiB
+/// storage-buffer binding (lavapipe's maxStorageBufferRange), like `max_patches`.
+pub const MAX_INITIAL_PATCHES: u32 = 900_000;
+
+/// Most steps of one simulation (a wavefront trapped by total internal reflection stops here).
+pub const MAX_LIGHT_STEPS: u32 = 1 << 16;
+
+/// One wavefront patch (glsl/eikonal/light_common.glsl `Patch`, std430).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct Patch {
+    /// Corner positions (w unused), in the order that makes
+    /// cross(x2 - x0, x3 - x1) point along the propagation.
+    pub x: [[f32; 4]; 4],
+    /// Corner optical directions v = n dx/ds (w unused).
+    pub v: [[f32; 4]; 4],
+    /// RGB flux dE * A in W (w unused).
+    pub flux: [f32; 4],
+}
+const _: () = assert!(std::mem::size_of::<Patch>() == 144);
+
+impl Patch {
+    pub fn corner(&self, c: usize) -> Vec3 {
+        Vec3::from_slice(&self.x[c][..3])
+    }
+    pub fn direction(&self, c: usize) -> Vec3 {
+        Vec3::from_slice(&self.v[c][..3])
+    }
+    pub fn flux(&self) -> Vec3 {
+        Vec3::from_slice(&self.flux[..3])
+    }
+    /// The patch's vector area (half the cross product of its diagonals), as the shaders.
+    pub fn normal(&self) -> Vec3 {
+        0.5 * (self.corner(2) - self.corner(0)).cross(self.corner(3) - self.corner(1))
+    }
+    pub fn mid(&self) -> Vec3 {
+        0.25 * (0..4).map(|c| self.corner(c)).sum::<Vec3>()
+    }
+}
+
+/// What a simulation did: steps, patch count after every step, peak, clamp losses.
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct LightStats {
+    pub initial_patches: u32,
+    pub steps: u32,
+    /// Patches after each step (the HistoPyramid's output count).
+    pub patch_counts: Vec<u32>,
+    pub peak_patches: u32,
+    /// Patches lost because tessellation would have exceeded `max_patches` (documented clamp).
+    pub dropped_patches: u32,
+    /// Wall-clock seconds of the whole simulation, uploads and readbacks included.
+    pub seconds: f64,
+}
+
+/// The irradiance volume's box and resolution: the volume's box and voxels, extended
+/// `below` metres down and `side` metres along -x, +x, -z, +z (whole voxels each).
+pub fn light_grid(volume: &Volume, below: f32, side: f32) -> (Vec3, Vec3, [u32; 3]) {
+    let voxel = volume.voxel_size();
+    let whole = |m: f32, v: f32| if m > 0.0 { (m / v).ceil() as u32 } else { 0 };
+    let (ex, ey, ez) = (whole(side, voxel.x), whole(below, voxel.y), whole(side, voxel.z));
+    let lo = Vec3::new(ex as f32 * voxel.x, ey as f32 * voxel.y, ez as f32 * voxel.z);
+    let hi = Vec3::new(ex as f32 * voxel.x, 0.0, ez as f32 * voxel.z);
+    let [rx, ry, rz] = volume.resolution;
+    (volume.min - lo, volume.max + hi, [rx + 2 * ex, ry + ey, rz + 2 * ez])
+}
+
+/// The largest refractive index of the volume (for the step budget).
+fn max_index(volume: &Volume) -> f32 {
+    match volume.index {
+        IndexProfile::Constant { n, .. } => n.max(1.0),
+        IndexProfile::Luneburg { .. } => std::f32::consts::SQRT_2,
+        IndexProfile::Linear { .. } => (0..8)
+            .map(|c| {
+                let p = Vec3::new(
+                    if c & 1 == 0 { volume.min.x } else { volume.max.x },
+                    if c & 2 == 0 { volume.min.y } else { volume.max.y },
+                    if c & 4 == 0 { volume.min.z } else { volume.max.z },
+                );
+                volume.index.n(p.as_dvec3()) as f32
+            })
+            .fold(1.0, f32::max),
+    }
+}
+
+/// A unit tangent frame (t1, t2) with t1 x t2 = w.
+fn frame(w: Vec3) -> (Vec3, Vec3) {
+    let a = if w.x.abs() < 0.9 { Vec3::X } else { Vec3::Y };
+    let t1 = w.cross(a).normalize();
+    (t1, w.cross(t1))
+}
+
+/// The initial wavefront (section 5.2: "a planar wavefront (directional light source) or a
+/// spherical wavefront (point light source) ... large enough to cover the simulation
+/// volume") as `per_side` x `per_side` patches per face, just outside the bounding sphere of
+/// the box `min`..`max`, in air (n = 1). A directional light's patches carry its irradiance
+/// E times their area; a point light's carry I / r0^2 times their area at radius r0. A point
+/// light inside the bounding sphere starts on a small sphere around it, all six cube faces.
+pub fn initial_wavefront(volume: &Volume, min: Vec3, max: Vec3, light: &Light, per_side: u32) -> Vec<Patch> {
+    let center = 0.5 * (min + max);
+    let radius = 0.5 * (max - min).length();
+    let voxel = volume.voxel_size().min_element();
+    let n_at = |x: Vec3| -> f32 {
+        let inside = x.cmpge(volume.min).all() && x.cmple(volume.max).all();
+        if inside {
+            volume.index.n(x.as_dvec3()) as f32
+        } else {
+            1.0
+        }
+    };
+    let mut patches = Vec::new();
+    // At most MAX_INITIAL_PATCHES in all (the list must fit one storage-buffer binding):
+    // fewer per side for the six faces of a point light inside the bounding sphere.
+    let faces = match *light {
+        Light::Point { position, .. } if (center - position).length() <= radius + voxel => 6,
+        _ => 1,
+    };
+    let most = ((MAX_INITIAL_PATCHES / faces) as f64).sqrt() as u32;
+    let k = per_side.clamp(1, most);
+    // x[c].w numbers the initial particles (4 per patch; exact in f32 below 2^24) so that
+    // tests can follow them; particles created by tessellation get -1.
+    let make = |corners: [Vec3; 4], dirs: [Vec3; 4], e: Vec3, id: usize| -> Patch {
+        let mut p = Patch::default();
+        for c in 0..4 {
+            p.x[c] = corners[c].extend((4 * id + c) as f32).to_array();
+            p.v[c] = (dirs[c] * n_at(corners[c])).extend(0.0).to_array();
+        }
+        let area = p.normal().length();
+        p.flux = (e * area).extend(0.0).to_array();
+        p
+    };
+    match *light {
+        Light::Directional { direction, irradiance } => {
+            let d = direction.normalize();
+            let (t1, t2) = frame(d);
+            let origin = center - d * (radius + voxel);
+            let side = 2.0 * radius / k as f32;
+            for j in 0..k {
+                for i in 0..k {
+                    let at =
+                        |a: u32, b: u32| origin + t1 * (-radius + a as f32 * side) + t2 * (-radius + b as f32 * side);
+                    let corners = [at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)];
+                    patches.push(make(corners, [d; 4], irradiance, patches.len()));
+                }
+            }
+        }
+        Light::Point { position, intensity } => {
+            let to_center = center - position;
+            let dist = to_center.length();
+            // (axis, tan of the half-angle, start radius) per face.
+            let faces: Vec<(Vec3, f32, f32)> = if dist > radius + voxel {
+                let tan = radius / (dist * dist - radius * radius).sqrt();
+                vec![(to_center / dist, tan, dist - radius - voxel)]
+            } else {
+                [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z]
+                    .iter()
+                    .map(|&a| (a, 1.0, 0.5 * voxel))
+                    .collect()
+            };
+            for (w, tan, r0) in faces {
+                let (t1, t2) = frame(w);
+                let e = intensity / (r0 * r0);
+                let dir = |a: u32, b: u32| {
+                    let u = -tan + 2.0 * tan * a as f32 / k as f32;
+                    let v = -tan + 2.0 * tan * b as f32 / k as f32;
+                    (w + t1 * u + t2 * v).normalize()
+                };
+                for j in 0..k {
+                    for i in 0..k {
+                        let dirs = [dir(i, j), dir(i + 1, j), dir(i + 1, j + 1), dir(i, j + 1)];
+                        patches.push(make(dirs.map(|d| position + d * r0), dirs, e, patches.len()));
+                    }
+                }
+            }
+        }
+    }
+    patches
+}
+
+/// The GPU light simulator for one light and one volume.
+pub struct LightSim {
+    pub hp: HistoPyramid,
+    lists: [Buffer; 2],
+    list_ids: [BufferId; 2],
+    _keys: Buffer,
+    keys_id: BufferId,
+    _deposits: Buffer,
+    deposits_id: BufferId,
+    /// rgb: dE_omega (W/m^2) of the highest-energy ray per voxel; a: 1 where lit.
+    pub irradiance: Image,
+    pub irradiance_id: ImageId,
+    /// xyz: that ray's unit direction of travel.
+    pub direction: Image,
+    pub direction_id: ImageId,
+    _set_layout: DescriptorSetLayout,
+    sets: [DescriptorSet; 2],
+    _layout: PipelineLayout,
+    step: ComputePipeline,
+    deposit: ComputePipeline,
+    expand: ComputePipeline,
+    field_id: ImageId,
+    extinction_id: ImageId,
+    /// Which list holds the current patches.
+    current: usize,
+    pub steps_taken: u32,
+    pub max_steps: u32,
+    pub initial: Vec<Patch>,
+    /// The irradiance volume's box and resolution.
+    pub light_min: Vec3,
+    pub light_max: Vec3,
+    pub resolution: [u32; 3],
+    /// The energy threshold in W (a fraction of the largest initial patch flux).
+    pub min_flux: f32,
+}
+
+fn f(x: f32) -> u32 {
+    x.to_bits()
+}
+
+impl LightSim {
+    /// Buffers, images and pipelines for simulating `light` through `volume` whose smoothed
+    /// (grad n, n - 1) texture is `field`; uploads the initial wavefront.
+    #[allow(clippy::too_many_arguments)] // reason: the volume's textures, the graph and the sampler are separate owners
+    pub fn new(
+        ctx: &Arc<GpuContext>,
+        params: &EikonalParams,
+        volume: &Volume,
+        light: &Light,
+        textures: &super::eikonal::VolumeTextures,
+        sampler: &Sampler,
+        graph: &mut FrameGraph,
+    ) -> GpuResult<Self> {
+        let (light_min, light_max, resolution) = light_grid(volume, params.light_below, params.light_side);
+        let per_side = if params.light_patches > 0 {
+            params.light_patches
+        } else {
+            volume.resolution.iter().copied().max().unwrap_or(1)
+        };
+        let initial = initial_wavefront(volume, light_min, light_max, light, per_side);
+        let voxel = volume.voxel_size().min_element();
+        let dt = params.light_dt * voxel;
+        // Enough time for the optical path of two box diagonals at the largest index, plus
+        // the way from the initial wavefront (outside the box's bounding sphere).
+        let diagonal = (light_max - light_min).length();
+        let max_steps =
+            ((2.0 * diagonal * max_index(volume) + 2.0 * diagonal) / dt).ceil().min(MAX_LIGHT_STEPS as f32) as u32;
+        let capacity = params.max_patches.max(initial.len() as u32);
+        let mut hp = HistoPyramid::new(ctx, capacity, max_steps, graph)?;
+        let capacity = hp.capacity;
+
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
+        let list_bytes = (capacity as u64) * std::mem::size_of::<Patch>() as u64;
+        let mut lists = [
+            Buffer::new(ctx, "eikonal_patches_0", list_bytes, storage, MemoryLocation::GpuToCpu)?,
+            Buffer::new(ctx, "eikonal_patches_1", list_bytes, storage, MemoryLocation::GpuToCpu)?,
+        ];
+        lists[0].write(0, bytemuck::cast_slice(&initial));
+        let voxels = resolution.iter().map(|&r| r as u64).product::<u64>();
+        let keys = Buffer::new(ctx, "eikonal_light_keys", 4 * voxels, storage, MemoryLocation::GpuOnly)?;
+        let deposits =
+            Buffer::new(ctx, "eikonal_light_deposits", 8 * capacity as u64, storage, MemoryLocation::GpuOnly)?;
+        // TRANSFER_SRC: tests read the volumes back.
+        let usage = vk::ImageUsageFlags::STORAGE
+            | vk::ImageUsageFlags::SAMPLED
+            | vk::ImageUsageFlags::TRANSFER_DST
+            | vk::ImageUsageFlags::TRANSFER_SRC;
+        let irradiance =
+            Image::new(ctx, &ImageDesc::d3("eikonal_irradiance", vk::Format::R32G32B32A32_SFLOAT, resolution, usage))?;
+        let direction =
+            Image::new(ctx, &ImageDesc::d3("eikonal_light_dir", vk::Format::R32G32B32A32_SFLOAT, resolution, usage))?;
+
+        let sb = vk::DescriptorType::STORAGE_BUFFER;
+        let si = vk::DescriptorType::STORAGE_IMAGE;
+        let stage = vk::ShaderStageFlags::COMPUTE;
+        let set_layout = DescriptorSetLayout::new(
+            ctx,
+            "eikonal_light",
+            &[
+                (LIGHT_BINDING_SRC, sb, stage),
+                (LIGHT_BINDING_DST, sb, stage),
+                (LIGHT_BINDING_FIELD, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, stage),
+                (crate::LIGHT_BINDING_EXTINCTION, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, stage),
+                (LIGHT_BINDING_KEYS, sb, stage),
+                (LIGHT_BINDING_DEPOSIT, sb, stage),
+                (LIGHT_BINDING_IRRADIANCE, si, stage),
+                (LIGHT_BINDING_DIRECTION, si, stage),
+            ],
+            2,
+        )?;
+        let set = |name: &str, a: &Buffer, b: &Buffer| {
+            set_layout.allocate(
+                name,
+                &[
+                    DescriptorWrite::Storage(LIGHT_BINDING_SRC, a),
+                    DescriptorWrite::Storage(LIGHT_BINDING_DST, b),
+                    DescriptorWrite::Sampled(
+                        LIGHT_BINDING_FIELD,
+                        textures.field.view(),
+                        sampler,
+                        vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                    ),
+                    DescriptorWrite::Sampled(
+                        crate::LIGHT_BINDING_EXTINCTION,
+                        textures.extinction.view(),
+                        sampler,
+                        vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                    ),
+                    DescriptorWrite::Storage(LIGHT_BINDING_KEYS, &keys),
+                    DescriptorWrite::Storage(LIGHT_BINDING_DEPOSIT, &deposits),
+                    DescriptorWrite::StorageImage(LIGHT_BINDING_IRRADIANCE, irradiance.view()),
+                    DescriptorWrite::StorageImage(LIGHT_BINDING_DIRECTION, direction.view()),
+                ],
+            )
+        };
+        let sets = [set("eikonal_light_0to1", &lists[0], &lists[1])?, set("eikonal_light_1to0", &lists[1], &lists[0])?];
+        let layout = PipelineLayout::new(ctx, "eikonal_light", &[hp.set_layout(), &set_layout], 4)?;
+
+        let largest = initial.iter().map(|p| p.flux().max_element()).fold(0.0f32, f32::max);
+        let min_flux = params.energy_threshold * largest;
+        let integrator = match params.integrator {
+            Integrator::Euler => EIKONAL_EULER,
+            Integrator::Rk4 => EIKONAL_RK4,
+        };
+        let spec = [
+            capacity,
+            max_steps,
+            f(dt),
+            f(volume.min.x),
+            f(volume.min.y),
+            f(volume.min.z),
+            f(volume.max.x),
+            f(volume.max.y),
+            f(volume.max.z),
+            f(light_min.x),
+            f(light_min.y),
+            f(light_min.z),
+            f(light_max.x),
+            f(light_max.y),
+            f(light_max.z),
+            // Extinction (Eq. 18) from the material volumes of src/scene/volume_sources.rs.
+            textures.channels,
+            textures.materials as u32,
+            f(min_flux),
+            integrator,
+        ];
+        let pipeline = |name: &str, shader: &str| ComputePipeline::new(ctx, name, shader, &layout, &spec);
+        let step = pipeline("eikonal_light_step", "eikonal/light_step.comp")?;
+        let deposit = pipeline("eikonal_light_deposit", "eikonal/light_deposit.comp")?;
+        let expand = pipeline("eikonal_light_expand", "eikonal/light_expand.comp")?;
+
+        let count = initial.len() as u32;
+        hp.reset(count);
+        let groups = count.div_ceil(crate::LIGHT_GROUP);
+        hp.state.write(
+            0,
+            bytemuck::bytes_of(&HpState { args: [groups, 1, 1, 0], count, next: count, ..HpState::default() }),
+        );
+
+        let list_ids = [graph.register_buffer(&lists[0]), graph.register_buffer(&lists[1])];
+        let keys_id = graph.register_buffer(&keys);
+        let deposits_id = graph.register_buffer(&deposits);
+        let irradiance_id = graph.register_image(&irradiance);
+        let direction_id = graph.register_image(&direction);
+        ctx.one_shot(|cmd| {
+            graph.access_now(
+                cmd,
+                &[(irradiance_id, Access::TransferWrite), (direction_id, Access::TransferWrite)],
+                &[(keys_id, Access::TransferWrite)],
+            );
+            cmd.clear_color_image(&irradiance, [0.0; 4]);
+            cmd.clear_color_image(&direction, [0.0; 4]);
+            cmd.fill_buffer(&keys, 0);
+        })?;
+        Ok(LightSim {
+            hp,
+            lists,
+            list_ids,
+            _keys: keys,
+            keys_id,
+            _deposits: deposits,
+            deposits_id,
+            irradiance,
+            irradiance_id,
+            direction,
+            direction_id,
+            _set_layout: set_layout,
+            sets,
+            _layout: layout,
+            step,
+            deposit,
+            expand,
+            field_id: textures.field_id,
+            extinction_id: textures.extinction_id,
+            current: 0,
+            steps_taken: 0,
+            max_steps,
+            initial,
+            light_min,
+            light_max,
+            resolution,
+            min_flux,
+        })
+    }
+
+    fn record_step<'a>(&'a self, frame: &mut Frame<'_, 'a>, from: usize) {
+        let hp = &self.hp;
+        let (set0, set1) = (hp.set, self.sets[from]);
+        let (src, dst) = (self.list_ids[from], self.list_ids[1 - from]);
+        let state = &hp.state;
+        let (step, deposit, expand) = (&self.step, &self.deposit, &self.expand);
+        frame
+            .pass("eikonal_light_step")
+            .read_buffer(hp.state_id, Access::IndirectArgs)
+            .read_buffer(hp.state_id, Access::ComputeRead)
+            .read(self.field_id, Access::ComputeSampled)
+            .read(self.extinction_id, Access::ComputeSampled)
+            .read(self.irradiance_id, Access::ComputeRead)
+            .write_buffer(src, Access::ComputeWrite)
+            .write_buffer(hp.classes_id, Access::ComputeWrite)
+            .write_buffer(self.keys_id, Access::ComputeWrite)
+            .write_buffer(self.deposits_id, Access::ComputeWrite)
+            .record(move |cmd| {
+                cmd.bind_compute(step, &[set0, set1]);
+                cmd.dispatch_indirect(state, 0);
+            });
+        frame
+            .pass("eikonal_light_deposit")
+            .read_buffer(hp.state_id, Access::IndirectArgs)
+            .read_buffer(hp.state_id, Access::ComputeRead)
+            .read(self.field_id, Access::ComputeSampled)
+            .read_buffer(src, Access::ComputeRead)
+            .read_buffer(self.keys_id, Access::ComputeRead)
+            .read_buffer(self.deposits_id, Access::ComputeRead)
+            .write(self.irradiance_id, Access::ComputeWrite)
+            .write(self.direction_id, Access::ComputeWrite)
+            .record(move |cmd| {
+                cmd.bind_compute(deposit, &[set0, set1]);
+                cmd.dispatch_indirect(state, 0);
+            });
+        hp.record(frame);
+        frame
+            .pass("eikonal_light_expand")
+            .read_buffer(hp.state_id, Access::IndirectArgs)
+            .write_buffer(hp.state_id, Access::ComputeWrite)
+            .read_buffer(hp.pairs_id, Access::ComputeRead)
+            .read_buffer(hp.classes_id, Access::ComputeRead)
+            .read_buffer(src, Access::ComputeRead)
+            .read(self.field_id, Access::ComputeSampled)
+            .read(self.irradiance_id, Access::ComputeRead)
+            .write_buffer(dst, Access::ComputeWrite)
+            .record(move |cmd| {
+                cmd.bind_compute(expand, &[set0, set1]);
+                cmd.dispatch_indirect(state, 0);
+            });
+    }
+
+    /// Record and run `steps` steps in one command buffer (no readback inside), then read
+    /// back the bookkeeping. Returns the patch count after the last step.
+    pub fn run_steps(&mut self, ctx: &Arc<GpuContext>, graph: &mut FrameGraph, steps: u32) -> GpuResult<u32> {
+        let mut from = self.current;
+        ctx.one_shot(|cmd| {
+            let mut frame = graph.frame();
+            for _ in 0..steps {
+                self.record_step(&mut frame, from);
+                from = 1 - from;
+            }
+            frame.execute(cmd, None);
+            let host: Vec<_> = [self.hp.state_id, self.hp.classes_id, self.list_ids[0], self.list_ids[1]]
+                .into_iter()
+                .map(|id| (id, Access::HostRead))
+                .collect();
+            graph.access_now(cmd, &[], &host);
+        })?;
+        self.current = from;
+        self.steps_taken += steps;
+        Ok(self.hp.read_state().count)
+    }
+
+    /// Simulate until no patch is left (or [`LightSim::max_steps`]), in batches of
+    /// [`LIGHT_BATCH`] steps, with a progress bar on a terminal.
+    pub fn run(&mut self, ctx: &Arc<GpuContext>, graph: &mut FrameGraph) -> GpuResult<LightStats> {
+        let start = Instant::now();
+        let bar = indicatif::ProgressBar::new(self.max_steps as u64);
+        bar.set_style(
+            indicatif::ProgressStyle::with_template("light simulation {bar:40} {pos}/{len} steps, {msg}")
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        let mut count = self.initial.len() as u32;
+        while count > 0 && self.steps_taken < self.max_steps {
+            let n = LIGHT_BATCH.min(self.max_steps - self.steps_taken);
+            count = self.run_steps(ctx, graph, n)?;
+            bar.set_position(self.steps_taken as u64);
+            bar.set_message(format!("{count} patches"));
+        }
+        bar.finish_and_clear();
+        let state = self.hp.read_state();
+        let mut counts = self.hp.read_history(self.steps_taken as usize);
+        // Steps after the list emptied (the rest of the last batch) did nothing.
+        if let Some(last) = counts.iter().position(|&c| c == 0) {
+            counts.truncate(last + 1);
+        }
+        Ok(LightStats {
+            initial_patches: self.initial.len() as u32,
+            steps: counts.len() as u32,
+            patch_counts: counts,
+            peak_patches: state.peak.max(self.initial.len() as u32),
+            dropped_patches: state.dropped,
+            seconds: start.elapsed().as_secs_f64(),
+        })
+    }
+
+    /// The current patch list (after the last step's compaction/expansion).
+    pub fn patches(&self) -> Vec<Patch> {
+        let n = self.hp.read_state().count as usize;
+        let all: &[Patch] = bytemuck::cast_slice(self.lists[self.current].read());
+        all[..n].to_vec()
+    }
+
+    /// The last step's first `count` patches before compaction (advanced, absorbed, in
+    /// the list the step read) and their classes; `count` is the list length before it.
+    pub fn last_step(&self, count: usize) -> (Vec<Patch>, Vec<u32>) {
+        let all: &[Patch] = bytemuck::cast_slice(self.lists[1 - self.current].read());
+        let classes: &[u32] = bytemuck::cast_slice(self.hp.classes.read());
+        (all[..count].to_vec(), classes[..count].to_vec())
+    }
+}
+
+/// A light simulation with its own volume textures and frame graph, for tests and `prism
+/// bench` (the renderer builds its own inside the eikonal pass).
+pub struct StandaloneLight {
+    pub sim: LightSim,
+    pub graph: FrameGraph,
+    _volume: super::eikonal::VolumeTextures,
+    _sampler: Sampler,
+}
+
+impl StandaloneLight {
+    pub fn new(ctx: &Arc<GpuContext>, params: &EikonalParams, volume: &Volume, light: &Light) -> GpuResult<Self> {
+        let mut graph = FrameGraph::new();
+        let textures = super::eikonal::prepare_volume(ctx, *params, volume, &mut graph)?;
+        let sampler = Sampler::new(ctx, "eikonal_light_field", crate::gpu::SamplerDesc::NEAREST_CLAMP)?;
+        let sim = LightSim::new(ctx, params, volume, light, &textures, &sampler, &mut graph)?;
+        Ok(StandaloneLight { sim, graph, _volume: textures, _sampler: sampler })
+    }
+
+    pub fn run(&mut self, ctx: &Arc<GpuContext>) -> GpuResult<LightStats> {
+        self.sim.run(ctx, &mut self.graph)
+    }
+
+    pub fn run_steps(&mut self, ctx: &Arc<GpuContext>, steps: u32) -> GpuResult<u32> {
+        self.sim.run_steps(ctx, &mut self.graph, steps)
+    }
+
+    /// Read the irradiance (rgba) and direction volumes back, x fastest.
+    pub fn read_volumes(&mut self, ctx: &Arc<GpuContext>) -> GpuResult<(Vec<f32>, Vec<f32>)> {
+        let voxels: u64 = self.sim.resolution.iter().map(|&r| r as u64).product();
+        let read = |graph: &mut FrameGraph, image: &Image, id: ImageId| -> GpuResult<Vec<f32>> {
+            let buffer = Buffer::new(
+                ctx,
+                "eikonal_light_readback",
+                16 * voxels,
+                vk::BufferUsageFlags::TRANSFER_DST,
+                MemoryLocation::GpuToCpu,
+            )?;
+            ctx.one_shot(|cmd| {
+                graph.access_now(cmd, &[(id, Access::TransferRead)], &[]);
+                cmd.copy_image_to_buffer(image, &buffer);
+            })?;
+            Ok(bytemuck::cast_slice(buffer.read()).to_vec())
+        };
+        let e = read(&mut self.graph, &self.sim.irradiance, self.sim.irradiance_id)?;
+        let d = read(&mut self.graph, &self.sim.direction, self.sim.direction_id)?;
+        Ok((e, d))
+    }
+}
+
+/// One equal-time step of Eqs. 14-15 (dx/dt = v / n^2, dv/dt = grad n / n) by classical
+/// RK4 in f64 on an analytic field: the CPU version of light_step.comp's particle update.
+pub fn light_rk4_step(field: &impl super::eikonal::IndexField, s: RayState, h: f64) -> RayState {
+    let rhs = |x: DVec3, v: DVec3| {
+        let n = field.n(x);
+        (v / (n * n), field.gradient(x) / n)
+    };
+    let k1 = rhs(s.x, s.v);
+    let k2 = rhs(s.x + 0.5 * h * k1.0, s.v + 0.5 * h * k1.1);
+    let k3 = rhs(s.x + 0.5 * h * k2.0, s.v + 0.5 * h * k2.1);
+    let k4 = rhs(s.x + h * k3.0, s.v + h * k3.1);
+    RayState {
+        x: s.x + h / 6.0 * (k1.0 + 2.0 * k2.0 + 2.0 * k3.0 + k4.0),
+        v: s.v + h / 6.0 * (k1.1 + 2.0 * k2.1 + 2.0 * k3.1 + k4.1),
+    }
+}
+
+/// The optical path (integral of n ds, trapezoid rule) along a polyline: with Eqs. 14-15
+/// every particle of one wavefront has covered the same S = t (Appendix, Eqs. 23-24).
+pub fn optical_path(field: &impl super::eikonal::IndexField, path: &[DVec3]) -> f64 {
+    path.windows(2).map(|w| 0.5 * (field.n(w[0]) + field.n(w[1])) * w[0].distance(w[1])).sum()
+}
+
+/// The renderer's light simulation: run once when the renderer is created (the light and
+/// the volume are static), and the per-frame `eikonal_light` pass that lights the diffuse
+/// receivers inside the irradiance volume (glsl/eikonal/light_receiver.frag).
+pub struct EikonalLight {
+    sim: LightSim,
+    pub stats: LightStats,
+    receiver: super::fullscreen::FullscreenPass,
+}
+
+impl EikonalLight {
+    #[allow(clippy::too_many_arguments)] // reason: the volume's textures, the graph and the targets are separate owners
+    pub fn new(
+        ctx: &Arc<GpuContext>,
+        params: &EikonalParams,
+        volume: &Volume,
+        light: &Light,
+        textures: &super::eikonal::VolumeTextures,
+        graph: &mut FrameGraph,
+        frame_layout: &DescriptorSetLayout,
+        targets: &crate::renderer::targets::Targets,
+        nearest: &Sampler,
+    ) -> GpuResult<Self> {
+        let mut sim = LightSim::new(ctx, params, volume, light, textures, nearest, graph)?;
+        let stats = sim.run(ctx, graph)?;
+        if stats.dropped_patches > 0 {
+            eprintln!(
+                "warning: eikonal light simulation: {} patches dropped at the max_patches = {} clamp (raise render.eikonal.max_patches)",
+                stats.dropped_patches,
+                sim.hp.capacity
+            );
+        }
+        let (lo, hi) = (sim.light_min, sim.light_max);
+        let receiver = super::fullscreen::FullscreenPass::new(
+            ctx,
+            &super::fullscreen::FullscreenDesc {
+                name: crate::renderer::plan::EIKONAL_LIGHT,
+                fragment_shader: "eikonal/light_receiver.frag",
+                inputs: &[
+                    (crate::BINDING_GBUF_NORMAL, &targets.gbuf_normal),
+                    (crate::BINDING_GBUF_ALBEDO, &targets.gbuf_albedo),
+                    (crate::BINDING_GBUF_DEPTH, &targets.depth),
+                    (crate::BINDING_EIKONAL_IRRADIANCE, &sim.irradiance),
+                    (crate::BINDING_EIKONAL_LIGHT_DIR, &sim.direction),
+                ],
+                target: (&targets.hdr, targets.hdr_id),
+                // Overwrites deferred shading's receivers inside the irradiance volume only.
+                clear: false,
+                specialization: &[f(lo.x), f(lo.y), f(lo.z), f(hi.x), f(hi.y), f(hi.z)],
+            },
+            frame_layout,
+            nearest,
+        )?;
+        Ok(EikonalLight { sim, stats, receiver })
+    }
+
+    pub fn light_box(&self) -> (Vec3, Vec3) {
+        (self.sim.light_min, self.sim.light_max)
+    }
+
+    pub fn images(&self) -> (&Image, &Image) {
+        (&self.sim.irradiance, &self.sim.direction)
+    }
+
+    pub fn image_ids(&self) -> [ImageId; 2] {
+        [self.sim.irradiance_id, self.sim.direction_id]
+    }
+
+    pub fn record<'a>(
+        &'a self,
+        frame: &mut Frame<'_, 'a>,
+        scene: &crate::renderer::gpu_scene::GpuScene,
+        targets: &crate::renderer::targets::Targets,
+        frame_set: DescriptorSet,
+    ) {
+        let reads = [
+            targets.gbuf_normal_id,
+            targets.gbuf_albedo_id,
+            targets.depth_id,
+            scene.environment_id,
+            targets.shadow_atlas_id,
+            self.sim.irradiance_id,
+            self.sim.direction_id,
+        ];
+        self.receiver.record(frame, frame_set, &reads);
+    }
+}

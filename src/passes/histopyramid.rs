@@ -1,0 +1,308 @@
+//! The HistoPyramid (Ziegler et al. 2006) with data expansion, as the eikonal light simulator
+//! reorganizes its patch list after every step (Ihrke et al. 2007, section 5.2.3,
+//! ../shared/papers/ihrke2007-eikonal-rendering.md): every input patch is classified 0
+//! (eliminate), 1 (retain) or 4 (tessellate); the pyramid of partial sums gives the output
+//! count, and each output slot finds its input patch and its index among that patch's
+//! outputs by descending the pyramid. The output generator (glsl/eikonal/light_expand.comp)
+//! turns index 0..3 of a tessellated patch into its four sub-patches, not copies.
+//!
+//! The pyramid is 1D and 4-ary (glsl/eikonal/histopyramid.glsl says why), built by one
+//! dispatch per level. The total is written by the device into the arguments of
+//! `vkCmdDispatchIndirect`, so a batch of simulation steps runs without the CPU.
+//! [`cpu_expand`] is the same algorithm on the CPU; tests/eikonal_light.rs checks that the
+//! GPU agrees exactly ([`gpu_expand`] runs only the HistoPyramid on given classes).
+use std::sync::Arc;
+
+use crate::gpu::{
+    vk, Access, Buffer, ComputePipeline, DescriptorSet, DescriptorSetLayout, DescriptorWrite, GpuContext, GpuResult,
+    MemoryLocation, PipelineLayout,
+};
+use crate::graph::{BufferId, Frame, FrameGraph};
+use crate::{
+    LIGHT_BINDING_CLASSES, LIGHT_BINDING_HISTORY, LIGHT_BINDING_LEVELS, LIGHT_BINDING_PAIRS, LIGHT_BINDING_STATE,
+    LIGHT_GROUP,
+};
+
+/// The device-side bookkeeping of glsl/eikonal/histopyramid.glsl (`State`, std430).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct HpState {
+    /// vkCmdDispatchIndirect groups over `next` (x, 1, 1) and one unused word.
+    pub args: [u32; 4],
+    /// Valid entries of level 0 (the input list's length).
+    pub count: u32,
+    /// Outputs of the last build (min(total, capacity)).
+    pub next: u32,
+    /// Outputs lost to the capacity clamp, summed over all builds.
+    pub dropped: u32,
+    /// Builds so far (the history index).
+    pub step: u32,
+    /// The largest `next` so far.
+    pub peak: u32,
+    /// The last unclamped total.
+    pub requested: u32,
+    pub pad: [u32; 2],
+}
+const _: () = assert!(std::mem::size_of::<HpState>() == 48);
+
+/// Lengths of levels 0 (the classes), 1, ..., top (length 1) for `capacity` entries.
+pub fn level_lengths(capacity: u32) -> Vec<u32> {
+    let mut lens = vec![capacity];
+    while *lens.last().unwrap() > 1 {
+        let n = *lens.last().unwrap();
+        lens.push(n.div_ceil(4));
+    }
+    lens
+}
+
+/// The pyramid on the CPU: level 0 is `classes[..count]` padded with zeros to `capacity`.
+pub fn cpu_levels(classes: &[u32], count: usize, capacity: u32) -> Vec<Vec<u32>> {
+    let lens = level_lengths(capacity);
+    let mut levels = vec![(0..capacity as usize).map(|i| if i < count { classes[i] } else { 0 }).collect::<Vec<_>>()];
+    for &len in &lens[1..] {
+        let below = levels.last().unwrap();
+        let value = |i: usize| below.get(i).copied().unwrap_or(0);
+        levels.push((0..len as usize).map(|i| (0..4).map(|c| value(4 * i + c)).sum()).collect());
+    }
+    levels
+}
+
+/// Compaction and expansion on the CPU: for every output slot (at most `capacity`, the
+/// clamp), its input entry and its index among that entry's outputs, by the same descent as
+/// glsl/eikonal/histopyramid_traverse.comp; and the unclamped total.
+pub fn cpu_expand(classes: &[u32], count: usize, capacity: u32) -> (Vec<(u32, u32)>, u32) {
+    let levels = cpu_levels(classes, count, capacity);
+    let top = levels.len() - 1;
+    let total = levels[top][0];
+    let next = total.min(capacity);
+    let value = |k: usize, i: usize| levels[k].get(i).copied().unwrap_or(0);
+    let pairs = (0..next)
+        .map(|j| {
+            let (mut node, mut rest) = (0usize, j);
+            for k in (1..=top).rev() {
+                let mut child = 4 * node;
+                for c in 0..4 {
+                    let v = value(k - 1, 4 * node + c);
+                    child = 4 * node + c;
+                    if rest < v {
+                        break;
+                    }
+                    rest -= v;
+                }
+                node = child;
+            }
+            (node as u32, rest)
+        })
+        .collect();
+    (pairs, total)
+}
+
+/// The GPU HistoPyramid over a list of `capacity` entries: the buffers, the descriptor set
+/// (set 0 of every light-simulation kernel) and the build/traversal pipelines.
+pub struct HistoPyramid {
+    pub capacity: u32,
+    pub history_len: u32,
+    top: u32,
+    set_layout: DescriptorSetLayout,
+    pub set: DescriptorSet,
+    layout: PipelineLayout,
+    reduce: ComputePipeline,
+    total: ComputePipeline,
+    traverse: ComputePipeline,
+    /// [`HpState`], host-visible (read after each batch); also the indirect arguments.
+    pub state: Buffer,
+    /// Level 0: one count per input entry, written by the classifier.
+    pub classes: Buffer,
+    _levels: Buffer,
+    /// (input entry, output index) per output slot.
+    pub pairs: Buffer,
+    /// `next` after every build, host-visible.
+    pub history: Buffer,
+    pub state_id: BufferId,
+    pub classes_id: BufferId,
+    levels_id: BufferId,
+    pub pairs_id: BufferId,
+    history_id: BufferId,
+}
+
+impl HistoPyramid {
+    /// Buffers for `capacity` entries (at least 4, so that the pyramid has a level above the
+    /// classes) and a history of `history_len` builds.
+    pub fn new(ctx: &Arc<GpuContext>, capacity: u32, history_len: u32, graph: &mut FrameGraph) -> GpuResult<Self> {
+        let capacity = capacity.max(4);
+        let history_len = history_len.max(1);
+        let lens = level_lengths(capacity);
+        let top = (lens.len() - 1) as u32;
+        let level_words: u64 = lens[1..].iter().map(|&n| n as u64).sum();
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
+        let host = MemoryLocation::GpuToCpu;
+        let state = Buffer::new(
+            ctx,
+            "histopyramid_state",
+            std::mem::size_of::<HpState>() as u64,
+            storage | vk::BufferUsageFlags::INDIRECT_BUFFER,
+            MemoryLocation::CpuToGpu,
+        )?;
+        let classes = Buffer::new(ctx, "histopyramid_classes", 4 * capacity as u64, storage, host)?;
+        let levels = Buffer::new(ctx, "histopyramid_levels", 4 * level_words, storage, MemoryLocation::GpuOnly)?;
+        let pairs = Buffer::new(ctx, "histopyramid_pairs", 8 * capacity as u64, storage, host)?;
+        let history = Buffer::new(ctx, "histopyramid_history", 4 * history_len as u64, storage, host)?;
+        let ty = vk::DescriptorType::STORAGE_BUFFER;
+        let stage = vk::ShaderStageFlags::COMPUTE;
+        let set_layout = DescriptorSetLayout::new(
+            ctx,
+            "histopyramid",
+            &[
+                (LIGHT_BINDING_STATE, ty, stage),
+                (LIGHT_BINDING_CLASSES, ty, stage),
+                (LIGHT_BINDING_LEVELS, ty, stage),
+                (LIGHT_BINDING_PAIRS, ty, stage),
+                (LIGHT_BINDING_HISTORY, ty, stage),
+            ],
+            1,
+        )?;
+        let set = set_layout.allocate(
+            "histopyramid",
+            &[
+                DescriptorWrite::Storage(LIGHT_BINDING_STATE, &state),
+                DescriptorWrite::Storage(LIGHT_BINDING_CLASSES, &classes),
+                DescriptorWrite::Storage(LIGHT_BINDING_LEVELS, &levels),
+                DescriptorWrite::Storage(LIGHT_BINDING_PAIRS, &pairs),
+                DescriptorWrite::Storage(LIGHT_BINDING_HISTORY, &history),
+            ],
+        )?;
+        let layout = PipelineLayout::new(ctx, "histopyramid", &[&set_layout], 4)?;
+        let spec = [capacity, history_len];
+        let reduce =
+            ComputePipeline::new(ctx, "histopyramid_reduce", "eikonal/histopyramid_reduce.comp", &layout, &spec)?;
+        let total = ComputePipeline::new(ctx, "histopyramid_total", "eikonal/histopyramid_total.comp", &layout, &spec)?;
+        let traverse =
+            ComputePipeline::new(ctx, "histopyramid_traverse", "eikonal/histopyramid_traverse.comp", &layout, &spec)?;
+        let (state_id, classes_id, levels_id, pairs_id, history_id) = (
+            graph.register_buffer(&state),
+            graph.register_buffer(&classes),
+            graph.register_buffer(&levels),
+            graph.register_buffer(&pairs),
+            graph.register_buffer(&history),
+        );
+        Ok(HistoPyramid {
+            capacity,
+            history_len,
+            top,
+            set_layout,
+            set,
+            layout,
+            reduce,
+            total,
+            traverse,
+            state,
+            classes,
+            _levels: levels,
+            pairs,
+            history,
+            state_id,
+            classes_id,
+            levels_id,
+            pairs_id,
+            history_id,
+        })
+    }
+
+    /// The set-0 layout that the light kernels share.
+    pub fn set_layout(&self) -> &DescriptorSetLayout {
+        &self.set_layout
+    }
+
+    /// Reset the bookkeeping for an input list of `count` entries (host write; call while
+    /// the device is idle).
+    pub fn reset(&mut self, count: u32) {
+        let s = HpState { count, ..HpState::default() };
+        self.state.write(0, bytemuck::bytes_of(&s));
+    }
+
+    /// The bookkeeping after the last submitted batch (device idle).
+    pub fn read_state(&self) -> HpState {
+        bytemuck::pod_read_unaligned(&self.state.read()[..std::mem::size_of::<HpState>()])
+    }
+
+    /// `next` after each of the first `n` builds.
+    pub fn read_history(&self, n: usize) -> Vec<u32> {
+        let words: &[u32] = bytemuck::cast_slice(&self.history.read()[..4 * self.history_len as usize]);
+        words[..n.min(words.len())].to_vec()
+    }
+
+    /// Record the build (one pass per level), the total and the traversal into `frame`; the
+    /// classes must be written by an earlier pass of the frame.
+    pub fn record<'a>(&'a self, frame: &mut Frame<'_, 'a>) {
+        let set = self.set;
+        for level in 1..=self.top {
+            let len = level_lengths(self.capacity)[level as usize];
+            let pipeline = &self.reduce;
+            frame
+                .pass("histopyramid_reduce")
+                .read_buffer(self.state_id, Access::ComputeRead)
+                .read_buffer(self.classes_id, Access::ComputeRead)
+                .write_buffer(self.levels_id, Access::ComputeWrite)
+                .record(move |cmd| {
+                    cmd.bind_compute(pipeline, &[set]);
+                    cmd.push_compute(pipeline, &level);
+                    cmd.dispatch(len.div_ceil(LIGHT_GROUP), 1, 1);
+                });
+        }
+        let total = &self.total;
+        frame
+            .pass("histopyramid_total")
+            .read_buffer(self.levels_id, Access::ComputeRead)
+            .write_buffer(self.state_id, Access::ComputeWrite)
+            .write_buffer(self.history_id, Access::ComputeWrite)
+            .record(move |cmd| {
+                cmd.bind_compute(total, &[set]);
+                cmd.dispatch(1, 1, 1);
+            });
+        let (traverse, state) = (&self.traverse, &self.state);
+        frame
+            .pass("histopyramid_traverse")
+            .read_buffer(self.state_id, Access::IndirectArgs)
+            .read_buffer(self.state_id, Access::ComputeRead)
+            .read_buffer(self.classes_id, Access::ComputeRead)
+            .read_buffer(self.levels_id, Access::ComputeRead)
+            .write_buffer(self.pairs_id, Access::ComputeWrite)
+            .record(move |cmd| {
+                cmd.bind_compute(traverse, &[set]);
+                cmd.dispatch_indirect(state, 0);
+            });
+    }
+
+    /// The pipeline layout of the HistoPyramid kernels (set 0, a 4-byte push constant).
+    pub fn pipeline_layout(&self) -> &PipelineLayout {
+        &self.layout
+    }
+}
+
+/// Test entry point: run only the GPU HistoPyramid (build, total, traversal) over
+/// `classes[..count]` with a list capacity of `capacity`, and return what
+/// [`cpu_expand`] returns.
+pub fn gpu_expand(
+    ctx: &Arc<GpuContext>,
+    classes: &[u32],
+    count: usize,
+    capacity: u32,
+) -> GpuResult<(Vec<(u32, u32)>, u32)> {
+    let mut graph = FrameGraph::new();
+    let mut hp = HistoPyramid::new(ctx, capacity, 1, &mut graph)?;
+    let n = count.min(classes.len()).min(hp.capacity as usize);
+    let mut words = vec![0xdead_beefu32; hp.capacity as usize];
+    words[..classes.len().min(hp.capacity as usize)]
+        .copy_from_slice(&classes[..classes.len().min(hp.capacity as usize)]);
+    hp.classes.write(0, bytemuck::cast_slice(&words));
+    hp.reset(n as u32);
+    ctx.one_shot(|cmd| {
+        let mut frame = graph.frame();
+        hp.record(&mut frame);
+        frame.execute(cmd, None);
+        graph.access_now(cmd, &[], &[(hp.state_id, Access::HostRead), (hp.pairs_id, Access::HostRead)]);
+    })?;
+    let state = hp.read_state();
+    let all: &[[u32; 2]] = bytemuck::cast_slice(hp.pairs.read());
+    Ok((all[..state.next as usize].iter().map(|p| (p[0], p[1])).collect(), state.requested))
+}
