@@ -255,7 +255,7 @@ vec3 march(vec3 o, vec3 d, float t_enter, int c, inout bool touched) {
                         L += T * sigma_s * path * inscatter(mid, -normalize(x - x0), light_min, light_max, ext.a);
                     }
                 }
-                touched = touched || any(greaterThan(sigma, vec3(0.0)));
+                touched = touched || any(greaterThan(sigma, vec3(0.0))) || any(greaterThan(E, vec3(0.0)));
                 T *= trans;
             }
         }
@@ -284,9 +284,9 @@ void main() {
     } else {
         L = march(o, d, t_enter, 0, touched);
     }
-    // ---- light (issue 7): a ray that crossed only air (no index change, no extinction)
-    // keeps what deferred shading drew behind it (the floor lit by the simulated light)
-    // instead of the environment.
-    if (SCATTER != 0u && !touched) discard;
+    // ---- light (issue 7): a ray that crossed only air (no index change, extinction or
+    // emission) keeps what deferred shading drew behind it (e.g. the floor under the volume,
+    // lit by the simulated light) instead of the environment.
+    if (!touched) discard;
     out_radiance = vec4(finite_or_zero(L), 1.0);
 }
