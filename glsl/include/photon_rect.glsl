@@ -6,6 +6,7 @@ struct PhotonRect {
     mat4 view_proj;   // world -> RECT_i's parallel projection from O_R along O_R O_i (glOrtho(-d, d, -d, d))
     vec4 axis;        // xyz: unit O_R -> O_i, the rectangle's normal; w: d_i (half the side)
     vec4 centre;      // xyz: O_i; w: radius of the receiver object around O_i (m)
+    uvec4 object;     // x: the receiver's object index (the G-buffer's albedo.a)
 };
 
 // Texture coordinates of x on RECT_i: "project P to caustic texture" (Fig. 23).

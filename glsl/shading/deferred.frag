@@ -64,34 +64,25 @@ vec3 caustic_irradiance(uint i, vec3 p, vec3 n) {
     return flux / taps * abs(dot(n, l.position.xyz)) / (texel * texel);
 }
 
-// Photon-buffer caustics at p (Hu & Qin 2007 §3.3, Fig. 23): p is projected with the
-// parallel projection of its object's rectangle RECT_i into TEX_CAUSTICS_i. The G-buffer
-// does not say which object p belongs to, so RECT_i is the rectangle whose object's bounding
-// sphere holds p and whose plane is nearest to p (exact for the planar receivers, whose
-// rectangle lies in their plane). PHOTON_PHYSICAL: irradiance on the rectangle (W/m^2) times
-// |n . axis|, the footprint of a texel projected along the axis onto a receiver tilted
-// against it; returned as irradiance. PHOTON_PAPER: the paper's intensity c, "blended with
-// the object's own colour" (returned as is, multiplied by the albedo by the caller).
-vec3 photon_caustic(vec3 p, vec3 n) {
-    int best = -1;
-    float best_d = 1.0 / 0.0;
-    vec2 best_uv = vec2(0.0);
+// Photon-buffer caustics at p (Hu & Qin 2007 §3.3, Fig. 23): p, a point of object
+// `object` (the G-buffer's albedo.a), is projected with the parallel projection of that
+// object's rectangle RECT_i into TEX_CAUSTICS_i (0 if the object has no rectangle: it is not
+// among the MAX_NEARBY_RECTS receivers). PHOTON_PHYSICAL: irradiance on the rectangle
+// (W/m^2) times |n . axis|, the footprint of a texel projected along the axis onto a
+// receiver tilted against it; returned as irradiance. PHOTON_PAPER: the paper's intensity c,
+// "blended with the object's own colour" (returned as is, multiplied by the albedo by the
+// caller).
+vec3 photon_caustic(vec3 p, vec3 n, uint object) {
     for (uint i = 0u; i < PHOTON_RECTS; ++i) {
         PhotonRect r = photon_rects[i];
-        if (distance(p, r.centre.xyz) > r.centre.w * 1.001 + 1e-6) continue;
+        if (r.object.x != object) continue;
         vec2 uv = rect_uv(r, p);
-        if (any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0)))) continue;
-        float d = abs(dot(p - r.centre.xyz, r.axis.xyz));
-        if (d < best_d) {
-            best = int(i);
-            best_d = d;
-            best_uv = uv;
-        }
+        if (any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0)))) return vec3(0.0);
+        vec3 c = textureLod(photon_caustics, vec3(uv, float(i)), 0.0).rgb;
+        if (PHOTON_MODE == PHOTON_PAPER) return c;
+        return c * abs(dot(n, r.axis.xyz));
     }
-    if (best < 0) return vec3(0.0);
-    vec3 c = textureLod(photon_caustics, vec3(best_uv, float(best)), 0.0).rgb;
-    if (PHOTON_MODE == PHOTON_PAPER) return c;
-    return c * abs(dot(n, photon_rects[best].axis.xyz));
+    return vec3(0.0);
 }
 
 void main() {
@@ -113,7 +104,8 @@ void main() {
     vec3 n = normalize(nm.xyz);
     // Two-sided diffuse: shade the side the camera sees.
     if (dot(n, ray) > 0.0) n = -n;
-    vec3 albedo = texelFetch(gbuf_albedo, px, 0).rgb;
+    vec4 albedo_object = texelFetch(gbuf_albedo, px, 0);
+    vec3 albedo = albedo_object.rgb;
     vec3 radiance = diffuse_radiance(p, n, albedo);
     if (CAUSTICS != 0u) {
         // Caustics mapping (Shah et al. 2007): the caustic map's irradiance, Lambertian.
@@ -122,7 +114,7 @@ void main() {
         radiance += albedo / PI * caustic;
     }
     if (PHOTON_RECTS != 0u) {
-        vec3 c = photon_caustic(p, n);
+        vec3 c = photon_caustic(p, n, uint(albedo_object.a + 0.5));
         radiance += PHOTON_MODE == PHOTON_PAPER ? albedo * c : albedo / PI * c;
     }
     out_radiance = vec4(finite_or_zero(radiance), 1.0);

@@ -72,11 +72,13 @@ pub struct GpuPhotonRect {
     pub view_proj: [[f32; 4]; 4],
     /// xyz: unit O_R -> O_i, the rectangle's normal and the projection's direction; w: d_i.
     pub axis: [f32; 4],
-    /// xyz: O_i; w: the receiver object's radius around O_i (deferred shading picks the
-    /// rectangle of the object whose bounding sphere holds the fragment).
+    /// xyz: O_i; w: the receiver object's radius around O_i.
     pub centre: [f32; 4],
+    /// x: the receiver's object index (deferred shading picks the rectangle of the object
+    /// the G-buffer names at each pixel); yzw unused.
+    pub object: [u32; 4],
 }
-const _: () = assert!(std::mem::size_of::<GpuPhotonRect>() == 96);
+const _: () = assert!(std::mem::size_of::<GpuPhotonRect>() == 112);
 
 /// Hu & Qin 2007 §2.2.1 (Fig. 12): RECT_i for the diffuse objects OBJ_i seen from O_R, as
 /// the nearby-geometry impostors build them (src/passes/nearby_impostors.rs: same O_i, d_i,
@@ -103,6 +105,7 @@ pub fn receiver_rectangles(scene: &Scene) -> Vec<GpuPhotonRect> {
                 view_proj: r.view_proj.to_cols_array_2d(),
                 axis: [r.axis.x, r.axis.y, r.axis.z, r.half_size],
                 centre: [r.center.x, r.center.y, r.center.z, r.half_size],
+                object: [r.object as u32, 0, 0, 0],
             });
         }
     }
