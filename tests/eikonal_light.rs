@@ -404,8 +404,8 @@ fn eikonal_sphere_floor_shows_the_focused_light() {
 }
 
 /// The floor of eikonal_sphere against caustic_sphere's reference (the same ball, floor,
-/// light and camera as a glass mesh; the reference does not yet trace light through
-/// volumes, so eikonal_sphere's own reference has no caustic): on the floor pixels that the
+/// light and camera as a glass mesh; the test predates the reference tracing light
+/// through volumes, the_reference_carries_light_through_the_volume below): on the floor pixels that the
 /// volume does not cover, the light simulation's shadow and caustic, as displayed (radiance
 /// clamped to [0, 1], the tone map's range at exposure 1), must be closer to the reference
 /// than the unshadowed direct light of render.eikonal.light = false. Unclamped, the
@@ -449,4 +449,45 @@ fn eikonal_sphere_floor_approaches_caustic_sphere_reference() {
     // Measured (clamped) at 48^2: 0.094 vs 0.232 (0.080 vs 0.233 at 64^2); half leaves room for the
     // reference's noise at 16 spp.
     assert!(on_1 < 0.5 * off_1, "light simulation {on_1} vs direct light {off_1}");
+}
+
+/// The reference carries light through volumes (issue 7): its shadow rays stop at a
+/// refractive volume and its photons cross it along the curved path, so eikonal_sphere's
+/// reference (the glass ball as a constant-index volume, traced exactly) shows the ball's
+/// shadow and caustic on the floor like caustic_sphere's reference (the same ball as a glass
+/// sphere, same floor, light and camera). The two must differ by no more than two
+/// caustic_sphere references with different seeds differ (the estimator's own noise), with
+/// a margin of 1.5 for the noise of the third image. Before, the floor under the volume was
+/// unshadowed and had no caustic.
+#[test]
+fn the_reference_carries_light_through_the_volume() {
+    use prism::reference::{Reference, ReferenceSettings};
+    let ctx = common::context(false);
+    let size = 32;
+    let render = |name: &str, seed: u32| {
+        let settings = ReferenceSettings { spp: 8, photons: 1 << 18, seed, ..ReferenceSettings::default() };
+        let mut r = Reference::new(&ctx, &common::scene(name, size, &[]), &settings).expect("reference");
+        r.run_all(|_, _| {}).unwrap();
+        r.image()
+    };
+    let glass = render("caustic_sphere", 1);
+    let glass2 = render("caustic_sphere", 2);
+    let volume = render("eikonal_sphere", 3);
+    let rmse = |a: &[f32], b: &[f32]| {
+        let (mut e, mut n) = (0f64, 0usize);
+        for (pa, pb) in a.chunks(4).zip(b.chunks(4)) {
+            for c in 0..3 {
+                // Clamped as displayed: the caustic's peak is noisy in both estimators.
+                e += (pa[c].min(1.0) as f64 - pb[c].min(1.0) as f64).powi(2);
+                n += 1;
+            }
+        }
+        (e / n as f64).sqrt()
+    };
+    let noise = rmse(&glass, &glass2);
+    let gap = rmse(&volume, &glass);
+    eprintln!("reference RMSE: eikonal_sphere vs caustic_sphere {gap:.4}, caustic_sphere seed 1 vs 2 {noise:.4}");
+    assert!(volume.iter().all(|v| v.is_finite()));
+    assert!(gap < 1.5 * noise.max(1e-3), "volume reference {gap} vs noise {noise}");
+    common::assert_no_validation_errors(&ctx);
 }

@@ -94,6 +94,11 @@ void main() {
             if (cosine <= 0.0 || dot(ng, wi) <= 0.0) continue;
             vec3 origin = offset_origin(s, wi);
             float t_max = dist < 3.0e38 ? length(l.position.xyz - origin) * (1.0 - 1e-6) : dist;
+            // Light through a refractive volume bends: no straight shadow ray reaches the
+            // light through it. That light arrives by the photons, which cross the volume
+            // (photons.comp), like the light behind a glass object.
+            float t_volume;
+            if (region_entry(origin, wi, t_max, t_volume)) continue;
             if (!occluded(origin, wi, t_max)) L += beta * brdf * E * cosine;
         }
         // Cosine-weighted sample: pdf cos/pi cancels the BRDF's 1/pi and the cosine.

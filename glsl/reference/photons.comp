@@ -6,6 +6,7 @@
 // every target whose cone (point light) or disk (directional light) contains the sample, so
 // overlapping targets are not counted twice.
 #include "sppm.glsl"
+#include "volume.glsl"
 
 // Uniform direction in the cone around unit axis a with cos(half-angle) cos_max.
 vec3 sample_cone(vec3 a, float cos_max, inout uint rng) {
@@ -92,6 +93,15 @@ void main() {
     uint outcome = PHOTON_LOST;
     for (uint bounce = 0u; bounce <= ref.counts.w; ++bounce) {
         Hit h = trace(o, d, 3.4e38);
+        // A refractive volume before the surface: the photon crosses it along the curved
+        // path (RK4, Fresnel at its boundary, absorption), as camera paths do; the crossing
+        // counts as a specular interaction, so the light behind it is deposited as caustic.
+        float tv;
+        if (region_entry(o, d, h.kind == 0u ? 3.4e38 : h.t, tv)) {
+            vec3 unused = vec3(0.0);
+            if (!volume_cross(o, d, tv, flux, unused, channel, rng)) break;
+            continue;
+        }
         if (h.kind == 0u) {
             outcome = bounce == 0u ? PHOTON_MISSED : PHOTON_ESCAPED;
             break;

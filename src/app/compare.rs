@@ -92,6 +92,13 @@ pub fn reference_key(scene: &Scene, settings: &ReferenceSettings) -> String {
     let mut table: toml::Table = toml::from_str(&scene.canonical).unwrap_or_default();
     table.remove("render");
     table.remove("name");
+    // An analytic index profile is traced exactly (glsl/reference/volume.glsl): the voxel
+    // resolution only matters to the reference when regions are rasterized into fields.
+    if scene.volume.as_ref().is_some_and(|v| v.regions.is_empty()) {
+        if let Some(toml::Value::Table(v)) = table.get_mut("volume") {
+            v.remove("resolution");
+        }
+    }
     h.bytes(toml::to_string(&table).unwrap_or_default().as_bytes());
     // Exact spheres are intersected analytically (their keys are in the scene text): their
     // tessellation does not change the reference.

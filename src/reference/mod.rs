@@ -17,7 +17,8 @@
 //! jumps at the region's boundary, and inside classical RK4 of the ray equation
 //! dx/ds = v/n, dv/ds = grad n on the analytic profile with a step of 1/2000 of the box
 //! diagonal, Beer-Lambert absorption along the curved path. Surfaces inside the region are
-//! not seen, and photons do not enter volumes (no volume caustics yet).
+//! not seen. Photons cross volumes the same way (photons.comp) and the volume is a photon
+//! target; shadow rays stop at it, so the light behind it arrives as caustics.
 //!
 //! A volume with `[[volume.region]]`s (volume sources, issue 7) is traced instead through
 //! the same voxel fields the view renderer gets (src/scene/volume_sources.rs): the index per
@@ -322,6 +323,15 @@ impl Reference {
                 // A little margin so that the cone contains the whole tessellated object.
                 targets.push([c.x, c.y, c.z, r * 1.001 + 1e-6]);
             }
+        }
+        // The refractive volume is a target too: the light that reaches the floor through it
+        // comes by photons (camera.comp's shadow rays stop at it).
+        if let Some(v) = &scene.volume {
+            let (c, r) = match v.index.region().filter(|_| v.regions.is_empty()) {
+                Some((c, r)) => (c, r),
+                None => ((v.min + v.max) * 0.5, (v.max - v.min).length() * 0.5),
+            };
+            targets.push([c.x, c.y, c.z, r * 1.001 + 1e-6]);
         }
         if targets.len() > REF_MAX_TARGETS as usize {
             return Err(RenderError::Limit(format!(
