@@ -170,25 +170,6 @@ fn occlusion_query_flux_is_independent_of_the_grid() {
     assert!((0.5..0.75).contains(&ratio), "ratio {ratio}");
 }
 
-/// Row-major index of the brightest pixel of the green channel after a 3x3 box filter.
-fn brightest(img: &[f32], w: usize, h: usize) -> (usize, usize) {
-    let mut best = (0, 0, f32::MIN);
-    for j in 1..h - 1 {
-        for i in 1..w - 1 {
-            let mut s = 0.0;
-            for dj in 0..3 {
-                for di in 0..3 {
-                    s += img[4 * ((j + dj - 1) * w + i + di - 1) + 1];
-                }
-            }
-            if s > best.2 {
-                best = (i, j, s);
-            }
-        }
-    }
-    (best.0, best.1)
-}
-
 /// Against the exact reference on caustic_sphere at 64^2: caustics mapping lowers the error
 /// compared with no caustics, the error falls as the grid grows, and the caustic's focus
 /// (its brightest spot) lies where the reference's is. Measured RMSE: none 0.737, grid
@@ -219,8 +200,8 @@ fn caustics_map_approaches_the_reference_on_caustic_sphere() {
             // The technique's caustic alone: the frame minus the frame without caustics.
             let caustic: Vec<f32> = img.hdr.iter().zip(&none.hdr).map(|(a, b)| a - b).collect();
             let (w, h) = (size as usize, size as usize);
-            let ours = brightest(&caustic, w, h);
-            let theirs = brightest(&reference_caustic, w, h);
+            let ours = common::brightest(&caustic, w, h);
+            let theirs = common::brightest(&reference_caustic, w, h);
             eprintln!("focus: caustics_map {ours:?}, reference {theirs:?}");
             let dist = ((ours.0 as f32 - theirs.0 as f32).powi(2) + (ours.1 as f32 - theirs.1 as f32).powi(2)).sqrt();
             assert!(dist <= 3.0, "focus {ours:?} vs reference {theirs:?}");

@@ -112,25 +112,6 @@ fn lightmap_flux_matches_the_analytic_flux_and_is_stable_in_the_map_size() {
     assert!((fluxes[0] / fluxes[2] - 1.0).abs() < 0.05, "64^2 vs 256^2: {fluxes:?}");
 }
 
-/// Row-major index of the brightest pixel of the green channel after a 3x3 box filter.
-fn brightest(img: &[f32], w: usize, h: usize) -> (usize, usize) {
-    let mut best = (0, 0, f32::MIN);
-    for j in 1..h - 1 {
-        for i in 1..w - 1 {
-            let mut s = 0.0;
-            for dj in 0..3 {
-                for di in 0..3 {
-                    s += img[4 * ((j + dj - 1) * w + i + di - 1) + 1];
-                }
-            }
-            if s > best.2 {
-                best = (i, j, s);
-            }
-        }
-    }
-    (best.0, best.1)
-}
-
 /// Against the exact reference (SPPM caustics) on caustic_sphere at 64^2: the light-map
 /// caustic lowers the error compared with no caustics, and its focus (the brightest spot of
 /// the caustic alone) lies where the reference's is. Measured: see the test output.
@@ -172,7 +153,7 @@ fn approaches_the_reference(scene: &str, ratio: f64) {
         errors.push(e);
         let caustic: Vec<f32> = img.hdr.iter().zip(&none.hdr).map(|(a, b)| a - b).collect();
         let (w, h) = (size as usize, size as usize);
-        let (ours, theirs) = (brightest(&caustic, w, h), brightest(&reference_caustic, w, h));
+        let (ours, theirs) = (common::brightest(&caustic, w, h), common::brightest(&reference_caustic, w, h));
         eprintln!("{scene}, caustic map {map}^2: RMSE {e:.4} (none {e_none:.4}); focus {ours:?}, reference {theirs:?}");
         let dist = ((ours.0 as f32 - theirs.0 as f32).powi(2) + (ours.1 as f32 - theirs.1 as f32).powi(2)).sqrt();
         assert!(dist <= 3.0, "focus {ours:?} vs reference {theirs:?}");

@@ -229,25 +229,6 @@ fn physical_flux_matches_the_closed_form_at_every_size() {
     }
 }
 
-/// Row-major index of the brightest pixel of the green channel after a 3x3 box filter.
-fn brightest(img: &[f32], w: usize, h: usize) -> (usize, usize) {
-    let mut best = (0, 0, f32::MIN);
-    for j in 1..h - 1 {
-        for i in 1..w - 1 {
-            let mut s = 0.0;
-            for dj in 0..3 {
-                for di in 0..3 {
-                    s += img[4 * ((j + dj - 1) * w + i + di - 1) + 1];
-                }
-            }
-            if s > best.2 {
-                best = (i, j, s);
-            }
-        }
-    }
-    (best.0, best.1)
-}
-
 /// Against the exact reference on caustic_sphere at 64^2: the physically normalised caustic
 /// carries the caustic radiance of caustics mapping (the same transmitted flux, summed over
 /// the image, which the filter's blur does not change) within 3% and the reference's within
@@ -273,7 +254,7 @@ fn photon_buffer_matches_the_reference_on_caustic_sphere() {
     let none = common::render_on(&ctx, &s);
     let e_none = rmse_rgba(&none.hdr, &reference);
     let (w, h) = (size as usize, size as usize);
-    let theirs = brightest(&reference_caustic, w, h);
+    let theirs = common::brightest(&reference_caustic, w, h);
     let ref_sum = total(&reference_caustic);
     let map = common::render_on(
         &ctx,
@@ -286,7 +267,7 @@ fn photon_buffer_matches_the_reference_on_caustic_sphere() {
         let img = common::render_on(&ctx, &c);
         let e = rmse_rgba(&img.hdr, &reference);
         let caustic: Vec<f32> = img.hdr.iter().zip(&none.hdr).map(|(a, b)| a - b).collect();
-        let ours = brightest(&caustic, w, h);
+        let ours = common::brightest(&caustic, w, h);
         let sum = total(&caustic);
         eprintln!(
             "size {pb}: RMSE {e:.4} (none {e_none:.4}); caustic radiance sum {sum:.2} vs reference {ref_sum:.2}; \
@@ -382,11 +363,11 @@ fn focus_matches_the_reference_on_bunny_and_ring() {
         drop(r);
         let none = common::render_on(&ctx, &s);
         let (w, h) = (size as usize, size as usize);
-        let theirs = brightest(&reference_caustic, w, h);
+        let theirs = common::brightest(&reference_caustic, w, h);
         for t in ["photon_buffer", "caustics_map"] {
             let img = common::render_on(&ctx, &common::scene(name, size, &[&format!("render.caustics={t}")]));
             let caustic: Vec<f32> = img.hdr.iter().zip(&none.hdr).map(|(a, b)| a - b).collect();
-            let ours = brightest(&caustic, w, h);
+            let ours = common::brightest(&caustic, w, h);
             let dist = ((ours.0 as f32 - theirs.0 as f32).powi(2) + (ours.1 as f32 - theirs.1 as f32).powi(2)).sqrt();
             eprintln!("{name} {t}: focus {ours:?} vs reference {theirs:?} ({dist:.1} px)");
             if t == "photon_buffer" {

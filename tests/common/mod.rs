@@ -139,3 +139,23 @@ pub fn assert_golden(name: &str, r: &Rendered) {
     let _ = std::fs::remove_file(&actual_path);
     let _ = std::fs::remove_file(&diff_path);
 }
+
+/// (column, row) of the brightest pixel (the caustic's focus) of the green channel of an
+/// RGBA f32 image, after a 3x3 box filter.
+pub fn brightest(img: &[f32], w: usize, h: usize) -> (usize, usize) {
+    let mut best = (0, 0, f32::MIN);
+    for j in 1..h - 1 {
+        for i in 1..w - 1 {
+            let mut s = 0.0;
+            for dj in 0..3 {
+                for di in 0..3 {
+                    s += img[4 * ((j + dj - 1) * w + i + di - 1) + 1];
+                }
+            }
+            if s > best.2 {
+                best = (i, j, s);
+            }
+        }
+    }
+    (best.0, best.1)
+}
