@@ -320,7 +320,11 @@ fn prism_scene(n: [f32; 3], tilt: f32, overrides: &[&str]) -> Scene {
         let lon = (i as f32 + 0.5) / w as f32 * 360.0 - 180.0;
         *p = image::Rgb([lon + 100.0; 3]);
     }
-    let env = dir().join("longitude.exr");
+    // One file per call: tests run in parallel threads of one process, and one test must not
+    // read the image while another rewrites it.
+    static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let call = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let env = dir().join(format!("longitude_{call}.exr"));
     img.save(&env).unwrap();
     let extra = format!("[environment]\ntype = \"image\"\nfile = \"{}\"\n", env.display());
     // A narrow view from far away: the rays are parallel to -z.
