@@ -299,7 +299,11 @@ fn two_balls(size: u32, overrides: &[&str]) -> prism::scene::Scene {
                  [[objects]]\nname = \"crate2\"\nmaterial = \"green\"\nshape = \"box\"\n\
                  center = [-2.4, 0.5, -2.4]\nsize = [1.0, 1.0, 1.0]\n\n[render]";
     let text = base.replacen("[render]", ball2, 1);
-    let path = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("impostor_two_balls.toml");
+    // One file per call: tests run in parallel threads, and one must not read the file while
+    // another rewrites it.
+    static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let call = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let path = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("impostor_two_balls_{call}.toml"));
     std::fs::write(&path, text).unwrap();
     let mut o = vec![format!("camera.width={size}"), format!("camera.height={size}")];
     o.extend(overrides.iter().map(|s| s.to_string()));
