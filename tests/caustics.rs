@@ -13,31 +13,17 @@ fn caustics(extra: &[&str]) -> Vec<String> {
     o
 }
 
-fn refs(v: &[String]) -> Vec<&str> {
-    v.iter().map(String::as_str).collect()
-}
-
-fn assert_finite(name: &str, hdr: &[f32]) {
-    let bad = hdr.iter().filter(|v| !v.is_finite()).count();
-    assert_eq!(bad, 0, "{name}: {bad} non-finite values");
-}
-
-/// Sum of the RGB radiance of an image.
-fn total(hdr: &[f32]) -> f64 {
-    hdr.chunks(4).map(|p| (p[0] + p[1] + p[2]) as f64).sum()
-}
-
 #[test]
 fn caustic_scenes_render_with_caustics_map() {
     let ctx = common::context(false);
     for name in ["caustic_sphere", "caustic_bunny", "metal_ring", "water_pool"] {
-        let with = common::render_on(&ctx, &common::scene(name, 96, &refs(&caustics(&[]))));
-        assert_finite(name, &with.hdr);
+        let with = common::render_on(&ctx, &common::scene(name, 96, &common::refs(&caustics(&[]))));
+        common::assert_finite(name, &with.hdr);
         for p in ["caustics_map_receivers", "caustics_map_refractors", "caustics_map"] {
             assert!(with.passes.iter().any(|n| n == p), "{name}: {p} missing from {:?}", with.passes);
         }
         let without = common::render_on(&ctx, &common::scene(name, 96, &[]));
-        let (a, b) = (total(&with.hdr), total(&without.hdr));
+        let (a, b) = (common::total(&with.hdr), common::total(&without.hdr));
         eprintln!("{name}: radiance sum with caustics {a:.2}, without {b:.2}");
         // water_pool's floor is seen only through the water, and no refraction technique
         // yet sees nearby geometry through a refractor: its caustic is checked by its flux.
@@ -47,29 +33,8 @@ fn caustic_scenes_render_with_caustics_map() {
     }
 }
 
-/// Flux leaving a glass ball of radius r at distance d from a point light of intensity I
-/// through both surfaces (exact Fresnel at entry and, by the sphere's symmetry, the same
-/// angle at exit): I * integral over the cone of (1 - F(theta_i))^2 dOmega.
-fn sphere_transmitted_flux(intensity: f64, d: f64, r: f64, ior: f64) -> f64 {
-    let alpha = (r / d).asin();
-    let steps = 20000;
-    let mut sum = 0.0;
-    for k in 0..steps {
-        let theta = (k as f64 + 0.5) / steps as f64 * alpha;
-        let sin_i = (d * theta.sin() / r).min(1.0);
-        let cos_i = (1.0 - sin_i * sin_i).sqrt();
-        let sin_t = sin_i / ior;
-        let cos_t = (1.0 - sin_t * sin_t).sqrt();
-        let rs = (cos_i - ior * cos_t) / (cos_i + ior * cos_t);
-        let rp = (ior * cos_i - cos_t) / (ior * cos_i + cos_t);
-        let f = 0.5 * (rs * rs + rp * rp);
-        sum += (1.0 - f) * (1.0 - f) * 2.0 * std::f64::consts::PI * theta.sin() * (alpha / steps as f64);
-    }
-    intensity * sum
-}
-
 fn map_flux(ctx: &std::sync::Arc<prism::gpu::GpuContext>, name: &str, extra: &[&str]) -> [f64; 3] {
-    let s = common::scene(name, 64, &refs(&caustics(extra)));
+    let s = common::scene(name, 64, &common::refs(&caustics(extra)));
     let mut r = Renderer::new(ctx, &s).expect("renderer");
     r.render_frame().expect("frame");
     let flux = r.caustic_map_flux().expect("readback").expect("a caustic map");
@@ -87,7 +52,7 @@ fn map_flux(ctx: &std::sync::Arc<prism::gpu::GpuContext>, name: &str, extra: &[&
 #[test]
 fn caustic_flux_is_conserved_and_independent_of_the_grid() {
     let ctx = common::context(false);
-    let expected = sphere_transmitted_flux(50.0, 3.8, 1.0, 1.5);
+    let expected = common::sphere_transmitted_flux(50.0, 3.8, 1.0, 1.5);
     let mut fluxes = Vec::new();
     for grid in [32, 64, 128, 256] {
         let f = map_flux(&ctx, "caustic_sphere", &[&format!("render.caustics_map.grid={grid}")]);
@@ -147,7 +112,7 @@ fn occlusion_query_flux_is_independent_of_the_grid() {
             let s = common::scene(
                 "caustic_sphere",
                 32,
-                &refs(&caustics(&[
+                &common::refs(&caustics(&[
                     &format!("render.caustics_map.grid={grid}"),
                     "render.caustics_map.flux=\"occlusion_query\"",
                 ])),
@@ -193,7 +158,11 @@ fn caustics_map_approaches_the_reference_on_caustic_sphere() {
     let e_none = rmse_rgba(&none.hdr, &reference);
     let mut errors = Vec::new();
     for grid in [8, 32, 128] {
-        let c = common::scene("caustic_sphere", size, &refs(&caustics(&[&format!("render.caustics_map.grid={grid}")])));
+        let c = common::scene(
+            "caustic_sphere",
+            size,
+            &common::refs(&caustics(&[&format!("render.caustics_map.grid={grid}")])),
+        );
         let img = common::render_on(&ctx, &c);
         errors.push(rmse_rgba(&img.hdr, &reference));
         if grid == 128 {
@@ -233,8 +202,8 @@ fn two_lights_add_their_caustics_with_every_technique() {
         let mut s = common::scene("caustic_sphere", 64, &[&caustics]);
         s.lights = lights.clone();
         let out = common::render_on(&ctx, &s);
-        assert_finite(technique, &out.hdr);
-        total(&out.hdr)
+        common::assert_finite(technique, &out.hdr);
+        common::total(&out.hdr)
     };
     for technique in ["caustics_map", "photon_buffer", "impostor_lightmap"] {
         let added: Vec<f64> = lights.iter().map(|l| sum(technique, l) - sum("none", l)).collect();

@@ -15,40 +15,10 @@ fn lightmap(extra: &[&str]) -> Vec<String> {
     o
 }
 
-fn refs(v: &[String]) -> Vec<&str> {
-    v.iter().map(String::as_str).collect()
-}
-
-/// Sum of the RGB radiance of an image.
-fn total(hdr: &[f32]) -> f64 {
-    hdr.chunks(4).map(|p| (p[0] + p[1] + p[2]) as f64).sum()
-}
-
-/// Flux leaving a glass ball of radius r at distance d from a point light of intensity I
-/// through both surfaces (exact Fresnel at entry and, by symmetry, the same angle at exit):
-/// I * integral over the cone of (1 - F(theta_i))^2 dOmega (as tests/caustics.rs).
-fn sphere_transmitted_flux(intensity: f64, d: f64, r: f64, ior: f64) -> f64 {
-    let alpha = (r / d).asin();
-    let steps = 20000;
-    let mut sum = 0.0;
-    for k in 0..steps {
-        let theta = (k as f64 + 0.5) / steps as f64 * alpha;
-        let sin_i = (d * theta.sin() / r).min(1.0);
-        let cos_i = (1.0 - sin_i * sin_i).sqrt();
-        let sin_t = sin_i / ior;
-        let cos_t = (1.0 - sin_t * sin_t).sqrt();
-        let rs = (cos_i - ior * cos_t) / (cos_i + ior * cos_t);
-        let rp = (ior * cos_i - cos_t) / (ior * cos_i + cos_t);
-        let f = 0.5 * (rs * rs + rp * rp);
-        sum += (1.0 - f) * (1.0 - f) * 2.0 * std::f64::consts::PI * theta.sin() * (alpha / steps as f64);
-    }
-    intensity * sum
-}
-
 /// Total flux (W, green channel) in the light maps: irradiance x texel area, over every
 /// receiver; and the peak irradiance with its (u, v).
 fn lightmap_flux(ctx: &std::sync::Arc<prism::gpu::GpuContext>, name: &str, extra: &[&str]) -> (f64, f32, [f32; 2]) {
-    let s = common::scene(name, 64, &refs(&lightmap(extra)));
+    let s = common::scene(name, 64, &common::refs(&lightmap(extra)));
     let mut r = Renderer::new(ctx, &s).expect("renderer");
     r.render_frame().expect("frame");
     let (texels, charts) = r.read_lightmaps().expect("readback").expect("light maps");
@@ -76,13 +46,13 @@ fn lightmap_flux(ctx: &std::sync::Arc<prism::gpu::GpuContext>, name: &str, extra
 fn caustic_scenes_render_with_impostor_lightmap() {
     let ctx = common::context(false);
     for name in ["caustic_sphere", "metal_ring"] {
-        let with = common::render_on(&ctx, &common::scene(name, 96, &refs(&lightmap(&[]))));
+        let with = common::render_on(&ctx, &common::scene(name, 96, &common::refs(&lightmap(&[]))));
         assert_eq!(non_finite_count(&with.hdr), 0, "{name}");
         for p in ["impostor_lightmap_uv_map", "impostor_lightmap_caustic_map", "impostor_lightmap_splat"] {
             assert!(with.passes.iter().any(|n| n == p), "{name}: {p} missing from {:?}", with.passes);
         }
         let without = common::render_on(&ctx, &common::scene(name, 96, &[]));
-        let (a, b) = (total(&with.hdr), total(&without.hdr));
+        let (a, b) = (common::total(&with.hdr), common::total(&without.hdr));
         eprintln!("{name}: radiance sum with light-map caustics {a:.2}, without {b:.2}");
         assert!(a > b * 1.01, "{name}: the caustic adds no light ({a} vs {b})");
     }
@@ -98,7 +68,7 @@ fn caustic_scenes_render_with_impostor_lightmap() {
 #[test]
 fn lightmap_flux_matches_the_analytic_flux_and_is_stable_in_the_map_size() {
     let ctx = common::context(false);
-    let expected = sphere_transmitted_flux(50.0, 3.8, 1.0, 1.5);
+    let expected = common::sphere_transmitted_flux(50.0, 3.8, 1.0, 1.5);
     let mut fluxes = Vec::new();
     for size in [64, 128, 256] {
         let (f, peak, at) =
@@ -146,7 +116,7 @@ fn approaches_the_reference(scene: &str, ratio: f64) {
         let c = common::scene(
             scene,
             size,
-            &refs(&lightmap(&[&format!("render.impostor_lightmap.caustic_map_size={map}")])),
+            &common::refs(&lightmap(&[&format!("render.impostor_lightmap.caustic_map_size={map}")])),
         );
         let img = common::render_on(&ctx, &c);
         let e = rmse_rgba(&img.hdr, &reference);
@@ -177,7 +147,7 @@ fn stable_at_degenerate_lights_and_parameters() {
         &["render.impostor_lightmap.filter_radius=0.75", "render.impostor_lightmap.uv_map_size=4"],
     ];
     for extra in cases {
-        let s = common::scene("caustic_sphere", 48, &refs(&lightmap(extra)));
+        let s = common::scene("caustic_sphere", 48, &common::refs(&lightmap(extra)));
         let mut r = Renderer::new(&ctx, &s).expect("renderer");
         r.render_frame().expect("frame");
         let hdr = r.read_hdr().unwrap();
@@ -198,7 +168,7 @@ fn moving_the_refractor_moves_the_caustic() {
         let i = (0..texels.len()).max_by(|&a, &b| texels[a][1].total_cmp(&texels[b][1])).unwrap();
         (i, texels.iter().map(|t| t[1] as f64).sum())
     };
-    let s = common::scene("caustic_sphere", 48, &refs(&lightmap(&[])));
+    let s = common::scene("caustic_sphere", 48, &common::refs(&lightmap(&[])));
     let mut r = Renderer::new(&ctx, &s).unwrap();
     r.render_frame().unwrap();
     let (before, _) = r.read_lightmaps().unwrap().unwrap();
@@ -206,7 +176,7 @@ fn moving_the_refractor_moves_the_caustic() {
     r.render_frame().unwrap();
     let (moved, _) = r.read_lightmaps().unwrap().unwrap();
     drop(r);
-    let s = common::scene("caustic_sphere", 48, &refs(&lightmap(&["objects.1.center=[0.8, 1.2, 0.3]"])));
+    let s = common::scene("caustic_sphere", 48, &common::refs(&lightmap(&["objects.1.center=[0.8, 1.2, 0.3]"])));
     let mut r = Renderer::new(&ctx, &s).unwrap();
     r.render_frame().unwrap();
     let (fresh, _) = r.read_lightmaps().unwrap().unwrap();
@@ -257,7 +227,7 @@ fn box_receivers_catch_the_caustic_on_their_faces() {
         .collect();
     eprintln!("box faces' flux: {fluxes:?} W");
     let total: f64 = fluxes.iter().sum();
-    let expected = sphere_transmitted_flux(50.0, 3.8, 1.0, 1.5);
+    let expected = common::sphere_transmitted_flux(50.0, 3.8, 1.0, 1.5);
     assert!((total / expected - 1.0).abs() < 0.02, "flux {total} W, expected {expected} W");
     // All of it on the top face (the face whose normal is +Y).
     assert!(fluxes.iter().filter(|&&f| f > 0.0).count() == 1, "{fluxes:?}");
@@ -266,5 +236,5 @@ fn box_receivers_catch_the_caustic_on_their_faces() {
 }
 
 fn total_radiance(hdr: &[f32]) -> f64 {
-    total(hdr)
+    common::total(hdr)
 }

@@ -14,26 +14,13 @@ fn photon(extra: &[&str]) -> Vec<String> {
     o
 }
 
-fn refs(v: &[String]) -> Vec<&str> {
-    v.iter().map(String::as_str).collect()
-}
-
-fn assert_finite(name: &str, hdr: &[f32]) {
-    let bad = hdr.iter().filter(|v| !v.is_finite()).count();
-    assert_eq!(bad, 0, "{name}: {bad} non-finite values");
-}
-
-fn total(hdr: &[f32]) -> f64 {
-    hdr.chunks(4).map(|p| (p[0] + p[1] + p[2]) as f64).sum()
-}
-
 /// Render one frame and read the photon buffer's images back.
 fn images(ctx: &std::sync::Arc<prism::gpu::GpuContext>, name: &str, size: u32, extra: &[&str]) -> PhotonBufferImages {
-    let s = common::scene(name, size, &refs(&photon(extra)));
+    let s = common::scene(name, size, &common::refs(&photon(extra)));
     let mut r = Renderer::new(ctx, &s).expect("renderer");
     r.render_frame().expect("frame");
     let hdr = r.read_hdr().expect("hdr");
-    assert_finite(name, &hdr);
+    common::assert_finite(name, &hdr);
     let out = r.photon_buffer_images().expect("readback").expect("a photon buffer");
     drop(r);
     common::assert_no_validation_errors(ctx);
@@ -69,13 +56,13 @@ fn caustic_power(im: &PhotonBufferImages) -> f64 {
 fn caustic_scenes_render_with_photon_buffer() {
     let ctx = common::context(false);
     for name in ["caustic_sphere", "caustic_bunny", "metal_ring", "water_pool"] {
-        let with = common::render_on(&ctx, &common::scene(name, 96, &refs(&photon(&[]))));
-        assert_finite(name, &with.hdr);
+        let with = common::render_on(&ctx, &common::scene(name, 96, &common::refs(&photon(&[]))));
+        common::assert_finite(name, &with.hdr);
         for p in ["photon_buffer_refractors", "photon_buffer", "photon_buffer_scatter", "photon_buffer_filter"] {
             assert!(with.passes.iter().any(|n| n == p), "{name}: {p} missing from {:?}", with.passes);
         }
         let without = common::render_on(&ctx, &common::scene(name, 96, &[]));
-        let (a, b) = (total(&with.hdr), total(&without.hdr));
+        let (a, b) = (common::total(&with.hdr), common::total(&without.hdr));
         let im = images(&ctx, name, 32, &[]);
         let (n, power) = photons_landed(&im);
         eprintln!("{name}: radiance sum with photon_buffer {a:.2}, without {b:.2}; {n} photons, {power:.3} W");
@@ -187,27 +174,6 @@ fn counting_and_filter_match_the_cpu_and_conserve_energy() {
     }
 }
 
-/// Flux leaving a glass ball of radius r at distance d from a point light of intensity I
-/// through both surfaces (as tests/caustics.rs): I * integral over the cone of
-/// (1 - F(theta_i))^2 dOmega.
-fn sphere_transmitted_flux(intensity: f64, d: f64, r: f64, ior: f64) -> f64 {
-    let alpha = (r / d).asin();
-    let steps = 20000;
-    let mut sum = 0.0;
-    for k in 0..steps {
-        let theta = (k as f64 + 0.5) / steps as f64 * alpha;
-        let sin_i = (d * theta.sin() / r).min(1.0);
-        let cos_i = (1.0 - sin_i * sin_i).sqrt();
-        let sin_t = sin_i / ior;
-        let cos_t = (1.0 - sin_t * sin_t).sqrt();
-        let rs = (cos_i - ior * cos_t) / (cos_i + ior * cos_t);
-        let rp = (ior * cos_i - cos_t) / (ior * cos_i + cos_t);
-        let f = 0.5 * (rs * rs + rp * rp);
-        sum += (1.0 - f) * (1.0 - f) * 2.0 * std::f64::consts::PI * theta.sin() * (alpha / steps as f64);
-    }
-    intensity * sum
-}
-
 /// The physical normalisation: the caustic textures hold the light's flux through the ball
 /// times both surfaces' Fresnel transmittance, independently of the photon buffer's size.
 /// Tolerance 2%: measured 9.107 / 9.199 / 9.218 / 9.230 W at 32 / 64 / 128 / 256 against the
@@ -217,7 +183,7 @@ fn sphere_transmitted_flux(intensity: f64, d: f64, r: f64, ior: f64) -> f64 {
 #[test]
 fn physical_flux_matches_the_closed_form_at_every_size() {
     let ctx = common::context(false);
-    let expected = sphere_transmitted_flux(50.0, 3.8, 1.0, 1.5);
+    let expected = common::sphere_transmitted_flux(50.0, 3.8, 1.0, 1.5);
     for size in [32, 64, 128, 256] {
         let im = images(&ctx, "caustic_sphere", 16, &[&format!("render.photon_buffer.size={size}")]);
         let (n, power) = photons_landed(&im);
@@ -255,20 +221,24 @@ fn photon_buffer_matches_the_reference_on_caustic_sphere() {
     let e_none = rmse_rgba(&none.hdr, &reference);
     let (w, h) = (size as usize, size as usize);
     let theirs = common::brightest(&reference_caustic, w, h);
-    let ref_sum = total(&reference_caustic);
+    let ref_sum = common::total(&reference_caustic);
     let map = common::render_on(
         &ctx,
         &common::scene("caustic_sphere", size, &["render.caustics=caustics_map", "render.caustics_map.grid=128"]),
     );
-    let map_sum = total(&map.hdr) - total(&none.hdr);
+    let map_sum = common::total(&map.hdr) - common::total(&none.hdr);
     eprintln!("caustics_map grid 128: caustic radiance sum {map_sum:.2}, RMSE {:.4}", rmse_rgba(&map.hdr, &reference));
     for pb in [64, 128, 256] {
-        let c = common::scene("caustic_sphere", size, &refs(&photon(&[&format!("render.photon_buffer.size={pb}")])));
+        let c = common::scene(
+            "caustic_sphere",
+            size,
+            &common::refs(&photon(&[&format!("render.photon_buffer.size={pb}")])),
+        );
         let img = common::render_on(&ctx, &c);
         let e = rmse_rgba(&img.hdr, &reference);
         let caustic: Vec<f32> = img.hdr.iter().zip(&none.hdr).map(|(a, b)| a - b).collect();
         let ours = common::brightest(&caustic, w, h);
-        let sum = total(&caustic);
+        let sum = common::total(&caustic);
         eprintln!(
             "size {pb}: RMSE {e:.4} (none {e_none:.4}); caustic radiance sum {sum:.2} vs reference {ref_sum:.2}; \
              focus {ours:?} vs reference {theirs:?}"
@@ -299,8 +269,8 @@ fn extremes_stay_finite() {
         &["lights.0.position=[0, 1.2, 0]"],
     ];
     for case in cases {
-        let img = common::render_on(&ctx, &common::scene("caustic_sphere", 32, &refs(&photon(case))));
-        assert_finite(&format!("{case:?}"), &img.hdr);
+        let img = common::render_on(&ctx, &common::scene("caustic_sphere", 32, &common::refs(&photon(case))));
+        common::assert_finite(&format!("{case:?}"), &img.hdr);
         let im = images(&ctx, "caustic_sphere", 16, case);
         assert!(im.caustics.iter().flatten().all(|v| v.is_finite()), "{case:?}: non-finite caustic texel");
         let (n, _) = photons_landed(&im);
@@ -313,8 +283,9 @@ fn extremes_stay_finite() {
     }
     // metal_ring's directional light and water_pool's five rectangles at a 1^2 buffer.
     for name in ["metal_ring", "water_pool"] {
-        let img = common::render_on(&ctx, &common::scene(name, 32, &refs(&photon(&["render.photon_buffer.size=1"]))));
-        assert_finite(name, &img.hdr);
+        let img =
+            common::render_on(&ctx, &common::scene(name, 32, &common::refs(&photon(&["render.photon_buffer.size=1"]))));
+        common::assert_finite(name, &img.hdr);
     }
 }
 
@@ -338,7 +309,7 @@ fn sync_validation_is_clean_over_frames_in_flight() {
         r.finish().unwrap();
         assert_eq!(r.take_timings().len(), 4);
         let hdr = r.read_hdr().unwrap();
-        assert_finite(&format!("{o:?}"), &hdr);
+        common::assert_finite(&format!("{o:?}"), &hdr);
         drop(r);
         common::assert_no_validation_errors(&ctx);
     }

@@ -159,3 +159,40 @@ pub fn brightest(img: &[f32], w: usize, h: usize) -> (usize, usize) {
     }
     (best.0, best.1)
 }
+
+/// Flux leaving a glass ball of radius r at distance d from a point light of intensity I
+/// through both surfaces (exact Fresnel at entry and, by the sphere's symmetry, the same
+/// angle at exit): I * integral over the cone of (1 - F(theta_i))^2 dOmega.
+pub fn sphere_transmitted_flux(intensity: f64, d: f64, r: f64, ior: f64) -> f64 {
+    let alpha = (r / d).asin();
+    let steps = 20000;
+    let mut sum = 0.0;
+    for k in 0..steps {
+        let theta = (k as f64 + 0.5) / steps as f64 * alpha;
+        let sin_i = (d * theta.sin() / r).min(1.0);
+        let cos_i = (1.0 - sin_i * sin_i).sqrt();
+        let sin_t = sin_i / ior;
+        let cos_t = (1.0 - sin_t * sin_t).sqrt();
+        let rs = (cos_i - ior * cos_t) / (cos_i + ior * cos_t);
+        let rp = (ior * cos_i - cos_t) / (ior * cos_i + cos_t);
+        let f = 0.5 * (rs * rs + rp * rp);
+        sum += (1.0 - f) * (1.0 - f) * 2.0 * std::f64::consts::PI * theta.sin() * (alpha / steps as f64);
+    }
+    intensity * sum
+}
+
+/// Fails the test if any value of an image is NaN or infinite.
+pub fn assert_finite(name: &str, hdr: &[f32]) {
+    let bad = hdr.iter().filter(|v| !v.is_finite()).count();
+    assert_eq!(bad, 0, "{name}: {bad} non-finite values");
+}
+
+/// Sum of the RGB radiance of an image.
+pub fn total(hdr: &[f32]) -> f64 {
+    hdr.chunks(4).map(|p| (p[0] + p[1] + p[2]) as f64).sum()
+}
+
+/// `--set`-style overrides as the `&[&str]` that `scene` takes.
+pub fn refs(v: &[String]) -> Vec<&str> {
+    v.iter().map(String::as_str).collect()
+}
