@@ -162,7 +162,8 @@ pub fn run(args: ReportArgs) -> Result<()> {
             let name = format!("{stem}-sweep");
             plot(
                 &assets.join(format!("{name}.svg")),
-                &assets.join(format!("{name}.png")),
+                // The report links the SVG; a PNG copy would only add weight to the repository.
+                None,
                 &format!("{}: FLIP against GPU time", e.scene),
                 "FLIP mean",
                 &points,

@@ -106,10 +106,10 @@ pub fn metric_of(m: &Measurement, name: &str) -> Result<f64> {
     })
 }
 
-/// A scatter plot of (time, error) with labels and the Pareto front, to SVG and PNG.
+/// A scatter plot of (time, error) with labels and the Pareto front, to SVG (and PNG if asked).
 pub fn plot(
     path_svg: &Path,
-    path_png: &Path,
+    path_png: Option<&Path>,
     title: &str,
     y_label: &str,
     points: &[(f64, f64)],
@@ -118,7 +118,9 @@ pub fn plot(
     use plotters::prelude::*;
     register_font()?;
     draw_plot(SVGBackend::new(path_svg, (900, 600)).into_drawing_area(), title, y_label, points, labels)?;
-    draw_plot(BitMapBackend::new(path_png, (900, 600)).into_drawing_area(), title, y_label, points, labels)?;
+    if let Some(path_png) = path_png {
+        draw_plot(BitMapBackend::new(path_png, (900, 600)).into_drawing_area(), title, y_label, points, labels)?;
+    }
     Ok(())
 }
 
@@ -301,7 +303,7 @@ pub fn run(args: SweepArgs) -> Result<()> {
         .collect::<Result<_>>()?;
     let labels: Vec<String> = rows.iter().map(|r| short_label(&r.setting)).collect();
     let title = format!("{}: {} against GPU time ({})", scenes[0].name, args.metric, ctx.info.name);
-    plot(svg_out.temp_path(), png_out.temp_path(), &title, &args.metric, &points, &labels)?;
+    plot(svg_out.temp_path(), Some(png_out.temp_path()), &title, &args.metric, &points, &labels)?;
     // All outputs appear together, only once everything has succeeded.
     csv_out.commit_bytes(table.as_bytes())?;
     svg_out.commit()?;
