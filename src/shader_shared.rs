@@ -195,4 +195,13 @@ shared_constants! {
     // The irradiance and direction volumes in set 1 of eikonal_view and deferred_shading.
     BINDING_EIKONAL_IRRADIANCE: u32 = 14;
     BINDING_EIKONAL_LIGHT_DIR: u32 = 15;
+    // --- branch `eikview` (issue 7; src/passes/eikonal_nearby.rs): what exit and reflected
+    // view rays meet. Set 1 of eikonal_view also holds the impostor rectangles and TEX_i of
+    // Hu & Qin 2007 §2.2 around the volume (the 14/15 of BINDING_NEARBY_* are taken by the
+    // light volumes there) and the triangles of the exactly intersected flat receivers
+    // (Ihrke et al. 2007 §6, Fig. 7), at most MAX_EIKONAL_TRIANGLES.
+    BINDING_EIKONAL_NEARBY_RECTS: u32 = 23;
+    BINDING_EIKONAL_NEARBY_TEXTURE: u32 = 24;
+    BINDING_EIKONAL_TRIANGLES: u32 = 25;
+    MAX_EIKONAL_TRIANGLES: u32 = 64;
 }

@@ -251,3 +251,24 @@ fn absurd_photon_buffer_and_caustics_map_parameters() {
         assert!(e.contains(key), "{set}: {e}");
     }
 }
+
+#[test]
+fn absurd_eikonal_nearby_parameters() {
+    // Branch `eikview`: render.eikonal.nearby and its impostor settings name the key, the
+    // allowed values, the file and line; no output file is written.
+    let c = Case::new("eikonal_nearby");
+    let scene = c.file("scene.toml", &format!("{GOOD}\n[render.eikonal]\nnearby = \"mirror\"\n"));
+    let e = c.render_fails(&scene, &[], &[]);
+    assert!(e.contains("nearby") && e.contains("scene.toml:") && e.contains("\"exact\""), "{e}");
+    let scene = c.file("ok.toml", GOOD);
+    for (set, key) in [
+        ("render.eikonal.nearby=true", "nearby"),
+        ("render.eikonal.nearby_iterations=-1", "nearby_iterations"),
+        ("render.eikonal.nearby_iterations=1000", "nearby_iterations"),
+        ("render.eikonal.nearby_resolution=1", "nearby_resolution"),
+        ("render.eikonal.nearby_resolution=100000", "nearby_resolution"),
+    ] {
+        let e = c.render_fails(&scene, &["--set", set], &[]);
+        assert!(e.contains(key), "{set}: {e}");
+    }
+}

@@ -273,3 +273,36 @@ fn eikonal_passes_only_with_a_volume() {
     no_volume.volume = None;
     assert!(!plan(&no_volume).iter().any(|p| p.name.starts_with("eikonal")));
 }
+
+/// Branch `eikview` (issue 7): the impostor textures around a volume (`eikonal_nearby`) are
+/// recorded only when an object is left to them: eikonal_sphere's floor quad is intersected
+/// exactly by default (no pass), goes through an impostor with render.eikonal.nearby =
+/// "impostor" (the pass between the light simulation's receivers and the view pass, whose
+/// textures carry the simulated caustic), and with "off" nothing. A non-flat object (here the
+/// floor's mesh called a sphere) needs an impostor even in "exact" mode. Volumes without
+/// objects never record it.
+#[test]
+fn eikonal_nearby_only_for_objects_left_to_impostors() {
+    let lit = ["shadow_map", "gbuffer", "deferred_shading", "eikonal_light", "eikonal_view", "tonemap"];
+    assert_eq!(names("eikonal_sphere", &["render.eikonal.nearby=\"exact\""]), lit);
+    assert_eq!(names("eikonal_sphere", &["render.eikonal.nearby=\"off\""]), lit);
+    assert_eq!(names("eikonal_wine_glass", &[]), lit);
+    let with =
+        ["shadow_map", "gbuffer", "deferred_shading", "eikonal_light", "eikonal_nearby", "eikonal_view", "tonemap"];
+    assert_eq!(names("eikonal_sphere", &["render.eikonal.nearby=\"impostor\""]), with);
+    assert_eq!(names("eikonal_wine_glass", &["render.eikonal.nearby=\"impostor\""]), with);
+    for scene in ["eikonal_luneburg", "eikonal_amber_bunny", "eikonal_dispersion_cube"] {
+        let n = names(scene, &["render.eikonal.nearby=\"impostor\""]);
+        assert!(!n.contains(&"eikonal_nearby"), "{scene}: {n:?}");
+    }
+    let mut s = common::scene("eikonal_sphere", 64, &[]);
+    let mut pebble = s.objects[0].clone();
+    pebble.name = "pebble".into();
+    pebble.shape = "sphere";
+    s.objects.push(pebble);
+    let p = plan(&s);
+    let n: Vec<_> = p.iter().map(|p| p.name).collect();
+    assert_eq!(n, with);
+    let reason = &p.iter().find(|p| p.name == "eikonal_nearby").unwrap().reason;
+    assert!(reason.contains("pebble") && !reason.contains("floor"), "{reason}");
+}

@@ -10,6 +10,8 @@
 // at the boundary indicator (delta rho L_r of Eq. 2, the reflected ray looks up the
 // environment: section 5.3's "first reflection"; T of Eq. 5 takes the transmitted part),
 // and dispersion: one march per RGB channel through its own index field (section 5.3).
+// Branch `eikview` (issue 7): exit and reflected rays meet the nearby scene geometry (exact
+// triangles of flat receivers, Hu & Qin impostors; §6, Fig. 7) before the environment.
 #include "frame.glsl"
 #include "environment.glsl"
 #include "fresnel.glsl"
@@ -36,6 +38,15 @@ layout(constant_id = 16) const float LIGHT_MAX_Y = 1.0;
 layout(constant_id = 17) const float LIGHT_MAX_Z = 1.0;
 #include "scatter.glsl"
 // ---- end light ----
+// ---- eikview (issue 7): nearby geometry for exit and reflected rays (nearby_exit.glsl) ----
+layout(constant_id = 18) const uint TRIANGLES_IN_BOX = 0u;  // 1: test every step against the triangles
+layout(constant_id = 19) const uint NEARBY_ITERATIONS = 3u; // Fig. 16 correction iterations
+layout(constant_id = 20) const float NEARBY_TOLERANCE = 1e-3;
+layout(constant_id = 21) const uint NEARBY_SEEDS = 8u;
+#include "lighting.glsl"
+#include "receiver.glsl"
+#include "nearby_exit.glsl"
+// ---- end eikview ----
 layout(set = 1, binding = BINDING_GBUF_DEPTH) uniform sampler2D gbuf_depth;
 // xyz: grad n per metre, w: n - 1, at the voxel centres; CHANNELS slabs stacked along z.
 layout(set = 1, binding = BINDING_EIKONAL_FIELD) uniform sampler3D field;
@@ -154,8 +165,9 @@ void run_start(inout Run r, float n, vec3 v, vec3 T) {
     r.rho = 0.0;
 }
 
-// The Fresnel event at the end of run r; v is the ray's current optical direction.
-void run_end(inout Run r, vec3 v, inout vec3 L, inout vec3 T) {
+// The Fresnel event at the end of run r; v is the ray's current optical direction, x its
+// position (eikview: where the reflected ray starts towards the nearby geometry).
+void run_end(inout Run r, vec3 x, vec3 v, inout vec3 L, inout vec3 T) {
     vec3 N = dot(r.grad_sum, r.grad_sum) > 1e-20 ? normalize(r.grad_sum) : -r.d_a;
     bool crossed = dot(normalize(v), N) * dot(r.d_a, N) > 0.0;
     if (!crossed || r.turned) {
@@ -164,7 +176,7 @@ void run_end(inout Run r, vec3 v, inout vec3 L, inout vec3 T) {
     }
     float F = r.rho * fresnel_dielectric(abs(dot(r.d_a, N)), r.n_a / max(r.n_peak, 1e-3));
     F = clamp(F, 0.0, 1.0);
-    L += r.T_a * F * environment(reflect(r.d_a, N));
+    L += r.T_a * F * exit_radiance(x, reflect(r.d_a, N), 0.0);
     T *= 1.0 - F;
 }
 
@@ -181,6 +193,8 @@ vec3 march(vec3 o, vec3 d, float t_enter, int c, inout bool touched) {
     if (banded) r.rho = band_reflectance(x);
     // Rays that leave the box stop one step past its face at most.
     float margin = STEP;
+    // eikview: the last point inside the box proper, where the exit ray starts.
+    vec3 x_in = x;
     for (uint i = 0u; i <= MAX_STEPS; ++i) {
         bool inside = i < MAX_STEPS && in_box(x, margin);
         bool band = inside && MATERIALS != 0u && in_band(x);
@@ -188,7 +202,7 @@ vec3 march(vec3 o, vec3 d, float t_enter, int c, inout bool touched) {
             // Leaving the band (into the air beyond the box when outside it).
             if (!inside && abs(1.0 - r.n_a) > abs(r.n_peak - r.n_a)) r.n_peak = 1.0;
             banded = false;
-            run_end(r, v, L, T);
+            run_end(r, x, v, L, T);
             r.turned = false;
         }
         if (!inside) break;
@@ -217,11 +231,25 @@ vec3 march(vec3 o, vec3 d, float t_enter, int c, inout bool touched) {
         vec4 s = sample_field(x, c);
         n_cur = 1.0 + s.w;
         touched = touched || abs(s.w) > 1e-4;
+        // ---- eikview: a receiver inside (or touching) the box ends the path where the
+        // step's chord crosses it (e.g. the table a wine glass stands on).
+        if (TRIANGLES_IN_BOX != 0u) {
+            vec3 seg = x - x0;
+            float len = length(seg);
+            float t_hit;
+            uint k;
+            vec2 b;
+            if (len > 0.0 && eik_triangle_hit(x0, seg / len, 0.0, len, t_hit, k, b)) {
+                return L + T * eik_triangle_radiance(k, x0, seg / len, t_hit, b);
+            }
+        }
+        if (in_box(x, 0.0)) x_in = x;
+        // ---- end eikview
         if (banded) {
             float up = r.n_peak - r.n_a;
             if (up * (n_cur - r.n_peak) < 0.0 && abs(n_cur - r.n_peak) > 0.02 * abs(up) + 1e-4) {
                 // The index turns back: the run ends at its peak, a new one begins.
-                run_end(r, v, L, T);
+                run_end(r, x, v, L, T);
                 float peak = r.n_peak;
                 run_start(r, peak, v, T);
             }
@@ -262,7 +290,9 @@ vec3 march(vec3 o, vec3 d, float t_enter, int c, inout bool touched) {
     }
     // A degenerate momentum (never for n > 0) keeps the incoming direction.
     vec3 exit_dir = dot(v, v) > 1e-20 ? normalize(v) : d;
-    return L + T * environment(exit_dir);
+    // eikview: the exit ray from the last point inside the box meets the nearby geometry
+    // (a hit a hair behind that point counts: a floor the box stands on).
+    return L + T * exit_radiance(x_in, exit_dir, -1e-4);
 }
 // ---- end volsrc ----
 

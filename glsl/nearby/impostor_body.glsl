@@ -11,6 +11,11 @@
 #include "lighting.glsl"
 #include "fresnel.glsl"
 #include "push.glsl"
+// Branch `eikview`: glsl/eikonal/nearby_impostor.frag shades diffuse objects with the
+// eikonal light simulation's irradiance (eikonal_receiver, declared before this include).
+#ifndef NEARBY_EIKONAL_LIGHT
+#define NEARBY_EIKONAL_LIGHT 0
+#endif
 #if NEARBY_RECURSIVE
 // The lookup of the level below: the same correction as refraction_hu_qin (constants 0..2).
 layout(constant_id = 0) const uint NEARBY_ITERATIONS = 3;
@@ -33,7 +38,12 @@ void main() {
     if (dot(n, pc.axis.xyz) > 0.0) n = -n;
     vec3 radiance = vec3(0.0);
     if (kind == MATERIAL_DIFFUSE) {
+#if NEARBY_EIKONAL_LIGHT
+        vec3 lo = vec3(LIGHT_MIN_X, LIGHT_MIN_Y, LIGHT_MIN_Z), hi = vec3(LIGHT_MAX_X, LIGHT_MAX_Y, LIGHT_MAX_Z);
+        radiance = eikonal_receiver(in_position, n, albedo_at(materials[mat], in_checker_uv), lo, hi);
+#else
         radiance = diffuse_radiance(in_position, n, albedo_at(materials[mat], in_checker_uv));
+#endif
     } else if (kind == MATERIAL_MIRROR || kind == MATERIAL_CONDUCTOR) {
         // The parallel projection's eye ray is +axis everywhere.
         vec3 R = reflect(pc.axis.xyz, n);

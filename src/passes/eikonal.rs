@@ -29,7 +29,7 @@ use crate::gpu::{
 };
 use crate::graph::{Frame, FrameGraph, ImageId};
 use crate::renderer::gpu_scene::GpuScene;
-use crate::renderer::plan::EIKONAL_VIEW;
+use crate::renderer::plan::{EIKONAL_NEARBY, EIKONAL_VIEW};
 use crate::renderer::targets::Targets;
 use crate::scene::techniques::{EikonalParams, Integrator};
 use crate::scene::{IndexProfile, Volume};
@@ -38,7 +38,14 @@ use crate::{
     BINDING_GBUF_DEPTH, EIKONAL_BINDING_DST, EIKONAL_BINDING_SRC, EIKONAL_EULER, EIKONAL_GROUP, EIKONAL_RK4,
 };
 
+use super::eikonal_nearby;
 use super::fullscreen::{FullscreenDesc, FullscreenPass};
+use super::nearby_impostors::{ImpostorShading, NearbyDesc, NearbyImpostors};
+
+/// Fig. 16's stopping tolerance (a fraction of d_i) and Fig. 17's seeds for the impostor
+/// lookup of exit rays: render.hu_qin's defaults (src/scene/techniques.rs).
+const NEARBY_TOLERANCE: f32 = 1e-3;
+const NEARBY_SEEDS: u32 = 8;
 
 /// Most steps a view ray may take (a ray that circles inside a lens stops here).
 pub const MAX_VIEW_STEPS: u32 = 8192;
@@ -168,6 +175,12 @@ pub struct VolumeTextures {
 pub struct EikonalPass {
     volume: VolumeTextures,
     view: FullscreenPass,
+    // --- branch `eikview` (issue 7): the nearby geometry of exit rays
+    // (src/passes/eikonal_nearby.rs): impostors (a 1x1 stand-in without rectangles), the
+    // set layout of their light-simulation shading, and the exact triangles.
+    nearby: NearbyImpostors,
+    _nearby_layout: Option<DescriptorSetLayout>,
+    _triangles: crate::gpu::Buffer,
     // --- branch `light` (issue 7): the light simulation and its receiver pass.
     light: Option<super::eikonal_light::EikonalLight>,
 }
@@ -184,6 +197,8 @@ impl EikonalPass {
         params: EikonalParams,
         volume: &Volume,
         light: Option<&crate::scene::Light>,
+        scene: &crate::scene::Scene,
+        gpu: &GpuScene,
         graph: &mut FrameGraph,
         frame_layout: &DescriptorSetLayout,
         targets: &Targets,
@@ -217,6 +232,91 @@ impl EikonalPass {
         let (light_min, light_max) = light.as_ref().map_or((glam::Vec3::ZERO, glam::Vec3::ONE), |l| l.light_box());
         // Without a simulation the field stands in for the light volumes (never read).
         let (irradiance, direction) = light.as_ref().map_or((&textures.field, &textures.field), |l| l.images());
+        // --- branch `eikview`: what exit and reflected rays meet (src/passes/eikonal_nearby.rs).
+        let tris: Vec<_> =
+            eikonal_nearby::exact_triangles(scene, params.nearby).0.into_iter().map(|(_, t)| t).collect();
+        let triangles = crate::gpu::Buffer::with_data(
+            ctx,
+            "eikonal_triangles",
+            &eikonal_nearby::triangle_buffer_bytes(&tris),
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+        )?;
+        // The march crosses the box's faces by up to one step (its margin).
+        let in_box = eikonal_nearby::triangles_meet_box(&tris, volume.min, volume.max, h);
+        let (kept, _) = eikonal_nearby::impostor_objects(scene, params.nearby);
+        let desc = NearbyDesc {
+            resolution: params.nearby_resolution,
+            recursion_depth: 0,
+            correction_iterations: params.nearby_iterations,
+            correction_tolerance: NEARBY_TOLERANCE,
+            seed_samples: NEARBY_SEEDS,
+        };
+        let (nearby, nearby_layout) = if kept.is_empty() {
+            (NearbyImpostors::stand_in(ctx, EIKONAL_NEARBY, gpu, graph, frame_layout)?, None)
+        } else {
+            let origin = eikonal_nearby::volume_origin(scene).unwrap_or(glam::Vec3::ZERO);
+            match &light {
+                // The textures carry the simulated caustic and shadow (glsl/eikonal/nearby_impostor.frag).
+                Some(l) => {
+                    let stage = vk::ShaderStageFlags::FRAGMENT;
+                    let sampled = vk::DescriptorType::COMBINED_IMAGE_SAMPLER;
+                    let layout = DescriptorSetLayout::new(
+                        ctx,
+                        EIKONAL_NEARBY,
+                        &[
+                            (crate::BINDING_EIKONAL_IRRADIANCE, sampled, stage),
+                            (crate::BINDING_EIKONAL_LIGHT_DIR, sampled, stage),
+                        ],
+                        1,
+                    )?;
+                    let (irr, dir) = l.images();
+                    let at = Access::FragmentSampled.info(false).layout;
+                    let set = layout.allocate(
+                        EIKONAL_NEARBY,
+                        &[
+                            DescriptorWrite::Sampled(crate::BINDING_EIKONAL_IRRADIANCE, irr.view(), nearest, at),
+                            DescriptorWrite::Sampled(crate::BINDING_EIKONAL_LIGHT_DIR, dir.view(), nearest, at),
+                        ],
+                    )?;
+                    let spec = [light_min.x, light_min.y, light_min.z, light_max.x, light_max.y, light_max.z].map(f);
+                    let shading = ImpostorShading {
+                        fragment_shader: "eikonal/nearby_impostor.frag",
+                        set_layout: &layout,
+                        set,
+                        specialization: &spec,
+                        reads: l.image_ids().to_vec(),
+                    };
+                    let nearby = NearbyImpostors::around(
+                        ctx,
+                        EIKONAL_NEARBY,
+                        &desc,
+                        origin,
+                        &kept,
+                        scene,
+                        gpu,
+                        graph,
+                        frame_layout,
+                        Some(shading),
+                    )?;
+                    (nearby, Some(layout))
+                }
+                None => (
+                    NearbyImpostors::around(
+                        ctx,
+                        EIKONAL_NEARBY,
+                        &desc,
+                        origin,
+                        &kept,
+                        scene,
+                        gpu,
+                        graph,
+                        frame_layout,
+                        None,
+                    )?,
+                    None,
+                ),
+            }
+        };
         let spec = [
             integrator,
             f(h),
@@ -239,8 +339,13 @@ impl EikonalPass {
             f(light_max.x),
             f(light_max.y),
             f(light_max.z),
+            // --- branch `eikview`: nearby_exit.glsl.
+            u32::from(in_box),
+            params.nearby_iterations,
+            f(NEARBY_TOLERANCE),
+            NEARBY_SEEDS,
         ];
-        let view = FullscreenPass::new(
+        let view = FullscreenPass::with_buffers(
             ctx,
             &FullscreenDesc {
                 name: EIKONAL_VIEW,
@@ -253,16 +358,21 @@ impl EikonalPass {
                     (BINDING_EIKONAL_EMISSION, &textures.emission),
                     (crate::BINDING_EIKONAL_IRRADIANCE, irradiance),
                     (crate::BINDING_EIKONAL_LIGHT_DIR, direction),
+                    (crate::BINDING_EIKONAL_NEARBY_TEXTURE, &nearby.texture),
                 ],
                 target: (&targets.hdr, targets.hdr_id),
                 // Keeps the deferred result and overwrites the pixels whose ray enters the box.
                 clear: false,
                 specialization: &spec,
             },
+            &[
+                (crate::BINDING_EIKONAL_NEARBY_RECTS, &nearby.rect_buffer),
+                (crate::BINDING_EIKONAL_TRIANGLES, &triangles),
+            ],
             frame_layout,
             nearest,
         )?;
-        Ok(EikonalPass { volume: textures, view, light })
+        Ok(EikonalPass { volume: textures, view, nearby, _nearby_layout: nearby_layout, _triangles: triangles, light })
     }
 
     /// The light simulation's statistics (None without a simulation).
@@ -284,19 +394,27 @@ impl EikonalPass {
         }
     }
 
+    /// `eikonal_nearby` (when the scene has impostor rectangles), then `eikonal_view`.
     pub fn record<'a>(
         &'a self,
         frame: &mut Frame<'_, 'a>,
-        scene: &GpuScene,
+        scene: &'a GpuScene,
         targets: &Targets,
         frame_set: DescriptorSet,
+        shadow_atlas: Option<ImageId>,
     ) {
+        if !self.nearby.is_empty() {
+            self.nearby.record(frame, scene, frame_set, shadow_atlas);
+        }
         let v = &self.volume;
         let mut reads =
             vec![targets.depth_id, v.field_id, v.extinction_id, v.albedo_id, v.emission_id, scene.environment_id];
         if let Some(l) = &self.light {
             reads.extend(l.image_ids());
         }
+        // eikview: the exit rays' shading reads the shadow maps and the impostor textures.
+        reads.push(self.nearby.texture_id);
+        reads.extend(shadow_atlas);
         self.view.record(frame, frame_set, &reads);
     }
 }

@@ -4,9 +4,9 @@
 use std::sync::Arc;
 
 use crate::gpu::{
-    vk, Access, Attachment, Blend, Clear, DepthState, DescriptorSet, DescriptorSetLayout, DescriptorWrite, Framebuffer,
-    GpuContext, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Image, PipelineLayout, RenderPass, RenderPassDesc,
-    Sampler, VertexLayout,
+    vk, Access, Attachment, Blend, Buffer, Clear, DepthState, DescriptorSet, DescriptorSetLayout, DescriptorWrite,
+    Framebuffer, GpuContext, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Image, PipelineLayout, RenderPass,
+    RenderPassDesc, Sampler, VertexLayout,
 };
 use crate::graph::{Frame, ImageId};
 
@@ -43,6 +43,17 @@ impl FullscreenPass {
         frame_layout: &DescriptorSetLayout,
         sampler: &Sampler,
     ) -> GpuResult<Self> {
+        Self::with_buffers(ctx, desc, &[], frame_layout, sampler)
+    }
+
+    /// As [`Self::new`], with storage buffers (binding, buffer) in set 1 besides the images.
+    pub fn with_buffers(
+        ctx: &Arc<GpuContext>,
+        desc: &FullscreenDesc<'_>,
+        buffers: &[(u32, &Buffer)],
+        frame_layout: &DescriptorSetLayout,
+        sampler: &Sampler,
+    ) -> GpuResult<Self> {
         let (target, target_id) = desc.target;
         let render_pass = RenderPass::new(
             ctx,
@@ -57,6 +68,9 @@ impl FullscreenPass {
             .inputs
             .iter()
             .map(|&(b, _)| (b, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, vk::ShaderStageFlags::FRAGMENT))
+            .chain(
+                buffers.iter().map(|&(b, _)| (b, vk::DescriptorType::STORAGE_BUFFER, vk::ShaderStageFlags::FRAGMENT)),
+            )
             .collect();
         let set_layout = DescriptorSetLayout::new(ctx, desc.name, &bindings, 1)?;
         let writes: Vec<_> = desc
@@ -67,6 +81,7 @@ impl FullscreenPass {
                 let layout = Access::FragmentSampled.info(image.aspect().contains(vk::ImageAspectFlags::DEPTH)).layout;
                 DescriptorWrite::Sampled(b, image.view(), sampler, layout)
             })
+            .chain(buffers.iter().map(|&(b, buffer)| DescriptorWrite::Storage(b, buffer)))
             .collect();
         let set = set_layout.allocate(desc.name, &writes)?;
         let layout = PipelineLayout::new(ctx, desc.name, &[frame_layout, &set_layout], 0)?;

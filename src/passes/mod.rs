@@ -6,6 +6,7 @@ pub mod deferred_shading;
 pub mod distance_impostor;
 pub mod eikonal;
 pub mod eikonal_light;
+pub mod eikonal_nearby;
 pub mod fullscreen;
 pub mod gbuffer;
 pub mod histopyramid;

@@ -192,13 +192,30 @@ pub fn rect_for(scene: &Scene, object: usize, origin_r: Vec3, layer: u32) -> Opt
 pub fn nearby_rects(scene: &Scene) -> (Vec3, Vec<NearbyRect>) {
     let Some(origin_r) = refractor_center(scene) else { return (Vec3::ZERO, Vec::new()) };
     let (kept, _) = nearby_objects(scene, origin_r);
+    (origin_r, rects_of(scene, origin_r, &kept))
+}
+
+/// The rectangles of `objects` seen from `origin_r`, layers in order.
+pub fn rects_of(scene: &Scene, origin_r: Vec3, objects: &[usize]) -> Vec<NearbyRect> {
     let mut rects = Vec::new();
-    for i in kept {
+    for &i in objects {
         if let Some(r) = rect_for(scene, i, origin_r, rects.len() as u32) {
             rects.push(r);
         }
     }
-    (origin_r, rects)
+    rects
+}
+
+/// Another way to shade the textures than glsl/nearby/impostor.frag (branch `eikview`: the
+/// eikonal light volumes for the caustic under the volume, src/passes/eikonal_nearby.rs): a
+/// fragment shader with a second descriptor set (owned by the caller, alive as long as the
+/// impostors), its specialisation constants, and the images that set samples.
+pub struct ImpostorShading<'a> {
+    pub fragment_shader: &'static str,
+    pub set_layout: &'a DescriptorSetLayout,
+    pub set: DescriptorSet,
+    pub specialization: &'a [u32],
+    pub reads: Vec<ImageId>,
 }
 
 /// std430 record of one rectangle (glsl/include/nearby.glsl, `NearbyRect`).
@@ -335,6 +352,8 @@ pub struct NearbyImpostors {
     recursive: Option<Recursive>,
     draws: Vec<usize>,
     metal: Vec<bool>,
+    /// [`ImpostorShading`]'s set and reads (level 0).
+    extra: Option<(DescriptorSet, Vec<ImageId>)>,
 }
 
 struct Recursive {
@@ -382,7 +401,28 @@ impl NearbyImpostors {
         let rects: Vec<NearbyRect> = rects.into_iter().filter(|r| r.object < gpu.draws.len()).collect();
         let metal = rects.iter().map(|r| is_metal(scene, r.object)).collect();
         let levels = recursion_levels(scene, &rects, desc.recursion_depth);
-        Self::build(ctx, name, desc, origin, rects, metal, levels, graph, frame_layout)
+        Self::build(ctx, name, desc, origin, rects, metal, levels, graph, frame_layout, None)
+    }
+
+    /// The rectangles of `objects` around `origin` (not the dielectrics' centre), without
+    /// recursion, shaded by `shading` when given (branch `eikview`: around an eikonal volume).
+    #[allow(clippy::too_many_arguments)]
+    pub fn around(
+        ctx: &Arc<GpuContext>,
+        name: &'static str,
+        desc: &NearbyDesc,
+        origin: Vec3,
+        objects: &[usize],
+        scene: &Scene,
+        gpu: &GpuScene,
+        graph: &mut FrameGraph,
+        frame_layout: &DescriptorSetLayout,
+        shading: Option<ImpostorShading<'_>>,
+    ) -> GpuResult<Self> {
+        let rects: Vec<NearbyRect> =
+            rects_of(scene, origin, objects).into_iter().filter(|r| r.object < gpu.draws.len()).collect();
+        let metal = rects.iter().map(|r| is_metal(scene, r.object)).collect();
+        Self::build(ctx, name, desc, origin, rects, metal, 0, graph, frame_layout, shading)
     }
 
     /// No rectangles: a cleared 1x1 stand-in texture and an empty rectangle buffer, for
@@ -401,7 +441,7 @@ impl NearbyImpostors {
             correction_tolerance: 1e-3,
             seed_samples: 1,
         };
-        Self::build(ctx, name, &desc, Vec3::ZERO, Vec::new(), Vec::new(), 0, graph, frame_layout)
+        Self::build(ctx, name, &desc, Vec3::ZERO, Vec::new(), Vec::new(), 0, graph, frame_layout, None)
     }
 
     /// Whether any rectangle exists (otherwise [`Self::record`] must not be called).
@@ -420,6 +460,7 @@ impl NearbyImpostors {
         levels: u32,
         graph: &mut FrameGraph,
         frame_layout: &DescriptorSetLayout,
+        shading: Option<ImpostorShading<'_>>,
     ) -> GpuResult<Self> {
         let layers_n = rects.len().max(1) as u32;
         let size = if rects.is_empty() { 1 } else { desc.resolution };
@@ -484,8 +525,20 @@ impl NearbyImpostors {
             blend: &[Blend::Off],
             specialization,
         };
-        let layout = PipelineLayout::new(ctx, name, &[frame_layout], push_size)?;
-        let pipeline = GraphicsPipeline::new(ctx, &pipeline_desc("nearby/impostor.frag", &[]), &layout, &render_pass)?;
+        let (layout, pipeline, extra) = match &shading {
+            Some(sh) => {
+                let layout = PipelineLayout::new(ctx, name, &[frame_layout, sh.set_layout], push_size)?;
+                let desc = pipeline_desc(sh.fragment_shader, sh.specialization);
+                let pipeline = GraphicsPipeline::new(ctx, &desc, &layout, &render_pass)?;
+                (layout, pipeline, Some((sh.set, sh.reads.clone())))
+            }
+            None => {
+                let layout = PipelineLayout::new(ctx, name, &[frame_layout], push_size)?;
+                let pipeline =
+                    GraphicsPipeline::new(ctx, &pipeline_desc("nearby/impostor.frag", &[]), &layout, &render_pass)?;
+                (layout, pipeline, None)
+            }
+        };
         let framebuffers_of = |image: &Image, label: &str| -> GpuResult<Vec<Framebuffer>> {
             rects
                 .iter()
@@ -568,6 +621,7 @@ impl NearbyImpostors {
             recursive,
             draws,
             metal,
+            extra,
         })
     }
 
@@ -595,6 +649,11 @@ impl NearbyImpostors {
             if let Some(atlas) = shadow_atlas {
                 pass = pass.read(atlas, Access::FragmentSampled);
             }
+            if let Some((_, reads)) = &self.extra {
+                for &id in reads {
+                    pass = pass.read(id, Access::FragmentSampled);
+                }
+            }
             let recursive = if level > 0 { self.recursive.as_ref() } else { None };
             if let (Some(_), Some(o)) = (recursive, &self.other) {
                 pass = pass.read(if dst == 0 { o.id } else { self.texture_id }, Access::FragmentSampled);
@@ -611,7 +670,10 @@ impl NearbyImpostors {
                             &rec.pipeline
                         }
                         _ => {
-                            cmd.bind_graphics(&self.pipeline, &[frame_set]);
+                            match &self.extra {
+                                Some((set, _)) => cmd.bind_graphics(&self.pipeline, &[frame_set, *set]),
+                                None => cmd.bind_graphics(&self.pipeline, &[frame_set]),
+                            }
                             &self.pipeline
                         }
                     };

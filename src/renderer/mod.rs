@@ -361,7 +361,18 @@ impl Renderer {
                 let p = EikonalParams::from_settings(&scene.render)
                     .map_err(|error| RenderError::Param { technique: "eikonal", error })?;
                 let light = if plan::has(&plan, plan::EIKONAL_LIGHT) { scene.lights.first() } else { None };
-                Some(EikonalPass::new(ctx, p, volume, light, &mut graph, &frame_layout, &targets, &nearest)?)
+                Some(EikonalPass::new(
+                    ctx,
+                    p,
+                    volume,
+                    light,
+                    scene,
+                    &gpu_scene,
+                    &mut graph,
+                    &frame_layout,
+                    &targets,
+                    &nearest,
+                )?)
             }
             _ => None,
         };
@@ -594,7 +605,7 @@ impl Renderer {
             p.record(&mut frame, scene, targets, frame_set, shadow_atlas);
         }
         if let Some(p) = &passes.eikonal {
-            p.record(&mut frame, scene, targets, frame_set);
+            p.record(&mut frame, scene, targets, frame_set, shadow_atlas);
         }
         passes.tonemap.record(&mut frame, targets, frame_set);
         debug_assert_eq!(frame.pass_names(), self.plan.iter().map(|p| p.name).collect::<Vec<_>>());

@@ -50,6 +50,9 @@ pub const EIKONAL_VIEW: &str = "eikonal_view";
 /// Ihrke et al. 2007 section 5.2 (src/passes/eikonal_light.rs): the light simulation (run
 /// when the renderer is created) and the diffuse receivers inside its irradiance volume.
 pub const EIKONAL_LIGHT: &str = "eikonal_light";
+/// Hu & Qin 2007 §2.2 impostor textures of the objects near the volume, for eikonal_view's
+/// exit and reflected rays (src/passes/eikonal_nearby.rs; branch `eikview`).
+pub const EIKONAL_NEARBY: &str = "eikonal_nearby";
 
 #[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
 pub struct PlannedPass {
@@ -160,6 +163,9 @@ pub fn plan(scene: &Scene) -> Vec<PlannedPass> {
         });
     }
     if let Some(v) = &scene.volume {
+        // --- branch `eikview`: after eikonal_light (the simulation ran at creation; the
+        // textures carry its caustic and shadow), before the view pass that reads them.
+        passes.extend(eikonal_nearby(scene));
         let [nx, ny, nz] = v.resolution;
         passes.push(PlannedPass {
             name: EIKONAL_VIEW,
@@ -348,6 +354,23 @@ fn hu_qin_nearby(scene: &Scene) -> Vec<PlannedPass> {
         });
     }
     passes
+}
+
+/// Issue 7: the impostor textures of the objects that eikonal_view's exit and reflected rays
+/// may meet (render.eikonal.nearby; none when every nearby object is intersected exactly).
+fn eikonal_nearby(scene: &Scene) -> Option<PlannedPass> {
+    use crate::passes::eikonal_nearby::impostor_objects;
+    let p = crate::scene::techniques::EikonalParams::from_settings(&scene.render).unwrap_or_default();
+    let (kept, dropped) = impostor_objects(scene, p.nearby);
+    let names = |v: &[usize]| v.iter().map(|&i| scene.objects[i].name.clone()).collect::<Vec<_>>();
+    let mut reason = format!(
+        "impostor rectangles + textures of {} around the volume for its exit and reflected rays (Hu & Qin 2007 §2.2)",
+        list(&names(&kept))
+    );
+    if !dropped.is_empty() {
+        reason += &format!("; {} left to the environment map", list(&names(&dropped)));
+    }
+    (!kept.is_empty()).then_some(PlannedPass { name: EIKONAL_NEARBY, reason })
 }
 
 /// The passes of double refraction with distance impostors (Szirmay-Kalos et al. 2005, §4).

@@ -617,6 +617,19 @@ pub enum Integrator {
     Rk4,
 }
 
+// --- branch `eikview` (issue 7): what exit and reflected view rays meet besides the environment.
+/// `render.eikonal.nearby` (src/passes/eikonal_nearby.rs).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum EikonalNearby {
+    /// The environment only (section 5.3 as written).
+    Off,
+    /// Hu & Qin 2007 §2.2 impostor rectangles around the volume for every nearby object.
+    Impostor,
+    /// Ihrke et al. 2007 §6, Fig. 7: an exact ray/quad intersection for quad receivers (the
+    /// other nearby objects through impostor rectangles).
+    Exact,
+}
+
 /// `[render.eikonal]`: eikonal rendering of a `[volume]` (src/passes/eikonal.rs).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct EikonalParams {
@@ -644,6 +657,12 @@ pub struct EikonalParams {
     /// Metres the irradiance volume also covers beside the volume's box along x and z (the
     /// receiver area that the volume's refracted light and shadow reach).
     pub light_side: f32,
+    // --- branch `eikview`: nearby geometry for exit and reflected rays.
+    pub nearby: EikonalNearby,
+    /// Fig. 16 correction iterations of the impostor lookup (0: the plain lookup of Fig. 13).
+    pub nearby_iterations: u32,
+    /// Edge of each impostor texture TEX_i in texels.
+    pub nearby_resolution: u32,
 }
 
 impl Default for EikonalParams {
@@ -659,6 +678,9 @@ impl Default for EikonalParams {
             light_patches: 0,
             light_below: 0.0,
             light_side: 0.0,
+            nearby: EikonalNearby::Exact,
+            nearby_iterations: 3,
+            nearby_resolution: 256,
         }
     }
 }
@@ -675,6 +697,9 @@ impl EikonalParams {
         "light_patches",
         "light_below",
         "light_side",
+        "nearby",
+        "nearby_iterations",
+        "nearby_resolution",
     ];
 
     pub fn from_table(t: Option<&toml::Table>) -> Result<Self, ParamError> {
@@ -709,6 +734,26 @@ impl EikonalParams {
                 "light_patches" => p.light_patches = integer(key, v, 0, 1024)?,
                 "light_below" => p.light_below = number(key, v, 0.0, 100.0)?,
                 "light_side" => p.light_side = number(key, v, 0.0, 100.0)?,
+                "nearby" => {
+                    p.nearby = match v.as_str() {
+                        Some("exact") => EikonalNearby::Exact,
+                        Some("impostor") => EikonalNearby::Impostor,
+                        Some("off") => EikonalNearby::Off,
+                        _ => {
+                            return Err(ParamError {
+                                key: key.clone(),
+                                message: format!("`nearby` must be \"exact\", \"impostor\" or \"off\", not {v}"),
+                                hint: "what rays leaving the volume meet: exact quads (Ihrke et al. 2007 Fig. 7), \
+                                       Hu & Qin 2007 impostor rectangles, or the environment only"
+                                    .into(),
+                            })
+                        }
+                    }
+                }
+                // As render.hu_qin.correction_iterations: beyond 64 the lookup has converged or cycles.
+                "nearby_iterations" => p.nearby_iterations = integer(key, v, 0, 64)?,
+                // As render.hu_qin.impostor_resolution (one RGBA32F layer per object).
+                "nearby_resolution" => p.nearby_resolution = integer(key, v, 4, 2048)?,
                 _ => return Err(unknown("eikonal", key, Self::KEYS)),
             }
         }
