@@ -84,16 +84,29 @@ fn eikonal_sphere_ball_shows_the_floor() {
     }
     report += &format!("reference ball mean {:.4} ({} px)", mean(&truth, &ball), ball.len());
     eprintln!("{report}");
+    // Measured (48^2, volume 48^3, reference 16 spp and 2^19 photons, lavapipe):
+    //   off:      RMSE image 1.1137 (clamped 0.1590), ball 0.2523, ball mean 0.0000
+    //   exact:    RMSE image 0.9403 (clamped 0.1126), ball 0.0252, ball mean 0.1977
+    //   impostor: RMSE image 0.9605 (clamped 0.1132), ball 0.0296, ball mean 0.1988
+    //   reference ball mean 0.2027 (410 px inside 0.9 of the silhouette).
+    // The unclamped image RMSE is dominated by the simulated caustic's peak on the floor seen
+    // directly (tests/eikonal_light.rs), which this branch does not change.
     let (t_mean, off_mean) = (mean(&truth, &ball), mean(&off.hdr, &ball));
     // Before: the ball shows the black environment.
     assert!(off_mean < 0.1 * t_mean, "{report}");
     for (name, img) in [("exact", &exact), ("impostor", &impostor)] {
-        // The ball's pixels are no longer environment-coloured: their mean is the reference's.
+        // The ball's pixels are no longer environment-coloured: their mean is the
+        // reference's (measured within 2.5%; 10% leaves room for the reference's noise).
         let m = mean(&img.hdr, &ball);
-        assert!((m - t_mean).abs() < 0.25 * t_mean, "{name}: {report}");
-        // And the error inside the ball falls.
-        assert!(rmse(&img.hdr, &truth, &ball, 1.0) < 0.5 * rmse(&off.hdr, &truth, &ball, 1.0), "{name}: {report}");
+        assert!((m - t_mean).abs() < 0.1 * t_mean, "{name}: {report}");
+        // The error inside the ball falls to about a tenth (measured 0.10 and 0.12 of off's).
+        assert!(rmse(&img.hdr, &truth, &ball, 1.0) < 0.3 * rmse(&off.hdr, &truth, &ball, 1.0), "{name}: {report}");
+        // And over the whole displayed image (measured 0.71 of off's).
+        assert!(rmse(&img.hdr, &truth, &[], 1.0) < 0.8 * rmse(&off.hdr, &truth, &[], 1.0), "{name}: {report}");
     }
+    // The default ("exact", Fig. 7's choice) measured more accurate than the impostor
+    // (0.0252 vs 0.0296 inside the ball): both are deterministic against a seeded reference.
+    assert!(rmse(&exact.hdr, &truth, &ball, 1.0) < rmse(&impostor.hdr, &truth, &ball, 1.0), "{report}");
     common::assert_no_validation_errors(&ctx);
 }
 
