@@ -424,7 +424,12 @@ fn eikonal_sphere_floor_approaches_caustic_sphere_reference() {
     let truth = reference.image();
     let o = "volume.resolution=[48, 48, 48]";
     let on = common::render_on(&ctx, &common::scene("eikonal_sphere", size, &[o]));
-    let off = common::render_on(&ctx, &common::scene("eikonal_sphere", size, &[o, "render.eikonal.light=false"]));
+    // Branch `eikview`: exit rays see the floor through the ball by default; "off" keeps the
+    // ball black here, so that the mask below selects the floor seen directly.
+    let off = common::render_on(
+        &ctx,
+        &common::scene("eikonal_sphere", size, &[o, "render.eikonal.light=false", "render.eikonal.nearby=\"off\""]),
+    );
     // Floor pixels: lit in the direct-light render (the ball's pixels and the sky are black).
     let rmse = |clamp: f32| {
         let (mut n, mut e_on, mut e_off) = (0usize, 0f64, 0f64);

@@ -114,10 +114,11 @@ fn eikonal_sphere_ball_shows_the_floor() {
 /// floor height (exit rays grazing the floor plane and running parallel to the impostor
 /// rectangle's plane), a volume of n < 1 (rays bent away from the normal, total internal
 /// reflection from outside), and a ball whose box stands on the floor (the floor inside the
-/// box: every march step is tested against it), in both modes.
+/// box: every march step is tested against it), in both modes. With synchronization
+/// validation: the impostor pass writes what the view pass reads.
 #[test]
 fn exit_rays_meeting_geometry_stay_finite() {
-    let ctx = common::context(false);
+    let ctx = common::context(true);
     let small = ["volume.resolution=[32, 32, 32]", "render.eikonal.light_patches=32"];
     let cases: [&[&str]; 4] = [
         &["camera.position=[0, 0.001, 5]", "camera.target=[0, 0.001, 0]"],
