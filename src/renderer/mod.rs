@@ -624,15 +624,6 @@ impl Renderer {
 
     fn read_image(&mut self, id: ImageId, bytes_per_texel: u64) -> Result<Vec<u8>, RenderError> {
         self.finish()?;
-        let (w, h) = (self.targets.width as u64, self.targets.height as u64);
-        let buffer = Buffer::new(
-            &self.ctx,
-            "readback",
-            w * h * bytes_per_texel,
-            vk::BufferUsageFlags::TRANSFER_DST,
-            MemoryLocation::GpuToCpu,
-        )?;
-        let buffer_id = self.graph.register_buffer(&buffer);
         let image = if id == self.targets.hdr_id {
             &self.targets.hdr
         } else if id == self.targets.ldr_id {
@@ -640,13 +631,7 @@ impl Renderer {
         } else {
             self.passes.debug_targets().find(|d| d.id == id).map(|d| &d.image).unwrap_or(&self.targets.ldr)
         };
-        let graph = &mut self.graph;
-        self.ctx.one_shot(|cmd| {
-            graph.access_now(cmd, &[(id, Access::TransferRead)], &[(buffer_id, Access::TransferWrite)]);
-            cmd.copy_image_to_buffer(image, &buffer);
-            graph.access_now(cmd, &[], &[(buffer_id, Access::HostRead)]);
-        })?;
-        Ok(buffer.read().to_vec())
+        Ok(self.graph.read_back(&self.ctx, image, id, bytes_per_texel, Access::TransferRead)?)
     }
 
     /// Linear radiance, RGBA f32, row 0 at the top.
@@ -668,24 +653,9 @@ impl Renderer {
             return Ok(None);
         }
         self.finish()?;
-        let atlas = &self.targets.caustic_atlas;
-        let texels = atlas.desc.width as u64 * atlas.desc.height as u64 * atlas.layers() as u64;
-        let buffer = Buffer::new(
-            &self.ctx,
-            "caustic_readback",
-            texels * 16,
-            vk::BufferUsageFlags::TRANSFER_DST,
-            MemoryLocation::GpuToCpu,
-        )?;
-        let buffer_id = self.graph.register_buffer(&buffer);
-        let id = self.targets.caustic_atlas_id;
-        let graph = &mut self.graph;
-        self.ctx.one_shot(|cmd| {
-            graph.access_now(cmd, &[(id, Access::TransferRead)], &[(buffer_id, Access::TransferWrite)]);
-            cmd.copy_image_to_buffer(atlas, &buffer);
-            graph.access_now(cmd, &[(id, Access::FragmentSampled)], &[(buffer_id, Access::HostRead)]);
-        })?;
-        let values: &[[f32; 4]] = bytemuck::cast_slice(buffer.read());
+        let (atlas, id) = (&self.targets.caustic_atlas, self.targets.caustic_atlas_id);
+        let bytes = self.graph.read_back(&self.ctx, atlas, id, 16, Access::FragmentSampled)?;
+        let values: &[[f32; 4]] = bytemuck::cast_slice(&bytes);
         let mut sum = [0f64; 3];
         for v in values {
             for c in 0..3 {
@@ -719,30 +689,13 @@ impl Renderer {
             return Ok(None);
         };
         let r = p.refractors();
-        let (image, id) = (&r.layers[0].0, r.layers[0].1);
-        let texels = image.desc.width as u64 * image.desc.height as u64 * image.layers() as u64;
-        let buffer = Buffer::new(
-            &self.ctx,
-            "visible_readback",
-            texels * 16,
-            vk::BufferUsageFlags::TRANSFER_DST,
-            MemoryLocation::GpuToCpu,
-        )?;
-        let buffer_id = self.graph.register_buffer(&buffer);
+        let (image, id, visible_id) = (&r.layers[0].0, r.layers[0].1, r.visible_id);
         let graph = &mut self.graph;
-        let visible_id = r.visible_id;
-        self.ctx.one_shot(|cmd| {
-            graph.access_now(
-                cmd,
-                &[(id, Access::TransferRead)],
-                &[(buffer_id, Access::TransferWrite), (visible_id, Access::HostRead)],
-            );
-            cmd.copy_image_to_buffer(image, &buffer);
-            graph.access_now(cmd, &[], &[(buffer_id, Access::HostRead)]);
-        })?;
+        self.ctx.one_shot(|cmd| graph.access_now(cmd, &[], &[(visible_id, Access::HostRead)]))?;
+        let bytes = self.graph.read_back(&self.ctx, image, id, 16, Access::TransferRead)?;
         let faces = image.layers() as usize;
         let per_face = (image.desc.width * image.desc.height) as usize;
-        let front: &[[f32; 4]] = bytemuck::cast_slice(buffer.read());
+        let front: &[[f32; 4]] = bytemuck::cast_slice(&bytes);
         let covered =
             (0..faces).map(|f| front[f * per_face..(f + 1) * per_face].iter().filter(|t| t[3] > 0.0).count() as u32);
         let visible: &[u32] = bytemuck::cast_slice(r.visible.read());
@@ -765,22 +718,8 @@ impl Renderer {
             [(&p.photons.0, p.photons.1), (&p.flux.0, p.flux.1), (&p.counts.0, p.counts.1), (&c.textures, c.id)];
         let mut out = Vec::new();
         for (image, id) in images {
-            let texels = image.desc.width as u64 * image.desc.height as u64 * image.layers() as u64;
-            let buffer = Buffer::new(
-                &self.ctx,
-                "photon_readback",
-                texels * 16,
-                vk::BufferUsageFlags::TRANSFER_DST,
-                MemoryLocation::GpuToCpu,
-            )?;
-            let buffer_id = self.graph.register_buffer(&buffer);
-            let graph = &mut self.graph;
-            self.ctx.one_shot(|cmd| {
-                graph.access_now(cmd, &[(id, Access::TransferRead)], &[(buffer_id, Access::TransferWrite)]);
-                cmd.copy_image_to_buffer(image, &buffer);
-                graph.access_now(cmd, &[(id, Access::FragmentSampled)], &[(buffer_id, Access::HostRead)]);
-            })?;
-            out.push((image.desc.width, bytemuck::pod_collect_to_vec::<u8, [f32; 4]>(buffer.read())));
+            let bytes = self.graph.read_back(&self.ctx, image, id, 16, Access::FragmentSampled)?;
+            out.push((image.desc.width, bytemuck::pod_collect_to_vec::<u8, [f32; 4]>(&bytes)));
         }
         let mut it = out.into_iter();
         let mut next = || it.next().unwrap();
