@@ -179,7 +179,7 @@ pub fn measure(ctx: &Arc<GpuContext>, scene: &Scene, args: &MeasureArgs, referen
     let (passes, frame) = summarize(&frames);
     let hdr = renderer.read_hdr()?;
     let ldr = renderer.read_ldr()?;
-    let ref_ldr = output::tonemap(reference, scene.render.exposure);
+    let ref_ldr = output::tonemap_scene(reference, &scene.render);
     let (errors, heatmap) =
         ErrorMetrics::between(&hdr, reference, &ldr, &ref_ldr, scene.camera.width, scene.camera.height);
     Ok(Measurement { passes, frame, errors, hdr, ldr, heatmap })
@@ -254,7 +254,7 @@ pub fn run(args: CompareArgs) -> Result<()> {
     eprintln!("wrote FLIP heat map {}", heat_path.display());
     if let Some((t, r)) = image_outs {
         output::write_png(t, w, h, &m.ldr)?;
-        output::write_png(r, w, h, &output::tonemap(&reference, scene.render.exposure))?;
+        output::write_png(r, w, h, &output::tonemap_scene(&reference, &scene.render))?;
     }
     if let Some(out) = json_out {
         let techniques = serde_json::json!({

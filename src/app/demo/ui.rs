@@ -148,6 +148,7 @@ fn technique_value<'a>(scene: &'a Scene, key: &str, accepted: &'a [&'a str]) -> 
         "refraction" => &scene.render.refraction,
         "reflection" => &scene.render.reflection,
         "caustics" => &scene.render.caustics,
+        "tonemap" => &scene.render.tonemap,
         _ => accepted.first().copied().unwrap_or(""),
     }
 }
