@@ -219,12 +219,7 @@ impl TonemapPass {
         let p = &a.params;
         let push = AdaptPush {
             size: [targets.width, targets.height, a.groups[0] * a.groups[1], slot as u32],
-            params: [
-                dt.map_or(-1.0, |t| t.max(0.0)),
-                p.delta,
-                p.key.unwrap_or(0.0),
-                p.white.unwrap_or(0.0),
-            ],
+            params: [dt.map_or(-1.0, |t| t.max(0.0)), p.delta, p.key.unwrap_or(0.0), p.white.unwrap_or(0.0)],
             params2: [p.tau_rod, p.tau_cone, p.luminance_scale, a.exposure],
         };
         let (set, pipeline, groups) = (a.set, &a.log_average, a.groups);

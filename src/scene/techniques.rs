@@ -633,14 +633,7 @@ pub struct TonemapAdaptiveParams {
 
 impl Default for TonemapAdaptiveParams {
     fn default() -> Self {
-        TonemapAdaptiveParams {
-            white: None,
-            key: None,
-            delta: 1e-4,
-            tau_rod: 0.4,
-            tau_cone: 0.1,
-            luminance_scale: 1.0,
-        }
+        TonemapAdaptiveParams { white: None, key: None, delta: 1e-4, tau_rod: 0.4, tau_cone: 0.1, luminance_scale: 1.0 }
     }
 }
 
