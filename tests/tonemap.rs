@@ -78,6 +78,12 @@ fn gpu_reduction_and_operator_match_the_cpu_on_wide_dynamic_range() {
         let differing = ldr.iter().zip(&clamp).filter(|(a, b)| (**a as i32 - **b as i32).abs() > 2).count();
         assert!(differing > ldr.len() / 10, "{name}: only {differing} codes differ from the clamp rule");
     }
+    // 257 x 225 pixels (fewer than 256^2): 9 x 8 = 72 tiles of 32^2, more than adapt.comp's
+    // 64 invocations, so its strided loop over the tiles and the partial tiles at the right
+    // and bottom edges are both exercised.
+    let s = common::scene("sphere_env", 64, &["render.tonemap=adaptive", "camera.width=257", "camera.height=225"]);
+    let (hdr, ldr, stats) = render(&ctx, &s);
+    assert_matches_cpu("sphere_env 257x225", &s, &hdr, &ldr, stats);
     // A fixed key and L_white go through the same path.
     let fixed = ["render.tonemap_adaptive.key=0.18", "render.tonemap_adaptive.white=2.5"];
     let s = common::scene("caustic_sphere", 64, &["render.tonemap=adaptive", fixed[0], fixed[1]]);

@@ -1,8 +1,8 @@
 #version 450
 // Adaptive tone map, step 1 of the log-average luminance (Reinhard et al. 2002, Eq. 1:
-// L_avg = exp(mean(log(delta + L_w)))): each workgroup sums log(delta + L_w) over its
-// TONEMAP_GROUP^2 pixels by a tree in shared memory and keeps the largest L_w, for
-// adapt.comp to finish. Pixels outside the image add nothing.
+// L_avg = exp(mean(log(delta + L_w)))): each invocation sums log(delta + L_w) over its
+// TONEMAP_BLOCK^2 pixels, then the workgroup sums its invocations by a tree in shared memory
+// and keeps the largest L_w, for adapt.comp to finish. Pixels outside the image add nothing.
 #include "adaptive.glsl"
 layout(local_size_x = TONEMAP_GROUP, local_size_y = TONEMAP_GROUP) in;
 layout(push_constant) uniform Push { AdaptPush p; } push;
@@ -14,14 +14,18 @@ shared float s_log[N];
 shared float s_max[N];
 
 void main() {
-    uvec2 p = gl_GlobalInvocationID.xy;
+    uvec2 base = gl_GlobalInvocationID.xy * TONEMAP_BLOCK;
     uint i = gl_LocalInvocationIndex;
     float l = 0.0, m = 0.0;
-    if (p.x < push.p.size.x && p.y < push.p.size.y) {
-        vec3 c = tonemap_input(texelFetch(hdr, ivec2(p), 0).rgb);
-        float Y = min(push.p.params2.z * tonemap_luminance(c), TONEMAP_MAX_LUMINANCE);
-        l = log(push.p.params.y + Y);
-        m = Y;
+    for (uint y = 0u; y < TONEMAP_BLOCK; ++y) {
+        for (uint x = 0u; x < TONEMAP_BLOCK; ++x) {
+            uvec2 p = base + uvec2(x, y);
+            if (p.x >= push.p.size.x || p.y >= push.p.size.y) continue;
+            vec3 c = tonemap_input(texelFetch(hdr, ivec2(p), 0).rgb);
+            float Y = min(push.p.params2.z * tonemap_luminance(c), TONEMAP_MAX_LUMINANCE);
+            l += log(push.p.params.y + Y);
+            m = max(m, Y);
+        }
     }
     s_log[i] = l;
     s_max[i] = m;

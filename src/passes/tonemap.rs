@@ -8,7 +8,7 @@
 //! 2005] is applied prior to display"). Krawczyk, Myszkowski & Seidel 2005 ("Perceptual
 //! effects in real-time tone mapping", SCCG) build on Reinhard et al. 2002's photographic
 //! operator; what is implemented here, per frame, on the GPU:
-//! - `tonemap_log_average` (glsl/tonemap/log_average.comp): per 16x16 tile, the sum of
+//! - `tonemap_log_average` (glsl/tonemap/log_average.comp): per 32x32 tile, the sum of
 //!   log(delta + L_w) and the largest L_w, by a tree in shared memory;
 //! - `tonemap_adapt` (glsl/tonemap/adapt.comp): the log-average luminance
 //!   L_avg = exp(mean(log(delta + L_w))) (Reinhard et al. 2002, Eq. 1); the adapted luminance
@@ -20,6 +20,7 @@
 //! - `tonemap` (glsl/tonemap/adaptive.frag): L = exposure * a / L_a * L_w (Reinhard et al.
 //!   2002, Eq. 2), L_d = L (1 + L / L_white^2) / (1 + L) (Eq. 4), colour scaled by L_d / L_w,
 //!   then the sRGB OETF.
+//!
 //! No CPU readback is in the loop: the state lives in a 2x1 image on the device; the host
 //! only reads the statistics for display after a frame's fence.
 //!
@@ -39,7 +40,7 @@ use crate::renderer::targets::Targets;
 use crate::scene::techniques::TonemapAdaptiveParams;
 use crate::{
     BINDING_HDR, BINDING_TONEMAP_STATE, TONEMAP_BINDING_HDR, TONEMAP_BINDING_PARTIALS, TONEMAP_BINDING_STATE,
-    TONEMAP_BINDING_STATS, TONEMAP_GROUP,
+    TONEMAP_BINDING_STATS, TONEMAP_BLOCK, TONEMAP_GROUP,
 };
 
 use super::fullscreen::{FullscreenDesc, FullscreenPass};
@@ -130,7 +131,8 @@ impl TonemapPass {
             &ImageDesc::d2("tonemap_state", vk::Format::R32G32B32A32_SFLOAT, 2, 1, U::STORAGE | U::SAMPLED),
         )?;
         let state_id = graph.register_image(&state);
-        let groups = [targets.width.div_ceil(TONEMAP_GROUP), targets.height.div_ceil(TONEMAP_GROUP)];
+        let tile = TONEMAP_GROUP * TONEMAP_BLOCK;
+        let groups = [targets.width.div_ceil(tile), targets.height.div_ceil(tile)];
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         let partials = Buffer::new(
             ctx,
