@@ -231,6 +231,7 @@ fn renderer_records_exactly_the_planned_passes() {
         ("room_glass", "render.refraction=impostor"),
         ("caustic_sphere", "render.caustics=caustics_map"),
         ("metal_ring", "render.caustics=caustics_map"),
+        ("caustic_sphere", "render.tonemap=adaptive"),
     ] {
         let o: Vec<&str> = [o].into_iter().filter(|o| !o.is_empty()).collect();
         let s = common::scene(name, 32, &o);

@@ -180,7 +180,9 @@ normal = [0, 1, 0]
 
 #[test]
 fn adapted_luminance_follows_the_log_average_with_the_rod_cone_time_constant() {
-    let ctx = common::context(false);
+    // Synchronization validation on: the state image carries L_a from frame to frame (two
+    // frames in flight) and the host reads each slot's statistics after its fence.
+    let ctx = common::context(true);
     let s = common::scene("caustic_sphere", 48, &["render.tonemap=adaptive"]);
     let p = TonemapAdaptiveParams::from_settings(&s.render).unwrap();
     let mut r = Renderer::new(&ctx, &s).unwrap();

@@ -97,7 +97,7 @@ pub struct GpuArgs {
 pub struct RenderArgs {
     #[command(flatten)]
     pub scene: SceneArgs,
-    /// Output PNG (tone-mapped sRGB).
+    /// Output PNG (tone-mapped sRGB: render.tonemap = "clamp" (default) or "adaptive").
     #[arg(short, long, default_value = "prism.png")]
     pub output: PathBuf,
     /// Also write linear radiance to this OpenEXR file.
