@@ -162,10 +162,15 @@ pub fn adaptive_stats(rgba: &[f32], p: &TonemapAdaptiveParams, exposure: f32) ->
 /// colour scaled by L_d / L_w, sRGB. RGBA f32 in, RGBA8 out, and the state it used.
 pub fn tonemap_adaptive(rgba: &[f32], p: &TonemapAdaptiveParams, exposure: f32) -> (Vec<u8>, AdaptiveStats) {
     let s = adaptive_stats(rgba, p, exposure);
+    (tonemap_adaptive_with(rgba, p, exposure, &s), s)
+}
+
+/// [`tonemap_adaptive`] with a given state (L_a, key, L_white), e.g. another image's:
+/// compare and report map the technique's image with the reference's state.
+pub fn tonemap_adaptive_with(rgba: &[f32], p: &TonemapAdaptiveParams, exposure: f32, s: &AdaptiveStats) -> Vec<u8> {
     let scale = exposure * s.key * p.luminance_scale / s.l_adapted;
     let inv_white2 = 1.0 / (s.white * s.white);
-    let out = rgba
-        .chunks_exact(4)
+    rgba.chunks_exact(4)
         .flat_map(|px| {
             let c = [tonemap_input(px[0]), tonemap_input(px[1]), tonemap_input(px[2])];
             let y = luminance(c);
@@ -177,6 +182,5 @@ pub fn tonemap_adaptive(rgba: &[f32], p: &TonemapAdaptiveParams, exposure: f32) 
             };
             [srgb8(c[0] * ratio), srgb8(c[1] * ratio), srgb8(c[2] * ratio), 255]
         })
-        .collect();
-    (out, s)
+        .collect()
 }
