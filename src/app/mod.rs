@@ -214,6 +214,12 @@ fn render(args: RenderArgs) -> Result<()> {
             eprintln!("patches after each step: {:?}", l.patch_counts);
         }
     }
+    if let Some(t) = renderer.tonemap_stats() {
+        eprintln!(
+            "adaptive tone map: L_avg {:.4e}, adapted {:.4e} (converged), key {:.4}, L_white {:.4}",
+            t.l_avg, t.l_adapted, t.key, t.white
+        );
+    }
     let total = timing.first().map(|t| t.total_ms()).unwrap_or(0.0);
     eprintln!(
         "wrote {} ({w}x{h}, scene {}, {} on {}, GPU frame {total:.2} ms)",
