@@ -1,11 +1,11 @@
 #version 450
 // Adaptive tone map, step 2: sum the partial sums of log_average.comp into the log-average
 // luminance L_avg (Reinhard et al. 2002, Eq. 1), let the adapted luminance L_a follow it
-// (Krawczyk et al. 2005, temporal adaptation):
+// (Krawczyk et al. 2005, §2.2 Eq. 5, §2.3 Eq. 7, §3.2 Eq. 12):
 //   L_a(t) = L_a(t - T) + (L_avg - L_a(t - T)) (1 - exp(-T / tau)),
 //   tau = sigma tau_rod + (1 - sigma) tau_cone, sigma = 0.04 / (0.04 + L_a)  (rods' share)
 // with T the time since the last frame (push; T < 0: converged, L_a = L_avg, as for every
-// headless render), the key a = 1.03 - 2 / (2 + log10(L_a + 1)) (Krawczyk et al. 2005)
+// headless render), the key a = 1.03 - 2 / (2 + log10(L_a + 1)) (Krawczyk et al. 2005, Eq. 11)
 // unless the scene fixes it, and L_white. Writes the state texels that adaptive.frag reads
 // and this frame slot's entry of the host-visible statistics.
 #include "adaptive.glsl"

@@ -12,11 +12,16 @@
 //!   log(delta + L_w) and the largest L_w, by a tree in shared memory;
 //! - `tonemap_adapt` (glsl/tonemap/adapt.comp): the log-average luminance
 //!   L_avg = exp(mean(log(delta + L_w))) (Reinhard et al. 2002, Eq. 1); the adapted luminance
-//!   L_a(t) = L_a(t-T) + (L_avg - L_a(t-T)) (1 - exp(-T / tau)) with the rods' and the cones'
-//!   time constants blended by the rods' sensitivity (Krawczyk et al. 2005, temporal
-//!   adaptation; T = the frame time in the window, converged L_a = L_avg for headless
-//!   renders); the key a = 1.03 - 2 / (2 + log10(L_a + 1)) (Krawczyk et al. 2005's automatic
-//!   key) or the scene's; L_white (the scene's or the largest scaled luminance, at least 1);
+//!   L_a(t) = L_a(t-T) + (L_avg - L_a(t-T)) (1 - exp(-T / tau)) (Krawczyk et al. 2005, §2.2,
+//!   Eq. 5) with tau_rod = 0.4 s and tau_cone = 0.1 s (Eq. 6) blended by the rods'
+//!   sensitivity sigma(Y) = 0.04 / (0.04 + Y) (§2.3, Eq. 7) as tau = sigma tau_rod +
+//!   (1 - sigma) tau_cone (§3.2, Eq. 12), T = the frame time in the window, converged
+//!   L_a = L_avg for headless renders; the key a = 1.03 - 2 / (2 + log10(L_a + 1)) (§3.1,
+//!   Eq. 11) or the scene's; L_white (the scene's or the largest scaled luminance, at least 1).
+//!   Krawczyk's full text is not in ../shared: the formulas were checked against the issue
+//!   and a public implementation that cites these section and equation numbers. Which Y
+//!   Eq. 12 takes is our choice: the adapted luminance of the previous frame (the state of
+//!   the eye whose receptors set the speed), not the new frame's average;
 //! - `tonemap` (glsl/tonemap/adaptive.frag): L = exposure * a / L_a * L_w (Reinhard et al.
 //!   2002, Eq. 2), L_d = L (1 + L / L_white^2) / (1 + L) (Eq. 4), colour scaled by L_d / L_w,
 //!   then the sRGB OETF.

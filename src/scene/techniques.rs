@@ -617,13 +617,14 @@ pub struct TonemapAdaptiveParams {
     /// the largest scaled luminance of the frame, at least 1 (Reinhard's own choice is the
     /// largest; with 1 the curve is the identity for images that never exceed 1).
     pub white: Option<f32>,
-    /// The key a; `None` ("auto"): Krawczyk et al. 2005's a = 1.03 - 2 / (2 + log10(L_a + 1)).
+    /// The key a; `None` ("auto"): Krawczyk et al. 2005's a = 1.03 - 2 / (2 + log10(L_a + 1))
+    /// (§3.1, Eq. 11).
     pub key: Option<f32>,
     /// The delta of the log-average L_avg = exp(mean(log(delta + L_w))), in cd/m^2: keeps
     /// black pixels from sending the average to 0 (Reinhard et al. 2002, Eq. 1).
     pub delta: f32,
-    /// Time constants of the rods and the cones in seconds (Krawczyk et al. 2005: 0.4 s and
-    /// 0.1 s), blended by the rods' sensitivity 0.04 / (0.04 + L_a).
+    /// Time constants of the rods and the cones in seconds (Krawczyk et al. 2005, Eq. 6: 0.4 s
+    /// and 0.1 s), blended by the rods' sensitivity 0.04 / (0.04 + L_a) (Eqs. 7, 12).
     pub tau_rod: f32,
     pub tau_cone: f32,
     /// cd/m^2 per unit of the scene's radiance: the absolute scale that the key and the
