@@ -40,6 +40,21 @@ shared_constants! {
     BINDING_GBUF_ALBEDO: u32 = 1;
     BINDING_GBUF_DEPTH: u32 = 2;
     BINDING_HDR: u32 = 3;
+    // The adaptive tone map's state (scale, 1/L_white^2, ...) in set 1 of tonemap/adaptive.frag.
+    BINDING_TONEMAP_STATE: u32 = 4;
+
+    // The adaptive tone map's reduction kernels (glsl/tonemap/*.comp; src/passes/tonemap.rs):
+    // one set 0. A workgroup of TONEMAP_GROUP^2 invocations, each summing a TONEMAP_BLOCK^2
+    // block of pixels in a loop: a tile of (TONEMAP_GROUP TONEMAP_BLOCK)^2 pixels. Few
+    // invocations and a serial loop because every barrier of the shared-memory tree costs a
+    // CPU device (lavapipe) more than the pixels do: 16x16 invocations of one pixel each made
+    // tonemap_log_average 17x the tone map pass itself (caustic_sphere, 512^2).
+    TONEMAP_BINDING_HDR: u32 = 0;
+    TONEMAP_BINDING_PARTIALS: u32 = 1;
+    TONEMAP_BINDING_STATE: u32 = 2;
+    TONEMAP_BINDING_STATS: u32 = 3;
+    TONEMAP_GROUP: u32 = 8;
+    TONEMAP_BLOCK: u32 = 4;
 
     // Reference path tracer (src/reference, glsl/reference): one descriptor set.
     REF_BINDING_UNIFORMS: u32 = 0;

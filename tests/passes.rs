@@ -28,6 +28,22 @@ fn pass_lists_follow_the_scene() {
 }
 
 #[test]
+fn the_adaptive_tone_map_adds_its_reduction_only_when_named() {
+    // Default (clamp, SCENES.md's PNG rule): the tone map alone, on every scene.
+    for scene in ["sphere_env", "caustic_sphere", "eikonal_sphere"] {
+        let n = names(scene, &[]);
+        assert!(!n.iter().any(|p| p.starts_with("tonemap_")), "{scene}: {n:?}");
+        assert_eq!(n.last(), Some(&"tonemap"));
+        assert_eq!(names(scene, &["render.tonemap=clamp"]), n);
+    }
+    // Adaptive (Ihrke et al. 2007 §5.3): the log-average reduction and the adaptation first.
+    assert_eq!(
+        names("sphere_env", &["render.tonemap=adaptive"]),
+        ["gbuffer", "deferred_shading", "refraction_single", "tonemap_log_average", "tonemap_adapt", "tonemap"]
+    );
+}
+
+#[test]
 fn a_scene_without_refractors_records_no_refraction_pass() {
     // Turning sphere_nearby's glass into a diffuse material removes the refraction pass.
     let n = names("sphere_nearby", &["objects.3.material=\"bunny\""]);
@@ -215,6 +231,7 @@ fn renderer_records_exactly_the_planned_passes() {
         ("room_glass", "render.refraction=impostor"),
         ("caustic_sphere", "render.caustics=caustics_map"),
         ("metal_ring", "render.caustics=caustics_map"),
+        ("caustic_sphere", "render.tonemap=adaptive"),
     ] {
         let o: Vec<&str> = [o].into_iter().filter(|o| !o.is_empty()).collect();
         let s = common::scene(name, 32, &o);

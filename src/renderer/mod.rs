@@ -28,10 +28,10 @@ use crate::passes::refraction_wyman::WymanPass;
 use crate::passes::refractor_layers::DebugTarget;
 use crate::passes::shadow_map::{ShadowMapPass, FAR_DISTANCE};
 use crate::passes::specular_single::{Mode, SpecularSinglePass};
-use crate::passes::tonemap::TonemapPass;
+use crate::passes::tonemap::{AdaptiveStats, TonemapPass};
 use crate::scene::techniques::{
     CausticsMapParams, EikonalParams, Flux, HuQinParams, ImpostorLightmapParams, ImpostorParams, PhotonBufferParams,
-    WymanParams,
+    TonemapAdaptiveParams, WymanParams,
 };
 use crate::scene::{Camera, Scene};
 use crate::{
@@ -152,6 +152,11 @@ pub struct Renderer {
     pending: Vec<Option<(u64, Vec<TimestampQuery>)>>,
     completed: Vec<FrameTiming>,
     frame_index: u64,
+    /// Seconds since the last frame for the adaptive tone map's temporal adaptation; `None`:
+    /// converged (headless). The first frame of a renderer is always converged.
+    tonemap_dt: Option<f32>,
+    /// What the adaptive tone map derived in the last completed frame.
+    tonemap_stats: Option<AdaptiveStats>,
     ctx: Arc<GpuContext>,
 }
 
@@ -365,6 +370,13 @@ impl Renderer {
             }
             _ => None,
         };
+        let tonemap = if plan::has(&plan, plan::TONEMAP_ADAPT) {
+            let p = TonemapAdaptiveParams::from_settings(&scene.render)
+                .map_err(|error| RenderError::Param { technique: "tonemap_adaptive", error })?;
+            Some((p, scene.render.exposure))
+        } else {
+            None
+        };
         let objects = (0..scene.objects.len())
             .map(|i| ObjectState {
                 name: scene.objects[i].name.clone(),
@@ -404,7 +416,7 @@ impl Renderer {
             eikonal,
             photon_buffer,
             photon_caustics,
-            tonemap: TonemapPass::new(ctx, &frame_layout, &targets, &nearest)?,
+            tonemap: TonemapPass::new(ctx, &frame_layout, &targets, &nearest, &mut graph, tonemap, FRAMES_IN_FLIGHT)?,
         };
 
         let mut uniforms = FrameUniforms {
@@ -439,6 +451,8 @@ impl Renderer {
             pending: vec![None; FRAMES_IN_FLIGHT],
             completed: Vec::new(),
             frame_index: 0,
+            tonemap_dt: None,
+            tonemap_stats: None,
             ctx: ctx.clone(),
         })
     }
@@ -479,8 +493,23 @@ impl Renderer {
         }
     }
 
+    /// Let the adaptive tone map adapt over time: `Some(seconds since the last frame)` (the
+    /// demo window), or `None` for the converged state of every headless render.
+    pub fn set_tonemap_time_step(&mut self, dt: Option<f32>) {
+        self.tonemap_dt = dt;
+    }
+
+    /// L_avg, the adapted luminance, the key and L_white of the last completed frame (the
+    /// adaptive tone map only).
+    pub fn tonemap_stats(&self) -> Option<AdaptiveStats> {
+        self.tonemap_stats
+    }
+
     fn collect_slot(&mut self, slot: usize) -> Result<(), RenderError> {
         if let Some((frame, queries)) = self.pending[slot].take() {
+            if let Some(s) = self.passes.tonemap.stats(slot) {
+                self.tonemap_stats = Some(s);
+            }
             let pool = &self.timestamps[slot];
             let last = queries.iter().map(|q| q.end + 1).max().unwrap_or(0);
             if let Some(ticks) = pool.read_ticks(last)? {
@@ -550,6 +579,7 @@ impl Renderer {
         if let Some(p) = &mut self.passes.impostor_lightmap {
             p.begin_frame();
         }
+        let dt = if self.frame_index == 0 { None } else { self.tonemap_dt };
         let Renderer { passes, frame_sets, scene, targets, timestamps, commands, graph, .. } = self;
         let shadow_atlas = passes.shadow_map.as_ref().map(|_| targets.shadow_atlas_id);
         let frame_set = frame_sets[slot];
@@ -596,7 +626,7 @@ impl Renderer {
         if let Some(p) = &passes.eikonal {
             p.record(&mut frame, scene, targets, frame_set);
         }
-        passes.tonemap.record(&mut frame, targets, frame_set);
+        passes.tonemap.record(&mut frame, targets, frame_set, slot, dt);
         debug_assert_eq!(frame.pass_names(), self.plan.iter().map(|p| p.name).collect::<Vec<_>>());
         extra(&mut frame, FinalImage { ldr: &targets.ldr, ldr_id: targets.ldr_id });
         // `cmd` borrows `commands` until its last use here.

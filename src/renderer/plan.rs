@@ -10,6 +10,10 @@ pub const DEFERRED_SHADING: &str = "deferred_shading";
 pub const REFRACTION_SINGLE: &str = "refraction_single";
 pub const REFLECTION_SINGLE: &str = "reflection_single";
 pub const TONEMAP: &str = "tonemap";
+/// The adaptive tone map (src/passes/tonemap.rs; `render.tonemap = "adaptive"`): the
+/// log-average luminance by a reduction on the GPU, then the adaptation state.
+pub const TONEMAP_LOG_AVERAGE: &str = "tonemap_log_average";
+pub const TONEMAP_ADAPT: &str = "tonemap_adapt";
 /// Wyman 2005 (src/passes/refraction_wyman.rs): the refractor layers, then the shading.
 pub const REFRACTION_WYMAN_LAYERS: &str = "refraction_wyman_layers";
 pub const REFRACTION_WYMAN: &str = "refraction_wyman";
@@ -166,7 +170,22 @@ pub fn plan(scene: &Scene) -> Vec<PlannedPass> {
             reason: format!("volume {} ({nx}x{ny}x{nz}): curved view rays, Ihrke et al. 2007 §4.1, §5.3", v.name),
         });
     }
-    passes.push(PlannedPass { name: TONEMAP, reason: "linear radiance -> sRGB PNG output".into() });
+    if scene.render.tonemap == "adaptive" {
+        passes.push(PlannedPass {
+            name: TONEMAP_LOG_AVERAGE,
+            reason: "log-average luminance of the HDR image, reduced on the GPU (render.tonemap = \"adaptive\")".into(),
+        });
+        passes.push(PlannedPass {
+            name: TONEMAP_ADAPT,
+            reason: "adapted luminance, key and L_white (Krawczyk et al. 2005, Ihrke et al. 2007 §5.3)".into(),
+        });
+        passes.push(PlannedPass {
+            name: TONEMAP,
+            reason: "linear radiance -> sRGB: Reinhard's operator on the adapted luminance".into(),
+        });
+    } else {
+        passes.push(PlannedPass { name: TONEMAP, reason: "linear radiance -> sRGB PNG output".into() });
+    }
     passes
 }
 

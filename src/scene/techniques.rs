@@ -604,7 +604,76 @@ pub fn check(technique: &str, t: &toml::Table) -> Result<(), ParamError> {
         "impostor" => ImpostorParams::from_table(Some(t)).map(|_| ()),
         "impostor_lightmap" => ImpostorLightmapParams::from_table(Some(t)).map(|_| ()),
         "eikonal" => EikonalParams::from_table(Some(t)).map(|_| ()),
+        "tonemap_adaptive" => TonemapAdaptiveParams::from_table(Some(t)).map(|_| ()),
         _ => Ok(()),
+    }
+}
+
+/// `[render.tonemap_adaptive]`: the adaptive tone map of `render.tonemap = "adaptive"`
+/// (Ihrke et al. 2007 §5.3 after Krawczyk, Myszkowski & Seidel 2005; src/passes/tonemap.rs).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TonemapAdaptiveParams {
+    /// Reinhard et al. 2002's L_white in units of the scaled luminance; `None` ("auto"):
+    /// the largest scaled luminance of the frame, at least 1 (Reinhard's own choice is the
+    /// largest; with 1 the curve is the identity for images that never exceed 1).
+    pub white: Option<f32>,
+    /// The key a; `None` ("auto"): Krawczyk et al. 2005's a = 1.03 - 2 / (2 + log10(L_a + 1))
+    /// (§3.1, Eq. 11).
+    pub key: Option<f32>,
+    /// The delta of the log-average L_avg = exp(mean(log(delta + L_w))), in cd/m^2: keeps
+    /// black pixels from sending the average to 0 (Reinhard et al. 2002, Eq. 1).
+    pub delta: f32,
+    /// Time constants of the rods and the cones in seconds (Krawczyk et al. 2005, Eq. 6: 0.4 s
+    /// and 0.1 s), blended by the rods' sensitivity 0.04 / (0.04 + L_a) (Eqs. 7, 12).
+    pub tau_rod: f32,
+    pub tau_cone: f32,
+    /// cd/m^2 per unit of the scene's radiance: the absolute scale that the key and the
+    /// rod/cone blend depend on (1: radiance read as cd/m^2).
+    pub luminance_scale: f32,
+}
+
+impl Default for TonemapAdaptiveParams {
+    fn default() -> Self {
+        TonemapAdaptiveParams { white: None, key: None, delta: 1e-4, tau_rod: 0.4, tau_cone: 0.1, luminance_scale: 1.0 }
+    }
+}
+
+impl TonemapAdaptiveParams {
+    pub const KEYS: &'static [&'static str] = &["white", "key", "delta", "tau_rod", "tau_cone", "luminance_scale"];
+
+    pub fn from_table(t: Option<&toml::Table>) -> Result<Self, ParamError> {
+        let mut p = TonemapAdaptiveParams::default();
+        // "auto" or a number in range.
+        let auto_or = |key: &str, v: &toml::Value, lo: f64, hi: f64| -> Result<Option<f32>, ParamError> {
+            if v.as_str() == Some("auto") {
+                return Ok(None);
+            }
+            number(key, v, lo, hi).map(Some).map_err(|e| ParamError {
+                message: format!("`{key}` must be \"auto\" or a number from {lo:e} to {hi:e}, not {v}"),
+                ..e
+            })
+        };
+        for (key, v) in t.into_iter().flatten() {
+            match key.as_str() {
+                // Below 1e-3 almost every pixel maps to white; above 1e6 the curve is L/(1+L).
+                "white" => p.white = auto_or(key, v, 1e-3, 1e6)?,
+                // Reinhard's keys run from 0.045 (low key) to 0.72 (high key); 0 would be black.
+                "key" => p.key = auto_or(key, v, 1e-3, 4.0)?,
+                // 0 would let one black pixel make L_avg 0 (log 0); above 1e3 cd/m^2 it
+                // dominates every luminance a scene is lit with.
+                "delta" => p.delta = number(key, v, 1e-12, 1e3)?,
+                // 0 s is instant adaptation (allowed); an hour is a frozen state.
+                "tau_rod" => p.tau_rod = number(key, v, 0.0, 3600.0)?,
+                "tau_cone" => p.tau_cone = number(key, v, 0.0, 3600.0)?,
+                "luminance_scale" => p.luminance_scale = number(key, v, 1e-6, 1e6)?,
+                _ => return Err(unknown("tonemap_adaptive", key, Self::KEYS)),
+            }
+        }
+        Ok(p)
+    }
+
+    pub fn from_settings(r: &RenderSettings) -> Result<Self, ParamError> {
+        Self::from_table(r.params.get("tonemap_adaptive"))
     }
 }
 
