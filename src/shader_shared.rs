@@ -175,6 +175,9 @@ shared_constants! {
     BINDING_NEARBY_RECTS: u32 = 14;
     BINDING_NEARBY_TEXTURE: u32 = 15;
     MAX_NEARBY_RECTS: u32 = 8;
+    // Rectangle sets, one per OBJ_R (every dielectric, and the specular objects whose
+    // recursive impostor textures look up their own set), each of at most MAX_NEARBY_RECTS.
+    MAX_NEARBY_SETS: u32 = 8;
     // Eikonal light simulator (Ihrke et al. 2007 section 5.2; src/passes/eikonal_light.rs,
     // src/passes/histopyramid.rs). One descriptor set for every light/HistoPyramid kernel.
     LIGHT_BINDING_STATE: u32 = 0;
