@@ -254,3 +254,17 @@ fn recursive_refraction_is_finite_at_the_extremes() {
         }
     }
 }
+
+/// Synchronization validation over several frames with two recursion levels of dielectric
+/// textures (both balls' sets in one array pair, ping-ponged every level).
+#[test]
+fn recursive_refraction_has_no_sync_hazard() {
+    let ctx = context(true);
+    let mut r = prism::renderer::Renderer::new(&ctx, &two_balls(32, &["render.hu_qin.recursion_depth=2"])).unwrap();
+    for _ in 0..3 {
+        r.render_frame().unwrap();
+    }
+    assert_finite("recursion_depth 2", &r.read_hdr().unwrap());
+    drop(r);
+    common::assert_no_validation_errors(&ctx);
+}
