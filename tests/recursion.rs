@@ -268,3 +268,46 @@ fn recursive_refraction_has_no_sync_hazard() {
     drop(r);
     common::assert_no_validation_errors(&ctx);
 }
+
+/// The stated limits: with ten glass balls, at most MAX_NEARBY_SETS sets (the first eight
+/// dielectrics in scene order) of at most MAX_NEARBY_RECTS rectangles, the nearest kept; the
+/// other two balls are named as having no set and see the environment only. It renders
+/// (tiny textures) with finite radiance and no validation error.
+#[test]
+fn many_dielectrics_keep_the_stated_limits() {
+    // two_glass_balls' camera, light and materials; its objects replaced by a floor and ten
+    // balls in two rows.
+    let path = prism::scene::benchmark_scene_path("two_glass_balls");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let mut toml = text[..text.find("[[objects]]").unwrap()].to_string();
+    toml += "[[objects]]\nname = \"floor\"\nmaterial = \"checker\"\nshape = \"quad\"\ncenter = [0, -1, 0]\n";
+    toml += "size = [10, 10]\nnormal = [0, 1, 0]\n";
+    for i in 0..10 {
+        let (x, z) = ((i % 5) as f32 - 2.0, -((i / 5) as f32) * 1.2);
+        toml += &format!(
+            "[[objects]]\nname = \"ball{i}\"\nmaterial = \"glass\"\nshape = \"sphere\"\ncenter = [{x}, -0.6, {z}]\nradius = 0.4\n"
+        );
+    }
+    toml += "[render]\nrefraction = \"hu_qin\"\n";
+    let dir = std::env::temp_dir().join(format!("prism-recursion-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("ten_balls.toml");
+    std::fs::write(&file, toml).unwrap();
+    let o = ["camera.width=32", "camera.height=32", "render.hu_qin.impostor_resolution=16"].map(String::from);
+    let s = prism::scene::load(&file, &o).unwrap();
+    let layout = prism::passes::nearby_impostors::nearby_layout(&s, 1);
+    let max_sets = prism::MAX_NEARBY_SETS as usize;
+    assert_eq!(layout.sets.len(), max_sets);
+    assert_eq!(layout.sets.iter().map(|s| s.object).collect::<Vec<_>>(), (1..=max_sets).collect::<Vec<_>>());
+    assert_eq!(layout.without_set, [9, 10]);
+    for set in &layout.sets {
+        // 10 other objects (9 balls + the floor), the nearest 8 kept.
+        assert_eq!(set.count, prism::MAX_NEARBY_RECTS);
+        assert_eq!(set.dropped.len(), 2, "{set:?}");
+    }
+    let reason = prism::renderer::plan::plan(&s).into_iter().find(|p| p.name == "refraction_hu_qin_nearby").unwrap();
+    assert!(reason.reason.contains("ball8, ball9 without a rectangle set"), "{}", reason.reason);
+    let ctx = context(false);
+    let r = render_on(&ctx, &s);
+    assert_finite("ten balls", &r.hdr);
+}
