@@ -57,7 +57,7 @@ use crate::graph::{Frame, FrameGraph, ImageId};
 use crate::renderer::gpu_scene::GpuScene;
 use crate::renderer::targets::DEPTH_FORMAT;
 use crate::scene::{Material, Scene};
-use crate::{BINDING_NEARBY_RECTS, BINDING_NEARBY_TEXTURE};
+use crate::{BINDING_NEARBY_BACK, BINDING_NEARBY_RECTS, BINDING_NEARBY_TEXTURE};
 pub use crate::{MAX_NEARBY_RECTS, MAX_NEARBY_SETS};
 
 /// TEX_i (rgb radiance) and TEX_DEPTH_i (a: axial distance from O_R) in one layer.
@@ -377,6 +377,19 @@ pub struct NearbyDesc {
     pub correction_iterations: u32,
     pub correction_tolerance: f32,
     pub seed_samples: u32,
+    /// A dielectric OBJ_k's second interface in its texture: the Fig. 9 search against its
+    /// back faces in the rectangle's projection ([`BACK_PASS`]), else its bounding sphere.
+    pub back_layer_exit: bool,
+}
+
+/// The dielectric OBJ_k's back faces in their rectangles' parallel projections (normal and
+/// axial depth), rendered once per frame before level 0: the exit surface of Fig. 9's search.
+pub const BACK_PASS: &str = "refraction_hu_qin_nearby_back";
+
+/// Whether a rectangle of `layout` stands for a dielectric (whose texture refracts, so that
+/// [`BACK_PASS`] renders its back faces when `back_layer_exit` is on).
+pub fn has_dielectric_rect(scene: &Scene, layout: &NearbyLayout) -> bool {
+    layout.rects.iter().any(|r| is_dielectric(scene, r.object))
 }
 
 /// Passes of the recursion levels 1..=MAX_RECURSION (level 0 is `name` itself).
@@ -418,8 +431,15 @@ pub struct NearbyImpostors {
     render_pass: RenderPass,
     _layout: PipelineLayout,
     pipeline: GraphicsPipeline,
-    /// Recursive levels: pipeline, layout, set-1 layout, and the sets reading array 0 / 1.
+    /// Recursive levels: pipeline and the sets reading array 0 / 1.
     recursive: Option<Recursive>,
+    _set_layout: DescriptorSetLayout,
+    _sampler: Sampler,
+    /// Set 1 reading `texture` (level 0 binds it without reading the array).
+    set_texture: DescriptorSet,
+    _back: Image,
+    back_id: ImageId,
+    back_pass: Option<BackPass>,
     draws: Vec<usize>,
     /// Per rectangle: OBJ_k reflects or refracts (recursive levels re-render it).
     specular: Vec<bool>,
@@ -428,12 +448,16 @@ pub struct NearbyImpostors {
 }
 
 struct Recursive {
-    _set_layout: DescriptorSetLayout,
-    _layout: PipelineLayout,
     pipeline: GraphicsPipeline,
-    _sampler: Sampler,
     /// [reads `texture`, reads `other`].
     sets: [DescriptorSet; 2],
+}
+
+/// [`BACK_PASS`]: one framebuffer per dielectric rectangle (index into the rectangles).
+struct BackPass {
+    _layout: PipelineLayout,
+    pipeline: GraphicsPipeline,
+    framebuffers: Vec<(usize, Framebuffer)>,
 }
 
 impl NearbyImpostors {
@@ -454,6 +478,7 @@ impl NearbyImpostors {
             correction_iterations: 3,
             correction_tolerance: 1e-3,
             seed_samples: 8,
+            back_layer_exit: true,
         };
         Self::with_desc(ctx, name, &desc, scene, gpu, graph, frame_layout)
     }
@@ -473,7 +498,24 @@ impl NearbyImpostors {
         debug_assert!(layout.rects.iter().all(|r| r.object < gpu.draws.len()), "impostor of an object without a draw");
         let specular = layout.rects.iter().map(|r| is_specular(scene, r.object)).collect();
         let lookup_set = layout.rects.iter().map(|r| layout.set_of(r.object).map_or(u32::MAX, |s| s as u32)).collect();
-        Self::build(ctx, name, desc, layout, specular, lookup_set, graph, frame_layout)
+        // Each array holds every set's textures; lavapipe allocates at most 2 GiB at once.
+        let bytes = layout.rects.len() as u64 * (desc.resolution as u64).pow(2) * 16;
+        if bytes > 1 << 30 {
+            return Err(crate::gpu::GpuError::Unsupported(format!(
+                "the {} impostor textures of {} rectangle set(s) at render.hu_qin.impostor_resolution = {} need {} MiB \
+                 per array (at most 1024): lower impostor_resolution",
+                layout.rects.len(),
+                layout.sets.len(),
+                desc.resolution,
+                bytes >> 20
+            )));
+        }
+        let back: Vec<usize> = if desc.back_layer_exit {
+            (0..layout.rects.len()).filter(|&i| is_dielectric(scene, layout.rects[i].object)).collect()
+        } else {
+            Vec::new()
+        };
+        Self::build(ctx, name, desc, layout, specular, lookup_set, back, graph, frame_layout)
     }
 
     /// No rectangles: a cleared 1x1 stand-in texture and an empty rectangle buffer, for
@@ -491,8 +533,9 @@ impl NearbyImpostors {
             correction_iterations: 0,
             correction_tolerance: 1e-3,
             seed_samples: 1,
+            back_layer_exit: false,
         };
-        Self::build(ctx, name, &desc, NearbyLayout::default(), Vec::new(), Vec::new(), graph, frame_layout)
+        Self::build(ctx, name, &desc, NearbyLayout::default(), Vec::new(), Vec::new(), Vec::new(), graph, frame_layout)
     }
 
     /// Whether any rectangle exists (otherwise [`Self::record`] must not be called).
@@ -508,6 +551,7 @@ impl NearbyImpostors {
         nearby: NearbyLayout,
         specular: Vec<bool>,
         lookup_set: Vec<u32>,
+        back_rects: Vec<usize>,
         graph: &mut FrameGraph,
         frame_layout: &DescriptorSetLayout,
     ) -> GpuResult<Self> {
@@ -539,12 +583,34 @@ impl NearbyImpostors {
             },
         )?;
         let depth_id = graph.register_image(&depth);
+        // The dielectrics' back faces (a 1x1 stand-in when none is rendered).
+        let back_size = if back_rects.is_empty() { 1 } else { size };
+        let back = Image::new(
+            ctx,
+            &ImageDesc {
+                name: format!("{name}_back"),
+                format: NEARBY_FORMAT,
+                width: back_size,
+                height: back_size,
+                layers: if back_rects.is_empty() { 1 } else { layers_n },
+                usage: U::COLOR_ATTACHMENT | U::SAMPLED | U::TRANSFER_DST,
+                view: ImageViewKind::D2Array,
+            },
+        )?;
+        let back_id = graph.register_image(&back);
+        let mut stand_ins = Vec::new();
         if rects.is_empty() {
-            // Nothing renders the stand-in: give it defined contents and the sampled layout.
+            stand_ins.push((&texture, texture_id));
+        }
+        if back_rects.is_empty() {
+            stand_ins.push((&back, back_id));
+        }
+        for (image, id) in stand_ins {
+            // Nothing renders a stand-in: give it defined contents and the sampled layout.
             ctx.one_shot(|cmd| {
-                graph.access_now(cmd, &[(texture_id, Access::TransferWrite)], &[]);
-                cmd.clear_color_image(&texture, [0.0; 4]);
-                graph.access_now(cmd, &[(texture_id, Access::FragmentSampled)], &[]);
+                graph.access_now(cmd, &[(id, Access::TransferWrite)], &[]);
+                cmd.clear_color_image(image, [0.0; 4]);
+                graph.access_now(cmd, &[(id, Access::FragmentSampled)], &[]);
             })?;
         }
         let rect_buffer = Buffer::with_data(
@@ -563,20 +629,87 @@ impl NearbyImpostors {
             },
         )?;
         let push_size = std::mem::size_of::<ImpostorPush>() as u32;
-        let pipeline_desc = |fragment_shader, specialization| GraphicsPipelineDesc {
+        let pipeline_desc = |fragment_shader, specialization, cull| GraphicsPipelineDesc {
             name,
             vertex_shader: "nearby/impostor.vert",
             fragment_shader,
             vertex: VertexLayout::Mesh,
             topology: vk::PrimitiveTopology::TRIANGLE_LIST,
-            // Quads are one-sided; O_R may see either side.
-            cull: vk::CullModeFlags::NONE,
+            cull,
             depth: DepthState::LESS,
             blend: &[Blend::Off],
             specialization,
         };
-        let layout = PipelineLayout::new(ctx, name, &[frame_layout], push_size)?;
-        let pipeline = GraphicsPipeline::new(ctx, &pipeline_desc("nearby/impostor.frag", &[]), &layout, &render_pass)?;
+        // Set 1 of both texture pipelines: the rectangles and the array of the level below
+        // (read by the recursive levels only) and the dielectrics' back faces.
+        let stage = vk::ShaderStageFlags::FRAGMENT;
+        let set_layout = DescriptorSetLayout::new(
+            ctx,
+            name,
+            &[
+                (BINDING_NEARBY_RECTS, vk::DescriptorType::STORAGE_BUFFER, stage),
+                (BINDING_NEARBY_TEXTURE, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, stage),
+                (BINDING_NEARBY_BACK, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, stage),
+            ],
+            2,
+        )?;
+        let sampler = Sampler::new(ctx, &format!("{name}_nearest"), SamplerDesc::NEAREST_CLAMP)?;
+        let sampled = Access::FragmentSampled.info(false).layout;
+        let set_reading = |view| {
+            set_layout.allocate(
+                name,
+                &[
+                    DescriptorWrite::Storage(BINDING_NEARBY_RECTS, &rect_buffer),
+                    DescriptorWrite::Sampled(BINDING_NEARBY_TEXTURE, view, &sampler, sampled),
+                    DescriptorWrite::Sampled(BINDING_NEARBY_BACK, back.view(), &sampler, sampled),
+                ],
+            )
+        };
+        // Specialisation constants 0..3 of impostor_body.glsl.
+        let spec = [
+            desc.correction_iterations,
+            desc.correction_tolerance.to_bits(),
+            desc.seed_samples,
+            u32::from(!back_rects.is_empty()),
+        ];
+        let layout = PipelineLayout::new(ctx, name, &[frame_layout, &set_layout], push_size)?;
+        // Quads are one-sided; O_R may see either side.
+        let pipeline = GraphicsPipeline::new(
+            ctx,
+            &pipeline_desc("nearby/impostor.frag", &spec, vk::CullModeFlags::NONE),
+            &layout,
+            &render_pass,
+        )?;
+        let back_pass = if back_rects.is_empty() {
+            None
+        } else {
+            let blayout = PipelineLayout::new(ctx, BACK_PASS, &[frame_layout], push_size)?;
+            // The nearest back faces. Meshes are wound counter-clockwise seen from outside
+            // (src/passes/refractor_layers.rs), but this projection, unlike the camera's, is
+            // not y-flipped: its back faces come out counter-clockwise, i.e. as the
+            // pipeline's front faces, so BACK is the mode that culls the faces towards O_R.
+            let bpipeline = GraphicsPipeline::new(
+                ctx,
+                &pipeline_desc("nearby/impostor_back.frag", &[], vk::CullModeFlags::BACK),
+                &blayout,
+                &render_pass,
+            )?;
+            let fbs = back_rects
+                .iter()
+                .map(|&i| {
+                    let r = &rects[i];
+                    Framebuffer::new(
+                        ctx,
+                        &format!("{BACK_PASS}_{}", r.layer),
+                        &render_pass,
+                        &[back.layer_view(r.layer), depth.layer_view(r.layer)],
+                        back.extent(),
+                    )
+                    .map(|fb| (i, fb))
+                })
+                .collect::<GpuResult<Vec<_>>>()?;
+            Some(BackPass { _layout: blayout, pipeline: bpipeline, framebuffers: fbs })
+        };
         let framebuffers_of = |image: &Image, label: &str| -> GpuResult<Vec<Framebuffer>> {
             rects
                 .iter()
@@ -592,50 +725,19 @@ impl NearbyImpostors {
                 .collect()
         };
         let framebuffers = framebuffers_of(&texture, name)?;
+        let set_texture = set_reading(texture.view())?;
         let (other, recursive) = if levels > 0 {
             let image = Image::new(ctx, &array_desc(format!("{name}_texture_b")))?;
             let id = graph.register_image(&image);
             let fbs = framebuffers_of(&image, &format!("{name}_b"))?;
-            let stage = vk::ShaderStageFlags::FRAGMENT;
-            let set_layout = DescriptorSetLayout::new(
-                ctx,
-                name,
-                &[
-                    (BINDING_NEARBY_RECTS, vk::DescriptorType::STORAGE_BUFFER, stage),
-                    (BINDING_NEARBY_TEXTURE, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, stage),
-                ],
-                2,
-            )?;
-            let sampler = Sampler::new(ctx, &format!("{name}_nearest"), SamplerDesc::NEAREST_CLAMP)?;
-            let sampled = Access::FragmentSampled.info(false).layout;
-            let set_reading = |view| {
-                set_layout.allocate(
-                    name,
-                    &[
-                        DescriptorWrite::Storage(BINDING_NEARBY_RECTS, &rect_buffer),
-                        DescriptorWrite::Sampled(BINDING_NEARBY_TEXTURE, view, &sampler, sampled),
-                    ],
-                )
-            };
-            let sets = [set_reading(texture.view())?, set_reading(image.view())?];
-            let rlayout = PipelineLayout::new(ctx, name, &[frame_layout, &set_layout], push_size)?;
-            let spec = [desc.correction_iterations, desc.correction_tolerance.to_bits(), desc.seed_samples];
+            let sets = [set_texture, set_reading(image.view())?];
             let rpipeline = GraphicsPipeline::new(
                 ctx,
-                &pipeline_desc("nearby/impostor_recursive.frag", &spec),
-                &rlayout,
+                &pipeline_desc("nearby/impostor_recursive.frag", &spec, vk::CullModeFlags::NONE),
+                &layout,
                 &render_pass,
             )?;
-            (
-                Some(TextureArray { _image: image, id, framebuffers: fbs }),
-                Some(Recursive {
-                    _set_layout: set_layout,
-                    _layout: rlayout,
-                    pipeline: rpipeline,
-                    _sampler: sampler,
-                    sets,
-                }),
-            )
+            (Some(TextureArray { _image: image, id, framebuffers: fbs }), Some(Recursive { pipeline: rpipeline, sets }))
         } else {
             (None, None)
         };
@@ -655,6 +757,12 @@ impl NearbyImpostors {
             _layout: layout,
             pipeline,
             recursive,
+            _set_layout: set_layout,
+            _sampler: sampler,
+            set_texture,
+            _back: back,
+            back_id,
+            back_pass,
             draws,
             specular,
             lookup_set,
@@ -679,6 +787,32 @@ impl NearbyImpostors {
                 *o = set.origin.extend(1.0).to_array();
             }
         }
+        if let Some(bp) = &self.back_pass {
+            let mut pass = frame.pass(BACK_PASS).write(self.back_id, Access::ColorAttachment);
+            pass = pass.write(self.depth_id, Access::DepthAttachment);
+            let origins = origins.clone();
+            pass.record(move |cmd| {
+                for (i, fb) in &bp.framebuffers {
+                    let r = &self.layout.rects[*i];
+                    // Empty texels: no normal (the test for a surface), depth the far plane.
+                    let clears = [Clear::Color([0.0, 0.0, 0.0, r.far]), Clear::Depth(1.0)];
+                    cmd.begin_render_pass(&self.render_pass, fb, &clears);
+                    cmd.bind_graphics(&bp.pipeline, &[frame_set]);
+                    cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
+                    let d = &scene.draws[self.draws[*i]];
+                    let push = ImpostorPush {
+                        view_proj: r.view_proj.to_cols_array_2d(),
+                        origin: origins[*i],
+                        axis: r.axis.extend(0.0).to_array(),
+                        material: [d.material, r.layer, self.lookup_set[*i], 0],
+                        sphere: r.center.extend(r.half_size).to_array(),
+                    };
+                    cmd.push_graphics(&bp.pipeline, &push);
+                    cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
+                    cmd.end_render_pass();
+                }
+            });
+        }
         for level in 0..=self.levels {
             // Level `level` writes array (levels - level) % 2: 0 is `texture`, 1 `other`.
             let dst = ((self.levels - level) % 2) as usize;
@@ -689,6 +823,7 @@ impl NearbyImpostors {
             let name = if level == 0 { self.name } else { RECURSION_PASSES[level as usize - 1] };
             let mut pass = frame.pass(name);
             pass = pass.write(dst_id, Access::ColorAttachment).write(self.depth_id, Access::DepthAttachment);
+            pass = pass.read(self.back_id, Access::FragmentSampled);
             if let Some(atlas) = shadow_atlas {
                 pass = pass.read(atlas, Access::FragmentSampled);
             }
@@ -709,8 +844,9 @@ impl NearbyImpostors {
                             cmd.bind_graphics(&rec.pipeline, &[frame_set, rec.sets[1 - dst]]);
                             &rec.pipeline
                         }
+                        // Level 0 reads no array: the set reading `texture` only fills set 1.
                         _ => {
-                            cmd.bind_graphics(&self.pipeline, &[frame_set]);
+                            cmd.bind_graphics(&self.pipeline, &[frame_set, self.set_texture]);
                             &self.pipeline
                         }
                     };

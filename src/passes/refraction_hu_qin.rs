@@ -62,6 +62,7 @@ impl HuQinPass {
                 correction_iterations: params.correction_iterations,
                 correction_tolerance: params.correction_tolerance,
                 seed_samples: params.seed_samples,
+                back_layer_exit: params.recursive_exit_back_layer,
             };
             NearbyImpostors::with_desc(ctx, REFRACTION_HU_QIN_NEARBY, &desc, scene, gpu, graph, frame_layout)?
         } else {

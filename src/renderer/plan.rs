@@ -315,7 +315,7 @@ fn image_space_refraction(scene: &Scene, dielectric: &[String]) -> Vec<PlannedPa
 /// dielectric has other objects to stand in for; §2.2.1's recursion levels when a rectangle
 /// stands for a specular object (another dielectric, a mirror or a conductor).
 fn hu_qin_nearby(scene: &Scene) -> Vec<PlannedPass> {
-    use crate::passes::nearby_impostors::{nearby_layout, RECURSION_PASSES};
+    use crate::passes::nearby_impostors::{has_dielectric_rect, nearby_layout, BACK_PASS, RECURSION_PASSES};
     let params = crate::scene::techniques::HuQinParams::from_settings(&scene.render).unwrap_or_default();
     if !params.nearby {
         return Vec::new();
@@ -355,7 +355,25 @@ fn hu_qin_nearby(scene: &Scene) -> Vec<PlannedPass> {
             crate::MAX_NEARBY_SETS
         );
     }
-    let mut passes = vec![PlannedPass { name: REFRACTION_HU_QIN_NEARBY, reason }];
+    let mut passes = Vec::new();
+    if params.recursive_exit_back_layer && has_dielectric_rect(scene, &layout) {
+        let names: Vec<String> = layout
+            .rects
+            .iter()
+            .filter(|r| matches!(scene.materials[scene.objects[r.object].material], Material::Dielectric { .. }))
+            .map(|r| name(r.object))
+            .collect();
+        passes.push(PlannedPass {
+            name: BACK_PASS,
+            reason: format!(
+                "back faces (normal, depth) of dielectric impostor(s) {} in their rectangles' projections: the exit \
+                 surface of their refraction (Hu & Qin 2007 §2.1.3 in §2.2.1's textures; \
+                 render.hu_qin.recursive_exit = \"back_layer\")",
+                list(&names)
+            ),
+        });
+    }
+    passes.push(PlannedPass { name: REFRACTION_HU_QIN_NEARBY, reason });
     for level in 1..=layout.levels {
         passes.push(PlannedPass {
             name: RECURSION_PASSES[level as usize - 1],

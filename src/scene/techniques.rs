@@ -78,6 +78,10 @@ pub struct HuQinParams {
     /// §2.2.1 recursive reflections: mirrors/conductors in the impostor textures reflect the
     /// environment only (0) or the impostors of the level below (1, 2, 3).
     pub recursion_depth: u32,
+    /// The second interface of a dielectric OBJ_k in its impostor texture: the Fig. 9 search
+    /// against OBJ_k's back faces in the rectangle's parallel projection (true), or OBJ_k's
+    /// bounding sphere (false, `recursive_exit = "bounding_sphere"`).
+    pub recursive_exit_back_layer: bool,
 }
 
 impl Default for HuQinParams {
@@ -96,6 +100,7 @@ impl Default for HuQinParams {
             correction_tolerance: 1e-3,
             seed_samples: 8,
             recursion_depth: 1,
+            recursive_exit_back_layer: true,
         }
     }
 }
@@ -441,6 +446,7 @@ impl HuQinParams {
         "correction_tolerance",
         "seed_samples",
         "recursion_depth",
+        "recursive_exit",
     ];
 
     pub fn from_table(t: Option<&toml::Table>) -> Result<Self, ParamError> {
@@ -464,6 +470,22 @@ impl HuQinParams {
                 "seed_samples" => p.seed_samples = integer(key, v, 1, 256)?,
                 // One pass per level (src/passes/nearby_impostors.rs, MAX_RECURSION).
                 "recursion_depth" => p.recursion_depth = integer(key, v, 0, 3)?,
+                "recursive_exit" => {
+                    p.recursive_exit_back_layer =
+                        match v.as_str() {
+                            Some("back_layer") => true,
+                            Some("bounding_sphere") => false,
+                            _ => return Err(ParamError {
+                                key: key.clone(),
+                                message: format!(
+                                    "`recursive_exit` must be \"back_layer\" or \"bounding_sphere\", not {v}"
+                                ),
+                                hint: "Hu & Qin 2007 §2.2.1: a dielectric impostor's exit point, by the Fig. 9 search \
+                                       against its back faces or where its bounding sphere is left"
+                                    .into(),
+                            }),
+                        }
+                }
                 _ => return Err(unknown("hu_qin", key, Self::KEYS)),
             }
         }
@@ -755,6 +777,8 @@ mod tests {
             ("seed_samples = 0", "seed_samples"),
             ("nearby = 3", "nearby"),
             ("recursion_depth = 4", "recursion_depth"),
+            ("recursive_exit = \"sphere\"", "recursive_exit"),
+            ("recursive_exit = 1", "recursive_exit"),
         ] {
             let e = HuQinParams::from_table(Some(&table(t))).unwrap_err();
             assert_eq!(e.key, key, "{t}");
