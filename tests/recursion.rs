@@ -336,3 +336,79 @@ fn many_dielectrics_keep_the_stated_limits() {
     let r = render_on(&ctx, &s);
     assert_finite("ten balls", &r.hdr);
 }
+
+/// The exit of a dielectric OBJ_k that is not a ball: B replaced by a glass cube (edge 1.2,
+/// centre (0.5, -0.4, -1.2)), where the bounding sphere (radius 1.04) lies far from the faces.
+/// A's pixels against the reference (64 spp, no photons) for depth 0, and depth 1 with each
+/// exit. Measured at 96^2 on lavapipe: RMSE over A 0.24519 (depth 0), 0.24363 (depth 1, back
+/// layer), 0.24097 (depth 1, bounding sphere); the 15 pixels the recursion changes go from
+/// 0.4508 to 0.3894. The exits differ on only 4 pixels (back layer 0.5821, bounding sphere
+/// 0.1086 there): at this size the cube is seen through A in a handful of pixels, and there the
+/// back-layer search, which assumes a back-facing exit (§4's shortcut: the texture's view has
+/// no dividing-pixel search), lands worse than the sphere. So the paper's exit search is not
+/// shown to buy accuracy here; docs/scene-format.md reports it.
+#[test]
+fn exit_of_a_glass_cube_behind_ball_a() {
+    let path = prism::scene::benchmark_scene_path("two_glass_balls");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let ball_b =
+        "name = \"ball_b\"\nmaterial = \"glass\"\nshape = \"sphere\"\ncenter = [0.5, -0.2, -1.2]\nradius = 0.8";
+    assert!(text.contains(ball_b), "two_glass_balls.toml changed: update this test");
+    let cube =
+        "name = \"cube_b\"\nmaterial = \"glass\"\nshape = \"box\"\ncenter = [0.5, -0.4, -1.2]\nsize = [1.2, 1.2, 1.2]";
+    let dir = std::env::temp_dir().join(format!("prism-recursion-cube-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("glass_cube.toml");
+    std::fs::write(&file, text.replace(ball_b, cube)).unwrap();
+    let load = |extra: &[&str]| {
+        let mut o = vec![format!("camera.width={SIZE}"), format!("camera.height={SIZE}")];
+        // Lit by the environment only (radiance 1, the light off): what B shows at level 0 (the
+        // environment) and at level 1 (the floor, wall and box) then differ the most.
+        o.extend(["environment.radiance=1", "lights.0.intensity=0"].map(String::from));
+        o.extend(extra.iter().map(|s| s.to_string()));
+        prism::scene::load(&file, &o).unwrap()
+    };
+    let ctx = context(false);
+    let s = load(&[]);
+    let mask = ball_a_mask(&s);
+    let mut r = Reference::new(&ctx, &s, &ReferenceSettings { spp: 64, photons: 0, ..Default::default() }).unwrap();
+    r.run_all(|_, _| {}).unwrap();
+    let reference = r.image();
+    drop(r);
+    let error = |extra: &[&str]| {
+        let h = render_on(&ctx, &load(extra)).hdr;
+        assert_finite(&format!("{extra:?}"), &h);
+        (masked_rmse(&h, &reference, &mask), h)
+    };
+    let (e0, h0) = error(&["render.hu_qin.recursion_depth=0"]);
+    let (e_back, h_back) = error(&["render.hu_qin.recursion_depth=1"]);
+    let (e_sphere, h_sphere) =
+        error(&["render.hu_qin.recursion_depth=1", "render.hu_qin.recursive_exit=\"bounding_sphere\""]);
+    let changed = |a: &[f32], b: &[f32]| -> Vec<bool> {
+        a.chunks(4)
+            .zip(b.chunks(4))
+            .zip(&mask)
+            .map(|((p, q), &m)| m && (0..3).any(|c| (p[c] - q[c]).abs() > 0.01))
+            .collect()
+    };
+    let c_back = changed(&h0, &h_back);
+    let c_exit = changed(&h_back, &h_sphere);
+    let count = |m: &[bool]| m.iter().filter(|&&x| x).count();
+    eprintln!(
+        "glass cube B, A's {} pixels: RMSE depth 0 {e0:.5}, depth 1 back layer {e_back:.5}, bounding sphere {e_sphere:.5}; \
+         {} pixels changed 0 -> 1 (RMSE there {:.4} -> {:.4}); {} differ between the exits (back {:.4}, sphere {:.4})",
+        count(&mask),
+        count(&c_back),
+        masked_rmse(&h0, &reference, &c_back),
+        masked_rmse(&h_back, &reference, &c_back),
+        count(&c_exit),
+        masked_rmse(&h_back, &reference, &c_exit),
+        masked_rmse(&h_sphere, &reference, &c_exit),
+    );
+    // Asserted with margin: the recursion helps over the changed pixels (measured 14%; 5%
+    // asserted) and over A with either exit (measured 0.6% and 1.7%).
+    assert!(count(&c_back) >= 5, "the recursion changed only {} pixels", count(&c_back));
+    let (r0, r1) = (masked_rmse(&h0, &reference, &c_back), masked_rmse(&h_back, &reference, &c_back));
+    assert!(r1 < 0.95 * r0, "depth 1 should be closer where it changes A: {r0} -> {r1}");
+    assert!(e_back < e0 && e_sphere < e0, "{e0} {e_back} {e_sphere}");
+}
