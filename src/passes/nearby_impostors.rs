@@ -30,9 +30,11 @@
 //! n - 1 of OBJ_k's *own* rectangle set (which holds OBJ_R), so that OBJ_k needs a set of its
 //! own even when it is a mirror (glsl/nearby/impostor_recursive.frag). One graph pass per level
 //! ([`RECURSION_PASSES`]), ping-ponging between two arrays so that the last level lands in
-//! [`NearbyImpostors::texture`]. A dielectric TEX_k leaves OBJ_k where its refracted ray leaves
-//! OBJ_k's bounding sphere (O_k, d_k) (glsl/nearby/impostor_body.glsl: the documented
-//! simplification of the second interface).
+//! [`NearbyImpostors::texture`]. A dielectric TEX_k finds its exit point by §2.1.3's search
+//! (Fig. 9) against OBJ_k's back faces rendered in the rectangle's projection ([`BACK_PASS`],
+//! assuming a back-facing exit as §4 does), or (`recursive_exit = "bounding_sphere"`, and
+//! where the search finds nothing) where T1 leaves OBJ_k's bounding sphere (O_k, d_k)
+//! (glsl/nearby/impostor_body.glsl).
 //!
 //! Limits (stated rules, not errors): at most [`MAX_NEARBY_RECTS`] rectangles per set; with
 //! more objects the ones whose bounding spheres come closest to O_R are kept and the others
