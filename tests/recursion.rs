@@ -335,6 +335,11 @@ fn many_dielectrics_keep_the_stated_limits() {
     let ctx = context(false);
     let r = render_on(&ctx, &s);
     assert_finite("ten balls", &r.hdr);
+    // 64 textures of 2048^2 texels would need 4 GiB per array: refused with the key to lower.
+    let o = ["camera.width=32", "camera.height=32", "render.hu_qin.impostor_resolution=2048"].map(String::from);
+    let big = prism::scene::load(&file, &o).unwrap();
+    let e = prism::renderer::Renderer::new(&ctx, &big).err().expect("4 GiB of impostor textures per array");
+    assert!(e.to_string().contains("lower impostor_resolution"), "{e}");
 }
 
 /// The exit of a dielectric OBJ_k that is not a ball: B replaced by a glass cube (edge 1.2,

@@ -460,8 +460,9 @@ impl HuQinParams {
                 "assume_back_facing" => p.assume_back_facing = boolean(key, v)?,
                 "debug" => p.debug = boolean(key, v)?,
                 "nearby" => p.nearby = boolean(key, v)?,
-                // 2048^2 texels x 16 bytes x MAX_NEARBY_RECTS (8) layers = 512 MiB, a quarter of
-                // lavapipe's 2 GiB allocation limit.
+                // 2048^2 texels x 16 bytes x MAX_NEARBY_RECTS (8) layers = 512 MiB per rectangle
+                // set, a quarter of lavapipe's 2 GiB allocation limit; with several sets the
+                // renderer refuses arrays over 1 GiB (src/passes/nearby_impostors.rs).
                 "impostor_resolution" => p.impostor_resolution = integer(key, v, 4, 2048)?,
                 // Fig. 16 converges in "two or three" steps; beyond 64 it only burns time.
                 "correction_iterations" => p.correction_iterations = integer(key, v, 0, 64)?,
