@@ -189,7 +189,13 @@ shared_constants! {
     // rectangles (the nearest objects are kept); the shader loops over them per ray.
     BINDING_NEARBY_RECTS: u32 = 14;
     BINDING_NEARBY_TEXTURE: u32 = 15;
+    // Set 1 of the impostor-texture passes only: the dielectric OBJ_k's nearest back faces in
+    // each rectangle's parallel projection (2D array: xyz outward normal, w axial depth).
+    BINDING_NEARBY_BACK: u32 = 16;
     MAX_NEARBY_RECTS: u32 = 8;
+    // Rectangle sets, one per OBJ_R (every dielectric, and the specular objects whose
+    // recursive impostor textures look up their own set), each of at most MAX_NEARBY_RECTS.
+    MAX_NEARBY_SETS: u32 = 8;
     // Eikonal light simulator (Ihrke et al. 2007 section 5.2; src/passes/eikonal_light.rs,
     // src/passes/histopyramid.rs). One descriptor set for every light/HistoPyramid kernel.
     LIGHT_BINDING_STATE: u32 = 0;

@@ -79,6 +79,14 @@ fn image_space_refraction_replaces_the_baseline() {
         names("sphere_env", &["render.refraction=hu_qin"]),
         ["gbuffer", "deferred_shading", "refraction_hu_qin_layers", "refraction_hu_qin", "tonemap"]
     );
+    // §2.2.1 recursion: one pass per level only where a rectangle stands for a specular object
+    // (two_glass_balls: each ball is a rectangle of the other's set); none for one refractor
+    // among diffuse objects, whatever the depth.
+    let n = names("two_glass_balls", &["render.hu_qin.recursion_depth=2"]);
+    assert!(n.contains(&"refraction_hu_qin_nearby_r2") && !n.contains(&"refraction_hu_qin_nearby_r3"), "{n:?}");
+    assert!(n.contains(&"refraction_hu_qin_nearby_back"), "{n:?}");
+    let n = names("sphere_nearby", &["render.refraction=hu_qin", "render.hu_qin.recursion_depth=3"]);
+    assert!(!n.iter().any(|p| p.starts_with("refraction_hu_qin_nearby_")), "{n:?}");
     // Only hu_qin has impostor rectangles.
     assert!(!names("sphere_nearby", &["render.refraction=wyman"]).contains(&"refraction_hu_qin_nearby"));
     // Without a refractor, none of their passes.

@@ -78,6 +78,10 @@ pub struct HuQinParams {
     /// §2.2.1 recursive reflections: mirrors/conductors in the impostor textures reflect the
     /// environment only (0) or the impostors of the level below (1, 2, 3).
     pub recursion_depth: u32,
+    /// The second interface of a dielectric OBJ_k in its impostor texture: the Fig. 9 search
+    /// against OBJ_k's back faces in the rectangle's parallel projection (true), or OBJ_k's
+    /// bounding sphere (false, `recursive_exit = "bounding_sphere"`).
+    pub recursive_exit_back_layer: bool,
 }
 
 impl Default for HuQinParams {
@@ -96,6 +100,7 @@ impl Default for HuQinParams {
             correction_tolerance: 1e-3,
             seed_samples: 8,
             recursion_depth: 1,
+            recursive_exit_back_layer: true,
         }
     }
 }
@@ -441,6 +446,7 @@ impl HuQinParams {
         "correction_tolerance",
         "seed_samples",
         "recursion_depth",
+        "recursive_exit",
     ];
 
     pub fn from_table(t: Option<&toml::Table>) -> Result<Self, ParamError> {
@@ -454,8 +460,9 @@ impl HuQinParams {
                 "assume_back_facing" => p.assume_back_facing = boolean(key, v)?,
                 "debug" => p.debug = boolean(key, v)?,
                 "nearby" => p.nearby = boolean(key, v)?,
-                // 2048^2 texels x 16 bytes x MAX_NEARBY_RECTS (8) layers = 512 MiB, a quarter of
-                // lavapipe's 2 GiB allocation limit.
+                // 2048^2 texels x 16 bytes x MAX_NEARBY_RECTS (8) layers = 512 MiB per rectangle
+                // set, a quarter of lavapipe's 2 GiB allocation limit; with several sets the
+                // renderer refuses arrays over 1 GiB (src/passes/nearby_impostors.rs).
                 "impostor_resolution" => p.impostor_resolution = integer(key, v, 4, 2048)?,
                 // Fig. 16 converges in "two or three" steps; beyond 64 it only burns time.
                 "correction_iterations" => p.correction_iterations = integer(key, v, 0, 64)?,
@@ -464,6 +471,22 @@ impl HuQinParams {
                 "seed_samples" => p.seed_samples = integer(key, v, 1, 256)?,
                 // One pass per level (src/passes/nearby_impostors.rs, MAX_RECURSION).
                 "recursion_depth" => p.recursion_depth = integer(key, v, 0, 3)?,
+                "recursive_exit" => {
+                    p.recursive_exit_back_layer =
+                        match v.as_str() {
+                            Some("back_layer") => true,
+                            Some("bounding_sphere") => false,
+                            _ => return Err(ParamError {
+                                key: key.clone(),
+                                message: format!(
+                                    "`recursive_exit` must be \"back_layer\" or \"bounding_sphere\", not {v}"
+                                ),
+                                hint: "Hu & Qin 2007 §2.2.1: a dielectric impostor's exit point, by the Fig. 9 search \
+                                       against its back faces or where its bounding sphere is left"
+                                    .into(),
+                            }),
+                        }
+                }
                 _ => return Err(unknown("hu_qin", key, Self::KEYS)),
             }
         }
@@ -824,6 +847,8 @@ mod tests {
             ("seed_samples = 0", "seed_samples"),
             ("nearby = 3", "nearby"),
             ("recursion_depth = 4", "recursion_depth"),
+            ("recursive_exit = \"sphere\"", "recursive_exit"),
+            ("recursive_exit = 1", "recursive_exit"),
         ] {
             let e = HuQinParams::from_table(Some(&table(t))).unwrap_err();
             assert_eq!(e.key, key, "{t}");

@@ -438,6 +438,19 @@ fn technique_parameters(ui: &mut egui::Ui, state: &mut UiState, scene: &Scene, r
                 state.set(req, "render.hu_qin.nearby".into(), nearby.to_string());
             }
             ui.end_row();
+            // §2.2.1: where a dielectric impostor's refracted ray leaves it.
+            ui.label("hu_qin.recursive_exit");
+            let current = if p.recursive_exit_back_layer { "back_layer" } else { "bounding_sphere" };
+            let mut chosen = current;
+            egui::ComboBox::from_id_salt("hu_qin_recursive_exit").selected_text(chosen).show_ui(ui, |ui| {
+                for option in ["back_layer", "bounding_sphere"] {
+                    ui.selectable_value(&mut chosen, option, option);
+                }
+            });
+            if chosen != current {
+                state.set(req, "render.hu_qin.recursive_exit".into(), format!("\"{chosen}\""));
+            }
+            ui.end_row();
             for (key, value, max) in [
                 ("correction_iterations", p.correction_iterations, 64),
                 ("seed_samples", p.seed_samples, 256),
