@@ -40,6 +40,21 @@ shared_constants! {
     BINDING_GBUF_ALBEDO: u32 = 1;
     BINDING_GBUF_DEPTH: u32 = 2;
     BINDING_HDR: u32 = 3;
+    // The adaptive tone map's state (scale, 1/L_white^2, ...) in set 1 of tonemap/adaptive.frag.
+    BINDING_TONEMAP_STATE: u32 = 4;
+
+    // The adaptive tone map's reduction kernels (glsl/tonemap/*.comp; src/passes/tonemap.rs):
+    // one set 0. A workgroup of TONEMAP_GROUP^2 invocations, each summing a TONEMAP_BLOCK^2
+    // block of pixels in a loop: a tile of (TONEMAP_GROUP TONEMAP_BLOCK)^2 pixels. Few
+    // invocations and a serial loop because every barrier of the shared-memory tree costs a
+    // CPU device (lavapipe) more than the pixels do: 16x16 invocations of one pixel each made
+    // tonemap_log_average 17x the tone map pass itself (caustic_sphere, 512^2).
+    TONEMAP_BINDING_HDR: u32 = 0;
+    TONEMAP_BINDING_PARTIALS: u32 = 1;
+    TONEMAP_BINDING_STATE: u32 = 2;
+    TONEMAP_BINDING_STATS: u32 = 3;
+    TONEMAP_GROUP: u32 = 8;
+    TONEMAP_BLOCK: u32 = 4;
 
     // Reference path tracer (src/reference, glsl/reference): one descriptor set.
     REF_BINDING_UNIFORMS: u32 = 0;
@@ -174,7 +189,13 @@ shared_constants! {
     // rectangles (the nearest objects are kept); the shader loops over them per ray.
     BINDING_NEARBY_RECTS: u32 = 14;
     BINDING_NEARBY_TEXTURE: u32 = 15;
+    // Set 1 of the impostor-texture passes only: the dielectric OBJ_k's nearest back faces in
+    // each rectangle's parallel projection (2D array: xyz outward normal, w axial depth).
+    BINDING_NEARBY_BACK: u32 = 16;
     MAX_NEARBY_RECTS: u32 = 8;
+    // Rectangle sets, one per OBJ_R (every dielectric, and the specular objects whose
+    // recursive impostor textures look up their own set), each of at most MAX_NEARBY_RECTS.
+    MAX_NEARBY_SETS: u32 = 8;
     // Eikonal light simulator (Ihrke et al. 2007 section 5.2; src/passes/eikonal_light.rs,
     // src/passes/histopyramid.rs). One descriptor set for every light/HistoPyramid kernel.
     LIGHT_BINDING_STATE: u32 = 0;

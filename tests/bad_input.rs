@@ -272,3 +272,30 @@ fn absurd_eikonal_nearby_parameters() {
         assert!(e.contains(key), "{set}: {e}");
     }
 }
+
+#[test]
+fn absurd_tone_map_settings() {
+    // render.tonemap names one of the accepted tone maps; [render.tonemap_adaptive] checks
+    // its numbers (file:line for the file, the key and the range for --set).
+    let c = Case::new("tonemap");
+    let scene = c.file(
+        "scene.toml",
+        &format!("{GOOD}\n[render]\ntonemap = \"adaptive\"\n[render.tonemap_adaptive]\ndelta = 0\n"),
+    );
+    let e = c.render_fails(&scene, &[], &[]);
+    assert!(e.contains("delta") && e.contains("scene.toml:"), "{e}");
+    let scene = c.file("ok.toml", GOOD);
+    let e = c.render_fails(&scene, &["--set", "render.tonemap=filmic"], &[]);
+    assert!(e.contains("filmic") && e.contains("clamp") && e.contains("adaptive"), "{e}");
+    for (set, key) in [
+        ("render.tonemap_adaptive.key=-1", "key"),
+        ("render.tonemap_adaptive.key=\"high\"", "auto"),
+        ("render.tonemap_adaptive.white=0", "white"),
+        ("render.tonemap_adaptive.tau_rod=-0.4", "tau_rod"),
+        ("render.tonemap_adaptive.luminance_scale=nan", "luminance_scale"),
+        ("render.tonemap_adaptive.gamma=2.2", "gamma"),
+    ] {
+        let e = c.render_fails(&scene, &["--set", "render.tonemap=adaptive", "--set", set], &[]);
+        assert!(e.contains(key), "{set}: {e}");
+    }
+}

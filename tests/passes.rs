@@ -28,6 +28,22 @@ fn pass_lists_follow_the_scene() {
 }
 
 #[test]
+fn the_adaptive_tone_map_adds_its_reduction_only_when_named() {
+    // Default (clamp, SCENES.md's PNG rule): the tone map alone, on every scene.
+    for scene in ["sphere_env", "caustic_sphere", "eikonal_sphere"] {
+        let n = names(scene, &[]);
+        assert!(!n.iter().any(|p| p.starts_with("tonemap_")), "{scene}: {n:?}");
+        assert_eq!(n.last(), Some(&"tonemap"));
+        assert_eq!(names(scene, &["render.tonemap=clamp"]), n);
+    }
+    // Adaptive (Ihrke et al. 2007 §5.3): the log-average reduction and the adaptation first.
+    assert_eq!(
+        names("sphere_env", &["render.tonemap=adaptive"]),
+        ["gbuffer", "deferred_shading", "refraction_single", "tonemap_log_average", "tonemap_adapt", "tonemap"]
+    );
+}
+
+#[test]
 fn a_scene_without_refractors_records_no_refraction_pass() {
     // Turning sphere_nearby's glass into a diffuse material removes the refraction pass.
     let n = names("sphere_nearby", &["objects.3.material=\"bunny\""]);
@@ -63,6 +79,14 @@ fn image_space_refraction_replaces_the_baseline() {
         names("sphere_env", &["render.refraction=hu_qin"]),
         ["gbuffer", "deferred_shading", "refraction_hu_qin_layers", "refraction_hu_qin", "tonemap"]
     );
+    // §2.2.1 recursion: one pass per level only where a rectangle stands for a specular object
+    // (two_glass_balls: each ball is a rectangle of the other's set); none for one refractor
+    // among diffuse objects, whatever the depth.
+    let n = names("two_glass_balls", &["render.hu_qin.recursion_depth=2"]);
+    assert!(n.contains(&"refraction_hu_qin_nearby_r2") && !n.contains(&"refraction_hu_qin_nearby_r3"), "{n:?}");
+    assert!(n.contains(&"refraction_hu_qin_nearby_back"), "{n:?}");
+    let n = names("sphere_nearby", &["render.refraction=hu_qin", "render.hu_qin.recursion_depth=3"]);
+    assert!(!n.iter().any(|p| p.starts_with("refraction_hu_qin_nearby_")), "{n:?}");
     // Only hu_qin has impostor rectangles.
     assert!(!names("sphere_nearby", &["render.refraction=wyman"]).contains(&"refraction_hu_qin_nearby"));
     // Without a refractor, none of their passes.
@@ -215,6 +239,7 @@ fn renderer_records_exactly_the_planned_passes() {
         ("room_glass", "render.refraction=impostor"),
         ("caustic_sphere", "render.caustics=caustics_map"),
         ("metal_ring", "render.caustics=caustics_map"),
+        ("caustic_sphere", "render.tonemap=adaptive"),
     ] {
         let o: Vec<&str> = [o].into_iter().filter(|o| !o.is_empty()).collect();
         let s = common::scene(name, 32, &o);

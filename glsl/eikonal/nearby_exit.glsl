@@ -92,7 +92,10 @@ vec3 eik_triangle_radiance(uint k, vec3 o, vec3 d, float t, vec2 b) {
 bool eik_impostor_hit(vec3 P, vec3 Ray, out vec3 color, out float dist) {
     color = vec3(0.0);
     dist = 1e30;
-    uint n = min(nearby_info.x, MAX_NEARBY_RECTS);
+    // The one rectangle set around the volume (NearbyImpostors::around); none: no impostors.
+    if (nearby_info.y == 0u) return false;
+    nearby_set = 0u;
+    uint n = min(nearby_sets[0].y, MAX_NEARBY_RECTS);
     float last = -1.0;
     for (uint pass = 0u; pass < n; ++pass) {
         uint k = n;

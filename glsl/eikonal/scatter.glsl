@@ -11,8 +11,11 @@
 #ifndef EIKONAL_SCATTER_GLSL
 #define EIKONAL_SCATTER_GLSL
 
-layout(set = 1, binding = BINDING_EIKONAL_IRRADIANCE) uniform sampler3D light_irradiance;
-layout(set = 1, binding = BINDING_EIKONAL_LIGHT_DIR) uniform sampler3D light_direction;
+#ifndef EIKONAL_LIGHT_SET
+#define EIKONAL_LIGHT_SET 1
+#endif
+layout(set = EIKONAL_LIGHT_SET, binding = BINDING_EIKONAL_IRRADIANCE) uniform sampler3D light_irradiance;
+layout(set = EIKONAL_LIGHT_SET, binding = BINDING_EIKONAL_LIGHT_DIR) uniform sampler3D light_direction;
 
 // Henyey & Greenstein 1941: normalized over the sphere, mean cosine g.
 float henyey_greenstein(float cos_theta, float g) {

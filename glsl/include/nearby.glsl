@@ -1,5 +1,6 @@
 // Hu & Qin 2007 §2.2: reflection and refraction of nearby geometry through impostor
-// rectangles (src/passes/nearby_impostors.rs builds them). nearby_radiance(P, Ray) is the
+// rectangles (src/passes/nearby_impostors.rs builds them), one rectangle set per OBJ_R,
+// selected by nearby_set (nearby_select_object). nearby_radiance(P, Ray) is the
 // "Ray Tracing Pass" of Fig. 13 with the seed selection of Fig. 17 and the iterative lookup
 // of Fig. 16. The including shader declares, before including this file:
 //   NEARBY_ITERATIONS (uint; 0 = the plain lookup of Fig. 13), NEARBY_TOLERANCE (float, a
@@ -19,16 +20,36 @@ struct NearbyRect {
 };
 
 layout(set = 1, binding = BINDING_NEARBY_RECTS, std430) readonly buffer NearbyRects {
-    uvec4 nearby_info;   // x: rectangle count (0: environment only)
-    vec4 nearby_origin;  // xyz: O_R
+    uvec4 nearby_info;                       // x: rectangles over all sets, y: sets (0: environment only)
+    uvec4 nearby_sets[MAX_NEARBY_SETS];      // x: first rectangle, y: count, z: OBJ_R's object index
+    vec4 nearby_origins[MAX_NEARBY_SETS];    // xyz: O_R of the set
     NearbyRect nearby_rects[];
 };
 // TEX_i (rgb: radiance) and TEX_DEPTH_i (a: axial distance dot(p - O_R, n_i)), layer i.
 layout(set = 1, binding = BINDING_NEARBY_TEXTURE) uniform sampler2DArray nearby_tex;
 
-// A rectangle to leave out of nearby_radiance (an impostor's own, when a mirror's texture is
-// rendered); none by default.
-uint nearby_skip = 0xffffffffu;
+// The rectangle set nearby_radiance looks up: that of OBJ_R, the object whose surface the ray
+// leaves (§2.2.1: every reflector/refractor sees the others through its own rectangles). None
+// (the environment only) by default.
+const uint NEARBY_NO_SET = 0xffffffffu;
+uint nearby_set = NEARBY_NO_SET;
+
+bool nearby_has_set() {
+    return nearby_set < min(nearby_info.y, MAX_NEARBY_SETS);
+}
+
+// Select the set whose OBJ_R is `object` (the G-buffer's albedo.a); false (environment
+// only) when the object has none.
+bool nearby_select_object(uint object) {
+    nearby_set = NEARBY_NO_SET;
+    for (uint s = 0u; s < min(nearby_info.y, MAX_NEARBY_SETS); ++s) {
+        if (nearby_sets[s].z == object) {
+            nearby_set = s;
+            return true;
+        }
+    }
+    return false;
+}
 
 // Fig. 13's intersect() and UV(): the hit t > 0 of P + t Ray with RECT_k and its (u, v).
 // Rays parallel to the plane (|cos| <= 1e-6) miss: no division by ~0. Mirrors
@@ -50,7 +71,7 @@ bool nearby_rect_hit(uint k, vec3 P, vec3 Ray, out float t, out vec2 uv) {
 // point's own depth z (axial distance from O_R, the same quantity the texture stores).
 vec3 nearby_project(uint k, vec3 p) {
     vec4 clip = nearby_rects[k].view_proj * vec4(p, 1.0);
-    return vec3(clip.xy * 0.5 + 0.5, dot(p - nearby_origin.xyz, nearby_rects[k].axis.xyz));
+    return vec3(clip.xy * 0.5 + 0.5, dot(p - nearby_origins[nearby_set].xyz, nearby_rects[k].axis.xyz));
 }
 
 bool nearby_inside(vec2 uv) {
@@ -125,22 +146,25 @@ bool nearby_lookup(uint k, vec3 P, vec3 Ray, float t_rect, vec2 uv_rect, out vec
 // then the environment map ("If there is no rectangle intersected ... index into the
 // environment map").
 vec3 nearby_radiance(vec3 P, vec3 Ray) {
-    uint n = min(nearby_info.x, MAX_NEARBY_RECTS);
+    if (!nearby_has_set()) return environment(Ray);
+    uint first = nearby_sets[nearby_set].x;
+    uint n = min(nearby_sets[nearby_set].y, MAX_NEARBY_RECTS);
+    uint end = first + n;
     float last = -1.0;
     for (uint pass = 0u; pass < n; ++pass) {
-        uint k = n;
+        uint k = end;
         float t_k = 1e30;
         vec2 uv_k = vec2(0.0);
-        for (uint i = 0u; i < n; ++i) {
+        for (uint i = first; i < end; ++i) {
             float t;
             vec2 uv;
-            if (i != nearby_skip && nearby_rect_hit(i, P, Ray, t, uv) && t > last && t < t_k) {
+            if (nearby_rect_hit(i, P, Ray, t, uv) && t > last && t < t_k) {
                 k = i;
                 t_k = t;
                 uv_k = uv;
             }
         }
-        if (k == n) break;
+        if (k == end) break;
         last = t_k;
         vec3 color;
         float dist;

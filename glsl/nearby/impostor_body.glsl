@@ -3,13 +3,15 @@
 // function as deferred shading: glsl/include/lighting.glsl), and the depth that the
 // iterative lookup of Fig. 16 compares against, as the axial distance from O_R along the
 // projection direction (linear in the ortho z, in world units).
-// A mirror or conductor OBJ_k (§2.2.1's recursive reflections) reflects the parallel
-// projection's view direction: at recursion level 0 it sees the environment
-// only (impostor.frag); at level >= 1 (impostor_recursive.frag) it sees the other impostors
-// of the level below. Included by both with NEARBY_RECURSIVE 0 or 1.
+// A specular OBJ_k (§2.2.1: "If OBJ_k in Fig. 12 is a reflector or a refractor, we render
+// TEX_k using the above method") reflects - and a dielectric also refracts - the parallel
+// projection's view direction: at recursion level 0 it sees the environment only
+// (impostor.frag); at level >= 1 (impostor_recursive.frag) the impostors of the level below
+// of its own rectangle set (which holds OBJ_R). Included by both with NEARBY_RECURSIVE 0 or 1.
 #include "frame.glsl"
 #include "lighting.glsl"
 #include "fresnel.glsl"
+#include "refraction.glsl"
 #include "push.glsl"
 // Branch `eikview`: glsl/eikonal/nearby_impostor.frag shades diffuse objects with the
 // eikonal light simulation's irradiance (eikonal_receiver, declared before this include).
@@ -23,11 +25,125 @@ layout(constant_id = 1) const float NEARBY_TOLERANCE = 1e-3;
 layout(constant_id = 2) const uint NEARBY_SEEDS = 8;
 #include "nearby.glsl"
 #endif
+// 1: a dielectric's exit is searched on its back faces (nearby_back, BACK_PASS of
+// src/passes/nearby_impostors.rs); 0: its bounding sphere (render.hu_qin.recursive_exit).
+layout(constant_id = 3) const uint NEARBY_EXIT_BACK = 1;
+// The dielectrics' back faces, layer = the rectangle's: xyz outward normal (0: none), w axial depth.
+layout(set = 1, binding = BINDING_NEARBY_BACK) uniform sampler2DArray nearby_back;
 layout(location = 0) in vec3 in_position;
 layout(location = 1) in vec3 in_normal;
 layout(location = 2) in vec2 in_checker_uv;
 // RT0 (RGBA32F): rgb = outgoing radiance (HDR) towards O_R; a = dot(p - O_R, n_i).
 layout(location = 0) out vec4 out_texel;
+
+// What OBJ_k sees from P along unit dir.
+vec3 seen_from(vec3 P, vec3 dir) {
+#if NEARBY_RECURSIVE
+    // Level n: OBJ_k's own rectangles (OBJ_k is not among them: a surface does not see
+    // itself through its own impostor) at level n - 1; none -> the environment.
+    nearby_set = pc.material.z;
+    return nearby_radiance(P, dir);
+#else
+    return environment(dir);
+#endif
+}
+
+// OBJ_k's back-face texel under p in this projection, and p's own axial depth z.
+vec4 back_texel(vec3 p, out float z) {
+    vec4 clip = pc.view_proj * vec4(p, 1.0);
+    vec2 uv = clip.xy * 0.5 + 0.5;
+    z = dot(p - pc.origin.xyz, pc.axis.xyz);
+    if (any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0)))) return vec4(0.0);
+    return textureLod(nearby_back, vec3(uv, float(pc.material.y)), 0.0);
+}
+
+bool back_covered(vec4 t) {
+    return dot(t.xyz, t.xyz) > 0.25;
+}
+
+// §2.1.3 (Fig. 9) in the parallel projection: d_T along T1 from P1 to OBJ_k's back faces, each
+// step the depth difference between the back layer and the current point along the view
+// direction (as glsl/refraction/hu_qin.frag's search_d_t), starting with the thickness along
+// the view ray (d_V). A point that leaves the back layer's coverage halves the step (§4). The
+// exit is assumed back-facing (§4's acceleration: this view has no dividing-pixel search);
+// false when no covered point was found, and the caller falls back to the bounding sphere.
+bool exit_on_back_layer(vec3 P1, vec3 T1, out float d, out vec3 N2) {
+    d = 0.0;
+    N2 = vec3(0.0);
+    float z;
+    vec4 b = back_texel(P1, z);
+    if (!back_covered(b)) return false;
+    float tol = 1e-4 * pc.sphere.w;
+    float step = max(b.w - z, tol);
+    bool found = false;
+    for (uint i = 0u; i < 32u; ++i) {
+        float next = max(d + step, 0.0);
+        b = back_texel(P1 + next * T1, z);
+        if (!back_covered(b)) {
+            step *= 0.5;
+            continue;
+        }
+        d = next;
+        found = true;
+        step = b.w - z;
+        if (abs(step) < tol) break;
+    }
+    if (!found) return false;
+    b = back_texel(P1 + d * T1, z);
+    if (!back_covered(b)) return false;
+    N2 = normalize(b.xyz);
+    return true;
+}
+
+// A dielectric OBJ_k as the main pass shows OBJ_R (glsl/refraction/hu_qin.frag), with the
+// projection's eye ray V = +axis: the Fresnel-weighted reflection at P1 and refraction through
+// two interfaces. P1 and N1 are this fragment (the nearest surface in the parallel
+// projection); the exit P2 and N2 come from the Fig. 9 search on OBJ_k's back faces
+// (exit_on_back_layer), or - with render.hu_qin.recursive_exit = "bounding_sphere", and where
+// that search finds nothing - from OBJ_k's bounding sphere (O_k, d_k), the rectangle's own
+// centre and half-size: T1 leaves where it leaves that sphere, with the sphere's normal. The
+// sphere is exact for a ball (up to its tessellation); for other shapes its exit lies further
+// out than the true one.
+vec3 dielectric_texel(vec3 P1, vec3 N1, Material m) {
+    vec3 V = pc.axis.xyz;
+    vec3 ior = max(m.spec_a.rgb, vec3(1e-6));
+    float cos_i = clamp(-dot(V, N1), 0.0, 1.0);
+    vec3 L_r = seen_from(P1, reflect(V, N1));
+    // Exact per-channel refraction (dispersion) when the ior is RGB; one path otherwise.
+    int channels = (ior.r == ior.g && ior.g == ior.b) ? 1 : 3;
+    vec3 L = vec3(0.0);
+    for (int c = 0; c < channels; ++c) {
+        float F = fresnel_dielectric(cos_i, 1.0 / ior[c]);
+        vec3 T1 = refract(V, N1, 1.0 / ior[c]);
+        vec3 L_t = vec3(0.0);
+        if (dot(T1, T1) > 0.0) {
+            float d;
+            vec3 N2;
+            if (NEARBY_EXIT_BACK == 0u || !exit_on_back_layer(P1, T1, d, N2)) {
+                // Far intersection of P1 + d T1 with the sphere: P1 lies inside it (every
+                // vertex is within d_k of O_k, and the faces between them too): root >= 0.
+                vec3 o = P1 - pc.sphere.xyz;
+                float b = dot(o, T1);
+                d = max(-b + sqrt(max(b * b - (dot(o, o) - pc.sphere.w * pc.sphere.w), 0.0)), 0.0);
+                N2 = P1 + d * T1 - pc.sphere.xyz;
+                float len = length(N2);
+                N2 = len > 1e-20 ? N2 / len : T1;
+            }
+            vec3 P2 = P1 + d * T1;
+            // Leaving: eta = n_k / 1; TIR clamped to the critical angle as the main pass does.
+            vec3 T2 = refract_clamped(T1, -N2, ior[c]);
+            L_t = seen_from(P2, T2) * exp(-m.spec_b.rgb * d);
+        }
+        vec3 Lc = F * L_r + (1.0 - F) * L_t;
+        if (channels == 1) {
+            L = Lc;
+        } else {
+            L[c] = Lc[c];
+        }
+    }
+    return L;
+}
+
 void main() {
     uint mat = pc.material.x;
     uint kind = material_kind(mat);
@@ -50,14 +166,9 @@ void main() {
         float cos_i = clamp(-dot(pc.axis.xyz, n), 0.0, 1.0);
         Material m = materials[mat];
         vec3 F = kind == MATERIAL_MIRROR ? m.spec_a.rgb : fresnel_conductor(cos_i, m.spec_a.rgb, m.spec_b.rgb);
-#if NEARBY_RECURSIVE
-        // The object's own rectangle is left out: a surface does not see itself by reflection
-        // through its own impostor (pc.material.y = its layer).
-        nearby_skip = pc.material.y;
-        radiance = F * nearby_radiance(in_position, R);
-#else
-        radiance = F * environment(R);
-#endif
+        radiance = F * seen_from(in_position, R);
+    } else if (kind == MATERIAL_DIELECTRIC) {
+        radiance = dielectric_texel(in_position, n, materials[mat]);
     }
     out_texel = vec4(finite_or_zero(radiance), dot(in_position - pc.origin.xyz, pc.axis.xyz));
 }

@@ -10,7 +10,8 @@
 // and switch to the front-facing layer when P2 leaves the refractor's silhouette.
 // §2.2: R (at P1) and T2 (at P2) see the nearby objects through their impostor rectangles
 // (glsl/include/nearby.glsl, Figs. 13, 16, 17), the environment map where none is hit; the
-// two are weighted by the dielectric Fresnel term.
+// two are weighted by the dielectric Fresnel term. Each dielectric is its own OBJ_R with its
+// own rectangle set (§2.2.1), picked by the G-buffer's object index.
 #include "frame.glsl"
 #include "environment.glsl"
 #include "fresnel.glsl"
@@ -28,6 +29,8 @@ layout(constant_id = 7) const uint NEARBY_SEEDS = 8;
 #include "nearby.glsl"
 layout(set = 1, binding = BINDING_GBUF_NORMAL) uniform sampler2D gbuf_normal;
 layout(set = 1, binding = BINDING_GBUF_DEPTH) uniform sampler2D gbuf_depth;
+// a: the object index (exact in half float up to 2048), which picks the rectangle set.
+layout(set = 1, binding = BINDING_GBUF_ALBEDO) uniform sampler2D gbuf_albedo;
 layout(set = 1, binding = BINDING_REFR_BACK_NORMAL) uniform sampler2D back_normal;
 layout(set = 1, binding = BINDING_REFR_BACK_DEPTH) uniform sampler2D back_depth;
 layout(set = 1, binding = BINDING_REFR_FRONT_NORMAL) uniform sampler2D front_normal;
@@ -102,6 +105,7 @@ void main() {
     float dist1 = length(P1 - frame.camera_position.xyz);
     float tol = TOLERANCE * dist1;
     float cos_i = clamp(-dot(V, N1), 0.0, 1.0);
+    nearby_select_object(uint(texelFetch(gbuf_albedo, px, 0).a + 0.5));
     vec3 L_reflected = nearby_radiance(P1, reflect(V, N1));
     // The back layer's thickness along the view ray: the first step of a back-facing search
     // (the paper's "small positive value" would need more iterations to reach the far side).

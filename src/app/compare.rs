@@ -12,6 +12,7 @@ use crate::metrics::image::ErrorMetrics;
 use crate::metrics::timing::Stats;
 use crate::reference::ReferenceSettings;
 use crate::renderer::{FrameTiming, Renderer};
+use crate::scene::techniques::TonemapAdaptiveParams;
 use crate::scene::{Environment, Scene};
 
 use super::bench::{summarize, PassStats};
@@ -178,8 +179,17 @@ pub fn measure(ctx: &Arc<GpuContext>, scene: &Scene, args: &MeasureArgs, referen
         renderer.take_timings().into_iter().filter(|f| f.frame >= args.warmup as u64).collect();
     let (passes, frame) = summarize(&frames);
     let hdr = renderer.read_hdr()?;
-    let ldr = renderer.read_ldr()?;
-    let ref_ldr = output::tonemap(reference, scene.render.exposure);
+    let ref_ldr = output::tonemap_scene(reference, &scene.render);
+    // With the adaptive tone map, both images are mapped with the reference's state (the eye
+    // adapted to the true scene), so that FLIP sees the technique's error under one display
+    // mapping rather than the exposure shift of a second adaptation to the wrong image.
+    let ldr = if scene.render.tonemap == "adaptive" {
+        let p = TonemapAdaptiveParams::from_settings(&scene.render).unwrap_or_default();
+        let state = output::adaptive_stats(reference, &p, scene.render.exposure);
+        output::tonemap_adaptive_with(&hdr, &p, scene.render.exposure, &state)
+    } else {
+        renderer.read_ldr()?
+    };
     let (errors, heatmap) =
         ErrorMetrics::between(&hdr, reference, &ldr, &ref_ldr, scene.camera.width, scene.camera.height);
     Ok(Measurement { passes, frame, errors, hdr, ldr, heatmap })
@@ -254,7 +264,7 @@ pub fn run(args: CompareArgs) -> Result<()> {
     eprintln!("wrote FLIP heat map {}", heat_path.display());
     if let Some((t, r)) = image_outs {
         output::write_png(t, w, h, &m.ldr)?;
-        output::write_png(r, w, h, &output::tonemap(&reference, scene.render.exposure))?;
+        output::write_png(r, w, h, &output::tonemap_scene(&reference, &scene.render))?;
     }
     if let Some(out) = json_out {
         let techniques = serde_json::json!({

@@ -83,10 +83,17 @@ fn parse_resize(v: &[String]) -> Result<Option<(u64, u32, u32)>> {
     Ok(Some((frame, w, h)))
 }
 
-pub fn run(args: DemoArgs) -> Result<()> {
+pub fn run(mut args: DemoArgs) -> Result<()> {
     let resize_at = parse_resize(&args.resize_at)?;
     let path = resolve_scene_path(args.scene.scene.as_deref());
-    let scene = args.scene.load()?;
+    let mut scene = args.scene.load()?;
+    // Volume scenes open with the adaptive tone map (Ihrke et al. 2007 §5.3 displays its
+    // HDR results so) unless the scene file or a --set names one; headless output keeps the
+    // scene's setting. As the first override, every later --set or overlay choice wins.
+    if scene.volume.is_some() && !scene.render.tonemap_named {
+        args.scene.set.insert(0, "render.tonemap=adaptive".into());
+        scene = args.scene.load()?;
+    }
     let screenshot = args.screenshot.as_deref().map(OutputFile::prepare).transpose()?;
     let screenshot_exr = args.screenshot_exr.as_deref().map(OutputFile::prepare).transpose()?;
     if (screenshot.is_some() || screenshot_exr.is_some()) && args.frames.is_none() {
@@ -683,6 +690,7 @@ impl Running {
                 stats: &self.stats,
                 camera_mode: self.camera.mode,
                 has_heightfield,
+                tonemap: self.renderer.tonemap_stats(),
             };
             requests = ui::draw(c, &mut self.ui, &view);
         });
@@ -713,6 +721,8 @@ impl Running {
         let first_use = vk::PipelineStageFlags::TRANSFER;
         self.renderer.graph_mut().reacquire_image(swap_id, first_use);
         let sync = SubmitSync { wait: vec![(wait, first_use)], signal: vec![render_done] };
+        // The adaptive tone map adapts over the frame time (Krawczyk et al. 2005).
+        self.renderer.set_tonemap_time_step(Some(dt));
         let overlay = &mut self.overlay;
         let show_overlay = self.ui.visible && !primitives.is_empty();
         let mut overlay_result = Ok(());

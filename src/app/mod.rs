@@ -97,7 +97,7 @@ pub struct GpuArgs {
 pub struct RenderArgs {
     #[command(flatten)]
     pub scene: SceneArgs,
-    /// Output PNG (tone-mapped sRGB).
+    /// Output PNG (tone-mapped sRGB: render.tonemap = "clamp" (default) or "adaptive").
     #[arg(short, long, default_value = "prism.png")]
     pub output: PathBuf,
     /// Also write linear radiance to this OpenEXR file.
@@ -213,6 +213,12 @@ fn render(args: RenderArgs) -> Result<()> {
         if args.verbose {
             eprintln!("patches after each step: {:?}", l.patch_counts);
         }
+    }
+    if let Some(t) = renderer.tonemap_stats() {
+        eprintln!(
+            "adaptive tone map: L_avg {:.4e}, adapted {:.4e} (converged), key {:.4}, L_white {:.4}",
+            t.l_avg, t.l_adapted, t.key, t.white
+        );
     }
     let total = timing.first().map(|t| t.total_ms()).unwrap_or(0.0);
     eprintln!(

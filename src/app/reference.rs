@@ -103,12 +103,12 @@ pub fn run(args: ReferenceCmd) -> Result<()> {
     let (w, h) = (scene.camera.width, scene.camera.height);
     let is_png = args.output.extension().is_some_and(|e| e.eq_ignore_ascii_case("png"));
     if is_png {
-        output::write_png(out, w, h, &output::tonemap(&image, scene.render.exposure))?;
+        output::write_png(out, w, h, &output::tonemap_scene(&image, &scene.render))?;
     } else {
         output::write_exr(out, w, h, &image)?;
     }
     if let Some(png) = png {
-        output::write_png(png, w, h, &output::tonemap(&image, scene.render.exposure))?;
+        output::write_png(png, w, h, &output::tonemap_scene(&image, &scene.render))?;
     }
     eprintln!(
         "wrote {} ({w}x{h}, scene {}, {} spp, {} photons, {:.1} s on {})",

@@ -175,7 +175,7 @@ pub fn run(args: ReportArgs) -> Result<()> {
         let (_, scene, m, reference) = rows.last().unwrap();
         let (w, h) = (scene.camera.width, scene.camera.height);
         let mut strip = vec![0u8; (3 * w * h * 4) as usize];
-        let ref_ldr = output::tonemap(reference, scene.render.exposure);
+        let ref_ldr = output::tonemap_scene(reference, &scene.render);
         for (k, img) in [&m.ldr, &ref_ldr, &m.heatmap].iter().enumerate() {
             for y in 0..h as usize {
                 let src = &img[y * w as usize * 4..(y + 1) * w as usize * 4];

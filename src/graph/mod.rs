@@ -6,8 +6,12 @@
 //! never record a barrier themselves. Every pass is wrapped in the same debug label and
 //! pair of timestamps, under one snake_case name (rule 5).
 use std::collections::HashSet;
+use std::sync::Arc;
 
-use crate::gpu::{vk, Access, Buffer, BufferBarrier, Cmd, Image, ImageBarrier, TimestampPool, TimestampQuery};
+use crate::gpu::{
+    vk, Access, Buffer, BufferBarrier, Cmd, GpuContext, GpuResult, Image, ImageBarrier, MemoryLocation, TimestampPool,
+    TimestampQuery,
+};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct ImageId(usize);
@@ -266,6 +270,35 @@ impl FrameGraph {
             .chain(buffers.iter().map(|&(id, a)| (Res::Buffer(id.0), a)))
             .collect();
         self.apply(cmd, &uses);
+    }
+
+    /// Copy every layer (or slice) of `image` into host memory: one submission that waits for
+    /// the GPU, then leaves the image in `after` (the access the next frame's passes expect;
+    /// `Access::TransferRead` when nothing needs it back). `bytes_per_texel` is the format's
+    /// size (16 for RGBA32F). For tests, reports and readbacks, never inside a frame.
+    pub fn read_back(
+        &mut self,
+        ctx: &Arc<GpuContext>,
+        image: &Image,
+        id: ImageId,
+        bytes_per_texel: u64,
+        after: Access,
+    ) -> GpuResult<Vec<u8>> {
+        let texels = image.desc.width as u64 * image.desc.height as u64 * image.depth() as u64 * image.layers() as u64;
+        let buffer = Buffer::new(
+            ctx,
+            &format!("{}_readback", image.name()),
+            texels * bytes_per_texel,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuToCpu,
+        )?;
+        let buffer_id = self.register_buffer(&buffer);
+        ctx.one_shot(|cmd| {
+            self.access_now(cmd, &[(id, Access::TransferRead)], &[(buffer_id, Access::TransferWrite)]);
+            cmd.copy_image_to_buffer(image, &buffer);
+            self.access_now(cmd, &[(id, after)], &[(buffer_id, Access::HostRead)]);
+        })?;
+        Ok(buffer.read().to_vec())
     }
 }
 

@@ -250,6 +250,7 @@ impl EikonalPass {
             correction_iterations: params.nearby_iterations,
             correction_tolerance: NEARBY_TOLERANCE,
             seed_samples: NEARBY_SEEDS,
+            back_layer_exit: false,
         };
         let (nearby, nearby_layout) = if kept.is_empty() {
             (NearbyImpostors::stand_in(ctx, EIKONAL_NEARBY, gpu, graph, frame_layout)?, None)
@@ -293,7 +294,6 @@ impl EikonalPass {
                         origin,
                         &kept,
                         scene,
-                        gpu,
                         graph,
                         frame_layout,
                         Some(shading),
@@ -308,7 +308,6 @@ impl EikonalPass {
                         origin,
                         &kept,
                         scene,
-                        gpu,
                         graph,
                         frame_layout,
                         None,

@@ -8,7 +8,7 @@ use crate::gpu::{
     Framebuffer, GpuContext, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Image, PipelineLayout, RenderPass,
     RenderPassDesc, Sampler, VertexLayout,
 };
-use crate::graph::{Frame, ImageId};
+use crate::graph::{BufferId, Frame, ImageId};
 
 pub struct FullscreenPass {
     name: &'static str,
@@ -123,9 +123,24 @@ impl FullscreenPass {
 
     /// Add the pass to `frame`, sampling `reads` in its fragment shader.
     pub fn record<'a>(&'a self, frame: &mut Frame<'_, 'a>, frame_set: DescriptorSet, reads: &[ImageId]) {
+        self.record_with(frame, frame_set, reads, &[]);
+    }
+
+    /// [`FullscreenPass::record`], also declaring `buffers` (the adaptive tone map declares
+    /// its statistics' host read here, so that the graph makes them visible to the host).
+    pub fn record_with<'a>(
+        &'a self,
+        frame: &mut Frame<'_, 'a>,
+        frame_set: DescriptorSet,
+        reads: &[ImageId],
+        buffers: &[(BufferId, Access)],
+    ) {
         let mut pass = frame.pass(self.name);
         for &id in reads {
             pass = pass.read(id, Access::FragmentSampled);
+        }
+        for &(id, access) in buffers {
+            pass = pass.read_buffer(id, access);
         }
         pass.write(self.target, Access::ColorAttachment).record(move |cmd| {
             let clear = if self.clear { Clear::Color([0.0; 4]) } else { Clear::None };

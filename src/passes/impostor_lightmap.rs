@@ -43,9 +43,9 @@ use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
 
 use crate::gpu::{
-    vk, Access, Attachment, Blend, Buffer, Clear, DepthState, DescriptorSet, DescriptorSetLayout, DescriptorWrite,
-    Framebuffer, GpuContext, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc, ImageViewKind,
-    MemoryLocation, PipelineLayout, RenderPass, RenderPassDesc, Sampler, SamplerDesc, VertexLayout,
+    vk, Access, Attachment, Blend, Clear, DepthState, DescriptorSet, DescriptorSetLayout, DescriptorWrite, Framebuffer,
+    GpuContext, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc, ImageViewKind, PipelineLayout,
+    RenderPass, RenderPassDesc, Sampler, SamplerDesc, VertexLayout,
 };
 use crate::graph::{Frame, FrameGraph, ImageId};
 use crate::passes::distance_impostor::{object_bounds, record_maps, ImpostorMap, MapContent};
@@ -702,24 +702,8 @@ impl ImpostorLightmap {
     /// Read the light maps back (RGBA f32, layer after layer; `charts[i]` is layer i). For
     /// tests; waits for the GPU.
     pub fn read_lightmaps(&self, ctx: &Arc<GpuContext>, graph: &mut FrameGraph) -> GpuResult<Vec<[f32; 4]>> {
-        let texels =
-            self.lightmaps.desc.width as u64 * self.lightmaps.desc.height as u64 * self.lightmaps.layers() as u64;
-        let buffer = Buffer::new(
-            ctx,
-            "impostor_lightmap_readback",
-            texels * 16,
-            vk::BufferUsageFlags::TRANSFER_DST,
-            MemoryLocation::GpuToCpu,
-        )?;
-        let buffer_id = graph.register_buffer(&buffer);
-        let id = self.lightmaps_id;
-        ctx.one_shot(|cmd| {
-            graph.access_now(cmd, &[(id, Access::TransferRead)], &[(buffer_id, Access::TransferWrite)]);
-            cmd.copy_image_to_buffer(&self.lightmaps, &buffer);
-            graph.access_now(cmd, &[(id, Access::FragmentSampled)], &[(buffer_id, Access::HostRead)]);
-        })?;
-        ctx.wait_idle()?;
-        Ok(bytemuck::cast_slice(buffer.read()).to_vec())
+        let bytes = graph.read_back(ctx, &self.lightmaps, self.lightmaps_id, 16, Access::FragmentSampled)?;
+        Ok(bytemuck::pod_collect_to_vec(&bytes))
     }
 }
 

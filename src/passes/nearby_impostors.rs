@@ -2,37 +2,49 @@
 //! Caustics" (IEEE TVCG 13(1)), §2.2 and §2.2.1 (Figs. 12, 13): nearby geometry seen through
 //! the refractor stands in as one textured square per object, its *impostor rectangle*.
 //!
-//! Initial pass (Fig. 13), on the CPU ([`nearby_rects`]):
-//! - O_R: the mean of the refractors' vertices ("the average value of object's vertices is
-//!   used in our implementation"); with several dielectric objects their vertices are pooled,
-//!   so one set of rectangles serves all of them (exact for the paper's single OBJ_R).
-//! - For each other object OBJ_i (diffuse, mirror or conductor): O_i = mean of its vertices, d_i = largest vertex distance
-//!   from O_i; RECT_i is the square of side 2 d_i centred at O_i perpendicular to O_R O_i.
+//! Initial pass (Fig. 13), on the CPU ([`nearby_layout`]):
+//! - Every dielectric object is its own OBJ_R with its own *rectangle set* ([`NearbySet`]);
+//!   O_R is the mean of its vertices ("the average value of object's vertices is used in our
+//!   implementation").
+//! - For each other object OBJ_i (diffuse, mirror, conductor or another dielectric): O_i = mean
+//!   of its vertices, d_i = largest vertex distance from O_i; RECT_i is the square of side 2 d_i
+//!   centred at O_i perpendicular to O_R O_i.
 //! - TEX_i is OBJ_i rendered from O_R towards O_i with the parallel projection
 //!   `glOrtho(-d_i, d_i, -d_i, d_i, near, far)`, with the same up vector as the rectangle, so
 //!   that a point of RECT_i and its texel share (u, v): [`NearbyRect::view_proj`].
 //!
-//! Rendering pass ([`NearbyImpostors`], `refraction_hu_qin_nearby`): every TEX_i into one
-//! layer of a 2D array texture (RGBA32F): rgb = the object's shaded radiance (direct light with
-//! shadow maps + environment irradiance, glsl/include/lighting.glsl, exactly as deferred
-//! shading computes it), a = TEX_DEPTH_i as the *axial* distance dot(p - O_R, n_i) from O_R
-//! along the projection direction n_i (linear in the ortho z of Fig. 16, in world units).
-//! Texels where no surface was drawn hold the far plane's axial distance.
+//! Rendering pass ([`NearbyImpostors`], `refraction_hu_qin_nearby`): every TEX_i of every set
+//! into one layer of one 2D array texture (RGBA32F; the rectangles of set s are the layers
+//! `first_s .. first_s + count_s`, one storage buffer holds every set's O_R and rectangles):
+//! rgb = the object's shaded radiance (direct light with shadow maps + environment
+//! irradiance, glsl/include/lighting.glsl, exactly as deferred shading computes it), a =
+//! TEX_DEPTH_i as the *axial* distance dot(p - O_R, n_i) from O_R along the projection
+//! direction n_i (linear in the ortho z of Fig. 16, in world units). Texels where no surface
+//! was drawn hold the far plane's axial distance. The refraction pass picks the set of the
+//! pixel's object by the G-buffer's object index (albedo.a).
 //!
-//! Recursion (§2.2.1, Fig. 24g; [`NearbyDesc::recursion_depth`]): a mirror or conductor's
-//! TEX_k shows it reflecting the projection's view direction: the environment at level 0,
-//! the other impostors of level n - 1 at level n (glsl/nearby/impostor_recursive.frag), one
-//! graph pass per level ([`RECURSION_PASSES`]), ping-ponging between two arrays so that the
-//! last level lands in [`NearbyImpostors::texture`]. OBJ_R itself is never drawn into a
-//! texture.
+//! Recursion (§2.2.1, Fig. 24g; [`NearbyDesc::recursion_depth`]): "If OBJ_k in Fig. 12 is a
+//! reflector or a refractor, we render TEX_k using the above method". A specular OBJ_k's TEX_k
+//! shows it reflecting (mirror, conductor) or reflecting and refracting (dielectric) the
+//! projection's view direction: the environment at level 0, at level n the impostors of level
+//! n - 1 of OBJ_k's *own* rectangle set (which holds OBJ_R), so that OBJ_k needs a set of its
+//! own even when it is a mirror (glsl/nearby/impostor_recursive.frag). One graph pass per level
+//! ([`RECURSION_PASSES`]), ping-ponging between two arrays so that the last level lands in
+//! [`NearbyImpostors::texture`]. A dielectric TEX_k finds its exit point by §2.1.3's search
+//! (Fig. 9) against OBJ_k's back faces rendered in the rectangle's projection ([`BACK_PASS`],
+//! assuming a back-facing exit as §4 does), or (`recursive_exit = "bounding_sphere"`, and
+//! where the search finds nothing) where T1 leaves OBJ_k's bounding sphere (O_k, d_k)
+//! (glsl/nearby/impostor_body.glsl).
 //!
-//! Limits (stated rule, not an error): at most [`MAX_NEARBY_RECTS`] rectangles; with more
-//! diffuse objects the ones whose bounding spheres come closest to O_R are kept and the others
-//! are seen through the environment map only (`prism passes` names them). Recursion depth at
-//! most [`MAX_RECURSION`].
+//! Limits (stated rules, not errors): at most [`MAX_NEARBY_RECTS`] rectangles per set; with
+//! more objects the ones whose bounding spheres come closest to O_R are kept and the others
+//! are seen through the environment map only (`prism passes` names them). At most
+//! [`MAX_NEARBY_SETS`] sets: the dielectrics first (in scene order), then the specular objects
+//! that recursion reaches; an object without a set sees the environment only (its refraction
+//! in the main pass, its TEX_k at every level). Recursion depth at most [`MAX_RECURSION`].
 //!
-//! This module is also used by the photon-buffer caustics (Hu & Qin §3): keep
-//! [`NearbyRect`], [`nearby_rects`] and [`NearbyImpostors`]' public fields stable.
+//! The photon-buffer caustics (Hu & Qin §3) use [`NearbyRect`], [`nearby_objects`] and
+//! [`rect_for`] with their own O_R: keep those stable.
 use std::sync::Arc;
 
 use bytemuck::{Pod, Zeroable};
@@ -47,8 +59,8 @@ use crate::graph::{Frame, FrameGraph, ImageId};
 use crate::renderer::gpu_scene::GpuScene;
 use crate::renderer::targets::DEPTH_FORMAT;
 use crate::scene::{Material, Scene};
-pub use crate::MAX_NEARBY_RECTS;
-use crate::{BINDING_NEARBY_RECTS, BINDING_NEARBY_TEXTURE};
+use crate::{BINDING_NEARBY_BACK, BINDING_NEARBY_RECTS, BINDING_NEARBY_TEXTURE};
+pub use crate::{MAX_NEARBY_RECTS, MAX_NEARBY_SETS};
 
 /// TEX_i (rgb radiance) and TEX_DEPTH_i (a: axial distance from O_R) in one layer.
 pub const NEARBY_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
@@ -154,24 +166,40 @@ pub fn object_center_extent(scene: &Scene, object: usize) -> Option<(Vec3, f32)>
     Some((c, d))
 }
 
-/// O_R: the mean of the vertices of every dielectric object (None without one).
-pub fn refractor_center(scene: &Scene) -> Option<Vec3> {
-    let (mut sum, mut n) = (glam::DVec3::ZERO, 0usize);
-    for o in &scene.objects {
-        if matches!(scene.materials[o.material], Material::Dielectric { .. }) {
-            sum += o.mesh.positions.iter().map(|v| v.as_dvec3()).sum::<glam::DVec3>();
-            n += o.mesh.positions.len();
-        }
-    }
-    (n > 0).then(|| (sum / n as f64).as_vec3())
+fn is_dielectric(scene: &Scene, object: usize) -> bool {
+    matches!(scene.materials[scene.objects[object].material], Material::Dielectric { .. })
 }
 
-/// The objects that get a rectangle (every one but the dielectrics, which make up OBJ_R:
-/// diffuse ones, and mirrors and conductors for §2.2.1's recursive reflections), nearest first (by the gap between O_R and their
-/// bounding sphere), at most [`MAX_NEARBY_RECTS`]; and those left out by that limit.
+/// Whether OBJ_k's texture shows it reflecting or refracting (§2.2.1's recursive case), so
+/// that it needs a rectangle set of its own as a viewpoint.
+fn is_specular(scene: &Scene, object: usize) -> bool {
+    !scene.materials[scene.objects[object].material].is_diffuse()
+}
+
+/// The photon-buffer caustics' receivers (src/passes/photon_buffer.rs): every object but the
+/// dielectrics, nearest first (by the gap between O_R and their bounding sphere), at most
+/// [`MAX_NEARBY_RECTS`]; and those left out by that limit. The refraction's rectangle sets
+/// use [`set_objects`].
 pub fn nearby_objects(scene: &Scene, origin_r: Vec3) -> (Vec<usize>, Vec<usize>) {
     let mut all: Vec<(f32, usize)> = (0..scene.objects.len())
         .filter(|&i| !matches!(scene.materials[scene.objects[i].material], Material::Dielectric { .. }))
+        .filter_map(|i| {
+            object_center_extent(scene, i).filter(|(_, d)| *d > 0.0).map(|(c, d)| (c.distance(origin_r) - d, i))
+        })
+        .collect();
+    all.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    let kept = all.iter().take(MAX_NEARBY_RECTS as usize).map(|&(_, i)| i).collect();
+    let dropped = all.iter().skip(MAX_NEARBY_RECTS as usize).map(|&(_, i)| i).collect();
+    (kept, dropped)
+}
+
+/// The objects that get a rectangle in the set of OBJ_R = `viewer` (every object but OBJ_R
+/// itself: diffuse ones, mirrors, conductors and the other dielectrics, §2.2.1), nearest first
+/// (by the gap between O_R and their bounding sphere), at most [`MAX_NEARBY_RECTS`]; and those
+/// left out by that limit.
+pub fn set_objects(scene: &Scene, viewer: usize, origin_r: Vec3) -> (Vec<usize>, Vec<usize>) {
+    let mut all: Vec<(f32, usize)> = (0..scene.objects.len())
+        .filter(|&i| i != viewer)
         .filter_map(|i| {
             object_center_extent(scene, i).filter(|(_, d)| *d > 0.0).map(|(c, d)| (c.distance(origin_r) - d, i))
         })
@@ -188,34 +216,92 @@ pub fn rect_for(scene: &Scene, object: usize, origin_r: Vec3, layer: u32) -> Opt
     (half_size > 0.0).then(|| NearbyRect::new(object, layer, origin_r, center, half_size))
 }
 
-/// O_R and the rectangles of `scene` (empty without a dielectric or a diffuse object).
-pub fn nearby_rects(scene: &Scene) -> (Vec3, Vec<NearbyRect>) {
-    let Some(origin_r) = refractor_center(scene) else { return (Vec3::ZERO, Vec::new()) };
-    let (kept, _) = nearby_objects(scene, origin_r);
-    (origin_r, rects_of(scene, origin_r, &kept))
-}
-
-/// The rectangles of `objects` seen from `origin_r`, layers in order.
-pub fn rects_of(scene: &Scene, origin_r: Vec3, objects: &[usize]) -> Vec<NearbyRect> {
-    let mut rects = Vec::new();
-    for &i in objects {
-        if let Some(r) = rect_for(scene, i, origin_r, rects.len() as u32) {
-            rects.push(r);
-        }
-    }
-    rects
-}
-
-/// Another way to shade the textures than glsl/nearby/impostor.frag (branch `eikview`: the
-/// eikonal light volumes for the caustic under the volume, src/passes/eikonal_nearby.rs): a
-/// fragment shader with a second descriptor set (owned by the caller, alive as long as the
-/// impostors), its specialisation constants, and the images that set samples.
+/// Another way to shade level 0 of the textures than glsl/nearby/impostor.frag (issue 7: the
+/// eikonal light volumes for the caustic under a volume, src/passes/eikonal_nearby.rs): a
+/// fragment shader including impostor_body.glsl with a third descriptor set (set 2, owned by
+/// the caller, alive as long as the impostors), its specialisation constants (ids from 4 on,
+/// after impostor_body.glsl's 0..3), and the images that set samples.
 pub struct ImpostorShading<'a> {
     pub fragment_shader: &'static str,
     pub set_layout: &'a DescriptorSetLayout,
     pub set: DescriptorSet,
     pub specialization: &'a [u32],
     pub reads: Vec<ImageId>,
+}
+
+/// The rectangle set of one OBJ_R: its rectangles are `rects[first .. first + count]` of
+/// [`NearbyLayout::rects`] (and the same layers of the texture array).
+#[derive(Clone, Debug, PartialEq)]
+pub struct NearbySet {
+    /// Index into `Scene::objects` of OBJ_R.
+    pub object: usize,
+    /// O_R: the mean of OBJ_R's vertices.
+    pub origin: Vec3,
+    pub first: u32,
+    pub count: u32,
+    /// Objects left out of this set by [`MAX_NEARBY_RECTS`] (seen through the environment).
+    pub dropped: Vec<usize>,
+}
+
+/// Every rectangle set of a scene, the rectangles, and the recursion levels they need.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct NearbyLayout {
+    pub sets: Vec<NearbySet>,
+    /// All sets' rectangles; `NearbyRect::layer` is the index here.
+    pub rects: Vec<NearbyRect>,
+    /// Recursion levels beyond 0: `recursion_depth` (at most [`MAX_RECURSION`]) when a
+    /// rectangle stands for a specular object, else 0 (nothing would change between levels).
+    pub levels: u32,
+    /// Specular objects that needed a set beyond [`MAX_NEARBY_SETS`] (environment only).
+    pub without_set: Vec<usize>,
+}
+
+impl NearbyLayout {
+    /// The set whose OBJ_R is `object`.
+    pub fn set_of(&self, object: usize) -> Option<usize> {
+        self.sets.iter().position(|s| s.object == object)
+    }
+}
+
+/// The rectangle sets of `scene` (Fig. 13's initial pass, once per OBJ_R): one per dielectric
+/// (the refraction pass looks them up), and with `recursion_depth` > 0 one per specular object
+/// that has a rectangle in a set (its recursive TEX_k looks up its own set), in that order, at
+/// most [`MAX_NEARBY_SETS`]. Empty without a dielectric.
+pub fn nearby_layout(scene: &Scene, recursion_depth: u32) -> NearbyLayout {
+    let mut viewers: Vec<usize> = (0..scene.objects.len()).filter(|&i| is_dielectric(scene, i)).collect();
+    let mut layout = NearbyLayout::default();
+    let mut next = 0;
+    while next < viewers.len() {
+        let viewer = viewers[next];
+        next += 1;
+        let Some((origin, extent)) = object_center_extent(scene, viewer) else { continue };
+        if extent <= 0.0 {
+            continue;
+        }
+        if layout.sets.len() == MAX_NEARBY_SETS as usize {
+            layout.without_set.push(viewer);
+            continue;
+        }
+        let (kept, dropped) = set_objects(scene, viewer, origin);
+        let first = layout.rects.len() as u32;
+        for i in kept {
+            if let Some(r) = rect_for(scene, i, origin, layout.rects.len() as u32) {
+                if recursion_depth > 0 && is_specular(scene, i) && !viewers.contains(&i) {
+                    viewers.push(i);
+                }
+                layout.rects.push(r);
+            }
+        }
+        let count = layout.rects.len() as u32 - first;
+        layout.sets.push(NearbySet { object: viewer, origin, first, count, dropped });
+    }
+    if layout.rects.is_empty() {
+        return NearbyLayout::default();
+    }
+    if layout.rects.iter().any(|r| is_specular(scene, r.object)) {
+        layout.levels = recursion_depth.min(MAX_RECURSION);
+    }
+    layout
 }
 
 /// std430 record of one rectangle (glsl/include/nearby.glsl, `NearbyRect`).
@@ -234,14 +320,19 @@ pub struct GpuNearbyRect {
 }
 const _: () = assert!(std::mem::size_of::<GpuNearbyRect>() == 128);
 
-/// Header of the rectangle buffer: count, then O_R.
+/// Header of the rectangle buffer (glsl/include/nearby.glsl, `NearbyRects`): the counts, then
+/// each set's rectangle range and OBJ_R, then each set's O_R.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 struct GpuNearbyHeader {
+    /// x rectangles over all sets, y sets.
     info: [u32; 4],
-    origin: [f32; 4],
+    /// x first rectangle, y count, z OBJ_R's object index (the G-buffer's albedo.a).
+    sets: [[u32; 4]; MAX_NEARBY_SETS as usize],
+    /// xyz O_R.
+    origins: [[f32; 4]; MAX_NEARBY_SETS as usize],
 }
-const _: () = assert!(std::mem::size_of::<GpuNearbyHeader>() == 32);
+const _: () = assert!(std::mem::size_of::<GpuNearbyHeader>() == 16 + 32 * MAX_NEARBY_SETS as usize);
 
 impl From<&NearbyRect> for GpuNearbyRect {
     fn from(r: &NearbyRect) -> Self {
@@ -257,10 +348,15 @@ impl From<&NearbyRect> for GpuNearbyRect {
 }
 
 /// Bytes of the storage buffer `NearbyRects` (header + one record per rectangle).
-pub fn rect_buffer_bytes(origin_r: Vec3, rects: &[NearbyRect]) -> Vec<u8> {
-    let header = GpuNearbyHeader { info: [rects.len() as u32, 0, 0, 0], origin: origin_r.extend(1.0).to_array() };
+pub fn rect_buffer_bytes(layout: &NearbyLayout) -> Vec<u8> {
+    let mut header = GpuNearbyHeader::zeroed();
+    header.info = [layout.rects.len() as u32, layout.sets.len() as u32, 0, 0];
+    for (k, set) in layout.sets.iter().enumerate().take(MAX_NEARBY_SETS as usize) {
+        header.sets[k] = [set.first, set.count, set.object as u32, 0];
+        header.origins[k] = set.origin.extend(1.0).to_array();
+    }
     let mut bytes = bytemuck::bytes_of(&header).to_vec();
-    for r in rects {
+    for r in &layout.rects {
         bytes.extend_from_slice(bytemuck::bytes_of(&GpuNearbyRect::from(r)));
     }
     bytes
@@ -271,32 +367,44 @@ pub fn rect_buffer_bytes(origin_r: Vec3, rects: &[NearbyRect]) -> Vec<u8> {
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 struct ImpostorPush {
     view_proj: [[f32; 4]; 4],
-    /// xyz O_R.
+    /// xyz O_R (of the set the rectangle belongs to).
     origin: [f32; 4],
     /// xyz n_i.
     axis: [f32; 4],
-    /// x material index, y the rectangle's layer (left out of its own reflection).
+    /// x material index, y the rectangle's layer, z OBJ_k's own set (the recursive levels
+    /// look it up; u32::MAX: none, the environment).
     material: [u32; 4],
+    /// xyz O_k, w d_k: OBJ_k's bounding sphere (a dielectric's second interface).
+    sphere: [f32; 4],
 }
-const _: () = assert!(std::mem::size_of::<ImpostorPush>() == 112);
-
-/// Whether OBJ_k's texture shows a reflection (§2.2.1's recursive case).
-fn is_metal(scene: &Scene, object: usize) -> bool {
-    matches!(scene.materials[scene.objects[object].material], Material::Mirror { .. } | Material::Conductor { .. })
-}
+const _: () = assert!(std::mem::size_of::<ImpostorPush>() == 128);
 
 /// How the impostor textures are made beyond [`NearbyImpostors::new`]'s defaults.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct NearbyDesc {
     /// Edge of each TEX_i in texels.
     pub resolution: u32,
-    /// §2.2.1 recursion: 0 = mirrors and conductors in the textures reflect the environment
-    /// only; n = they reflect the other impostors of level n - 1 (one extra pass per level).
+    /// §2.2.1 recursion: 0 = mirrors, conductors and dielectrics in the textures reflect and
+    /// refract the environment only; n = the impostors of level n - 1 of their own rectangle
+    /// set (one extra pass per level).
     pub recursion_depth: u32,
     /// The lookup used by the recursive levels (as `[render.hu_qin]`'s).
     pub correction_iterations: u32,
     pub correction_tolerance: f32,
     pub seed_samples: u32,
+    /// A dielectric OBJ_k's second interface in its texture: the Fig. 9 search against its
+    /// back faces in the rectangle's projection ([`BACK_PASS`]), else its bounding sphere.
+    pub back_layer_exit: bool,
+}
+
+/// The dielectric OBJ_k's back faces in their rectangles' parallel projections (normal and
+/// axial depth), rendered once per frame before level 0: the exit surface of Fig. 9's search.
+pub const BACK_PASS: &str = "refraction_hu_qin_nearby_back";
+
+/// Whether a rectangle of `layout` stands for a dielectric (whose texture refracts, so that
+/// [`BACK_PASS`] renders its back faces when `back_layer_exit` is on).
+pub fn has_dielectric_rect(scene: &Scene, layout: &NearbyLayout) -> bool {
+    layout.rects.iter().any(|r| is_dielectric(scene, r.object))
 }
 
 /// Passes of the recursion levels 1..=MAX_RECURSION (level 0 is `name` itself).
@@ -304,16 +412,6 @@ pub const RECURSION_PASSES: [&str; 3] =
     ["refraction_hu_qin_nearby_r1", "refraction_hu_qin_nearby_r2", "refraction_hu_qin_nearby_r3"];
 /// Deepest recursion: each level is one more rendering of every texture.
 pub const MAX_RECURSION: u32 = RECURSION_PASSES.len() as u32;
-
-/// How many recursion levels beyond 0 the scene's rectangles need: none without a mirror or
-/// conductor among them (nothing would change from level to level).
-pub fn recursion_levels(scene: &Scene, rects: &[NearbyRect], depth: u32) -> u32 {
-    if rects.iter().any(|r| is_metal(scene, r.object)) {
-        depth.min(MAX_RECURSION)
-    } else {
-        0
-    }
-}
 
 /// One array of textures (recursion levels ping-pong between two).
 struct TextureArray {
@@ -328,8 +426,8 @@ struct TextureArray {
 /// rectangle buffer the shading reads.
 pub struct NearbyImpostors {
     name: &'static str,
-    pub origin: Vec3,
-    pub rects: Vec<NearbyRect>,
+    /// The rectangle sets (one per OBJ_R) and all their rectangles.
+    pub layout: NearbyLayout,
     /// Edge of each TEX_i in texels.
     pub resolution: u32,
     /// 2D array, one layer per rectangle (one cleared stand-in layer without rectangles): the
@@ -348,25 +446,39 @@ pub struct NearbyImpostors {
     render_pass: RenderPass,
     _layout: PipelineLayout,
     pipeline: GraphicsPipeline,
-    /// Recursive levels: pipeline, layout, set-1 layout, and the sets reading array 0 / 1.
+    /// Recursive levels: pipeline and the sets reading array 0 / 1.
     recursive: Option<Recursive>,
+    _set_layout: DescriptorSetLayout,
+    _sampler: Sampler,
+    /// Set 1 reading `texture` (level 0 binds it without reading the array).
+    set_texture: DescriptorSet,
+    _back: Image,
+    back_id: ImageId,
+    back_pass: Option<BackPass>,
     draws: Vec<usize>,
-    metal: Vec<bool>,
-    /// [`ImpostorShading`]'s set and reads (level 0).
+    /// Per rectangle: OBJ_k reflects or refracts (recursive levels re-render it).
+    specular: Vec<bool>,
+    /// Per rectangle: OBJ_k's own set (u32::MAX: none).
+    lookup_set: Vec<u32>,
+    /// [`ImpostorShading`]'s set and the images it reads (level 0).
     extra: Option<(DescriptorSet, Vec<ImageId>)>,
 }
 
 struct Recursive {
-    _set_layout: DescriptorSetLayout,
-    _layout: PipelineLayout,
     pipeline: GraphicsPipeline,
-    _sampler: Sampler,
     /// [reads `texture`, reads `other`].
     sets: [DescriptorSet; 2],
 }
 
+/// [`BACK_PASS`]: one framebuffer per dielectric rectangle (index into the rectangles).
+struct BackPass {
+    _layout: PipelineLayout,
+    pipeline: GraphicsPipeline,
+    framebuffers: Vec<(usize, Framebuffer)>,
+}
+
 impl NearbyImpostors {
-    /// The rectangles of [`nearby_rects`] and their textures, `resolution`^2 texels each, no
+    /// The rectangle sets of [`nearby_layout`] and their textures, `resolution`^2 texels each, no
     /// recursion.
     pub fn new(
         ctx: &Arc<GpuContext>,
@@ -383,6 +495,7 @@ impl NearbyImpostors {
             correction_iterations: 3,
             correction_tolerance: 1e-3,
             seed_samples: 8,
+            back_layer_exit: true,
         };
         Self::with_desc(ctx, name, &desc, scene, gpu, graph, frame_layout)
     }
@@ -397,15 +510,35 @@ impl NearbyImpostors {
         graph: &mut FrameGraph,
         frame_layout: &DescriptorSetLayout,
     ) -> GpuResult<Self> {
-        let (origin, rects) = nearby_rects(scene);
-        let rects: Vec<NearbyRect> = rects.into_iter().filter(|r| r.object < gpu.draws.len()).collect();
-        let metal = rects.iter().map(|r| is_metal(scene, r.object)).collect();
-        let levels = recursion_levels(scene, &rects, desc.recursion_depth);
-        Self::build(ctx, name, desc, origin, rects, metal, levels, graph, frame_layout, None)
+        let layout = nearby_layout(scene, desc.recursion_depth);
+        // Every object has a draw (GpuScene uploads them all); a stale layout would index past it.
+        debug_assert!(layout.rects.iter().all(|r| r.object < gpu.draws.len()), "impostor of an object without a draw");
+        let specular = layout.rects.iter().map(|r| is_specular(scene, r.object)).collect();
+        let lookup_set = layout.rects.iter().map(|r| layout.set_of(r.object).map_or(u32::MAX, |s| s as u32)).collect();
+        // Each array holds every set's textures; lavapipe allocates at most 2 GiB at once.
+        let bytes = layout.rects.len() as u64 * (desc.resolution as u64).pow(2) * 16;
+        if bytes > 1 << 30 {
+            return Err(crate::gpu::GpuError::Unsupported(format!(
+                "the {} impostor textures of {} rectangle set(s) at render.hu_qin.impostor_resolution = {} need {} MiB \
+                 per array (at most 1024): lower impostor_resolution",
+                layout.rects.len(),
+                layout.sets.len(),
+                desc.resolution,
+                bytes >> 20
+            )));
+        }
+        let back: Vec<usize> = if desc.back_layer_exit {
+            (0..layout.rects.len()).filter(|&i| is_dielectric(scene, layout.rects[i].object)).collect()
+        } else {
+            Vec::new()
+        };
+        Self::build(ctx, name, desc, layout, specular, lookup_set, back, graph, frame_layout, None)
     }
 
-    /// The rectangles of `objects` around `origin` (not the dielectrics' centre), without
-    /// recursion, shaded by `shading` when given (branch `eikview`: around an eikonal volume).
+    /// One rectangle set around `origin` that belongs to no object (issue 7: the eikonal
+    /// volume's centre, src/passes/eikonal_nearby.rs) over `objects`, without recursion or
+    /// back faces (mirrors reflect the environment, dielectrics refract it), shaded by
+    /// `shading` when given.
     #[allow(clippy::too_many_arguments)]
     pub fn around(
         ctx: &Arc<GpuContext>,
@@ -414,15 +547,23 @@ impl NearbyImpostors {
         origin: Vec3,
         objects: &[usize],
         scene: &Scene,
-        gpu: &GpuScene,
         graph: &mut FrameGraph,
         frame_layout: &DescriptorSetLayout,
         shading: Option<ImpostorShading<'_>>,
     ) -> GpuResult<Self> {
-        let rects: Vec<NearbyRect> =
-            rects_of(scene, origin, objects).into_iter().filter(|r| r.object < gpu.draws.len()).collect();
-        let metal = rects.iter().map(|r| is_metal(scene, r.object)).collect();
-        Self::build(ctx, name, desc, origin, rects, metal, 0, graph, frame_layout, shading)
+        let mut layout = NearbyLayout::default();
+        for &i in objects.iter().take(MAX_NEARBY_RECTS as usize) {
+            if let Some(r) = rect_for(scene, i, origin, layout.rects.len() as u32) {
+                layout.rects.push(r);
+            }
+        }
+        let dropped = objects.iter().skip(MAX_NEARBY_RECTS as usize).copied().collect();
+        let count = layout.rects.len() as u32;
+        layout.sets.push(NearbySet { object: usize::MAX, origin, first: 0, count, dropped });
+        let specular = vec![false; layout.rects.len()];
+        let lookup_set = vec![u32::MAX; layout.rects.len()];
+        let desc = NearbyDesc { recursion_depth: 0, back_layer_exit: false, ..*desc };
+        Self::build(ctx, name, &desc, layout, specular, lookup_set, Vec::new(), graph, frame_layout, shading)
     }
 
     /// No rectangles: a cleared 1x1 stand-in texture and an empty rectangle buffer, for
@@ -440,13 +581,25 @@ impl NearbyImpostors {
             correction_iterations: 0,
             correction_tolerance: 1e-3,
             seed_samples: 1,
+            back_layer_exit: false,
         };
-        Self::build(ctx, name, &desc, Vec3::ZERO, Vec::new(), Vec::new(), 0, graph, frame_layout, None)
+        Self::build(
+            ctx,
+            name,
+            &desc,
+            NearbyLayout::default(),
+            Vec::new(),
+            Vec::new(),
+            Vec::new(),
+            graph,
+            frame_layout,
+            None,
+        )
     }
 
     /// Whether any rectangle exists (otherwise [`Self::record`] must not be called).
     pub fn is_empty(&self) -> bool {
-        self.rects.is_empty()
+        self.layout.rects.is_empty()
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -454,14 +607,15 @@ impl NearbyImpostors {
         ctx: &Arc<GpuContext>,
         name: &'static str,
         desc: &NearbyDesc,
-        origin: Vec3,
-        rects: Vec<NearbyRect>,
-        metal: Vec<bool>,
-        levels: u32,
+        nearby: NearbyLayout,
+        specular: Vec<bool>,
+        lookup_set: Vec<u32>,
+        back_rects: Vec<usize>,
         graph: &mut FrameGraph,
         frame_layout: &DescriptorSetLayout,
         shading: Option<ImpostorShading<'_>>,
     ) -> GpuResult<Self> {
+        let (rects, levels) = (&nearby.rects, nearby.levels);
         let layers_n = rects.len().max(1) as u32;
         let size = if rects.is_empty() { 1 } else { desc.resolution };
         use vk::ImageUsageFlags as U;
@@ -489,18 +643,40 @@ impl NearbyImpostors {
             },
         )?;
         let depth_id = graph.register_image(&depth);
+        // The dielectrics' back faces (a 1x1 stand-in when none is rendered).
+        let back_size = if back_rects.is_empty() { 1 } else { size };
+        let back = Image::new(
+            ctx,
+            &ImageDesc {
+                name: format!("{name}_back"),
+                format: NEARBY_FORMAT,
+                width: back_size,
+                height: back_size,
+                layers: if back_rects.is_empty() { 1 } else { layers_n },
+                usage: U::COLOR_ATTACHMENT | U::SAMPLED | U::TRANSFER_DST,
+                view: ImageViewKind::D2Array,
+            },
+        )?;
+        let back_id = graph.register_image(&back);
+        let mut stand_ins = Vec::new();
         if rects.is_empty() {
-            // Nothing renders the stand-in: give it defined contents and the sampled layout.
+            stand_ins.push((&texture, texture_id));
+        }
+        if back_rects.is_empty() {
+            stand_ins.push((&back, back_id));
+        }
+        for (image, id) in stand_ins {
+            // Nothing renders a stand-in: give it defined contents and the sampled layout.
             ctx.one_shot(|cmd| {
-                graph.access_now(cmd, &[(texture_id, Access::TransferWrite)], &[]);
-                cmd.clear_color_image(&texture, [0.0; 4]);
-                graph.access_now(cmd, &[(texture_id, Access::FragmentSampled)], &[]);
+                graph.access_now(cmd, &[(id, Access::TransferWrite)], &[]);
+                cmd.clear_color_image(image, [0.0; 4]);
+                graph.access_now(cmd, &[(id, Access::FragmentSampled)], &[]);
             })?;
         }
         let rect_buffer = Buffer::with_data(
             ctx,
             &format!("{name}_rects"),
-            &rect_buffer_bytes(origin, &rects),
+            &rect_buffer_bytes(&nearby),
             vk::BufferUsageFlags::STORAGE_BUFFER,
         )?;
         let render_pass = RenderPass::new(
@@ -513,31 +689,96 @@ impl NearbyImpostors {
             },
         )?;
         let push_size = std::mem::size_of::<ImpostorPush>() as u32;
-        let pipeline_desc = |fragment_shader, specialization| GraphicsPipelineDesc {
+        let pipeline_desc = |fragment_shader, specialization, cull| GraphicsPipelineDesc {
             name,
             vertex_shader: "nearby/impostor.vert",
             fragment_shader,
             vertex: VertexLayout::Mesh,
             topology: vk::PrimitiveTopology::TRIANGLE_LIST,
-            // Quads are one-sided; O_R may see either side.
-            cull: vk::CullModeFlags::NONE,
+            cull,
             depth: DepthState::LESS,
             blend: &[Blend::Off],
             specialization,
         };
+        // Set 1 of both texture pipelines: the rectangles and the array of the level below
+        // (read by the recursive levels only) and the dielectrics' back faces.
+        let stage = vk::ShaderStageFlags::FRAGMENT;
+        let set_layout = DescriptorSetLayout::new(
+            ctx,
+            name,
+            &[
+                (BINDING_NEARBY_RECTS, vk::DescriptorType::STORAGE_BUFFER, stage),
+                (BINDING_NEARBY_TEXTURE, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, stage),
+                (BINDING_NEARBY_BACK, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, stage),
+            ],
+            2,
+        )?;
+        let sampler = Sampler::new(ctx, &format!("{name}_nearest"), SamplerDesc::NEAREST_CLAMP)?;
+        let sampled = Access::FragmentSampled.info(false).layout;
+        let set_reading = |view| {
+            set_layout.allocate(
+                name,
+                &[
+                    DescriptorWrite::Storage(BINDING_NEARBY_RECTS, &rect_buffer),
+                    DescriptorWrite::Sampled(BINDING_NEARBY_TEXTURE, view, &sampler, sampled),
+                    DescriptorWrite::Sampled(BINDING_NEARBY_BACK, back.view(), &sampler, sampled),
+                ],
+            )
+        };
+        // Specialisation constants 0..3 of impostor_body.glsl.
+        let spec = [
+            desc.correction_iterations,
+            desc.correction_tolerance.to_bits(),
+            desc.seed_samples,
+            u32::from(!back_rects.is_empty()),
+        ];
+        // An ImpostorShading's constants follow those 0..3.
+        let shading_spec: Vec<u32> =
+            spec.iter().chain(shading.as_ref().map_or(&[][..], |sh| sh.specialization)).copied().collect();
+        // Quads are one-sided; O_R may see either side.
         let (layout, pipeline, extra) = match &shading {
             Some(sh) => {
-                let layout = PipelineLayout::new(ctx, name, &[frame_layout, sh.set_layout], push_size)?;
-                let desc = pipeline_desc(sh.fragment_shader, sh.specialization);
+                let layout = PipelineLayout::new(ctx, name, &[frame_layout, &set_layout, sh.set_layout], push_size)?;
+                let desc = pipeline_desc(sh.fragment_shader, &shading_spec[..], vk::CullModeFlags::NONE);
                 let pipeline = GraphicsPipeline::new(ctx, &desc, &layout, &render_pass)?;
                 (layout, pipeline, Some((sh.set, sh.reads.clone())))
             }
             None => {
-                let layout = PipelineLayout::new(ctx, name, &[frame_layout], push_size)?;
-                let pipeline =
-                    GraphicsPipeline::new(ctx, &pipeline_desc("nearby/impostor.frag", &[]), &layout, &render_pass)?;
+                let layout = PipelineLayout::new(ctx, name, &[frame_layout, &set_layout], push_size)?;
+                let desc = pipeline_desc("nearby/impostor.frag", &spec[..], vk::CullModeFlags::NONE);
+                let pipeline = GraphicsPipeline::new(ctx, &desc, &layout, &render_pass)?;
                 (layout, pipeline, None)
             }
+        };
+        let back_pass = if back_rects.is_empty() {
+            None
+        } else {
+            let blayout = PipelineLayout::new(ctx, BACK_PASS, &[frame_layout], push_size)?;
+            // The nearest back faces. Meshes are wound counter-clockwise seen from outside
+            // (src/passes/refractor_layers.rs), but this projection, unlike the camera's, is
+            // not y-flipped: its back faces come out counter-clockwise, i.e. as the
+            // pipeline's front faces, so BACK is the mode that culls the faces towards O_R.
+            let bpipeline = GraphicsPipeline::new(
+                ctx,
+                &pipeline_desc("nearby/impostor_back.frag", &[], vk::CullModeFlags::BACK),
+                &blayout,
+                &render_pass,
+            )?;
+            let fbs = back_rects
+                .iter()
+                .map(|&i| {
+                    let r = &rects[i];
+                    Framebuffer::new(
+                        ctx,
+                        &format!("{BACK_PASS}_{}", r.layer),
+                        &render_pass,
+                        &[back.layer_view(r.layer), depth.layer_view(r.layer)],
+                        back.extent(),
+                    )
+                    .map(|fb| (i, fb))
+                })
+                .collect::<GpuResult<Vec<_>>>()?;
+            Some(BackPass { _layout: blayout, pipeline: bpipeline, framebuffers: fbs })
         };
         let framebuffers_of = |image: &Image, label: &str| -> GpuResult<Vec<Framebuffer>> {
             rects
@@ -554,58 +795,25 @@ impl NearbyImpostors {
                 .collect()
         };
         let framebuffers = framebuffers_of(&texture, name)?;
+        let set_texture = set_reading(texture.view())?;
         let (other, recursive) = if levels > 0 {
             let image = Image::new(ctx, &array_desc(format!("{name}_texture_b")))?;
             let id = graph.register_image(&image);
             let fbs = framebuffers_of(&image, &format!("{name}_b"))?;
-            let stage = vk::ShaderStageFlags::FRAGMENT;
-            let set_layout = DescriptorSetLayout::new(
-                ctx,
-                name,
-                &[
-                    (BINDING_NEARBY_RECTS, vk::DescriptorType::STORAGE_BUFFER, stage),
-                    (BINDING_NEARBY_TEXTURE, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, stage),
-                ],
-                2,
-            )?;
-            let sampler = Sampler::new(ctx, &format!("{name}_nearest"), SamplerDesc::NEAREST_CLAMP)?;
-            let sampled = Access::FragmentSampled.info(false).layout;
-            let set_reading = |view| {
-                set_layout.allocate(
-                    name,
-                    &[
-                        DescriptorWrite::Storage(BINDING_NEARBY_RECTS, &rect_buffer),
-                        DescriptorWrite::Sampled(BINDING_NEARBY_TEXTURE, view, &sampler, sampled),
-                    ],
-                )
-            };
-            let sets = [set_reading(texture.view())?, set_reading(image.view())?];
-            let rlayout = PipelineLayout::new(ctx, name, &[frame_layout, &set_layout], push_size)?;
-            let spec = [desc.correction_iterations, desc.correction_tolerance.to_bits(), desc.seed_samples];
+            let sets = [set_texture, set_reading(image.view())?];
             let rpipeline = GraphicsPipeline::new(
                 ctx,
-                &pipeline_desc("nearby/impostor_recursive.frag", &spec),
-                &rlayout,
+                &pipeline_desc("nearby/impostor_recursive.frag", &spec, vk::CullModeFlags::NONE),
+                &layout,
                 &render_pass,
             )?;
-            (
-                Some(TextureArray { _image: image, id, framebuffers: fbs }),
-                Some(Recursive {
-                    _set_layout: set_layout,
-                    _layout: rlayout,
-                    pipeline: rpipeline,
-                    _sampler: sampler,
-                    sets,
-                }),
-            )
+            (Some(TextureArray { _image: image, id, framebuffers: fbs }), Some(Recursive { pipeline: rpipeline, sets }))
         } else {
             (None, None)
         };
         let draws = rects.iter().map(|r| r.object).collect();
         Ok(NearbyImpostors {
             name,
-            origin,
-            rects,
             resolution: size,
             texture,
             texture_id,
@@ -619,9 +827,17 @@ impl NearbyImpostors {
             _layout: layout,
             pipeline,
             recursive,
+            _set_layout: set_layout,
+            _sampler: sampler,
+            set_texture,
+            _back: back,
+            back_id,
+            back_pass,
             draws,
-            metal,
+            specular,
+            lookup_set,
             extra,
+            layout: nearby,
         })
     }
 
@@ -635,7 +851,39 @@ impl NearbyImpostors {
         frame_set: DescriptorSet,
         shadow_atlas: Option<ImageId>,
     ) {
-        let origin = self.origin.extend(1.0).to_array();
+        // Each rectangle's O_R: that of the set it belongs to.
+        let mut origins = vec![[0.0; 4]; self.layout.rects.len()];
+        for set in &self.layout.sets {
+            for o in &mut origins[set.first as usize..(set.first + set.count) as usize] {
+                *o = set.origin.extend(1.0).to_array();
+            }
+        }
+        if let Some(bp) = &self.back_pass {
+            let mut pass = frame.pass(BACK_PASS).write(self.back_id, Access::ColorAttachment);
+            pass = pass.write(self.depth_id, Access::DepthAttachment);
+            let origins = origins.clone();
+            pass.record(move |cmd| {
+                for (i, fb) in &bp.framebuffers {
+                    let r = &self.layout.rects[*i];
+                    // Empty texels: no normal (the test for a surface), depth the far plane.
+                    let clears = [Clear::Color([0.0, 0.0, 0.0, r.far]), Clear::Depth(1.0)];
+                    cmd.begin_render_pass(&self.render_pass, fb, &clears);
+                    cmd.bind_graphics(&bp.pipeline, &[frame_set]);
+                    cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
+                    let d = &scene.draws[self.draws[*i]];
+                    let push = ImpostorPush {
+                        view_proj: r.view_proj.to_cols_array_2d(),
+                        origin: origins[*i],
+                        axis: r.axis.extend(0.0).to_array(),
+                        material: [d.material, r.layer, self.lookup_set[*i], 0],
+                        sphere: r.center.extend(r.half_size).to_array(),
+                    };
+                    cmd.push_graphics(&bp.pipeline, &push);
+                    cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
+                    cmd.end_render_pass();
+                }
+            });
+        }
         for level in 0..=self.levels {
             // Level `level` writes array (levels - level) % 2: 0 is `texture`, 1 `other`.
             let dst = ((self.levels - level) % 2) as usize;
@@ -646,10 +894,11 @@ impl NearbyImpostors {
             let name = if level == 0 { self.name } else { RECURSION_PASSES[level as usize - 1] };
             let mut pass = frame.pass(name);
             pass = pass.write(dst_id, Access::ColorAttachment).write(self.depth_id, Access::DepthAttachment);
+            pass = pass.read(self.back_id, Access::FragmentSampled);
             if let Some(atlas) = shadow_atlas {
                 pass = pass.read(atlas, Access::FragmentSampled);
             }
-            if let Some((_, reads)) = &self.extra {
+            if let (0, Some((_, reads))) = (level, &self.extra) {
                 for &id in reads {
                     pass = pass.read(id, Access::FragmentSampled);
                 }
@@ -658,21 +907,26 @@ impl NearbyImpostors {
             if let (Some(_), Some(o)) = (recursive, &self.other) {
                 pass = pass.read(if dst == 0 { o.id } else { self.texture_id }, Access::FragmentSampled);
             }
+            let origins = origins.clone();
             pass.record(move |cmd| {
-                for (i, (r, fb)) in self.rects.iter().zip(dst_fbs).enumerate() {
+                for (i, (r, fb)) in self.layout.rects.iter().zip(dst_fbs).enumerate() {
                     // Empty texels: TEX_DEPTH = the far plane (never a surface, see DEPTH_MARGIN).
                     let clears = [Clear::Color([0.0, 0.0, 0.0, r.far]), Clear::Depth(1.0)];
                     cmd.begin_render_pass(&self.render_pass, fb, &clears);
                     let pipeline = match recursive {
-                        // Diffuse layers are the same at every level; mirrors read the other array.
-                        Some(rec) if self.metal[i] => {
+                        // Diffuse layers are the same at every level; specular ones read the
+                        // other array.
+                        Some(rec) if self.specular[i] => {
                             cmd.bind_graphics(&rec.pipeline, &[frame_set, rec.sets[1 - dst]]);
                             &rec.pipeline
                         }
+                        // Level 0 reads no array: the set reading `texture` only fills set 1.
                         _ => {
                             match &self.extra {
-                                Some((set, _)) => cmd.bind_graphics(&self.pipeline, &[frame_set, *set]),
-                                None => cmd.bind_graphics(&self.pipeline, &[frame_set]),
+                                Some((set, _)) => {
+                                    cmd.bind_graphics(&self.pipeline, &[frame_set, self.set_texture, *set])
+                                }
+                                None => cmd.bind_graphics(&self.pipeline, &[frame_set, self.set_texture]),
                             }
                             &self.pipeline
                         }
@@ -681,9 +935,10 @@ impl NearbyImpostors {
                     let d = &scene.draws[self.draws[i]];
                     let push = ImpostorPush {
                         view_proj: r.view_proj.to_cols_array_2d(),
-                        origin,
+                        origin: origins[i],
                         axis: r.axis.extend(0.0).to_array(),
-                        material: [d.material, r.layer, 0, 0],
+                        material: [d.material, r.layer, self.lookup_set[i], 0],
+                        sphere: r.center.extend(r.half_size).to_array(),
                     };
                     cmd.push_graphics(pipeline, &push);
                     cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);

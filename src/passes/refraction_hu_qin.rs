@@ -3,9 +3,10 @@
 //! interfaces without preprocessing. `render.refraction = "hu_qin"`, parameters
 //! `[render.hu_qin]` ([`HuQinParams`]).
 //!
-//! - `refraction_hu_qin_nearby` (with `nearby = true` and diffuse objects in the scene): §2.2,
-//!   the impostor rectangles and textures TEX_i of the nearby objects
-//!   (src/passes/nearby_impostors.rs).
+//! - `refraction_hu_qin_nearby` (with `nearby = true` and other objects in the scene): §2.2,
+//!   the impostor rectangles and textures TEX_i of the nearby objects, one rectangle set per
+//!   dielectric (src/passes/nearby_impostors.rs), and `_r1`.. the §2.2.1 recursion levels;
+//!   before them `refraction_hu_qin_nearby_back`, the back faces of the dielectric impostors.
 //! - `refraction_hu_qin_layers`: depth and normal of the refractors' nearest back faces and
 //!   nearest front faces (Fig. 4, "initial pass").
 //! - `refraction_hu_qin`: glsl/refraction/hu_qin.frag: T1, the binary search for the dividing
@@ -27,8 +28,8 @@ use crate::renderer::targets::Targets;
 use crate::scene::techniques::HuQinParams;
 use crate::scene::Scene;
 use crate::{
-    BINDING_GBUF_DEPTH, BINDING_GBUF_NORMAL, BINDING_NEARBY_RECTS, BINDING_NEARBY_TEXTURE, BINDING_REFR_BACK_DEPTH,
-    BINDING_REFR_BACK_NORMAL, BINDING_REFR_FRONT_DEPTH, BINDING_REFR_FRONT_NORMAL,
+    BINDING_GBUF_ALBEDO, BINDING_GBUF_DEPTH, BINDING_GBUF_NORMAL, BINDING_NEARBY_RECTS, BINDING_NEARBY_TEXTURE,
+    BINDING_REFR_BACK_DEPTH, BINDING_REFR_BACK_NORMAL, BINDING_REFR_FRONT_DEPTH, BINDING_REFR_FRONT_NORMAL,
 };
 
 use super::nearby_impostors::{NearbyDesc, NearbyImpostors};
@@ -62,6 +63,7 @@ impl HuQinPass {
                 correction_iterations: params.correction_iterations,
                 correction_tolerance: params.correction_tolerance,
                 seed_samples: params.seed_samples,
+                back_layer_exit: params.recursive_exit_back_layer,
             };
             NearbyImpostors::with_desc(ctx, REFRACTION_HU_QIN_NEARBY, &desc, scene, gpu, graph, frame_layout)?
         } else {
@@ -88,6 +90,7 @@ impl HuQinPass {
                 inputs: &[
                     (BINDING_GBUF_NORMAL, &targets.gbuf_normal, targets.gbuf_normal_id),
                     (BINDING_GBUF_DEPTH, &targets.depth, targets.depth_id),
+                    (BINDING_GBUF_ALBEDO, &targets.gbuf_albedo, targets.gbuf_albedo_id),
                     (BINDING_REFR_BACK_NORMAL, &b.normal, b.normal_id),
                     (BINDING_REFR_BACK_DEPTH, &b.depth, b.depth_id),
                     (BINDING_REFR_FRONT_NORMAL, &f.normal, f.normal_id),

@@ -28,10 +28,10 @@ use crate::passes::refraction_wyman::WymanPass;
 use crate::passes::refractor_layers::DebugTarget;
 use crate::passes::shadow_map::{ShadowMapPass, FAR_DISTANCE};
 use crate::passes::specular_single::{Mode, SpecularSinglePass};
-use crate::passes::tonemap::TonemapPass;
+use crate::passes::tonemap::{AdaptiveStats, TonemapPass};
 use crate::scene::techniques::{
     CausticsMapParams, EikonalParams, Flux, HuQinParams, ImpostorLightmapParams, ImpostorParams, PhotonBufferParams,
-    WymanParams,
+    TonemapAdaptiveParams, WymanParams,
 };
 use crate::scene::{Camera, Scene};
 use crate::{
@@ -152,6 +152,11 @@ pub struct Renderer {
     pending: Vec<Option<(u64, Vec<TimestampQuery>)>>,
     completed: Vec<FrameTiming>,
     frame_index: u64,
+    /// Seconds since the last frame for the adaptive tone map's temporal adaptation; `None`:
+    /// converged (headless). The first frame of a renderer is always converged.
+    tonemap_dt: Option<f32>,
+    /// What the adaptive tone map derived in the last completed frame.
+    tonemap_stats: Option<AdaptiveStats>,
     ctx: Arc<GpuContext>,
 }
 
@@ -376,6 +381,13 @@ impl Renderer {
             }
             _ => None,
         };
+        let tonemap = if plan::has(&plan, plan::TONEMAP_ADAPT) {
+            let p = TonemapAdaptiveParams::from_settings(&scene.render)
+                .map_err(|error| RenderError::Param { technique: "tonemap_adaptive", error })?;
+            Some((p, scene.render.exposure))
+        } else {
+            None
+        };
         let objects = (0..scene.objects.len())
             .map(|i| ObjectState {
                 name: scene.objects[i].name.clone(),
@@ -415,7 +427,7 @@ impl Renderer {
             eikonal,
             photon_buffer,
             photon_caustics,
-            tonemap: TonemapPass::new(ctx, &frame_layout, &targets, &nearest)?,
+            tonemap: TonemapPass::new(ctx, &frame_layout, &targets, &nearest, &mut graph, tonemap, FRAMES_IN_FLIGHT)?,
         };
 
         let mut uniforms = FrameUniforms {
@@ -450,6 +462,8 @@ impl Renderer {
             pending: vec![None; FRAMES_IN_FLIGHT],
             completed: Vec::new(),
             frame_index: 0,
+            tonemap_dt: None,
+            tonemap_stats: None,
             ctx: ctx.clone(),
         })
     }
@@ -490,8 +504,23 @@ impl Renderer {
         }
     }
 
+    /// Let the adaptive tone map adapt over time: `Some(seconds since the last frame)` (the
+    /// demo window), or `None` for the converged state of every headless render.
+    pub fn set_tonemap_time_step(&mut self, dt: Option<f32>) {
+        self.tonemap_dt = dt;
+    }
+
+    /// L_avg, the adapted luminance, the key and L_white of the last completed frame (the
+    /// adaptive tone map only).
+    pub fn tonemap_stats(&self) -> Option<AdaptiveStats> {
+        self.tonemap_stats
+    }
+
     fn collect_slot(&mut self, slot: usize) -> Result<(), RenderError> {
         if let Some((frame, queries)) = self.pending[slot].take() {
+            if let Some(s) = self.passes.tonemap.stats(slot) {
+                self.tonemap_stats = Some(s);
+            }
             let pool = &self.timestamps[slot];
             let last = queries.iter().map(|q| q.end + 1).max().unwrap_or(0);
             if let Some(ticks) = pool.read_ticks(last)? {
@@ -561,6 +590,7 @@ impl Renderer {
         if let Some(p) = &mut self.passes.impostor_lightmap {
             p.begin_frame();
         }
+        let dt = if self.frame_index == 0 { None } else { self.tonemap_dt };
         let Renderer { passes, frame_sets, scene, targets, timestamps, commands, graph, .. } = self;
         let shadow_atlas = passes.shadow_map.as_ref().map(|_| targets.shadow_atlas_id);
         let frame_set = frame_sets[slot];
@@ -607,7 +637,7 @@ impl Renderer {
         if let Some(p) = &passes.eikonal {
             p.record(&mut frame, scene, targets, frame_set, shadow_atlas);
         }
-        passes.tonemap.record(&mut frame, targets, frame_set);
+        passes.tonemap.record(&mut frame, targets, frame_set, slot, dt);
         debug_assert_eq!(frame.pass_names(), self.plan.iter().map(|p| p.name).collect::<Vec<_>>());
         extra(&mut frame, FinalImage { ldr: &targets.ldr, ldr_id: targets.ldr_id });
         // `cmd` borrows `commands` until its last use here.
@@ -635,15 +665,6 @@ impl Renderer {
 
     fn read_image(&mut self, id: ImageId, bytes_per_texel: u64) -> Result<Vec<u8>, RenderError> {
         self.finish()?;
-        let (w, h) = (self.targets.width as u64, self.targets.height as u64);
-        let buffer = Buffer::new(
-            &self.ctx,
-            "readback",
-            w * h * bytes_per_texel,
-            vk::BufferUsageFlags::TRANSFER_DST,
-            MemoryLocation::GpuToCpu,
-        )?;
-        let buffer_id = self.graph.register_buffer(&buffer);
         let image = if id == self.targets.hdr_id {
             &self.targets.hdr
         } else if id == self.targets.ldr_id {
@@ -651,13 +672,7 @@ impl Renderer {
         } else {
             self.passes.debug_targets().find(|d| d.id == id).map(|d| &d.image).unwrap_or(&self.targets.ldr)
         };
-        let graph = &mut self.graph;
-        self.ctx.one_shot(|cmd| {
-            graph.access_now(cmd, &[(id, Access::TransferRead)], &[(buffer_id, Access::TransferWrite)]);
-            cmd.copy_image_to_buffer(image, &buffer);
-            graph.access_now(cmd, &[], &[(buffer_id, Access::HostRead)]);
-        })?;
-        Ok(buffer.read().to_vec())
+        Ok(self.graph.read_back(&self.ctx, image, id, bytes_per_texel, Access::TransferRead)?)
     }
 
     /// Linear radiance, RGBA f32, row 0 at the top.
@@ -679,24 +694,9 @@ impl Renderer {
             return Ok(None);
         }
         self.finish()?;
-        let atlas = &self.targets.caustic_atlas;
-        let texels = atlas.desc.width as u64 * atlas.desc.height as u64 * atlas.layers() as u64;
-        let buffer = Buffer::new(
-            &self.ctx,
-            "caustic_readback",
-            texels * 16,
-            vk::BufferUsageFlags::TRANSFER_DST,
-            MemoryLocation::GpuToCpu,
-        )?;
-        let buffer_id = self.graph.register_buffer(&buffer);
-        let id = self.targets.caustic_atlas_id;
-        let graph = &mut self.graph;
-        self.ctx.one_shot(|cmd| {
-            graph.access_now(cmd, &[(id, Access::TransferRead)], &[(buffer_id, Access::TransferWrite)]);
-            cmd.copy_image_to_buffer(atlas, &buffer);
-            graph.access_now(cmd, &[(id, Access::FragmentSampled)], &[(buffer_id, Access::HostRead)]);
-        })?;
-        let values: &[[f32; 4]] = bytemuck::cast_slice(buffer.read());
+        let (atlas, id) = (&self.targets.caustic_atlas, self.targets.caustic_atlas_id);
+        let bytes = self.graph.read_back(&self.ctx, atlas, id, 16, Access::FragmentSampled)?;
+        let values: &[[f32; 4]] = bytemuck::cast_slice(&bytes);
         let mut sum = [0f64; 3];
         for v in values {
             for c in 0..3 {
@@ -730,30 +730,13 @@ impl Renderer {
             return Ok(None);
         };
         let r = p.refractors();
-        let (image, id) = (&r.layers[0].0, r.layers[0].1);
-        let texels = image.desc.width as u64 * image.desc.height as u64 * image.layers() as u64;
-        let buffer = Buffer::new(
-            &self.ctx,
-            "visible_readback",
-            texels * 16,
-            vk::BufferUsageFlags::TRANSFER_DST,
-            MemoryLocation::GpuToCpu,
-        )?;
-        let buffer_id = self.graph.register_buffer(&buffer);
+        let (image, id, visible_id) = (&r.layers[0].0, r.layers[0].1, r.visible_id);
         let graph = &mut self.graph;
-        let visible_id = r.visible_id;
-        self.ctx.one_shot(|cmd| {
-            graph.access_now(
-                cmd,
-                &[(id, Access::TransferRead)],
-                &[(buffer_id, Access::TransferWrite), (visible_id, Access::HostRead)],
-            );
-            cmd.copy_image_to_buffer(image, &buffer);
-            graph.access_now(cmd, &[], &[(buffer_id, Access::HostRead)]);
-        })?;
+        self.ctx.one_shot(|cmd| graph.access_now(cmd, &[], &[(visible_id, Access::HostRead)]))?;
+        let bytes = self.graph.read_back(&self.ctx, image, id, 16, Access::TransferRead)?;
         let faces = image.layers() as usize;
         let per_face = (image.desc.width * image.desc.height) as usize;
-        let front: &[[f32; 4]] = bytemuck::cast_slice(buffer.read());
+        let front: &[[f32; 4]] = bytemuck::cast_slice(&bytes);
         let covered =
             (0..faces).map(|f| front[f * per_face..(f + 1) * per_face].iter().filter(|t| t[3] > 0.0).count() as u32);
         let visible: &[u32] = bytemuck::cast_slice(r.visible.read());
@@ -776,22 +759,8 @@ impl Renderer {
             [(&p.photons.0, p.photons.1), (&p.flux.0, p.flux.1), (&p.counts.0, p.counts.1), (&c.textures, c.id)];
         let mut out = Vec::new();
         for (image, id) in images {
-            let texels = image.desc.width as u64 * image.desc.height as u64 * image.layers() as u64;
-            let buffer = Buffer::new(
-                &self.ctx,
-                "photon_readback",
-                texels * 16,
-                vk::BufferUsageFlags::TRANSFER_DST,
-                MemoryLocation::GpuToCpu,
-            )?;
-            let buffer_id = self.graph.register_buffer(&buffer);
-            let graph = &mut self.graph;
-            self.ctx.one_shot(|cmd| {
-                graph.access_now(cmd, &[(id, Access::TransferRead)], &[(buffer_id, Access::TransferWrite)]);
-                cmd.copy_image_to_buffer(image, &buffer);
-                graph.access_now(cmd, &[(id, Access::FragmentSampled)], &[(buffer_id, Access::HostRead)]);
-            })?;
-            out.push((image.desc.width, bytemuck::pod_collect_to_vec::<u8, [f32; 4]>(buffer.read())));
+            let bytes = self.graph.read_back(&self.ctx, image, id, 16, Access::FragmentSampled)?;
+            out.push((image.desc.width, bytemuck::pod_collect_to_vec::<u8, [f32; 4]>(&bytes)));
         }
         let mut it = out.into_iter();
         let mut next = || it.next().unwrap();

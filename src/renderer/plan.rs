@@ -10,6 +10,10 @@ pub const DEFERRED_SHADING: &str = "deferred_shading";
 pub const REFRACTION_SINGLE: &str = "refraction_single";
 pub const REFLECTION_SINGLE: &str = "reflection_single";
 pub const TONEMAP: &str = "tonemap";
+/// The adaptive tone map (src/passes/tonemap.rs; `render.tonemap = "adaptive"`): the
+/// log-average luminance by a reduction on the GPU, then the adaptation state.
+pub const TONEMAP_LOG_AVERAGE: &str = "tonemap_log_average";
+pub const TONEMAP_ADAPT: &str = "tonemap_adapt";
 /// Wyman 2005 (src/passes/refraction_wyman.rs): the refractor layers, then the shading.
 pub const REFRACTION_WYMAN_LAYERS: &str = "refraction_wyman_layers";
 pub const REFRACTION_WYMAN: &str = "refraction_wyman";
@@ -172,7 +176,22 @@ pub fn plan(scene: &Scene) -> Vec<PlannedPass> {
             reason: format!("volume {} ({nx}x{ny}x{nz}): curved view rays, Ihrke et al. 2007 §4.1, §5.3", v.name),
         });
     }
-    passes.push(PlannedPass { name: TONEMAP, reason: "linear radiance -> sRGB PNG output".into() });
+    if scene.render.tonemap == "adaptive" {
+        passes.push(PlannedPass {
+            name: TONEMAP_LOG_AVERAGE,
+            reason: "log-average luminance of the HDR image, reduced on the GPU (render.tonemap = \"adaptive\")".into(),
+        });
+        passes.push(PlannedPass {
+            name: TONEMAP_ADAPT,
+            reason: "adapted luminance, key and L_white (Krawczyk et al. 2005, Ihrke et al. 2007 §5.3)".into(),
+        });
+        passes.push(PlannedPass {
+            name: TONEMAP,
+            reason: "linear radiance -> sRGB: Reinhard's operator on the adapted luminance".into(),
+        });
+    } else {
+        passes.push(PlannedPass { name: TONEMAP, reason: "linear radiance -> sRGB PNG output".into() });
+    }
     passes
 }
 
@@ -317,37 +336,76 @@ fn image_space_refraction(scene: &Scene, dielectric: &[String]) -> Vec<PlannedPa
     passes
 }
 
-/// Hu & Qin 2007 §2.2: the impostor textures, when `render.hu_qin.nearby` is on and there are
-/// diffuse objects to stand in for.
+/// Hu & Qin 2007 §2.2: the impostor textures, when `render.hu_qin.nearby` is on and a
+/// dielectric has other objects to stand in for; §2.2.1's recursion levels when a rectangle
+/// stands for a specular object (another dielectric, a mirror or a conductor).
 fn hu_qin_nearby(scene: &Scene) -> Vec<PlannedPass> {
-    use crate::passes::nearby_impostors::RECURSION_PASSES;
-    use crate::passes::nearby_impostors::{nearby_objects, nearby_rects, recursion_levels, refractor_center};
+    use crate::passes::nearby_impostors::{has_dielectric_rect, nearby_layout, BACK_PASS, RECURSION_PASSES};
     let params = crate::scene::techniques::HuQinParams::from_settings(&scene.render).unwrap_or_default();
-    let Some(origin) = refractor_center(scene).filter(|_| params.nearby) else { return Vec::new() };
-    let (kept, dropped) = nearby_objects(scene, origin);
-    if kept.is_empty() {
+    if !params.nearby {
         return Vec::new();
     }
-    let names = |v: &[usize]| v.iter().map(|&i| scene.objects[i].name.clone()).collect::<Vec<_>>();
+    let layout = nearby_layout(scene, params.recursion_depth);
+    if layout.rects.is_empty() {
+        return Vec::new();
+    }
+    let name = |i: usize| scene.objects[i].name.clone();
+    let sets: Vec<String> = layout
+        .sets
+        .iter()
+        .map(|s| {
+            let kept: Vec<String> =
+                layout.rects[s.first as usize..(s.first + s.count) as usize].iter().map(|r| name(r.object)).collect();
+            let mut t = format!("{} sees {}", name(s.object), list(&kept));
+            if !s.dropped.is_empty() {
+                let dropped: Vec<String> = s.dropped.iter().map(|&i| name(i)).collect();
+                t += &format!(
+                    " ({} left to the environment map: at most {} rectangles, the nearest are kept)",
+                    list(&dropped),
+                    crate::MAX_NEARBY_RECTS
+                );
+            }
+            t
+        })
+        .collect();
     let mut reason = format!(
-        "impostor rectangles + textures of nearby {} for the refracted and reflected rays (Hu & Qin 2007 §2.2)",
-        list(&names(&kept))
+        "impostor rectangles + textures for the refracted and reflected rays (Hu & Qin 2007 §2.2): {}",
+        sets.join("; ")
     );
-    if !dropped.is_empty() {
+    if !layout.without_set.is_empty() {
+        let names: Vec<String> = layout.without_set.iter().map(|&i| name(i)).collect();
         reason += &format!(
-            "; {} left to the environment map (at most {} rectangles, the nearest are kept)",
-            list(&names(&dropped)),
-            crate::MAX_NEARBY_RECTS
+            "; {} without a rectangle set of its own (at most {} sets): environment only",
+            list(&names),
+            crate::MAX_NEARBY_SETS
         );
     }
-    let mut passes = vec![PlannedPass { name: REFRACTION_HU_QIN_NEARBY, reason }];
-    let (_, rects) = nearby_rects(scene);
-    for level in 1..=recursion_levels(scene, &rects, params.recursion_depth) {
+    let mut passes = Vec::new();
+    if params.recursive_exit_back_layer && has_dielectric_rect(scene, &layout) {
+        let names: Vec<String> = layout
+            .rects
+            .iter()
+            .filter(|r| matches!(scene.materials[scene.objects[r.object].material], Material::Dielectric { .. }))
+            .map(|r| name(r.object))
+            .collect();
+        passes.push(PlannedPass {
+            name: BACK_PASS,
+            reason: format!(
+                "back faces (normal, depth) of dielectric impostor(s) {} in their rectangles' projections: the exit \
+                 surface of their refraction (Hu & Qin 2007 §2.1.3 in §2.2.1's textures; \
+                 render.hu_qin.recursive_exit = \"back_layer\")",
+                list(&names)
+            ),
+        });
+    }
+    passes.push(PlannedPass { name: REFRACTION_HU_QIN_NEARBY, reason });
+    for level in 1..=layout.levels {
         passes.push(PlannedPass {
             name: RECURSION_PASSES[level as usize - 1],
             reason: format!(
-                "recursion level {level} of {} (render.hu_qin.recursion_depth): mirrors/conductors among them reflect \
-                 the impostors of level {} (Hu & Qin 2007 §2.2.1)",
+                "recursion level {level} of {} (render.hu_qin.recursion_depth): the mirrors, conductors and \
+                 dielectrics among the impostors reflect and refract the impostors of level {} of their own \
+                 rectangle sets (Hu & Qin 2007 §2.2.1)",
                 params.recursion_depth,
                 level - 1
             ),

@@ -39,9 +39,17 @@ pub const REFLECTION_TECHNIQUES: &[&str] = &["single", "impostor"];
 /// Accepted values of `render.caustics`; the first is the default.
 pub const CAUSTICS_TECHNIQUES: &[&str] = &["none", "caustics_map", "photon_buffer", "impostor_lightmap"];
 
+/// Accepted values of `render.tonemap`; the first is the default (SCENES.md's PNG rule).
+/// `adaptive`: Ihrke et al. 2007 §5.3 after Krawczyk et al. 2005 (src/passes/tonemap.rs).
+pub const TONEMAPS: &[&str] = &["clamp", "adaptive"];
+
 /// The technique keys of `[render]` and their accepted values.
-pub const TECHNIQUE_KEYS: &[(&str, &[&str])] =
-    &[("refraction", REFRACTION_TECHNIQUES), ("reflection", REFLECTION_TECHNIQUES), ("caustics", CAUSTICS_TECHNIQUES)];
+pub const TECHNIQUE_KEYS: &[(&str, &[&str])] = &[
+    ("refraction", REFRACTION_TECHNIQUES),
+    ("reflection", REFLECTION_TECHNIQUES),
+    ("caustics", CAUSTICS_TECHNIQUES),
+    ("tonemap", TONEMAPS),
+];
 
 /// Every `shape` an object may have.
 pub const SHAPES: &[&str] = &["sphere", "quad", "box", "torus", "open_cylinder", "lathe", "heightfield", "mesh"];
@@ -248,6 +256,11 @@ pub struct RenderSettings {
     pub caustics: String,
     pub shadow_map_size: u32,
     pub exposure: f32,
+    /// One of [`TONEMAPS`]: how PNG output (and the window) maps radiance to 8 bits.
+    pub tonemap: String,
+    /// Whether the scene file or a `--set` named `render.tonemap` (the demo window picks the
+    /// adaptive tone map for volume scenes only when it was not named).
+    pub tonemap_named: bool,
     /// Longitude segments of tessellated spheres (latitude: half).
     pub sphere_segments: u32,
     /// Technique parameter tables, `[render.<name>]`, validated by the technique.
@@ -262,6 +275,8 @@ impl Default for RenderSettings {
             caustics: CAUSTICS_TECHNIQUES[0].to_string(),
             shadow_map_size: 1024,
             exposure: 1.0,
+            tonemap: TONEMAPS[0].to_string(),
+            tonemap_named: false,
             sphere_segments: 128,
             params: BTreeMap::new(),
         }
@@ -403,7 +418,8 @@ fn render_settings(t: Option<&toml::Table>, src: &Source) -> Result<RenderSettin
     let Some(t) = t else {
         return Ok(r);
     };
-    const KEYS: &[&str] = &["refraction", "reflection", "caustics", "shadow_map_size", "exposure", "sphere_segments"];
+    const KEYS: &[&str] =
+        &["refraction", "reflection", "caustics", "tonemap", "shadow_map_size", "exposure", "sphere_segments"];
     let int = |key: &str, v: &toml::Value, lo: i64, hi: i64| -> Result<u32, SceneError> {
         let path = format!("render.{key}");
         match v.as_integer() {
@@ -444,6 +460,10 @@ fn render_settings(t: Option<&toml::Table>, src: &Source) -> Result<RenderSettin
             match key.as_str() {
                 "refraction" => r.refraction = name.to_string(),
                 "reflection" => r.reflection = name.to_string(),
+                "tonemap" => {
+                    r.tonemap = name.to_string();
+                    r.tonemap_named = true;
+                }
                 _ => r.caustics = name.to_string(),
             }
             continue;

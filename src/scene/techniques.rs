@@ -78,6 +78,10 @@ pub struct HuQinParams {
     /// §2.2.1 recursive reflections: mirrors/conductors in the impostor textures reflect the
     /// environment only (0) or the impostors of the level below (1, 2, 3).
     pub recursion_depth: u32,
+    /// The second interface of a dielectric OBJ_k in its impostor texture: the Fig. 9 search
+    /// against OBJ_k's back faces in the rectangle's parallel projection (true), or OBJ_k's
+    /// bounding sphere (false, `recursive_exit = "bounding_sphere"`).
+    pub recursive_exit_back_layer: bool,
 }
 
 impl Default for HuQinParams {
@@ -96,6 +100,7 @@ impl Default for HuQinParams {
             correction_tolerance: 1e-3,
             seed_samples: 8,
             recursion_depth: 1,
+            recursive_exit_back_layer: true,
         }
     }
 }
@@ -441,6 +446,7 @@ impl HuQinParams {
         "correction_tolerance",
         "seed_samples",
         "recursion_depth",
+        "recursive_exit",
     ];
 
     pub fn from_table(t: Option<&toml::Table>) -> Result<Self, ParamError> {
@@ -454,8 +460,9 @@ impl HuQinParams {
                 "assume_back_facing" => p.assume_back_facing = boolean(key, v)?,
                 "debug" => p.debug = boolean(key, v)?,
                 "nearby" => p.nearby = boolean(key, v)?,
-                // 2048^2 texels x 16 bytes x MAX_NEARBY_RECTS (8) layers = 512 MiB, a quarter of
-                // lavapipe's 2 GiB allocation limit.
+                // 2048^2 texels x 16 bytes x MAX_NEARBY_RECTS (8) layers = 512 MiB per rectangle
+                // set, a quarter of lavapipe's 2 GiB allocation limit; with several sets the
+                // renderer refuses arrays over 1 GiB (src/passes/nearby_impostors.rs).
                 "impostor_resolution" => p.impostor_resolution = integer(key, v, 4, 2048)?,
                 // Fig. 16 converges in "two or three" steps; beyond 64 it only burns time.
                 "correction_iterations" => p.correction_iterations = integer(key, v, 0, 64)?,
@@ -464,6 +471,22 @@ impl HuQinParams {
                 "seed_samples" => p.seed_samples = integer(key, v, 1, 256)?,
                 // One pass per level (src/passes/nearby_impostors.rs, MAX_RECURSION).
                 "recursion_depth" => p.recursion_depth = integer(key, v, 0, 3)?,
+                "recursive_exit" => {
+                    p.recursive_exit_back_layer =
+                        match v.as_str() {
+                            Some("back_layer") => true,
+                            Some("bounding_sphere") => false,
+                            _ => return Err(ParamError {
+                                key: key.clone(),
+                                message: format!(
+                                    "`recursive_exit` must be \"back_layer\" or \"bounding_sphere\", not {v}"
+                                ),
+                                hint: "Hu & Qin 2007 §2.2.1: a dielectric impostor's exit point, by the Fig. 9 search \
+                                       against its back faces or where its bounding sphere is left"
+                                    .into(),
+                            }),
+                        }
+                }
                 _ => return Err(unknown("hu_qin", key, Self::KEYS)),
             }
         }
@@ -604,7 +627,76 @@ pub fn check(technique: &str, t: &toml::Table) -> Result<(), ParamError> {
         "impostor" => ImpostorParams::from_table(Some(t)).map(|_| ()),
         "impostor_lightmap" => ImpostorLightmapParams::from_table(Some(t)).map(|_| ()),
         "eikonal" => EikonalParams::from_table(Some(t)).map(|_| ()),
+        "tonemap_adaptive" => TonemapAdaptiveParams::from_table(Some(t)).map(|_| ()),
         _ => Ok(()),
+    }
+}
+
+/// `[render.tonemap_adaptive]`: the adaptive tone map of `render.tonemap = "adaptive"`
+/// (Ihrke et al. 2007 §5.3 after Krawczyk, Myszkowski & Seidel 2005; src/passes/tonemap.rs).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TonemapAdaptiveParams {
+    /// Reinhard et al. 2002's L_white in units of the scaled luminance; `None` ("auto"):
+    /// the largest scaled luminance of the frame, at least 1 (Reinhard's own choice is the
+    /// largest; with 1 the curve is the identity for images that never exceed 1).
+    pub white: Option<f32>,
+    /// The key a; `None` ("auto"): Krawczyk et al. 2005's a = 1.03 - 2 / (2 + log10(L_a + 1))
+    /// (§3.1, Eq. 11).
+    pub key: Option<f32>,
+    /// The delta of the log-average L_avg = exp(mean(log(delta + L_w))), in cd/m^2: keeps
+    /// black pixels from sending the average to 0 (Reinhard et al. 2002, Eq. 1).
+    pub delta: f32,
+    /// Time constants of the rods and the cones in seconds (Krawczyk et al. 2005, Eq. 6: 0.4 s
+    /// and 0.1 s), blended by the rods' sensitivity 0.04 / (0.04 + L_a) (Eqs. 7, 12).
+    pub tau_rod: f32,
+    pub tau_cone: f32,
+    /// cd/m^2 per unit of the scene's radiance: the absolute scale that the key and the
+    /// rod/cone blend depend on (1: radiance read as cd/m^2).
+    pub luminance_scale: f32,
+}
+
+impl Default for TonemapAdaptiveParams {
+    fn default() -> Self {
+        TonemapAdaptiveParams { white: None, key: None, delta: 1e-4, tau_rod: 0.4, tau_cone: 0.1, luminance_scale: 1.0 }
+    }
+}
+
+impl TonemapAdaptiveParams {
+    pub const KEYS: &'static [&'static str] = &["white", "key", "delta", "tau_rod", "tau_cone", "luminance_scale"];
+
+    pub fn from_table(t: Option<&toml::Table>) -> Result<Self, ParamError> {
+        let mut p = TonemapAdaptiveParams::default();
+        // "auto" or a number in range.
+        let auto_or = |key: &str, v: &toml::Value, lo: f64, hi: f64| -> Result<Option<f32>, ParamError> {
+            if v.as_str() == Some("auto") {
+                return Ok(None);
+            }
+            number(key, v, lo, hi).map(Some).map_err(|e| ParamError {
+                message: format!("`{key}` must be \"auto\" or a number from {lo:e} to {hi:e}, not {v}"),
+                ..e
+            })
+        };
+        for (key, v) in t.into_iter().flatten() {
+            match key.as_str() {
+                // Below 1e-3 almost every pixel maps to white; above 1e6 the curve is L/(1+L).
+                "white" => p.white = auto_or(key, v, 1e-3, 1e6)?,
+                // Reinhard's keys run from 0.045 (low key) to 0.72 (high key); 0 would be black.
+                "key" => p.key = auto_or(key, v, 1e-3, 4.0)?,
+                // 0 would let one black pixel make L_avg 0 (log 0); above 1e3 cd/m^2 it
+                // dominates every luminance a scene is lit with.
+                "delta" => p.delta = number(key, v, 1e-12, 1e3)?,
+                // 0 s is instant adaptation (allowed); an hour is a frozen state.
+                "tau_rod" => p.tau_rod = number(key, v, 0.0, 3600.0)?,
+                "tau_cone" => p.tau_cone = number(key, v, 0.0, 3600.0)?,
+                "luminance_scale" => p.luminance_scale = number(key, v, 1e-6, 1e6)?,
+                _ => return Err(unknown("tonemap_adaptive", key, Self::KEYS)),
+            }
+        }
+        Ok(p)
+    }
+
+    pub fn from_settings(r: &RenderSettings) -> Result<Self, ParamError> {
+        Self::from_table(r.params.get("tonemap_adaptive"))
     }
 }
 
@@ -800,6 +892,8 @@ mod tests {
             ("seed_samples = 0", "seed_samples"),
             ("nearby = 3", "nearby"),
             ("recursion_depth = 4", "recursion_depth"),
+            ("recursive_exit = \"sphere\"", "recursive_exit"),
+            ("recursive_exit = 1", "recursive_exit"),
         ] {
             let e = HuQinParams::from_table(Some(&table(t))).unwrap_err();
             assert_eq!(e.key, key, "{t}");

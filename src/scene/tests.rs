@@ -579,3 +579,32 @@ fn default_paths() {
     assert!(assets_dir().join("meshes").join("bunny.obj").exists());
     assert!(load(&default_scene_path(), &[]).is_ok());
 }
+
+#[test]
+fn tone_map_setting_and_adaptive_parameters() {
+    use crate::scene::techniques::TonemapAdaptiveParams;
+    let s = load_str(BASE, Path::new("t.toml"), &[]).unwrap();
+    assert_eq!((s.render.tonemap.as_str(), s.render.tonemap_named), ("clamp", false));
+    let s = load_str(BASE, Path::new("t.toml"), &sets(&["render.tonemap=clamp"])).unwrap();
+    assert_eq!((s.render.tonemap.as_str(), s.render.tonemap_named), ("clamp", true));
+    let s = load_str(
+        BASE,
+        Path::new("t.toml"),
+        &sets(&[
+            "render.tonemap=adaptive",
+            "render.tonemap_adaptive.key=0.18",
+            "render.tonemap_adaptive.white=\"auto\"",
+        ]),
+    )
+    .unwrap();
+    assert_eq!((s.render.tonemap.as_str(), s.render.tonemap_named), ("adaptive", true));
+    let p = TonemapAdaptiveParams::from_settings(&s.render).unwrap();
+    assert_eq!(p, TonemapAdaptiveParams { key: Some(0.18), white: None, ..Default::default() });
+    // The defaults: Krawczyk et al. 2005's time constants, automatic key and white.
+    let d = TonemapAdaptiveParams::default();
+    assert_eq!((d.tau_rod, d.tau_cone, d.key, d.white), (0.4, 0.1, None, None));
+    for bad in ["render.tonemap=aces", "render.tonemap_adaptive.delta=-1", "render.tonemap_adaptive.white=\"max\""] {
+        let e = load_str(BASE, Path::new("t.toml"), &sets(&[bad])).expect_err(bad).to_string();
+        assert!(e.contains("--set"), "{bad}: {e}");
+    }
+}

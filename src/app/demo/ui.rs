@@ -140,6 +140,8 @@ pub struct View<'a> {
     pub stats: &'a Stats,
     pub camera_mode: Mode,
     pub has_heightfield: bool,
+    /// The adaptive tone map's state in the last completed frame (`render.tonemap = "adaptive"`).
+    pub tonemap: Option<crate::passes::tonemap::AdaptiveStats>,
 }
 
 /// The current value of `render.<key>` for a technique key.
@@ -148,6 +150,7 @@ fn technique_value<'a>(scene: &'a Scene, key: &str, accepted: &'a [&'a str]) -> 
         "refraction" => &scene.render.refraction,
         "reflection" => &scene.render.reflection,
         "caustics" => &scene.render.caustics,
+        "tonemap" => &scene.render.tonemap,
         _ => accepted.first().copied().unwrap_or(""),
     }
 }
@@ -268,6 +271,17 @@ fn parameters(ui: &mut egui::Ui, state: &mut UiState, view: &View, req: &mut Req
             state.set(req, "render.exposure".into(), exposure.to_string());
         }
         ui.end_row();
+
+        if let Some(t) = view.tonemap {
+            // The adaptive tone map (Krawczyk et al. 2005): the frame's log-average, the
+            // luminance the eye has adapted to so far, the key and L_white.
+            ui.label("adaptation");
+            ui.label(format!(
+                "L_avg {:.3e}  L_a {:.3e}\nkey {:.3}  L_white {:.3}",
+                t.l_avg, t.l_adapted, t.key, t.white
+            ));
+            ui.end_row();
+        }
 
         ui.label("shadow map");
         let mut size = scene.render.shadow_map_size;
@@ -422,6 +436,19 @@ fn technique_parameters(ui: &mut egui::Ui, state: &mut UiState, scene: &Scene, r
             let mut nearby = p.nearby;
             if ui.checkbox(&mut nearby, "").changed() {
                 state.set(req, "render.hu_qin.nearby".into(), nearby.to_string());
+            }
+            ui.end_row();
+            // §2.2.1: where a dielectric impostor's refracted ray leaves it.
+            ui.label("hu_qin.recursive_exit");
+            let current = if p.recursive_exit_back_layer { "back_layer" } else { "bounding_sphere" };
+            let mut chosen = current;
+            egui::ComboBox::from_id_salt("hu_qin_recursive_exit").selected_text(chosen).show_ui(ui, |ui| {
+                for option in ["back_layer", "bounding_sphere"] {
+                    ui.selectable_value(&mut chosen, option, option);
+                }
+            });
+            if chosen != current {
+                state.set(req, "render.hu_qin.recursive_exit".into(), format!("\"{chosen}\""));
             }
             ui.end_row();
             for (key, value, max) in [

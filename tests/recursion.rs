@@ -1,0 +1,419 @@
+//! Hu & Qin 2007 §2.2.1: recursive refraction through the impostors of *other dielectrics*
+//! (src/passes/nearby_impostors.rs, glsl/nearby/impostor_body.glsl). Every dielectric is its
+//! own OBJ_R with its own rectangle set, and a dielectric OBJ_k's TEX_k shows it refracting:
+//! the environment at level 0, the level n - 1 impostors of its own set at level n. Measured
+//! on assets/scenes/two_glass_balls.toml (glass ball B behind glass ball A) against prism's
+//! exact reference; the pass list, the finiteness at the extremes, and (in the last test) the
+//! single-refractor scenes staying as they were.
+mod common;
+
+use common::{assert_finite, context, render_on, scene};
+use prism::reference::{Reference, ReferenceSettings};
+
+const SIZE: u32 = 96;
+
+/// The pixels whose centre ray (SCENES.md's pinhole) hits ball A (`objects.3`, centre
+/// (-0.35, -0.2, 0.6), radius 0.6): A is the nearest object wherever its sphere is hit, since
+/// nothing stands between it and the camera.
+fn ball_a_mask(s: &prism::scene::Scene) -> Vec<bool> {
+    ball_mask(s, 3)
+}
+
+/// The pixels whose centre ray hits the sphere of object `object`.
+fn ball_mask(s: &prism::scene::Scene, object: usize) -> Vec<bool> {
+    let Some(prism::scene::Analytic::Sphere { center: c, radius: r }) = s.objects[object].analytic else {
+        panic!("object {object} is not a sphere")
+    };
+    let (w, h) = (s.camera.width, s.camera.height);
+    let eye = s.camera.position;
+    let forward = (s.camera.target - eye).normalize();
+    let right = forward.cross(s.camera.up).normalize();
+    let up = right.cross(forward);
+    let tan = (s.camera.vfov_deg.to_radians() * 0.5).tan();
+    let aspect = w as f32 / h as f32;
+    let mut mask = Vec::with_capacity((w * h) as usize);
+    for j in 0..h {
+        for i in 0..w {
+            let x = (2.0 * (i as f32 + 0.5) / w as f32 - 1.0) * tan * aspect;
+            let y = (1.0 - 2.0 * (j as f32 + 0.5) / h as f32) * tan;
+            let d = (forward + x * right + y * up).normalize();
+            let o = eye - c;
+            let b = o.dot(d);
+            mask.push(b * b - (o.length_squared() - r * r) > 0.0 && b < 0.0);
+        }
+    }
+    mask
+}
+
+/// RMSE of linear radiance over the pixels where `mask` is set.
+fn masked_rmse(a: &[f32], b: &[f32], mask: &[bool]) -> f64 {
+    let (mut sum, mut n) = (0.0f64, 0usize);
+    for (k, &m) in mask.iter().enumerate() {
+        if m {
+            for c in 0..3 {
+                let d = (a[4 * k + c] - b[4 * k + c]) as f64;
+                sum += d * d;
+            }
+            n += 3;
+        }
+    }
+    (sum / n.max(1) as f64).sqrt()
+}
+
+fn two_balls(size: u32, extra: &[&str]) -> prism::scene::Scene {
+    scene("two_glass_balls", size, extra)
+}
+
+/// The pass list: one recursion pass per level, and none where no rectangle stands for a
+/// specular object (one refractor among diffuse objects), whatever `recursion_depth` says.
+#[test]
+fn recursion_levels_follow_the_scene() {
+    let names = |s: &prism::scene::Scene| -> Vec<&'static str> {
+        prism::renderer::plan::plan(s).iter().map(|p| p.name).filter(|n| n.contains("nearby")).collect()
+    };
+    let back = "refraction_hu_qin_nearby_back";
+    assert_eq!(names(&two_balls(32, &["render.hu_qin.recursion_depth=0"])), [back, "refraction_hu_qin_nearby"]);
+    assert_eq!(
+        names(&two_balls(32, &["render.hu_qin.recursion_depth=3"])),
+        [
+            back,
+            "refraction_hu_qin_nearby",
+            "refraction_hu_qin_nearby_r1",
+            "refraction_hu_qin_nearby_r2",
+            "refraction_hu_qin_nearby_r3"
+        ]
+    );
+    // The bounding-sphere exit needs no back faces.
+    assert_eq!(
+        names(&two_balls(32, &["render.hu_qin.recursion_depth=1", "render.hu_qin.recursive_exit=\"bounding_sphere\""])),
+        ["refraction_hu_qin_nearby", "refraction_hu_qin_nearby_r1"]
+    );
+    // Ball B made diffuse: A is the only specular object, nothing to recurse into and no
+    // dielectric impostor.
+    assert_eq!(
+        names(&two_balls(32, &["render.hu_qin.recursion_depth=3", "objects.4.material=\"box\""])),
+        ["refraction_hu_qin_nearby"]
+    );
+    // Each ball is its own OBJ_R and a rectangle in the other's set.
+    let s = two_balls(32, &[]);
+    let layout = prism::passes::nearby_impostors::nearby_layout(&s, 1);
+    assert_eq!(layout.sets.iter().map(|s| s.object).collect::<Vec<_>>(), [3, 4]);
+    for set in &layout.sets {
+        let objects: Vec<usize> =
+            layout.rects[set.first as usize..(set.first + set.count) as usize].iter().map(|r| r.object).collect();
+        assert!(!objects.contains(&set.object), "set of {} holds itself: {objects:?}", set.object);
+        assert_eq!(objects.len(), 4, "{objects:?}");
+        assert!(objects.contains(&(7 - set.object)), "set of {} lacks the other ball: {objects:?}", set.object);
+    }
+    assert_eq!(layout.levels, 1);
+}
+
+/// A's pixels against the exact reference (64 spp, no photons: the same noisy image for every
+/// setting, so differences between settings are not noise) for recursion_depth 0, 1, 2, and
+/// B's visibility through A. Measured at 96^2 on lavapipe (default: the back-layer exit):
+/// - A's RMSE: depth 0 0.04971, depth 1 0.04970, depth 2 0.04970 (with the bounding-sphere
+///   exit, depth 1: 0.04955); with B moved out of the scene (what A showed before each
+///   dielectric had its own rectangle set: B was never drawn into a texture) 0.05917. Seeing B
+///   through A is the gain (16%). The recursion itself changes only the 7 pixels of A where
+///   B's texture differs from the environment it showed at level 0 (radiance 0.05 here, close
+///   to the shadowed floor that B shows there). Over those pixels the mean radiance moves
+///   from 0.047 (depth 0) to 0.108 (depth 1) against the reference's 0.096, but the RMSE there
+///   does not fall (0.0710 -> 0.0717; 0.0581 with the bounding-sphere exit): B's texture holds
+///   the right brightness in slightly wrong places.
+/// - With B moved to (0.3, 0.2, -1.0), behind A's centre, depth 1 is *worse* over A (0.0421 ->
+///   0.0471; 54 pixels change, mean 0.048 -> 0.156 against the reference's 0.067): TEX_B holds
+///   B as seen along the one direction O_A -> O_B, but A is a lens and the rays it sends to B
+///   arrive from widely varying directions, for which B refracts other parts of the scene
+///   (Hu & Qin's assumption that an object looks the same from everywhere on OBJ_R, §2.2.1,
+///   breaks worst for a refractive OBJ_k). Reported in docs/scene-format.md.
+#[test]
+fn recursion_against_the_reference_over_ball_a() {
+    let ctx = context(false);
+    let s = two_balls(SIZE, &[]);
+    let mask = ball_a_mask(&s);
+    let pixels = mask.iter().filter(|&&m| m).count();
+    assert!(pixels > 500, "ball A covers only {pixels} pixels");
+    let mut r = Reference::new(&ctx, &s, &ReferenceSettings { spp: 64, photons: 0, ..Default::default() }).unwrap();
+    r.run_all(|_, _| {}).unwrap();
+    let reference = r.image();
+    drop(r);
+    let images: Vec<Vec<f32>> = (0..=2)
+        .map(|d| {
+            let r = render_on(&ctx, &two_balls(SIZE, &[&format!("render.hu_qin.recursion_depth={d}")]));
+            assert_finite(&format!("recursion_depth {d}"), &r.hdr);
+            r.hdr
+        })
+        .collect();
+    let errors: Vec<f64> = images.iter().map(|h| masked_rmse(h, &reference, &mask)).collect();
+    // Ball B moved out of the scene: what A shows without B.
+    let without_b = render_on(&ctx, &two_balls(SIZE, &["objects.4.center=[0.5, -0.2, -40]"])).hdr;
+    let e_without = masked_rmse(&without_b, &reference, &mask);
+    let b_effect: Vec<f64> = images.iter().map(|h| masked_rmse(h, &without_b, &mask)).collect();
+    let changed: Vec<bool> = images[0]
+        .chunks(4)
+        .zip(images[1].chunks(4))
+        .zip(&mask)
+        .map(|((a, b), &m)| m && (0..3).any(|c| (a[c] - b[c]).abs() > 0.01))
+        .collect();
+    let n_changed = changed.iter().filter(|&&m| m).count();
+    let mean = |h: &[f32]| {
+        let s: f64 = changed
+            .iter()
+            .enumerate()
+            .filter(|(_, &m)| m)
+            .map(|(k, _)| (h[4 * k] + h[4 * k + 1] + h[4 * k + 2]) as f64)
+            .sum();
+        s / (3 * n_changed.max(1)) as f64
+    };
+    let ch: Vec<f64> = images.iter().map(|h| masked_rmse(h, &reference, &changed)).collect();
+    eprintln!(
+        "changed 0->1: {n_changed} px, RMSE there {:.4} {:.4} {:.4}, mean d0 {:.4} d1 {:.4} ref {:.4}",
+        ch[0],
+        ch[1],
+        ch[2],
+        mean(&images[0]),
+        mean(&images[1]),
+        mean(&reference)
+    );
+    // B where A does not cover it: B's own refraction in the main pass.
+    let bmask: Vec<bool> = ball_mask(&s, 4).iter().zip(&mask).map(|(&b, &a)| b && !a).collect();
+    let eb: Vec<f64> = images.iter().map(|h| masked_rmse(h, &reference, &bmask)).collect();
+    eprintln!("B's own {} pixels: RMSE {:.5} {:.5} {:.5}", bmask.iter().filter(|&&m| m).count(), eb[0], eb[1], eb[2]);
+    eprintln!(
+        "two_glass_balls {SIZE}^2, {pixels} pixels of A, RMSE vs reference: depth 0 {:.5}, 1 {:.5}, 2 {:.5}; \
+         B moved away {e_without:.5}; RMSE(image, image without B) over A: {:.5} {:.5} {:.5}",
+        errors[0], errors[1], errors[2], b_effect[0], b_effect[1], b_effect[2]
+    );
+    // The documented simplification: the bounding sphere as the glass textures' exit.
+    let sphere = render_on(&ctx, &two_balls(SIZE, &["render.hu_qin.recursive_exit=\"bounding_sphere\""])).hdr;
+    eprintln!(
+        "depth 1 with the bounding-sphere exit: RMSE over A {:.5}, over the changed pixels {:.4}",
+        masked_rmse(&sphere, &reference, &mask),
+        masked_rmse(&sphere, &reference, &changed)
+    );
+    // B is visible through A: A's pixels differ from the image without B (measured 0.0418 at
+    // every depth; a texture set without B, as before, gives 0).
+    assert!(b_effect[1] > 0.02, "B is not visible through A: {b_effect:?}");
+    // ... and showing it lowers A's error (measured 16%; 10% margin).
+    assert!(errors[1] < 0.9 * e_without, "B through A should lower A's error: {e_without} -> {}", errors[1]);
+    // The recursion (depth 1 against 0) changes the pixels of A where B's texture is seen
+    // (measured 7) and brings their mean radiance to the reference's (measured |0.108 - 0.096|
+    // against |0.047 - 0.096|: a quarter of the gap; asserted: less than half), without
+    // making A worse overall (measured 0.04970 against 0.04971; 1% allowed for another
+    // rasteriser's placement of those few pixels). It does not lower A's RMSE measurably:
+    // see the comment above.
+    assert!(n_changed >= 3, "the recursion changed only {n_changed} pixels of A");
+    let (m0, m1, mr) = (mean(&images[0]), mean(&images[1]), mean(&reference));
+    assert!(
+        (m1 - mr).abs() < 0.5 * (m0 - mr).abs(),
+        "depth 1 should be closer to the reference's mean: {m0} {m1} {mr}"
+    );
+    assert!(errors[1] < 1.01 * errors[0], "depth 1 should not make A worse: {errors:?}");
+}
+
+/// Fig. 18's experiment one level down: ball B of ior 1 (its own material) bends nothing, so
+/// A must show through B what lies behind B, as if B were not there. Lit by the environment
+/// only (radiance 1, the light off), so that B casts no shadow and the scene with B moved away
+/// is the exact answer. At level 0 B's texture shows the environment (1) through B; at level 1
+/// the floor, wall and box of B's own rectangle set.
+#[test]
+fn ior_one_ball_b_shows_what_lies_behind_it_at_level_one() {
+    let ctx = context(false);
+    let base = [
+        "environment.radiance=1",
+        "lights.0.intensity=0",
+        "materials.clear={type=\"dielectric\", ior=1.0}",
+        "objects.4.material=\"clear\"",
+    ];
+    let render = |extra: &str| {
+        let mut o = base.to_vec();
+        o.push(extra);
+        let r = render_on(&ctx, &two_balls(SIZE, &o));
+        assert_finite(extra, &r.hdr);
+        r.hdr
+    };
+    let without_b = render("objects.4.center=[0.5, -0.2, -40]");
+    let d0 = render("render.hu_qin.recursion_depth=0");
+    let d1 = render("render.hu_qin.recursion_depth=1");
+    let mask = ball_a_mask(&two_balls(SIZE, &[]));
+    let (e0, e1) = (masked_rmse(&d0, &without_b, &mask), masked_rmse(&d1, &without_b, &mask));
+    // Where B's texture is seen through A: the pixels the recursion changed.
+    let changed: Vec<bool> = d0
+        .chunks(4)
+        .zip(d1.chunks(4))
+        .zip(&mask)
+        .map(|((a, b), &m)| m && (0..3).any(|c| (a[c] - b[c]).abs() > 0.05))
+        .collect();
+    let n = changed.iter().filter(|&&m| m).count();
+    let (c0, c1) = (masked_rmse(&d0, &without_b, &changed), masked_rmse(&d1, &without_b, &changed));
+    eprintln!("B of ior 1, A's pixels vs the scene without B: RMSE depth 0 {e0:.4}, depth 1 {e1:.4}; over the {n} pixels that changed: {c0:.4}, {c1:.4}");
+    // Threshold: measured at 96^2 (lavapipe). See the eprintln; a recursion that does not
+    // reach B's texture changes no pixel (n = 0) or leaves the level-0 error.
+    assert!(n >= 20, "the recursion changed only {n} of A's pixels");
+    assert!(c1 < 0.5 * c0, "level 1 should show what lies behind B: {c0} -> {c1}");
+    assert!(e1 < e0, "{e0} -> {e1}");
+}
+
+/// The extremes of a dielectric OBJ_k's texture at every recursion depth: B's ior near 1,
+/// below 1 (a bubble: total internal reflection inside), large, dispersive, and a grazing
+/// camera in the floor's plane; both balls sharing one centre (O_R O_k of zero length).
+#[test]
+fn recursive_refraction_is_finite_at_the_extremes() {
+    let ctx = context(false);
+    for extra in [
+        &["materials.glass.ior=1.0"][..],
+        &["materials.glass.ior=1.0001"],
+        &["materials.glass.ior=0.75"],
+        &["materials.glass.ior=0.5"],
+        &["materials.glass.ior=4.0"],
+        &["materials.glass.ior=[1.45, 1.5, 1.55]"],
+        &["materials.glass.absorption=[100, 0, 1]"],
+        &["camera.position=[0, -0.999, 5]"],
+        &["objects.4.center=[-0.35, -0.2, 0.6]", "objects.4.radius=0.3"],
+    ] {
+        for depth in [0, 1, 3] {
+            let mut o = vec![format!("render.hu_qin.recursion_depth={depth}")];
+            o.extend(extra.iter().map(|s| s.to_string()));
+            let r = render_on(&ctx, &two_balls(48, &common::refs(&o)));
+            assert_finite(&format!("{extra:?} depth {depth}"), &r.hdr);
+        }
+    }
+}
+
+/// Synchronization validation over several frames with two recursion levels of dielectric
+/// textures (both balls' sets in one array pair, ping-ponged every level).
+#[test]
+fn recursive_refraction_has_no_sync_hazard() {
+    let ctx = context(true);
+    let mut r = prism::renderer::Renderer::new(&ctx, &two_balls(32, &["render.hu_qin.recursion_depth=2"])).unwrap();
+    for _ in 0..3 {
+        r.render_frame().unwrap();
+    }
+    assert_finite("recursion_depth 2", &r.read_hdr().unwrap());
+    drop(r);
+    common::assert_no_validation_errors(&ctx);
+}
+
+/// The stated limits: with ten glass balls, at most MAX_NEARBY_SETS sets (the first eight
+/// dielectrics in scene order) of at most MAX_NEARBY_RECTS rectangles, the nearest kept; the
+/// other two balls are named as having no set and see the environment only. It renders
+/// (tiny textures) with finite radiance and no validation error.
+#[test]
+fn many_dielectrics_keep_the_stated_limits() {
+    // two_glass_balls' camera, light and materials; its objects replaced by a floor and ten
+    // balls in two rows.
+    let path = prism::scene::benchmark_scene_path("two_glass_balls");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let mut toml = text[..text.find("[[objects]]").unwrap()].to_string();
+    toml += "[[objects]]\nname = \"floor\"\nmaterial = \"checker\"\nshape = \"quad\"\ncenter = [0, -1, 0]\n";
+    toml += "size = [10, 10]\nnormal = [0, 1, 0]\n";
+    for i in 0..10 {
+        let (x, z) = ((i % 5) as f32 - 2.0, -((i / 5) as f32) * 1.2);
+        toml += &format!(
+            "[[objects]]\nname = \"ball{i}\"\nmaterial = \"glass\"\nshape = \"sphere\"\ncenter = [{x}, -0.6, {z}]\nradius = 0.4\n"
+        );
+    }
+    toml += "[render]\nrefraction = \"hu_qin\"\n";
+    let dir = std::env::temp_dir().join(format!("prism-recursion-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("ten_balls.toml");
+    std::fs::write(&file, toml).unwrap();
+    let o = ["camera.width=32", "camera.height=32", "render.hu_qin.impostor_resolution=16"].map(String::from);
+    let s = prism::scene::load(&file, &o).unwrap();
+    let layout = prism::passes::nearby_impostors::nearby_layout(&s, 1);
+    let max_sets = prism::MAX_NEARBY_SETS as usize;
+    assert_eq!(layout.sets.len(), max_sets);
+    assert_eq!(layout.sets.iter().map(|s| s.object).collect::<Vec<_>>(), (1..=max_sets).collect::<Vec<_>>());
+    assert_eq!(layout.without_set, [9, 10]);
+    for set in &layout.sets {
+        // 10 other objects (9 balls + the floor), the nearest 8 kept.
+        assert_eq!(set.count, prism::MAX_NEARBY_RECTS);
+        assert_eq!(set.dropped.len(), 2, "{set:?}");
+    }
+    let reason = prism::renderer::plan::plan(&s).into_iter().find(|p| p.name == "refraction_hu_qin_nearby").unwrap();
+    assert!(reason.reason.contains("ball8, ball9 without a rectangle set"), "{}", reason.reason);
+    let ctx = context(false);
+    let r = render_on(&ctx, &s);
+    assert_finite("ten balls", &r.hdr);
+    // 64 textures of 2048^2 texels would need 4 GiB per array: refused with the key to lower.
+    let o = ["camera.width=32", "camera.height=32", "render.hu_qin.impostor_resolution=2048"].map(String::from);
+    let big = prism::scene::load(&file, &o).unwrap();
+    let e = prism::renderer::Renderer::new(&ctx, &big).err().expect("4 GiB of impostor textures per array");
+    assert!(e.to_string().contains("lower impostor_resolution"), "{e}");
+}
+
+/// The exit of a dielectric OBJ_k that is not a ball: B replaced by a glass cube (edge 1.2,
+/// centre (0.5, -0.4, -1.2)), where the bounding sphere (radius 1.04) lies far from the faces.
+/// A's pixels against the reference (64 spp, no photons) for depth 0, and depth 1 with each
+/// exit. Measured at 96^2 on lavapipe: RMSE over A 0.24519 (depth 0), 0.24363 (depth 1, back
+/// layer), 0.24097 (depth 1, bounding sphere); the 15 pixels the recursion changes go from
+/// 0.4508 to 0.3894. The exits differ on only 4 pixels (back layer 0.5821, bounding sphere
+/// 0.1086 there): at this size the cube is seen through A in a handful of pixels, and there the
+/// back-layer search, which assumes a back-facing exit (§4's shortcut: the texture's view has
+/// no dividing-pixel search), lands worse than the sphere. So the paper's exit search is not
+/// shown to buy accuracy here; docs/scene-format.md reports it.
+#[test]
+fn exit_of_a_glass_cube_behind_ball_a() {
+    let path = prism::scene::benchmark_scene_path("two_glass_balls");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let ball_b =
+        "name = \"ball_b\"\nmaterial = \"glass\"\nshape = \"sphere\"\ncenter = [0.5, -0.2, -1.2]\nradius = 0.8";
+    assert!(text.contains(ball_b), "two_glass_balls.toml changed: update this test");
+    let cube =
+        "name = \"cube_b\"\nmaterial = \"glass\"\nshape = \"box\"\ncenter = [0.5, -0.4, -1.2]\nsize = [1.2, 1.2, 1.2]";
+    let dir = std::env::temp_dir().join(format!("prism-recursion-cube-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("glass_cube.toml");
+    std::fs::write(&file, text.replace(ball_b, cube)).unwrap();
+    let load = |extra: &[&str]| {
+        let mut o = vec![format!("camera.width={SIZE}"), format!("camera.height={SIZE}")];
+        // Lit by the environment only (radiance 1, the light off): what B shows at level 0 (the
+        // environment) and at level 1 (the floor, wall and box) then differ the most.
+        o.extend(["environment.radiance=1", "lights.0.intensity=0"].map(String::from));
+        o.extend(extra.iter().map(|s| s.to_string()));
+        prism::scene::load(&file, &o).unwrap()
+    };
+    let ctx = context(false);
+    let s = load(&[]);
+    let mask = ball_a_mask(&s);
+    let mut r = Reference::new(&ctx, &s, &ReferenceSettings { spp: 64, photons: 0, ..Default::default() }).unwrap();
+    r.run_all(|_, _| {}).unwrap();
+    let reference = r.image();
+    drop(r);
+    let error = |extra: &[&str]| {
+        let h = render_on(&ctx, &load(extra)).hdr;
+        assert_finite(&format!("{extra:?}"), &h);
+        (masked_rmse(&h, &reference, &mask), h)
+    };
+    let (e0, h0) = error(&["render.hu_qin.recursion_depth=0"]);
+    let (e_back, h_back) = error(&["render.hu_qin.recursion_depth=1"]);
+    let (e_sphere, h_sphere) =
+        error(&["render.hu_qin.recursion_depth=1", "render.hu_qin.recursive_exit=\"bounding_sphere\""]);
+    let changed = |a: &[f32], b: &[f32]| -> Vec<bool> {
+        a.chunks(4)
+            .zip(b.chunks(4))
+            .zip(&mask)
+            .map(|((p, q), &m)| m && (0..3).any(|c| (p[c] - q[c]).abs() > 0.01))
+            .collect()
+    };
+    let c_back = changed(&h0, &h_back);
+    let c_exit = changed(&h_back, &h_sphere);
+    let count = |m: &[bool]| m.iter().filter(|&&x| x).count();
+    eprintln!(
+        "glass cube B, A's {} pixels: RMSE depth 0 {e0:.5}, depth 1 back layer {e_back:.5}, bounding sphere {e_sphere:.5}; \
+         {} pixels changed 0 -> 1 (RMSE there {:.4} -> {:.4}); {} differ between the exits (back {:.4}, sphere {:.4})",
+        count(&mask),
+        count(&c_back),
+        masked_rmse(&h0, &reference, &c_back),
+        masked_rmse(&h_back, &reference, &c_back),
+        count(&c_exit),
+        masked_rmse(&h_back, &reference, &c_exit),
+        masked_rmse(&h_sphere, &reference, &c_exit),
+    );
+    // Asserted with margin: the recursion helps over the changed pixels (measured 14%; 5%
+    // asserted) and over A with either exit (measured 0.6% and 1.7%).
+    assert!(count(&c_back) >= 5, "the recursion changed only {} pixels", count(&c_back));
+    let (r0, r1) = (masked_rmse(&h0, &reference, &c_back), masked_rmse(&h_back, &reference, &c_back));
+    assert!(r1 < 0.95 * r0, "depth 1 should be closer where it changes A: {r0} -> {r1}");
+    assert!(e_back < e0 && e_sphere < e0, "{e0} {e_back} {e_sphere}");
+}
