@@ -394,6 +394,16 @@ pub fn has_dielectric_rect(scene: &Scene, layout: &NearbyLayout) -> bool {
     layout.rects.iter().any(|r| is_dielectric(scene, r.object))
 }
 
+/// With recursion levels: level 0's diffuse layers copied into the other array of the
+/// ping-pong, once per frame. Diffuse TEX_i do not change between levels, so the levels >= 1
+/// re-render only the specular layers (mirrors, conductors, dielectrics).
+pub const COPY_PASS: &str = "refraction_hu_qin_nearby_copy";
+
+/// Whether `layout` needs [`COPY_PASS`]: recursion levels and a diffuse rectangle.
+pub fn needs_copy(scene: &Scene, layout: &NearbyLayout) -> bool {
+    layout.levels > 0 && layout.rects.iter().any(|r| !is_specular(scene, r.object))
+}
+
 /// Passes of the recursion levels 1..=MAX_RECURSION (level 0 is `name` itself).
 pub const RECURSION_PASSES: [&str; 3] =
     ["refraction_hu_qin_nearby_r1", "refraction_hu_qin_nearby_r2", "refraction_hu_qin_nearby_r3"];
@@ -402,7 +412,7 @@ pub const MAX_RECURSION: u32 = RECURSION_PASSES.len() as u32;
 
 /// One array of textures (recursion levels ping-pong between two).
 struct TextureArray {
-    _image: Image,
+    image: Image,
     id: ImageId,
     /// One per rectangle.
     framebuffers: Vec<Framebuffer>,
@@ -445,6 +455,8 @@ pub struct NearbyImpostors {
     draws: Vec<usize>,
     /// Per rectangle: OBJ_k reflects or refracts (recursive levels re-render it).
     specular: Vec<bool>,
+    /// Layers of the diffuse rectangles: rendered at level 0 only, and copied into `other`.
+    diffuse_layers: Vec<u32>,
     /// Per rectangle: OBJ_k's own set (u32::MAX: none).
     lookup_set: Vec<u32>,
 }
@@ -739,11 +751,12 @@ impl NearbyImpostors {
                 &layout,
                 &render_pass,
             )?;
-            (Some(TextureArray { _image: image, id, framebuffers: fbs }), Some(Recursive { pipeline: rpipeline, sets }))
+            (Some(TextureArray { image, id, framebuffers: fbs }), Some(Recursive { pipeline: rpipeline, sets }))
         } else {
             (None, None)
         };
         let draws = rects.iter().map(|r| r.object).collect();
+        let diffuse_layers = rects.iter().zip(&specular).filter(|(_, &sp)| !sp).map(|(r, _)| r.layer).collect();
         Ok(NearbyImpostors {
             name,
             resolution: size,
@@ -767,6 +780,7 @@ impl NearbyImpostors {
             back_pass,
             draws,
             specular,
+            diffuse_layers,
             lookup_set,
             layout: nearby,
         })
@@ -774,7 +788,9 @@ impl NearbyImpostors {
 
     /// Render every TEX_i (after the shadow maps, which it reads through the frame set): level
     /// 0 as the graph pass `name`, then each recursion level l as `RECURSION_PASSES[l - 1]`.
-    /// Levels ping-pong between two arrays so that the last one lands in `texture`.
+    /// Levels ping-pong between two arrays so that the last one lands in `texture`. Diffuse
+    /// layers are the same at every level: level 0 renders them, [`COPY_PASS`] copies them into
+    /// the other array, and the levels >= 1 render the specular layers only.
     pub fn record<'a>(
         &'a self,
         frame: &mut Frame<'_, 'a>,
@@ -836,12 +852,15 @@ impl NearbyImpostors {
             let origins = origins.clone();
             pass.record(move |cmd| {
                 for (i, (r, fb)) in self.layout.rects.iter().zip(dst_fbs).enumerate() {
+                    if level > 0 && !self.specular[i] {
+                        // Kept from level 0 (rendered there or copied by COPY_PASS).
+                        continue;
+                    }
                     // Empty texels: TEX_DEPTH = the far plane (never a surface, see DEPTH_MARGIN).
                     let clears = [Clear::Color([0.0, 0.0, 0.0, r.far]), Clear::Depth(1.0)];
                     cmd.begin_render_pass(&self.render_pass, fb, &clears);
                     let pipeline = match recursive {
-                        // Diffuse layers are the same at every level; specular ones read the
-                        // other array.
+                        // Specular layers read the other array.
                         Some(rec) if self.specular[i] => {
                             cmd.bind_graphics(&rec.pipeline, &[frame_set, rec.sets[1 - dst]]);
                             &rec.pipeline
@@ -866,6 +885,20 @@ impl NearbyImpostors {
                     cmd.end_render_pass();
                 }
             });
+            if level == 0 && !self.diffuse_layers.is_empty() {
+                if let Some(o) = &self.other {
+                    // Level 0 wrote array `dst`; the other array receives the diffuse layers
+                    // that the levels writing it no longer render.
+                    let (src, dst_image) = if dst == 0 { (&self.texture, &o.image) } else { (&o.image, &self.texture) };
+                    let (src_id, copy_dst_id) =
+                        if dst == 0 { (self.texture_id, o.id) } else { (o.id, self.texture_id) };
+                    let pass = frame
+                        .pass(COPY_PASS)
+                        .read(src_id, Access::TransferRead)
+                        .write(copy_dst_id, Access::TransferWrite);
+                    pass.record(move |cmd| cmd.copy_image_layers(src, dst_image, &self.diffuse_layers));
+                }
+            }
         }
     }
 }

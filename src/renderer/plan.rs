@@ -334,7 +334,9 @@ fn image_space_refraction(scene: &Scene, dielectric: &[String]) -> Vec<PlannedPa
 /// dielectric has other objects to stand in for; §2.2.1's recursion levels when a rectangle
 /// stands for a specular object (another dielectric, a mirror or a conductor).
 fn hu_qin_nearby(scene: &Scene) -> Vec<PlannedPass> {
-    use crate::passes::nearby_impostors::{has_dielectric_rect, nearby_layout, BACK_PASS, RECURSION_PASSES};
+    use crate::passes::nearby_impostors::{
+        has_dielectric_rect, nearby_layout, needs_copy, BACK_PASS, COPY_PASS, RECURSION_PASSES,
+    };
     let params = crate::scene::techniques::HuQinParams::from_settings(&scene.render).unwrap_or_default();
     if !params.nearby {
         return Vec::new();
@@ -393,6 +395,14 @@ fn hu_qin_nearby(scene: &Scene) -> Vec<PlannedPass> {
         });
     }
     passes.push(PlannedPass { name: REFRACTION_HU_QIN_NEARBY, reason });
+    if needs_copy(scene, &layout) {
+        passes.push(PlannedPass {
+            name: COPY_PASS,
+            reason: "level 0's diffuse impostor textures copied into the recursion's other array: they do not \
+                     change between levels, which re-render only the specular ones (Hu & Qin 2007 §2.2.1)"
+                .to_string(),
+        });
+    }
     for level in 1..=layout.levels {
         passes.push(PlannedPass {
             name: RECURSION_PASSES[level as usize - 1],
