@@ -377,7 +377,7 @@ fn hu_qin_nearby(scene: &Scene) -> Vec<PlannedPass> {
         );
     }
     let mut passes = Vec::new();
-    if params.recursive_exit_back_layer && has_dielectric_rect(scene, &layout) {
+    if params.recursive_exit.uses_layers() && has_dielectric_rect(scene, &layout) {
         let names: Vec<String> = layout
             .rects
             .iter()
@@ -387,10 +387,16 @@ fn hu_qin_nearby(scene: &Scene) -> Vec<PlannedPass> {
         passes.push(PlannedPass {
             name: BACK_PASS,
             reason: format!(
-                "back faces (normal, depth) of dielectric impostor(s) {} in their rectangles' projections: the exit \
-                 surface of their refraction (Hu & Qin 2007 §2.1.3 in §2.2.1's textures; \
-                 render.hu_qin.recursive_exit = \"back_layer\")",
-                list(&names)
+                "{} faces (normal, depth) of dielectric impostor(s) {} in their rectangles' projections: the exit \
+                 surfaces of their refraction (Hu & Qin 2007 §2.1 in §2.2.1's textures; \
+                 render.hu_qin.recursive_exit = \"{}\")",
+                if params.recursive_exit == crate::scene::techniques::RecursiveExit::Full {
+                    "back and front"
+                } else {
+                    "back"
+                },
+                list(&names),
+                params.recursive_exit.name()
             ),
         });
     }
