@@ -370,8 +370,8 @@ fn many_dielectrics_keep_the_stated_limits() {
 /// 0.4508 to 0.3894. The exits differ on only 4 pixels (back layer 0.5821, bounding sphere
 /// 0.1086 there): at this size the cube is seen through A in a handful of pixels, and there the
 /// back-layer search (the default, `"back_facing"`, §4's shortcut) lands worse than the sphere.
-/// `"full"` (Fig. 5's test with the dividing pixel) gave the same 0.24363: a convex box has
-/// no front-facing exit in a parallel projection. So the paper's exit search is not shown to
+/// `"full"` (Fig. 5's test with the dividing pixel) gave the same 0.24363: no front-facing
+/// exit of the cube is seen through A. So the paper's exit search is not shown to
 /// buy accuracy here; docs/scene-format.md reports it.
 #[test]
 fn exit_of_a_glass_cube_behind_ball_a() {

@@ -30,11 +30,15 @@
 //! n - 1 of OBJ_k's *own* rectangle set (which holds OBJ_R), so that OBJ_k needs a set of its
 //! own even when it is a mirror (glsl/nearby/impostor_recursive.frag). One graph pass per level
 //! ([`RECURSION_PASSES`]), ping-ponging between two arrays so that the last level lands in
-//! [`NearbyImpostors::texture`]. A dielectric TEX_k finds its exit point by §2.1.3's search
-//! (Fig. 9) against OBJ_k's back faces rendered in the rectangle's projection ([`BACK_PASS`],
-//! assuming a back-facing exit as §4 does), or (`recursive_exit = "bounding_sphere"`, and
-//! where the search finds nothing) where T1 leaves OBJ_k's bounding sphere (O_k, d_k)
-//! (glsl/nearby/impostor_body.glsl).
+//! [`NearbyImpostors::texture`]. Diffuse textures do not change between levels: level 0
+//! renders them, [`COPY_PASS`] copies them into the other array, and the levels >= 1 render
+//! only the specular ones. A dielectric TEX_k finds its exit point with §2.1's search in the
+//! rectangle's projection (glsl/include/hu_qin_exit.glsl, shared with the main pass) on OBJ_k's
+//! faces rendered there by [`BACK_PASS`]: `recursive_exit = "full"` renders the front and back
+//! faces and runs Fig. 7's dividing-pixel search, Fig. 5's front/back test and Fig. 9's search;
+//! `"back_facing"` (§4's acceleration) only the back faces and Fig. 9; `"bounding_sphere"`
+//! (and wherever the search finds no face) uses where T1 leaves OBJ_k's bounding sphere
+//! (O_k, d_k) (glsl/nearby/impostor_body.glsl).
 //!
 //! Limits (stated rules, not errors): at most [`MAX_NEARBY_RECTS`] rectangles per set; with
 //! more objects the ones whose bounding spheres come closest to O_R are kept and the others
