@@ -192,6 +192,8 @@ shared_constants! {
     // Set 1 of the impostor-texture passes only: the dielectric OBJ_k's nearest back faces in
     // each rectangle's parallel projection (2D array: xyz outward normal, w axial depth).
     BINDING_NEARBY_BACK: u32 = 16;
+    // ... and their nearest front faces, the same layout (recursive_exit = "full").
+    BINDING_NEARBY_FRONT: u32 = 17;
     MAX_NEARBY_RECTS: u32 = 8;
     // Rectangle sets, one per OBJ_R (every dielectric, and the specular objects whose
     // recursive impostor textures look up their own set), each of at most MAX_NEARBY_RECTS.

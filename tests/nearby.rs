@@ -204,6 +204,7 @@ fn recursive_impostors_of_a_mirror() {
         [
             "refraction_hu_qin_nearby_back",
             "refraction_hu_qin_nearby",
+            "refraction_hu_qin_nearby_copy",
             "refraction_hu_qin_nearby_r1",
             "refraction_hu_qin_nearby_r2"
         ]

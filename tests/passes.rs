@@ -85,6 +85,10 @@ fn image_space_refraction_replaces_the_baseline() {
     let n = names("two_glass_balls", &["render.hu_qin.recursion_depth=2"]);
     assert!(n.contains(&"refraction_hu_qin_nearby_r2") && !n.contains(&"refraction_hu_qin_nearby_r3"), "{n:?}");
     assert!(n.contains(&"refraction_hu_qin_nearby_back"), "{n:?}");
+    // The diffuse textures are rendered once and copied for the levels >= 1; not without levels.
+    assert!(n.contains(&"refraction_hu_qin_nearby_copy"), "{n:?}");
+    let n = names("two_glass_balls", &["render.hu_qin.recursion_depth=0"]);
+    assert!(!n.contains(&"refraction_hu_qin_nearby_copy"), "{n:?}");
     let n = names("sphere_nearby", &["render.refraction=hu_qin", "render.hu_qin.recursion_depth=3"]);
     assert!(!n.iter().any(|p| p.starts_with("refraction_hu_qin_nearby_")), "{n:?}");
     // Only hu_qin has impostor rectangles.

@@ -25,11 +25,18 @@ layout(constant_id = 1) const float NEARBY_TOLERANCE = 1e-3;
 layout(constant_id = 2) const uint NEARBY_SEEDS = 8;
 #include "nearby.glsl"
 #endif
-// 1: a dielectric's exit is searched on its back faces (nearby_back, BACK_PASS of
-// src/passes/nearby_impostors.rs); 0: its bounding sphere (render.hu_qin.recursive_exit).
-layout(constant_id = 3) const uint NEARBY_EXIT_BACK = 1;
-// The dielectrics' back faces, layer = the rectangle's: xyz outward normal (0: none), w axial depth.
+// A dielectric's exit (render.hu_qin.recursive_exit): 2 "full", §2.1's whole method in the
+// rectangle's projection (Fig. 7's dividing pixel, Fig. 5's front/back test, Fig. 9's search
+// on the front or back layer); 1 "back_facing", §4's acceleration (the exit assumed
+// back-facing: Fig. 9 on the back layer only); 0 "bounding_sphere".
+layout(constant_id = 3) const uint NEARBY_EXIT = 2;
+// Fig. 7's halvings and Fig. 9's steps (render.hu_qin.search_steps, max_iterations).
+layout(constant_id = 4) const uint SEARCH_STEPS = 8;
+layout(constant_id = 5) const uint MAX_ITERATIONS = 32;
+// The dielectrics' nearest back and front faces (BACK_PASS of src/passes/nearby_impostors.rs),
+// layer = the rectangle's: xyz outward normal (0: none), w axial depth.
 layout(set = 1, binding = BINDING_NEARBY_BACK) uniform sampler2DArray nearby_back;
+layout(set = 1, binding = BINDING_NEARBY_FRONT) uniform sampler2DArray nearby_front;
 layout(location = 0) in vec3 in_position;
 layout(location = 1) in vec3 in_normal;
 layout(location = 2) in vec2 in_checker_uv;
@@ -48,58 +55,71 @@ vec3 seen_from(vec3 P, vec3 dir) {
 #endif
 }
 
-// OBJ_k's back-face texel under p in this projection, and p's own axial depth z.
-vec4 back_texel(vec3 p, out float z) {
-    vec4 clip = pc.view_proj * vec4(p, 1.0);
-    vec2 uv = clip.xy * 0.5 + 0.5;
-    z = dot(p - pc.origin.xyz, pc.axis.xyz);
-    if (any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0)))) return vec4(0.0);
-    return textureLod(nearby_back, vec3(uv, float(pc.material.y)), 0.0);
+// The rectangle's parallel projection as the view of §2.1's exit search
+// (glsl/include/hu_qin_exit.glsl): uv of TEX_k, depths are axial distances from O_R (linear).
+vec2 exit_project(vec3 P) {
+    vec4 clip = pc.view_proj * vec4(P, 1.0);
+    return clip.xy * 0.5 + 0.5;
 }
-
-bool back_covered(vec4 t) {
+float exit_point_depth(vec3 P) {
+    return dot(P - pc.origin.xyz, pc.axis.xyz);
+}
+// OBJ_k's front (true) or back layer texel at uv; zero outside the texture.
+vec4 exit_texel(bool front, vec2 uv) {
+    if (any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0)))) return vec4(0.0);
+    vec3 at = vec3(uv, float(pc.material.y));
+    return front ? textureLod(nearby_front, at, 0.0) : textureLod(nearby_back, at, 0.0);
+}
+bool exit_covered(bool front, vec2 uv) {
+    vec4 t = exit_texel(front, uv);
     return dot(t.xyz, t.xyz) > 0.25;
 }
+float exit_layer_depth(bool front, vec2 uv) {
+    return exit_texel(front, uv).w;
+}
+// The back layer's point at uv: the projection's rays are parallel to the axis, so any point
+// that projects to uv, moved along the axis to the layer's axial depth.
+vec3 exit_back_point(vec2 uv) {
+    vec4 q = inverse(pc.view_proj) * vec4(uv * 2.0 - 1.0, 0.0, 1.0);
+    vec3 Q = q.xyz / q.w;
+    return Q + (exit_layer_depth(false, uv) - exit_point_depth(Q)) * pc.axis.xyz;
+}
+#include "hu_qin_exit.glsl"
 
-// §2.1.3 (Fig. 9) in the parallel projection: d_T along T1 from P1 to OBJ_k's back faces, each
-// step the depth difference between the back layer and the current point along the view
-// direction (as glsl/refraction/hu_qin.frag's search_d_t), starting with the thickness along
-// the view ray (d_V). A point that leaves the back layer's coverage halves the step (§4). The
-// exit is assumed back-facing (§4's acceleration: this view has no dividing-pixel search);
-// false when no covered point was found, and the caller falls back to the bounding sphere.
-bool exit_on_back_layer(vec3 P1, vec3 T1, out float d, out vec3 N2) {
+// §2.1.2-2.1.4 in the parallel projection: d along T1 from P1 to OBJ_k's exit and the exit's
+// normal N2. The eye ray is V = +axis everywhere. With NEARBY_EXIT 2, Fig. 7's dividing pixel
+// (searched over the whole texture: OBJ_k lies within its bounding sphere, whose diameter is
+// the texture's side, so span 1 in uv) and Fig. 5's test pick the front or back layer; with 1
+// the exit is assumed back-facing (§4). Fig. 9's first step: the back layer's thickness along
+// V at P1 (d_V, as the main pass), or 1% of d_k on the front layer (the main pass's 1% of the
+// eye distance; the ortho view has no eye distance). False when no covered point was found:
+// the caller falls back to the bounding sphere.
+bool exit_on_layers(vec3 P1, vec3 T1, out float d, out vec3 N2) {
     d = 0.0;
     N2 = vec3(0.0);
-    float z;
-    vec4 b = back_texel(P1, z);
-    if (!back_covered(b)) return false;
+    vec2 p1 = exit_project(P1);
+    if (!exit_covered(false, p1)) return false;
     float tol = 1e-4 * pc.sphere.w;
-    float step = max(b.w - z, tol);
-    bool found = false;
-    for (uint i = 0u; i < 32u; ++i) {
-        float next = max(d + step, 0.0);
-        b = back_texel(P1 + next * T1, z);
-        if (!back_covered(b)) {
-            step *= 0.5;
-            continue;
-        }
-        d = next;
-        found = true;
-        step = b.w - z;
-        if (abs(step) < tol) break;
+    bool front = NEARBY_EXIT == 2u && hu_qin_exit_is_front(pc.axis.xyz, p1, P1, T1, 0.01 * pc.sphere.w, 1.0);
+    bool found;
+    if (front) {
+        hu_qin_search_d_t(true, P1, T1, tol, 0.01 * pc.sphere.w, d, found);
+    } else {
+        float d_V = max(exit_layer_depth(false, p1) - exit_point_depth(P1), tol);
+        hu_qin_search_d_t(false, P1, T1, tol, d_V, d, found);
     }
     if (!found) return false;
-    b = back_texel(P1 + d * T1, z);
-    if (!back_covered(b)) return false;
-    N2 = normalize(b.xyz);
+    vec4 t = exit_texel(front, exit_project(P1 + d * T1));
+    if (!(dot(t.xyz, t.xyz) > 0.25)) return false;
+    N2 = normalize(t.xyz);
     return true;
 }
 
 // A dielectric OBJ_k as the main pass shows OBJ_R (glsl/refraction/hu_qin.frag), with the
 // projection's eye ray V = +axis: the Fresnel-weighted reflection at P1 and refraction through
 // two interfaces. P1 and N1 are this fragment (the nearest surface in the parallel
-// projection); the exit P2 and N2 come from the Fig. 9 search on OBJ_k's back faces
-// (exit_on_back_layer), or - with render.hu_qin.recursive_exit = "bounding_sphere", and where
+// projection); the exit P2 and N2 come from §2.1's search on OBJ_k's front and back faces
+// (exit_on_layers), or - with render.hu_qin.recursive_exit = "bounding_sphere", and where
 // that search finds nothing - from OBJ_k's bounding sphere (O_k, d_k), the rectangle's own
 // centre and half-size: T1 leaves where it leaves that sphere, with the sphere's normal. The
 // sphere is exact for a ball (up to its tessellation); for other shapes its exit lies further
@@ -119,7 +139,7 @@ vec3 dielectric_texel(vec3 P1, vec3 N1, Material m) {
         if (dot(T1, T1) > 0.0) {
             float d;
             vec3 N2;
-            if (NEARBY_EXIT_BACK == 0u || !exit_on_back_layer(P1, T1, d, N2)) {
+            if (NEARBY_EXIT == 0u || !exit_on_layers(P1, T1, d, N2)) {
                 // Far intersection of P1 + d T1 with the sphere: P1 lies inside it (every
                 // vertex is within d_k of O_k, and the faces between them too): root >= 0.
                 vec3 o = P1 - pc.sphere.xyz;

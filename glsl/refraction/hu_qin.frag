@@ -40,50 +40,26 @@ layout(location = 0) out vec4 out_radiance;
 layout(location = 1) out vec4 out_p2;
 layout(location = 2) out vec4 out_t2;
 
-// Inside the refractor's silhouette: where its back layer has a surface.
-bool in_silhouette(vec2 uv) {
-    return layer_covered(back_normal, uv);
+// The camera view's layers for the exit search shared with the impostor textures
+// (glsl/include/hu_qin_exit.glsl). Depths are the view-space distances along -z rather than
+// the paper's [0, 1] buffer z, which with prism's reversed-Z infinite projection is far from
+// linear; the back layer's coverage is the refractor's silhouette.
+bool exit_covered(bool front, vec2 uv) {
+    return front ? layer_covered(front_normal, uv) : layer_covered(back_normal, uv);
 }
-
-// Fig. 7: binary search from p1 along the unit screen direction t1 for the dividing pixel
-// p_e, the last pixel inside the silhouette. The interval [inside, outside] starts at
-// [0, 0.75] in uv units, "75 percent of the depth buffer size" (the paper's -1..1 span is
-// 2), and each step halves it: 8 steps resolve 0.75/256 of the image.
-vec2 dividing_pixel(vec2 p1, vec2 t1) {
-    float inside = 0.0, outside = 0.75;
-    for (uint i = 0; i < SEARCH_STEPS; ++i) {
-        float mid = 0.5 * (inside + outside);
-        if (in_silhouette(p1 + mid * t1)) inside = mid; else outside = mid;
-    }
-    return p1 + inside * t1;
+float exit_layer_depth(bool front, vec2 uv) {
+    return front ? layer_view_depth(front_depth, uv) : layer_view_depth(back_depth, uv);
 }
-
-// Fig. 9: d_T by the iterative lookup, against the front (flag -1) or back (flag 1) layer.
-// Distances are the view-space distances along -z rather than the paper's [0, 1] buffer z,
-// which with prism's reversed-Z infinite projection is far from linear. Returns false if P2
-// left the silhouette (section 4: then the exit is front-facing); the step is then halved
-// and the search continues from the last point inside.
-bool search_d_t(bool front, vec3 P1, vec3 T1, float tol, float step0, out float d_T) {
-    float flag = front ? -1.0 : 1.0;
-    float step = step0;
-    bool stayed = true;
-    d_T = 0.0;
-    for (uint i = 0; i < MAX_ITERATIONS; ++i) {
-        float next = max(d_T + step, 0.0);
-        vec3 P2 = P1 + next * T1;
-        vec2 uv = project_uv(P2);
-        if (!(front ? layer_covered(front_normal, uv) : in_silhouette(uv))) {
-            stayed = false;
-            step *= 0.5;
-            continue;
-        }
-        d_T = next;
-        float z = front ? layer_view_depth(front_depth, uv) : layer_view_depth(back_depth, uv);
-        step = flag * (z - view_depth(P2));
-        if (abs(step) < tol) break;
-    }
-    return stayed;
+float exit_point_depth(vec3 P) {
+    return view_depth(P);
 }
+vec2 exit_project(vec3 P) {
+    return project_uv(P);
+}
+vec3 exit_back_point(vec2 uv) {
+    return world_from_depth(uv, texelFetch(back_depth, texel_of(uv), 0).r);
+}
+#include "hu_qin_exit.glsl"
 
 void main() {
     ivec2 px = ivec2(gl_FragCoord.xy);
@@ -129,26 +105,17 @@ void main() {
             // A small positive first step for the front-facing search (Fig. 9), 1% of the
             // eye distance: the iteration starts at P1, which lies on the front layer.
             float step_front = 0.01 * dist1;
+            bool found;
             if (ASSUME_BACK_FACING == 0) {
-                vec2 p1 = in_uv;
-                vec2 t1 = project_uv(P1 + (0.01 * dist1) * T1) - p1;
-                if (dot(t1, t1) > 1e-14) {
-                    vec2 pe = dividing_pixel(p1, normalize(t1));
-                    vec3 Pe = world_from_depth(pe, texelFetch(back_depth, texel_of(pe), 0).r);
-                    // Fig. 5: theta_1 between V and T1, theta_2 between V and P1 -> P_e, both in
-                    // the plane of the eye, P1 and P2. T1 turned further from V than the chord
-                    // to the dividing point leaves through the front-facing surface.
-                    vec3 chord = Pe - P1;
-                    float theta_1 = acos(clamp(dot(V, T1), -1.0, 1.0));
-                    float theta_2 = dot(chord, chord) > 0.0 ? acos(clamp(dot(V, normalize(chord)), -1.0, 1.0)) : PI;
-                    front = theta_1 > theta_2;
-                }
-                if (front) search_d_t(true, P1, T1, tol, step_front, d_T);
-                else search_d_t(false, P1, T1, tol, d_V, d_T);
-            } else if (!search_d_t(false, P1, T1, tol, d_V, d_T)) {
+                // Fig. 7's interval is "75 percent of the depth buffer size" (0.75 in uv units,
+                // the paper's -1..1 span being 2): 8 steps resolve 0.75/256 of the image.
+                front = hu_qin_exit_is_front(V, in_uv, P1, T1, 0.01 * dist1, 0.75);
+                if (front) hu_qin_search_d_t(true, P1, T1, tol, step_front, d_T, found);
+                else hu_qin_search_d_t(false, P1, T1, tol, d_V, d_T, found);
+            } else if (!hu_qin_search_d_t(false, P1, T1, tol, d_V, d_T, found)) {
                 // Section 4: P2 left the silhouette, so the exit is front-facing.
                 front = true;
-                search_d_t(true, P1, T1, tol, step_front, d_T);
+                hu_qin_search_d_t(true, P1, T1, tol, step_front, d_T, found);
             }
             P2 = P1 + d_T * T1;
             vec2 uv2 = project_uv(P2);

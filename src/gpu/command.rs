@@ -317,6 +317,44 @@ impl<'a> Cmd<'a> {
         };
     }
 
+    /// Copy whole layers `layers` of `src` (in TRANSFER_SRC_OPTIMAL) to the same layers of `dst`
+    /// (in TRANSFER_DST_OPTIMAL); both colour images of the same extent and format.
+    pub fn copy_image_layers(&self, src: &Image, dst: &Image, layers: &[u32]) {
+        let regions: Vec<vk::ImageCopy> = layers
+            .iter()
+            .map(|&layer| {
+                let sub = vk::ImageSubresourceLayers {
+                    aspect_mask: vk::ImageAspectFlags::COLOR,
+                    mip_level: 0,
+                    base_array_layer: layer,
+                    layer_count: 1,
+                };
+                vk::ImageCopy {
+                    src_subresource: sub,
+                    src_offset: vk::Offset3D::default(),
+                    dst_subresource: sub,
+                    dst_offset: vk::Offset3D::default(),
+                    extent: vk::Extent3D { width: src.desc.width, height: src.desc.height, depth: 1 },
+                }
+            })
+            .collect();
+        if regions.is_empty() {
+            return;
+        }
+        // SAFETY: the caller transitioned both images (frame graph); the layers exist in both,
+        // which were created alike with TRANSFER_SRC / TRANSFER_DST usage.
+        unsafe {
+            self.dev().cmd_copy_image(
+                self.raw,
+                src.raw,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                dst.raw,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &regions,
+            )
+        };
+    }
+
     /// Clear every layer of a colour image (in TRANSFER_DST_OPTIMAL).
     pub fn clear_color_image(&self, image: &Image, value: [f32; 4]) {
         let range = vk::ImageSubresourceRange {

@@ -30,11 +30,15 @@
 //! n - 1 of OBJ_k's *own* rectangle set (which holds OBJ_R), so that OBJ_k needs a set of its
 //! own even when it is a mirror (glsl/nearby/impostor_recursive.frag). One graph pass per level
 //! ([`RECURSION_PASSES`]), ping-ponging between two arrays so that the last level lands in
-//! [`NearbyImpostors::texture`]. A dielectric TEX_k finds its exit point by §2.1.3's search
-//! (Fig. 9) against OBJ_k's back faces rendered in the rectangle's projection ([`BACK_PASS`],
-//! assuming a back-facing exit as §4 does), or (`recursive_exit = "bounding_sphere"`, and
-//! where the search finds nothing) where T1 leaves OBJ_k's bounding sphere (O_k, d_k)
-//! (glsl/nearby/impostor_body.glsl).
+//! [`NearbyImpostors::texture`]. Diffuse textures do not change between levels: level 0
+//! renders them, [`COPY_PASS`] copies them into the other array, and the levels >= 1 render
+//! only the specular ones. A dielectric TEX_k finds its exit point with §2.1's search in the
+//! rectangle's projection (glsl/include/hu_qin_exit.glsl, shared with the main pass) on OBJ_k's
+//! faces rendered there by [`BACK_PASS`]: `recursive_exit = "full"` renders the front and back
+//! faces and runs Fig. 7's dividing-pixel search, Fig. 5's front/back test and Fig. 9's search;
+//! `"back_facing"` (§4's acceleration) only the back faces and Fig. 9; `"bounding_sphere"`
+//! (and wherever the search finds no face) uses where T1 leaves OBJ_k's bounding sphere
+//! (O_k, d_k) (glsl/nearby/impostor_body.glsl).
 //!
 //! Limits (stated rules, not errors): at most [`MAX_NEARBY_RECTS`] rectangles per set; with
 //! more objects the ones whose bounding spheres come closest to O_R are kept and the others
@@ -58,8 +62,9 @@ use crate::gpu::{
 use crate::graph::{Frame, FrameGraph, ImageId};
 use crate::renderer::gpu_scene::GpuScene;
 use crate::renderer::targets::DEPTH_FORMAT;
+use crate::scene::techniques::RecursiveExit;
 use crate::scene::{Material, Scene};
-use crate::{BINDING_NEARBY_BACK, BINDING_NEARBY_RECTS, BINDING_NEARBY_TEXTURE};
+use crate::{BINDING_NEARBY_BACK, BINDING_NEARBY_FRONT, BINDING_NEARBY_RECTS, BINDING_NEARBY_TEXTURE};
 pub use crate::{MAX_NEARBY_RECTS, MAX_NEARBY_SETS};
 
 /// TEX_i (rgb radiance) and TEX_DEPTH_i (a: axial distance from O_R) in one layer.
@@ -392,19 +397,34 @@ pub struct NearbyDesc {
     pub correction_iterations: u32,
     pub correction_tolerance: f32,
     pub seed_samples: u32,
-    /// A dielectric OBJ_k's second interface in its texture: the Fig. 9 search against its
-    /// back faces in the rectangle's projection ([`BACK_PASS`]), else its bounding sphere.
-    pub back_layer_exit: bool,
+    /// A dielectric OBJ_k's second interface in its texture: §2.1's search on its front and
+    /// back faces in the rectangle's projection ([`BACK_PASS`]), on its back faces only (§4),
+    /// or its bounding sphere.
+    pub exit: RecursiveExit,
+    /// Fig. 7's halvings and Fig. 9's steps of that search (as the main pass's).
+    pub search_steps: u32,
+    pub max_iterations: u32,
 }
 
-/// The dielectric OBJ_k's back faces in their rectangles' parallel projections (normal and
-/// axial depth), rendered once per frame before level 0: the exit surface of Fig. 9's search.
+/// The dielectric OBJ_k's back faces (and with `recursive_exit = "full"` their front faces) in
+/// their rectangles' parallel projections (normal and axial depth), rendered once per frame
+/// before level 0: the exit surfaces of §2.1's search.
 pub const BACK_PASS: &str = "refraction_hu_qin_nearby_back";
 
 /// Whether a rectangle of `layout` stands for a dielectric (whose texture refracts, so that
-/// [`BACK_PASS`] renders its back faces when `back_layer_exit` is on).
+/// [`BACK_PASS`] renders its faces unless the exit is the bounding sphere).
 pub fn has_dielectric_rect(scene: &Scene, layout: &NearbyLayout) -> bool {
     layout.rects.iter().any(|r| is_dielectric(scene, r.object))
+}
+
+/// With recursion levels: level 0's diffuse layers copied into the other array of the
+/// ping-pong, once per frame. Diffuse TEX_i do not change between levels, so the levels >= 1
+/// re-render only the specular layers (mirrors, conductors, dielectrics).
+pub const COPY_PASS: &str = "refraction_hu_qin_nearby_copy";
+
+/// Whether `layout` needs [`COPY_PASS`]: recursion levels and a diffuse rectangle.
+pub fn needs_copy(scene: &Scene, layout: &NearbyLayout) -> bool {
+    layout.levels > 0 && layout.rects.iter().any(|r| !is_specular(scene, r.object))
 }
 
 /// Passes of the recursion levels 1..=MAX_RECURSION (level 0 is `name` itself).
@@ -415,7 +435,7 @@ pub const MAX_RECURSION: u32 = RECURSION_PASSES.len() as u32;
 
 /// One array of textures (recursion levels ping-pong between two).
 struct TextureArray {
-    _image: Image,
+    image: Image,
     id: ImageId,
     /// One per rectangle.
     framebuffers: Vec<Framebuffer>,
@@ -454,10 +474,14 @@ pub struct NearbyImpostors {
     set_texture: DescriptorSet,
     _back: Image,
     back_id: ImageId,
+    _front: Image,
+    front_id: ImageId,
     back_pass: Option<BackPass>,
     draws: Vec<usize>,
     /// Per rectangle: OBJ_k reflects or refracts (recursive levels re-render it).
     specular: Vec<bool>,
+    /// Layers of the diffuse rectangles: rendered at level 0 only, and copied into `other`.
+    diffuse_layers: Vec<u32>,
     /// Per rectangle: OBJ_k's own set (u32::MAX: none).
     lookup_set: Vec<u32>,
     /// [`ImpostorShading`]'s set and the images it reads (level 0).
@@ -470,11 +494,13 @@ struct Recursive {
     sets: [DescriptorSet; 2],
 }
 
-/// [`BACK_PASS`]: one framebuffer per dielectric rectangle (index into the rectangles).
+/// [`BACK_PASS`]: one framebuffer per dielectric rectangle (index into the rectangles), for
+/// the back faces and (full exit search) the front faces.
 struct BackPass {
     _layout: PipelineLayout,
     pipeline: GraphicsPipeline,
     framebuffers: Vec<(usize, Framebuffer)>,
+    front: Option<(GraphicsPipeline, Vec<(usize, Framebuffer)>)>,
 }
 
 impl NearbyImpostors {
@@ -495,7 +521,9 @@ impl NearbyImpostors {
             correction_iterations: 3,
             correction_tolerance: 1e-3,
             seed_samples: 8,
-            back_layer_exit: true,
+            exit: RecursiveExit::BackFacing,
+            search_steps: 8,
+            max_iterations: 32,
         };
         Self::with_desc(ctx, name, &desc, scene, gpu, graph, frame_layout)
     }
@@ -527,7 +555,7 @@ impl NearbyImpostors {
                 bytes >> 20
             )));
         }
-        let back: Vec<usize> = if desc.back_layer_exit {
+        let back: Vec<usize> = if desc.exit.uses_layers() {
             (0..layout.rects.len()).filter(|&i| is_dielectric(scene, layout.rects[i].object)).collect()
         } else {
             Vec::new()
@@ -581,7 +609,9 @@ impl NearbyImpostors {
             correction_iterations: 0,
             correction_tolerance: 1e-3,
             seed_samples: 1,
-            back_layer_exit: false,
+            exit: RecursiveExit::BoundingSphere,
+            search_steps: 8,
+            max_iterations: 32,
         };
         Self::build(
             ctx,
@@ -658,12 +688,31 @@ impl NearbyImpostors {
             },
         )?;
         let back_id = graph.register_image(&back);
+        // Their front faces, with the full exit search only (else a 1x1 stand-in).
+        let with_front = !back_rects.is_empty() && desc.exit == RecursiveExit::Full;
+        let front_size = if with_front { size } else { 1 };
+        let front = Image::new(
+            ctx,
+            &ImageDesc {
+                name: format!("{name}_front"),
+                format: NEARBY_FORMAT,
+                width: front_size,
+                height: front_size,
+                layers: if with_front { layers_n } else { 1 },
+                usage: U::COLOR_ATTACHMENT | U::SAMPLED | U::TRANSFER_DST,
+                view: ImageViewKind::D2Array,
+            },
+        )?;
+        let front_id = graph.register_image(&front);
         let mut stand_ins = Vec::new();
         if rects.is_empty() {
             stand_ins.push((&texture, texture_id));
         }
         if back_rects.is_empty() {
             stand_ins.push((&back, back_id));
+        }
+        if !with_front {
+            stand_ins.push((&front, front_id));
         }
         for (image, id) in stand_ins {
             // Nothing renders a stand-in: give it defined contents and the sampled layout.
@@ -710,6 +759,7 @@ impl NearbyImpostors {
                 (BINDING_NEARBY_RECTS, vk::DescriptorType::STORAGE_BUFFER, stage),
                 (BINDING_NEARBY_TEXTURE, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, stage),
                 (BINDING_NEARBY_BACK, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, stage),
+                (BINDING_NEARBY_FRONT, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, stage),
             ],
             2,
         )?;
@@ -722,15 +772,25 @@ impl NearbyImpostors {
                     DescriptorWrite::Storage(BINDING_NEARBY_RECTS, &rect_buffer),
                     DescriptorWrite::Sampled(BINDING_NEARBY_TEXTURE, view, &sampler, sampled),
                     DescriptorWrite::Sampled(BINDING_NEARBY_BACK, back.view(), &sampler, sampled),
+                    DescriptorWrite::Sampled(BINDING_NEARBY_FRONT, front.view(), &sampler, sampled),
                 ],
             )
         };
-        // Specialisation constants 0..3 of impostor_body.glsl.
+        // Specialisation constants 0..5 of impostor_body.glsl (NEARBY_EXIT: 2 full, 1 back-facing,
+        // 0 bounding sphere).
+        let exit_mode = match desc.exit {
+            _ if back_rects.is_empty() => 0,
+            RecursiveExit::Full => 2,
+            RecursiveExit::BackFacing => 1,
+            RecursiveExit::BoundingSphere => 0,
+        };
         let spec = [
             desc.correction_iterations,
             desc.correction_tolerance.to_bits(),
             desc.seed_samples,
-            u32::from(!back_rects.is_empty()),
+            exit_mode,
+            desc.search_steps,
+            desc.max_iterations,
         ];
         // An ImpostorShading's constants follow those 0..3.
         let shading_spec: Vec<u32> =
@@ -760,25 +820,40 @@ impl NearbyImpostors {
             // pipeline's front faces, so BACK is the mode that culls the faces towards O_R.
             let bpipeline = GraphicsPipeline::new(
                 ctx,
-                &pipeline_desc("nearby/impostor_back.frag", &[], vk::CullModeFlags::BACK),
+                &pipeline_desc("nearby/impostor_back.frag", &[0], vk::CullModeFlags::BACK),
                 &blayout,
                 &render_pass,
             )?;
-            let fbs = back_rects
-                .iter()
-                .map(|&i| {
-                    let r = &rects[i];
-                    Framebuffer::new(
-                        ctx,
-                        &format!("{BACK_PASS}_{}", r.layer),
-                        &render_pass,
-                        &[back.layer_view(r.layer), depth.layer_view(r.layer)],
-                        back.extent(),
-                    )
-                    .map(|fb| (i, fb))
-                })
-                .collect::<GpuResult<Vec<_>>>()?;
-            Some(BackPass { _layout: blayout, pipeline: bpipeline, framebuffers: fbs })
+            let fbs_of = |image: &Image, label: &str| {
+                back_rects
+                    .iter()
+                    .map(|&i| {
+                        let r = &rects[i];
+                        Framebuffer::new(
+                            ctx,
+                            &format!("{label}_{}", r.layer),
+                            &render_pass,
+                            &[image.layer_view(r.layer), depth.layer_view(r.layer)],
+                            image.extent(),
+                        )
+                        .map(|fb| (i, fb))
+                    })
+                    .collect::<GpuResult<Vec<_>>>()
+            };
+            let fbs = fbs_of(&back, BACK_PASS)?;
+            // The nearest front faces: the other cull mode (FRONT 1 flips the normal to face O_R).
+            let front_faces = if with_front {
+                let fpipeline = GraphicsPipeline::new(
+                    ctx,
+                    &pipeline_desc("nearby/impostor_back.frag", &[1], vk::CullModeFlags::FRONT),
+                    &blayout,
+                    &render_pass,
+                )?;
+                Some((fpipeline, fbs_of(&front, &format!("{BACK_PASS}_front"))?))
+            } else {
+                None
+            };
+            Some(BackPass { _layout: blayout, pipeline: bpipeline, framebuffers: fbs, front: front_faces })
         };
         let framebuffers_of = |image: &Image, label: &str| -> GpuResult<Vec<Framebuffer>> {
             rects
@@ -807,11 +882,12 @@ impl NearbyImpostors {
                 &layout,
                 &render_pass,
             )?;
-            (Some(TextureArray { _image: image, id, framebuffers: fbs }), Some(Recursive { pipeline: rpipeline, sets }))
+            (Some(TextureArray { image, id, framebuffers: fbs }), Some(Recursive { pipeline: rpipeline, sets }))
         } else {
             (None, None)
         };
         let draws = rects.iter().map(|r| r.object).collect();
+        let diffuse_layers = rects.iter().zip(&specular).filter(|(_, &sp)| !sp).map(|(r, _)| r.layer).collect();
         Ok(NearbyImpostors {
             name,
             resolution: size,
@@ -832,9 +908,12 @@ impl NearbyImpostors {
             set_texture,
             _back: back,
             back_id,
+            _front: front,
+            front_id,
             back_pass,
             draws,
             specular,
+            diffuse_layers,
             lookup_set,
             extra,
             layout: nearby,
@@ -843,7 +922,9 @@ impl NearbyImpostors {
 
     /// Render every TEX_i (after the shadow maps, which it reads through the frame set): level
     /// 0 as the graph pass `name`, then each recursion level l as `RECURSION_PASSES[l - 1]`.
-    /// Levels ping-pong between two arrays so that the last one lands in `texture`.
+    /// Levels ping-pong between two arrays so that the last one lands in `texture`. Diffuse
+    /// layers are the same at every level: level 0 renders them, [`COPY_PASS`] copies them into
+    /// the other array, and the levels >= 1 render the specular layers only.
     pub fn record<'a>(
         &'a self,
         frame: &mut Frame<'_, 'a>,
@@ -861,14 +942,18 @@ impl NearbyImpostors {
         if let Some(bp) = &self.back_pass {
             let mut pass = frame.pass(BACK_PASS).write(self.back_id, Access::ColorAttachment);
             pass = pass.write(self.depth_id, Access::DepthAttachment);
+            if bp.front.is_some() {
+                pass = pass.write(self.front_id, Access::ColorAttachment);
+            }
             let origins = origins.clone();
             pass.record(move |cmd| {
-                for (i, fb) in &bp.framebuffers {
+                let front = bp.front.iter().flat_map(|(p, fbs)| fbs.iter().map(move |f| (p, f)));
+                for (pipeline, (i, fb)) in bp.framebuffers.iter().map(|f| (&bp.pipeline, f)).chain(front) {
                     let r = &self.layout.rects[*i];
                     // Empty texels: no normal (the test for a surface), depth the far plane.
                     let clears = [Clear::Color([0.0, 0.0, 0.0, r.far]), Clear::Depth(1.0)];
                     cmd.begin_render_pass(&self.render_pass, fb, &clears);
-                    cmd.bind_graphics(&bp.pipeline, &[frame_set]);
+                    cmd.bind_graphics(pipeline, &[frame_set]);
                     cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
                     let d = &scene.draws[self.draws[*i]];
                     let push = ImpostorPush {
@@ -878,7 +963,7 @@ impl NearbyImpostors {
                         material: [d.material, r.layer, self.lookup_set[*i], 0],
                         sphere: r.center.extend(r.half_size).to_array(),
                     };
-                    cmd.push_graphics(&bp.pipeline, &push);
+                    cmd.push_graphics(pipeline, &push);
                     cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
                     cmd.end_render_pass();
                 }
@@ -894,7 +979,7 @@ impl NearbyImpostors {
             let name = if level == 0 { self.name } else { RECURSION_PASSES[level as usize - 1] };
             let mut pass = frame.pass(name);
             pass = pass.write(dst_id, Access::ColorAttachment).write(self.depth_id, Access::DepthAttachment);
-            pass = pass.read(self.back_id, Access::FragmentSampled);
+            pass = pass.read(self.back_id, Access::FragmentSampled).read(self.front_id, Access::FragmentSampled);
             if let Some(atlas) = shadow_atlas {
                 pass = pass.read(atlas, Access::FragmentSampled);
             }
@@ -910,12 +995,15 @@ impl NearbyImpostors {
             let origins = origins.clone();
             pass.record(move |cmd| {
                 for (i, (r, fb)) in self.layout.rects.iter().zip(dst_fbs).enumerate() {
+                    if level > 0 && !self.specular[i] {
+                        // Kept from level 0 (rendered there or copied by COPY_PASS).
+                        continue;
+                    }
                     // Empty texels: TEX_DEPTH = the far plane (never a surface, see DEPTH_MARGIN).
                     let clears = [Clear::Color([0.0, 0.0, 0.0, r.far]), Clear::Depth(1.0)];
                     cmd.begin_render_pass(&self.render_pass, fb, &clears);
                     let pipeline = match recursive {
-                        // Diffuse layers are the same at every level; specular ones read the
-                        // other array.
+                        // Specular layers read the other array.
                         Some(rec) if self.specular[i] => {
                             cmd.bind_graphics(&rec.pipeline, &[frame_set, rec.sets[1 - dst]]);
                             &rec.pipeline
@@ -945,6 +1033,20 @@ impl NearbyImpostors {
                     cmd.end_render_pass();
                 }
             });
+            if level == 0 && !self.diffuse_layers.is_empty() {
+                if let Some(o) = &self.other {
+                    // Level 0 wrote array `dst`; the other array receives the diffuse layers
+                    // that the levels writing it no longer render.
+                    let (src, dst_image) = if dst == 0 { (&self.texture, &o.image) } else { (&o.image, &self.texture) };
+                    let (src_id, copy_dst_id) =
+                        if dst == 0 { (self.texture_id, o.id) } else { (o.id, self.texture_id) };
+                    let pass = frame
+                        .pass(COPY_PASS)
+                        .read(src_id, Access::TransferRead)
+                        .write(copy_dst_id, Access::TransferWrite);
+                    pass.record(move |cmd| cmd.copy_image_layers(src, dst_image, &self.diffuse_layers));
+                }
+            }
         }
     }
 }

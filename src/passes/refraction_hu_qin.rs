@@ -63,7 +63,9 @@ impl HuQinPass {
                 correction_iterations: params.correction_iterations,
                 correction_tolerance: params.correction_tolerance,
                 seed_samples: params.seed_samples,
-                back_layer_exit: params.recursive_exit_back_layer,
+                exit: params.recursive_exit,
+                search_steps: params.search_steps,
+                max_iterations: params.max_iterations,
             };
             NearbyImpostors::with_desc(ctx, REFRACTION_HU_QIN_NEARBY, &desc, scene, gpu, graph, frame_layout)?
         } else {

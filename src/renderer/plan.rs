@@ -340,7 +340,9 @@ fn image_space_refraction(scene: &Scene, dielectric: &[String]) -> Vec<PlannedPa
 /// dielectric has other objects to stand in for; §2.2.1's recursion levels when a rectangle
 /// stands for a specular object (another dielectric, a mirror or a conductor).
 fn hu_qin_nearby(scene: &Scene) -> Vec<PlannedPass> {
-    use crate::passes::nearby_impostors::{has_dielectric_rect, nearby_layout, BACK_PASS, RECURSION_PASSES};
+    use crate::passes::nearby_impostors::{
+        has_dielectric_rect, nearby_layout, needs_copy, BACK_PASS, COPY_PASS, RECURSION_PASSES,
+    };
     let params = crate::scene::techniques::HuQinParams::from_settings(&scene.render).unwrap_or_default();
     if !params.nearby {
         return Vec::new();
@@ -381,7 +383,7 @@ fn hu_qin_nearby(scene: &Scene) -> Vec<PlannedPass> {
         );
     }
     let mut passes = Vec::new();
-    if params.recursive_exit_back_layer && has_dielectric_rect(scene, &layout) {
+    if params.recursive_exit.uses_layers() && has_dielectric_rect(scene, &layout) {
         let names: Vec<String> = layout
             .rects
             .iter()
@@ -391,14 +393,28 @@ fn hu_qin_nearby(scene: &Scene) -> Vec<PlannedPass> {
         passes.push(PlannedPass {
             name: BACK_PASS,
             reason: format!(
-                "back faces (normal, depth) of dielectric impostor(s) {} in their rectangles' projections: the exit \
-                 surface of their refraction (Hu & Qin 2007 §2.1.3 in §2.2.1's textures; \
-                 render.hu_qin.recursive_exit = \"back_layer\")",
-                list(&names)
+                "{} faces (normal, depth) of dielectric impostor(s) {} in their rectangles' projections: the exit \
+                 surfaces of their refraction (Hu & Qin 2007 §2.1 in §2.2.1's textures; \
+                 render.hu_qin.recursive_exit = \"{}\")",
+                if params.recursive_exit == crate::scene::techniques::RecursiveExit::Full {
+                    "back and front"
+                } else {
+                    "back"
+                },
+                list(&names),
+                params.recursive_exit.name()
             ),
         });
     }
     passes.push(PlannedPass { name: REFRACTION_HU_QIN_NEARBY, reason });
+    if needs_copy(scene, &layout) {
+        passes.push(PlannedPass {
+            name: COPY_PASS,
+            reason: "level 0's diffuse impostor textures copied into the recursion's other array: they do not \
+                     change between levels, which re-render only the specular ones (Hu & Qin 2007 §2.2.1)"
+                .to_string(),
+        });
+    }
     for level in 1..=layout.levels {
         passes.push(PlannedPass {
             name: RECURSION_PASSES[level as usize - 1],

@@ -78,10 +78,37 @@ pub struct HuQinParams {
     /// §2.2.1 recursive reflections: mirrors/conductors in the impostor textures reflect the
     /// environment only (0) or the impostors of the level below (1, 2, 3).
     pub recursion_depth: u32,
-    /// The second interface of a dielectric OBJ_k in its impostor texture: the Fig. 9 search
-    /// against OBJ_k's back faces in the rectangle's parallel projection (true), or OBJ_k's
-    /// bounding sphere (false, `recursive_exit = "bounding_sphere"`).
-    pub recursive_exit_back_layer: bool,
+    /// The second interface of a dielectric OBJ_k in its impostor texture (`recursive_exit`).
+    pub recursive_exit: RecursiveExit,
+}
+
+/// Where a dielectric OBJ_k's refracted ray leaves it inside its impostor texture (Hu & Qin
+/// 2007 §2.2.1 with §2.1's exit search in the rectangle's parallel projection).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RecursiveExit {
+    /// `"full"`: Fig. 7's dividing pixel and Fig. 5's front/back test, then Fig. 9's search on
+    /// OBJ_k's front or back faces.
+    Full,
+    /// `"back_facing"`: §4's acceleration, the exit assumed back-facing (Fig. 9 on the back
+    /// faces only).
+    BackFacing,
+    /// `"bounding_sphere"`: where T1 leaves OBJ_k's bounding sphere.
+    BoundingSphere,
+}
+
+impl RecursiveExit {
+    pub const NAMES: [&'static str; 3] = ["full", "back_facing", "bounding_sphere"];
+    pub fn name(self) -> &'static str {
+        match self {
+            RecursiveExit::Full => "full",
+            RecursiveExit::BackFacing => "back_facing",
+            RecursiveExit::BoundingSphere => "bounding_sphere",
+        }
+    }
+    /// Whether the exit search reads OBJ_k's back faces (and front faces with `Full`).
+    pub fn uses_layers(self) -> bool {
+        self != RecursiveExit::BoundingSphere
+    }
 }
 
 impl Default for HuQinParams {
@@ -100,7 +127,10 @@ impl Default for HuQinParams {
             correction_tolerance: 1e-3,
             seed_samples: 8,
             recursion_depth: 1,
-            recursive_exit_back_layer: true,
+            // Measured (tests/recursion.rs: two balls, a cube, a torus, a cone; docs/scene-format.md):
+            // the full search changes at most a few pixels over the back-facing one, and costs
+            // the front faces' pass; so §4's acceleration by default.
+            recursive_exit: RecursiveExit::BackFacing,
         }
     }
 }
@@ -472,18 +502,22 @@ impl HuQinParams {
                 // One pass per level (src/passes/nearby_impostors.rs, MAX_RECURSION).
                 "recursion_depth" => p.recursion_depth = integer(key, v, 0, 3)?,
                 "recursive_exit" => {
-                    p.recursive_exit_back_layer =
+                    p.recursive_exit =
                         match v.as_str() {
-                            Some("back_layer") => true,
-                            Some("bounding_sphere") => false,
+                            Some("full") => RecursiveExit::Full,
+                            Some("back_facing") => RecursiveExit::BackFacing,
+                            Some("bounding_sphere") => RecursiveExit::BoundingSphere,
                             _ => return Err(ParamError {
                                 key: key.clone(),
                                 message: format!(
-                                    "`recursive_exit` must be \"back_layer\" or \"bounding_sphere\", not {v}"
+                                    "`recursive_exit` must be \"full\", \"back_facing\" or \"bounding_sphere\", \
+                                     not {v}"
                                 ),
-                                hint: "Hu & Qin 2007 §2.2.1: a dielectric impostor's exit point, by the Fig. 9 search \
-                                       against its back faces or where its bounding sphere is left"
-                                    .into(),
+                                hint:
+                                    "Hu & Qin 2007 §2.2.1: a dielectric impostor's exit point, by §2.1's whole search \
+                                       (Figs. 5, 7, 9) on its front and back faces, by Fig. 9 on its back faces only \
+                                       (§4), or where its bounding sphere is left"
+                                        .into(),
                             }),
                         }
                 }
@@ -871,6 +905,14 @@ mod tests {
         let p = HuQinParams::from_table(Some(&table("search_steps = 4\ntolerance = 0.01\nassume_back_facing = true")))
             .unwrap();
         assert_eq!((p.search_steps, p.tolerance, p.assume_back_facing), (4, 0.01, true));
+        for (name, exit) in RecursiveExit::NAMES.iter().zip([
+            RecursiveExit::Full,
+            RecursiveExit::BackFacing,
+            RecursiveExit::BoundingSphere,
+        ]) {
+            let p = HuQinParams::from_table(Some(&table(&format!("recursive_exit = \"{name}\"")))).unwrap();
+            assert_eq!((p.recursive_exit, p.recursive_exit.name()), (exit, *name));
+        }
         let w = WymanParams::from_table(Some(&table("back_surface = \"second\""))).unwrap();
         assert_eq!(w.back_surface, BackSurface::Second);
     }
@@ -894,6 +936,7 @@ mod tests {
             ("recursion_depth = 4", "recursion_depth"),
             ("recursive_exit = \"sphere\"", "recursive_exit"),
             ("recursive_exit = 1", "recursive_exit"),
+            ("recursive_exit = \"back_layer\"", "recursive_exit"),
         ] {
             let e = HuQinParams::from_table(Some(&table(t))).unwrap_err();
             assert_eq!(e.key, key, "{t}");

@@ -440,10 +440,10 @@ fn technique_parameters(ui: &mut egui::Ui, state: &mut UiState, scene: &Scene, r
             ui.end_row();
             // §2.2.1: where a dielectric impostor's refracted ray leaves it.
             ui.label("hu_qin.recursive_exit");
-            let current = if p.recursive_exit_back_layer { "back_layer" } else { "bounding_sphere" };
+            let current = p.recursive_exit.name();
             let mut chosen = current;
             egui::ComboBox::from_id_salt("hu_qin_recursive_exit").selected_text(chosen).show_ui(ui, |ui| {
-                for option in ["back_layer", "bounding_sphere"] {
+                for option in crate::scene::techniques::RecursiveExit::NAMES {
                     ui.selectable_value(&mut chosen, option, option);
                 }
             });

@@ -1,0 +1,74 @@
+// Hu & Qin 2007 §2.1.2-2.1.3: where the refracted ray T1 leaves the refractor, found in a
+// view's front and back depth/normal layers. Shared by the camera view
+// (glsl/refraction/hu_qin.frag, perspective) and the impostor textures' parallel projections
+// (glsl/nearby/impostor_body.glsl, §2.2.1: "we render TEX_k using the above method").
+// The including shader defines, before including this file:
+//   constants SEARCH_STEPS (Fig. 7's halvings) and MAX_ITERATIONS (Fig. 9's steps);
+//   bool exit_covered(bool front, vec2 uv): the front (true) or back (false) layer holds a
+//     surface at uv (the back layer's coverage is the refractor's silhouette);
+//   float exit_layer_depth(bool front, vec2 uv): that layer's depth at uv, a distance that
+//     grows away from the eye along the view direction;
+//   float exit_point_depth(vec3 P): P's depth in the same measure;
+//   vec2 exit_project(vec3 P): P's uv in the view;
+//   vec3 exit_back_point(vec2 uv): the back layer's surface point at uv.
+#ifndef PRISM_HU_QIN_EXIT_GLSL
+#define PRISM_HU_QIN_EXIT_GLSL
+
+// Fig. 7: binary search from p1 along the unit uv direction t1 for the dividing pixel p_e,
+// the last pixel inside the silhouette. The interval [inside, outside] starts at [0, span]
+// in uv units and each step halves it.
+vec2 hu_qin_dividing_pixel(vec2 p1, vec2 t1, float span) {
+    float inside = 0.0, outside = span;
+    for (uint i = 0; i < SEARCH_STEPS; ++i) {
+        float mid = 0.5 * (inside + outside);
+        if (exit_covered(false, p1 + mid * t1)) inside = mid; else outside = mid;
+    }
+    return p1 + inside * t1;
+}
+
+// §2.1.2, Fig. 5: whether T1 leaves through a front-facing surface. t1 is T1 projected into
+// the view (P1 and the point `probe` along T1); p_e the dividing pixel along it (Fig. 7) and
+// P_e its back-layer point; theta_1 between V and T1, theta_2 between V and P1 -> P_e, both in
+// the plane of the eye, P1 and P2: T1 turned further from V than the chord to the dividing
+// point leaves through the front-facing surface. Back-facing where t1 has no length (T1
+// along V).
+bool hu_qin_exit_is_front(vec3 V, vec2 p1, vec3 P1, vec3 T1, float probe, float span) {
+    vec2 t1 = exit_project(P1 + probe * T1) - p1;
+    if (!(dot(t1, t1) > 1e-14)) return false;
+    vec2 pe = hu_qin_dividing_pixel(p1, normalize(t1), span);
+    vec3 Pe = exit_back_point(pe);
+    vec3 chord = Pe - P1;
+    float theta_1 = acos(clamp(dot(V, T1), -1.0, 1.0));
+    float theta_2 = dot(chord, chord) > 0.0 ? acos(clamp(dot(V, normalize(chord)), -1.0, 1.0)) : PI;
+    return theta_1 > theta_2;
+}
+
+// §2.1.3, Fig. 9: d_T by the iterative lookup, against the front (flag -1) or back (flag 1)
+// layer: each step is the depth difference between the layer and the current point. Returns
+// false if P2 left the layer's coverage (section 4: then the exit is front-facing); the step
+// is then halved and the search continues from the last point inside. `found`: some step
+// landed on a covered point (d_T > 0 was accepted).
+bool hu_qin_search_d_t(bool front, vec3 P1, vec3 T1, float tol, float step0, out float d_T, out bool found) {
+    float flag = front ? -1.0 : 1.0;
+    float step = step0;
+    bool stayed = true;
+    found = false;
+    d_T = 0.0;
+    for (uint i = 0; i < MAX_ITERATIONS; ++i) {
+        float next = max(d_T + step, 0.0);
+        vec3 P2 = P1 + next * T1;
+        vec2 uv = exit_project(P2);
+        if (!exit_covered(front, uv)) {
+            stayed = false;
+            step *= 0.5;
+            continue;
+        }
+        d_T = next;
+        found = true;
+        float z = exit_layer_depth(front, uv);
+        step = flag * (z - exit_point_depth(P2));
+        if (abs(step) < tol) break;
+    }
+    return stayed;
+}
+#endif
