@@ -250,7 +250,11 @@ impl EikonalPass {
             correction_iterations: params.nearby_iterations,
             correction_tolerance: NEARBY_TOLERANCE,
             seed_samples: NEARBY_SEEDS,
-            back_layer_exit: false,
+            // Around a volume (NearbyImpostors::around) no object refracts: the exit settings
+            // are never used.
+            exit: crate::scene::techniques::RecursiveExit::BoundingSphere,
+            search_steps: 8,
+            max_iterations: 32,
         };
         let (nearby, nearby_layout) = if kept.is_empty() {
             (NearbyImpostors::stand_in(ctx, EIKONAL_NEARBY, gpu, graph, frame_layout)?, None)

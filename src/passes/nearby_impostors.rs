@@ -224,8 +224,8 @@ pub fn rect_for(scene: &Scene, object: usize, origin_r: Vec3, layer: u32) -> Opt
 /// Another way to shade level 0 of the textures than glsl/nearby/impostor.frag (issue 7: the
 /// eikonal light volumes for the caustic under a volume, src/passes/eikonal_nearby.rs): a
 /// fragment shader including impostor_body.glsl with a third descriptor set (set 2, owned by
-/// the caller, alive as long as the impostors), its specialisation constants (ids from 4 on,
-/// after impostor_body.glsl's 0..3), and the images that set samples.
+/// the caller, alive as long as the impostors), its specialisation constants (ids from 6 on,
+/// after impostor_body.glsl's 0..5), and the images that set samples.
 pub struct ImpostorShading<'a> {
     pub fragment_shader: &'static str,
     pub set_layout: &'a DescriptorSetLayout,
@@ -590,7 +590,7 @@ impl NearbyImpostors {
         layout.sets.push(NearbySet { object: usize::MAX, origin, first: 0, count, dropped });
         let specular = vec![false; layout.rects.len()];
         let lookup_set = vec![u32::MAX; layout.rects.len()];
-        let desc = NearbyDesc { recursion_depth: 0, back_layer_exit: false, ..*desc };
+        let desc = NearbyDesc { recursion_depth: 0, exit: RecursiveExit::BoundingSphere, ..*desc };
         Self::build(ctx, name, &desc, layout, specular, lookup_set, Vec::new(), graph, frame_layout, shading)
     }
 
@@ -792,7 +792,7 @@ impl NearbyImpostors {
             desc.search_steps,
             desc.max_iterations,
         ];
-        // An ImpostorShading's constants follow those 0..3.
+        // An ImpostorShading's constants follow those 0..5.
         let shading_spec: Vec<u32> =
             spec.iter().chain(shading.as_ref().map_or(&[][..], |sh| sh.specialization)).copied().collect();
         // Quads are one-sided; O_R may see either side.
