@@ -360,8 +360,9 @@ impl Renderer {
             (Some(volume), true) => {
                 let p = EikonalParams::from_settings(&scene.render)
                     .map_err(|error| RenderError::Param { technique: "eikonal", error })?;
-                let light = if plan::has(&plan, plan::EIKONAL_LIGHT) { scene.lights.first() } else { None };
-                Some(EikonalPass::new(ctx, p, volume, light, &mut graph, &frame_layout, &targets, &nearest)?)
+                let lights: &[crate::scene::Light] =
+                    if plan::has(&plan, plan::EIKONAL_LIGHT) { &scene.lights } else { &[] };
+                Some(EikonalPass::new(ctx, p, volume, lights, &mut graph, &frame_layout, &targets, &nearest)?)
             }
             _ => None,
         };
