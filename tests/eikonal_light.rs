@@ -595,6 +595,7 @@ fn ball_floor_rings(intensity: f64, h: f64, c: f64, r: f64, ior: f64, dr: f64, r
 ///   patches that crossed a focus loses light, printed).
 /// - The caustic (r < 0.35 m, where all the refracted light lands): the ball's cone flux,
 ///   I 2 pi (1 - cos alpha).
+///
 /// The highest-energy voxelization of before (dE = flux / smallest patch area in the
 /// voxel) made the focus several times too bright; the track-length deposit conserves flux.
 #[test]
