@@ -257,10 +257,7 @@ fn absurd_eikonal_light_parameters() {
     // Ihrke et al. 2007 §5.2 (render.eikonal): a tile larger than the patch list, a
     // non-boolean keep_crossed; the error names the key and the file, and no file is written.
     let c = Case::new("eikonal_light");
-    let scene = c.file(
-        "scene.toml",
-        &format!("{GOOD}\n[render.eikonal]\nmax_patches = 1000\ntile_patches = 5000\n"),
-    );
+    let scene = c.file("scene.toml", &format!("{GOOD}\n[render.eikonal]\nmax_patches = 1000\ntile_patches = 5000\n"));
     let e = c.render_fails(&scene, &[], &[]);
     assert!(e.contains("tile_patches") && e.contains("max_patches") && e.contains("scene.toml"), "{e}");
     let scene = c.file("ok.toml", GOOD);
