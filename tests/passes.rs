@@ -261,11 +261,11 @@ fn eikonal_passes_only_with_a_volume() {
     assert!(!plan(&unlit).iter().any(|p| p.name == "eikonal_light"));
     // Two lights: one eikonal_light pass (every light is simulated into the same volumes),
     // whose reason names both.
-    let two = common::scene(
-        "eikonal_sphere",
-        64,
-        &["lights=[{type=\"point\", position=[0,5,0], intensity=50}, {type=\"directional\", direction=[0.3,-1,0], irradiance=1}]"],
-    );
+    let mut two = common::scene("eikonal_sphere", 64, &[]);
+    two.lights.push(prism::scene::Light::Directional {
+        direction: glam::Vec3::new(0.3, -1.0, 0.0).normalize(),
+        irradiance: glam::Vec3::ONE,
+    });
     let p = plan(&two);
     let light: Vec<_> = p.iter().filter(|p| p.name == "eikonal_light").collect();
     assert_eq!(light.len(), 1, "{p:?}");
