@@ -208,8 +208,8 @@ shared_constants! {
     LIGHT_BINDING_SRC: u32 = 5;
     LIGHT_BINDING_DST: u32 = 6;
     LIGHT_BINDING_FIELD: u32 = 7;
-    LIGHT_BINDING_KEYS: u32 = 8;
-    LIGHT_BINDING_DEPOSIT: u32 = 9;
+    // The additive irradiance accumulator (r32ui 3D image, six slabs along y).
+    LIGHT_BINDING_ACCUM: u32 = 8;
     LIGHT_BINDING_IRRADIANCE: u32 = 10;
     LIGHT_BINDING_DIRECTION: u32 = 11;
     LIGHT_BINDING_EXTINCTION: u32 = 12;

@@ -274,6 +274,25 @@ fn absurd_eikonal_nearby_parameters() {
 }
 
 #[test]
+fn absurd_eikonal_light_parameters() {
+    // Ihrke et al. 2007 §5.2 (render.eikonal): a tile larger than the patch list, a
+    // non-boolean keep_crossed; the error names the key and the file, and no file is written.
+    let c = Case::new("eikonal_light");
+    let scene = c.file("scene.toml", &format!("{GOOD}\n[render.eikonal]\nmax_patches = 1000\ntile_patches = 5000\n"));
+    let e = c.render_fails(&scene, &[], &[]);
+    assert!(e.contains("tile_patches") && e.contains("max_patches") && e.contains("scene.toml"), "{e}");
+    let scene = c.file("ok.toml", GOOD);
+    for (set, key) in [
+        ("render.eikonal.keep_crossed=3", "keep_crossed"),
+        ("render.eikonal.tile_patches=-1", "tile_patches"),
+        ("render.eikonal.tile_patches=2000000", "tile_patches"),
+    ] {
+        let e = c.render_fails(&scene, &["--set", set], &[]);
+        assert!(e.contains(key), "{set}: {e}");
+    }
+}
+
+#[test]
 fn absurd_tone_map_settings() {
     // render.tonemap names one of the accepted tone maps; [render.tonemap_adaptive] checks
     // its numbers (file:line for the file, the key and the range for --set).

@@ -288,6 +288,17 @@ fn eikonal_passes_only_with_a_volume() {
     let mut unlit = common::scene("eikonal_sphere", 64, &[]);
     unlit.lights.clear();
     assert!(!plan(&unlit).iter().any(|p| p.name == "eikonal_light"));
+    // Two lights: one eikonal_light pass (every light is simulated into the same volumes),
+    // whose reason names both.
+    let mut two = common::scene("eikonal_sphere", 64, &[]);
+    two.lights.push(prism::scene::Light::Directional {
+        direction: glam::Vec3::new(0.3, -1.0, 0.0).normalize(),
+        irradiance: glam::Vec3::ONE,
+    });
+    let p = plan(&two);
+    let light: Vec<_> = p.iter().filter(|p| p.name == "eikonal_light").collect();
+    assert_eq!(light.len(), 1, "{p:?}");
+    assert!(light[0].reason.contains("light 0") && light[0].reason.contains("light 1"), "{}", light[0].reason);
     // The volume-source scenes (issue 7): the wine glass's light adds its shadow map and the
     // light simulation (the caustic on the table); the others have no light.
     for scene in ["eikonal_amber_bunny", "eikonal_dispersion_cube"] {

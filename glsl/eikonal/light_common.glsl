@@ -19,14 +19,29 @@ layout(std430, set = 1, binding = LIGHT_BINDING_DST) buffer Dst { Patch dst[]; }
 layout(set = 1, binding = LIGHT_BINDING_FIELD) uniform sampler3D field;
 // (sigma_a + sigma_s RGB per metre, HG g) of src/scene/volume_sources.rs, over the VOLUME's box.
 layout(set = 1, binding = LIGHT_BINDING_EXTINCTION) uniform sampler3D extinction_map;
-// Per voxel of the irradiance volume: the largest irradiance key deposited so far.
-layout(std430, set = 1, binding = LIGHT_BINDING_KEYS) buffer Keys { uint keys[]; };
-// Per patch of this step: (voxel index or ~0, key) of its deposit.
-layout(std430, set = 1, binding = LIGHT_BINDING_DEPOSIT) buffer Deposits { uvec2 deposits[]; };
-// rgb: differential irradiance dE_omega (W/m^2) of the highest-energy ray; a: 1 where lit.
+// The additive accumulator of the track-length irradiance estimate (light_step.comp): per
+// voxel of the irradiance volume six f32 sums stored as bits (CAS-added), in six slabs along
+// y: 0..2 the scalar irradiance R, G, B (W/m^2), 3..5 the vector irradiance
+// sum_j (E_r + E_g + E_b)_j l_j. light_resolve.comp turns it into the two volumes below.
+layout(set = 1, binding = LIGHT_BINDING_ACCUM, r32ui) uniform uimage3D accum;
+// rgb: irradiance sum_j dE_omega,j (W/m^2) of every ray through the voxel (Eqs. 6-7 sum
+// over j); a: 1 where lit.
 layout(set = 1, binding = LIGHT_BINDING_IRRADIANCE, rgba32f) uniform image3D irradiance;
-// xyz: that ray's unit direction of travel.
+// xyz: the vector irradiance sum_j (E_r + E_g + E_b)_j l_j (l_j the unit direction of
+// travel); w: sum_j (E_r + E_g + E_b)_j. xyz / w is the mean direction of the light (its
+// length the mean cosine between the rays), and for a Lambertian receiver with normal n,
+// -dot(n, xyz) / w * E is Eq. 7's sum_j cos(theta_j) dE_omega,j exactly (per channel where
+// the rays at the voxel share one colour ratio).
 layout(set = 1, binding = LIGHT_BINDING_DIRECTION, rgba32f) uniform image3D direction;
+
+// Per run of the simulator (one light, one index channel, one tile of the initial
+// wavefront; src/passes/eikonal_light.rs `LightRun`).
+layout(push_constant) uniform RunPush {
+    uint slab;        // index slab of `field` the wavefront travels through (dispersion)
+    float sign;       // +1: deposit; -1: take a run's deposits back (an overflowing tile)
+    float min_flux;   // energy threshold in W (section 5.2.3, patch termination)
+    uint pad;
+} run;
 
 layout(constant_id = 2) const float DT = 0.01;             // time step of Eqs. 14-15
 layout(constant_id = 3) const float VOL_MIN_X = -1.0;      // the index field's box
@@ -43,7 +58,7 @@ layout(constant_id = 13) const float LIGHT_MAX_Y = 1.0;
 layout(constant_id = 14) const float LIGHT_MAX_Z = 1.0;
 layout(constant_id = 15) const uint CHANNELS = 1u;         // index slabs in `field` (3: dispersion)
 layout(constant_id = 16) const uint MATERIALS = 0u;        // 0: no extinction anywhere (stand-in)
-layout(constant_id = 17) const float MIN_FLUX = 0.0;       // energy threshold (W)
+layout(constant_id = 17) const uint KEEP_CROSSED = 0u;     // 1: keep patches past a singularity
 layout(constant_id = 18) const uint INTEGRATOR = EIKONAL_EULER;
 
 const vec3 VOL_MIN = vec3(VOL_MIN_X, VOL_MIN_Y, VOL_MIN_Z);
@@ -51,10 +66,11 @@ const vec3 VOL_MAX = vec3(VOL_MAX_X, VOL_MAX_Y, VOL_MAX_Z);
 const vec3 LIGHT_MIN = vec3(LIGHT_MIN_X, LIGHT_MIN_Y, LIGHT_MIN_Z);
 const vec3 LIGHT_MAX = vec3(LIGHT_MAX_X, LIGHT_MAX_Y, LIGHT_MAX_Z);
 
-// With a per-channel index (CHANNELS = 3, dispersion) the light travels through the green
-// slab: one wavefront, not three (a limitation; the view renderer marches each channel).
+// With a per-channel index (CHANNELS = 3, dispersion) each channel's wavefront travels
+// through its own slab (section 5.3: "a separate refractive index field for each RGB
+// channel"): the simulator runs once per channel (`run.slab`).
 vec4 field_voxel(ivec3 q, ivec3 size) {
-    int slab = CHANNELS == 3u ? 1 : 0;
+    int slab = int(min(run.slab, CHANNELS - 1u));
     return all(greaterThanEqual(q, ivec3(0))) && all(lessThan(q, size)) ? texelFetch(field, q + ivec3(0, 0, slab * size.z), 0)
                                                                       : vec4(0.0);
 }
@@ -113,8 +129,15 @@ bool in_light_box(vec3 x) {
     return all(greaterThanEqual(x, LIGHT_MIN)) && all(lessThan(x, LIGHT_MAX));
 }
 
-// The irradiance volume's voxel holding x (x inside the light box).
-ivec3 light_voxel(vec3 x) {
-    ivec3 size = imageSize(irradiance);
-    return clamp(ivec3(floor((x - LIGHT_MIN) / (LIGHT_MAX - LIGHT_MIN) * vec3(size))), ivec3(0), size - 1);
+// Add `value` to component `comp` (slab) of voxel q of the accumulator: a compare-and-swap
+// loop on the f32 bits (float atomics are an extension; this is core Vulkan). The order of
+// the additions is not fixed, so sums agree between runs to f32 rounding only.
+void accum_add(ivec3 q, int comp, float value) {
+    ivec3 c = ivec3(q.x, q.y + comp * imageSize(irradiance).y, q.z);
+    uint old = imageLoad(accum, c).x;
+    for (int k = 0; k < 65536; ++k) {
+        uint seen = imageAtomicCompSwap(accum, c, old, floatBitsToUint(uintBitsToFloat(old) + value));
+        if (seen == old) break;
+        old = seen;
+    }
 }

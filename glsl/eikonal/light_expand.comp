@@ -5,7 +5,7 @@
 // j holds (input patch, index among its outputs) from histopyramid_traverse.comp: a
 // retained patch is copied; output k of a tessellated one is its k-th quarter of the
 // bilinear split (section 4.2.3, Fig. 4 right), the new edge midpoints and centre moved
-// back onto the curved wavefront, their flux split by area so that the total is conserved.
+// back onto the curved wavefront, each with a quarter of the flux (conserved).
 #include "light_common.glsl"
 layout(local_size_x = LIGHT_GROUP) in;
 
@@ -54,8 +54,6 @@ void main() {
     gv[4] = normalize(va + vb) * index_at(gx[4]);
     // Quarter k's corners in the parent's order: lower-left grid index and its 3 others.
     const int base[4] = int[4](0, 1, 4, 3);
-    float areas[4];
-    float sum = 0.0;
     Patch q[4];
     for (int k = 0; k < 4; ++k) {
         int b = base[k];
@@ -64,11 +62,14 @@ void main() {
             q[k].x[c] = vec4(gx[idx[c]], gw[idx[c]]);
             q[k].v[c] = vec4(gv[idx[c]], 0.0);
         }
-        areas[k] = length(patch_normal(q[k]));
-        sum += areas[k];
     }
     uint k = min(pair.y, 3u);
     Patch out_patch = q[k];
-    out_patch.flux = vec4(p.flux.rgb * (sum > 0.0 ? areas[k] / sum : 0.25), 0.0);
+    // Each quarter is the stream tube (Fig. 3) of a quarter of the parent's particles'
+    // parameter square, which carried a quarter of its flux at birth (uniform irradiance
+    // over a patch of at most a voxel): flux / 4. Splitting by the quarters' current areas
+    // instead moved flux towards the stretched side of patches sheared across the ball's
+    // rim (a dark band beside eikonal_sphere's shadow, and as much extra in its caustic).
+    out_patch.flux = vec4(p.flux.rgb * 0.25, 0.0);
     dst[j] = out_patch;
 }

@@ -1,12 +1,6 @@
 #version 450
-// Diffuse receivers inside the irradiance volume receive the simulated light (Ihrke et al.
-// 2007, Fig. 1 left: the caustic on the table; Eq. 7 with a Lambertian BRDF, one incoming
-// ray per voxel). The irradiance volume covers the volume's box and `light_below` metres
-// under it (src/passes/eikonal_light.rs), so a floor just under the volume lies inside.
-// There the simulated light replaces the unoccluded direct term of the light it simulates
-// (lights[0]): the wavefront carries both the light that missed the volume (I / r^2, the
-// same as the direct term) and the refracted, focused light. Other lights, the
-// environment and the shadow maps of meshes stay as deferred_shading computed them.
+// Diffuse receivers of the G-buffer inside the irradiance volume receive the simulated light
+// (Ihrke et al. 2007, Fig. 1 left: the caustic on the table): glsl/eikonal/receiver.glsl.
 #include "frame.glsl"
 #include "environment.glsl"
 #include "lighting.glsl"
@@ -20,6 +14,7 @@ layout(constant_id = 2) const float LIGHT_MIN_Z = 0.0;
 layout(constant_id = 3) const float LIGHT_MAX_X = 1.0;
 layout(constant_id = 4) const float LIGHT_MAX_Y = 1.0;
 layout(constant_id = 5) const float LIGHT_MAX_Z = 1.0;
+#include "receiver.glsl"
 layout(location = 0) in vec2 in_uv;
 layout(location = 0) out vec4 out_radiance;
 
@@ -31,29 +26,9 @@ void main() {
     if (material_kind(uint(nm.w + 0.5)) != MATERIAL_DIFFUSE) discard;
     vec3 p = world_from_depth(in_uv, depth);
     vec3 lo = vec3(LIGHT_MIN_X, LIGHT_MIN_Y, LIGHT_MIN_Z), hi = vec3(LIGHT_MAX_X, LIGHT_MAX_Y, LIGHT_MAX_Z);
-    if (any(lessThan(p, lo)) || any(greaterThanEqual(p, hi)) || frame.info.x == 0u) discard;
+    if (!eikonal_receives(p, lo, hi)) discard;
     vec3 n = normalize(nm.xyz);
     if (dot(n, camera_ray(in_uv)) > 0.0) n = -n;
     vec3 albedo = texelFetch(gbuf_albedo, px, 0).rgb;
-    vec3 radiance = diffuse_radiance(p, n, albedo);
-
-    // lights[0]'s direct term exactly as diffuse_radiance added it ...
-    Light l = frame.lights[0];
-    vec3 wi, e;
-    if (uint(l.position.w + 0.5) == LIGHT_POINT) {
-        vec3 d = l.position.xyz - p;
-        float r2 = max(dot(d, d), 1e-30);
-        wi = d * inversesqrt(r2);
-        e = l.intensity.rgb / r2;
-    } else {
-        wi = -l.position.xyz;
-        e = l.intensity.rgb;
-    }
-    float visible = visibility(0u, p, n);
-    vec3 direct = e * max(dot(n, wi), 0.0) * visible;
-    // ... replaced by the simulated irradiance dE_omega with Lambert's cosine of its ray.
-    vec3 sim, l_dir;
-    vec3 simulated = light_at(p, lo, hi, sim, l_dir) ? sim * max(dot(n, -l_dir), 0.0) * visible : vec3(0.0);
-    radiance += albedo / PI * (simulated - direct);
-    out_radiance = vec4(finite_or_zero(max(radiance, vec3(0.0))), 1.0);
+    out_radiance = vec4(eikonal_receiver(p, n, albedo, lo, hi), 1.0);
 }

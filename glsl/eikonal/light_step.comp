@@ -4,13 +4,25 @@
 //   (dx/dt = v / n^2, dv/dt = grad n / n; forward Euler like the paper, or RK4), so that all
 //   particles stay on one wavefront (Appendix, Eqs. 23-24: dS/dt = 1);
 // - Eq. 18: the flux dE * A loses exp(-sigma_r dt / n) (ds = dt / n, Eq. 24); without
-//   absorption it is constant, and the irradiance is flux / area (Eq. 17);
-// - section 5.2.2: voxelize the patch midpoint, keeping per voxel the highest-energy ray
-//   (first half of a two-pass scheme: atomicMax of the irradiance's float bits, which order
-//   like the floats for non-negative values; light_deposit.comp then lets the winner write);
+//   absorption it is constant (the intensity law, Eqs. 16-17);
+// - section 5.2.2: voxelize the patch into the irradiance volume. Not the paper's "highest
+//   energy ray" with dE = flux / area (Eq. 17) at the midpoint's voxel: near a focus the
+//   patch area goes to 0 and that value to infinity (the "catastrophic points" of 5.2.3),
+//   and a voxel that a focus narrower than itself crosses kept the focus's peak, not its
+//   mean over the voxel: on eikonal_sphere's floor the caustic came out several times too
+//   bright (issue 7). Instead the stream tube's energy is binned by the track-length
+//   estimate of the intensity law: a tube of flux Phi = dE A crossing a voxel of volume V
+//   over a length l adds Phi l / V to its irradiance, which for a uniform beam filling the
+//   voxel (cross-section h^2, l = h) is exactly dE, and which near a focus is the flux
+//   through the voxel over its cross-section: finite, and the voxel's mean. The flux is
+//   splatted trilinearly (tent of two voxels) at the midpoint of the step's segment, since
+//   neighbouring midpoints of patches up to a voxel wide are up to a voxel apart. Every
+//   ray's irradiance is summed (Eqs. 6-7 sum over the incoming rays j), and so are the
+//   lights, tiles and channels of src/passes/eikonal_light.rs, whose runs all add here;
 // - section 5.2.3: classify it 0 (eliminate: below the energy threshold, leaving the volume,
-//   or its orientation flipped against its direction = it crossed a wavefront singularity),
-//   1 (retain) or 4 (tessellate: its corners span more than one voxel along an axis).
+//   or its orientation flipped against its direction = it crossed a wavefront singularity,
+//   unless KEEP_CROSSED), 1 (retain) or 4 (tessellate: its corners span more than one voxel
+//   along an axis).
 #include "light_common.glsl"
 layout(local_size_x = LIGHT_GROUP) in;
 
@@ -48,10 +60,43 @@ bool heads_into_box(vec3 o, vec3 d) {
     return near <= far && far > 0.0;
 }
 
+// Track-length deposit of `flux` (W) over the segment a -> b (section 5.2.2, see the top).
+void deposit(vec3 a, vec3 b, vec3 flux, vec3 dir) {
+    float len = distance(a, b);
+    vec3 at = 0.5 * (a + b);
+    ivec3 size = imageSize(irradiance);
+    vec3 voxel = (LIGHT_MAX - LIGHT_MIN) / vec3(size);
+    // Up to a voxel outside the box the splat still reaches the boundary voxels (without
+    // it they would miss half their deposits).
+    if (!(len > 0.0) || any(lessThan(at, LIGHT_MIN - voxel)) || any(greaterThan(at, LIGHT_MAX + voxel))) return;
+    vec3 e = run.sign * flux * (len / (voxel.x * voxel.y * voxel.z));
+    if (any(isnan(e)) || any(isinf(e))) return;
+    vec3 d = dir * (e.r + e.g + e.b);
+    vec3 u = (at - LIGHT_MIN) / voxel - 0.5;
+    ivec3 i0 = ivec3(floor(u));
+    vec3 f = u - vec3(i0);
+    for (int c = 0; c < 8; ++c) {
+        ivec3 o = ivec3(c & 1, (c >> 1) & 1, (c >> 2) & 1);
+        ivec3 q = i0 + o;
+        if (any(lessThan(q, ivec3(0))) || any(greaterThanEqual(q, size))) continue;
+        vec3 w3 = mix(1.0 - f, f, vec3(o));
+        float w = w3.x * w3.y * w3.z;
+        if (!(w > 0.0)) continue;
+        // Zero channels (one channel's run of a dispersive volume) cost no atomics.
+        if (e.r != 0.0) accum_add(q, 0, w * e.r);
+        if (e.g != 0.0) accum_add(q, 1, w * e.g);
+        if (e.b != 0.0) accum_add(q, 2, w * e.b);
+        accum_add(q, 3, w * d.x);
+        accum_add(q, 4, w * d.y);
+        accum_add(q, 5, w * d.z);
+    }
+}
+
 void main() {
     uint i = gl_GlobalInvocationID.x;
     if (i >= state.count) return;
     Patch p = src[i];
+    vec3 mid0 = patch_mid(p);
     for (int c = 0; c < 4; ++c) {
         vec3 x = p.x[c].xyz, v = p.v[c].xyz;
         advance(x, v);
@@ -66,14 +111,18 @@ void main() {
     }
     vec3 normal = patch_normal(p);
     vec3 dir = patch_dir(p);
-    float area = length(normal);
-    bool singular = !(dot(normal, dir) > 0.0);
+    bool finite_patch = !any(isnan(normal)) && !any(isinf(normal)) && dot(dir, dir) > 0.0;
+    bool singular = !finite_patch || (KEEP_CROSSED == 0u && !(dot(normal, dir) > 0.0));
     vec3 voxel = (LIGHT_MAX - LIGHT_MIN) / vec3(imageSize(irradiance));
     vec3 lo = min(min(p.x[0].xyz, p.x[1].xyz), min(p.x[2].xyz, p.x[3].xyz));
     vec3 hi = max(max(p.x[0].xyz, p.x[1].xyz), max(p.x[2].xyz, p.x[3].xyz));
-    bool near_box = all(greaterThanEqual(hi, LIGHT_MIN - voxel)) && all(lessThanEqual(lo, LIGHT_MAX + voxel));
+    // Within its own size of the box a patch is split already: each step halves it while
+    // moving half a voxel, so it is down to a voxel when it enters (a patch of many voxels
+    // deposited at its midpoint would leave holes in the first layers).
+    vec3 margin = max(voxel, vec3(max(hi.x - lo.x, max(hi.y - lo.y, hi.z - lo.z))));
+    bool near_box = all(greaterThanEqual(hi, LIGHT_MIN - margin)) && all(lessThanEqual(lo, LIGHT_MAX + margin));
     uint cls = 1u;
-    if (singular || max(p.flux.r, max(p.flux.g, p.flux.b)) < MIN_FLUX) {
+    if (singular || max(p.flux.r, max(p.flux.g, p.flux.b)) < run.min_flux) {
         cls = 0u;
     } else if (!near_box && !heads_into_box(mid, dir)) {
         cls = 0u;   // left the simulation volume (and will not re-enter: straight in air)
@@ -82,18 +131,5 @@ void main() {
     }
     classes[i] = cls;
     src[i] = p;
-
-    uvec2 deposit = uvec2(0xffffffffu, 0u);
-    if (!singular && area > 0.0 && in_light_box(mid)) {
-        vec3 e = p.flux.rgb / area;   // Eq. 17: dE_omega(t) = dE_omega(0) A(0) / A(t)
-        float key = max(e.r, max(e.g, e.b));
-        if (key > 0.0 && !isinf(key) && !isnan(key)) {
-            ivec3 q = light_voxel(mid);
-            ivec3 size = imageSize(irradiance);
-            uint cell = uint(q.x + size.x * (q.y + size.y * q.z));
-            deposit = uvec2(cell, floatBitsToUint(key));
-            atomicMax(keys[cell], deposit.y);
-        }
-    }
-    deposits[i] = deposit;
+    if (!singular) deposit(mid0, mid, p.flux.rgb, normalize(dir));
 }

@@ -23,11 +23,14 @@ float henyey_greenstein(float cos_theta, float g) {
     return (1.0 - g * g) / (4.0 * PI * d * sqrt(max(d, 1e-12)));
 }
 
-// The simulated light at x in the irradiance volume spanning light_min..light_max:
-// trilinear over the voxels that received a patch midpoint (alpha 1), renormalized by their
-// weight, so that a voxel the wavefront crossed between two midpoints (a hole of the
-// midpoint voxelization, section 4.2.3) takes its lit neighbours' value instead of 0.
-// Returns false where no voxel of the 2x2x2 neighbourhood was lit.
+// The simulated light at x in the irradiance volume spanning light_min..light_max, by
+// trilinear interpolation (the track-length deposits of light_step.comp are splatted
+// trilinearly, so no voxel inside the lit region is a hole and the interpolation is linear:
+// the light of several runs, lights and channels adds up exactly). `irradiance` is the sum
+// of every ray's dE_omega (Eqs. 6-7 sum over j); `dir` is the mean direction of travel,
+// sum_j w_j l_j / sum_j w_j (w = E_r + E_g + E_b), whose length is the mean cosine between
+// the rays: dot(n, -dir) * irradiance is Eq. 7's sum_j cos(theta_j) dE_omega,j for a
+// Lambertian receiver. Returns false where no light arrives.
 bool light_at(vec3 x, vec3 light_min, vec3 light_max, out vec3 irradiance, out vec3 dir) {
     irradiance = vec3(0.0);
     dir = vec3(0.0);
@@ -36,22 +39,17 @@ bool light_at(vec3 x, vec3 light_min, vec3 light_max, out vec3 irradiance, out v
     vec3 u = (x - light_min) / (light_max - light_min) * vec3(size) - 0.5;
     ivec3 i0 = ivec3(floor(u));
     vec3 f = u - vec3(i0);
-    float weight = 0.0;
+    vec4 vector_sum = vec4(0.0);
     for (int c = 0; c < 8; ++c) {
         ivec3 o = ivec3(c & 1, (c >> 1) & 1, (c >> 2) & 1);
-        ivec3 q = i0 + o;
-        if (any(lessThan(q, ivec3(0))) || any(greaterThanEqual(q, size))) continue;
-        vec4 e = texelFetch(light_irradiance, q, 0);
-        if (e.a <= 0.0) continue;
+        ivec3 q = clamp(i0 + o, ivec3(0), size - 1);
         vec3 w3 = mix(1.0 - f, f, vec3(o));
         float w = w3.x * w3.y * w3.z;
-        irradiance += w * e.rgb;
-        dir += w * texelFetch(light_direction, q, 0).xyz;
-        weight += w;
+        irradiance += w * texelFetch(light_irradiance, q, 0).rgb;
+        vector_sum += w * texelFetch(light_direction, q, 0);
     }
-    if (!(weight > 1e-6)) return false;
-    irradiance /= weight;
-    dir = dot(dir, dir) > 1e-20 ? normalize(dir) : vec3(0.0);
+    if (!(vector_sum.w > 0.0)) return false;
+    dir = vector_sum.xyz / vector_sum.w;
     return true;
 }
 
@@ -60,6 +58,8 @@ bool light_at(vec3 x, vec3 light_min, vec3 light_max, out vec3 irradiance, out v
 vec3 inscatter(vec3 x, vec3 to_eye, vec3 light_min, vec3 light_max, float g) {
     vec3 e, l;
     if (!light_at(x, light_min, light_max, e, l)) return vec3(0.0);
+    // The mean direction stands for every ray (the paper keeps one ray per voxel, 5.2.2).
+    l = dot(l, l) > 1e-12 ? normalize(l) : vec3(0.0);
     return henyey_greenstein(dot(l, to_eye), g) * e;
 }
 #endif

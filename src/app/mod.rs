@@ -207,11 +207,24 @@ fn render(args: RenderArgs) -> Result<()> {
     }
     if let Some(l) = renderer.light_stats() {
         eprintln!(
-            "eikonal light simulation: {} steps, {} initial patches, peak {}, {} dropped at max_patches, {:.2} s",
-            l.steps, l.initial_patches, l.peak_patches, l.dropped_patches, l.seconds
+            "eikonal light simulation: {} runs (lights x channels x tiles; {} tiles split), {} steps, {} initial patches, peak {}, {} dropped at max_patches, {:.2} s",
+            l.runs.len(), l.split_tiles, l.steps, l.initial_patches, l.peak_patches, l.dropped_patches, l.seconds
         );
         if args.verbose {
-            eprintln!("patches after each step: {:?}", l.patch_counts);
+            let mut at = 0usize;
+            for r in &l.runs {
+                let end = (at + r.steps as usize).min(l.patch_counts.len());
+                eprintln!(
+                    "run light {} channel {:?} tile {}..{} sign {}: patches after each step: {:?}",
+                    r.light,
+                    r.channel,
+                    r.start,
+                    r.end,
+                    r.sign,
+                    &l.patch_counts[at..end]
+                );
+                at = end;
+            }
         }
     }
     if let Some(t) = renderer.tonemap_stats() {

@@ -196,7 +196,7 @@ impl EikonalPass {
         ctx: &Arc<GpuContext>,
         params: EikonalParams,
         volume: &Volume,
-        light: Option<&crate::scene::Light>,
+        lights: &[crate::scene::Light],
         scene: &crate::scene::Scene,
         gpu: &GpuScene,
         graph: &mut FrameGraph,
@@ -206,12 +206,13 @@ impl EikonalPass {
     ) -> GpuResult<Self> {
         let textures = prepare_volume(ctx, params, volume, graph)?;
         // --- branch `light`: section 5.2's light simulation before the view pass is built.
-        let light = match light {
-            Some(l) if params.light => Some(super::eikonal_light::EikonalLight::new(
+        // Every light of the scene (issue 7): their runs add into one pair of volumes.
+        let light = match lights {
+            [_, ..] if params.light => Some(super::eikonal_light::EikonalLight::new(
                 ctx,
                 &params,
                 volume,
-                l,
+                lights,
                 &textures,
                 graph,
                 frame_layout,

@@ -1,6 +1,6 @@
 //! The eikonal light simulator (Ihrke et al. 2007, sections 4.2 and 5.2,
-//! ../shared/papers/ihrke2007-eikonal-rendering.md): adaptive wavefront tracing of one light
-//! through the smoothed index field, producing the irradiance and direction volumes that
+//! ../shared/papers/ihrke2007-eikonal-rendering.md): adaptive wavefront tracing of every
+//! light of the scene through the smoothed index field, producing the irradiance and direction volumes that
 //! the view renderer's single scattering (section 5.3, Eqs. 6-7, glsl/eikonal/scatter.glsl)
 //! and the floor under the volume (deferred shading) read.
 //!
@@ -11,10 +11,24 @@
 //! - Section 5.2.1 (glsl/eikonal/light_step.comp): every step advances the corners with the
 //!   equal-time ray equation, Eqs. 14-15, and absorbs with Eq. 18; the irradiance of a patch
 //!   is its flux over its area (Eq. 17, intensity law Eq. 16).
-//! - Section 5.2.2: the midpoint is voxelized into the irradiance volume, keeping the
-//!   highest-energy ray per voxel (atomicMax, then light_deposit.comp).
+//! - Section 5.2.2: each step's segment of the patch midpoint is voxelized by the
+//!   track-length estimate of the intensity law (flux * length / voxel volume, splatted
+//!   trilinearly, summed over all rays: glsl/eikonal/light_step.comp says why not the
+//!   paper's highest-energy dE = flux / area, which made the floor caustic's peak several
+//!   times too bright), into an additive accumulator that light_resolve.comp turns into the
+//!   irradiance and (vector) direction volumes.
 //! - Section 5.2.3: each patch is classified 0/1/4 and the list is compacted and expanded by
 //!   the HistoPyramid (src/passes/histopyramid.rs) and glsl/eikonal/light_expand.comp.
+//!
+//! Because the accumulator only adds, the simulation is a sequence of independent runs
+//! ([`LightRun`]) depositing into it: one per light (section 3.2: "a discrete number of
+//! light sources", Eqs. 6-7 sum over them), per index channel of a dispersive volume
+//! (section 5.3: "a separate refractive index field for each RGB channel"; each channel's
+//! wavefront carries only that channel's flux), and per tile of the initial wavefront,
+//! whose patches evolve independently (section 5.2: "the wavefront patches are independent
+//! and thus can be stacked"), so that no list outgrows `max_patches`: a tile whose
+//! tessellation overflows the list is taken back (rerun with negative deposits) and split
+//! into four.
 //!
 //! The irradiance volume covers the volume's box extended `light_below` metres down, so that
 //! a floor just under the volume lies inside it: the simplest honest way to get the caustic
@@ -24,6 +38,7 @@
 //!
 //! Steps run in batches of [`LIGHT_BATCH`] per command buffer with indirect dispatches sized
 //! by the device; only after a batch is the patch count read back to decide whether to go on.
+use std::collections::VecDeque;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -37,8 +52,8 @@ use crate::graph::{BufferId, Frame, FrameGraph, ImageId};
 use crate::scene::techniques::{EikonalParams, Integrator};
 use crate::scene::{IndexProfile, Light, Volume};
 use crate::{
-    EIKONAL_EULER, EIKONAL_RK4, LIGHT_BINDING_DEPOSIT, LIGHT_BINDING_DIRECTION, LIGHT_BINDING_DST, LIGHT_BINDING_FIELD,
-    LIGHT_BINDING_IRRADIANCE, LIGHT_BINDING_KEYS, LIGHT_BINDING_SRC,
+    EIKONAL_EULER, EIKONAL_GROUP, EIKONAL_RK4, LIGHT_BINDING_ACCUM, LIGHT_BINDING_DIRECTION, LIGHT_BINDING_DST,
+    LIGHT_BINDING_FIELD, LIGHT_BINDING_IRRADIANCE, LIGHT_BINDING_SRC,
 };
 
 use super::eikonal::RayState;
@@ -87,16 +102,64 @@ impl Patch {
     }
 }
 
-/// What a simulation did: steps, patch count after every step, peak, clamp losses.
+/// One run of the simulator: a tile `start..end` of light `light`'s initial wavefront,
+/// travelling through index slab `slab` and carrying the flux of `channel` only (None:
+/// all three), depositing with `sign` (-1 takes an overflowing run's deposits back).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct LightRun {
+    pub light: usize,
+    pub slab: u32,
+    pub channel: Option<usize>,
+    pub start: usize,
+    pub end: usize,
+    pub sign: f32,
+}
+
+/// glsl/eikonal/light_common.glsl `RunPush`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+struct RunPush {
+    slab: u32,
+    sign: f32,
+    min_flux: f32,
+    pad: u32,
+}
+const _: () = assert!(std::mem::size_of::<RunPush>() == 16);
+
+/// What one run did.
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct RunStats {
+    pub light: usize,
+    /// The channel of a dispersive volume's run (None: all three).
+    pub channel: Option<usize>,
+    /// The tile: initial patches `start..end` of the light's wavefront.
+    pub start: usize,
+    pub end: usize,
+    /// -1: the take-back of an overflowing tile.
+    pub sign: f32,
+    pub steps: u32,
+    pub peak_patches: u32,
+    pub dropped_patches: u32,
+}
+
+/// What a simulation did: steps, patch count after every step, peak, clamp losses, summed
+/// or concatenated over its runs (one per light, channel and tile; `runs`).
 #[derive(Clone, Debug, Default, serde::Serialize)]
 pub struct LightStats {
+    /// Initial patches of every light's wavefront (each channel's run starts them again).
     pub initial_patches: u32,
+    /// Steps of all runs.
     pub steps: u32,
-    /// Patches after each step (the HistoPyramid's output count).
+    /// Patches after each step (the HistoPyramid's output count), run after run.
     pub patch_counts: Vec<u32>,
+    /// The largest list of any run.
     pub peak_patches: u32,
-    /// Patches lost because tessellation would have exceeded `max_patches` (documented clamp).
+    /// Patches lost because tessellation exceeded `max_patches` in a run that could not be
+    /// split further (a tile of one patch); overflowing tiles are split and rerun instead.
     pub dropped_patches: u32,
+    /// Tiles that overflowed the list, were taken back and split into four.
+    pub split_tiles: u32,
+    pub runs: Vec<RunStats>,
     /// Wall-clock seconds of the whole simulation, uploads and readbacks included.
     pub seconds: f64,
 }
@@ -225,55 +288,92 @@ pub fn initial_wavefront(volume: &Volume, min: Vec3, max: Vec3, light: &Light, p
     patches
 }
 
-/// The GPU light simulator for one light and one volume.
+/// The GPU light simulator for the lights of a scene and one volume.
 pub struct LightSim {
     pub hp: HistoPyramid,
     lists: [Buffer; 2],
     list_ids: [BufferId; 2],
-    _keys: Buffer,
-    keys_id: BufferId,
-    _deposits: Buffer,
-    deposits_id: BufferId,
-    /// rgb: dE_omega (W/m^2) of the highest-energy ray per voxel; a: 1 where lit.
+    /// Six f32 sums per voxel (as u32 bits) in six slabs along y: irradiance R, G, B and
+    /// the vector irradiance (light_common.glsl `accum`).
+    _accum: Image,
+    accum_id: ImageId,
+    /// rgb: the irradiance sum_j dE_omega,j (W/m^2) of all rays through the voxel; a: 1
+    /// where lit.
     pub irradiance: Image,
     pub irradiance_id: ImageId,
-    /// xyz: that ray's unit direction of travel.
+    /// xyz: the vector irradiance sum_j (E_r + E_g + E_b)_j l_j; w: sum_j (E_r + E_g + E_b)_j.
     pub direction: Image,
     pub direction_id: ImageId,
     _set_layout: DescriptorSetLayout,
     sets: [DescriptorSet; 2],
     _layout: PipelineLayout,
     step: ComputePipeline,
-    deposit: ComputePipeline,
     expand: ComputePipeline,
+    resolve: ComputePipeline,
     field_id: ImageId,
     extinction_id: ImageId,
     /// Which list holds the current patches.
     current: usize,
+    /// Steps of the current run.
     pub steps_taken: u32,
     pub max_steps: u32,
+    /// The current run's initial patches (as uploaded: a dispersive run's flux masked to
+    /// its channel).
     pub initial: Vec<Patch>,
+    /// Every light's whole initial wavefront.
+    pub wavefronts: Vec<Vec<Patch>>,
+    /// The run in progress and the runs still to do.
+    pub run: LightRun,
+    pub queue: VecDeque<LightRun>,
     /// The irradiance volume's box and resolution.
     pub light_min: Vec3,
     pub light_max: Vec3,
     pub resolution: [u32; 3],
-    /// The energy threshold in W (a fraction of the largest initial patch flux).
+    /// The energy threshold in W of the current run (a fraction of the largest initial
+    /// patch flux of its light and channel).
     pub min_flux: f32,
+    threshold: f32,
 }
 
 fn f(x: f32) -> u32 {
     x.to_bits()
 }
 
+/// The runs for `wavefronts` (one per light) through a field of `channels` index slabs, in
+/// tiles of at most `tile` initial patches.
+pub fn plan_runs(wavefronts: &[Vec<Patch>], channels: u32, tile: usize) -> VecDeque<LightRun> {
+    let tile = tile.max(1);
+    let mut runs = VecDeque::new();
+    for (light, w) in wavefronts.iter().enumerate() {
+        let per_channel: Vec<(u32, Option<usize>)> =
+            if channels == 3 { (0..3).map(|c| (c as u32, Some(c))).collect() } else { vec![(0, None)] };
+        for (slab, channel) in per_channel {
+            // A channel the light does not emit deposits nothing.
+            if let Some(c) = channel {
+                if w.iter().all(|p| p.flux[c] <= 0.0) {
+                    continue;
+                }
+            }
+            let mut start = 0;
+            while start < w.len() {
+                let end = (start + tile).min(w.len());
+                runs.push_back(LightRun { light, slab, channel, start, end, sign: 1.0 });
+                start = end;
+            }
+        }
+    }
+    runs
+}
+
 impl LightSim {
-    /// Buffers, images and pipelines for simulating `light` through `volume` whose smoothed
-    /// (grad n, n - 1) texture is `field`; uploads the initial wavefront.
+    /// Buffers, images and pipelines for simulating `lights` through `volume` whose smoothed
+    /// (grad n, n - 1) texture is `field`; uploads the first run's initial wavefront.
     #[allow(clippy::too_many_arguments)] // reason: the volume's textures, the graph and the sampler are separate owners
     pub fn new(
         ctx: &Arc<GpuContext>,
         params: &EikonalParams,
         volume: &Volume,
-        light: &Light,
+        lights: &[Light],
         textures: &super::eikonal::VolumeTextures,
         sampler: &Sampler,
         graph: &mut FrameGraph,
@@ -284,7 +384,8 @@ impl LightSim {
         } else {
             volume.resolution.iter().copied().max().unwrap_or(1)
         };
-        let initial = initial_wavefront(volume, light_min, light_max, light, per_side);
+        let wavefronts: Vec<Vec<Patch>> =
+            lights.iter().map(|l| initial_wavefront(volume, light_min, light_max, l, per_side)).collect();
         let voxel = volume.voxel_size().min_element();
         let dt = params.light_dt * voxel;
         // Enough time for the optical path of two box diagonals at the largest index, plus
@@ -292,21 +393,21 @@ impl LightSim {
         let diagonal = (light_max - light_min).length();
         let max_steps =
             ((2.0 * diagonal * max_index(volume) + 2.0 * diagonal) / dt).ceil().min(MAX_LIGHT_STEPS as f32) as u32;
-        let capacity = params.max_patches.max(initial.len() as u32);
-        let mut hp = HistoPyramid::new(ctx, capacity, max_steps, graph)?;
+        let hp = HistoPyramid::new(ctx, params.max_patches, max_steps, graph)?;
         let capacity = hp.capacity;
+        // Tiles: `tile_patches`, or an eighth of the list (room for the wavefront to grow
+        // eightfold by tessellation before a tile must be split), never more than the list.
+        let tile = if params.tile_patches > 0 { params.tile_patches } else { capacity / 8 }.clamp(1, capacity);
+        let mut queue = plan_runs(&wavefronts, textures.channels, tile as usize);
+        let run =
+            queue.pop_front().unwrap_or(LightRun { light: 0, slab: 0, channel: None, start: 0, end: 0, sign: 1.0 });
 
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
         let list_bytes = (capacity as u64) * std::mem::size_of::<Patch>() as u64;
-        let mut lists = [
+        let lists = [
             Buffer::new(ctx, "eikonal_patches_0", list_bytes, storage, MemoryLocation::GpuToCpu)?,
             Buffer::new(ctx, "eikonal_patches_1", list_bytes, storage, MemoryLocation::GpuToCpu)?,
         ];
-        lists[0].write(0, bytemuck::cast_slice(&initial));
-        let voxels = resolution.iter().map(|&r| r as u64).product::<u64>();
-        let keys = Buffer::new(ctx, "eikonal_light_keys", 4 * voxels, storage, MemoryLocation::GpuOnly)?;
-        let deposits =
-            Buffer::new(ctx, "eikonal_light_deposits", 8 * capacity as u64, storage, MemoryLocation::GpuOnly)?;
         // TRANSFER_SRC: tests read the volumes back.
         let usage = vk::ImageUsageFlags::STORAGE
             | vk::ImageUsageFlags::SAMPLED
@@ -316,6 +417,10 @@ impl LightSim {
             Image::new(ctx, &ImageDesc::d3("eikonal_irradiance", vk::Format::R32G32B32A32_SFLOAT, resolution, usage))?;
         let direction =
             Image::new(ctx, &ImageDesc::d3("eikonal_light_dir", vk::Format::R32G32B32A32_SFLOAT, resolution, usage))?;
+        let accum_extent = [resolution[0], 6 * resolution[1], resolution[2]];
+        let accum_usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_DST;
+        let accum =
+            Image::new(ctx, &ImageDesc::d3("eikonal_light_accum", vk::Format::R32_UINT, accum_extent, accum_usage))?;
 
         let sb = vk::DescriptorType::STORAGE_BUFFER;
         let si = vk::DescriptorType::STORAGE_IMAGE;
@@ -328,8 +433,7 @@ impl LightSim {
                 (LIGHT_BINDING_DST, sb, stage),
                 (LIGHT_BINDING_FIELD, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, stage),
                 (crate::LIGHT_BINDING_EXTINCTION, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, stage),
-                (LIGHT_BINDING_KEYS, sb, stage),
-                (LIGHT_BINDING_DEPOSIT, sb, stage),
+                (LIGHT_BINDING_ACCUM, si, stage),
                 (LIGHT_BINDING_IRRADIANCE, si, stage),
                 (LIGHT_BINDING_DIRECTION, si, stage),
             ],
@@ -353,18 +457,20 @@ impl LightSim {
                         sampler,
                         vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
                     ),
-                    DescriptorWrite::Storage(LIGHT_BINDING_KEYS, &keys),
-                    DescriptorWrite::Storage(LIGHT_BINDING_DEPOSIT, &deposits),
+                    DescriptorWrite::StorageImage(LIGHT_BINDING_ACCUM, accum.view()),
                     DescriptorWrite::StorageImage(LIGHT_BINDING_IRRADIANCE, irradiance.view()),
                     DescriptorWrite::StorageImage(LIGHT_BINDING_DIRECTION, direction.view()),
                 ],
             )
         };
         let sets = [set("eikonal_light_0to1", &lists[0], &lists[1])?, set("eikonal_light_1to0", &lists[1], &lists[0])?];
-        let layout = PipelineLayout::new(ctx, "eikonal_light", &[hp.set_layout(), &set_layout], 4)?;
+        let layout = PipelineLayout::new(
+            ctx,
+            "eikonal_light",
+            &[hp.set_layout(), &set_layout],
+            std::mem::size_of::<RunPush>() as u32,
+        )?;
 
-        let largest = initial.iter().map(|p| p.flux().max_element()).fold(0.0f32, f32::max);
-        let min_flux = params.energy_threshold * largest;
         let integrator = match params.integrator {
             Integrator::Euler => EIKONAL_EULER,
             Integrator::Rk4 => EIKONAL_RK4,
@@ -388,45 +494,39 @@ impl LightSim {
             // Extinction (Eq. 18) from the material volumes of src/scene/volume_sources.rs.
             textures.channels,
             textures.materials as u32,
-            f(min_flux),
+            u32::from(params.keep_crossed),
             integrator,
         ];
         let pipeline = |name: &str, shader: &str| ComputePipeline::new(ctx, name, shader, &layout, &spec);
         let step = pipeline("eikonal_light_step", "eikonal/light_step.comp")?;
-        let deposit = pipeline("eikonal_light_deposit", "eikonal/light_deposit.comp")?;
         let expand = pipeline("eikonal_light_expand", "eikonal/light_expand.comp")?;
-
-        let count = initial.len() as u32;
-        hp.reset(count);
-        let groups = count.div_ceil(crate::LIGHT_GROUP);
-        hp.state.write(
-            0,
-            bytemuck::bytes_of(&HpState { args: [groups, 1, 1, 0], count, next: count, ..HpState::default() }),
-        );
+        let resolve = pipeline("eikonal_light_resolve", "eikonal/light_resolve.comp")?;
 
         let list_ids = [graph.register_buffer(&lists[0]), graph.register_buffer(&lists[1])];
-        let keys_id = graph.register_buffer(&keys);
-        let deposits_id = graph.register_buffer(&deposits);
         let irradiance_id = graph.register_image(&irradiance);
         let direction_id = graph.register_image(&direction);
+        let accum_id = graph.register_image(&accum);
         ctx.one_shot(|cmd| {
             graph.access_now(
                 cmd,
-                &[(irradiance_id, Access::TransferWrite), (direction_id, Access::TransferWrite)],
-                &[(keys_id, Access::TransferWrite)],
+                &[
+                    (irradiance_id, Access::TransferWrite),
+                    (direction_id, Access::TransferWrite),
+                    (accum_id, Access::TransferWrite),
+                ],
+                &[],
             );
             cmd.clear_color_image(&irradiance, [0.0; 4]);
             cmd.clear_color_image(&direction, [0.0; 4]);
-            cmd.fill_buffer(&keys, 0);
+            // 0.0f32 has the bits 0: the accumulator's sums start at zero.
+            cmd.clear_color_image(&accum, [0.0; 4]);
         })?;
-        Ok(LightSim {
+        let mut sim = LightSim {
             hp,
             lists,
             list_ids,
-            _keys: keys,
-            keys_id,
-            _deposits: deposits,
-            deposits_id,
+            _accum: accum,
+            accum_id,
             irradiance,
             irradiance_id,
             direction,
@@ -435,19 +535,62 @@ impl LightSim {
             sets,
             _layout: layout,
             step,
-            deposit,
             expand,
+            resolve,
             field_id: textures.field_id,
             extinction_id: textures.extinction_id,
             current: 0,
             steps_taken: 0,
             max_steps,
-            initial,
+            initial: Vec::new(),
+            wavefronts,
+            run,
+            queue,
             light_min,
             light_max,
             resolution,
-            min_flux,
-        })
+            min_flux: 0.0,
+            threshold: params.energy_threshold,
+        };
+        sim.begin(run);
+        Ok(sim)
+    }
+
+    /// Upload `run`'s initial patches into list 0 and reset the bookkeeping (device idle).
+    pub fn begin(&mut self, run: LightRun) {
+        let mut patches: Vec<Patch> =
+            self.wavefronts.get(run.light).map_or(&[][..], |w| &w[run.start..run.end]).to_vec();
+        if let Some(c) = run.channel {
+            for p in &mut patches {
+                for k in 0..3 {
+                    if k != c {
+                        p.flux[k] = 0.0;
+                    }
+                }
+            }
+        }
+        // The threshold is relative to the largest initial patch of this light and channel
+        // (not of this tile, so that tiling does not change which patches are terminated).
+        let largest = self.wavefronts.get(run.light).map_or(0.0, |w| {
+            w.iter().map(|p| run.channel.map_or(p.flux().max_element(), |c| p.flux[c])).fold(0.0f32, f32::max)
+        });
+        self.min_flux = self.threshold * largest;
+        let count = patches.len() as u32;
+        self.lists[0].write(0, bytemuck::cast_slice(&patches));
+        self.hp.reset(count);
+        let groups = count.div_ceil(crate::LIGHT_GROUP);
+        self.hp.state.write(
+            0,
+            bytemuck::bytes_of(&HpState { args: [groups, 1, 1, 0], count, next: count, ..HpState::default() }),
+        );
+        self.current = 0;
+        self.steps_taken = 0;
+        self.initial = patches;
+        self.run = run;
+    }
+
+    fn push(&self) -> RunPush {
+        RunPush { slab: self.run.slab, sign: self.run.sign, min_flux: self.min_flux, pad: 0 }
     }
 
     fn record_step<'a>(&'a self, frame: &mut Frame<'_, 'a>, from: usize) {
@@ -455,7 +598,8 @@ impl LightSim {
         let (set0, set1) = (hp.set, self.sets[from]);
         let (src, dst) = (self.list_ids[from], self.list_ids[1 - from]);
         let state = &hp.state;
-        let (step, deposit, expand) = (&self.step, &self.deposit, &self.expand);
+        let (step, expand) = (&self.step, &self.expand);
+        let push = self.push();
         frame
             .pass("eikonal_light_step")
             .read_buffer(hp.state_id, Access::IndirectArgs)
@@ -465,24 +609,10 @@ impl LightSim {
             .read(self.irradiance_id, Access::ComputeRead)
             .write_buffer(src, Access::ComputeWrite)
             .write_buffer(hp.classes_id, Access::ComputeWrite)
-            .write_buffer(self.keys_id, Access::ComputeWrite)
-            .write_buffer(self.deposits_id, Access::ComputeWrite)
+            .write(self.accum_id, Access::ComputeWrite)
             .record(move |cmd| {
                 cmd.bind_compute(step, &[set0, set1]);
-                cmd.dispatch_indirect(state, 0);
-            });
-        frame
-            .pass("eikonal_light_deposit")
-            .read_buffer(hp.state_id, Access::IndirectArgs)
-            .read_buffer(hp.state_id, Access::ComputeRead)
-            .read(self.field_id, Access::ComputeSampled)
-            .read_buffer(src, Access::ComputeRead)
-            .read_buffer(self.keys_id, Access::ComputeRead)
-            .read_buffer(self.deposits_id, Access::ComputeRead)
-            .write(self.irradiance_id, Access::ComputeWrite)
-            .write(self.direction_id, Access::ComputeWrite)
-            .record(move |cmd| {
-                cmd.bind_compute(deposit, &[set0, set1]);
+                cmd.push_compute(step, &push);
                 cmd.dispatch_indirect(state, 0);
             });
         hp.record(frame);
@@ -498,12 +628,13 @@ impl LightSim {
             .write_buffer(dst, Access::ComputeWrite)
             .record(move |cmd| {
                 cmd.bind_compute(expand, &[set0, set1]);
+                cmd.push_compute(expand, &push);
                 cmd.dispatch_indirect(state, 0);
             });
     }
 
-    /// Record and run `steps` steps in one command buffer (no readback inside), then read
-    /// back the bookkeeping. Returns the patch count after the last step.
+    /// Record and run `steps` steps of the current run in one command buffer (no readback
+    /// inside), then read back the bookkeeping. Returns the patch count after the last step.
     pub fn run_steps(&mut self, ctx: &Arc<GpuContext>, graph: &mut FrameGraph, steps: u32) -> GpuResult<u32> {
         let mut from = self.current;
         ctx.one_shot(|cmd| {
@@ -524,37 +655,132 @@ impl LightSim {
         Ok(self.hp.read_state().count)
     }
 
-    /// Simulate until no patch is left (or [`LightSim::max_steps`]), in batches of
-    /// [`LIGHT_BATCH`] steps, with a progress bar on a terminal.
-    pub fn run(&mut self, ctx: &Arc<GpuContext>, graph: &mut FrameGraph) -> GpuResult<LightStats> {
-        let start = Instant::now();
-        let bar = indicatif::ProgressBar::new(self.max_steps as u64);
-        bar.set_style(
-            indicatif::ProgressStyle::with_template("light simulation {bar:40} {pos}/{len} steps, {msg}")
-                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-        );
+    /// Turn the accumulator into the irradiance and direction volumes (after the runs; again
+    /// after more runs, it always reflects everything deposited so far).
+    pub fn resolve(&self, ctx: &Arc<GpuContext>, graph: &mut FrameGraph) -> GpuResult<()> {
+        let (set0, set1) = (self.hp.set, self.sets[0]);
+        let resolve = &self.resolve;
+        let push = self.push();
+        let groups = self.resolution.map(|r| r.div_ceil(EIKONAL_GROUP));
+        ctx.one_shot(|cmd| {
+            let mut frame = graph.frame();
+            frame
+                .pass("eikonal_light_resolve")
+                .read(self.accum_id, Access::ComputeRead)
+                .write(self.irradiance_id, Access::ComputeWrite)
+                .write(self.direction_id, Access::ComputeWrite)
+                .record(move |cmd| {
+                    cmd.bind_compute(resolve, &[set0, set1]);
+                    cmd.push_compute(resolve, &push);
+                    cmd.dispatch(groups[0], groups[1], groups[2]);
+                });
+            frame.execute(cmd, None);
+        })
+    }
+
+    /// Run the current run to its end (no patch left, or [`LightSim::max_steps`]) in
+    /// batches of [`LIGHT_BATCH`] steps; `progress` is called after each batch.
+    fn finish_run(
+        &mut self,
+        ctx: &Arc<GpuContext>,
+        graph: &mut FrameGraph,
+        mut progress: impl FnMut(u32, u32),
+    ) -> GpuResult<(RunStats, Vec<u32>)> {
         let mut count = self.initial.len() as u32;
         while count > 0 && self.steps_taken < self.max_steps {
             let n = LIGHT_BATCH.min(self.max_steps - self.steps_taken);
             count = self.run_steps(ctx, graph, n)?;
-            bar.set_position(self.steps_taken as u64);
-            bar.set_message(format!("{count} patches"));
+            progress(n, count);
         }
-        bar.finish_and_clear();
         let state = self.hp.read_state();
         let mut counts = self.hp.read_history(self.steps_taken as usize);
         // Steps after the list emptied (the rest of the last batch) did nothing.
         if let Some(last) = counts.iter().position(|&c| c == 0) {
             counts.truncate(last + 1);
         }
-        Ok(LightStats {
-            initial_patches: self.initial.len() as u32,
+        let r = self.run;
+        let stats = RunStats {
+            light: r.light,
+            channel: r.channel,
+            start: r.start,
+            end: r.end,
+            sign: r.sign,
             steps: counts.len() as u32,
-            patch_counts: counts,
             peak_patches: state.peak.max(self.initial.len() as u32),
             dropped_patches: state.dropped,
-            seconds: start.elapsed().as_secs_f64(),
-        })
+        };
+        Ok((stats, counts))
+    }
+
+    /// Simulate every run (lights, channels, tiles) to its end, splitting the tiles that
+    /// overflow the list, then resolve the volumes; a progress bar on a terminal.
+    pub fn run(&mut self, ctx: &Arc<GpuContext>, graph: &mut FrameGraph) -> GpuResult<LightStats> {
+        let start = Instant::now();
+        let max_steps = self.max_steps as u64;
+        let bar = indicatif::ProgressBar::new((self.queue.len() as u64 + 1) * max_steps);
+        bar.set_style(
+            indicatif::ProgressStyle::with_template("light simulation {bar:40} {pos}/{len} steps, {msg}")
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        let mut stats = LightStats {
+            initial_patches: self.wavefronts.iter().map(|w| w.len() as u32).sum(),
+            ..LightStats::default()
+        };
+        let lights = self.wavefronts.len();
+        let mut done_runs = 0u64;
+        loop {
+            let r = self.run;
+            let label = format!(
+                "light {}/{lights}{}, tile {}..{}{}",
+                r.light + 1,
+                r.channel.map_or(String::new(), |c| format!(" channel {}", ["R", "G", "B"][c])),
+                r.start,
+                r.end,
+                if r.sign < 0.0 { " (take-back)" } else { "" }
+            );
+            let mut taken = 0u64;
+            let (run_stats, counts) = self.finish_run(ctx, graph, |n, count| {
+                taken += n as u64;
+                bar.set_position(done_runs * max_steps + taken.min(max_steps));
+                bar.set_message(format!("{label}: {count} patches"));
+            })?;
+            done_runs += 1;
+            stats.steps += run_stats.steps;
+            stats.patch_counts.extend_from_slice(&counts);
+            stats.peak_patches = stats.peak_patches.max(run_stats.peak_patches);
+            let overflowed = run_stats.dropped_patches > 0;
+            if overflowed && r.sign > 0.0 && r.end - r.start > 1 {
+                // Take the run's deposits back (the same patches, the same drops: the
+                // simulation is deterministic up to the order of the float additions),
+                // then simulate its four quarters.
+                stats.split_tiles += 1;
+                let len = r.end - r.start;
+                let quarter = len.div_ceil(4);
+                let mut parts = Vec::new();
+                let mut s0 = r.start;
+                while s0 < r.end {
+                    let e0 = (s0 + quarter).min(r.end);
+                    parts.push(LightRun { start: s0, end: e0, ..r });
+                    s0 = e0;
+                }
+                for p in parts.into_iter().rev() {
+                    self.queue.push_front(p);
+                }
+                self.queue.push_front(LightRun { sign: -1.0, ..r });
+            } else if r.sign > 0.0 {
+                stats.dropped_patches += run_stats.dropped_patches;
+            }
+            stats.runs.push(run_stats);
+            bar.set_length((done_runs + self.queue.len() as u64) * max_steps);
+            match self.queue.pop_front() {
+                Some(next) => self.begin(next),
+                None => break,
+            }
+        }
+        bar.finish_and_clear();
+        self.resolve(ctx, graph)?;
+        stats.seconds = start.elapsed().as_secs_f64();
+        Ok(stats)
     }
 
     /// The current patch list (after the last step's compaction/expansion).
@@ -584,10 +810,20 @@ pub struct StandaloneLight {
 
 impl StandaloneLight {
     pub fn new(ctx: &Arc<GpuContext>, params: &EikonalParams, volume: &Volume, light: &Light) -> GpuResult<Self> {
+        Self::with_lights(ctx, params, volume, std::slice::from_ref(light))
+    }
+
+    /// All of `lights` deposit into one pair of volumes.
+    pub fn with_lights(
+        ctx: &Arc<GpuContext>,
+        params: &EikonalParams,
+        volume: &Volume,
+        lights: &[Light],
+    ) -> GpuResult<Self> {
         let mut graph = FrameGraph::new();
         let textures = super::eikonal::prepare_volume(ctx, *params, volume, &mut graph)?;
         let sampler = Sampler::new(ctx, "eikonal_light_field", crate::gpu::SamplerDesc::NEAREST_CLAMP)?;
-        let sim = LightSim::new(ctx, params, volume, light, &textures, &sampler, &mut graph)?;
+        let sim = LightSim::new(ctx, params, volume, lights, &textures, &sampler, &mut graph)?;
         Ok(StandaloneLight { sim, graph, _volume: textures, _sampler: sampler })
     }
 
@@ -599,8 +835,9 @@ impl StandaloneLight {
         self.sim.run_steps(ctx, &mut self.graph, steps)
     }
 
-    /// Read the irradiance (rgba) and direction volumes back, x fastest.
+    /// Resolve and read the irradiance (rgba) and direction volumes back, x fastest.
     pub fn read_volumes(&mut self, ctx: &Arc<GpuContext>) -> GpuResult<(Vec<f32>, Vec<f32>)> {
+        self.sim.resolve(ctx, &mut self.graph)?;
         let voxels: u64 = self.sim.resolution.iter().map(|&r| r as u64).product();
         let read = |graph: &mut FrameGraph, image: &Image, id: ImageId| -> GpuResult<Vec<f32>> {
             let buffer = Buffer::new(
@@ -660,18 +897,18 @@ impl EikonalLight {
         ctx: &Arc<GpuContext>,
         params: &EikonalParams,
         volume: &Volume,
-        light: &Light,
+        lights: &[Light],
         textures: &super::eikonal::VolumeTextures,
         graph: &mut FrameGraph,
         frame_layout: &DescriptorSetLayout,
         targets: &crate::renderer::targets::Targets,
         nearest: &Sampler,
     ) -> GpuResult<Self> {
-        let mut sim = LightSim::new(ctx, params, volume, light, textures, nearest, graph)?;
+        let mut sim = LightSim::new(ctx, params, volume, lights, textures, nearest, graph)?;
         let stats = sim.run(ctx, graph)?;
         if stats.dropped_patches > 0 {
             eprintln!(
-                "warning: eikonal light simulation: {} patches dropped at the max_patches = {} clamp (raise render.eikonal.max_patches)",
+                "warning: eikonal light simulation: {} patches dropped at the max_patches = {} clamp by tiles of one patch (raise render.eikonal.max_patches)",
                 stats.dropped_patches,
                 sim.hp.capacity
             );

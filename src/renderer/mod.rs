@@ -365,12 +365,13 @@ impl Renderer {
             (Some(volume), true) => {
                 let p = EikonalParams::from_settings(&scene.render)
                     .map_err(|error| RenderError::Param { technique: "eikonal", error })?;
-                let light = if plan::has(&plan, plan::EIKONAL_LIGHT) { scene.lights.first() } else { None };
+                let lights: &[crate::scene::Light] =
+                    if plan::has(&plan, plan::EIKONAL_LIGHT) { &scene.lights } else { &[] };
                 Some(EikonalPass::new(
                     ctx,
                     p,
                     volume,
-                    light,
+                    lights,
                     scene,
                     &gpu_scene,
                     &mut graph,

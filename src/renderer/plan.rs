@@ -122,7 +122,7 @@ pub fn plan(scene: &Scene) -> Vec<PlannedPass> {
     });
     passes.extend(lightmap_apply);
     // --- branch `light`: only with a volume, a light, and render.eikonal.light on.
-    if let (Some(v), Some(l)) = (&scene.volume, scene.lights.first()) {
+    if let (Some(v), false) = (&scene.volume, scene.lights.is_empty()) {
         let on = crate::scene::techniques::EikonalParams::from_settings(&scene.render).map_or(true, |p| p.light);
         if on {
             passes.push(PlannedPass {
@@ -130,7 +130,7 @@ pub fn plan(scene: &Scene) -> Vec<PlannedPass> {
                 reason: format!(
                     "volume {} lit by {}: wavefront light simulation, Ihrke et al. 2007 §4.2, §5.2 (receivers in its irradiance volume)",
                     v.name,
-                    describe_light(0, l)
+                    scene.lights.iter().enumerate().map(|(i, l)| describe_light(i, l)).collect::<Vec<_>>().join(", ")
                 ),
             });
         }

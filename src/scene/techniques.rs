@@ -773,8 +773,18 @@ pub struct EikonalParams {
     pub energy_threshold: f32,
     /// Time step of Eqs. 14-15 in voxels of optical path (dS/dt = 1, Eq. 23).
     pub light_dt: f32,
-    /// Capacity of the patch list; tessellation beyond it drops the last outputs (counted).
+    /// Capacity of the patch list (one storage-buffer binding); a tile of the initial
+    /// wavefront whose tessellation outgrows it is taken back and split into four.
     pub max_patches: u32,
+    /// Initial patches per tile of the wavefront (0: max_patches / 8), simulated one tile
+    /// after the other into the same volumes.
+    pub tile_patches: u32,
+    /// Keep patches whose orientation flipped (they crossed a wavefront singularity, a
+    /// focus) instead of discarding them (section 5.2.3; false is the paper). The paper
+    /// discards them because flux / area is infinite there; the track-length deposit stays
+    /// finite, and the light past a focus reaches the floor: on eikonal_sphere half of the
+    /// ball's light crosses the caustic before the floor (tests/eikonal_light.rs).
+    pub keep_crossed: bool,
     /// Initial wavefront patches per side (0: the largest volume resolution).
     pub light_patches: u32,
     /// Metres below the volume's box that the irradiance volume also covers, so a floor
@@ -801,6 +811,8 @@ impl Default for EikonalParams {
             energy_threshold: 1e-4,
             light_dt: 0.5,
             max_patches: 1 << 19,
+            tile_patches: 0,
+            keep_crossed: true,
             light_patches: 0,
             light_below: 0.0,
             light_side: 0.0,
@@ -820,6 +832,8 @@ impl EikonalParams {
         "energy_threshold",
         "light_dt",
         "max_patches",
+        "tile_patches",
+        "keep_crossed",
         "light_patches",
         "light_below",
         "light_side",
@@ -857,6 +871,9 @@ impl EikonalParams {
                 // A list of 900 000 patches of 144 bytes is 124 MiB: one storage-buffer
                 // binding may span at most 128 MiB (lavapipe's maxStorageBufferRange).
                 "max_patches" => p.max_patches = integer(key, v, 4, 900_000)?,
+                // A tile larger than the list could not even be uploaded.
+                "tile_patches" => p.tile_patches = integer(key, v, 0, 900_000)?,
+                "keep_crossed" => p.keep_crossed = boolean(key, v)?,
                 "light_patches" => p.light_patches = integer(key, v, 0, 1024)?,
                 "light_below" => p.light_below = number(key, v, 0.0, 100.0)?,
                 "light_side" => p.light_side = number(key, v, 0.0, 100.0)?,
@@ -882,6 +899,16 @@ impl EikonalParams {
                 "nearby_resolution" => p.nearby_resolution = integer(key, v, 4, 2048)?,
                 _ => return Err(unknown("eikonal", key, Self::KEYS)),
             }
+        }
+        if p.tile_patches > p.max_patches {
+            return Err(ParamError {
+                key: "tile_patches".into(),
+                message: format!(
+                    "`tile_patches` = {} exceeds `max_patches` = {}: a tile must fit the patch list",
+                    p.tile_patches, p.max_patches
+                ),
+                hint: "use at most max_patches / 4 (room for tessellation), or 0 for max_patches / 8".into(),
+            });
         }
         Ok(p)
     }
