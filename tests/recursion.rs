@@ -66,6 +66,28 @@ fn two_balls(size: u32, extra: &[&str]) -> prism::scene::Scene {
 
 /// The pass list: one recursion pass per level, and none where no rectangle stands for a
 /// specular object (one refractor among diffuse objects), whatever `recursion_depth` says.
+/// Loads two_glass_balls at `size`^2 with ball B replaced by the object `b` (scene-file text),
+/// lit by the environment only (radiance 1, the light off): what B shows at level 0 (the
+/// environment) and at level 1 (the floor, wall and box) then differ the most. `tag` names
+/// the temporary scene file (one per test: tests run in parallel).
+fn b_replaced(tag: &str, b: &str, size: u32) -> impl Fn(&[&str]) -> prism::scene::Scene {
+    let path = prism::scene::benchmark_scene_path("two_glass_balls");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let ball_b =
+        "name = \"ball_b\"\nmaterial = \"glass\"\nshape = \"sphere\"\ncenter = [0.5, -0.2, -1.2]\nradius = 0.8";
+    assert!(text.contains(ball_b), "two_glass_balls.toml changed: update this test");
+    let dir = std::env::temp_dir().join(format!("prism-recursion-{tag}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join(format!("glass_{tag}.toml"));
+    std::fs::write(&file, text.replace(ball_b, b)).unwrap();
+    move |extra: &[&str]| {
+        let mut o = vec![format!("camera.width={size}"), format!("camera.height={size}")];
+        o.extend(["environment.radiance=1", "lights.0.intensity=0"].map(String::from));
+        o.extend(extra.iter().map(|s| s.to_string()));
+        prism::scene::load(&file, &o).unwrap()
+    }
+}
+
 #[test]
 fn recursion_levels_follow_the_scene() {
     let names = |s: &prism::scene::Scene| -> Vec<&'static str> {
@@ -375,25 +397,9 @@ fn many_dielectrics_keep_the_stated_limits() {
 /// buy accuracy here; docs/scene-format.md reports it.
 #[test]
 fn exit_of_a_glass_cube_behind_ball_a() {
-    let path = prism::scene::benchmark_scene_path("two_glass_balls");
-    let text = std::fs::read_to_string(&path).unwrap();
-    let ball_b =
-        "name = \"ball_b\"\nmaterial = \"glass\"\nshape = \"sphere\"\ncenter = [0.5, -0.2, -1.2]\nradius = 0.8";
-    assert!(text.contains(ball_b), "two_glass_balls.toml changed: update this test");
     let cube =
         "name = \"cube_b\"\nmaterial = \"glass\"\nshape = \"box\"\ncenter = [0.5, -0.4, -1.2]\nsize = [1.2, 1.2, 1.2]";
-    let dir = std::env::temp_dir().join(format!("prism-recursion-cube-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let file = dir.join("glass_cube.toml");
-    std::fs::write(&file, text.replace(ball_b, cube)).unwrap();
-    let load = |extra: &[&str]| {
-        let mut o = vec![format!("camera.width={SIZE}"), format!("camera.height={SIZE}")];
-        // Lit by the environment only (radiance 1, the light off): what B shows at level 0 (the
-        // environment) and at level 1 (the floor, wall and box) then differ the most.
-        o.extend(["environment.radiance=1", "lights.0.intensity=0"].map(String::from));
-        o.extend(extra.iter().map(|s| s.to_string()));
-        prism::scene::load(&file, &o).unwrap()
-    };
+    let load = b_replaced("cube", cube, SIZE);
     let ctx = context(false);
     let s = load(&[]);
     let mask = ball_a_mask(&s);
@@ -448,24 +454,10 @@ fn exit_of_a_glass_cube_behind_ball_a() {
 /// A's pixels against the reference (64 spp, no photons), lit by the environment only.
 #[test]
 fn exit_modes_of_a_glass_torus_behind_ball_a() {
-    let path = prism::scene::benchmark_scene_path("two_glass_balls");
-    let text = std::fs::read_to_string(&path).unwrap();
-    let ball_b =
-        "name = \"ball_b\"\nmaterial = \"glass\"\nshape = \"sphere\"\ncenter = [0.5, -0.2, -1.2]\nradius = 0.8";
-    assert!(text.contains(ball_b), "two_glass_balls.toml changed: update this test");
     let torus = "name = \"torus_b\"\nmaterial = \"glass\"\nshape = \"torus\"\nmajor_radius = 0.5\n\
                  minor_radius = 0.2\nsegments = 64\n\
                  transform = { rotation = [70, 0, 20], translation = [0.5, -0.2, -1.2] }";
-    let dir = std::env::temp_dir().join(format!("prism-recursion-torus-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let file = dir.join("glass_torus.toml");
-    std::fs::write(&file, text.replace(ball_b, torus)).unwrap();
-    let load = |extra: &[&str]| {
-        let mut o = vec![format!("camera.width={SIZE}"), format!("camera.height={SIZE}")];
-        o.extend(["environment.radiance=1", "lights.0.intensity=0"].map(String::from));
-        o.extend(extra.iter().map(|s| s.to_string()));
-        prism::scene::load(&file, &o).unwrap()
-    };
+    let load = b_replaced("torus", torus, SIZE);
     let ctx = context(false);
     let s = load(&[]);
     let mask = ball_a_mask(&s);
@@ -536,25 +528,11 @@ fn exit_modes_of_a_glass_torus_behind_ball_a() {
 #[test]
 fn front_facing_exits_of_a_glass_cone_behind_ball_a() {
     const CONE_SIZE: u32 = 128;
-    let path = prism::scene::benchmark_scene_path("two_glass_balls");
-    let text = std::fs::read_to_string(&path).unwrap();
-    let ball_b =
-        "name = \"ball_b\"\nmaterial = \"glass\"\nshape = \"sphere\"\ncenter = [0.5, -0.2, -1.2]\nradius = 0.8";
-    assert!(text.contains(ball_b), "two_glass_balls.toml changed: update this test");
     // Lathe axis +Y turned onto (-0.36, -0.22, 0.9), the base centre -> A's centre direction.
     let cone = "name = \"cone_b\"\nmaterial = \"glass\"\nshape = \"lathe\"\n\
                 profile = [[0, 0], [0.35, 0], [0, 1.0]]\nsegments = 64\n\
                 transform = { rotation = [102.7, -21.6, 0], translation = [0.3, 0.2, -1.0] }";
-    let dir = std::env::temp_dir().join(format!("prism-recursion-cone-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let file = dir.join("glass_cone.toml");
-    std::fs::write(&file, text.replace(ball_b, cone)).unwrap();
-    let load = |extra: &[&str]| {
-        let mut o = vec![format!("camera.width={CONE_SIZE}"), format!("camera.height={CONE_SIZE}")];
-        o.extend(["environment.radiance=1", "lights.0.intensity=0"].map(String::from));
-        o.extend(extra.iter().map(|s| s.to_string()));
-        prism::scene::load(&file, &o).unwrap()
-    };
+    let load = b_replaced("cone", cone, CONE_SIZE);
     let ctx = context(false);
     let render = |m: &str| {
         let h = render_on(&ctx, &load(&[&format!("render.hu_qin.recursive_exit=\"{m}\"")])).hdr;

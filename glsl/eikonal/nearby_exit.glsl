@@ -86,38 +86,13 @@ vec3 eik_triangle_radiance(uint k, vec3 o, vec3 d, float t, vec2 b) {
     return finite_or_zero(eik_surface_radiance(p, n, albedo));
 }
 
-// nearby_radiance's search (Fig. 13: the closest rectangle first, the next where its texel
+// glsl/include/nearby.glsl nearby_hit (Fig. 13: the closest rectangle first, the next where its texel
 // is empty), returning the distance of the surface found instead of falling back to the
 // environment.
 bool eik_impostor_hit(vec3 P, vec3 Ray, out vec3 color, out float dist) {
-    color = vec3(0.0);
-    dist = 1e30;
     // The one rectangle set around the volume (NearbyImpostors::around); none: no impostors.
-    if (nearby_info.y == 0u) return false;
-    nearby_set = 0u;
-    uint n = min(nearby_sets[0].y, MAX_NEARBY_RECTS);
-    float last = -1.0;
-    for (uint pass = 0u; pass < n; ++pass) {
-        uint k = n;
-        float t_k = 1e30;
-        vec2 uv_k = vec2(0.0);
-        for (uint i = 0u; i < n; ++i) {
-            float t;
-            vec2 uv;
-            if (nearby_rect_hit(i, P, Ray, t, uv) && t > last && t < t_k) {
-                k = i;
-                t_k = t;
-                uv_k = uv;
-            }
-        }
-        if (k == n) break;
-        last = t_k;
-        if (nearby_lookup(k, P, Ray, t_k, uv_k, color, dist)) {
-            color = finite_or_zero(color);
-            return true;
-        }
-    }
-    return false;
+    nearby_set = nearby_info.y == 0u ? NEARBY_NO_SET : 0u;
+    return nearby_hit(P, Ray, color, dist);
 }
 
 // What the ray P + t dir (dir unit) meets for t > t_min: the nearer of an exact triangle hit

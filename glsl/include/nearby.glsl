@@ -140,13 +140,14 @@ bool nearby_lookup(uint k, vec3 P, vec3 Ray, float t_rect, vec2 uv_rect, out vec
     return nearby_covered(k, texel);
 }
 
-// Radiance arriving at P from direction Ray (unit): Fig. 13 picks the rectangle whose hit is
-// closest to P. Where that texel is empty (the square is larger than the object's
-// silhouette), the next-closest rectangle is tried instead of showing TEX_k's background,
-// then the environment map ("If there is no rectangle intersected ... index into the
-// environment map").
-vec3 nearby_radiance(vec3 P, vec3 Ray) {
-    if (!nearby_has_set()) return environment(Ray);
+// The surface the ray P + t Ray (unit) meets through the selected set's rectangles: Fig. 13
+// picks the rectangle whose hit is closest to P. Where that texel is empty (the square is
+// larger than the object's silhouette), the next-closest rectangle is tried instead of
+// showing TEX_k's background. False when no rectangle holds a surface along the ray.
+bool nearby_hit(vec3 P, vec3 Ray, out vec3 color, out float dist) {
+    color = vec3(0.0);
+    dist = 1e30;
+    if (!nearby_has_set()) return false;
     uint first = nearby_sets[nearby_set].x;
     uint n = min(nearby_sets[nearby_set].y, MAX_NEARBY_RECTS);
     uint end = first + n;
@@ -166,10 +167,19 @@ vec3 nearby_radiance(vec3 P, vec3 Ray) {
         }
         if (k == end) break;
         last = t_k;
-        vec3 color;
-        float dist;
-        if (nearby_lookup(k, P, Ray, t_k, uv_k, color, dist)) return finite_or_zero(color);
+        if (nearby_lookup(k, P, Ray, t_k, uv_k, color, dist)) {
+            color = finite_or_zero(color);
+            return true;
+        }
     }
-    return environment(Ray);
+    return false;
+}
+
+// Radiance arriving at P from direction Ray (unit): nearby_hit, else the environment map
+// ("If there is no rectangle intersected ... index into the environment map").
+vec3 nearby_radiance(vec3 P, vec3 Ray) {
+    vec3 color;
+    float dist;
+    return nearby_hit(P, Ray, color, dist) ? color : environment(Ray);
 }
 #endif

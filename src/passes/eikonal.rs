@@ -261,65 +261,53 @@ impl EikonalPass {
             (NearbyImpostors::stand_in(ctx, EIKONAL_NEARBY, gpu, graph, frame_layout)?, None)
         } else {
             let origin = eikonal_nearby::volume_origin(scene).unwrap_or(glam::Vec3::ZERO);
-            match &light {
-                // The textures carry the simulated caustic and shadow (glsl/eikonal/nearby_impostor.frag).
-                Some(l) => {
-                    let stage = vk::ShaderStageFlags::FRAGMENT;
-                    let sampled = vk::DescriptorType::COMBINED_IMAGE_SAMPLER;
-                    let layout = DescriptorSetLayout::new(
-                        ctx,
-                        EIKONAL_NEARBY,
-                        &[
-                            (crate::BINDING_EIKONAL_IRRADIANCE, sampled, stage),
-                            (crate::BINDING_EIKONAL_LIGHT_DIR, sampled, stage),
-                        ],
-                        1,
-                    )?;
-                    let (irr, dir) = l.images();
-                    let at = Access::FragmentSampled.info(false).layout;
-                    let set = layout.allocate(
-                        EIKONAL_NEARBY,
-                        &[
-                            DescriptorWrite::Sampled(crate::BINDING_EIKONAL_IRRADIANCE, irr.view(), nearest, at),
-                            DescriptorWrite::Sampled(crate::BINDING_EIKONAL_LIGHT_DIR, dir.view(), nearest, at),
-                        ],
-                    )?;
-                    let spec = [light_min.x, light_min.y, light_min.z, light_max.x, light_max.y, light_max.z].map(f);
-                    let shading = ImpostorShading {
-                        fragment_shader: "eikonal/nearby_impostor.frag",
-                        set_layout: &layout,
-                        set,
-                        specialization: &spec,
-                        reads: l.image_ids().to_vec(),
-                    };
-                    let nearby = NearbyImpostors::around(
-                        ctx,
-                        EIKONAL_NEARBY,
-                        &desc,
-                        origin,
-                        &kept,
-                        scene,
-                        graph,
-                        frame_layout,
-                        Some(shading),
-                    )?;
-                    (nearby, Some(layout))
-                }
-                None => (
-                    NearbyImpostors::around(
-                        ctx,
-                        EIKONAL_NEARBY,
-                        &desc,
-                        origin,
-                        &kept,
-                        scene,
-                        graph,
-                        frame_layout,
-                        None,
-                    )?,
-                    None,
-                ),
+            // With a light simulation the textures carry the simulated caustic and shadow
+            // (glsl/eikonal/nearby_impostor.frag): its volumes in a set of their own.
+            let spec = [light_min.x, light_min.y, light_min.z, light_max.x, light_max.y, light_max.z].map(f);
+            let mut shading_layout = None;
+            let mut shading = None;
+            if let Some(l) = &light {
+                let stage = vk::ShaderStageFlags::FRAGMENT;
+                let sampled = vk::DescriptorType::COMBINED_IMAGE_SAMPLER;
+                let layout = shading_layout.insert(DescriptorSetLayout::new(
+                    ctx,
+                    EIKONAL_NEARBY,
+                    &[
+                        (crate::BINDING_EIKONAL_IRRADIANCE, sampled, stage),
+                        (crate::BINDING_EIKONAL_LIGHT_DIR, sampled, stage),
+                    ],
+                    1,
+                )?);
+                let (irr, dir) = l.images();
+                let at = Access::FragmentSampled.info(false).layout;
+                let set = layout.allocate(
+                    EIKONAL_NEARBY,
+                    &[
+                        DescriptorWrite::Sampled(crate::BINDING_EIKONAL_IRRADIANCE, irr.view(), nearest, at),
+                        DescriptorWrite::Sampled(crate::BINDING_EIKONAL_LIGHT_DIR, dir.view(), nearest, at),
+                    ],
+                )?;
+                shading = Some((set, l.image_ids().to_vec()));
             }
+            let shading = shading_layout.as_ref().zip(shading).map(|(layout, (set, reads))| ImpostorShading {
+                fragment_shader: "eikonal/nearby_impostor.frag",
+                set_layout: layout,
+                set,
+                specialization: &spec,
+                reads,
+            });
+            let nearby = NearbyImpostors::around(
+                ctx,
+                EIKONAL_NEARBY,
+                &desc,
+                origin,
+                &kept,
+                scene,
+                graph,
+                frame_layout,
+                shading,
+            )?;
+            (nearby, shading_layout)
         };
         let spec = [
             integrator,

@@ -186,16 +186,7 @@ fn is_specular(scene: &Scene, object: usize) -> bool {
 /// [`MAX_NEARBY_RECTS`]; and those left out by that limit. The refraction's rectangle sets
 /// use [`set_objects`].
 pub fn nearby_objects(scene: &Scene, origin_r: Vec3) -> (Vec<usize>, Vec<usize>) {
-    let mut all: Vec<(f32, usize)> = (0..scene.objects.len())
-        .filter(|&i| !matches!(scene.materials[scene.objects[i].material], Material::Dielectric { .. }))
-        .filter_map(|i| {
-            object_center_extent(scene, i).filter(|(_, d)| *d > 0.0).map(|(c, d)| (c.distance(origin_r) - d, i))
-        })
-        .collect();
-    all.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-    let kept = all.iter().take(MAX_NEARBY_RECTS as usize).map(|&(_, i)| i).collect();
-    let dropped = all.iter().skip(MAX_NEARBY_RECTS as usize).map(|&(_, i)| i).collect();
-    (kept, dropped)
+    nearest_first(scene, origin_r, |i| !is_dielectric(scene, i))
 }
 
 /// The objects that get a rectangle in the set of OBJ_R = `viewer` (every object but OBJ_R
@@ -203,15 +194,21 @@ pub fn nearby_objects(scene: &Scene, origin_r: Vec3) -> (Vec<usize>, Vec<usize>)
 /// (by the gap between O_R and their bounding sphere), at most [`MAX_NEARBY_RECTS`]; and those
 /// left out by that limit.
 pub fn set_objects(scene: &Scene, viewer: usize, origin_r: Vec3) -> (Vec<usize>, Vec<usize>) {
+    nearest_first(scene, origin_r, |i| i != viewer)
+}
+
+/// The objects `include` accepts that have an extent, ordered by the gap between O_R and
+/// their bounding sphere (ties by index): the first [`MAX_NEARBY_RECTS`] and the rest.
+fn nearest_first(scene: &Scene, origin_r: Vec3, include: impl Fn(usize) -> bool) -> (Vec<usize>, Vec<usize>) {
     let mut all: Vec<(f32, usize)> = (0..scene.objects.len())
-        .filter(|&i| i != viewer)
+        .filter(|&i| include(i))
         .filter_map(|i| {
             object_center_extent(scene, i).filter(|(_, d)| *d > 0.0).map(|(c, d)| (c.distance(origin_r) - d, i))
         })
         .collect();
     all.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-    let kept = all.iter().take(MAX_NEARBY_RECTS as usize).map(|&(_, i)| i).collect();
-    let dropped = all.iter().skip(MAX_NEARBY_RECTS as usize).map(|&(_, i)| i).collect();
+    let mut kept: Vec<usize> = all.into_iter().map(|(_, i)| i).collect();
+    let dropped = kept.split_off(kept.len().min(MAX_NEARBY_RECTS as usize));
     (kept, dropped)
 }
 
