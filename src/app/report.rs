@@ -108,7 +108,7 @@ pub fn run(args: ReportArgs) -> Result<()> {
         if !selected {
             match previous.as_ref().and_then(|p| p.section(&heading)) {
                 Some(section) => md.push_str(&section),
-                None => writeln!(md, "{heading}\n\nNot measured yet: run `prism report --only {}`.\n", e.scene)?,
+                None => writeln!(md, "{heading}\n\n{NOT_MEASURED} run `prism report --only {}`.\n", e.scene)?,
             }
             continue;
         }
@@ -206,6 +206,9 @@ fn entry_hash(e: &Entry) -> String {
     format!("{:08x}", h as u32)
 }
 
+/// The body of a section `--only` skipped and no earlier report measured.
+const NOT_MEASURED: &str = "Not measured yet:";
+
 /// The sections of an existing report, to keep those that `--only` does not measure.
 struct Previous {
     /// Heading line and the whole section (heading included, up to the next heading).
@@ -235,9 +238,14 @@ impl Previous {
         Previous { sections, revision, command }
     }
 
-    /// The section under `heading`, with a provenance line added if it has none.
+    /// The section under `heading`, with a provenance line added if it has none; `None` for a
+    /// section that was never measured (its placeholder is written afresh, without a
+    /// provenance line that would claim a measurement).
     fn section(&self, heading: &str) -> Option<String> {
         let (_, body) = self.sections.iter().find(|(h, _)| h == heading)?;
+        if body.contains(NOT_MEASURED) {
+            return None;
+        }
         if body.contains("*Measured at git revision") {
             return Some(body.clone());
         }
@@ -248,5 +256,25 @@ impl Previous {
             self.command.as_deref().unwrap_or("prism report")
         ));
         Some(body)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Previous;
+
+    /// A kept section gains the file's provenance line; a placeholder never does (it was not
+    /// measured), so the next report writes it afresh.
+    #[test]
+    fn kept_sections_name_their_revision_and_placeholders_stay_unmeasured() {
+        let text =
+            "Command: `prism report --size 128`\nMeasured at git revision abc123.\n\n## a: measured\n\n| row |\n\n\
+                    ## b: skipped\n\nNot measured yet: run `prism report --only b`.\n\n\
+                    *Measured at git revision def456 with `prism report`.*\n";
+        let p = Previous::parse(text);
+        let a = p.section("## a: measured").unwrap();
+        assert!(a.contains("*Measured at git revision abc123 with `prism report --size 128`.*"), "{a}");
+        assert_eq!(p.section("## b: skipped"), None);
+        assert_eq!(p.section("## c: absent"), None);
     }
 }
