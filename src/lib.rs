@@ -15,6 +15,7 @@ pub mod passes;
 pub mod reference;
 pub mod renderer;
 pub mod scene;
+pub mod technique;
 
 /// Rust side of `shared_constants!` (src/shader_shared.rs): plain `pub const`s.
 macro_rules! shared_constants {

@@ -230,6 +230,28 @@ fn unknown_benchmark_scene_and_bad_override() {
 }
 
 #[test]
+fn misspelt_technique_tables_and_keys_name_the_closest() {
+    // A misspelt table is an error, not a silently ignored table: in the file (with its line)
+    // and through --set (naming the override), each with the name it most likely meant.
+    let c = Case::new("misspelt");
+    let scene = c.file("scene.toml", &format!("{GOOD}\n[render.huqin]\nsearch_steps = 4\n"));
+    let e = c.render_fails(&scene, &[], &[]);
+    assert!(e.contains("scene.toml:26") && e.contains("[render.huqin]") && e.contains("[render.hu_qin]"), "{e}");
+    let scene = c.file("ok.toml", GOOD);
+    for (set, wrong, meant) in [
+        ("render.hu_quin.search_steps=4", "hu_quin", "[render.hu_qin]"),
+        ("render.hu_qin.search_step=4", "search_step", "`search_steps`"),
+        ("render.exposur=2", "exposur", "`exposure`"),
+    ] {
+        let e = c.render_fails(&scene, &["--set", set], &[]);
+        assert!(e.contains(wrong) && e.contains(&format!("did you mean {meant}")) && e.contains(set), "{set}: {e}");
+    }
+    // A name unlike every table gets the list, without a guess.
+    let e = c.render_fails(&scene, &["--set", "render.zzzzzzzz.x=1"], &[]);
+    assert!(e.contains("[render.zzzzzzzz]") && !e.contains("did you mean") && e.contains("[render.wyman]"), "{e}");
+}
+
+#[test]
 fn absurd_photon_buffer_and_caustics_map_parameters() {
     // Hu & Qin 2007 §3 (render.photon_buffer) and Shah et al.'s Eq. 6 weight
     // (render.caustics_map.flux): the key, the allowed values, no output file.

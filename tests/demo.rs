@@ -274,3 +274,157 @@ fn demo_opens_volume_scenes_with_the_adaptive_tone_map() {
     let clamp = differing("clamp");
     assert!((clamp as f64) > total * 0.5, "only {clamp} pixels differ from the clamp render");
 }
+
+#[test]
+fn demo_applies_changes_to_the_running_renderer() {
+    // Scripted changes in a running window: each re-creates only what depends on it, and the
+    // log says what and how long it took.
+    let Some(display) = display() else { return };
+    let out = demo(
+        &display,
+        &[
+            "sphere_nearby",
+            "--set",
+            "render.refraction=hu_qin",
+            "--set",
+            "camera.width=96",
+            "--set",
+            "camera.height=96",
+            "--frames",
+            "8",
+            "--validation",
+            "--at",
+            "2:render.hu_qin.search_steps=4",
+            "--at",
+            "3:materials.glass.ior=1.33",
+            "--at",
+            "4:render.caustics=caustics_map",
+            "--at",
+            "5:render.caustics_map.grid=64",
+        ],
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "prism demo failed:\n{stderr}");
+    assert!(!stderr.contains("VUID") && !stderr.contains("SYNC-HAZARD"), "validation messages:\n{stderr}");
+    let line = |change: &str| {
+        stderr.lines().find(|l| l.contains(change)).unwrap_or_else(|| panic!("no log line for {change}:\n{stderr}"))
+    };
+    assert!(line("render.hu_qin.search_steps=4").contains("re-created refraction = \"hu_qin\" ("), "{stderr}");
+    assert!(line("materials.glass.ior=1.33").contains("rewrote the materials buffer ("), "{stderr}");
+    assert!(
+        line("render.caustics=caustics_map").contains("re-created caustics = \"caustics_map\", deferred_shading ("),
+        "{stderr}"
+    );
+    assert!(line("render.caustics_map.grid=64").contains("re-created caustics = \"caustics_map\" ("), "{stderr}");
+    assert!(!stderr.contains("whole renderer"), "{stderr}");
+}
+
+fn copy_tree(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap().flatten() {
+        let (src, dst) = (e.path(), to.join(e.file_name()));
+        if src.is_dir() {
+            copy_tree(&src, &dst);
+        } else {
+            std::fs::copy(&src, &dst).unwrap();
+        }
+    }
+}
+
+#[test]
+fn demo_recompiles_an_edited_shader_and_shows_its_errors() {
+    use std::io::{BufRead, BufReader};
+    let Some(display) = display() else { return };
+    let dir = out_dir("demo_shaders");
+    let glsl = dir.join("glsl");
+    let _ = std::fs::remove_dir_all(&glsl);
+    copy_tree(&Path::new(env!("CARGO_MANIFEST_DIR")).join("glsl"), &glsl);
+    let tonemap = glsl.join("tonemap/tonemap.frag");
+    let original = std::fs::read_to_string(&tonemap).unwrap();
+    let (shot, reference) = (dir.join("shot.png"), dir.join("reference.png"));
+    let _ = std::fs::remove_file(&shot);
+    let size = ["--width", "64", "--height", "48"];
+    let mut child = Command::new(env!("CARGO_BIN_EXE_prism"))
+        .args(["demo", "sphere_env", "--frames", "1000000", "--validation", "--no-overlay"])
+        .args(["--shaders", glsl.to_str().unwrap(), "--exit-after-shader-reloads", "1"])
+        .args(["--screenshot", shot.to_str().unwrap()])
+        .args(size)
+        .env("DISPLAY", &display.name)
+        .env_remove("WAYLAND_DISPLAY")
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let (tx, rx) = std::sync::mpsc::channel();
+    let stderr = child.stderr.take().unwrap();
+    std::thread::spawn(move || {
+        for line in BufReader::new(stderr).lines().map_while(Result::ok) {
+            let _ = tx.send(line);
+        }
+    });
+    let mut log = String::new();
+    let mut wait_for = |needle: &str| -> bool {
+        let deadline = Instant::now() + Duration::from_secs(120);
+        while let Some(left) = deadline.checked_duration_since(Instant::now()) {
+            match rx.recv_timeout(left) {
+                Ok(line) => {
+                    log.push_str(&line);
+                    log.push('\n');
+                    if line.contains(needle) {
+                        return true;
+                    }
+                }
+                Err(_) => return false,
+            }
+        }
+        false
+    };
+    let started = wait_for("for shader changes");
+    // A syntax error on line 9: reported with its file and line, and the window goes on.
+    std::thread::sleep(Duration::from_millis(600));
+    let broken = original.replacen("void main() {", "void main() {\n    this is not glsl;", 1);
+    std::fs::write(&tonemap, broken).unwrap();
+    let errored = started && wait_for("glsl/tonemap/tonemap.frag:9:");
+    let running_after_error = child.try_wait().unwrap().is_none();
+    // A valid edit: a quarter of the exposure. Only the tone map is re-created.
+    std::thread::sleep(Duration::from_millis(600));
+    std::fs::write(&tonemap, original.replace("frame.camera_position.w * L", "0.25 * frame.camera_position.w * L"))
+        .unwrap();
+    let reloaded = errored && wait_for("glsl/tonemap/tonemap.frag recompiled: re-created tonemap (");
+    let deadline = Instant::now() + Duration::from_secs(120);
+    let status = loop {
+        match child.try_wait().unwrap() {
+            Some(s) => break Some(s),
+            None if Instant::now() > deadline => break None,
+            None => std::thread::sleep(Duration::from_millis(100)),
+        }
+    };
+    if status.is_none() {
+        let _ = child.kill();
+    }
+    let _ = child.wait();
+    // The rest of the log (validation messages come at exit).
+    while let Ok(line) = rx.recv_timeout(Duration::from_millis(500)) {
+        log.push_str(&line);
+        log.push('\n');
+    }
+    assert!(started, "the demo did not start:\n{log}");
+    assert!(errored, "the broken shader was not reported with its file and line:\n{log}");
+    assert!(running_after_error, "the demo stopped on a shader error:\n{log}");
+    assert!(reloaded, "the fixed shader was not recompiled, or more than the tone map was re-created:\n{log}");
+    assert!(status.is_some_and(|s| s.success()), "the demo did not exit cleanly:\n{log}");
+    assert!(!log.contains("VUID") && !log.contains("panicked"), "{log}");
+
+    // 0.25 x exposure x L is exposure 0.25 x L exactly (a power of two): the same image as a
+    // render with render.exposure = 0.25, up to the screenshot test's rare edge pixels.
+    let out = Command::new(env!("CARGO_BIN_EXE_prism"))
+        .args(["render", "sphere_env", "--set", "render.exposure=0.25", "-o", reference.to_str().unwrap()])
+        .args(size)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "prism render failed:\n{}", String::from_utf8_lossy(&out.stderr));
+    let (a, b) = (image::open(&shot).unwrap().to_rgba8(), image::open(&reference).unwrap().to_rgba8());
+    let differing =
+        a.pixels().zip(b.pixels()).filter(|(p, q)| p.0.iter().zip(q.0.iter()).any(|(x, y)| x.abs_diff(*y) > 8)).count();
+    assert!((differing as f64) < (64.0 * 48.0) * 0.002, "{differing} pixels differ from the exposure-0.25 render");
+}

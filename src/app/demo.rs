@@ -6,6 +6,7 @@
 //! edit, a lost surface) are shown or recovered from, never a panic.
 mod camera;
 mod drag;
+mod shaders;
 mod ui;
 
 use std::path::{Path, PathBuf};
@@ -64,6 +65,22 @@ pub struct DemoArgs {
     /// to WxH.
     #[arg(long, hide = true, num_args = 2, value_names = ["FRAME", "WxH"])]
     pub resize_at: Vec<String>,
+    /// The GLSL tree to watch and recompile when a shader changes (default: the source
+    /// tree's glsl/ when it exists). Only the pipelines built from a changed shader are
+    /// re-created; a compile error is shown with its file:line and the old shaders stay.
+    #[arg(long, value_name = "DIR")]
+    pub shaders: Option<PathBuf>,
+    /// Do not watch any GLSL tree: use the SPIR-V embedded at build time only.
+    #[arg(long)]
+    pub no_shader_reload: bool,
+    /// Test hook: exit (writing --screenshot) two frames after the Nth successful shader
+    /// reload.
+    #[arg(long, hide = true, value_name = "N")]
+    pub exit_after_shader_reloads: Option<u32>,
+    /// Script a change: after FRAME presented frames, apply `--set KEY=VALUE` to the running
+    /// renderer (repeatable). The log names what each change re-created and how long it took.
+    #[arg(long, value_name = "FRAME:KEY=VALUE")]
+    pub at: Vec<String>,
     /// Test hook: after FRAME presented frames, behave as if the window surface had been
     /// lost (VK_ERROR_SURFACE_LOST_KHR, which X11 cannot be asked to produce): destroy the
     /// surface and swapchain and create new ones, as the error path does.
@@ -83,8 +100,41 @@ fn parse_resize(v: &[String]) -> Result<Option<(u64, u32, u32)>> {
     Ok(Some((frame, w, h)))
 }
 
+/// The GLSL tree the window watches: `--shaders`, else the source tree's when it exists.
+fn shader_dir(args: &DemoArgs) -> Option<PathBuf> {
+    if args.no_shader_reload {
+        return None;
+    }
+    let dir = args.shaders.clone().unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("glsl"));
+    dir.is_dir().then_some(dir)
+}
+
+/// `--at FRAME:KEY=VALUE`.
+fn parse_at(v: &[String]) -> Result<Vec<(u64, String)>> {
+    v.iter()
+        .map(|a| {
+            let (frame, set) = a.split_once(':').with_context(|| format!("--at {a:?}: write FRAME:KEY=VALUE"))?;
+            let frame: u64 = frame.parse().with_context(|| format!("--at {a:?}: bad frame number {frame:?}"))?;
+            if !set.contains('=') {
+                bail!("--at {a:?}: the change must be KEY=VALUE, e.g. 10:render.hu_qin.search_steps=4");
+            }
+            Ok((frame, set.to_string()))
+        })
+        .collect()
+}
+
 pub fn run(mut args: DemoArgs) -> Result<()> {
     let resize_at = parse_resize(&args.resize_at)?;
+    let at = parse_at(&args.at)?;
+    if let Some(dir) = args.shaders.as_deref().filter(|d| !d.is_dir()) {
+        bail!("--shaders {}: not a directory (give the GLSL tree to watch, e.g. glsl)", dir.display());
+    }
+    // Refuse a bad change now, not after FRAME frames: every change applied at once must load.
+    if !at.is_empty() {
+        let mut all = args.scene.clone();
+        all.set.extend(at.iter().map(|(_, s)| s.clone()));
+        all.load()?;
+    }
     let path = resolve_scene_path(args.scene.scene.as_deref());
     let mut scene = args.scene.load()?;
     // Volume scenes open with the adaptive tone map (Ihrke et al. 2007 §5.3 displays its
@@ -104,8 +154,17 @@ pub fn run(mut args: DemoArgs) -> Result<()> {
     }
     let event_loop = EventLoop::new()
         .map_err(|e| anyhow::anyhow!("no display: run under xvfb-run or set DISPLAY (the window system said: {e})"))?;
-    let mut app =
-        App { args, path, resize_at, screenshot, screenshot_exr, initial: Some(scene), running: None, result: Ok(()) };
+    let mut app = App {
+        args,
+        path,
+        resize_at,
+        at,
+        screenshot,
+        screenshot_exr,
+        initial: Some(scene),
+        running: None,
+        result: Ok(()),
+    };
     event_loop.run_app(&mut app).context("the window event loop failed")?;
     app.result
 }
@@ -114,6 +173,8 @@ struct App {
     args: DemoArgs,
     path: PathBuf,
     resize_at: Option<(u64, u32, u32)>,
+    /// Scripted changes (`--at`), by frame.
+    at: Vec<(u64, String)>,
     screenshot: Option<OutputFile>,
     screenshot_exr: Option<OutputFile>,
     /// The scene loaded before the window opened, taken by `resumed`.
@@ -149,6 +210,16 @@ struct Running {
     swap_ids: Vec<ImageId>,
     swapchain_stale: bool,
     needs_rebuild: bool,
+    /// What asked for the next rebuild, for its log line (None: the animation, or no log).
+    change: Option<String>,
+    /// The changes `--at` applied so far, as `--set`s after the command line's.
+    scripted: Vec<String>,
+    /// The GLSL tree being watched, if any.
+    shader_watch: Option<shaders::ShaderWatch>,
+    /// Successful shader reloads so far, and the frame at which to exit after them
+    /// (`--exit-after-shader-reloads`).
+    shader_reloads: u32,
+    exit_at: Option<u64>,
     /// An object was moved in the renderer (Ctrl + drag): reload the CPU scene (picking, the
     /// overlay's fields) from the overrides once the drag ends, without a new renderer.
     scene_stale: bool,
@@ -195,13 +266,18 @@ impl ApplicationHandler for App {
                         return self.fail(event_loop, e);
                     }
                 }
+                for (_, set) in self.at.iter().filter(|(f, _)| *f == r.frames) {
+                    r.scripted.push(set.clone());
+                    r.change = Some(set.clone());
+                    r.needs_rebuild = true;
+                }
                 if let Some((at, w, h)) = self.resize_at {
                     if r.frames == at {
                         eprintln!("demo: requesting a resize to {w}x{h}");
                         let _ = r.window.request_inner_size(PhysicalSize::new(w, h));
                     }
                 }
-                if self.args.frames.is_some_and(|n| r.frames >= n) {
+                if self.args.frames.is_some_and(|n| r.frames >= n) || r.exit_at.is_some_and(|f| r.frames >= f) {
                     self.finish(event_loop)
                 }
             }
@@ -326,6 +402,11 @@ impl Running {
             swap_ids: Vec::new(),
             swapchain_stale: false,
             needs_rebuild: false,
+            change: None,
+            scripted: Vec::new(),
+            shader_watch: shader_dir(args).map(shaders::ShaderWatch::new),
+            shader_reloads: 0,
+            exit_at: None,
             scene_stale: false,
             reloading: false,
             ui: ui::UiState::new(!args.no_overlay),
@@ -341,6 +422,9 @@ impl Running {
             screenshots: 0,
         };
         r.register_swapchain();
+        if let Some(w) = &r.shader_watch {
+            eprintln!("demo: watching {} for shader changes", w.dir().display());
+        }
         Ok(r)
     }
 
@@ -365,6 +449,7 @@ impl Running {
     /// Every override: the command line's, the window size, the overlay's, the animation time.
     fn overrides(&self, args: &DemoArgs, size: (u32, u32)) -> Vec<String> {
         let mut o = args.scene.set.clone();
+        o.extend(self.scripted.iter().cloned());
         o.push(format!("camera.width={}", size.0));
         o.push(format!("camera.height={}", size.1));
         o.extend(self.ui.overrides.iter().map(|(k, v)| format!("{k}={v}")));
@@ -393,11 +478,15 @@ impl Running {
                 return Ok(());
             }
         };
-        match Renderer::new(&self.ctx, &scene) {
-            Ok(renderer) => {
-                // The old renderer waits for its frames when dropped.
-                self.renderer = renderer;
-                self.register_swapchain();
+        match self.renderer.update(&scene) {
+            Ok(update) => {
+                if update.rebuilt {
+                    self.register_swapchain();
+                }
+                if let Some(change) = self.change.take() {
+                    eprintln!("demo: frame {}: {change}: {} ({} ms)", self.frames, update.describe(), update.ms);
+                    self.ui.status = Some(format!("{change}: {}", update.describe()));
+                }
                 let camera_moved = scene.camera.position != self.scene.camera.position
                     || scene.camera.target != self.scene.camera.target
                     || scene.camera.up != self.scene.camera.up
@@ -416,6 +505,57 @@ impl Running {
             }
             Err(RenderError::Gpu(e @ (GpuError::Vk { .. } | GpuError::Alloc { .. }))) => {
                 return Err(e).context("cannot rebuild the renderer");
+            }
+            Err(e) => self.ui.error = Some(format!("{e}")),
+        }
+        Ok(())
+    }
+
+    /// Recompile the shaders that changed on disk and re-create the techniques built from
+    /// them. A compile error goes to the overlay and the log; the running shaders stay.
+    fn poll_shaders(&mut self, args: &DemoArgs) -> Result<()> {
+        let Some(watch) = self.shader_watch.as_mut() else { return Ok(()) };
+        let changed = watch.poll();
+        if changed.is_empty() {
+            return Ok(());
+        }
+        let dir = watch.dir().to_path_buf();
+        let (mut compiled, mut errors) = (Vec::new(), Vec::new());
+        for rel in &changed {
+            match crate::gpu::compile_shader(&dir, rel) {
+                Ok((words, _)) => {
+                    self.ctx.set_shader(rel, words);
+                    compiled.push(rel.clone());
+                }
+                Err(e) => errors.push(e),
+            }
+        }
+        if !errors.is_empty() {
+            let e = errors.join("\n");
+            eprintln!("demo: shader error (the last good shaders stay in use):\n{e}");
+            self.ui.error = Some(e);
+        }
+        if compiled.is_empty() {
+            return Ok(());
+        }
+        match self.renderer.reload_shaders(&self.scene, &compiled) {
+            Ok(update) => {
+                if update.rebuilt {
+                    self.register_swapchain();
+                }
+                let names = compiled.iter().map(|r| format!("glsl/{r}")).collect::<Vec<_>>().join(", ");
+                eprintln!("demo: frame {}: {names} recompiled: {} ({} ms)", self.frames, update.describe(), update.ms);
+                self.ui.status = Some(format!("{names} recompiled"));
+                if errors.is_empty() {
+                    self.ui.error = None;
+                }
+                self.shader_reloads += 1;
+                if args.exit_after_shader_reloads.is_some_and(|n| self.shader_reloads >= n) {
+                    self.exit_at = Some(self.frames + 2);
+                }
+            }
+            Err(RenderError::Gpu(e @ (GpuError::Vk { .. } | GpuError::Alloc { .. }))) => {
+                return Err(e).context("cannot re-create the pipelines of the reloaded shaders");
             }
             Err(e) => self.ui.error = Some(format!("{e}")),
         }
@@ -653,21 +793,23 @@ impl Running {
         let extent = self.swapchain.extent();
         let path = resolve_scene_path(args.scene.scene.as_deref());
         self.poll_scene_file(&path);
+        self.poll_shaders(args)?;
         let resized = (self.renderer.width(), self.renderer.height()) != (extent.width, extent.height);
         let animating = self.ui.animate && self.has_heightfield();
+        if resized && self.change.is_none() {
+            self.change = Some(format!("resize to {}x{}", extent.width, extent.height));
+        }
         if self.needs_rebuild || resized || animating {
             self.needs_rebuild = false;
             self.scene_stale = false;
             self.rebuild(args, &path, (extent.width, extent.height))?;
         } else if self.scene_stale && self.grab.is_none() {
-            // After a Ctrl + drag: the renderer already has the object where the override
-            // puts it; only the CPU scene follows.
+            // After a Ctrl + drag: while dragging, only the object's vertices followed the
+            // cursor; now everything built from positions catches up (impostor rectangles,
+            // light frusta, photon rectangles, distance impostors, shadow faces).
             self.scene_stale = false;
-            let size = (self.renderer.width(), self.renderer.height());
-            match scene::load(&path, &self.overrides(args, size)) {
-                Ok(s) => self.scene = s,
-                Err(_) => self.needs_rebuild = true,
-            }
+            self.change = Some("object moved".to_string());
+            self.rebuild(args, &path, (extent.width, extent.height))?;
         }
         self.camera.update(dt);
         let camera = self.camera.camera(self.renderer.width(), self.renderer.height());

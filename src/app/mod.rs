@@ -210,6 +210,13 @@ fn render(args: RenderArgs) -> Result<()> {
             "eikonal light simulation: {} runs (lights x channels x tiles; {} tiles split), {} steps, {} initial patches, peak {}, {} dropped at max_patches, {:.2} s",
             l.runs.len(), l.split_tiles, l.steps, l.initial_patches, l.peak_patches, l.dropped_patches, l.seconds
         );
+        if l.dropped_patches > 0 {
+            eprintln!(
+                "warning: eikonal light simulation: {} patches dropped at the max_patches clamp by tiles of one patch \
+                 (raise render.eikonal.max_patches)",
+                l.dropped_patches
+            );
+        }
         if args.verbose {
             let mut at = 0usize;
             for r in &l.runs {

@@ -81,9 +81,35 @@ pub struct GpuContext {
     pub(crate) garbage: Mutex<Vec<(u64, Garbage)>>,
     /// Pool for one-shot uploads and readbacks.
     pub(crate) oneshot_pool: Mutex<vk::CommandPool>,
+    /// Shaders recompiled at run time (the window's hot reload), in place of the embedded
+    /// SPIR-V of the same name.
+    shader_overrides: Mutex<std::collections::HashMap<String, Vec<u32>>>,
+    /// Names of the shaders loaded since the last [`GpuContext::take_shader_log`]: which
+    /// pipelines a hot-reloaded shader affects.
+    shader_log: Mutex<Vec<String>>,
 }
 
 impl GpuContext {
+    /// The SPIR-V of shader `path` (relative to `glsl/`): a run-time override set by
+    /// [`GpuContext::set_shader`], or the embedded one. Logged for `take_shader_log`.
+    pub fn shader(&self, path: &str) -> GpuResult<Vec<u32>> {
+        self.shader_log.lock().unwrap_or_else(|e| e.into_inner()).push(path.to_string());
+        if let Some(words) = self.shader_overrides.lock().unwrap_or_else(|e| e.into_inner()).get(path) {
+            return Ok(words.clone());
+        }
+        super::shader_spirv(path)
+    }
+
+    /// Use `words` for shader `path` in every pipeline created from now on.
+    pub fn set_shader(&self, path: &str, words: Vec<u32>) {
+        self.shader_overrides.lock().unwrap_or_else(|e| e.into_inner()).insert(path.to_string(), words);
+    }
+
+    /// The shaders loaded since the last call.
+    pub fn take_shader_log(&self) -> Vec<String> {
+        std::mem::take(&mut *self.shader_log.lock().unwrap_or_else(|e| e.into_inner()))
+    }
+
     /// A headless context: no surface or swapchain extension.
     pub fn new(desc: &ContextDesc) -> GpuResult<Arc<GpuContext>> {
         Self::create(desc, None)
@@ -285,6 +311,8 @@ impl GpuContext {
             completed: AtomicU64::new(0),
             garbage: Mutex::new(Vec::new()),
             oneshot_pool: Mutex::new(oneshot_pool),
+            shader_overrides: Mutex::default(),
+            shader_log: Mutex::default(),
         }))
     }
 

@@ -12,6 +12,7 @@ mod context;
 mod debug;
 mod descriptor;
 mod error;
+mod glsl;
 mod image;
 mod overlay;
 mod pipeline;
@@ -52,6 +53,21 @@ pub fn shader_spirv(path: &str) -> GpuResult<Vec<u32>> {
         .ok_or_else(|| GpuError::MissingShader(path.to_string()))?;
     ash::util::read_spv(&mut std::io::Cursor::new(bytes))
         .map_err(|e| GpuError::InvalidShader(path.to_string(), e.to_string()))
+}
+
+/// The shader-interface header build.rs generated (`prism_shared.glsl`), for run-time
+/// compiles.
+const SHARED_HEADER: &str = include_str!(concat!(env!("OUT_DIR"), "/prism_shared.glsl"));
+
+/// Compile the shader `rel` of the tree `glsl` at run time, exactly as build.rs compiles the
+/// embedded ones (the window's hot reload: [`GpuContext::set_shader`]). Returns the SPIR-V
+/// words and the files it included; an error names the file and line.
+pub fn compile_shader(glsl: &std::path::Path, rel: &str) -> Result<(Vec<u32>, Vec<std::path::PathBuf>), String> {
+    let compiler = shaderc::Compiler::new().map_err(|e| format!("shaderc: {e}"))?;
+    let mut includes = Vec::new();
+    let bytes = glsl::compile_glsl(&compiler, glsl, rel, SHARED_HEADER, &mut includes)?;
+    let words = ash::util::read_spv(&mut std::io::Cursor::new(bytes)).map_err(|e| format!("glsl/{rel}: {e}"))?;
+    Ok((words, includes))
 }
 
 /// Names of every embedded shader (for tests and `--help` diagnostics).

@@ -5,7 +5,7 @@ use ash::vk;
 
 use super::context::GpuContext;
 use super::error::{GpuResult, VkContext};
-use super::{shader_spirv, DescriptorSetLayout, RenderPass};
+use super::{DescriptorSetLayout, RenderPass};
 
 pub struct PipelineLayout {
     ctx: Arc<GpuContext>,
@@ -87,9 +87,9 @@ pub struct GraphicsPipeline {
 }
 
 fn shader_module(ctx: &GpuContext, path: &str) -> GpuResult<vk::ShaderModule> {
-    let code = shader_spirv(path)?;
+    let code = ctx.shader(path)?;
     let info = vk::ShaderModuleCreateInfo::default().code(&code);
-    // SAFETY: code is SPIR-V compiled by build.rs.
+    // SAFETY: code is SPIR-V compiled by shaderc, at build time or by the hot reload.
     let m = unsafe { ctx.raw().create_shader_module(&info, None) }.vk("vkCreateShaderModule")?;
     ctx.set_name(m, path);
     Ok(m)

@@ -341,6 +341,16 @@ impl<'g, 'a> Frame<'g, 'a> {
         self.passes.iter().map(|p| p.name.as_str()).collect()
     }
 
+    /// Passes declared so far.
+    pub fn pass_count(&self) -> usize {
+        self.passes.len()
+    }
+
+    /// Names of the passes declared from index `first` on.
+    pub fn pass_names_since(&self, first: usize) -> impl Iterator<Item = &str> + Clone {
+        self.passes[first..].iter().map(|p| p.name.as_str())
+    }
+
     /// Record every pass into `cmd`: barriers, label, timestamps, the pass's commands.
     /// Returns the timestamp query pairs written (if a pool is given).
     pub fn execute(self, cmd: &Cmd, timestamps: Option<&TimestampPool>) -> Vec<TimestampQuery> {

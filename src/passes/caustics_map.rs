@@ -39,10 +39,13 @@ use crate::graph::{BufferId, Frame, FrameGraph, ImageId};
 use crate::passes::shadow_map::FAR_DISTANCE;
 use crate::renderer::gpu_scene::{cube_face_views, Draw, GpuScene};
 use crate::renderer::gpu_types::ShadowPush;
-use crate::renderer::plan::{CAUSTICS_MAP, CAUSTICS_MAP_RECEIVERS, CAUSTICS_MAP_REFRACTORS};
 use crate::renderer::targets::{Targets, CAUSTIC_FORMAT, DEPTH_FORMAT, SHADOW_FORMAT};
 use crate::scene::techniques::{CausticsMapParams, Flux, Newton};
 use crate::scene::{Light, Material, Scene};
+use crate::technique::{
+    caustic_objects, list, params, tables_and_placement, FrameInputs, PlannedPass, Registration, RenderError, Setup,
+    Stage, Technique,
+};
 use crate::{
     CAUSTIC_BINDING_BACK_NORMAL, CAUSTIC_BINDING_BACK_POSITION, CAUSTIC_BINDING_FACES, CAUSTIC_BINDING_FRONT_NORMAL,
     CAUSTIC_BINDING_FRONT_POSITION, CAUSTIC_BINDING_MATERIALS, CAUSTIC_BINDING_RECEIVER_2D,
@@ -50,6 +53,56 @@ use crate::{
     CAUSTIC_LAYER_BACK, CAUSTIC_LAYER_FRONT, FLUX_OCCLUSION_QUERY, FLUX_SOLID_ANGLE, LIGHT_DIRECTIONAL, LIGHT_POINT,
     NEWTON_APPROXIMATE, NEWTON_TRUE, SHADOW_LAYERS_PER_LIGHT,
 };
+
+pub const CAUSTICS_MAP_RECEIVERS: &str = "caustics_map_receivers";
+pub const CAUSTICS_MAP_REFRACTORS: &str = "caustics_map_refractors";
+pub const CAUSTICS_MAP: &str = "caustics_map";
+
+/// `render.caustics = "caustics_map"`, parameters `[render.caustics_map]`.
+pub const TECHNIQUE: Registration = Registration {
+    key: "caustics = \"caustics_map\"",
+    plan,
+    create,
+    inputs: |scene| tables_and_placement(scene, &["caustics_map"]),
+};
+
+fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
+    let Some((diffuse, specular)) = caustic_objects(scene, "caustics_map") else {
+        return Vec::new();
+    };
+    let lights = scene.lights.len();
+    [
+        PlannedPass::new(
+            CAUSTICS_MAP_RECEIVERS,
+            format!("positions of the diffuse receivers {} seen from {lights} light(s)", list(&diffuse)),
+        ),
+        PlannedPass::new(
+            CAUSTICS_MAP_REFRACTORS,
+            format!("positions and normals of the specular {} seen from the light(s)", list(&specular)),
+        ),
+        PlannedPass::new(
+            CAUSTICS_MAP,
+            format!(
+                "vertex grid splatted onto the receivers through {} (render.caustics = \"caustics_map\")",
+                list(&specular)
+            ),
+        ),
+    ]
+    .into_iter()
+    .map(|p| (Stage::Caustics, p))
+    .collect()
+}
+
+fn create(s: &mut Setup<'_>) -> Result<Box<dyn Technique>, RenderError> {
+    let p = params("caustics_map", CausticsMapParams::from_settings(&s.scene.render))?;
+    Ok(Box::new(CausticsMapPass::new(s.ctx, p, s.scene, s.gpu, s.graph, s.targets)?))
+}
+
+impl Technique for CausticsMapPass {
+    fn record<'a>(&'a self, _: Stage, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>) {
+        self.record(frame, inputs.scene, inputs.targets);
+    }
+}
 
 /// Refractor textures: 32-bit float positions and normals, so that the estimate's error is
 /// the technique's, not the storage's.

@@ -5,11 +5,74 @@ use std::sync::Arc;
 use crate::gpu::{DescriptorSet, DescriptorSetLayout, GpuContext, GpuResult, Sampler};
 use crate::graph::{Frame, ImageId};
 use crate::renderer::gpu_scene::GpuScene;
-use crate::renderer::plan::DEFERRED_SHADING;
 use crate::renderer::targets::Targets;
+use crate::scene::techniques::CausticsMapParams;
+use crate::technique::{
+    diffuse_names, list, params, placement, tables, FrameInputs, PlannedPass, Registration, RenderError, Setup, Stage,
+    Technique,
+};
 use crate::{BINDING_GBUF_ALBEDO, BINDING_GBUF_DEPTH, BINDING_GBUF_NORMAL};
 
 use super::fullscreen::{FullscreenDesc, FullscreenPass};
+
+pub const DEFERRED_SHADING: &str = "deferred_shading";
+
+/// Baseline: every frame shades its diffuse surfaces and draws the environment behind them.
+pub const TECHNIQUE: Registration = Registration {
+    key: DEFERRED_SHADING,
+    plan,
+    create,
+    // Which caustic technique runs decides what it reads, with caustics mapping's filter and
+    // the photon buffer's rectangles and normalisation.
+    // The photon rectangles (their count) follow the receivers.
+    inputs: |scene| {
+        let filter = CausticsMapParams::from_settings(&scene.render).map(|p| p.filter).ok();
+        let mut inputs = format!("{} {filter:?} {}", scene.render.caustics, tables(scene, &["photon_buffer"]));
+        if scene.render.caustics == "photon_buffer" {
+            inputs += &placement(scene);
+        }
+        inputs
+    },
+};
+
+fn plan(scene: &crate::scene::Scene) -> Vec<(Stage, PlannedPass)> {
+    let diffuse = diffuse_names(scene);
+    let reason = if diffuse.is_empty() {
+        "environment background (no diffuse object)".to_string()
+    } else if scene.lights.is_empty() {
+        format!("environment background; diffuse {} lit by the environment only", list(&diffuse))
+    } else {
+        format!("environment background; diffuse {} lit by {} light(s)", list(&diffuse), scene.lights.len())
+    };
+    vec![(Stage::Shading, PlannedPass::new(DEFERRED_SHADING, reason))]
+}
+
+/// Reads whatever the shadow and caustic techniques planned before it.
+fn create(s: &mut Setup<'_>) -> Result<Box<dyn Technique>, RenderError> {
+    let caustic_filter = if s.planned(super::caustics_map::CAUSTICS_MAP) {
+        Some(params("caustics_map", CausticsMapParams::from_settings(&s.scene.render))?.filter)
+    } else {
+        None
+    };
+    let c = s.photon_caustics;
+    let photon = s.planned(super::photon_buffer::PHOTON_BUFFER).then_some((c.count, c.mode, c.id));
+    let shadowed = s.planned(super::shadow_map::SHADOW_MAP);
+    Ok(Box::new(DeferredShadingPass::new(
+        s.ctx,
+        s.frame_layout,
+        s.targets,
+        s.nearest,
+        shadowed,
+        caustic_filter,
+        photon,
+    )?))
+}
+
+impl Technique for DeferredShadingPass {
+    fn record<'a>(&'a self, _: Stage, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>) {
+        self.record(frame, inputs.scene, inputs.targets, inputs.frame_set);
+    }
+}
 
 pub struct DeferredShadingPass {
     pass: FullscreenPass,

@@ -41,17 +41,123 @@ use crate::gpu::{
 };
 use crate::graph::{Frame, FrameGraph, ImageId, PassBuilder};
 use crate::renderer::gpu_scene::{cube_face_views, GpuScene};
-use crate::renderer::plan::{
-    REFLECTION_IMPOSTOR, REFLECTION_IMPOSTOR_MAP, REFRACTION_IMPOSTOR, REFRACTION_IMPOSTOR_MAP,
-    REFRACTION_IMPOSTOR_REFRACTOR_MAP,
-};
 use crate::renderer::targets::{Targets, DEPTH_FORMAT};
 use crate::scene::techniques::{ImpostorFresnel, ImpostorMaps, ImpostorParams, ImpostorUpdate};
 use crate::scene::{Analytic, Material, Scene};
+use crate::technique::{
+    dielectric_names, list, metal_names, params, tables_and_placement, FrameInputs, PlannedPass, Registration, Setup,
+    Stage, Technique,
+};
 use crate::{
     BINDING_GBUF_ALBEDO, BINDING_GBUF_DEPTH, BINDING_GBUF_NORMAL, BINDING_IMPOSTOR_DISTANCE, BINDING_IMPOSTOR_PROBE,
     BINDING_IMPOSTOR_RADIANCE, BINDING_IMPOSTOR_REFRACTOR, IMPOSTOR_PROBE_FRESNEL, IMPOSTOR_PROBE_HIT, WORKGROUP_2D,
 };
+
+pub const REFLECTION_IMPOSTOR_MAP: &str = "reflection_impostor_map";
+pub const REFLECTION_IMPOSTOR: &str = "reflection_impostor";
+pub const REFRACTION_IMPOSTOR_MAP: &str = "refraction_impostor_map";
+pub const REFRACTION_IMPOSTOR_REFRACTOR_MAP: &str = "refraction_impostor_refractor_map";
+pub const REFRACTION_IMPOSTOR: &str = "refraction_impostor";
+
+/// `render.refraction = "impostor"` (§4), parameters `[render.impostor]`.
+pub const REFRACTION: Registration = Registration {
+    key: "refraction = \"impostor\"",
+    plan: |scene| {
+        let dielectric = dielectric_names(scene);
+        if dielectric.is_empty() || scene.render.refraction != "impostor" {
+            return Vec::new();
+        }
+        let list = list(&dielectric);
+        [
+            PlannedPass::new(
+                REFRACTION_IMPOSTOR_MAP,
+                format!("distance impostor around dielectric {list} (render.refraction = \"impostor\")"),
+            ),
+            PlannedPass::new(
+                REFRACTION_IMPOSTOR_REFRACTOR_MAP,
+                format!("refractor map (distance + normal cube) of {list}"),
+            ),
+            PlannedPass::new(
+                REFRACTION_IMPOSTOR,
+                format!("double refraction of {list} through the refractor map (Szirmay-Kalos et al. 2005, §4)"),
+            ),
+        ]
+        .into_iter()
+        .map(|p| (Stage::Refraction, p))
+        .collect()
+    },
+    create: |s| {
+        let p = params("impostor", ImpostorParams::from_settings(&s.scene.render))?;
+        let t = ImpostorRefraction::new(s, p)?;
+        Ok(Box::new(t))
+    },
+    inputs: |scene| tables_and_placement(scene, &["impostor"]),
+};
+
+/// `render.reflection = "impostor"` (§3), parameters `[render.impostor]`.
+pub const REFLECTION: Registration = Registration {
+    key: "reflection = \"impostor\"",
+    plan: |scene| {
+        let metal = metal_names(scene);
+        if metal.is_empty() || scene.render.reflection != "impostor" {
+            return Vec::new();
+        }
+        let list = list(&metal);
+        vec![
+            (
+                Stage::Reflection,
+                PlannedPass::new(
+                    REFLECTION_IMPOSTOR_MAP,
+                    format!(
+                        "distance impostor (radiance + distance cube) around mirror/conductor {list} \
+                         (render.reflection = \"impostor\")"
+                    ),
+                ),
+            ),
+            (
+                Stage::Reflection,
+                PlannedPass::new(
+                    REFLECTION_IMPOSTOR,
+                    format!("localized reflection of {list} (Hit(), Szirmay-Kalos et al. 2005)"),
+                ),
+            ),
+        ]
+    },
+    create: |s| {
+        let p = params("impostor", ImpostorParams::from_settings(&s.scene.render))?;
+        let t = ImpostorReflection::new(s, p)?;
+        Ok(Box::new(t))
+    },
+    inputs: |scene| tables_and_placement(scene, &["impostor"]),
+};
+
+impl Technique for ImpostorRefraction {
+    fn record<'a>(&'a self, _: Stage, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>) {
+        self.record(frame, inputs.scene, inputs.targets, inputs.frame_set, inputs.shadow_atlas);
+    }
+
+    fn begin_frame(&mut self) {
+        ImpostorRefraction::begin_frame(self);
+    }
+
+    fn objects_moved(&mut self, bounds: &[(Vec3, f32)]) {
+        ImpostorRefraction::objects_moved(self, bounds);
+    }
+}
+
+impl Technique for ImpostorReflection {
+    fn record<'a>(&'a self, _: Stage, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>) {
+        self.record(frame, inputs.scene, inputs.targets, inputs.frame_set, inputs.shadow_atlas);
+    }
+
+    fn begin_frame(&mut self) {
+        ImpostorReflection::begin_frame(self);
+    }
+
+    fn objects_moved(&mut self, bounds: &[(Vec3, f32)]) {
+        ImpostorReflection::objects_moved(self, bounds);
+    }
+}
 
 /// Cleared distance where no surface is seen: IMPOSTOR_NO_SURFACE of glsl/include/impostor.glsl.
 pub const NO_SURFACE: f32 = 1e15;
@@ -680,17 +786,10 @@ pub struct ImpostorReflection {
 }
 
 impl ImpostorReflection {
-    #[allow(clippy::too_many_arguments)]
-    pub fn new(
-        ctx: &Arc<GpuContext>,
-        params: ImpostorParams,
-        scene: &Scene,
-        gpu: &GpuScene,
-        graph: &mut FrameGraph,
-        frame_layout: &DescriptorSetLayout,
-        targets: &Targets,
-        nearest: &Sampler,
-    ) -> GpuResult<Self> {
+    pub fn new(s: &mut Setup<'_>, params: ImpostorParams) -> GpuResult<Self> {
+        let (ctx, scene, gpu, frame_layout, targets, nearest) =
+            (s.ctx, s.scene, s.gpu, s.frame_layout, s.targets, s.nearest);
+        let graph = &mut *s.graph;
         let metals = objects_where(scene, |m| matches!(m, Material::Mirror { .. } | Material::Conductor { .. }));
         let mut maps = Vec::new();
         for group in map_groups(&params, metals) {
@@ -778,17 +877,10 @@ pub struct ImpostorRefraction {
 }
 
 impl ImpostorRefraction {
-    #[allow(clippy::too_many_arguments)]
-    pub fn new(
-        ctx: &Arc<GpuContext>,
-        params: ImpostorParams,
-        scene: &Scene,
-        gpu: &GpuScene,
-        graph: &mut FrameGraph,
-        frame_layout: &DescriptorSetLayout,
-        targets: &Targets,
-        nearest: &Sampler,
-    ) -> GpuResult<Self> {
+    pub fn new(s: &mut Setup<'_>, params: ImpostorParams) -> GpuResult<Self> {
+        let (ctx, scene, gpu, frame_layout, targets, nearest) =
+            (s.ctx, s.scene, s.gpu, s.frame_layout, s.targets, s.nearest);
+        let graph = &mut *s.graph;
         let glass = objects_where(scene, |m| matches!(m, Material::Dielectric { .. }));
         let mut instances = Vec::new();
         for group in map_groups(&params, glass) {

@@ -25,14 +25,17 @@ use glam::DVec3;
 
 use crate::gpu::{
     vk, Access, ComputePipeline, DescriptorSet, DescriptorSetLayout, DescriptorWrite, GpuContext, GpuResult, Image,
-    ImageDesc, PipelineLayout, Sampler,
+    ImageDesc, PipelineLayout,
 };
 use crate::graph::{Frame, FrameGraph, ImageId};
 use crate::renderer::gpu_scene::GpuScene;
-use crate::renderer::plan::{EIKONAL_NEARBY, EIKONAL_VIEW};
 use crate::renderer::targets::Targets;
 use crate::scene::techniques::{EikonalParams, Integrator};
-use crate::scene::{IndexProfile, Volume};
+use crate::scene::{IndexProfile, Scene, Volume};
+use crate::technique::{
+    describe_lights, list, params, tables_and_placement, FrameInputs, PlannedPass, Registration, RenderError, Setup,
+    Stage, Technique,
+};
 use crate::{
     BINDING_EIKONAL_ALBEDO, BINDING_EIKONAL_EMISSION, BINDING_EIKONAL_EXTINCTION, BINDING_EIKONAL_FIELD,
     BINDING_GBUF_DEPTH, EIKONAL_BINDING_DST, EIKONAL_BINDING_SRC, EIKONAL_EULER, EIKONAL_GROUP, EIKONAL_RK4,
@@ -41,6 +44,70 @@ use crate::{
 use super::eikonal_nearby;
 use super::fullscreen::{FullscreenDesc, FullscreenPass};
 use super::nearby_impostors::{ImpostorShading, NearbyDesc, NearbyImpostors};
+
+pub const EIKONAL_VIEW: &str = "eikonal_view";
+/// §5.2's light simulation (run when the technique is created) and the diffuse receivers
+/// inside its irradiance volume.
+pub const EIKONAL_LIGHT: &str = "eikonal_light";
+/// Hu & Qin 2007 §2.2 impostor textures of the objects near the volume, for eikonal_view's
+/// exit and reflected rays (src/passes/eikonal_nearby.rs).
+pub const EIKONAL_NEARBY: &str = "eikonal_nearby";
+
+/// Every scene with a `[volume]`; parameters `[render.eikonal]`.
+pub const TECHNIQUE: Registration =
+    Registration { key: "[volume]", plan, create, inputs: |scene| tables_and_placement(scene, &["eikonal"]) };
+
+fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
+    let Some(v) = &scene.volume else {
+        return Vec::new();
+    };
+    let p = EikonalParams::from_settings(&scene.render).unwrap_or_default();
+    let mut passes = Vec::new();
+    if !scene.lights.is_empty() && p.light {
+        let reason = format!(
+            "volume {} lit by {}: wavefront light simulation, Ihrke et al. 2007 §4.2, §5.2 (receivers in its irradiance volume)",
+            v.name,
+            describe_lights(scene, ", ")
+        );
+        passes.push((Stage::Lighting, PlannedPass::new(EIKONAL_LIGHT, reason)));
+    }
+    // After eikonal_light (the simulation ran at creation; the textures carry its caustic
+    // and shadow), before the view pass that reads them.
+    let (kept, dropped) = eikonal_nearby::impostor_objects(scene, p.nearby);
+    if !kept.is_empty() {
+        let names = |v: &[usize]| v.iter().map(|&i| scene.objects[i].name.clone()).collect::<Vec<_>>();
+        let mut reason = format!(
+            "impostor rectangles + textures of {} around the volume for its exit and reflected rays (Hu & Qin 2007 §2.2)",
+            list(&names(&kept))
+        );
+        if !dropped.is_empty() {
+            reason += &format!("; {} left to the environment map", list(&names(&dropped)));
+        }
+        passes.push((Stage::Volume, PlannedPass::new(EIKONAL_NEARBY, reason)));
+    }
+    let [nx, ny, nz] = v.resolution;
+    let reason = format!("volume {} ({nx}x{ny}x{nz}): curved view rays, Ihrke et al. 2007 §4.1, §5.3", v.name);
+    passes.push((Stage::Volume, PlannedPass::new(EIKONAL_VIEW, reason)));
+    passes
+}
+
+fn create(s: &mut Setup<'_>) -> Result<Box<dyn Technique>, RenderError> {
+    let p = params("eikonal", EikonalParams::from_settings(&s.scene.render))?;
+    let scene = s.scene;
+    let volume = scene.volume.as_ref().expect("planned only with a volume");
+    let lights: &[crate::scene::Light] = if s.planned(EIKONAL_LIGHT) { &scene.lights } else { &[] };
+    Ok(Box::new(EikonalPass::new(s, p, volume, lights)?))
+}
+
+impl Technique for EikonalPass {
+    fn record<'a>(&'a self, stage: Stage, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>) {
+        if stage == Stage::Lighting {
+            self.record_light(frame, inputs.scene, inputs.targets, inputs.frame_set);
+        } else {
+            self.record(frame, inputs.scene, inputs.targets, inputs.frame_set, inputs.shadow_atlas);
+        }
+    }
+}
 
 /// Fig. 16's stopping tolerance (a fraction of d_i) and Fig. 17's seeds for the impostor
 /// lookup of exit rays: render.hu_qin's defaults (src/scene/techniques.rs).
@@ -191,19 +258,15 @@ fn f(x: f32) -> u32 {
 
 impl EikonalPass {
     /// Sample, upload, smooth and differentiate `volume`, and create the view pass.
-    #[allow(clippy::too_many_arguments)] // reason: the light is optional input next to the pass's own
     pub fn new(
-        ctx: &Arc<GpuContext>,
+        s: &mut Setup<'_>,
         params: EikonalParams,
         volume: &Volume,
         lights: &[crate::scene::Light],
-        scene: &crate::scene::Scene,
-        gpu: &GpuScene,
-        graph: &mut FrameGraph,
-        frame_layout: &DescriptorSetLayout,
-        targets: &Targets,
-        nearest: &Sampler,
     ) -> GpuResult<Self> {
+        let (ctx, scene, gpu, frame_layout, targets, nearest) =
+            (s.ctx, s.scene, s.gpu, s.frame_layout, s.targets, s.nearest);
+        let graph = &mut *s.graph;
         let textures = prepare_volume(ctx, params, volume, graph)?;
         // --- branch `light`: section 5.2's light simulation before the view pass is built.
         // Every light of the scene (issue 7): their runs add into one pair of volumes.

@@ -905,19 +905,13 @@ impl EikonalLight {
         nearest: &Sampler,
     ) -> GpuResult<Self> {
         let mut sim = LightSim::new(ctx, params, volume, lights, textures, nearest, graph)?;
+        // Dropped patches are reported by the caller from `stats.dropped_patches`.
         let stats = sim.run(ctx, graph)?;
-        if stats.dropped_patches > 0 {
-            eprintln!(
-                "warning: eikonal light simulation: {} patches dropped at the max_patches = {} clamp by tiles of one patch (raise render.eikonal.max_patches)",
-                stats.dropped_patches,
-                sim.hp.capacity
-            );
-        }
         let (lo, hi) = (sim.light_min, sim.light_max);
         let receiver = super::fullscreen::FullscreenPass::new(
             ctx,
             &super::fullscreen::FullscreenDesc {
-                name: crate::renderer::plan::EIKONAL_LIGHT,
+                name: super::eikonal::EIKONAL_LIGHT,
                 fragment_shader: "eikonal/light_receiver.frag",
                 inputs: &[
                     (crate::BINDING_GBUF_NORMAL, &targets.gbuf_normal),

@@ -8,8 +8,32 @@ use crate::gpu::{
 };
 use crate::graph::Frame;
 use crate::renderer::gpu_scene::GpuScene;
-use crate::renderer::plan::GBUFFER;
 use crate::renderer::targets::Targets;
+use crate::technique::{no_inputs, FrameInputs, PlannedPass, Registration, RenderError, Setup, Stage, Technique};
+
+pub const GBUFFER: &str = "gbuffer";
+
+/// Baseline: every frame rasterises its first visible surfaces (or clears the depth).
+pub const TECHNIQUE: Registration = Registration { key: GBUFFER, plan, create, inputs: no_inputs };
+
+fn plan(scene: &crate::scene::Scene) -> Vec<(Stage, PlannedPass)> {
+    let reason = if scene.objects.is_empty() {
+        "clears depth: the scene has no objects, so the environment fills the frame".to_string()
+    } else {
+        format!("rasterises the first visible surface of {} object(s)", scene.objects.len())
+    };
+    vec![(Stage::Surfaces, PlannedPass::new(GBUFFER, reason))]
+}
+
+fn create(s: &mut Setup<'_>) -> Result<Box<dyn Technique>, RenderError> {
+    Ok(Box::new(GBufferPass::new(s.ctx, s.frame_layout, s.targets)?))
+}
+
+impl Technique for GBufferPass {
+    fn record<'a>(&'a self, _: Stage, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>) {
+        self.record(frame, inputs.scene, inputs.targets, inputs.frame_set);
+    }
+}
 
 pub struct GBufferPass {
     render_pass: RenderPass,

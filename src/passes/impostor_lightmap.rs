@@ -29,7 +29,7 @@
 //!    light-map irradiance x albedo / pi.
 //!
 //! Light maps: one layer of a 2D array per chart (`lightmap_size`^2 each). Receivers: the
-//! diffuse quads and boxes (plan::lightmap_receivers); a quad's unique chart is the planar
+//! diffuse quads and boxes ([`lightmap_receivers`]); a quad's unique chart is the planar
 //! projection onto its own edges, (u, v) in [0, 1]^2, a box has one such chart (and light map)
 //! per face; (u, v) is evaluated per pixel from the world position in the uv map and in the
 //! apply pass alike (which also matches the face by its normal). Other diffuse objects
@@ -50,18 +50,104 @@ use crate::gpu::{
 use crate::graph::{Frame, FrameGraph, ImageId};
 use crate::passes::distance_impostor::{object_bounds, record_maps, ImpostorMap, MapContent};
 use crate::renderer::gpu_scene::GpuScene;
-use crate::renderer::plan::{
-    lightmap_receivers, IMPOSTOR_LIGHTMAP_APPLY, IMPOSTOR_LIGHTMAP_CAUSTIC_MAP, IMPOSTOR_LIGHTMAP_REFRACTOR_MAP,
-    IMPOSTOR_LIGHTMAP_SPLAT, IMPOSTOR_LIGHTMAP_UV_MAP,
-};
 use crate::renderer::targets::{Targets, DEPTH_FORMAT};
 use crate::scene::techniques::{ImpostorLightmapParams, ImpostorParams};
 use crate::scene::{Light, Material, Scene};
+use crate::technique::{
+    dielectric_names, list, params, specular_names, tables_and_placement, FrameInputs, PlannedPass, Registration,
+    RenderError, Setup, Stage, Technique,
+};
 use crate::{
     BINDING_GBUF_ALBEDO, BINDING_GBUF_DEPTH, BINDING_GBUF_NORMAL, BINDING_LIGHTMAPS, LIGHTMAP_BINDING_PHOTON_HIT,
     LIGHTMAP_BINDING_PHOTON_POWER, LIGHTMAP_BINDING_REFRACTOR, LIGHTMAP_BINDING_UV_LINEAR, LIGHTMAP_BINDING_UV_NEAREST,
     LIGHT_DIRECTIONAL, LIGHT_POINT,
 };
+
+pub const IMPOSTOR_LIGHTMAP_UV_MAP: &str = "impostor_lightmap_uv_map";
+pub const IMPOSTOR_LIGHTMAP_REFRACTOR_MAP: &str = "impostor_lightmap_refractor_map";
+pub const IMPOSTOR_LIGHTMAP_CAUSTIC_MAP: &str = "impostor_lightmap_caustic_map";
+pub const IMPOSTOR_LIGHTMAP_SPLAT: &str = "impostor_lightmap_splat";
+pub const IMPOSTOR_LIGHTMAP_APPLY: &str = "impostor_lightmap_apply";
+
+/// `render.caustics = "impostor_lightmap"`, parameters `[render.impostor_lightmap]`.
+pub const TECHNIQUE: Registration = Registration {
+    key: "caustics = \"impostor_lightmap\"",
+    plan,
+    create,
+    inputs: |scene| tables_and_placement(scene, &["impostor_lightmap", "impostor"]),
+};
+
+/// The diffuse receivers that get light maps: quads (one planar chart) and boxes (one per
+/// face).
+pub fn lightmap_receivers(scene: &Scene) -> Vec<usize> {
+    (0..scene.objects.len())
+        .filter(|&i| {
+            let o = &scene.objects[i];
+            scene.materials[o.material].is_diffuse() && (o.shape == "quad" || o.shape == "box")
+        })
+        .collect()
+}
+
+/// Only with a light, a specular object, a quad or box receiver and the technique selected.
+fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
+    let receivers: Vec<String> = lightmap_receivers(scene).iter().map(|&i| scene.objects[i].name.clone()).collect();
+    if scene.render.caustics != "impostor_lightmap" || scene.lights.is_empty() || receivers.is_empty() {
+        return Vec::new();
+    }
+    let (dielectric, specular) = (dielectric_names(scene), specular_names(scene));
+    if specular.is_empty() {
+        return Vec::new();
+    }
+    let (receivers, specular) = (list(&receivers), list(&specular));
+    let mut passes = vec![PlannedPass::new(
+        IMPOSTOR_LIGHTMAP_UV_MAP,
+        format!("uv cube map (light-map uv + receiver id + distance) around {specular} of receivers {receivers}"),
+    )];
+    if !dielectric.is_empty() {
+        passes.push(PlannedPass::new(
+            IMPOSTOR_LIGHTMAP_REFRACTOR_MAP,
+            format!("refractor map of {} for the photons' exit points", list(&dielectric)),
+        ));
+    }
+    passes.extend([
+        PlannedPass::new(
+            IMPOSTOR_LIGHTMAP_CAUSTIC_MAP,
+            format!("caustic map of {specular} from {} light(s): Hit() into the uv map", scene.lights.len()),
+        ),
+        PlannedPass::new(
+            IMPOSTOR_LIGHTMAP_SPLAT,
+            format!("Gaussian splats into the light maps of {receivers} (render.caustics = \"impostor_lightmap\")"),
+        ),
+    ]);
+    let apply =
+        PlannedPass::new(IMPOSTOR_LIGHTMAP_APPLY, format!("caustic irradiance of the light maps on {receivers}"));
+    let mut out: Vec<_> = passes.into_iter().map(|p| (Stage::Caustics, p)).collect();
+    out.push((Stage::Lighting, apply));
+    out
+}
+
+fn create(s: &mut Setup<'_>) -> Result<Box<dyn Technique>, RenderError> {
+    let p = params("impostor_lightmap", ImpostorLightmapParams::from_settings(&s.scene.render))?;
+    Ok(Box::new(ImpostorLightmap::new(s.ctx, p, s.scene, s.gpu, s.graph, s.frame_layout, s.targets)?))
+}
+
+impl Technique for ImpostorLightmap {
+    fn record<'a>(&'a self, stage: Stage, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>) {
+        if stage == Stage::Lighting {
+            self.record_apply(frame, inputs.targets, inputs.frame_set);
+        } else {
+            self.record(frame, inputs.scene, inputs.frame_set);
+        }
+    }
+
+    fn begin_frame(&mut self) {
+        ImpostorLightmap::begin_frame(self);
+    }
+
+    fn objects_moved(&mut self, bounds: &[(Vec3, f32)]) {
+        ImpostorLightmap::objects_moved(self, bounds);
+    }
+}
 
 /// Caustic map and light maps: 32-bit float, so sums of many small splats stay exact.
 const MAP_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
@@ -138,7 +224,7 @@ pub struct Chart {
 }
 
 impl Chart {
-    /// The chart of a quad object (plan::lightmap_receivers: shape "quad", corners 0, 1, 2, 3
+    /// The chart of a quad object ([`lightmap_receivers`]: shape "quad", corners 0, 1, 2, 3
     /// counter-clockwise, src/scene/shapes.rs).
     pub fn of_quad(scene: &Scene, object: usize, face: u32) -> Chart {
         let p = &scene.objects[object].mesh.positions[4 * face as usize..];

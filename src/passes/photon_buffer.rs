@@ -51,9 +51,12 @@ use crate::graph::{Frame, FrameGraph, ImageId};
 use crate::passes::caustics_map::{is_specular, RefractorLayers};
 use crate::passes::nearby_impostors::{nearby_objects, rect_for};
 use crate::renderer::gpu_scene::GpuScene;
-use crate::renderer::plan::{PHOTON_BUFFER, PHOTON_BUFFER_FILTER, PHOTON_BUFFER_REFRACTORS, PHOTON_BUFFER_SCATTER};
 use crate::scene::techniques::{PhotonBufferParams, PhotonNormalization};
 use crate::scene::Scene;
+use crate::technique::{
+    caustic_objects, list, params, tables_and_placement, FrameInputs, PlannedPass, Registration, RenderError, Setup,
+    Stage, Technique,
+};
 use crate::{
     CAUSTIC_BINDING_BACK_NORMAL, CAUSTIC_BINDING_BACK_POSITION, CAUSTIC_BINDING_FACES, CAUSTIC_BINDING_FRONT_NORMAL,
     CAUSTIC_BINDING_FRONT_POSITION, CAUSTIC_BINDING_MATERIALS, PHOTON_BINDING_RECTS, PHOTON_PAPER, PHOTON_PHYSICAL,
@@ -62,6 +65,55 @@ use crate::{
 /// Photon buffer and caustic textures: 32-bit float, so that counts stay exact to 2^24
 /// photons per texel and (u, v) resolves far below a texel of the largest texture.
 pub const PHOTON_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
+
+pub const PHOTON_BUFFER_REFRACTORS: &str = "photon_buffer_refractors";
+pub const PHOTON_BUFFER: &str = "photon_buffer";
+pub const PHOTON_BUFFER_SCATTER: &str = "photon_buffer_scatter";
+pub const PHOTON_BUFFER_FILTER: &str = "photon_buffer_filter";
+
+/// `render.caustics = "photon_buffer"`, parameters `[render.photon_buffer]`.
+pub const TECHNIQUE: Registration = Registration {
+    key: "caustics = \"photon_buffer\"",
+    plan,
+    create,
+    inputs: |scene| tables_and_placement(scene, &["photon_buffer"]),
+};
+
+fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
+    let Some((diffuse, specular)) = caustic_objects(scene, "photon_buffer") else {
+        return Vec::new();
+    };
+    [
+        PlannedPass::new(
+            PHOTON_BUFFER_REFRACTORS,
+            format!("positions and normals of the specular {} seen from the light(s)", list(&specular)),
+        ),
+        PlannedPass::new(
+            PHOTON_BUFFER,
+            format!(
+                "photons through {} onto the rectangles of the receivers {} (render.caustics = \"photon_buffer\")",
+                list(&specular),
+                list(&diffuse)
+            ),
+        ),
+        PlannedPass::new(PHOTON_BUFFER_SCATTER, format!("photon counts in the caustic textures of {}", list(&diffuse))),
+        PlannedPass::new(PHOTON_BUFFER_FILTER, "filter of Hu & Qin 2007 §3.2"),
+    ]
+    .into_iter()
+    .map(|p| (Stage::Caustics, p))
+    .collect()
+}
+
+fn create(s: &mut Setup<'_>) -> Result<Box<dyn Technique>, RenderError> {
+    let p = params("photon_buffer", PhotonBufferParams::from_settings(&s.scene.render))?;
+    Ok(Box::new(PhotonBufferPass::new(s.ctx, p, s.scene, s.gpu, s.graph, s.photon_caustics)?))
+}
+
+impl Technique for PhotonBufferPass {
+    fn record<'a>(&'a self, _: Stage, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>) {
+        self.record(frame, inputs.scene, inputs.photon_caustics);
+    }
+}
 
 /// One receiver rectangle RECT_i (mirrors `PhotonRect` in glsl/include/photon_rect.glsl,
 /// std430).

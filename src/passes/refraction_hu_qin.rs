@@ -17,23 +17,165 @@
 //!   (`seed_samples`) and the iterative correction of Fig. 16 (`correction_iterations`,
 //!   `correction_tolerance`), the environment map where no rectangle is hit
 //!   (glsl/include/nearby.glsl); reflection and refraction are weighted by Fresnel.
-use std::sync::Arc;
 
-use crate::gpu::{DescriptorSet, DescriptorSetLayout, GpuContext, GpuResult, Sampler};
-use crate::graph::ImageId;
-use crate::graph::{Frame, FrameGraph};
-use crate::renderer::gpu_scene::GpuScene;
-use crate::renderer::plan::{REFRACTION_HU_QIN, REFRACTION_HU_QIN_LAYERS, REFRACTION_HU_QIN_NEARBY};
-use crate::renderer::targets::Targets;
-use crate::scene::techniques::HuQinParams;
-use crate::scene::Scene;
+use crate::gpu::GpuResult;
+use crate::graph::Frame;
+use crate::scene::techniques::{HuQinParams, RecursiveExit};
+use crate::scene::{Material, Scene};
+use crate::technique::{
+    dielectric_names, list, params, tables_and_placement, FrameInputs, PlannedPass, Registration, RenderError, Setup,
+    Stage, Technique,
+};
 use crate::{
     BINDING_GBUF_ALBEDO, BINDING_GBUF_DEPTH, BINDING_GBUF_NORMAL, BINDING_NEARBY_RECTS, BINDING_NEARBY_TEXTURE,
     BINDING_REFR_BACK_DEPTH, BINDING_REFR_BACK_NORMAL, BINDING_REFR_FRONT_DEPTH, BINDING_REFR_FRONT_NORMAL,
 };
 
-use super::nearby_impostors::{NearbyDesc, NearbyImpostors};
+use super::nearby_impostors::{
+    has_dielectric_rect, nearby_layout, needs_copy, NearbyDesc, NearbyImpostors, BACK_PASS, COPY_PASS, RECURSION_PASSES,
+};
 use super::refractor_layers::{DebugTarget, LayerKind, RefractorLayers, ShadeDesc, ShadePass};
+
+pub const REFRACTION_HU_QIN_LAYERS: &str = "refraction_hu_qin_layers";
+pub const REFRACTION_HU_QIN: &str = "refraction_hu_qin";
+/// §2.2: TEX_i of the nearby objects' impostor rectangles, before the shading that looks
+/// them up.
+pub const REFRACTION_HU_QIN_NEARBY: &str = "refraction_hu_qin_nearby";
+
+/// `render.refraction = "hu_qin"`, parameters `[render.hu_qin]`.
+pub const TECHNIQUE: Registration = Registration {
+    key: "refraction = \"hu_qin\"",
+    plan,
+    create,
+    inputs: |scene| tables_and_placement(scene, &["hu_qin"]),
+};
+
+fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
+    let dielectric = dielectric_names(scene);
+    if dielectric.is_empty() || scene.render.refraction != "hu_qin" {
+        return Vec::new();
+    }
+    let mut passes = nearby_plan(scene);
+    passes.push(PlannedPass::new(
+        REFRACTION_HU_QIN_LAYERS,
+        format!(
+            "back and front faces (depth, normal) of dielectric {} (render.refraction = \"hu_qin\")",
+            list(&dielectric)
+        ),
+    ));
+    passes.push(PlannedPass::new(
+        REFRACTION_HU_QIN,
+        format!("two-interface refraction of {} (binary search and iterative d_T, Hu & Qin 2007)", list(&dielectric)),
+    ));
+    passes.into_iter().map(|p| (Stage::Refraction, p)).collect()
+}
+
+/// §2.2: the impostor textures, when `render.hu_qin.nearby` is on and a dielectric has other
+/// objects to stand in for; §2.2.1's recursion levels when a rectangle stands for a specular
+/// object (another dielectric, a mirror or a conductor).
+fn nearby_plan(scene: &Scene) -> Vec<PlannedPass> {
+    let params = HuQinParams::from_settings(&scene.render).unwrap_or_default();
+    if !params.nearby {
+        return Vec::new();
+    }
+    let layout = nearby_layout(scene, params.recursion_depth);
+    if layout.rects.is_empty() {
+        return Vec::new();
+    }
+    let name = |i: usize| scene.objects[i].name.clone();
+    let sets: Vec<String> = layout
+        .sets
+        .iter()
+        .map(|s| {
+            let kept: Vec<String> =
+                layout.rects[s.first as usize..(s.first + s.count) as usize].iter().map(|r| name(r.object)).collect();
+            let mut t = format!("{} sees {}", name(s.object), list(&kept));
+            if !s.dropped.is_empty() {
+                let dropped: Vec<String> = s.dropped.iter().map(|&i| name(i)).collect();
+                t += &format!(
+                    " ({} left to the environment map: at most {} rectangles, the nearest are kept)",
+                    list(&dropped),
+                    crate::MAX_NEARBY_RECTS
+                );
+            }
+            t
+        })
+        .collect();
+    let mut reason = format!(
+        "impostor rectangles + textures for the refracted and reflected rays (Hu & Qin 2007 §2.2): {}",
+        sets.join("; ")
+    );
+    if !layout.without_set.is_empty() {
+        let names: Vec<String> = layout.without_set.iter().map(|&i| name(i)).collect();
+        reason += &format!(
+            "; {} without a rectangle set of its own (at most {} sets): environment only",
+            list(&names),
+            crate::MAX_NEARBY_SETS
+        );
+    }
+    let mut passes = Vec::new();
+    if params.recursive_exit.uses_layers() && has_dielectric_rect(scene, &layout) {
+        let names: Vec<String> = layout
+            .rects
+            .iter()
+            .filter(|r| matches!(scene.materials[scene.objects[r.object].material], Material::Dielectric { .. }))
+            .map(|r| name(r.object))
+            .collect();
+        passes.push(PlannedPass::new(
+            BACK_PASS,
+            format!(
+                "{} faces (normal, depth) of dielectric impostor(s) {} in their rectangles' projections: the exit \
+                 surfaces of their refraction (Hu & Qin 2007 §2.1 in §2.2.1's textures; \
+                 render.hu_qin.recursive_exit = \"{}\")",
+                if params.recursive_exit == RecursiveExit::Full { "back and front" } else { "back" },
+                list(&names),
+                params.recursive_exit.name()
+            ),
+        ));
+    }
+    passes.push(PlannedPass::new(REFRACTION_HU_QIN_NEARBY, reason));
+    if needs_copy(scene, &layout) {
+        passes.push(PlannedPass::new(
+            COPY_PASS,
+            "level 0's diffuse impostor textures copied into the recursion's other array: they do not \
+             change between levels, which re-render only the specular ones (Hu & Qin 2007 §2.2.1)",
+        ));
+    }
+    for level in 1..=layout.levels {
+        passes.push(PlannedPass::new(
+            RECURSION_PASSES[level as usize - 1],
+            format!(
+                "recursion level {level} of {} (render.hu_qin.recursion_depth): the mirrors, conductors and \
+                 dielectrics among the impostors reflect and refract the impostors of level {} of their own \
+                 rectangle sets (Hu & Qin 2007 §2.2.1)",
+                params.recursion_depth,
+                level - 1
+            ),
+        ));
+    }
+    passes
+}
+
+fn create(s: &mut Setup<'_>) -> Result<Box<dyn Technique>, RenderError> {
+    let p = params("hu_qin", HuQinParams::from_settings(&s.scene.render))?;
+    Ok(Box::new(HuQinPass::new(s, p)?))
+}
+
+impl Technique for HuQinPass {
+    fn record<'a>(&'a self, _: Stage, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>) {
+        let (scene, frame_set) = (inputs.scene, inputs.frame_set);
+        if !self.nearby.is_empty() {
+            self.nearby.record(frame, scene, frame_set, inputs.shadow_atlas);
+        }
+        self.layers.record(frame, scene, inputs.targets, frame_set);
+        self.shade.record(frame, scene.environment_id, frame_set);
+    }
+
+    /// P2 and T2 (with `debug = true`), see [`ShadePass`].
+    fn debug_targets(&self) -> &[DebugTarget] {
+        &self.shade.debug
+    }
+}
 
 pub struct HuQinPass {
     /// The impostors (a stand-in without nearby objects or with `nearby = false`).
@@ -44,18 +186,10 @@ pub struct HuQinPass {
 }
 
 impl HuQinPass {
-    #[allow(clippy::too_many_arguments)]
-    pub fn new(
-        ctx: &Arc<GpuContext>,
-        params: HuQinParams,
-        scene: &Scene,
-        gpu: &GpuScene,
-        graph: &mut FrameGraph,
-        frame_layout: &DescriptorSetLayout,
-        targets: &Targets,
-        nearest: &Sampler,
-    ) -> GpuResult<Self> {
-        // The same rule as plan.rs (REFRACTION_HU_QIN_NEARBY): rectangles only when asked for.
+    pub fn new(s: &mut Setup<'_>, params: HuQinParams) -> GpuResult<Self> {
+        let (ctx, scene, gpu, frame_layout) = (s.ctx, s.scene, s.gpu, s.frame_layout);
+        let graph = &mut *s.graph;
+        // The same rule as the plan's REFRACTION_HU_QIN_NEARBY: rectangles only when asked for.
         let nearby = if params.nearby {
             let desc = NearbyDesc {
                 resolution: params.impostor_resolution,
@@ -71,18 +205,9 @@ impl HuQinPass {
         } else {
             NearbyImpostors::stand_in(ctx, REFRACTION_HU_QIN_NEARBY, gpu, graph, frame_layout)?
         };
-        let layers = RefractorLayers::new(
-            ctx,
-            REFRACTION_HU_QIN_LAYERS,
-            &[LayerKind::BackNearest, LayerKind::Front],
-            None,
-            scene,
-            gpu,
-            graph,
-            frame_layout,
-            targets,
-            nearest,
-        )?;
+        let layers =
+            RefractorLayers::new(s, REFRACTION_HU_QIN_LAYERS, &[LayerKind::BackNearest, LayerKind::Front], None)?;
+        let (graph, targets, nearest) = (&mut *s.graph, s.targets, s.nearest);
         let (b, f) = (&layers.layers[0], &layers.layers[1]);
         let shade = ShadePass::new(
             ctx,
@@ -118,25 +243,5 @@ impl HuQinPass {
             nearest,
         )?;
         Ok(HuQinPass { nearby, layers, shade, params })
-    }
-
-    pub fn record<'a>(
-        &'a self,
-        frame: &mut Frame<'_, 'a>,
-        scene: &'a GpuScene,
-        targets: &Targets,
-        frame_set: DescriptorSet,
-        shadow_atlas: Option<ImageId>,
-    ) {
-        if !self.nearby.is_empty() {
-            self.nearby.record(frame, scene, frame_set, shadow_atlas);
-        }
-        self.layers.record(frame, scene, targets, frame_set);
-        self.shade.record(frame, scene.environment_id, frame_set);
-    }
-
-    /// P2 and T2 (with `debug = true`), see [`ShadePass`].
-    pub fn debug_targets(&self) -> &[DebugTarget] {
-        &self.shade.debug
     }
 }

@@ -11,15 +11,15 @@
 //!   environment; TIR clamped to the critical angle and the silhouette fallback of §3.3.
 //!
 //! d_N is precomputed per vertex on the CPU ([`super::wyman_distance`]).
-use std::sync::Arc;
 
-use crate::gpu::{DescriptorSet, DescriptorSetLayout, GpuContext, GpuResult, Sampler};
-use crate::graph::{Frame, FrameGraph};
-use crate::renderer::gpu_scene::GpuScene;
-use crate::renderer::plan::{REFRACTION_WYMAN, REFRACTION_WYMAN_LAYERS};
-use crate::renderer::targets::Targets;
+use crate::gpu::GpuResult;
+use crate::graph::Frame;
 use crate::scene::techniques::{BackSurface, WymanParams};
 use crate::scene::{Material, Scene};
+use crate::technique::{
+    dielectric_names, list, params, tables_and_placement, FrameInputs, PlannedPass, Registration, RenderError, Setup,
+    Stage, Technique,
+};
 use crate::{
     BINDING_GBUF_DEPTH, BINDING_GBUF_NORMAL, BINDING_REFR_BACK_DEPTH, BINDING_REFR_BACK_NORMAL,
     BINDING_REFR_FRONT_NORMAL,
@@ -27,6 +27,52 @@ use crate::{
 
 use super::refractor_layers::{DebugTarget, LayerKind, RefractorLayers, ShadeDesc, ShadePass};
 use super::wyman_distance::distance_along_normals;
+
+pub const REFRACTION_WYMAN_LAYERS: &str = "refraction_wyman_layers";
+pub const REFRACTION_WYMAN: &str = "refraction_wyman";
+
+/// `render.refraction = "wyman"`, parameters `[render.wyman]`.
+pub const TECHNIQUE: Registration = Registration {
+    key: "refraction = \"wyman\"",
+    plan,
+    create,
+    inputs: |scene| tables_and_placement(scene, &["wyman"]),
+};
+
+fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
+    let dielectric = dielectric_names(scene);
+    if dielectric.is_empty() || scene.render.refraction != "wyman" {
+        return Vec::new();
+    }
+    let list = list(&dielectric);
+    let layers = PlannedPass::new(
+        REFRACTION_WYMAN_LAYERS,
+        format!(
+            "back surface (depth, normal) and front faces with d_N of dielectric {list} (render.refraction = \"wyman\")"
+        ),
+    );
+    let shade = PlannedPass::new(
+        REFRACTION_WYMAN,
+        format!("two-interface refraction of {list} (d_V/d_N interpolation, Wyman 2005)"),
+    );
+    vec![(Stage::Refraction, layers), (Stage::Refraction, shade)]
+}
+
+fn create(s: &mut Setup<'_>) -> Result<Box<dyn Technique>, RenderError> {
+    let p = params("wyman", WymanParams::from_settings(&s.scene.render))?;
+    Ok(Box::new(WymanPass::new(s, p)?))
+}
+
+impl Technique for WymanPass {
+    fn record<'a>(&'a self, _: Stage, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>) {
+        self.layers.record(frame, inputs.scene, inputs.targets, inputs.frame_set);
+        self.shade.record(frame, inputs.scene.environment_id, inputs.frame_set);
+    }
+
+    fn debug_targets(&self) -> &[DebugTarget] {
+        &self.shade.debug
+    }
+}
 
 pub struct WymanPass {
     layers: RefractorLayers,
@@ -48,34 +94,14 @@ pub fn scene_distance_along_normals(scene: &Scene) -> Vec<f32> {
 }
 
 impl WymanPass {
-    #[allow(clippy::too_many_arguments)]
-    pub fn new(
-        ctx: &Arc<GpuContext>,
-        params: WymanParams,
-        scene: &Scene,
-        gpu: &GpuScene,
-        graph: &mut FrameGraph,
-        frame_layout: &DescriptorSetLayout,
-        targets: &Targets,
-        nearest: &Sampler,
-    ) -> GpuResult<Self> {
+    pub fn new(s: &mut Setup<'_>, params: WymanParams) -> GpuResult<Self> {
+        let (ctx, scene, frame_layout, targets, nearest) = (s.ctx, s.scene, s.frame_layout, s.targets, s.nearest);
         let back = match params.back_surface {
             BackSurface::Furthest => LayerKind::BackFurthest,
             BackSurface::Second => LayerKind::Second,
         };
         let d_n = scene_distance_along_normals(scene);
-        let layers = RefractorLayers::new(
-            ctx,
-            REFRACTION_WYMAN_LAYERS,
-            &[back, LayerKind::Front],
-            Some(&d_n),
-            scene,
-            gpu,
-            graph,
-            frame_layout,
-            targets,
-            nearest,
-        )?;
+        let layers = RefractorLayers::new(s, REFRACTION_WYMAN_LAYERS, &[back, LayerKind::Front], Some(&d_n))?;
         let (b, f) = (&layers.layers[0], &layers.layers[1]);
         let shade = ShadePass::new(
             ctx,
@@ -93,27 +119,11 @@ impl WymanPass {
                 specialization: &[],
                 debug: params.debug,
             },
-            graph,
+            s.graph,
             frame_layout,
             targets,
             nearest,
         )?;
         Ok(WymanPass { layers, shade, params })
-    }
-
-    pub fn record<'a>(
-        &'a self,
-        frame: &mut Frame<'_, 'a>,
-        scene: &'a GpuScene,
-        targets: &Targets,
-        frame_set: DescriptorSet,
-    ) {
-        self.layers.record(frame, scene, targets, frame_set);
-        self.shade.record(frame, scene.environment_id, frame_set);
-    }
-
-    /// P2 and T2 (with `debug = true`), see [`ShadePass`].
-    pub fn debug_targets(&self) -> &[DebugTarget] {
-        &self.shade.debug
     }
 }

@@ -26,6 +26,7 @@ use crate::graph::{Frame, FrameGraph, ImageId};
 use crate::renderer::gpu_scene::{Draw, GpuScene};
 use crate::renderer::targets::{Targets, DEPTH_FORMAT, HDR_FORMAT};
 use crate::scene::{Material, Scene};
+use crate::technique::Setup;
 use crate::{BINDING_GBUF_DEPTH, BINDING_REFR_DN, LAYER_BACK_FURTHEST, LAYER_BACK_NEAREST, LAYER_FRONT, LAYER_SECOND};
 
 /// Normal (and d_N) layers are 32-bit float like the radiance: P2's error should be the
@@ -108,19 +109,10 @@ pub fn refractor_draws(scene: &Scene, gpu: &GpuScene) -> Vec<Draw> {
 
 impl RefractorLayers {
     /// `d_n`: one f32 per scene vertex (in GpuScene's order), written to the layers' w.
-    #[allow(clippy::too_many_arguments)]
-    pub fn new(
-        ctx: &Arc<GpuContext>,
-        name: &'static str,
-        kinds: &[LayerKind],
-        d_n: Option<&[f32]>,
-        scene: &Scene,
-        gpu: &GpuScene,
-        graph: &mut FrameGraph,
-        frame_layout: &DescriptorSetLayout,
-        targets: &Targets,
-        nearest: &Sampler,
-    ) -> GpuResult<Self> {
+    pub fn new(s: &mut Setup<'_>, name: &'static str, kinds: &[LayerKind], d_n: Option<&[f32]>) -> GpuResult<Self> {
+        let (ctx, scene, gpu, frame_layout, targets, nearest) =
+            (s.ctx, s.scene, s.gpu, s.frame_layout, s.targets, s.nearest);
+        let graph = &mut *s.graph;
         let render_pass = RenderPass::new(
             ctx,
             name,

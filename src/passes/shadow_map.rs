@@ -10,8 +10,36 @@ use crate::gpu::{
 use crate::graph::Frame;
 use crate::renderer::gpu_scene::{GpuScene, ShadowFace};
 use crate::renderer::gpu_types::ShadowPush;
-use crate::renderer::plan::SHADOW_MAP;
 use crate::renderer::targets::Targets;
+use crate::technique::{
+    describe_lights, diffuse_names, list, placement, FrameInputs, PlannedPass, Registration, RenderError, Setup, Stage,
+    Technique,
+};
+
+pub const SHADOW_MAP: &str = "shadow_map";
+
+/// Baseline: every light's shadow map, when a light has a diffuse receiver to shadow.
+pub const TECHNIQUE: Registration = Registration { key: SHADOW_MAP, plan, create, inputs: placement };
+
+fn plan(scene: &crate::scene::Scene) -> Vec<(Stage, PlannedPass)> {
+    let diffuse = diffuse_names(scene);
+    if scene.lights.is_empty() || diffuse.is_empty() {
+        return Vec::new();
+    }
+    let reason =
+        format!("{} cast shadows on the diffuse receivers {}", describe_lights(scene, " and "), list(&diffuse));
+    vec![(Stage::Shadows, PlannedPass::new(SHADOW_MAP, reason))]
+}
+
+fn create(s: &mut Setup<'_>) -> Result<Box<dyn Technique>, RenderError> {
+    Ok(Box::new(ShadowMapPass::new(s.ctx, s.gpu, s.targets)?))
+}
+
+impl Technique for ShadowMapPass {
+    fn record<'a>(&'a self, _: Stage, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>) {
+        self.record(frame, inputs.scene, inputs.targets);
+    }
+}
 
 /// Cleared distance: "no occluder in this direction".
 pub const FAR_DISTANCE: f32 = 3.0e38;

@@ -9,11 +9,62 @@ use std::sync::Arc;
 use crate::gpu::{DescriptorSet, DescriptorSetLayout, GpuContext, GpuResult, Sampler};
 use crate::graph::Frame;
 use crate::renderer::gpu_scene::GpuScene;
-use crate::renderer::plan::{REFLECTION_SINGLE, REFRACTION_SINGLE};
 use crate::renderer::targets::Targets;
+use crate::scene::Scene;
+use crate::technique::{
+    dielectric_names, list, metal_names, no_inputs, FrameInputs, PlannedPass, Registration, Stage, Technique,
+};
 use crate::{BINDING_GBUF_DEPTH, BINDING_GBUF_NORMAL, SPECULAR_MODE_REFLECTION, SPECULAR_MODE_REFRACTION};
 
 use super::fullscreen::{FullscreenDesc, FullscreenPass};
+
+pub const REFRACTION_SINGLE: &str = "refraction_single";
+pub const REFLECTION_SINGLE: &str = "reflection_single";
+
+/// `render.refraction = "single"`: the dielectrics' baseline.
+pub const REFRACTION: Registration = Registration {
+    key: "refraction = \"single\"",
+    plan: |scene| plan(scene, Mode::Refraction),
+    create: |s| Ok(Box::new(SpecularSinglePass::new(s.ctx, Mode::Refraction, s.frame_layout, s.targets, s.nearest)?)),
+    inputs: no_inputs,
+};
+
+/// `render.reflection = "single"`: the mirrors' and conductors' baseline.
+pub const REFLECTION: Registration = Registration {
+    key: "reflection = \"single\"",
+    plan: |scene| plan(scene, Mode::Reflection),
+    create: |s| Ok(Box::new(SpecularSinglePass::new(s.ctx, Mode::Reflection, s.frame_layout, s.targets, s.nearest)?)),
+    inputs: no_inputs,
+};
+
+fn plan(scene: &Scene, mode: Mode) -> Vec<(Stage, PlannedPass)> {
+    let (objects, selected, stage, name, what) = match mode {
+        Mode::Refraction => (
+            dielectric_names(scene),
+            &scene.render.refraction,
+            Stage::Refraction,
+            REFRACTION_SINGLE,
+            "dielectric {} (render.refraction = \"single\")",
+        ),
+        Mode::Reflection => (
+            metal_names(scene),
+            &scene.render.reflection,
+            Stage::Reflection,
+            REFLECTION_SINGLE,
+            "mirror/conductor {} (render.reflection = \"single\")",
+        ),
+    };
+    if objects.is_empty() || selected != "single" {
+        return Vec::new();
+    }
+    vec![(stage, PlannedPass::new(name, what.replace("{}", &list(&objects))))]
+}
+
+impl Technique for SpecularSinglePass {
+    fn record<'a>(&'a self, _: Stage, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>) {
+        self.record(frame, inputs.scene, inputs.targets, inputs.frame_set);
+    }
+}
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Mode {

@@ -33,22 +33,76 @@
 //! Gaussian pyramid; this is the global curve), glare, the loss of colour in scotopic and
 //! mesopic vision, and the loss of visual acuity. [`crate::app::output::tonemap_adaptive`] is
 //! the same operator on the CPU (compare, report, reference PNGs).
-use std::sync::Arc;
 
 use crate::gpu::{
-    vk, Access, Buffer, ComputePipeline, DescriptorSet, DescriptorSetLayout, DescriptorWrite, GpuContext, GpuResult,
-    Image, ImageDesc, MemoryLocation, PipelineLayout, Sampler,
+    vk, Access, Buffer, ComputePipeline, DescriptorSet, DescriptorSetLayout, DescriptorWrite, GpuResult, Image,
+    ImageDesc, MemoryLocation, PipelineLayout,
 };
-use crate::graph::{BufferId, Frame, FrameGraph, ImageId};
-use crate::renderer::plan::{TONEMAP, TONEMAP_ADAPT, TONEMAP_LOG_AVERAGE};
+use crate::graph::{BufferId, Frame, ImageId};
 use crate::renderer::targets::Targets;
 use crate::scene::techniques::TonemapAdaptiveParams;
+use crate::scene::Scene;
+use crate::technique::{params, tables, FrameInputs, PlannedPass, Registration, RenderError, Setup, Stage, Technique};
 use crate::{
     BINDING_HDR, BINDING_TONEMAP_STATE, TONEMAP_BINDING_HDR, TONEMAP_BINDING_PARTIALS, TONEMAP_BINDING_STATE,
     TONEMAP_BINDING_STATS, TONEMAP_BLOCK, TONEMAP_GROUP,
 };
 
 use super::fullscreen::{FullscreenDesc, FullscreenPass};
+
+pub const TONEMAP: &str = "tonemap";
+/// The adaptive tone map (`render.tonemap = "adaptive"`): the log-average luminance by a
+/// reduction on the GPU, then the adaptation state.
+pub const TONEMAP_LOG_AVERAGE: &str = "tonemap_log_average";
+pub const TONEMAP_ADAPT: &str = "tonemap_adapt";
+
+/// Baseline: every frame ends in the tone map, `render.tonemap = "clamp"` or `"adaptive"`
+/// (parameters `[render.tonemap_adaptive]`).
+pub const TECHNIQUE: Registration = Registration {
+    key: TONEMAP,
+    plan,
+    create,
+    // The adaptive tone map starts from the exposure; the clamp reads it from the uniforms.
+    inputs: |scene| match scene.render.tonemap.as_str() {
+        "adaptive" => format!("{} {}", scene.render.exposure, tables(scene, &["tonemap_adaptive"])),
+        _ => String::new(),
+    },
+};
+
+fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
+    let passes = if scene.render.tonemap == "adaptive" {
+        vec![
+            PlannedPass::new(
+                TONEMAP_LOG_AVERAGE,
+                "log-average luminance of the HDR image, reduced on the GPU (render.tonemap = \"adaptive\")",
+            ),
+            PlannedPass::new(
+                TONEMAP_ADAPT,
+                "adapted luminance, key and L_white (Krawczyk et al. 2005, Ihrke et al. 2007 §5.3)",
+            ),
+            PlannedPass::new(TONEMAP, "linear radiance -> sRGB: Reinhard's operator on the adapted luminance"),
+        ]
+    } else {
+        vec![PlannedPass::new(TONEMAP, "linear radiance -> sRGB PNG output")]
+    };
+    passes.into_iter().map(|p| (Stage::Tonemap, p)).collect()
+}
+
+fn create(s: &mut Setup<'_>) -> Result<Box<dyn Technique>, RenderError> {
+    let adaptive = if s.planned(TONEMAP_ADAPT) {
+        let p = params("tonemap_adaptive", TonemapAdaptiveParams::from_settings(&s.scene.render))?;
+        Some((p, s.scene.render.exposure))
+    } else {
+        None
+    };
+    Ok(Box::new(TonemapPass::new(s, adaptive)?))
+}
+
+impl Technique for TonemapPass {
+    fn record<'a>(&'a self, _: Stage, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>) {
+        self.record(frame, inputs.targets, inputs.frame_set, inputs.slot, inputs.dt);
+    }
+}
 
 /// Push constants of glsl/tonemap/log_average.comp and adapt.comp (`AdaptPush`, std430).
 #[repr(C)]
@@ -103,17 +157,10 @@ pub struct TonemapPass {
 
 impl TonemapPass {
     /// The clamp tone map, or with `adaptive = Some((params, exposure))` the adaptive one
-    /// with its reduction (`slots`: frames in flight, one statistics entry each).
-    #[allow(clippy::too_many_arguments)]
-    pub fn new(
-        ctx: &Arc<GpuContext>,
-        frame_layout: &DescriptorSetLayout,
-        targets: &Targets,
-        nearest: &Sampler,
-        graph: &mut FrameGraph,
-        adaptive: Option<(TonemapAdaptiveParams, f32)>,
-        slots: usize,
-    ) -> GpuResult<Self> {
+    /// with its reduction (one statistics entry per frame in flight).
+    pub fn new(s: &mut Setup<'_>, adaptive: Option<(TonemapAdaptiveParams, f32)>) -> GpuResult<Self> {
+        let (ctx, frame_layout, targets, nearest, slots) = (s.ctx, s.frame_layout, s.targets, s.nearest, s.slots);
+        let graph = &mut *s.graph;
         let Some((params, exposure)) = adaptive else {
             let pass = FullscreenPass::new(
                 ctx,

@@ -133,6 +133,103 @@ pub fn cube_face_views(eye: Vec3) -> [Mat4; 6] {
     ]
 }
 
+/// Every object's world-space mesh, concatenated: vertices, indices, one draw per object, and
+/// the bounding sphere (centre, radius) of the objects and the camera.
+fn geometry(scene: &Scene) -> (Vec<Vertex>, Vec<u32>, Vec<Draw>, Vec3, f32) {
+    let mut vertices: Vec<Vertex> = Vec::new();
+    let mut indices: Vec<u32> = Vec::new();
+    let mut draws = Vec::new();
+    let (mut lo, mut hi) = (scene.camera.position, scene.camera.position);
+    for o in &scene.objects {
+        let m = &o.mesh;
+        draws.push(Draw {
+            first_index: indices.len() as u32,
+            index_count: m.indices.len() as u32,
+            vertex_offset: vertices.len() as i32,
+            material: o.material as u32,
+        });
+        for k in 0..m.positions.len() {
+            let p = m.positions[k];
+            lo = lo.min(p);
+            hi = hi.max(p);
+            vertices.push(Vertex {
+                position: p.to_array(),
+                normal: m.normals[k].to_array(),
+                checker_uv: m.checker_uv.get(k).copied().unwrap_or_default().to_array(),
+            });
+        }
+        indices.extend_from_slice(&m.indices);
+    }
+    let bounds_center = (lo + hi) * 0.5;
+    let bounds_radius = ((hi - lo).length() * 0.5).max(1e-6);
+    (vertices, indices, draws, bounds_center, bounds_radius)
+}
+
+/// The lights' uniforms and their shadow faces; each light owns SHADOW_LAYERS_PER_LIGHT atlas
+/// layers.
+fn lights(
+    scene: &Scene,
+    bounds_center: Vec3,
+    bounds_radius: f32,
+    shadow_size: u32,
+) -> (Vec<GpuLight>, Vec<ShadowFace>) {
+    let mut lights = Vec::new();
+    let mut shadow_faces = Vec::new();
+    let texel = 2.0 / shadow_size.max(1) as f32;
+    for (i, l) in scene.lights.iter().enumerate() {
+        let base = i as u32 * SHADOW_LAYERS_PER_LIGHT;
+        match l {
+            Light::Point { position, intensity } => {
+                // Near/far bound every object from the light; near is small relative to
+                // the scene so that tiny and huge scenes behave alike.
+                let far = (position.distance(bounds_center) + bounds_radius) * 1.01;
+                let near = (far * 1e-4).max(1e-9);
+                let proj = Mat4::perspective_rh(std::f32::consts::FRAC_PI_2, 1.0, near, far);
+                for (f, view) in cube_face_views(*position).iter().enumerate() {
+                    shadow_faces.push(ShadowFace {
+                        layer: base + f as u32,
+                        view_proj: proj * *view,
+                        light: v4(*position, LIGHT_POINT as f32),
+                        origin: [0.0; 4],
+                    });
+                }
+                lights.push(GpuLight {
+                    position: v4(*position, LIGHT_POINT as f32),
+                    intensity: v4(*intensity, base as f32),
+                    // A cube texel at distance r spans about 2r/size: offset by 1.5 texels.
+                    shadow: [near, far, 1.5 * texel, 1.0 / shadow_size.max(1) as f32],
+                    origin: [0.0; 4],
+                    view_proj: Mat4::IDENTITY.to_cols_array_2d(),
+                });
+            }
+            Light::Directional { direction, irradiance } => {
+                let dir = direction.normalize();
+                let r = bounds_radius * 1.01;
+                let origin = bounds_center - dir * r;
+                let up = if dir.y.abs() > 0.99 { Vec3::Z } else { Vec3::Y };
+                let view = Mat4::look_at_rh(origin, origin + dir, up);
+                let proj = Mat4::orthographic_rh(-r, r, -r, r, 0.0, 2.0 * r);
+                let view_proj = proj * view;
+                shadow_faces.push(ShadowFace {
+                    layer: base,
+                    view_proj,
+                    light: v4(dir, LIGHT_DIRECTIONAL as f32),
+                    origin: v4(origin, 0.0),
+                });
+                lights.push(GpuLight {
+                    position: v4(dir, LIGHT_DIRECTIONAL as f32),
+                    intensity: v4(*irradiance, base as f32),
+                    // A texel spans 2r/size metres: offset by 1.5 texels.
+                    shadow: [0.0, 2.0 * r, 1.5 * 2.0 * r / shadow_size.max(1) as f32, 1.0 / shadow_size.max(1) as f32],
+                    origin: v4(origin, 0.0),
+                    view_proj: view_proj.to_cols_array_2d(),
+                });
+            }
+        }
+    }
+    (lights, shadow_faces)
+}
+
 impl GpuScene {
     pub fn new(
         ctx: &Arc<GpuContext>,
@@ -146,33 +243,7 @@ impl GpuScene {
                 scene.lights.len()
             )));
         }
-        // Geometry: concatenate every object's world-space mesh.
-        let mut vertices: Vec<Vertex> = Vec::new();
-        let mut indices: Vec<u32> = Vec::new();
-        let mut draws = Vec::new();
-        let (mut lo, mut hi) = (scene.camera.position, scene.camera.position);
-        for o in &scene.objects {
-            let m = &o.mesh;
-            draws.push(Draw {
-                first_index: indices.len() as u32,
-                index_count: m.indices.len() as u32,
-                vertex_offset: vertices.len() as i32,
-                material: o.material as u32,
-            });
-            for k in 0..m.positions.len() {
-                let p = m.positions[k];
-                lo = lo.min(p);
-                hi = hi.max(p);
-                vertices.push(Vertex {
-                    position: p.to_array(),
-                    normal: m.normals[k].to_array(),
-                    checker_uv: m.checker_uv.get(k).copied().unwrap_or_default().to_array(),
-                });
-            }
-            indices.extend_from_slice(&m.indices);
-        }
-        let bounds_center = (lo + hi) * 0.5;
-        let bounds_radius = ((hi - lo).length() * 0.5).max(1e-6);
+        let (vertices, indices, draws, bounds_center, bounds_radius) = geometry(scene);
         // Host-visible buffers: written once here, read by the GPU after the submission that
         // follows (host writes are visible to every later queue submission).
         let vertices = Buffer::with_data(
@@ -229,66 +300,7 @@ impl GpuScene {
         })?;
         drop(staging);
 
-        // Lights and their shadow faces. Each light owns SHADOW_LAYERS_PER_LIGHT atlas layers.
-        let mut lights = Vec::new();
-        let mut shadow_faces = Vec::new();
-        let texel = 2.0 / shadow_size.max(1) as f32;
-        for (i, l) in scene.lights.iter().enumerate() {
-            let base = i as u32 * SHADOW_LAYERS_PER_LIGHT;
-            match l {
-                Light::Point { position, intensity } => {
-                    // Near/far bound every object from the light; near is small relative to
-                    // the scene so that tiny and huge scenes behave alike.
-                    let far = (position.distance(bounds_center) + bounds_radius) * 1.01;
-                    let near = (far * 1e-4).max(1e-9);
-                    let proj = Mat4::perspective_rh(std::f32::consts::FRAC_PI_2, 1.0, near, far);
-                    for (f, view) in cube_face_views(*position).iter().enumerate() {
-                        shadow_faces.push(ShadowFace {
-                            layer: base + f as u32,
-                            view_proj: proj * *view,
-                            light: v4(*position, LIGHT_POINT as f32),
-                            origin: [0.0; 4],
-                        });
-                    }
-                    lights.push(GpuLight {
-                        position: v4(*position, LIGHT_POINT as f32),
-                        intensity: v4(*intensity, base as f32),
-                        // A cube texel at distance r spans about 2r/size: offset by 1.5 texels.
-                        shadow: [near, far, 1.5 * texel, 1.0 / shadow_size.max(1) as f32],
-                        origin: [0.0; 4],
-                        view_proj: Mat4::IDENTITY.to_cols_array_2d(),
-                    });
-                }
-                Light::Directional { direction, irradiance } => {
-                    let dir = direction.normalize();
-                    let r = bounds_radius * 1.01;
-                    let origin = bounds_center - dir * r;
-                    let up = if dir.y.abs() > 0.99 { Vec3::Z } else { Vec3::Y };
-                    let view = Mat4::look_at_rh(origin, origin + dir, up);
-                    let proj = Mat4::orthographic_rh(-r, r, -r, r, 0.0, 2.0 * r);
-                    let view_proj = proj * view;
-                    shadow_faces.push(ShadowFace {
-                        layer: base,
-                        view_proj,
-                        light: v4(dir, LIGHT_DIRECTIONAL as f32),
-                        origin: v4(origin, 0.0),
-                    });
-                    lights.push(GpuLight {
-                        position: v4(dir, LIGHT_DIRECTIONAL as f32),
-                        intensity: v4(*irradiance, base as f32),
-                        // A texel spans 2r/size metres: offset by 1.5 texels.
-                        shadow: [
-                            0.0,
-                            2.0 * r,
-                            1.5 * 2.0 * r / shadow_size.max(1) as f32,
-                            1.0 / shadow_size.max(1) as f32,
-                        ],
-                        origin: v4(origin, 0.0),
-                        view_proj: view_proj.to_cols_array_2d(),
-                    });
-                }
-            }
-        }
+        let (lights, shadow_faces) = lights(scene, bounds_center, bounds_radius, shadow_size);
         Ok(GpuScene {
             vertices,
             indices,
@@ -302,6 +314,19 @@ impl GpuScene {
             bounds_center,
             bounds_radius,
         })
+    }
+
+    /// Objects and lights moved, or meshes changed shape with the same vertex and index
+    /// counts (the water's heightfield over time): rewrite the vertices in place and derive
+    /// the bounds, the lights and the shadow faces again. The caller waits for the GPU first
+    /// and has checked that the topology is unchanged.
+    pub fn update_placement(&mut self, scene: &Scene, shadow_size: u32) {
+        let (vertices, _, _, center, radius) = geometry(scene);
+        let bytes: &[u8] = bytemuck::cast_slice(&vertices);
+        assert_eq!(bytes.len(), self.vertices.read().len(), "update_placement with a changed topology");
+        self.vertices.write(0, bytes);
+        (self.bounds_center, self.bounds_radius) = (center, radius);
+        (self.lights, self.shadow_faces) = lights(scene, center, radius, shadow_size);
     }
 }
 

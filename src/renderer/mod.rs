@@ -6,39 +6,36 @@ pub mod gpu_scene;
 pub mod gpu_types;
 pub mod plan;
 pub mod targets;
+mod update;
+
+pub use update::Update;
 
 use std::sync::Arc;
 
 use glam::{Mat4, Vec3};
 
 use crate::gpu::{
-    vk, Access, Buffer, CommandPool, DescriptorSet, DescriptorSetLayout, DescriptorWrite, GpuContext, GpuError, Image,
+    vk, Access, Buffer, CommandPool, DescriptorSet, DescriptorSetLayout, DescriptorWrite, GpuContext, Image,
     MemoryLocation, Sampler, SamplerDesc, SubmitSync, TimestampPool, TimestampQuery,
 };
 use crate::graph::{Frame, FrameGraph, ImageId};
 use crate::passes::caustics_map::CausticsMapPass;
-use crate::passes::deferred_shading::DeferredShadingPass;
 use crate::passes::distance_impostor::{object_bounds, ImpostorMap, ImpostorReflection, ImpostorRefraction};
 use crate::passes::eikonal::EikonalPass;
-use crate::passes::gbuffer::GBufferPass;
 use crate::passes::impostor_lightmap::ImpostorLightmap;
 use crate::passes::photon_buffer::{PhotonBufferPass, PhotonCaustics};
-use crate::passes::refraction_hu_qin::HuQinPass;
-use crate::passes::refraction_wyman::WymanPass;
 use crate::passes::refractor_layers::DebugTarget;
-use crate::passes::shadow_map::{ShadowMapPass, FAR_DISTANCE};
-use crate::passes::specular_single::{Mode, SpecularSinglePass};
+use crate::passes::shadow_map::FAR_DISTANCE;
 use crate::passes::tonemap::{AdaptiveStats, TonemapPass};
-use crate::scene::techniques::{
-    CausticsMapParams, EikonalParams, Flux, HuQinParams, ImpostorLightmapParams, ImpostorParams, PhotonBufferParams,
-    TonemapAdaptiveParams, WymanParams,
-};
+use crate::scene::techniques::{Flux, PhotonBufferParams};
 use crate::scene::{Camera, Scene};
+use crate::technique::{FrameInputs, Recipe, Setup, Technique, TECHNIQUES};
 use crate::{
     BINDING_CAUSTIC_2D, BINDING_CAUSTIC_CUBE, BINDING_ENVIRONMENT, BINDING_FRAME, BINDING_MATERIALS,
     BINDING_PHOTON_CAUSTICS, BINDING_PHOTON_RECTS, BINDING_SHADOW_2D, BINDING_SHADOW_CUBE,
 };
 
+pub use crate::technique::RenderError;
 use gpu_scene::GpuScene;
 use gpu_types::FrameUniforms;
 use plan::PlannedPass;
@@ -56,17 +53,6 @@ pub const EXTRA_TIMED_PASSES: usize = 4;
 pub struct FinalImage<'a> {
     pub ldr: &'a Image,
     pub ldr_id: ImageId,
-}
-
-#[derive(Debug, thiserror::Error)]
-pub enum RenderError {
-    #[error(transparent)]
-    Gpu(#[from] GpuError),
-    #[error("{0}")]
-    Limit(String),
-    /// A technique parameter (`[render.<technique>]`) that is unknown or out of range.
-    #[error("render.{technique}.{}: {error}", error.key)]
-    Param { technique: &'static str, error: crate::scene::techniques::ParamError },
 }
 
 /// GPU time of one pass in one frame, in milliseconds from the frame's first timestamp.
@@ -104,36 +90,13 @@ impl FrameTiming {
     }
 }
 
-struct Passes {
-    shadow_map: Option<ShadowMapPass>,
-    caustics_map: Option<CausticsMapPass>,
-    photon_buffer: Option<PhotonBufferPass>,
-    /// Hu & Qin 2007 §3's caustic textures and rectangles (a stand-in without photon_buffer).
-    photon_caustics: PhotonCaustics,
-    gbuffer: GBufferPass,
-    deferred: DeferredShadingPass,
-    refraction_single: Option<SpecularSinglePass>,
-    reflection_single: Option<SpecularSinglePass>,
-    refraction_wyman: Option<WymanPass>,
-    refraction_hu_qin: Option<HuQinPass>,
-    refraction_impostor: Option<ImpostorRefraction>,
-    reflection_impostor: Option<ImpostorReflection>,
-    impostor_lightmap: Option<ImpostorLightmap>,
-    eikonal: Option<EikonalPass>,
-    tonemap: TonemapPass,
-}
-
-impl Passes {
-    /// The debug targets of the refraction techniques that have them enabled.
-    fn debug_targets(&self) -> impl Iterator<Item = &DebugTarget> {
-        let wyman = self.refraction_wyman.iter().flat_map(|p| p.debug_targets());
-        wyman.chain(self.refraction_hu_qin.iter().flat_map(|p| p.debug_targets()))
-    }
-}
-
 pub struct Renderer {
-    // Field order matters for drop: passes and GPU data before the context they came from.
-    passes: Passes,
+    // Field order matters for drop: techniques and GPU data before the context they came from.
+    /// One slot per entry of [`TECHNIQUES`]; `None` where the scene plans none of its passes.
+    techniques: Vec<Option<Box<dyn Technique>>>,
+    /// Hu & Qin 2007 §3's caustic textures and rectangles (a stand-in without photon_buffer),
+    /// bound in the frame set.
+    photon_caustics: PhotonCaustics,
     frame_sets: Vec<DescriptorSet>,
     /// Owns the pool the frame sets come from; kept alive for them.
     _frame_layout: DescriptorSetLayout,
@@ -144,7 +107,18 @@ pub struct Renderer {
     timestamps: Vec<TimestampPool>,
     commands: CommandPool,
     graph: FrameGraph,
-    plan: Vec<PlannedPass>,
+    recipe: Recipe,
+    /// What [`Renderer::update`] compares a changed scene against: the shared resources'
+    /// fingerprint, and each technique's (`None`: not in the recipe).
+    shared_fingerprint: u64,
+    technique_fingerprints: Vec<Option<u64>>,
+    /// What the caustic atlas and the photon-buffer textures were made for.
+    caustic_size: Option<u32>,
+    photon_params: Option<PhotonBufferParams>,
+    /// The shaders each technique's pipelines were created from (for the hot reload).
+    technique_shaders: Vec<Vec<String>>,
+    /// [`crate::technique::placement`] of the scene the vertices and lights hold.
+    placement: String,
     /// Every object's vertex range and current (centre, bounding radius), for moving objects.
     objects: Vec<ObjectState>,
     uniforms: FrameUniforms,
@@ -191,27 +165,16 @@ pub fn camera_projection(vfov_deg: f32, aspect: f32, near: f32) -> Mat4 {
 
 impl Renderer {
     pub fn new(ctx: &Arc<GpuContext>, scene: &Scene) -> Result<Renderer, RenderError> {
-        let plan = plan::plan(scene);
+        let recipe = crate::technique::recipe(scene);
+        let plan = &recipe.passes;
         let mut graph = FrameGraph::new();
         let shadow_size = scene.render.shadow_map_size;
-        let shadowed = plan::has(&plan, plan::SHADOW_MAP);
+        let shadowed = plan::has(plan, crate::passes::shadow_map::SHADOW_MAP);
         let gpu_scene = GpuScene::new(ctx, scene, &mut graph, shadow_size)?;
-        let caustics_params = if plan::has(&plan, plan::CAUSTICS_MAP) {
-            Some(
-                CausticsMapParams::from_settings(&scene.render)
-                    .map_err(|error| RenderError::Param { technique: "caustics_map", error })?,
-            )
-        } else {
-            None
-        };
-        let photon_params = if plan::has(&plan, plan::PHOTON_BUFFER) {
-            Some(
-                PhotonBufferParams::from_settings(&scene.render)
-                    .map_err(|error| RenderError::Param { technique: "photon_buffer", error })?,
-            )
-        } else {
-            None
-        };
+        // The frame set binds the caustic atlas and the photon-buffer textures whether or not
+        // a caustic technique writes them; their sizes follow the technique's parameters.
+        let caustic_size = update::caustic_size(scene, &recipe)?;
+        let photon_params = update::photon_params(scene, &recipe)?;
         let photon_caustics = PhotonCaustics::new(ctx, &mut graph, scene, photon_params.as_ref())?;
         let targets = Targets::new(
             ctx,
@@ -220,7 +183,7 @@ impl Renderer {
             scene.camera.height,
             if shadowed { scene.lights.len() as u32 } else { 0 },
             shadow_size,
-            caustics_params.map(|p| p.map_size),
+            caustic_size,
         )?;
 
         let nearest = Sampler::new(ctx, "nearest_clamp", SamplerDesc::NEAREST_CLAMP)?;
@@ -315,80 +278,6 @@ impl Renderer {
             cmd.clear_color_image(&targets.caustic_atlas, [0.0; 4]);
             graph.access_now(cmd, &[(caustic_id, Access::FragmentSampled)], &[]);
         })?;
-        let caustics_map = match caustics_params {
-            Some(p) => Some(CausticsMapPass::new(ctx, p, scene, &gpu_scene, &mut graph, &targets)?),
-            None => None,
-        };
-        let photon_buffer = match photon_params {
-            Some(p) => Some(PhotonBufferPass::new(ctx, p, scene, &gpu_scene, &mut graph, &photon_caustics)?),
-            None => None,
-        };
-
-        let refraction_wyman = if plan::has(&plan, plan::REFRACTION_WYMAN) {
-            let params = WymanParams::from_settings(&scene.render)
-                .map_err(|error| RenderError::Param { technique: "wyman", error })?;
-            Some(WymanPass::new(ctx, params, scene, &gpu_scene, &mut graph, &frame_layout, &targets, &nearest)?)
-        } else {
-            None
-        };
-        let refraction_hu_qin = if plan::has(&plan, plan::REFRACTION_HU_QIN) {
-            let params = HuQinParams::from_settings(&scene.render)
-                .map_err(|error| RenderError::Param { technique: "hu_qin", error })?;
-            Some(HuQinPass::new(ctx, params, scene, &gpu_scene, &mut graph, &frame_layout, &targets, &nearest)?)
-        } else {
-            None
-        };
-        let impostor_params = || {
-            ImpostorParams::from_settings(&scene.render)
-                .map_err(|error| RenderError::Param { technique: "impostor", error })
-        };
-        let refraction_impostor = if plan::has(&plan, plan::REFRACTION_IMPOSTOR) {
-            let p = impostor_params()?;
-            Some(ImpostorRefraction::new(ctx, p, scene, &gpu_scene, &mut graph, &frame_layout, &targets, &nearest)?)
-        } else {
-            None
-        };
-        let reflection_impostor = if plan::has(&plan, plan::REFLECTION_IMPOSTOR) {
-            let p = impostor_params()?;
-            Some(ImpostorReflection::new(ctx, p, scene, &gpu_scene, &mut graph, &frame_layout, &targets, &nearest)?)
-        } else {
-            None
-        };
-        let impostor_lightmap = if plan::has(&plan, plan::IMPOSTOR_LIGHTMAP_SPLAT) {
-            let p = ImpostorLightmapParams::from_settings(&scene.render)
-                .map_err(|error| RenderError::Param { technique: "impostor_lightmap", error })?;
-            Some(ImpostorLightmap::new(ctx, p, scene, &gpu_scene, &mut graph, &frame_layout, &targets)?)
-        } else {
-            None
-        };
-        let eikonal = match (&scene.volume, plan::has(&plan, plan::EIKONAL_VIEW)) {
-            (Some(volume), true) => {
-                let p = EikonalParams::from_settings(&scene.render)
-                    .map_err(|error| RenderError::Param { technique: "eikonal", error })?;
-                let lights: &[crate::scene::Light] =
-                    if plan::has(&plan, plan::EIKONAL_LIGHT) { &scene.lights } else { &[] };
-                Some(EikonalPass::new(
-                    ctx,
-                    p,
-                    volume,
-                    lights,
-                    scene,
-                    &gpu_scene,
-                    &mut graph,
-                    &frame_layout,
-                    &targets,
-                    &nearest,
-                )?)
-            }
-            _ => None,
-        };
-        let tonemap = if plan::has(&plan, plan::TONEMAP_ADAPT) {
-            let p = TonemapAdaptiveParams::from_settings(&scene.render)
-                .map_err(|error| RenderError::Param { technique: "tonemap_adaptive", error })?;
-            Some((p, scene.render.exposure))
-        } else {
-            None
-        };
         let objects = (0..scene.objects.len())
             .map(|i| ObjectState {
                 name: scene.objects[i].name.clone(),
@@ -397,39 +286,25 @@ impl Renderer {
                 bounds: object_bounds(scene, i),
             })
             .collect();
-        let passes = Passes {
-            shadow_map: if shadowed { Some(ShadowMapPass::new(ctx, &gpu_scene, &targets)?) } else { None },
-            caustics_map,
-            gbuffer: GBufferPass::new(ctx, &frame_layout, &targets)?,
-            deferred: DeferredShadingPass::new(
-                ctx,
-                &frame_layout,
-                &targets,
-                &nearest,
-                shadowed,
-                caustics_params.map(|p| p.filter),
-                photon_buffer.as_ref().map(|_| (photon_caustics.count, photon_caustics.mode, photon_caustics.id)),
-            )?,
-            refraction_single: if plan::has(&plan, plan::REFRACTION_SINGLE) {
-                Some(SpecularSinglePass::new(ctx, Mode::Refraction, &frame_layout, &targets, &nearest)?)
-            } else {
-                None
-            },
-            reflection_single: if plan::has(&plan, plan::REFLECTION_SINGLE) {
-                Some(SpecularSinglePass::new(ctx, Mode::Reflection, &frame_layout, &targets, &nearest)?)
-            } else {
-                None
-            },
-            refraction_wyman,
-            refraction_hu_qin,
-            refraction_impostor,
-            reflection_impostor,
-            impostor_lightmap,
-            eikonal,
-            photon_buffer,
-            photon_caustics,
-            tonemap: TonemapPass::new(ctx, &frame_layout, &targets, &nearest, &mut graph, tonemap, FRAMES_IN_FLIGHT)?,
+        let mut setup = Setup {
+            ctx,
+            scene,
+            gpu: &gpu_scene,
+            graph: &mut graph,
+            frame_layout: &frame_layout,
+            targets: &targets,
+            nearest: &nearest,
+            photon_caustics: &photon_caustics,
+            plan,
+            slots: FRAMES_IN_FLIGHT,
         };
+        let mut techniques = Vec::with_capacity(TECHNIQUES.len());
+        let mut technique_shaders = Vec::with_capacity(TECHNIQUES.len());
+        for (i, t) in TECHNIQUES.iter().enumerate() {
+            ctx.take_shader_log();
+            techniques.push(if recipe.uses(i) { Some((t.create)(&mut setup)?) } else { None });
+            technique_shaders.push(ctx.take_shader_log());
+        }
 
         let mut uniforms = FrameUniforms {
             env_sh: gpu_scene.env_sh,
@@ -446,8 +321,12 @@ impl Renderer {
             let pairs = plan.len() + EXTRA_TIMED_PASSES;
             timestamps.push(TimestampPool::new(ctx, &format!("timestamps_{i}"), 2 * pairs as u32)?);
         }
+        let shared_fingerprint = update::shared_fingerprint(scene, &recipe);
+        let technique_fingerprints =
+            (0..TECHNIQUES.len()).map(|i| update::technique_fingerprint(scene, &recipe, i)).collect();
         Ok(Renderer {
-            passes,
+            techniques,
+            photon_caustics,
             frame_sets,
             _frame_layout: frame_layout,
             frame_buffers,
@@ -457,7 +336,13 @@ impl Renderer {
             timestamps,
             commands: CommandPool::new(ctx, FRAMES_IN_FLIGHT as u32)?,
             graph,
-            plan,
+            recipe,
+            shared_fingerprint,
+            technique_fingerprints,
+            caustic_size,
+            photon_params,
+            technique_shaders,
+            placement: crate::technique::placement(scene),
             objects,
             uniforms,
             pending: vec![None; FRAMES_IN_FLIGHT],
@@ -469,18 +354,28 @@ impl Renderer {
         })
     }
 
+    /// The created technique of type `T`, if the scene planned it.
+    pub fn technique<T: Technique>(&self) -> Option<&T> {
+        technique(&self.techniques)
+    }
+
+    /// Every created technique's debug targets.
+    fn debug_target_list(&self) -> impl Iterator<Item = &DebugTarget> {
+        debug_targets(&self.techniques)
+    }
+
     pub fn context(&self) -> &Arc<GpuContext> {
         &self.ctx
     }
 
     /// The eikonal light simulation's steps, patch counts and time (None without one).
     pub fn light_stats(&self) -> Option<&crate::passes::eikonal_light::LightStats> {
-        self.passes.eikonal.as_ref().and_then(|p| p.light_stats())
+        self.technique::<EikonalPass>().and_then(|p| p.light_stats())
     }
 
     /// The passes this renderer records, in order, with the reason for each.
     pub fn plan(&self) -> &[PlannedPass] {
-        &self.plan
+        &self.recipe.passes
     }
 
     pub fn width(&self) -> u32 {
@@ -519,7 +414,7 @@ impl Renderer {
 
     fn collect_slot(&mut self, slot: usize) -> Result<(), RenderError> {
         if let Some((frame, queries)) = self.pending[slot].take() {
-            if let Some(s) = self.passes.tonemap.stats(slot) {
+            if let Some(s) = self.technique::<TonemapPass>().and_then(|t| t.stats(slot)) {
                 self.tonemap_stats = Some(s);
             }
             let pool = &self.timestamps[slot];
@@ -582,64 +477,52 @@ impl Renderer {
         self.uniforms.info[1] = self.frame_index as u32;
         self.frame_buffers[slot].write(0, bytemuck::bytes_of(&self.uniforms));
 
-        if let Some(p) = &mut self.passes.refraction_impostor {
-            p.begin_frame();
-        }
-        if let Some(p) = &mut self.passes.reflection_impostor {
-            p.begin_frame();
-        }
-        if let Some(p) = &mut self.passes.impostor_lightmap {
-            p.begin_frame();
+        for t in self.techniques.iter_mut().flatten() {
+            t.begin_frame();
         }
         let dt = if self.frame_index == 0 { None } else { self.tonemap_dt };
-        let Renderer { passes, frame_sets, scene, targets, timestamps, commands, graph, .. } = self;
-        let shadow_atlas = passes.shadow_map.as_ref().map(|_| targets.shadow_atlas_id);
-        let frame_set = frame_sets[slot];
+        let Renderer {
+            techniques,
+            photon_caustics,
+            frame_sets,
+            scene,
+            targets,
+            timestamps,
+            commands,
+            graph,
+            recipe,
+            ..
+        } = self;
+        let shadowed = recipe.passes.iter().any(|p| p.name == crate::passes::shadow_map::SHADOW_MAP);
+        let inputs = FrameInputs {
+            scene,
+            targets,
+            photon_caustics,
+            frame_set: frame_sets[slot],
+            slot,
+            shadow_atlas: shadowed.then_some(targets.shadow_atlas_id),
+            dt,
+        };
         let cmd = commands.begin(slot)?;
         let mut frame = graph.frame();
-        if let Some(p) = &passes.shadow_map {
-            p.record(&mut frame, scene, targets);
+        // The frame recipe: the steps in the order they were planned. Each step must record
+        // exactly the passes its technique planned for that stage, or `prism passes`, the
+        // timings and the frame would disagree: checked in every build.
+        for step in &recipe.steps {
+            let t = techniques[step.technique].as_deref().expect("a planned technique is created");
+            let first = frame.pass_count();
+            t.record(step.stage, &mut frame, &inputs);
+            let planned = recipe.passes[step.passes.clone()].iter().map(|p| p.name);
+            let recorded = frame.pass_names_since(first);
+            assert!(
+                planned.clone().eq(recorded.clone()),
+                "technique `{}` recorded {:?} in stage {:?}, but planned {:?}",
+                TECHNIQUES[step.technique].key,
+                recorded.collect::<Vec<_>>(),
+                step.stage,
+                planned.collect::<Vec<_>>()
+            );
         }
-        if let Some(p) = &passes.caustics_map {
-            p.record(&mut frame, scene, targets);
-        }
-        if let Some(p) = &passes.impostor_lightmap {
-            p.record(&mut frame, scene, frame_set);
-        }
-        if let Some(p) = &passes.photon_buffer {
-            p.record(&mut frame, scene, &passes.photon_caustics);
-        }
-        passes.gbuffer.record(&mut frame, scene, targets, frame_set);
-        passes.deferred.record(&mut frame, scene, targets, frame_set);
-        if let Some(p) = &passes.impostor_lightmap {
-            p.record_apply(&mut frame, targets, frame_set);
-        }
-        if let Some(p) = &passes.eikonal {
-            p.record_light(&mut frame, scene, targets, frame_set);
-        }
-        if let Some(p) = &passes.refraction_single {
-            p.record(&mut frame, scene, targets, frame_set);
-        }
-        if let Some(p) = &passes.refraction_wyman {
-            p.record(&mut frame, scene, targets, frame_set);
-        }
-        if let Some(p) = &passes.refraction_hu_qin {
-            p.record(&mut frame, scene, targets, frame_set, shadow_atlas);
-        }
-        if let Some(p) = &passes.refraction_impostor {
-            p.record(&mut frame, scene, targets, frame_set, shadow_atlas);
-        }
-        if let Some(p) = &passes.reflection_single {
-            p.record(&mut frame, scene, targets, frame_set);
-        }
-        if let Some(p) = &passes.reflection_impostor {
-            p.record(&mut frame, scene, targets, frame_set, shadow_atlas);
-        }
-        if let Some(p) = &passes.eikonal {
-            p.record(&mut frame, scene, targets, frame_set, shadow_atlas);
-        }
-        passes.tonemap.record(&mut frame, targets, frame_set, slot, dt);
-        debug_assert_eq!(frame.pass_names(), self.plan.iter().map(|p| p.name).collect::<Vec<_>>());
         extra(&mut frame, FinalImage { ldr: &targets.ldr, ldr_id: targets.ldr_id });
         // `cmd` borrows `commands` until its last use here.
         let queries = frame.execute(&cmd, Some(&timestamps[slot]));
@@ -671,7 +554,7 @@ impl Renderer {
         } else if id == self.targets.ldr_id {
             &self.targets.ldr
         } else {
-            self.passes.debug_targets().find(|d| d.id == id).map(|d| &d.image).unwrap_or(&self.targets.ldr)
+            debug_targets(&self.techniques).find(|d| d.id == id).map(|d| &d.image).unwrap_or(&self.targets.ldr)
         };
         Ok(self.graph.read_back(&self.ctx, image, id, bytes_per_texel, Access::TransferRead)?)
     }
@@ -691,7 +574,7 @@ impl Renderer {
     /// (the map holds flux per texel, src/passes/caustics_map.rs); `None` without a
     /// caustics_map pass.
     pub fn caustic_map_flux(&mut self) -> Result<Option<[f64; 3]>, RenderError> {
-        if self.passes.caustics_map.is_none() {
+        if self.technique::<CausticsMapPass>().is_none() {
             return Ok(None);
         }
         self.finish()?;
@@ -713,7 +596,7 @@ impl Renderer {
     #[allow(clippy::type_complexity)]
     pub fn read_lightmaps(&mut self) -> Result<Option<(Vec<[f32; 4]>, Vec<(usize, f32)>)>, RenderError> {
         self.finish()?;
-        let Some(p) = &self.passes.impostor_lightmap else { return Ok(None) };
+        let Some(p) = technique::<ImpostorLightmap>(&self.techniques) else { return Ok(None) };
         let texels = p.read_lightmaps(&self.ctx, &mut self.graph)?;
         Ok(Some((texels, p.charts.iter().map(|c| (c.object, c.area())).collect())))
     }
@@ -722,12 +605,12 @@ impl Renderer {
     /// the texels of the front refractor layer that see a specular surface (what V should
     /// count); `None` without caustics_map and `flux = "occlusion_query"`.
     pub fn caustics_map_visible(&mut self) -> Result<Option<VisibleCounts>, RenderError> {
-        let on = self.passes.caustics_map.as_ref().is_some_and(|p| p.params().flux == Flux::OcclusionQuery);
+        let on = self.technique::<CausticsMapPass>().is_some_and(|p| p.params().flux == Flux::OcclusionQuery);
         if !on {
             return Ok(None);
         }
         self.finish()?;
-        let Some(p) = &self.passes.caustics_map else {
+        let Some(p) = technique::<CausticsMapPass>(&self.techniques) else {
             return Ok(None);
         };
         let r = p.refractors();
@@ -748,14 +631,14 @@ impl Renderer {
     /// src/passes/photon_buffer.rs), RGBA f32 with all layers one after another; `None`
     /// without a photon_buffer pass.
     pub fn photon_buffer_images(&mut self) -> Result<Option<PhotonBufferImages>, RenderError> {
-        if self.passes.photon_buffer.is_none() {
+        if self.technique::<PhotonBufferPass>().is_none() {
             return Ok(None);
         }
         self.finish()?;
-        let Some(p) = &self.passes.photon_buffer else {
+        let Some(p) = technique::<PhotonBufferPass>(&self.techniques) else {
             return Ok(None);
         };
-        let c = &self.passes.photon_caustics;
+        let c = &self.photon_caustics;
         let images =
             [(&p.photons.0, p.photons.1), (&p.flux.0, p.flux.1), (&p.counts.0, p.counts.1), (&c.textures, c.id)];
         let mut out = Vec::new();
@@ -783,12 +666,12 @@ impl Renderer {
     /// Names of the debug targets [`Renderer::read_target`] can read (e.g.
     /// `refraction_hu_qin_p2`, `refraction_hu_qin_t2` with `render.hu_qin.debug = true`).
     pub fn debug_targets(&self) -> Vec<String> {
-        self.passes.debug_targets().map(|d| d.name.clone()).collect()
+        self.debug_target_list().map(|d| d.name.clone()).collect()
     }
 
     /// A debug target, RGBA f32, row 0 at the top; `None` if no pass writes one of that name.
     pub fn read_target(&mut self, name: &str) -> Result<Option<Vec<f32>>, RenderError> {
-        let Some(id) = self.passes.debug_targets().find(|d| d.name == name).map(|d| d.id) else {
+        let Some(id) = self.debug_target_list().find(|d| d.name == name).map(|d| d.id) else {
             return Ok(None);
         };
         let bytes = self.read_image(id, 16)?;
@@ -817,6 +700,14 @@ pub struct PhotonBufferImages {
     /// The filtered caustic textures, one layer per rectangle.
     pub caustics: Vec<[f32; 4]>,
     pub rectangles: Vec<crate::passes::photon_buffer::GpuPhotonRect>,
+}
+
+fn technique<T: Technique>(techniques: &[Option<Box<dyn Technique>>]) -> Option<&T> {
+    techniques.iter().flatten().find_map(|t| (t.as_ref() as &dyn std::any::Any).downcast_ref::<T>())
+}
+
+fn debug_targets(techniques: &[Option<Box<dyn Technique>>]) -> impl Iterator<Item = &DebugTarget> {
+    techniques.iter().flatten().flat_map(|t| t.debug_targets())
 }
 
 /// View, projection and position uniforms for `cam`, with the near plane scaled to the
@@ -859,15 +750,11 @@ impl Renderer {
         }
         self.scene.vertices.write(range.start, bytemuck::cast_slice(&vertices));
         o.bounds.0 = center;
+        // The vertices no longer hold any scene's placement: the next update rewrites them.
+        self.placement.clear();
         let bounds: Vec<_> = self.objects.iter().map(|o| o.bounds).collect();
-        if let Some(p) = &mut self.passes.refraction_impostor {
-            p.objects_moved(&bounds);
-        }
-        if let Some(p) = &mut self.passes.reflection_impostor {
-            p.objects_moved(&bounds);
-        }
-        if let Some(p) = &mut self.passes.impostor_lightmap {
-            p.objects_moved(&bounds);
+        for t in self.techniques.iter_mut().flatten() {
+            t.objects_moved(&bounds);
         }
         Ok(true)
     }
@@ -880,7 +767,8 @@ impl Renderer {
 
     /// Every map of an effect: one shared, or one per object in scene order.
     pub fn impostor_maps(&self, effect: ImpostorEffect) -> Vec<&ImpostorMap> {
-        let (reflection, refraction) = (&self.passes.reflection_impostor, &self.passes.refraction_impostor);
+        let reflection = self.technique::<ImpostorReflection>();
+        let refraction = self.technique::<ImpostorRefraction>();
         match effect {
             ImpostorEffect::Reflection => reflection.iter().flat_map(|p| &p.maps).collect(),
             ImpostorEffect::Refraction => refraction.iter().flat_map(|p| &p.instances).map(|i| &i.map).collect(),
@@ -899,11 +787,12 @@ impl Renderer {
         records: &[[[f32; 4]; 3]],
     ) -> Result<Option<Vec<[[f32; 4]; 3]>>, RenderError> {
         self.finish()?;
-        let (reflection, refraction) = (&self.passes.reflection_impostor, &self.passes.refraction_impostor);
+        let reflection = technique::<ImpostorReflection>(&self.techniques);
+        let refraction = technique::<ImpostorRefraction>(&self.techniques);
         let map = match effect {
-            ImpostorEffect::Reflection => reflection.as_ref().and_then(|p| p.maps.first()),
-            ImpostorEffect::Refraction => refraction.as_ref().and_then(|p| p.instances.first()).map(|i| &i.map),
-            ImpostorEffect::Refractor => refraction.as_ref().and_then(|p| p.instances.first()).map(|i| &i.refractor),
+            ImpostorEffect::Reflection => reflection.and_then(|p| p.maps.first()),
+            ImpostorEffect::Refraction => refraction.and_then(|p| p.instances.first()).map(|i| &i.map),
+            ImpostorEffect::Refractor => refraction.and_then(|p| p.instances.first()).map(|i| &i.refractor),
         };
         match map {
             Some(m) => Ok(Some(m.probe(&self.ctx, &mut self.graph, fresnel, iterations, records)?)),

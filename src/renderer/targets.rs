@@ -21,6 +21,8 @@ pub const CAUSTIC_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 pub struct Targets {
     pub width: u32,
     pub height: u32,
+    /// Lights with layers in the shadow and caustic atlases (0: the 1x1 stand-ins).
+    pub shadow_lights: u32,
     pub gbuf_normal: Image,
     pub gbuf_albedo: Image,
     pub depth: Image,
@@ -100,31 +102,11 @@ impl Targets {
                 view: ImageViewKind::D2Array,
             },
         )?;
-        let (csize, clayers) = match caustic_size {
-            Some(c) if lights > 0 => (c, lights * SHADOW_LAYERS_PER_LIGHT),
-            _ => (1, SHADOW_LAYERS_PER_LIGHT),
-        };
-        if csize > ctx.limits().max_image_dimension_cube {
-            return Err(RenderError::Limit(format!(
-                "render.caustics_map.map_size = {csize} is above the device's maximum cube size {}",
-                ctx.limits().max_image_dimension_cube
-            )));
-        }
-        let caustic_atlas = Image::new(
-            ctx,
-            &ImageDesc {
-                name: "caustic_atlas".into(),
-                format: CAUSTIC_FORMAT,
-                width: csize,
-                height: csize,
-                layers: clayers,
-                usage: U::COLOR_ATTACHMENT | U::SAMPLED | U::TRANSFER_DST | U::TRANSFER_SRC,
-                view: ImageViewKind::CubeArray,
-            },
-        )?;
+        let caustic_atlas = Self::caustic_atlas(ctx, lights, caustic_size)?;
         Ok(Targets {
             width,
             height,
+            shadow_lights: lights,
             gbuf_normal_id: graph.register_image(&gbuf_normal),
             gbuf_albedo_id: graph.register_image(&gbuf_albedo),
             depth_id: graph.register_image(&depth),
@@ -142,6 +124,41 @@ impl Targets {
             shadow_depth,
             caustic_atlas,
         })
+    }
+
+    /// Put `atlas` (registered with the frame graph as `id`) in place of the caustic atlas,
+    /// and return the one it replaces (to swap back, or to drop once the GPU is done with it).
+    pub fn swap_caustic_atlas(&mut self, atlas: (Image, ImageId)) -> (Image, ImageId) {
+        let id = std::mem::replace(&mut self.caustic_atlas_id, atlas.1);
+        (std::mem::replace(&mut self.caustic_atlas, atlas.0), id)
+    }
+
+    /// The caustic-map atlas: six cube-compatible layers of `caustic_size` per light, or a 1x1
+    /// stand-in when no caustics-mapping pass writes it (it is bound all the same).
+    pub fn caustic_atlas(ctx: &Arc<GpuContext>, lights: u32, caustic_size: Option<u32>) -> Result<Image, RenderError> {
+        let (size, layers) = match caustic_size {
+            Some(c) if lights > 0 => (c, lights * SHADOW_LAYERS_PER_LIGHT),
+            _ => (1, SHADOW_LAYERS_PER_LIGHT),
+        };
+        if size > ctx.limits().max_image_dimension_cube {
+            return Err(RenderError::Limit(format!(
+                "render.caustics_map.map_size = {size} is above the device's maximum cube size {}",
+                ctx.limits().max_image_dimension_cube
+            )));
+        }
+        use vk::ImageUsageFlags as U;
+        Ok(Image::new(
+            ctx,
+            &ImageDesc {
+                name: "caustic_atlas".into(),
+                format: CAUSTIC_FORMAT,
+                width: size,
+                height: size,
+                layers,
+                usage: U::COLOR_ATTACHMENT | U::SAMPLED | U::TRANSFER_DST | U::TRANSFER_SRC,
+                view: ImageViewKind::CubeArray,
+            },
+        )?)
     }
 
     pub fn extent(&self) -> vk::Extent2D {

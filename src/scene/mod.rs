@@ -484,7 +484,25 @@ fn render_settings(t: Option<&toml::Table>, src: &Source) -> Result<RenderSettin
                 r.exposure = positive(src, &path, e as f32)?;
             }
             _ => match v.as_table() {
-                // Open-ended technique parameters; the technique checks them.
+                Some(table) if !techniques::TABLES.contains(&key.as_str()) => {
+                    let mut hint = format!(
+                        "the technique parameter tables are {}",
+                        techniques::TABLES.iter().map(|t| format!("[render.{t}]")).collect::<Vec<_>>().join(", ")
+                    );
+                    if let Some(c) = techniques::closest(key, techniques::TABLES) {
+                        hint = format!("did you mean [render.{c}]? {hint}");
+                    }
+                    // Point at the table's first key: in a file that is the table's first
+                    // line, and from the command line the `--set` that created the table.
+                    let at = table.keys().next().map_or(path.clone(), |k| format!("{path}.{k}"));
+                    return Err(src.key_error(
+                        ErrorKind::Schema,
+                        &at,
+                        format!("unknown technique table [render.{key}]"),
+                        hint,
+                    ));
+                }
+                // Technique parameters; the technique checks them.
                 Some(p) => {
                     techniques::check(key, p).map_err(|e| {
                         value_err(
@@ -497,12 +515,17 @@ fn render_settings(t: Option<&toml::Table>, src: &Source) -> Result<RenderSettin
                     r.params.insert(key.clone(), p.clone());
                 }
                 None => {
+                    let mut hint =
+                        format!("[render] takes {} and technique parameter tables [render.<technique>]", list(KEYS));
+                    if let Some(c) = techniques::closest(key, KEYS) {
+                        hint = format!("did you mean `{c}`? {hint}");
+                    }
                     return Err(src.key_error(
                         ErrorKind::Schema,
                         &path,
                         format!("unknown key `{key}` in [render]"),
-                        format!("[render] takes {} and technique parameter tables [render.<technique>]", list(KEYS)),
-                    ))
+                        hint,
+                    ));
                 }
             },
         }

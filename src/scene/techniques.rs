@@ -394,11 +394,36 @@ impl PhotonBufferParams {
 }
 
 fn unknown(technique: &str, key: &str, accepted: &[&str]) -> ParamError {
-    ParamError {
-        key: key.to_string(),
-        message: format!("unknown parameter `{key}` of render.{technique}"),
-        hint: format!("render.{technique} takes {}", accepted.join(", ")),
+    let mut hint = format!("render.{technique} takes {}", accepted.join(", "));
+    if let Some(c) = closest(key, accepted) {
+        hint = format!("did you mean `{c}`? {hint}");
     }
+    ParamError { key: key.to_string(), message: format!("unknown parameter `{key}` of render.{technique}"), hint }
+}
+
+/// The parameter tables `[render.<technique>]` there are.
+pub const TABLES: &[&str] = &[
+    "wyman",
+    "hu_qin",
+    "caustics_map",
+    "photon_buffer",
+    "impostor",
+    "impostor_lightmap",
+    "eikonal",
+    "tonemap_adaptive",
+];
+
+/// The candidate a misspelt `name` most likely meant: the nearest by edit distance, if it is
+/// within a third of the name's length (at least 2 edits: `huqin` -> `hu_qin`, `hu_quin` ->
+/// `hu_qin`), so that a name unlike every candidate gets no suggestion.
+pub fn closest<'a>(name: &str, candidates: &[&'a str]) -> Option<&'a str> {
+    let limit = (name.chars().count() / 3).max(2);
+    candidates
+        .iter()
+        .map(|c| (strsim::levenshtein(name, c), *c))
+        .filter(|(d, _)| *d <= limit)
+        .min_by_key(|(d, _)| *d)
+        .map(|(_, c)| c)
 }
 
 fn boolean(key: &str, v: &toml::Value) -> Result<bool, ParamError> {
@@ -662,7 +687,8 @@ pub fn check(technique: &str, t: &toml::Table) -> Result<(), ParamError> {
         "impostor_lightmap" => ImpostorLightmapParams::from_table(Some(t)).map(|_| ()),
         "eikonal" => EikonalParams::from_table(Some(t)).map(|_| ()),
         "tonemap_adaptive" => TonemapAdaptiveParams::from_table(Some(t)).map(|_| ()),
-        _ => Ok(()),
+        // The scene loader refuses unknown tables before it gets here (`TABLES`).
+        _ => unreachable!("render.{technique} is not a technique table"),
     }
 }
 

@@ -1,0 +1,338 @@
+//! The technique contract and the frame recipe (../shared/DESIGN.md, "The technique
+//! contract"; kajiya's `renderers/*.rs` called from one `world_render_passes.rs`, Falcor's
+//! render passes that declare what they need).
+//!
+//! Every technique, the baseline passes included, is one [`Registration`] in [`TECHNIQUES`]:
+//!
+//! - **plan**: given the scene, the passes it needs, each tagged with the [`Stage`] of the
+//!   frame it runs in and the reason the scene requires it (`prism passes` prints these);
+//!   no pass, no technique: it is never created;
+//! - **create**: its resources, from the frame's shared resources in [`Setup`];
+//! - **record** ([`Technique::record`]): its passes of one stage into the frame graph,
+//!   reading the frame's shared inputs ([`FrameInputs`]);
+//! - **react** ([`Technique::begin_frame`], [`Technique::objects_moved`]): what it rebuilds
+//!   when something changes.
+//!
+//! The frame recipe ([`recipe`]) is the one place the order lives: the stages in [`RECIPE`]
+//! order, and within a stage the techniques in registration order. The renderer records
+//! the same steps it planned, and checks after every step, in every build, that the
+//! technique recorded exactly the passes it planned; so `prism passes`, the timings and the
+//! recorded frame cannot disagree.
+//!
+//! Adding a technique: one file with its plan, its creation and its `impl Technique`, and
+//! one line in [`TECHNIQUES`] (docs/architecture.md walks through it).
+use std::any::Any;
+use std::ops::Range;
+use std::sync::Arc;
+
+use glam::Vec3;
+
+use crate::gpu::{DescriptorSet, DescriptorSetLayout, GpuContext, GpuError, Sampler};
+use crate::graph::{Frame, FrameGraph, ImageId};
+use crate::passes;
+use crate::passes::photon_buffer::PhotonCaustics;
+use crate::passes::refractor_layers::DebugTarget;
+use crate::renderer::gpu_scene::GpuScene;
+use crate::renderer::targets::Targets;
+use crate::scene::{Light, Material, Scene};
+
+/// Where in the frame a pass runs. A stage's passes may read what every earlier stage
+/// wrote: shadows and caustics before the surfaces are shaded, the opaque image before the
+/// specular objects are composited into it, everything before the tone map.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize)]
+pub enum Stage {
+    /// Distance-to-light maps of every light.
+    Shadows,
+    /// Caustic light on the diffuse receivers (caustic maps, photon buffers, light maps).
+    Caustics,
+    /// The first visible surface of every object (G-buffer).
+    Surfaces,
+    /// Diffuse shading and the environment behind everything.
+    Shading,
+    /// Light added to the shaded surfaces after shading (light maps, volume irradiance).
+    Lighting,
+    /// The dielectrics composited into the image.
+    Refraction,
+    /// The mirrors and conductors composited into the image.
+    Reflection,
+    /// Inhomogeneous media (eikonal view rays).
+    Volume,
+    /// Linear radiance to the displayed image.
+    Tonemap,
+}
+
+/// The frame recipe's order of stages.
+pub const RECIPE: [Stage; 9] = [
+    Stage::Shadows,
+    Stage::Caustics,
+    Stage::Surfaces,
+    Stage::Shading,
+    Stage::Lighting,
+    Stage::Refraction,
+    Stage::Reflection,
+    Stage::Volume,
+    Stage::Tonemap,
+];
+
+/// Every technique prism knows, in the order they are created and, within a stage,
+/// recorded. A technique's creation may read what the ones before it planned.
+pub const TECHNIQUES: &[Registration] = &[
+    passes::shadow_map::TECHNIQUE,
+    passes::caustics_map::TECHNIQUE,
+    passes::photon_buffer::TECHNIQUE,
+    passes::impostor_lightmap::TECHNIQUE,
+    passes::gbuffer::TECHNIQUE,
+    passes::deferred_shading::TECHNIQUE,
+    passes::specular_single::REFRACTION,
+    passes::refraction_wyman::TECHNIQUE,
+    passes::refraction_hu_qin::TECHNIQUE,
+    passes::distance_impostor::REFRACTION,
+    passes::specular_single::REFLECTION,
+    passes::distance_impostor::REFLECTION,
+    passes::eikonal::TECHNIQUE,
+    passes::tonemap::TECHNIQUE,
+];
+
+/// One pass a technique needs for a scene, and why.
+#[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
+pub struct PlannedPass {
+    /// Snake_case: also the pass's timing name and its golden image's name.
+    pub name: &'static str,
+    /// Which objects, lights or settings require the pass.
+    pub reason: String,
+}
+
+impl PlannedPass {
+    pub fn new(name: &'static str, reason: impl Into<String>) -> Self {
+        PlannedPass { name, reason: reason.into() }
+    }
+}
+
+/// A technique's entry in [`TECHNIQUES`].
+pub struct Registration {
+    /// What selects it: `refraction = "wyman"`, or the baseline pass's name.
+    pub key: &'static str,
+    /// The passes it needs for a scene, each with its stage; empty: the technique is not
+    /// created. Pure CPU (`prism passes` calls it without a device).
+    pub plan: fn(&Scene) -> Vec<(Stage, PlannedPass)>,
+    /// Its resources. Called only when `plan` returned passes.
+    pub create: fn(&mut Setup<'_>) -> Result<Box<dyn Technique>, RenderError>,
+    /// What its resources depend on besides its own plan and the frame's shared resources
+    /// (the GPU scene, the targets): usually its `[render.<table>]`s ([`tables`]). When a
+    /// scene changes and neither this nor its plan did, the running technique is kept.
+    pub inputs: fn(&Scene) -> String,
+}
+
+/// What a technique's creation can use: the device, the scene, the frame's shared resources
+/// and the whole plan (a technique that adapts to another's presence reads it here).
+pub struct Setup<'a> {
+    pub ctx: &'a Arc<GpuContext>,
+    pub scene: &'a Scene,
+    pub gpu: &'a GpuScene,
+    pub graph: &'a mut FrameGraph,
+    /// The frame descriptor set's layout (set 0 of every pipeline that reads the frame).
+    pub frame_layout: &'a DescriptorSetLayout,
+    pub targets: &'a Targets,
+    /// Nearest-neighbour, clamp-to-edge: how techniques read each other's targets.
+    pub nearest: &'a Sampler,
+    /// Hu & Qin 2007 §3's caustic textures and rectangles, bound in the frame set.
+    pub photon_caustics: &'a PhotonCaustics,
+    pub plan: &'a [PlannedPass],
+    /// Frames in flight: techniques with per-frame state keep one copy per slot.
+    pub slots: usize,
+}
+
+impl Setup<'_> {
+    /// Whether any technique planned the pass `name`.
+    pub fn planned(&self, name: &str) -> bool {
+        has(self.plan, name)
+    }
+}
+
+/// What every recording reads: the scene's GPU data, the frame's targets and descriptor
+/// set, and what earlier stages produced.
+pub struct FrameInputs<'a> {
+    pub scene: &'a GpuScene,
+    pub targets: &'a Targets,
+    pub photon_caustics: &'a PhotonCaustics,
+    pub frame_set: DescriptorSet,
+    /// The frame-in-flight slot being recorded.
+    pub slot: usize,
+    /// The shadow atlas, when a shadow pass wrote it this frame.
+    pub shadow_atlas: Option<ImageId>,
+    /// Seconds since the last frame (the window's temporal adaptation); `None`: converged.
+    pub dt: Option<f32>,
+}
+
+/// A created technique: what the frame recipe calls.
+pub trait Technique: Any {
+    /// Record this technique's passes of `stage` (exactly those its plan gave that stage).
+    fn record<'a>(&'a self, stage: Stage, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>);
+
+    /// Called before every frame is recorded (a cache decides here whether to render again).
+    fn begin_frame(&mut self) {}
+
+    /// Objects moved: every object's (centre, bounding radius), in scene order.
+    fn objects_moved(&mut self, _bounds: &[(Vec3, f32)]) {}
+
+    /// Intermediate images a test or a debug view can read back.
+    fn debug_targets(&self) -> &[DebugTarget] {
+        &[]
+    }
+}
+
+/// One step of the recipe: one technique's passes of one stage.
+#[derive(Clone, Debug)]
+pub struct Step {
+    /// Index into [`TECHNIQUES`].
+    pub technique: usize,
+    pub stage: Stage,
+    /// This step's passes in [`Recipe::passes`].
+    pub passes: Range<usize>,
+}
+
+/// The frame of a scene: every pass in order, and the steps that record them.
+#[derive(Clone, Debug)]
+pub struct Recipe {
+    pub passes: Vec<PlannedPass>,
+    pub steps: Vec<Step>,
+}
+
+impl Recipe {
+    /// Whether technique `index` of [`TECHNIQUES`] has any pass in this frame.
+    pub fn uses(&self, index: usize) -> bool {
+        self.steps.iter().any(|s| s.technique == index)
+    }
+}
+
+/// The frame recipe for `scene`: each technique's plan, ordered by [`RECIPE`] stage, then
+/// by registration.
+pub fn recipe(scene: &Scene) -> Recipe {
+    let planned: Vec<Vec<(Stage, PlannedPass)>> = TECHNIQUES.iter().map(|t| (t.plan)(scene)).collect();
+    let mut recipe = Recipe { passes: Vec::new(), steps: Vec::new() };
+    for stage in RECIPE {
+        for (technique, passes) in planned.iter().enumerate() {
+            let start = recipe.passes.len();
+            recipe.passes.extend(passes.iter().filter(|(s, _)| *s == stage).map(|(_, p)| p.clone()));
+            if recipe.passes.len() > start {
+                recipe.steps.push(Step { technique, stage, passes: start..recipe.passes.len() });
+            }
+        }
+    }
+    recipe
+}
+
+/// Whether the pass list contains `name`.
+pub fn has(plan: &[PlannedPass], name: &str) -> bool {
+    plan.iter().any(|p| p.name == name)
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
+    #[error("{0}")]
+    Limit(String),
+    /// A technique parameter (`[render.<technique>]`) that is unknown or out of range.
+    #[error("render.{technique}.{}: {error}", error.key)]
+    Param { technique: &'static str, error: crate::scene::techniques::ParamError },
+}
+
+/// `[render.<technique>]` parsed into its typed parameters, as a [`RenderError`].
+pub fn params<T>(
+    technique: &'static str,
+    parsed: Result<T, crate::scene::techniques::ParamError>,
+) -> Result<T, RenderError> {
+    parsed.map_err(|error| RenderError::Param { technique, error })
+}
+
+/// The parameter tables `[render.<name>]` of `names` as they are in `scene` (absent: empty),
+/// for [`Registration::inputs`].
+pub fn tables(scene: &Scene, names: &[&str]) -> String {
+    names.iter().map(|n| format!("[{n}] {:?}\n", scene.render.params.get(*n))).collect()
+}
+
+/// Where everything is: every vertex of every object, the analytic shapes, the lights and the
+/// camera position (the GPU scene's bounds include it), as one hash. A technique whose
+/// resources are built from positions (impostor rectangles, light frusta, shadow faces) puts
+/// it in its [`Registration::inputs`], and is re-created when something moves.
+pub fn placement(scene: &Scene) -> String {
+    use std::hash::{Hash, Hasher};
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    for o in &scene.objects {
+        for (p, n) in o.mesh.positions.iter().zip(&o.mesh.normals) {
+            (p.to_array().map(f32::to_bits), n.to_array().map(f32::to_bits)).hash(&mut h);
+        }
+        for uv in &o.mesh.checker_uv {
+            uv.to_array().map(f32::to_bits).hash(&mut h);
+        }
+        format!("{:?}", o.analytic).hash(&mut h);
+    }
+    format!("{:?} {:?}", scene.lights, scene.camera.position).hash(&mut h);
+    format!("placement {:016x}", h.finish())
+}
+
+/// [`tables`] and [`placement`]: the inputs of a technique built from its settings and from
+/// where things are.
+pub fn tables_and_placement(scene: &Scene, names: &[&str]) -> String {
+    tables(scene, names) + &placement(scene)
+}
+
+/// [`Registration::inputs`] of a technique that depends on nothing but its plan.
+pub fn no_inputs(_: &Scene) -> String {
+    String::new()
+}
+
+/// Names of the objects whose material satisfies `pred`, for the plans' reasons.
+pub fn object_names(scene: &Scene, pred: impl Fn(&Material) -> bool) -> Vec<String> {
+    scene.objects.iter().filter(|o| pred(&scene.materials[o.material])).map(|o| o.name.clone()).collect()
+}
+
+pub fn diffuse_names(scene: &Scene) -> Vec<String> {
+    object_names(scene, Material::is_diffuse)
+}
+
+pub fn dielectric_names(scene: &Scene) -> Vec<String> {
+    object_names(scene, |m| matches!(m, Material::Dielectric { .. }))
+}
+
+pub fn metal_names(scene: &Scene) -> Vec<String> {
+    object_names(scene, |m| matches!(m, Material::Mirror { .. } | Material::Conductor { .. }))
+}
+
+/// The specular objects (dielectrics, then mirrors and conductors) that cast caustics.
+pub fn specular_names(scene: &Scene) -> Vec<String> {
+    let mut v = dielectric_names(scene);
+    v.extend(metal_names(scene));
+    v
+}
+
+/// The diffuse receivers and the specular casters, when the scene can show a caustic with
+/// the caustics technique `key` selected: a light, a receiver and a caster.
+pub fn caustic_objects(scene: &Scene, key: &str) -> Option<(Vec<String>, Vec<String>)> {
+    if scene.render.caustics != key || scene.lights.is_empty() {
+        return None;
+    }
+    let (diffuse, specular) = (diffuse_names(scene), specular_names(scene));
+    (!diffuse.is_empty() && !specular.is_empty()).then_some((diffuse, specular))
+}
+
+pub fn list(v: &[String]) -> String {
+    v.join(", ")
+}
+
+pub fn describe_light(i: usize, l: &Light) -> String {
+    match l {
+        Light::Point { position: p, .. } => {
+            format!("light {i} (point at ({}, {}, {}))", p.x, p.y, p.z)
+        }
+        Light::Directional { direction: d, .. } => {
+            format!("light {i} (directional ({:.3}, {:.3}, {:.3}))", d.x, d.y, d.z)
+        }
+    }
+}
+
+/// Every light described, joined by `sep`.
+pub fn describe_lights(scene: &Scene, sep: &str) -> String {
+    scene.lights.iter().enumerate().map(|(i, l)| describe_light(i, l)).collect::<Vec<_>>().join(sep)
+}

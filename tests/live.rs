@@ -1,0 +1,137 @@
+//! Live changes (`Renderer::update`): a running renderer that takes a changed scene renders
+//! exactly what a renderer created for that scene renders, and re-creates only the
+//! techniques the change affects.
+mod common;
+
+use prism::renderer::{Renderer, Update};
+
+const SIZE: u32 = 64;
+
+/// The linear radiance and the tone-mapped image of the next frame.
+fn frame(r: &mut Renderer) -> (Vec<f32>, Vec<u8>) {
+    r.render_frame().unwrap();
+    (r.read_hdr().unwrap(), r.read_ldr().unwrap())
+}
+
+/// Render `scene` with `before`, update the running renderer to `after`, and require the
+/// image of a renderer created for `after`, bit for bit: both record the same commands on the
+/// same data, so any difference is state the update left stale. Returns what the update did.
+fn live(scene: &str, before: &[&str], after: &[&str]) -> Update {
+    let ctx = common::context(false);
+    let mut running = Renderer::new(&ctx, &common::scene(scene, SIZE, before)).unwrap();
+    frame(&mut running);
+    let changed = common::scene(scene, SIZE, after);
+    let update = running.update(&changed).unwrap();
+    let (hdr, ldr) = frame(&mut running);
+    let mut fresh = Renderer::new(&ctx, &changed).unwrap();
+    let (expected_hdr, expected_ldr) = frame(&mut fresh);
+    let differing = hdr.chunks(4).zip(expected_hdr.chunks(4)).filter(|(a, b)| a != b).count();
+    assert_eq!(differing, 0, "{scene} {before:?} -> {after:?}: {differing} HDR pixels differ ({update:?})");
+    let differing = ldr.chunks(4).zip(expected_ldr.chunks(4)).filter(|(a, b)| a != b).count();
+    assert_eq!(differing, 0, "{scene} {before:?} -> {after:?}: {differing} LDR pixels differ ({update:?})");
+    assert_eq!(running.plan(), fresh.plan());
+    drop((running, fresh));
+    common::assert_no_validation_errors(&ctx);
+    update
+}
+
+#[test]
+fn a_technique_parameter_re_creates_that_technique_only() {
+    let u = live(
+        "sphere_nearby",
+        &["render.refraction=hu_qin", "render.hu_qin.search_steps=8"],
+        &["render.refraction=hu_qin", "render.hu_qin.search_steps=2"],
+    );
+    assert_eq!(
+        (u.rebuilt, u.recreated.as_slice(), u.dropped.as_slice()),
+        (false, &["refraction = \"hu_qin\""][..], &[][..])
+    );
+    assert!(!u.materials);
+}
+
+#[test]
+fn a_material_value_rewrites_the_materials_buffer_only() {
+    let u = live("sphere_env", &["render.refraction=wyman"], &["render.refraction=wyman", "materials.glass.ior=1.33"]);
+    assert_eq!((u.rebuilt, u.recreated.len(), u.materials), (false, 0, true), "{u:?}");
+}
+
+#[test]
+fn switching_a_technique_creates_the_new_one_and_drops_the_old() {
+    let u = live("sphere_env", &["render.refraction=single"], &["render.refraction=hu_qin"]);
+    assert!(!u.rebuilt, "{u:?}");
+    assert_eq!(u.recreated, ["refraction = \"hu_qin\""]);
+    assert_eq!(u.dropped, ["refraction = \"single\""]);
+    let u = live("room_mirror", &[], &["render.reflection=impostor", "render.impostor.iterations=2"]);
+    assert_eq!((u.rebuilt, u.recreated.as_slice()), (false, &["reflection = \"impostor\""][..]), "{u:?}");
+}
+
+#[test]
+fn the_field_of_view_and_the_exposure_are_uniforms() {
+    let u = live("sphere_nearby", &[], &["camera.vfov_deg=35", "render.exposure=1.7"]);
+    assert_eq!(u, Update { ms: u.ms, ..Update::default() });
+    // The camera's position bounds the scene that the shadow faces are fitted to: a move.
+    let u = live("sphere_nearby", &[], &["camera.position=[0.3, 1.1, 3.6]"]);
+    assert!(!u.rebuilt && u.moved && u.recreated == ["shadow_map"], "{u:?}");
+}
+
+#[test]
+fn the_adaptive_tone_map_is_re_created_with_its_settings() {
+    let u = live(
+        "caustic_sphere",
+        &["render.tonemap=adaptive"],
+        &["render.tonemap=adaptive", "render.tonemap_adaptive.key=0.3"],
+    );
+    assert_eq!((u.rebuilt, u.recreated.as_slice()), (false, &["tonemap"][..]), "{u:?}");
+}
+
+#[test]
+fn topology_and_image_size_re_create_the_renderer() {
+    let u = live("sphere_env", &[], &["render.sphere_segments=24"]);
+    assert!(u.rebuilt, "{u:?}");
+    let u = live("sphere_env", &[], &["camera.width=48"]);
+    assert!(u.rebuilt, "{u:?}");
+}
+
+#[test]
+fn switching_the_caustics_rebinds_their_textures_without_a_rebuild() {
+    for (from, to) in [("none", "caustics_map"), ("caustics_map", "photon_buffer"), ("photon_buffer", "none")] {
+        let u = live("caustic_sphere", &[&format!("render.caustics={from}")], &[&format!("render.caustics={to}")]);
+        assert!(!u.rebuilt, "{from} -> {to}: {u:?}");
+        assert!(u.recreated.contains(&"deferred_shading"), "{from} -> {to}: {u:?}");
+    }
+    // A new atlas size: the atlas, and the two techniques that draw into and read it.
+    let u = live(
+        "caustic_sphere",
+        &["render.caustics=caustics_map"],
+        &["render.caustics=caustics_map", "render.caustics_map.map_size=128"],
+    );
+    assert_eq!((u.rebuilt, u.recreated.as_slice()), (false, &["caustics = \"caustics_map\""][..]), "{u:?}");
+    // Deferred shading reads only the filter radius.
+    let u = live(
+        "caustic_sphere",
+        &["render.caustics=caustics_map"],
+        &["render.caustics=caustics_map", "render.caustics_map.filter=2"],
+    );
+    assert_eq!(u.recreated, ["caustics = \"caustics_map\"", "deferred_shading"], "{u:?}");
+}
+
+#[test]
+fn moving_an_object_or_a_light_updates_everything_built_from_positions() {
+    // Hu & Qin §2.2's impostor rectangles and textures, caustics mapping's light frusta and
+    // Hu & Qin §3's photon rectangles are built from where the objects are: after a move the
+    // running renderer draws what a renderer created for the new positions draws.
+    let hu_qin = ["render.refraction=hu_qin"];
+    let u = live("sphere_nearby", &hu_qin, &["render.refraction=hu_qin", "objects.3.center=[0.4, 0.1, 0.3]"]);
+    assert!(!u.rebuilt && u.moved, "{u:?}");
+    assert!(u.recreated.contains(&"refraction = \"hu_qin\"") && u.recreated.contains(&"shadow_map"), "{u:?}");
+    assert!(!u.recreated.contains(&"gbuffer") && !u.recreated.contains(&"deferred_shading"), "{u:?}");
+    for caustics in ["render.caustics=caustics_map", "render.caustics=photon_buffer"] {
+        let u = live("caustic_sphere", &[caustics], &[caustics, "objects.1.center=[0.3, 1.0, -0.2]"]);
+        assert!(!u.rebuilt && u.moved, "{caustics}: {u:?}");
+        let u = live("caustic_sphere", &[caustics], &[caustics, "lights.0.position=[0.5, 4.5, 0.2]"]);
+        assert!(!u.rebuilt && u.moved, "{caustics}, light: {u:?}");
+    }
+    // The water's heightfield over time: same topology, new vertices.
+    let u = live("water_pool", &[], &["objects.5.time=0.7"]);
+    assert!(!u.rebuilt && u.moved, "{u:?}");
+}
