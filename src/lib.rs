@@ -8,10 +8,10 @@
 #![allow(clippy::result_large_err)]
 
 pub mod app;
+pub mod frame;
 pub mod gpu;
 pub mod graph;
 pub mod metrics;
-pub mod passes;
 pub mod reference;
 pub mod renderer;
 pub mod scene;

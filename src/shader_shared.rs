@@ -25,11 +25,11 @@ shared_constants! {
     BINDING_ENVIRONMENT: u32 = 2;
     BINDING_SHADOW_CUBE: u32 = 3;
     BINDING_SHADOW_2D: u32 = 4;
-    // The caustic map atlas (src/passes/caustics_map.rs), laid out like the shadow atlas:
+    // The caustic map atlas (src/technique/caustics/caustics_map.rs), laid out like the shadow atlas:
     // flux per texel in W, looked up by the receivers as a cube or as layers.
     BINDING_CAUSTIC_CUBE: u32 = 5;
     BINDING_CAUSTIC_2D: u32 = 6;
-    // Photon-buffer caustics (Hu & Qin 2007 §3; src/passes/photon_buffer.rs): the filtered
+    // Photon-buffer caustics (Hu & Qin 2007 §3; src/technique/caustics/photon_buffer.rs): the filtered
     // caustic textures TEX_CAUSTICS_i (one array layer per receiver rectangle) and the
     // rectangles; a 1x1 stand-in and one zero rectangle when no photon pass runs.
     BINDING_PHOTON_CAUSTICS: u32 = 7;
@@ -43,7 +43,7 @@ shared_constants! {
     // The adaptive tone map's state (scale, 1/L_white^2, ...) in set 1 of tonemap/adaptive.frag.
     BINDING_TONEMAP_STATE: u32 = 4;
 
-    // The adaptive tone map's reduction kernels (glsl/tonemap/*.comp; src/passes/tonemap.rs):
+    // The adaptive tone map's reduction kernels (glsl/tonemap/*.comp; src/technique/baseline/tonemap.rs):
     // one set 0. A workgroup of TONEMAP_GROUP^2 invocations, each summing a TONEMAP_BLOCK^2
     // block of pixels in a loop: a tile of (TONEMAP_GROUP TONEMAP_BLOCK)^2 pixels. Few
     // invocations and a serial loop because every barrier of the shared-memory tree costs a
@@ -93,7 +93,7 @@ shared_constants! {
     SPECULAR_MODE_REFRACTION: u32 = 0;
     SPECULAR_MODE_REFLECTION: u32 = 1;
 
-    // Image-space refraction (src/passes/refractor_layers.rs). Set 1 of the layer passes:
+    // Image-space refraction (src/technique/refraction/refractor_layers.rs). Set 1 of the layer passes:
     // the per-vertex d_N storage buffer (Wyman 2005 only) and BINDING_GBUF_DEPTH (peeling).
     BINDING_REFR_DN: u32 = 4;
     // Set 1 of the refraction shading passes, besides BINDING_GBUF_NORMAL / _DEPTH.
@@ -110,7 +110,7 @@ shared_constants! {
     LAYER_BACK_FURTHEST: u32 = 2;
     LAYER_SECOND: u32 = 3;
 
-    // Distance impostors (Szirmay-Kalos et al. 2005, src/passes/distance_impostor.rs). Set 1
+    // Distance impostors (Szirmay-Kalos et al. 2005, src/technique/impostor/distance_impostor.rs). Set 1
     // of the impostor shading passes, besides BINDING_GBUF_NORMAL / _DEPTH: the environment
     // impostor's radiance (rgb, distance in a unless separate) and distance cubes, and the
     // refractor map (xyz outward normal, w distance from the refractor's centre).
@@ -122,7 +122,7 @@ shared_constants! {
     // Probe modes: Hit() against a map, and the conductor Fresnel terms.
     IMPOSTOR_PROBE_HIT: u32 = 0;
     IMPOSTOR_PROBE_FRESNEL: u32 = 1;
-    // Caustics mapping (Shah et al. 2007; src/passes/caustics_map.rs). Set 1 of the splat
+    // Caustics mapping (Shah et al. 2007; src/technique/caustics/caustics_map.rs). Set 1 of the splat
     // pass: the source faces and lights, the materials, the receivers' distance atlas (as a
     // cube array and as layers) and the refractor layers seen from the light.
     CAUSTIC_BINDING_FACES: u32 = 0;
@@ -149,7 +149,7 @@ shared_constants! {
     CAUSTIC_FACE_PERSPECTIVE: u32 = 0;
     CAUSTIC_FACE_ORTHOGRAPHIC: u32 = 1;
     // Light-map caustics with distance impostors (Szirmay-Kalos et al. 2005 §5;
-    // src/passes/impostor_lightmap.rs). Set 1 of the caustic-map pass: the uv cube map,
+    // src/technique/impostor/impostor_lightmap.rs). Set 1 of the caustic-map pass: the uv cube map,
     // filtered (its distance, for Hit()) and unfiltered (uv and receiver id), and the refractor
     // map; of the splat pass: the caustic map's two targets; of the apply pass (besides
     // BINDING_GBUF_*): the light maps.
@@ -166,7 +166,7 @@ shared_constants! {
     // normalised filter, or the paper's s * (filtered photon count).
     PHOTON_PHYSICAL: u32 = 0;
     PHOTON_PAPER: u32 = 1;
-    // Eikonal rendering (Ihrke et al. 2007; src/passes/eikonal.rs). The volume compute
+    // Eikonal rendering (Ihrke et al. 2007; src/technique/eikonal/eikonal_view.rs). The volume compute
     // passes read EIKONAL_BINDING_SRC and write EIKONAL_BINDING_DST (storage images); set 1
     // of eikonal_view samples the field (grad n, n - 1) at BINDING_EIKONAL_FIELD besides
     // BINDING_GBUF_DEPTH.
@@ -183,7 +183,7 @@ shared_constants! {
     EIKONAL_RK4: u32 = 1;
     // Compute workgroup edge of the volume passes (4^3 invocations).
     EIKONAL_GROUP: u32 = 4;
-    // Hu & Qin 2007 §2.2 nearby geometry (src/passes/nearby_impostors.rs): set 1 of
+    // Hu & Qin 2007 §2.2 nearby geometry (src/technique/refraction/nearby_impostors.rs): set 1 of
     // refraction_hu_qin also holds the impostor rectangles (storage buffer) and TEX_i /
     // TEX_DEPTH_i (2D array: rgb radiance, a axial depth). At most MAX_NEARBY_RECTS
     // rectangles (the nearest objects are kept); the shader loops over them per ray.
@@ -198,8 +198,8 @@ shared_constants! {
     // Rectangle sets, one per OBJ_R (every dielectric, and the specular objects whose
     // recursive impostor textures look up their own set), each of at most MAX_NEARBY_RECTS.
     MAX_NEARBY_SETS: u32 = 8;
-    // Eikonal light simulator (Ihrke et al. 2007 section 5.2; src/passes/eikonal_light.rs,
-    // src/passes/histopyramid.rs). One descriptor set for every light/HistoPyramid kernel.
+    // Eikonal light simulator (Ihrke et al. 2007 section 5.2; src/technique/eikonal/eikonal_light.rs,
+    // src/technique/eikonal/histopyramid.rs). One descriptor set for every light/HistoPyramid kernel.
     LIGHT_BINDING_STATE: u32 = 0;
     LIGHT_BINDING_CLASSES: u32 = 1;
     LIGHT_BINDING_LEVELS: u32 = 2;
@@ -218,7 +218,7 @@ shared_constants! {
     // The irradiance and direction volumes in set 1 of eikonal_view and deferred_shading.
     BINDING_EIKONAL_IRRADIANCE: u32 = 14;
     BINDING_EIKONAL_LIGHT_DIR: u32 = 15;
-    // --- branch `eikview` (issue 7; src/passes/eikonal_nearby.rs): what exit and reflected
+    // --- branch `eikview` (issue 7; src/technique/eikonal/eikonal_nearby.rs): what exit and reflected
     // view rays meet. Set 1 of eikonal_view also holds the impostor rectangles and TEX_i of
     // Hu & Qin 2007 §2.2 around the volume (the 14/15 of BINDING_NEARBY_* are taken by the
     // light volumes there) and the triangles of the exactly intersected flat receivers

@@ -1,4 +1,4 @@
-//! Caustics mapping (Shah et al. 2007; src/passes/caustics_map.rs) on the caustic scenes:
+//! Caustics mapping (Shah et al. 2007; src/technique/caustics/caustics_map.rs) on the caustic scenes:
 //! finite images without validation errors, flux conservation (Eq. 6 in physical units),
 //! and agreement with prism's exact reference (photon-mapped caustics).
 mod common;
@@ -85,7 +85,7 @@ fn caustic_flux_is_conserved_and_independent_of_the_grid() {
 /// does not depend on the grid (within 5% from 64^2 to 256^2), and it is the solid-angle
 /// flux times the mean N . L over the ball's projected disk (Eq. 6's extra cosine: 2/3 for a
 /// sphere) and the face's mean texel solid angle over that of its centre, where the ball is
-/// (in physical units V itself cancels: src/passes/caustics_map.rs). Measured 5.311 / 5.327 /
+/// (in physical units V itself cancels: src/technique/caustics/caustics_map.rs). Measured 5.311 / 5.327 /
 /// 5.336 W at 64 / 128 / 256 (0.5% apart), 0.58 of solid_angle's 9.18 W, whose closed form is
 /// 9.24 W (above): solid_angle is the more accurate and stays the default.
 #[test]

@@ -1,12 +1,12 @@
-//! Eikonal rendering (Ihrke et al. 2007; src/passes/eikonal.rs): the integrators of the ray
+//! Eikonal rendering (Ihrke et al. 2007; src/technique/eikonal/eikonal_view.rs): the integrators of the ray
 //! equation on the CPU (straight rays, the Luneburg focus, fourth-order convergence of RK4),
 //! the GPU view renderer on the volume scenes and their edge cases, and the scene checks.
 mod common;
 
 use glam::DVec3;
-use prism::passes::eikonal::{euler_step, rk4_step, sphere_crossing, trace, RayState};
 use prism::scene::techniques::Integrator;
 use prism::scene::{self, IndexProfile};
+use prism::technique::eikonal::eikonal_view::{euler_step, rk4_step, sphere_crossing, trace, RayState};
 
 const LENS: IndexProfile = IndexProfile::Luneburg { center: glam::Vec3::ZERO, radius: 1.0 };
 

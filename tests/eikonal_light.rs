@@ -1,15 +1,15 @@
 //! The eikonal light simulator (Ihrke et al. 2007, sections 4.2 and 5.2;
-//! src/passes/eikonal_light.rs, src/passes/histopyramid.rs): the GPU HistoPyramid against
+//! src/technique/eikonal/eikonal_light.rs, src/technique/eikonal/histopyramid.rs): the GPU HistoPyramid against
 //! its CPU version, the Appendix's step-size properties, the Luneburg focus of GPU
 //! particles, energy balance, stability, and the renders with the light simulation on.
 mod common;
 
 use glam::{DVec3, Vec3};
-use prism::passes::eikonal::{rk4_step, RayState};
-use prism::passes::eikonal_light::{light_rk4_step, optical_path, Patch, StandaloneLight};
-use prism::passes::histopyramid::{cpu_expand, gpu_expand};
 use prism::scene::techniques::EikonalParams;
 use prism::scene::{IndexProfile, Light};
+use prism::technique::eikonal::eikonal_light::{light_rk4_step, optical_path, Patch, StandaloneLight};
+use prism::technique::eikonal::eikonal_view::{rk4_step, RayState};
+use prism::technique::eikonal::histopyramid::{cpu_expand, gpu_expand};
 
 /// xorshift64*: reproducible random classes without a dependency.
 struct Rng(u64);

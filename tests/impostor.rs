@@ -1,4 +1,4 @@
-//! Distance impostors (Szirmay-Kalos et al. 2005, src/passes/distance_impostor.rs): Hit()
+//! Distance impostors (Szirmay-Kalos et al. 2005, src/technique/impostor/distance_impostor.rs): Hit()
 //! against the analytic room of room_mirror (the paper's exact case: planar walls), the
 //! error against prism's exact reference compared with classic environment mapping, the
 //! conductor Fresnel approximation against the exact formula, regeneration when the sphere

@@ -1,5 +1,5 @@
 //! Light-map caustics with distance impostors (Szirmay-Kalos et al. 2005 §5;
-//! src/passes/impostor_lightmap.rs), `render.caustics = "impostor_lightmap"`: the caustic
+//! src/technique/impostor/impostor_lightmap.rs), `render.caustics = "impostor_lightmap"`: the caustic
 //! scenes render without validation errors or NaN, the light maps conserve the photons' power
 //! (total flux on caustic_sphere's floor against the analytic flux through the ball, stable
 //! in the caustic-map size), and the degenerate lights stay finite.

@@ -1,10 +1,10 @@
 //! Hu & Qin 2007 §2.2: reflection and refraction of nearby geometry through impostor
-//! rectangles (src/passes/nearby_impostors.rs, glsl/include/nearby.glsl): sphere_nearby
+//! rectangles (src/technique/refraction/nearby_impostors.rs, glsl/include/nearby.glsl): sphere_nearby
 //! renders with them, with finite radiance at every extreme; the iterative correction
 //! (Fig. 16) lowers the error against prism's exact reference; and Fig. 18's experiment:
 //! behind a refractor of ior 1 the corrected lookup shows the scene as it is without it.
 //! The CPU check of the ray/rectangle intersection and (u, v) is the unit test in
-//! src/passes/nearby_impostors.rs.
+//! src/technique/refraction/nearby_impostors.rs.
 mod common;
 
 use common::{context, render_on, scene};

@@ -1,4 +1,4 @@
-//! Photon-buffer caustics (Hu & Qin 2007 §3; src/passes/photon_buffer.rs): the caustic
+//! Photon-buffer caustics (Hu & Qin 2007 §3; src/technique/caustics/photon_buffer.rs): the caustic
 //! scenes render without validation errors or NaN, the GPU counting and filter agree with a
 //! CPU version of §3.2 and conserve energy, the physical normalisation matches the closed form
 //! and prism's exact reference, and the extreme cases stay finite.

@@ -1,5 +1,5 @@
 //! Hu & Qin 2007 §2.2.1: recursive refraction through the impostors of *other dielectrics*
-//! (src/passes/nearby_impostors.rs, glsl/nearby/impostor_body.glsl). Every dielectric is its
+//! (src/technique/refraction/nearby_impostors.rs, glsl/nearby/impostor_body.glsl). Every dielectric is its
 //! own OBJ_R with its own rectangle set, and a dielectric OBJ_k's TEX_k shows it refracting:
 //! the environment at level 0, the level n - 1 impostors of its own set at level n. Measured
 //! on assets/scenes/two_glass_balls.toml (glass ball B behind glass ball A) against prism's
@@ -127,7 +127,7 @@ fn recursion_levels_follow_the_scene() {
     );
     // Each ball is its own OBJ_R and a rectangle in the other's set.
     let s = two_balls(32, &[]);
-    let layout = prism::passes::nearby_impostors::nearby_layout(&s, 1);
+    let layout = prism::technique::refraction::nearby_impostors::nearby_layout(&s, 1);
     assert_eq!(layout.sets.iter().map(|s| s.object).collect::<Vec<_>>(), [3, 4]);
     for set in &layout.sets {
         let objects: Vec<usize> =
@@ -362,7 +362,7 @@ fn many_dielectrics_keep_the_stated_limits() {
     std::fs::write(&file, toml).unwrap();
     let o = ["camera.width=32", "camera.height=32", "render.hu_qin.impostor_resolution=16"].map(String::from);
     let s = prism::scene::load(&file, &o).unwrap();
-    let layout = prism::passes::nearby_impostors::nearby_layout(&s, 1);
+    let layout = prism::technique::refraction::nearby_impostors::nearby_layout(&s, 1);
     let max_sets = prism::MAX_NEARBY_SETS as usize;
     assert_eq!(layout.sets.len(), max_sets);
     assert_eq!(layout.sets.iter().map(|s| s.object).collect::<Vec<_>>(), (1..=max_sets).collect::<Vec<_>>());

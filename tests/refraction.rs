@@ -5,8 +5,8 @@ mod common;
 
 use common::{assert_golden, context, render, render_on, scene};
 use glam::Vec3;
-use prism::passes::wyman_distance::compute_distance_along_normals;
 use prism::renderer::Renderer;
+use prism::technique::refraction::wyman_distance::compute_distance_along_normals;
 
 const TECHNIQUES: [&str; 2] = ["wyman", "hu_qin"];
 

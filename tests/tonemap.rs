@@ -1,15 +1,15 @@
 //! The adaptive tone map (`render.tonemap = "adaptive"`, Ihrke et al. 2007 §5.3 after
-//! Krawczyk et al. 2005; src/passes/tonemap.rs): the GPU reduction and operator against the
+//! Krawczyk et al. 2005; src/technique/baseline/tonemap.rs): the GPU reduction and operator against the
 //! CPU version in src/app/output.rs, the extremes, and the temporal adaptation.
 mod common;
 
 use std::path::Path;
 
 use prism::app::output;
-use prism::passes::tonemap::AdaptiveStats;
 use prism::renderer::Renderer;
 use prism::scene::techniques::TonemapAdaptiveParams;
 use prism::scene::{self, Scene};
+use prism::technique::baseline::tonemap::AdaptiveStats;
 
 /// Render one converged frame; return HDR, LDR and the GPU's tone-map state.
 fn render(ctx: &std::sync::Arc<prism::gpu::GpuContext>, s: &Scene) -> (Vec<f32>, Vec<u8>, AdaptiveStats) {

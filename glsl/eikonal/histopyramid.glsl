@@ -7,7 +7,7 @@
 // because Shader Model 3 hardware had no buffers; in a storage buffer the list is 1D and a
 // 4-ary reduction of it has the same depth (log4 N) and the same traversal as the 2D
 // pyramid's 2x2 quads, without padding the list to a square power of two.
-// Mirrored exactly on the CPU by src/passes/histopyramid.rs (tests/eikonal_light.rs).
+// Mirrored exactly on the CPU by src/technique/eikonal/histopyramid.rs (tests/eikonal_light.rs).
 #include "prism_shared.glsl"
 
 // Entries of level 0: the list capacity, also the most outputs (the clamp).

@@ -1,5 +1,5 @@
 // Shared by the eikonal light simulator's kernels (Ihrke et al. 2007, section 5.2;
-// src/passes/eikonal_light.rs): the wavefront patch list, the smoothed index field, the
+// src/technique/eikonal/eikonal_light.rs): the wavefront patch list, the smoothed index field, the
 // irradiance and direction volumes. Set 0 is the HistoPyramid (histopyramid.glsl).
 #include "histopyramid.glsl"
 
@@ -35,7 +35,7 @@ layout(set = 1, binding = LIGHT_BINDING_IRRADIANCE, rgba32f) uniform image3D irr
 layout(set = 1, binding = LIGHT_BINDING_DIRECTION, rgba32f) uniform image3D direction;
 
 // Per run of the simulator (one light, one index channel, one tile of the initial
-// wavefront; src/passes/eikonal_light.rs `LightRun`).
+// wavefront; src/technique/eikonal/eikonal_light.rs `LightRun`).
 layout(push_constant) uniform RunPush {
     uint slab;        // index slab of `field` the wavefront travels through (dispersion)
     float sign;       // +1: deposit; -1: take a run's deposits back (an overflowing tile)

@@ -18,7 +18,7 @@
 //   splatted trilinearly (tent of two voxels) at the midpoint of the step's segment, since
 //   neighbouring midpoints of patches up to a voxel wide are up to a voxel apart. Every
 //   ray's irradiance is summed (Eqs. 6-7 sum over the incoming rays j), and so are the
-//   lights, tiles and channels of src/passes/eikonal_light.rs, whose runs all add here;
+//   lights, tiles and channels of src/technique/eikonal/eikonal_light.rs, whose runs all add here;
 // - section 5.2.3: classify it 0 (eliminate: below the energy threshold, leaving the volume,
 //   or its orientation flipped against its direction = it crossed a wavefront singularity,
 //   unless KEEP_CROSSED), 1 (retain) or 4 (tessellate: its corners span more than one voxel

@@ -1,10 +1,10 @@
-// Branch `eikview` (issue 7; src/passes/eikonal_nearby.rs): what an eikonal view ray meets
+// Branch `eikview` (issue 7; src/technique/eikonal/eikonal_nearby.rs): what an eikonal view ray meets
 // after it leaves the volume, or after the boundary reflects it. Section 5.3 of Ihrke et al.
 // 2007 looks up the environment only; for Fig. 7 the paper "replaced the environment map
 // lookup by a ray-plane intersection in the fragment shader" and points to Hu and Qin [2007]
 // for more complex nearby geometry (§6). Both:
 // - the flat diffuse receivers (quads, boxes) as triangles, intersected exactly
-//   (Moller & Trumbore 1997; src/passes/eikonal_nearby.rs ray_triangle is the CPU twin) and
+//   (Moller & Trumbore 1997; src/technique/eikonal/eikonal_nearby.rs ray_triangle is the CPU twin) and
 //   shaded like deferred shading with the light simulation's irradiance (receiver.glsl);
 // - the other nearby objects through Hu & Qin 2007 §2.2's impostor rectangles around the
 //   volume (glsl/include/nearby.glsl: Fig. 13's rectangle hit, Figs. 16-17's lookup);

@@ -1,6 +1,6 @@
 // A diffuse receiver lit by the eikonal light simulation (Ihrke et al. 2007, Fig. 1 left;
 // Eq. 7 with a Lambertian BRDF). The irradiance volume covers the volume's box and
-// `light_below` metres under it (src/passes/eikonal_light.rs), so a floor just under the
+// `light_below` metres under it (src/technique/eikonal/eikonal_light.rs), so a floor just under the
 // volume lies inside. There the simulated light replaces the direct terms of the lights
 // (all of them are simulated): the wavefronts carry both the light that missed the volume
 // (I / r^2, the same as the direct term) and the refracted, focused light. The environment

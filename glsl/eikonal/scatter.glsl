@@ -2,7 +2,7 @@
 // Eqs. 2, 3 and 6, sections 4.1 and 5.3): with one incoming ray per voxel from the light
 // simulator (section 5.2.2, the highest-energy ray), the in-scatter integral of Eq. 3
 // becomes the sum of Eq. 6 with a single term, p(x, v, l) dE_omega, where dE_omega is the
-// irradiance volume and l the direction volume (src/passes/eikonal_light.rs). The phase
+// irradiance volume and l the direction volume (src/technique/eikonal/eikonal_light.rs). The phase
 // function is Henyey-Greenstein (section 5.1), evaluated "on-the-fly in the fragment
 // shader" (section 5.3). Per step of arc length ds the ray gains
 //     T(s) sigma_s p(cos theta) dE_omega ds,

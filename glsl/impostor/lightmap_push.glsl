@@ -1,5 +1,5 @@
 // Push constants of the caustic-map pass of light-map caustics
-// (src/passes/impostor_lightmap.rs, CausticPush).
+// (src/technique/impostor/impostor_lightmap.rs, CausticPush).
 layout(push_constant) uniform Push {
     mat4 view_proj;      // world -> the light's clip space (fitted to the specular objects)
     vec4 light;          // xyz: point light position or unit direction of travel; w: LIGHT_*

@@ -5,7 +5,7 @@
 // texture space and "moves the quadrilateral out of the clipping region if the alpha is
 // negative". One point sprite per caustic-map texel; the Gaussian weights are normalized here
 // over exactly the texels the fragment shader keeps (centres within `radius`), so each photon
-// deposits all of its power (src/passes/impostor_lightmap.rs, `splat_weights`, checks the same
+// deposits all of its power (src/technique/impostor/impostor_lightmap.rs, `splat_weights`, checks the same
 // sum on the CPU).
 #include "common.glsl"
 layout(set = 0, binding = LIGHTMAP_BINDING_PHOTON_HIT) uniform sampler2D photon_hit;

@@ -1,4 +1,4 @@
-// Push constants of the impostor map passes (src/passes/distance_impostor.rs, MapPush).
+// Push constants of the impostor map passes (src/technique/impostor/distance_impostor.rs, MapPush).
 layout(push_constant) uniform Push {
     mat4 view_proj;   // world -> clip space of one cube face
     vec4 reference;   // xyz: the map's reference point o

@@ -1,4 +1,4 @@
-// Set 1 and push constants of the impostor shading passes (src/passes/distance_impostor.rs,
+// Set 1 and push constants of the impostor shading passes (src/technique/impostor/distance_impostor.rs,
 // ShadePush), and the localized environment lookup of §3.
 #include "frame.glsl"
 #include "environment.glsl"

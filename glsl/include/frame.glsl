@@ -1,5 +1,5 @@
 // Set 0, shared by every pass: frame uniforms, materials, environment, shadow maps.
-// Layouts mirror src/renderer/gpu_types.rs (std140 / std430, vec4 members only).
+// Layouts mirror src/frame/gpu_types.rs (std140 / std430, vec4 members only).
 #ifndef PRISM_FRAME_GLSL
 #define PRISM_FRAME_GLSL
 #include "common.glsl"
@@ -33,11 +33,11 @@ layout(set = 0, binding = BINDING_MATERIALS, std430) readonly buffer Materials {
 layout(set = 0, binding = BINDING_ENVIRONMENT) uniform sampler2D environment_map;
 layout(set = 0, binding = BINDING_SHADOW_CUBE) uniform samplerCubeArray shadow_cubes;
 layout(set = 0, binding = BINDING_SHADOW_2D) uniform sampler2DArray shadow_layers;
-// Caustic-map atlas (Shah et al. 2007; src/passes/caustics_map.rs): flux per texel in W,
+// Caustic-map atlas (Shah et al. 2007; src/technique/caustics/caustics_map.rs): flux per texel in W,
 // laid out like the shadow atlas.
 layout(set = 0, binding = BINDING_CAUSTIC_CUBE) uniform samplerCubeArray caustic_cubes;
 layout(set = 0, binding = BINDING_CAUSTIC_2D) uniform sampler2DArray caustic_layers;
-// Photon-buffer caustic textures (Hu & Qin 2007 §3; src/passes/photon_buffer.rs): one layer
+// Photon-buffer caustic textures (Hu & Qin 2007 §3; src/technique/caustics/photon_buffer.rs): one layer
 // per receiver rectangle, and the rectangles.
 #include "photon_rect.glsl"
 layout(set = 0, binding = BINDING_PHOTON_CAUSTICS) uniform sampler2DArray photon_caustics;

@@ -1,5 +1,5 @@
 // Hu & Qin 2007 §2.2: reflection and refraction of nearby geometry through impostor
-// rectangles (src/passes/nearby_impostors.rs builds them), one rectangle set per OBJ_R,
+// rectangles (src/technique/refraction/nearby_impostors.rs builds them), one rectangle set per OBJ_R,
 // selected by nearby_set (nearby_select_object). nearby_radiance(P, Ray) is the
 // "Ray Tracing Pass" of Fig. 13 with the seed selection of Fig. 17 and the iterative lookup
 // of Fig. 16. The including shader declares, before including this file:

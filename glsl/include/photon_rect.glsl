@@ -1,5 +1,5 @@
 // A receiver rectangle RECT_i of Hu & Qin 2007 §2.2.1 (Fig. 12-13), as the photon-buffer
-// caustics (§3, src/passes/photon_buffer.rs) use it. Mirrors GpuPhotonRect (std430).
+// caustics (§3, src/technique/caustics/photon_buffer.rs) use it. Mirrors GpuPhotonRect (std430).
 #ifndef PRISM_PHOTON_RECT_GLSL
 #define PRISM_PHOTON_RECT_GLSL
 struct PhotonRect {

@@ -1,4 +1,4 @@
-// Push constants of the impostor-texture pass (src/passes/nearby_impostors.rs, ImpostorPush).
+// Push constants of the impostor-texture pass (src/technique/refraction/nearby_impostors.rs, ImpostorPush).
 layout(push_constant) uniform Push {
     mat4 view_proj;   // world -> clip of glOrtho(-d_i, d_i, -d_i, d_i, near, far) from O_R to O_i
     vec4 origin;      // xyz: O_R, the refractor's centre

@@ -1,5 +1,5 @@
 #version 450
-// Refractor layers (src/passes/refractor_layers.rs): world-space vertices, plus Wyman 2005's
+// Refractor layers (src/technique/refraction/refractor_layers.rs): world-space vertices, plus Wyman 2005's
 // per-vertex distance d_N along the inverted normal (§3.1), indexed by gl_VertexIndex (which
 // includes the draw's vertex offset, so it indexes the scene-wide vertex array).
 #include "frame.glsl"

@@ -6,7 +6,7 @@
 #define PRISM_TONEMAP_ADAPTIVE_GLSL
 #include "prism_shared.glsl"
 
-// Push constants of log_average.comp and adapt.comp (src/passes/tonemap.rs, `AdaptPush`).
+// Push constants of log_average.comp and adapt.comp (src/technique/baseline/tonemap.rs, `AdaptPush`).
 struct AdaptPush {
     uvec4 size;        // width, height, workgroups of log_average, frame slot (stats entry)
     vec4 params;       // dt in s (< 0: converged, no temporal state), delta, key (<= 0: auto), white (<= 0: auto)

@@ -59,7 +59,7 @@ pub struct BenchReport {
     /// The eikonal light simulation (run once when the renderer is created): steps, patch
     /// count per step, peak, wall-clock seconds. Absent without one.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub light_simulation: Option<crate::passes::eikonal_light::LightStats>,
+    pub light_simulation: Option<crate::technique::eikonal::eikonal_light::LightStats>,
     pub note: &'static str,
 }
 

@@ -24,9 +24,9 @@ use winit::keyboard::{KeyCode, PhysicalKey};
 use winit::raw_window_handle::HasDisplayHandle;
 use winit::window::{Window, WindowId};
 
-use crate::gpu::{vk, Access, Acquired, GpuContext, GpuError, Overlay, Presented, SubmitSync, Swapchain};
+use crate::gpu::{vk, Acquired, GpuContext, GpuError, Overlay, Presented, SubmitSync, Swapchain};
 use crate::graph::ImageId;
-use crate::renderer::{RenderError, Renderer, FRAMES_IN_FLIGHT};
+use crate::renderer::{OverlayDraw, RenderError, Renderer, WindowTarget, FRAMES_IN_FLIGHT};
 use crate::scene::{self, Scene};
 
 use super::output::{self, OutputFile};
@@ -865,26 +865,14 @@ impl Running {
         let sync = SubmitSync { wait: vec![(wait, first_use)], signal: vec![render_done] };
         // The adaptive tone map adapts over the frame time (Krawczyk et al. 2005).
         self.renderer.set_tonemap_time_step(Some(dt));
-        let overlay = &mut self.overlay;
         let show_overlay = self.ui.visible && !primitives.is_empty();
-        let mut overlay_result = Ok(());
-        let ppp = full.pixels_per_point;
-        self.renderer.render_frame_with(&sync, |frame, fin| {
-            frame
-                .pass(ui::PRESENT_BLIT)
-                .read(fin.ldr_id, Access::TransferRead)
-                .write(swap_id, Access::TransferWrite)
-                .record(move |cmd| cmd.blit_to(fin.ldr, swap_raw, extent, vk::Filter::LINEAR));
-            if show_overlay {
-                let result = &mut overlay_result;
-                let primitives = &primitives;
-                frame.pass(ui::OVERLAY).write(swap_id, Access::ColorAttachment).record(move |cmd| {
-                    *result = overlay.record(cmd, index as usize, ppp, primitives);
-                });
-            }
-            frame.release(swap_id, Access::Present);
-        })?;
-        overlay_result?;
+        let overlay = show_overlay.then(|| OverlayDraw {
+            overlay: &mut self.overlay,
+            pixels_per_point: full.pixels_per_point,
+            primitives: &primitives,
+        });
+        let target = WindowTarget { id: swap_id, raw: swap_raw, extent, index };
+        self.renderer.render_to_window(&sync, &target, overlay)?;
         match self.swapchain.present(index) {
             Ok(Presented::Ok) => self.swapchain_stale |= suboptimal,
             Ok(Presented::Stale) => self.swapchain_stale = true,

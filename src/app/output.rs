@@ -5,9 +5,9 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 
-use crate::passes::tonemap::AdaptiveStats;
 use crate::scene::techniques::TonemapAdaptiveParams;
 use crate::scene::RenderSettings;
+use crate::technique::baseline::tonemap::AdaptiveStats;
 
 pub struct OutputFile {
     target: PathBuf,
@@ -158,7 +158,7 @@ pub fn adaptive_stats(rgba: &[f32], p: &TonemapAdaptiveParams, exposure: f32) ->
 }
 
 /// The adaptive tone map on the CPU, term for term as glsl/tonemap/adaptive.frag (see
-/// src/passes/tonemap.rs): L = exposure a / L_a * L_w, L_d = L (1 + L / L_white^2) / (1 + L),
+/// src/technique/baseline/tonemap.rs): L = exposure a / L_a * L_w, L_d = L (1 + L / L_white^2) / (1 + L),
 /// colour scaled by L_d / L_w, sRGB. RGBA f32 in, RGBA8 out, and the state it used.
 pub fn tonemap_adaptive(rgba: &[f32], p: &TonemapAdaptiveParams, exposure: f32) -> (Vec<u8>, AdaptiveStats) {
     let s = adaptive_stats(rgba, p, exposure);

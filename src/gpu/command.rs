@@ -128,7 +128,22 @@ impl<'a> Cmd<'a> {
     }
 
     /// Begin `pass` on `fb` and set the viewport and scissor to the framebuffer.
-    pub fn begin_render_pass(&self, pass: &RenderPass, fb: &Framebuffer, clears: &[Clear]) {
+    /// Record `draw` inside `pass` on `fb`: the pass begins before and ends after it, so a
+    /// begin is never left without its end.
+    pub fn in_render_pass<R>(
+        &self,
+        pass: &RenderPass,
+        fb: &Framebuffer,
+        clears: &[Clear],
+        draw: impl FnOnce(&Cmd) -> R,
+    ) -> R {
+        self.begin_render_pass(pass, fb, clears);
+        let r = draw(self);
+        self.end_render_pass();
+        r
+    }
+
+    fn begin_render_pass(&self, pass: &RenderPass, fb: &Framebuffer, clears: &[Clear]) {
         let values: Vec<vk::ClearValue> = clears
             .iter()
             .map(|c| match *c {
@@ -166,7 +181,7 @@ impl<'a> Cmd<'a> {
         }
     }
 
-    pub fn end_render_pass(&self) {
+    fn end_render_pass(&self) {
         // SAFETY: inside a render pass begun by begin_render_pass.
         unsafe { self.dev().cmd_end_render_pass(self.raw) };
     }
@@ -233,7 +248,7 @@ impl<'a> Cmd<'a> {
 
     /// A compute dispatch whose group counts (three u32) are read by the device from
     /// `buffer` at byte `offset`: GPU-generated work sizes without a CPU round trip (the
-    /// HistoPyramid's output count, src/passes/histopyramid.rs).
+    /// HistoPyramid's output count, src/technique/eikonal/histopyramid.rs).
     pub fn dispatch_indirect(&self, buffer: &Buffer, offset: u64) {
         // SAFETY: recording outside a render pass with a bound compute pipeline; the buffer
         // has INDIRECT_BUFFER usage and holds a VkDispatchIndirectCommand at `offset`.

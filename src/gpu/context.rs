@@ -87,6 +87,11 @@ pub struct GpuContext {
     /// Names of the shaders loaded since the last [`GpuContext::take_shader_log`]: which
     /// pipelines a hot-reloaded shader affects.
     shader_log: Mutex<Vec<String>>,
+    /// Live render passes and samplers by description (src/gpu/render_pass.rs, image.rs).
+    pub(crate) render_passes:
+        Mutex<std::collections::HashMap<super::RenderPassDesc, std::sync::Weak<super::render_pass::SharedRenderPass>>>,
+    pub(crate) samplers:
+        Mutex<std::collections::HashMap<super::SamplerDesc, std::sync::Weak<super::image::SharedSampler>>>,
 }
 
 impl GpuContext {
@@ -313,6 +318,8 @@ impl GpuContext {
             oneshot_pool: Mutex::new(oneshot_pool),
             shader_overrides: Mutex::default(),
             shader_log: Mutex::default(),
+            render_passes: Mutex::default(),
+            samplers: Mutex::default(),
         }))
     }
 

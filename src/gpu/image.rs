@@ -208,7 +208,7 @@ impl Drop for Image {
     }
 }
 
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct SamplerDesc {
     pub filter: vk::Filter,
     pub address_u: vk::SamplerAddressMode,
@@ -234,13 +234,34 @@ impl SamplerDesc {
     };
 }
 
-pub struct Sampler {
+/// The `VkSampler` every [`Sampler`] of one description shares; destroyed with the last of
+/// them. The context's cache holds it weakly.
+pub(crate) struct SharedSampler {
     ctx: Arc<GpuContext>,
+    raw: vk::Sampler,
+}
+
+impl Drop for SharedSampler {
+    fn drop(&mut self) {
+        // Samplers are only dropped with their owners, after wait_idle.
+        // SAFETY: no pending command buffer references the sampler.
+        unsafe { self.ctx.raw().destroy_sampler(self.raw, None) };
+    }
+}
+
+pub struct Sampler {
+    _shared: Arc<SharedSampler>,
     pub(crate) raw: vk::Sampler,
 }
 
 impl Sampler {
+    /// The sampler of `desc`: the cached one if a live sampler has the same description,
+    /// else a new one named `name`.
     pub fn new(ctx: &Arc<GpuContext>, name: &str, desc: SamplerDesc) -> GpuResult<Sampler> {
+        let mut cache = ctx.samplers.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(shared) = cache.get(&desc).and_then(std::sync::Weak::upgrade) {
+            return Ok(Sampler { raw: shared.raw, _shared: shared });
+        }
         let info = vk::SamplerCreateInfo::default()
             .mag_filter(desc.filter)
             .min_filter(desc.filter)
@@ -252,14 +273,9 @@ impl Sampler {
         // SAFETY: valid create info.
         let raw = unsafe { ctx.raw().create_sampler(&info, None) }.vk("vkCreateSampler")?;
         ctx.set_name(raw, name);
-        Ok(Sampler { ctx: ctx.clone(), raw })
-    }
-}
-
-impl Drop for Sampler {
-    fn drop(&mut self) {
-        // Samplers are only dropped with the renderer, after wait_idle.
-        // SAFETY: no pending command buffer references the sampler.
-        unsafe { self.ctx.raw().destroy_sampler(self.raw, None) };
+        let shared = Arc::new(SharedSampler { ctx: ctx.clone(), raw });
+        cache.retain(|_, s| s.strong_count() > 0);
+        cache.insert(desc, Arc::downgrade(&shared));
+        Ok(Sampler { _shared: shared, raw })
     }
 }

@@ -125,10 +125,10 @@ impl Overlay {
     ) -> GpuResult<()> {
         let fb = &self.framebuffers[image];
         let extent = fb.extent;
-        cmd.begin_render_pass(&self.render_pass, fb, &[Clear::None]);
-        let drawn = self.renderer.cmd_draw(cmd.raw, extent, pixels_per_point, primitives).map_err(overlay_error);
-        cmd.end_render_pass();
-        drawn
+        let renderer = &mut self.renderer;
+        cmd.in_render_pass(&self.render_pass, fb, &[Clear::None], |cmd| {
+            renderer.cmd_draw(cmd.raw, extent, pixels_per_point, primitives).map_err(overlay_error)
+        })
     }
 }
 

@@ -1,4 +1,5 @@
-//! Explicit `VkRenderPass` objects described by a small key (wgpu-hal's `RenderPassKey`).
+//! Explicit `VkRenderPass` objects described by a small key (wgpu-hal's `RenderPassKey`),
+//! cached by that key: passes with the same attachments share one `VkRenderPass`.
 //! Initial layout = final layout = the attachment layout; the frame graph does every
 //! transition outside the pass (kajiya), so a pass never changes a layout behind its back.
 use std::sync::Arc;
@@ -24,14 +25,34 @@ pub struct RenderPassDesc {
     pub depth_read_only: bool,
 }
 
-pub struct RenderPass {
+/// The `VkRenderPass` every [`RenderPass`] of one description shares; destroyed with the
+/// last of them. The context's cache holds it weakly.
+pub(crate) struct SharedRenderPass {
     ctx: Arc<GpuContext>,
+    raw: vk::RenderPass,
+}
+
+impl Drop for SharedRenderPass {
+    fn drop(&mut self) {
+        // SAFETY: render passes are dropped with their owners after the device is idle.
+        unsafe { self.ctx.raw().destroy_render_pass(self.raw, None) };
+    }
+}
+
+pub struct RenderPass {
+    _shared: Arc<SharedRenderPass>,
     pub(crate) raw: vk::RenderPass,
     pub desc: RenderPassDesc,
 }
 
 impl RenderPass {
+    /// The render pass of `desc`: the cached one if a live pass has the same description,
+    /// else a new one named `name` (the debug name of the first creator).
     pub fn new(ctx: &Arc<GpuContext>, name: &str, desc: &RenderPassDesc) -> GpuResult<RenderPass> {
+        let mut cache = ctx.render_passes.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(shared) = cache.get(desc).and_then(std::sync::Weak::upgrade) {
+            return Ok(RenderPass { raw: shared.raw, _shared: shared, desc: desc.clone() });
+        }
         let load = |a: &Attachment| {
             if a.clear {
                 vk::AttachmentLoadOp::CLEAR
@@ -89,14 +110,10 @@ impl RenderPass {
         // SAFETY: valid create info; referenced arrays live for the call.
         let raw = unsafe { ctx.raw().create_render_pass(&info, None) }.vk("vkCreateRenderPass")?;
         ctx.set_name(raw, name);
-        Ok(RenderPass { ctx: ctx.clone(), raw, desc: desc.clone() })
-    }
-}
-
-impl Drop for RenderPass {
-    fn drop(&mut self) {
-        // SAFETY: render passes are dropped with their owner after the device is idle.
-        unsafe { self.ctx.raw().destroy_render_pass(self.raw, None) };
+        let shared = Arc::new(SharedRenderPass { ctx: ctx.clone(), raw });
+        cache.retain(|_, p| p.strong_count() > 0);
+        cache.insert(desc.clone(), Arc::downgrade(&shared));
+        Ok(RenderPass { _shared: shared, raw, desc: desc.clone() })
     }
 }
 

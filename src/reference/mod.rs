@@ -34,13 +34,13 @@ use std::sync::Arc;
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
 
+use crate::frame::gpu_scene::GpuScene;
+use crate::frame::RenderError;
 use crate::gpu::{
     vk, Access, Buffer, ComputePipeline, DescriptorSet, DescriptorSetLayout, DescriptorWrite, GpuContext,
     MemoryLocation, PipelineLayout, Sampler, SamplerDesc,
 };
 use crate::graph::{BufferId, FrameGraph};
-use crate::renderer::gpu_scene::GpuScene;
-use crate::renderer::RenderError;
 use crate::scene::{Analytic, Light, Material, Scene};
 use crate::*;
 

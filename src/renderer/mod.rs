@@ -2,12 +2,11 @@
 //! needs ([`plan`]), records them through the frame graph each frame, and reads back images
 //! and per-pass GPU timings. Headless; the demo window shares it and only swaps the final
 //! target.
-pub mod gpu_scene;
-pub mod gpu_types;
 pub mod plan;
-pub mod targets;
+mod present;
 mod update;
 
+pub use present::{OverlayDraw, WindowTarget, OVERLAY, PRESENT_BLIT};
 pub use update::Update;
 
 use std::sync::Arc;
@@ -19,27 +18,29 @@ use crate::gpu::{
     MemoryLocation, Sampler, SamplerDesc, SubmitSync, TimestampPool, TimestampQuery,
 };
 use crate::graph::{Frame, FrameGraph, ImageId};
-use crate::passes::caustics_map::CausticsMapPass;
-use crate::passes::distance_impostor::{object_bounds, ImpostorMap, ImpostorReflection, ImpostorRefraction};
-use crate::passes::eikonal::EikonalPass;
-use crate::passes::impostor_lightmap::ImpostorLightmap;
-use crate::passes::photon_buffer::{PhotonBufferPass, PhotonCaustics};
-use crate::passes::refractor_layers::DebugTarget;
-use crate::passes::shadow_map::FAR_DISTANCE;
-use crate::passes::tonemap::{AdaptiveStats, TonemapPass};
 use crate::scene::techniques::{Flux, PhotonBufferParams};
 use crate::scene::{Camera, Scene};
-use crate::technique::{FrameInputs, Recipe, Setup, Technique, TECHNIQUES};
+use crate::technique::baseline::shadow_map::FAR_DISTANCE;
+use crate::technique::baseline::tonemap::{AdaptiveStats, TonemapPass};
+use crate::technique::caustics::caustics_map::CausticsMapPass;
+use crate::technique::caustics::photon_buffer::{PhotonBufferPass, PhotonCaustics};
+use crate::technique::eikonal::eikonal_view::EikonalPass;
+use crate::technique::impostor::distance_impostor::{
+    object_bounds, ImpostorMap, ImpostorReflection, ImpostorRefraction,
+};
+use crate::technique::impostor::impostor_lightmap::ImpostorLightmap;
+use crate::technique::refraction::refractor_layers::DebugTarget;
+use crate::technique::{Cache, FrameInputs, Recipe, Setup, Technique, TECHNIQUES};
 use crate::{
     BINDING_CAUSTIC_2D, BINDING_CAUSTIC_CUBE, BINDING_ENVIRONMENT, BINDING_FRAME, BINDING_MATERIALS,
     BINDING_PHOTON_CAUSTICS, BINDING_PHOTON_RECTS, BINDING_SHADOW_2D, BINDING_SHADOW_CUBE,
 };
 
-pub use crate::technique::RenderError;
-use gpu_scene::GpuScene;
-use gpu_types::FrameUniforms;
+use crate::frame::gpu_scene::GpuScene;
+use crate::frame::gpu_types::{self, FrameUniforms};
+use crate::frame::targets::Targets;
+pub use crate::frame::RenderError;
 use plan::PlannedPass;
-use targets::Targets;
 
 /// Frames the CPU may record ahead of the GPU; each has its own command buffer, fence,
 /// uniform buffer, descriptor set and timestamp pool.
@@ -119,6 +120,8 @@ pub struct Renderer {
     technique_shaders: Vec<Vec<String>>,
     /// [`crate::technique::placement`] of the scene the vertices and lights hold.
     placement: String,
+    /// What techniques keep across their re-creation (the eikonal light simulation).
+    cache: Cache,
     /// Every object's vertex range and current (centre, bounding radius), for moving objects.
     objects: Vec<ObjectState>,
     uniforms: FrameUniforms,
@@ -169,7 +172,7 @@ impl Renderer {
         let plan = &recipe.passes;
         let mut graph = FrameGraph::new();
         let shadow_size = scene.render.shadow_map_size;
-        let shadowed = plan::has(plan, crate::passes::shadow_map::SHADOW_MAP);
+        let shadowed = plan::has(plan, crate::technique::baseline::shadow_map::SHADOW_MAP);
         let gpu_scene = GpuScene::new(ctx, scene, &mut graph, shadow_size)?;
         // The frame set binds the caustic atlas and the photon-buffer textures whether or not
         // a caustic technique writes them; their sizes follow the technique's parameters.
@@ -226,58 +229,19 @@ impl Renderer {
                         &latlong,
                         vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
                     ),
-                    DescriptorWrite::Sampled(
-                        BINDING_SHADOW_CUBE,
-                        targets.shadow_atlas.view(),
-                        &nearest,
-                        vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-                    ),
-                    DescriptorWrite::Sampled(
-                        BINDING_SHADOW_2D,
-                        targets.shadow_atlas.array_view(),
-                        &nearest,
-                        vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-                    ),
-                    DescriptorWrite::Sampled(
-                        BINDING_CAUSTIC_CUBE,
-                        targets.caustic_atlas.view(),
-                        &nearest,
-                        vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-                    ),
-                    DescriptorWrite::Sampled(
-                        BINDING_CAUSTIC_2D,
-                        targets.caustic_atlas.array_view(),
-                        &nearest,
-                        vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-                    ),
-                    DescriptorWrite::Sampled(
-                        BINDING_PHOTON_CAUSTICS,
-                        photon_caustics.textures.view(),
-                        &nearest,
-                        vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-                    ),
-                    DescriptorWrite::Storage(BINDING_PHOTON_RECTS, &photon_caustics.rects),
                 ],
             )?;
             frame_buffers.push(ubo);
             frame_sets.push(set);
         }
 
-        // The atlas is bound even when no shadow pass writes it: give it defined contents
-        // ("nothing occludes") and the layout the shaders expect.
-        let atlas_id = targets.shadow_atlas_id;
-        ctx.one_shot(|cmd| {
-            graph.access_now(cmd, &[(atlas_id, Access::TransferWrite)], &[]);
-            cmd.clear_color_image(&targets.shadow_atlas, [FAR_DISTANCE; 4]);
-            graph.access_now(cmd, &[(atlas_id, Access::FragmentSampled)], &[]);
-        })?;
-        // Likewise the caustic atlas: "no caustic light".
-        let caustic_id = targets.caustic_atlas_id;
-        ctx.one_shot(|cmd| {
-            graph.access_now(cmd, &[(caustic_id, Access::TransferWrite)], &[]);
-            cmd.clear_color_image(&targets.caustic_atlas, [0.0; 4]);
-            graph.access_now(cmd, &[(caustic_id, Access::FragmentSampled)], &[]);
-        })?;
+        // The atlases are bound even when no pass writes them: give them defined contents
+        // ("nothing occludes", "no caustic light") and the layout the shaders expect.
+        bind_atlas(ctx, &frame_sets, [BINDING_SHADOW_CUBE, BINDING_SHADOW_2D], &targets.shadow_atlas, &nearest);
+        bind_atlas(ctx, &frame_sets, [BINDING_CAUSTIC_CUBE, BINDING_CAUSTIC_2D], &targets.caustic_atlas, &nearest);
+        bind_photon_caustics(ctx, &frame_sets, &photon_caustics, &nearest);
+        clear_atlas(ctx, &mut graph, &targets.shadow_atlas, targets.shadow_atlas_id, FAR_DISTANCE)?;
+        clear_atlas(ctx, &mut graph, &targets.caustic_atlas, targets.caustic_atlas_id, 0.0)?;
         let objects = (0..scene.objects.len())
             .map(|i| ObjectState {
                 name: scene.objects[i].name.clone(),
@@ -286,6 +250,8 @@ impl Renderer {
                 bounds: object_bounds(scene, i),
             })
             .collect();
+        let mut cache = Cache::default();
+        cache.begin();
         let mut setup = Setup {
             ctx,
             scene,
@@ -297,6 +263,7 @@ impl Renderer {
             photon_caustics: &photon_caustics,
             plan,
             slots: FRAMES_IN_FLIGHT,
+            cache: &mut cache,
         };
         let mut techniques = Vec::with_capacity(TECHNIQUES.len());
         let mut technique_shaders = Vec::with_capacity(TECHNIQUES.len());
@@ -305,6 +272,7 @@ impl Renderer {
             techniques.push(if recipe.uses(i) { Some((t.create)(&mut setup)?) } else { None });
             technique_shaders.push(ctx.take_shader_log());
         }
+        cache.end();
 
         let mut uniforms = FrameUniforms {
             env_sh: gpu_scene.env_sh,
@@ -343,6 +311,7 @@ impl Renderer {
             photon_params,
             technique_shaders,
             placement: crate::technique::placement(scene),
+            cache,
             objects,
             uniforms,
             pending: vec![None; FRAMES_IN_FLIGHT],
@@ -369,7 +338,7 @@ impl Renderer {
     }
 
     /// The eikonal light simulation's steps, patch counts and time (None without one).
-    pub fn light_stats(&self) -> Option<&crate::passes::eikonal_light::LightStats> {
+    pub fn light_stats(&self) -> Option<&crate::technique::eikonal::eikonal_light::LightStats> {
         self.technique::<EikonalPass>().and_then(|p| p.light_stats())
     }
 
@@ -493,7 +462,7 @@ impl Renderer {
             recipe,
             ..
         } = self;
-        let shadowed = recipe.passes.iter().any(|p| p.name == crate::passes::shadow_map::SHADOW_MAP);
+        let shadowed = recipe.passes.iter().any(|p| p.name == crate::technique::baseline::shadow_map::SHADOW_MAP);
         let inputs = FrameInputs {
             scene,
             targets,
@@ -571,7 +540,7 @@ impl Renderer {
     }
 
     /// Total flux in the caustic map (W per channel), summed over every texel of every layer
-    /// (the map holds flux per texel, src/passes/caustics_map.rs); `None` without a
+    /// (the map holds flux per texel, src/technique/caustics/caustics_map.rs); `None` without a
     /// caustics_map pass.
     pub fn caustic_map_flux(&mut self) -> Result<Option<[f64; 3]>, RenderError> {
         if self.technique::<CausticsMapPass>().is_none() {
@@ -628,7 +597,7 @@ impl Renderer {
     }
 
     /// The photon-buffer caustics' intermediate images (Hu & Qin 2007 §3,
-    /// src/passes/photon_buffer.rs), RGBA f32 with all layers one after another; `None`
+    /// src/technique/caustics/photon_buffer.rs), RGBA f32 with all layers one after another; `None`
     /// without a photon_buffer pass.
     pub fn photon_buffer_images(&mut self) -> Result<Option<PhotonBufferImages>, RenderError> {
         if self.technique::<PhotonBufferPass>().is_none() {
@@ -699,7 +668,52 @@ pub struct PhotonBufferImages {
     pub counts: Vec<[f32; 4]>,
     /// The filtered caustic textures, one layer per rectangle.
     pub caustics: Vec<[f32; 4]>,
-    pub rectangles: Vec<crate::passes::photon_buffer::GpuPhotonRect>,
+    pub rectangles: Vec<crate::technique::caustics::photon_buffer::GpuPhotonRect>,
+}
+
+/// Bind `atlas` in every frame set: its cube-array view at `bindings[0]`, its 2D-array view at
+/// `bindings[1]`.
+fn bind_atlas(ctx: &GpuContext, sets: &[DescriptorSet], bindings: [u32; 2], atlas: &Image, sampler: &Sampler) {
+    let sampled = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
+    for set in sets {
+        set.update(
+            ctx,
+            &[
+                DescriptorWrite::Sampled(bindings[0], atlas.view(), sampler, sampled),
+                DescriptorWrite::Sampled(bindings[1], atlas.array_view(), sampler, sampled),
+            ],
+        );
+    }
+}
+
+/// Bind Hu & Qin 2007 §3's caustic textures and rectangles in every frame set.
+fn bind_photon_caustics(ctx: &GpuContext, sets: &[DescriptorSet], c: &PhotonCaustics, sampler: &Sampler) {
+    let sampled = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
+    for set in sets {
+        set.update(
+            ctx,
+            &[
+                DescriptorWrite::Sampled(BINDING_PHOTON_CAUSTICS, c.textures.view(), sampler, sampled),
+                DescriptorWrite::Storage(BINDING_PHOTON_RECTS, &c.rects),
+            ],
+        );
+    }
+}
+
+/// Fill every layer of `atlas` with `value`, ready to be sampled.
+fn clear_atlas(
+    ctx: &GpuContext,
+    graph: &mut FrameGraph,
+    atlas: &Image,
+    id: ImageId,
+    value: f32,
+) -> Result<(), RenderError> {
+    ctx.one_shot(|cmd| {
+        graph.access_now(cmd, &[(id, Access::TransferWrite)], &[]);
+        cmd.clear_color_image(atlas, [value; 4]);
+        graph.access_now(cmd, &[(id, Access::FragmentSampled)], &[]);
+    })?;
+    Ok(())
 }
 
 fn technique<T: Technique>(techniques: &[Option<Box<dyn Technique>>]) -> Option<&T> {

@@ -11,6 +11,9 @@
 //!   caustic atlas and photon-buffer textures (made anew and bound when the caustic technique
 //!   changes), and every technique's own settings. When it changes, the whole renderer is
 //!   re-created;
+//! - a new image size makes new targets (and atlases, bound in the frame sets), and every
+//!   technique is re-created on them; [`crate::technique::Cache`] keeps what does not
+//!   depend on the size (the eikonal light simulation);
 //! - each technique's fingerprint: its steps in the frame recipe (passes, stages and
 //!   reasons) and its [`crate::technique::Registration::inputs`]. A technique whose
 //!   fingerprint is unchanged keeps running; one whose fingerprint changed is re-created;
@@ -22,15 +25,17 @@ use std::collections::hash_map::DefaultHasher;
 use std::hash::{Hash, Hasher};
 use std::time::Instant;
 
-use crate::gpu::{Access, DescriptorWrite, TimestampPool};
-use crate::passes::photon_buffer::PhotonCaustics;
+use crate::gpu::TimestampPool;
 use crate::scene::techniques::{CausticsMapParams, PhotonBufferParams};
 use crate::scene::{Environment, Material, Scene};
+use crate::technique::caustics::photon_buffer::PhotonCaustics;
 use crate::technique::{params, recipe, Recipe, Setup, TECHNIQUES};
 
-use super::gpu_scene::gpu_material;
-use super::targets::Targets;
-use super::{set_camera_uniforms, RenderError, Renderer, FRAMES_IN_FLIGHT};
+use super::{
+    bind_atlas, bind_photon_caustics, clear_atlas, set_camera_uniforms, RenderError, Renderer, FRAMES_IN_FLIGHT,
+};
+use crate::frame::gpu_scene::gpu_material;
+use crate::frame::targets::Targets;
 
 /// What [`Renderer::update`] did.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
@@ -45,6 +50,8 @@ pub struct Update {
     pub materials: bool,
     /// Objects, lights or the camera position moved: the vertices were rewritten in place.
     pub moved: bool,
+    /// The image size changed: new targets, every technique re-created on them.
+    pub resized: bool,
     /// Wall-clock time of the update, in ms.
     pub ms: u64,
 }
@@ -57,6 +64,9 @@ impl Update {
                 .to_string();
         }
         let mut parts = Vec::new();
+        if self.resized {
+            parts.push("made the targets at the new size".to_string());
+        }
         if !self.recreated.is_empty() {
             parts.push(format!("re-created {}", self.recreated.join(", ")));
         }
@@ -82,7 +92,7 @@ pub(super) fn shared_fingerprint(scene: &Scene, recipe: &Recipe) -> u64 {
     // The effective scene file without what is only uniform data or a technique's own.
     let mut table: toml::Table = scene.canonical.parse().unwrap_or_default();
     if let Some(toml::Value::Table(camera)) = table.get_mut("camera") {
-        for key in ["position", "target", "up", "vfov_deg"] {
+        for key in ["position", "target", "up", "vfov_deg", "width", "height"] {
             camera.remove(key);
         }
     }
@@ -115,13 +125,13 @@ pub(super) fn shared_fingerprint(scene: &Scene, recipe: &Recipe) -> u64 {
         }
     }
     // Which lights have shadow (and caustic) atlas layers.
-    crate::technique::has(&recipe.passes, crate::passes::shadow_map::SHADOW_MAP).hash(&mut h);
+    crate::technique::has(&recipe.passes, crate::technique::baseline::shadow_map::SHADOW_MAP).hash(&mut h);
     h.finish()
 }
 
 /// The caustic atlas's edge when caustics mapping runs (else the 1x1 stand-in).
 pub(super) fn caustic_size(scene: &Scene, recipe: &Recipe) -> Result<Option<u32>, RenderError> {
-    if !crate::technique::has(&recipe.passes, crate::passes::caustics_map::CAUSTICS_MAP) {
+    if !crate::technique::has(&recipe.passes, crate::technique::caustics::caustics_map::CAUSTICS_MAP) {
         return Ok(None);
     }
     Ok(Some(params("caustics_map", CausticsMapParams::from_settings(&scene.render))?.map_size))
@@ -129,7 +139,7 @@ pub(super) fn caustic_size(scene: &Scene, recipe: &Recipe) -> Result<Option<u32>
 
 /// The photon-buffer parameters when the technique runs (else the stand-in's `None`).
 pub(super) fn photon_params(scene: &Scene, recipe: &Recipe) -> Result<Option<PhotonBufferParams>, RenderError> {
-    if !crate::technique::has(&recipe.passes, crate::passes::photon_buffer::PHOTON_BUFFER) {
+    if !crate::technique::has(&recipe.passes, crate::technique::caustics::photon_buffer::PHOTON_BUFFER) {
         return Ok(None);
     }
     Ok(Some(params("photon_buffer", PhotonBufferParams::from_settings(&scene.render))?))
@@ -189,7 +199,7 @@ impl Renderer {
         if placement != self.placement {
             self.scene.update_placement(scene, scene.render.shadow_map_size);
             for (o, i) in self.objects.iter_mut().zip(0..) {
-                o.bounds = crate::passes::distance_impostor::object_bounds(scene, i);
+                o.bounds = crate::technique::impostor::distance_impostor::object_bounds(scene, i);
             }
             for (i, l) in self.scene.lights.iter().enumerate() {
                 self.uniforms.lights[i] = *l;
@@ -199,7 +209,22 @@ impl Renderer {
         }
         // Everything new is made first, then swapped in: a failure leaves the old state.
         let caustic_size = caustic_size(scene, &new_recipe)?;
-        let atlas = match caustic_size != self.caustic_size {
+        // A new image size: new targets, and every technique re-created on them (the
+        // technique cache keeps what does not depend on the size).
+        let (width, height) = (scene.camera.width, scene.camera.height);
+        let targets = match (width, height) != (self.targets.width, self.targets.height) {
+            true => Some(Targets::new(
+                &self.ctx,
+                &mut self.graph,
+                width,
+                height,
+                self.targets.shadow_lights,
+                scene.render.shadow_map_size,
+                caustic_size,
+            )?),
+            false => None,
+        };
+        let atlas = match caustic_size != self.caustic_size && targets.is_none() {
             true => {
                 let atlas = Targets::caustic_atlas(&self.ctx, self.targets.shadow_lights, caustic_size)?;
                 let id = self.graph.register_image(&atlas);
@@ -217,20 +242,24 @@ impl Renderer {
         let fingerprints: Vec<Option<u64>> =
             (0..TECHNIQUES.len()).map(|i| technique_fingerprint(scene, &new_recipe, i)).collect();
         let forced = |i: usize| force.get(i).copied().unwrap_or(false);
-        let changed =
-            |i: usize| fingerprints[i].is_some() && (fingerprints[i] != self.technique_fingerprints[i] || forced(i));
+        let resized = targets.is_some();
+        let changed = |i: usize| {
+            fingerprints[i].is_some() && (fingerprints[i] != self.technique_fingerprints[i] || forced(i) || resized)
+        };
         let mut setup = Setup {
             ctx: &self.ctx,
             scene,
             gpu: &self.scene,
             graph: &mut self.graph,
             frame_layout: &self._frame_layout,
-            targets: &self.targets,
+            targets: targets.as_ref().unwrap_or(&self.targets),
             nearest: &self._samplers[0],
             photon_caustics: photon.as_ref().unwrap_or(&self.photon_caustics),
             plan: &new_recipe.passes,
             slots: FRAMES_IN_FLIGHT,
+            cache: &mut self.cache,
         };
+        setup.cache.begin();
         let mut created = Vec::new();
         for i in (0..TECHNIQUES.len()).filter(|&i| changed(i)) {
             self.ctx.take_shader_log();
@@ -254,6 +283,14 @@ impl Renderer {
         }
 
         // Commit. The GPU is idle: the old resources can go, the frame sets can be rewritten.
+        self.cache.end();
+        let old_targets = targets.map(|t| std::mem::replace(&mut self.targets, t));
+        if old_targets.is_some() {
+            self.clear_and_bind_shadow_atlas()?;
+            self.clear_and_bind_caustic_atlas()?;
+            self.caustic_size = caustic_size;
+            update.resized = true;
+        }
         if old_atlas.is_some() {
             self.clear_and_bind_caustic_atlas()?;
             self.caustic_size = caustic_size;
@@ -273,8 +310,9 @@ impl Renderer {
             self.technique_shaders[i] = shaders;
             update.recreated.push(TECHNIQUES[i].key);
         }
-        // After the techniques whose framebuffers held its views.
+        // After the techniques whose framebuffers held their views.
         drop(old_atlas);
+        drop(old_targets);
         self.technique_fingerprints = fingerprints;
         self.recipe = new_recipe;
         // Uniform data: the materials, the camera, the exposure.
@@ -291,39 +329,36 @@ impl Renderer {
         Ok(update)
     }
 
+    /// "Nothing occludes" in a new shadow atlas, bound in every frame set.
+    fn clear_and_bind_shadow_atlas(&mut self) -> Result<(), RenderError> {
+        let (atlas, id) = (&self.targets.shadow_atlas, self.targets.shadow_atlas_id);
+        clear_atlas(&self.ctx, &mut self.graph, atlas, id, crate::technique::baseline::shadow_map::FAR_DISTANCE)?;
+        bind_atlas(
+            &self.ctx,
+            &self.frame_sets,
+            [crate::BINDING_SHADOW_CUBE, crate::BINDING_SHADOW_2D],
+            atlas,
+            &self._samplers[0],
+        );
+        Ok(())
+    }
+
     /// "No caustic light" in a new caustic atlas, bound in every frame set.
     fn clear_and_bind_caustic_atlas(&mut self) -> Result<(), RenderError> {
-        let (atlas, id, graph) = (&self.targets.caustic_atlas, self.targets.caustic_atlas_id, &mut self.graph);
-        self.ctx.one_shot(|cmd| {
-            graph.access_now(cmd, &[(id, Access::TransferWrite)], &[]);
-            cmd.clear_color_image(atlas, [0.0; 4]);
-            graph.access_now(cmd, &[(id, Access::FragmentSampled)], &[]);
-        })?;
-        let (nearest, sampled) = (&self._samplers[0], ash::vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL);
-        for set in &self.frame_sets {
-            set.update(
-                &self.ctx,
-                &[
-                    DescriptorWrite::Sampled(crate::BINDING_CAUSTIC_CUBE, atlas.view(), nearest, sampled),
-                    DescriptorWrite::Sampled(crate::BINDING_CAUSTIC_2D, atlas.array_view(), nearest, sampled),
-                ],
-            );
-        }
+        let (atlas, id) = (&self.targets.caustic_atlas, self.targets.caustic_atlas_id);
+        clear_atlas(&self.ctx, &mut self.graph, atlas, id, 0.0)?;
+        bind_atlas(
+            &self.ctx,
+            &self.frame_sets,
+            [crate::BINDING_CAUSTIC_CUBE, crate::BINDING_CAUSTIC_2D],
+            atlas,
+            &self._samplers[0],
+        );
         Ok(())
     }
 
     /// The photon-buffer caustic textures and rectangles, bound in every frame set.
     fn bind_photon_caustics(&self) {
-        let (nearest, sampled) = (&self._samplers[0], ash::vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL);
-        let c = &self.photon_caustics;
-        for set in &self.frame_sets {
-            set.update(
-                &self.ctx,
-                &[
-                    DescriptorWrite::Sampled(crate::BINDING_PHOTON_CAUSTICS, c.textures.view(), nearest, sampled),
-                    DescriptorWrite::Storage(crate::BINDING_PHOTON_RECTS, &c.rects),
-                ],
-            );
-        }
+        bind_photon_caustics(&self.ctx, &self.frame_sets, &self.photon_caustics, &self._samplers[0]);
     }
 }

@@ -40,7 +40,7 @@ pub const REFLECTION_TECHNIQUES: &[&str] = &["single", "impostor"];
 pub const CAUSTICS_TECHNIQUES: &[&str] = &["none", "caustics_map", "photon_buffer", "impostor_lightmap"];
 
 /// Accepted values of `render.tonemap`; the first is the default (SCENES.md's PNG rule).
-/// `adaptive`: Ihrke et al. 2007 §5.3 after Krawczyk et al. 2005 (src/passes/tonemap.rs).
+/// `adaptive`: Ihrke et al. 2007 §5.3 after Krawczyk et al. 2005 (src/technique/baseline/tonemap.rs).
 pub const TONEMAPS: &[&str] = &["clamp", "adaptive"];
 
 /// The technique keys of `[render]` and their accepted values.

@@ -64,7 +64,7 @@ pub struct HuQinParams {
     /// Also write P2 and T2 to the debug targets `refraction_hu_qin_p2` / `_t2`.
     pub debug: bool,
     /// §2.2: look R and T2 up in the impostor rectangles of the nearby diffuse objects
-    /// (src/passes/nearby_impostors.rs) before the environment map.
+    /// (src/technique/refraction/nearby_impostors.rs) before the environment map.
     pub nearby: bool,
     /// Edge of each impostor texture TEX_i in texels (§2.2.1).
     pub impostor_resolution: u32,
@@ -328,7 +328,7 @@ pub enum PhotonNormalization {
 }
 
 /// `[render.photon_buffer]`: photon-buffer caustics (Hu & Qin 2007 §3,
-/// src/passes/photon_buffer.rs).
+/// src/technique/caustics/photon_buffer.rs).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PhotonBufferParams {
     /// Pixels per side of the photon buffer rendered from the light (§3.1; one photon per
@@ -517,14 +517,14 @@ impl HuQinParams {
                 "nearby" => p.nearby = boolean(key, v)?,
                 // 2048^2 texels x 16 bytes x MAX_NEARBY_RECTS (8) layers = 512 MiB per rectangle
                 // set, a quarter of lavapipe's 2 GiB allocation limit; with several sets the
-                // renderer refuses arrays over 1 GiB (src/passes/nearby_impostors.rs).
+                // renderer refuses arrays over 1 GiB (src/technique/refraction/nearby_impostors.rs).
                 "impostor_resolution" => p.impostor_resolution = integer(key, v, 4, 2048)?,
                 // Fig. 16 converges in "two or three" steps; beyond 64 it only burns time.
                 "correction_iterations" => p.correction_iterations = integer(key, v, 0, 64)?,
                 "correction_tolerance" => p.correction_tolerance = number(key, v, 1e-7, 0.5)?,
                 // Each seed is one texture fetch per rectangle per ray.
                 "seed_samples" => p.seed_samples = integer(key, v, 1, 256)?,
-                // One pass per level (src/passes/nearby_impostors.rs, MAX_RECURSION).
+                // One pass per level (src/technique/refraction/nearby_impostors.rs, MAX_RECURSION).
                 "recursion_depth" => p.recursion_depth = integer(key, v, 0, 3)?,
                 "recursive_exit" => {
                     p.recursive_exit =
@@ -693,7 +693,7 @@ pub fn check(technique: &str, t: &toml::Table) -> Result<(), ParamError> {
 }
 
 /// `[render.tonemap_adaptive]`: the adaptive tone map of `render.tonemap = "adaptive"`
-/// (Ihrke et al. 2007 §5.3 after Krawczyk, Myszkowski & Seidel 2005; src/passes/tonemap.rs).
+/// (Ihrke et al. 2007 §5.3 after Krawczyk, Myszkowski & Seidel 2005; src/technique/baseline/tonemap.rs).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TonemapAdaptiveParams {
     /// Reinhard et al. 2002's L_white in units of the scaled luminance; `None` ("auto"):
@@ -770,7 +770,7 @@ pub enum Integrator {
 }
 
 // --- branch `eikview` (issue 7): what exit and reflected view rays meet besides the environment.
-/// `render.eikonal.nearby` (src/passes/eikonal_nearby.rs).
+/// `render.eikonal.nearby` (src/technique/eikonal/eikonal_nearby.rs).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum EikonalNearby {
     /// The environment only (section 5.3 as written).
@@ -782,7 +782,7 @@ pub enum EikonalNearby {
     Exact,
 }
 
-/// `[render.eikonal]`: eikonal rendering of a `[volume]` (src/passes/eikonal.rs).
+/// `[render.eikonal]`: eikonal rendering of a `[volume]` (src/technique/eikonal/eikonal_view.rs).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct EikonalParams {
     /// Standard deviation of the Gaussian pre-smoothing in voxels (section 5.1: "typically
@@ -791,7 +791,7 @@ pub struct EikonalParams {
     pub integrator: Integrator,
     /// Arc length per step, in voxels (of the smallest voxel edge).
     pub step: f32,
-    // --- light simulator (section 5.2; src/passes/eikonal_light.rs) ---
+    // --- light simulator (section 5.2; src/technique/eikonal/eikonal_light.rs) ---
     /// Run the wavefront light simulation when the scene has a light (`light`).
     pub light: bool,
     /// Patches whose flux falls below this fraction of an initial patch's flux are

@@ -2,7 +2,7 @@
 //! al. 2007, section 5.1: "input scenes are stored as a set of 3D volume textures"). The
 //! scene gives the volume's box, its voxel resolution and an analytic refractive-index
 //! profile; [`Volume::sample`] rasterizes the profile at the voxel centres, which the GPU
-//! smooths and differentiates (src/passes/eikonal.rs). Outside the box the index is 1.
+//! smooths and differentiates (src/technique/eikonal/eikonal_view.rs). Outside the box the index is 1.
 use glam::{DVec3, Vec3};
 
 use super::file::{check_keys, FileIndex, FileVolume};

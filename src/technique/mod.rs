@@ -27,14 +27,20 @@ use std::sync::Arc;
 
 use glam::Vec3;
 
-use crate::gpu::{DescriptorSet, DescriptorSetLayout, GpuContext, GpuError, Sampler};
+use crate::frame::gpu_scene::GpuScene;
+use crate::frame::targets::Targets;
+use crate::gpu::{DescriptorSet, DescriptorSetLayout, GpuContext, Sampler};
 use crate::graph::{Frame, FrameGraph, ImageId};
-use crate::passes;
-use crate::passes::photon_buffer::PhotonCaustics;
-use crate::passes::refractor_layers::DebugTarget;
-use crate::renderer::gpu_scene::GpuScene;
-use crate::renderer::targets::Targets;
 use crate::scene::{Light, Material, Scene};
+
+pub mod baseline;
+pub mod caustics;
+pub mod eikonal;
+pub mod impostor;
+pub mod refraction;
+
+use caustics::photon_buffer::PhotonCaustics;
+use refraction::refractor_layers::DebugTarget;
 
 /// Where in the frame a pass runs. A stage's passes may read what every earlier stage
 /// wrote: shadows and caustics before the surfaces are shaded, the opaque image before the
@@ -77,20 +83,20 @@ pub const RECIPE: [Stage; 9] = [
 /// Every technique prism knows, in the order they are created and, within a stage,
 /// recorded. A technique's creation may read what the ones before it planned.
 pub const TECHNIQUES: &[Registration] = &[
-    passes::shadow_map::TECHNIQUE,
-    passes::caustics_map::TECHNIQUE,
-    passes::photon_buffer::TECHNIQUE,
-    passes::impostor_lightmap::TECHNIQUE,
-    passes::gbuffer::TECHNIQUE,
-    passes::deferred_shading::TECHNIQUE,
-    passes::specular_single::REFRACTION,
-    passes::refraction_wyman::TECHNIQUE,
-    passes::refraction_hu_qin::TECHNIQUE,
-    passes::distance_impostor::REFRACTION,
-    passes::specular_single::REFLECTION,
-    passes::distance_impostor::REFLECTION,
-    passes::eikonal::TECHNIQUE,
-    passes::tonemap::TECHNIQUE,
+    baseline::shadow_map::TECHNIQUE,
+    caustics::caustics_map::TECHNIQUE,
+    caustics::photon_buffer::TECHNIQUE,
+    impostor::impostor_lightmap::TECHNIQUE,
+    baseline::gbuffer::TECHNIQUE,
+    baseline::deferred_shading::TECHNIQUE,
+    baseline::specular_single::REFRACTION,
+    refraction::refraction_wyman::TECHNIQUE,
+    refraction::refraction_hu_qin::TECHNIQUE,
+    impostor::distance_impostor::REFRACTION,
+    baseline::specular_single::REFLECTION,
+    impostor::distance_impostor::REFLECTION,
+    eikonal::eikonal_view::TECHNIQUE,
+    baseline::tonemap::TECHNIQUE,
 ];
 
 /// One pass a technique needs for a scene, and why.
@@ -140,6 +146,59 @@ pub struct Setup<'a> {
     pub plan: &'a [PlannedPass],
     /// Frames in flight: techniques with per-frame state keep one copy per slot.
     pub slots: usize,
+    /// What a technique keeps across its own re-creation.
+    pub cache: &'a mut Cache,
+}
+
+/// Results a technique keeps across its own re-creation, by type and key: what is expensive
+/// and depends on less than the technique does. The eikonal light simulation depends on the
+/// volume, the lights and its settings; the technique around it also depends on the image
+/// size and on the objects near the volume, and is re-created when they change, without
+/// simulating again.
+#[derive(Default)]
+pub struct Cache {
+    entries: std::collections::HashMap<(std::any::TypeId, u64), (std::rc::Rc<dyn Any>, u64)>,
+    generation: u64,
+}
+
+impl Cache {
+    /// The entry of type `T` under `key`, made by `make` when there is none.
+    pub fn get_or_try_insert<T: 'static, E>(
+        &mut self,
+        key: u64,
+        make: impl FnOnce() -> Result<T, E>,
+    ) -> Result<std::rc::Rc<T>, E> {
+        let id = (std::any::TypeId::of::<T>(), key);
+        if let Some((entry, used)) = self.entries.get_mut(&id) {
+            *used = self.generation;
+            if let Ok(t) = entry.clone().downcast::<T>() {
+                return Ok(t);
+            }
+        }
+        let t = std::rc::Rc::new(make()?);
+        self.entries.insert(id, (t.clone(), self.generation));
+        Ok(t)
+    }
+
+    /// Start a round of creations (a renderer's, or an update's).
+    pub(crate) fn begin(&mut self) {
+        self.generation += 1;
+    }
+
+    /// End the round: keep what this round asked for and what a running technique still
+    /// holds; drop the rest.
+    pub(crate) fn end(&mut self) {
+        let generation = self.generation;
+        self.entries.retain(|_, (entry, used)| *used == generation || std::rc::Rc::strong_count(entry) > 1);
+    }
+}
+
+/// A key for [`Cache`]: the hash of what the cached result depends on, from its `Debug` form.
+pub fn cache_key(inputs: &impl std::fmt::Debug) -> u64 {
+    use std::hash::{Hash, Hasher};
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    format!("{inputs:?}").hash(&mut h);
+    h.finish()
 }
 
 impl Setup<'_> {
@@ -227,16 +286,7 @@ pub fn has(plan: &[PlannedPass], name: &str) -> bool {
     plan.iter().any(|p| p.name == name)
 }
 
-#[derive(Debug, thiserror::Error)]
-pub enum RenderError {
-    #[error(transparent)]
-    Gpu(#[from] GpuError),
-    #[error("{0}")]
-    Limit(String),
-    /// A technique parameter (`[render.<technique>]`) that is unknown or out of range.
-    #[error("render.{technique}.{}: {error}", error.key)]
-    Param { technique: &'static str, error: crate::scene::techniques::ParamError },
-}
+pub use crate::frame::RenderError;
 
 /// `[render.<technique>]` parsed into its typed parameters, as a [`RenderError`].
 pub fn params<T>(

@@ -13,8 +13,7 @@ use super::camera::Mode;
 
 /// Passes the window appends after the scene's: timed and labelled like every pass, but
 /// not part of any technique's cost.
-pub const PRESENT_BLIT: &str = "present_blit";
-pub const OVERLAY: &str = "overlay";
+pub use crate::renderer::{OVERLAY, PRESENT_BLIT};
 
 /// Frames the averages run over.
 const WINDOW: usize = 60;
@@ -141,7 +140,7 @@ pub struct View<'a> {
     pub camera_mode: Mode,
     pub has_heightfield: bool,
     /// The adaptive tone map's state in the last completed frame (`render.tonemap = "adaptive"`).
-    pub tonemap: Option<crate::passes::tonemap::AdaptiveStats>,
+    pub tonemap: Option<crate::technique::baseline::tonemap::AdaptiveStats>,
 }
 
 /// The current value of `render.<key>` for a technique key.
@@ -431,7 +430,7 @@ fn technique_parameters(ui: &mut egui::Ui, state: &mut UiState, scene: &Scene, r
                 state.set(req, "render.hu_qin.assume_back_facing".into(), back.to_string());
             }
             ui.end_row();
-            // §2.2 nearby geometry (src/passes/nearby_impostors.rs).
+            // §2.2 nearby geometry (src/technique/refraction/nearby_impostors.rs).
             ui.label("hu_qin.nearby");
             let mut nearby = p.nearby;
             if ui.checkbox(&mut nearby, "").changed() {

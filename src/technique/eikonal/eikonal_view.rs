@@ -23,13 +23,13 @@ use std::sync::Arc;
 
 use glam::DVec3;
 
+use crate::frame::gpu_scene::GpuScene;
+use crate::frame::targets::Targets;
 use crate::gpu::{
     vk, Access, ComputePipeline, DescriptorSet, DescriptorSetLayout, DescriptorWrite, GpuContext, GpuResult, Image,
     ImageDesc, PipelineLayout,
 };
 use crate::graph::{Frame, FrameGraph, ImageId};
-use crate::renderer::gpu_scene::GpuScene;
-use crate::renderer::targets::Targets;
 use crate::scene::techniques::{EikonalParams, Integrator};
 use crate::scene::{IndexProfile, Scene, Volume};
 use crate::technique::{
@@ -42,15 +42,15 @@ use crate::{
 };
 
 use super::eikonal_nearby;
-use super::fullscreen::{FullscreenDesc, FullscreenPass};
-use super::nearby_impostors::{ImpostorShading, NearbyDesc, NearbyImpostors};
+use crate::technique::baseline::fullscreen::{FullscreenDesc, FullscreenPass};
+use crate::technique::refraction::nearby_impostors::{ImpostorShading, NearbyDesc, NearbyImpostors};
 
 pub const EIKONAL_VIEW: &str = "eikonal_view";
 /// §5.2's light simulation (run when the technique is created) and the diffuse receivers
 /// inside its irradiance volume.
 pub const EIKONAL_LIGHT: &str = "eikonal_light";
 /// Hu & Qin 2007 §2.2 impostor textures of the objects near the volume, for eikonal_view's
-/// exit and reflected rays (src/passes/eikonal_nearby.rs).
+/// exit and reflected rays (src/technique/eikonal/eikonal_nearby.rs).
 pub const EIKONAL_NEARBY: &str = "eikonal_nearby";
 
 /// Every scene with a `[volume]`; parameters `[render.eikonal]`.
@@ -243,7 +243,7 @@ pub struct EikonalPass {
     volume: VolumeTextures,
     view: FullscreenPass,
     // --- branch `eikview` (issue 7): the nearby geometry of exit rays
-    // (src/passes/eikonal_nearby.rs): impostors (a 1x1 stand-in without rectangles), the
+    // (src/technique/eikonal/eikonal_nearby.rs): impostors (a 1x1 stand-in without rectangles), the
     // set layout of their light-simulation shading, and the exact triangles.
     nearby: NearbyImpostors,
     _nearby_layout: Option<DescriptorSetLayout>,
@@ -281,6 +281,7 @@ impl EikonalPass {
                 frame_layout,
                 targets,
                 nearest,
+                s.cache,
             )?),
             _ => None,
         };
@@ -296,7 +297,7 @@ impl EikonalPass {
         let (light_min, light_max) = light.as_ref().map_or((glam::Vec3::ZERO, glam::Vec3::ONE), |l| l.light_box());
         // Without a simulation the field stands in for the light volumes (never read).
         let (irradiance, direction) = light.as_ref().map_or((&textures.field, &textures.field), |l| l.images());
-        // --- branch `eikview`: what exit and reflected rays meet (src/passes/eikonal_nearby.rs).
+        // --- branch `eikview`: what exit and reflected rays meet (src/technique/eikonal/eikonal_nearby.rs).
         let tris: Vec<_> =
             eikonal_nearby::exact_triangles(scene, params.nearby).0.into_iter().map(|(_, t)| t).collect();
         let triangles = crate::gpu::Buffer::with_data(

@@ -15,7 +15,7 @@ pub const GBUF_NORMAL_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
 pub const GBUF_ALBEDO_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
 pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
 pub const SHADOW_FORMAT: vk::Format = vk::Format::R32_SFLOAT;
-/// Caustic map: flux per texel in W, RGB (Shah et al. 2007; src/passes/caustics_map.rs).
+/// Caustic map: flux per texel in W, RGB (Shah et al. 2007; src/technique/caustics/caustics_map.rs).
 pub const CAUSTIC_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 
 pub struct Targets {

@@ -54,14 +54,14 @@ use std::sync::Arc;
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
 
+use crate::frame::gpu_scene::GpuScene;
+use crate::frame::targets::DEPTH_FORMAT;
 use crate::gpu::{
     vk, Access, Attachment, Blend, Buffer, Clear, DepthState, DescriptorSet, DescriptorSetLayout, DescriptorWrite,
     Framebuffer, GpuContext, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc, ImageViewKind,
     PipelineLayout, RenderPass, RenderPassDesc, Sampler, SamplerDesc, VertexLayout,
 };
 use crate::graph::{Frame, FrameGraph, ImageId};
-use crate::renderer::gpu_scene::GpuScene;
-use crate::renderer::targets::DEPTH_FORMAT;
 use crate::scene::techniques::RecursiveExit;
 use crate::scene::{Material, Scene};
 use crate::{BINDING_NEARBY_BACK, BINDING_NEARBY_FRONT, BINDING_NEARBY_RECTS, BINDING_NEARBY_TEXTURE};
@@ -181,7 +181,7 @@ fn is_specular(scene: &Scene, object: usize) -> bool {
     !scene.materials[scene.objects[object].material].is_diffuse()
 }
 
-/// The photon-buffer caustics' receivers (src/passes/photon_buffer.rs): every object but the
+/// The photon-buffer caustics' receivers (src/technique/caustics/photon_buffer.rs): every object but the
 /// dielectrics, nearest first (by the gap between O_R and their bounding sphere), at most
 /// [`MAX_NEARBY_RECTS`]; and those left out by that limit. The refraction's rectangle sets
 /// use [`set_objects`].
@@ -219,7 +219,7 @@ pub fn rect_for(scene: &Scene, object: usize, origin_r: Vec3, layer: u32) -> Opt
 }
 
 /// Another way to shade level 0 of the textures than glsl/nearby/impostor.frag (issue 7: the
-/// eikonal light volumes for the caustic under a volume, src/passes/eikonal_nearby.rs): a
+/// eikonal light volumes for the caustic under a volume, src/technique/eikonal/eikonal_nearby.rs): a
 /// fragment shader including impostor_body.glsl with a third descriptor set (set 2, owned by
 /// the caller, alive as long as the impostors), its specialisation constants (ids from 6 on,
 /// after impostor_body.glsl's 0..5), and the images that set samples.
@@ -561,7 +561,7 @@ impl NearbyImpostors {
     }
 
     /// One rectangle set around `origin` that belongs to no object (issue 7: the eikonal
-    /// volume's centre, src/passes/eikonal_nearby.rs) over `objects`, without recursion or
+    /// volume's centre, src/technique/eikonal/eikonal_nearby.rs) over `objects`, without recursion or
     /// back faces (mirrors reflect the environment, dielectrics refract it), shaded by
     /// `shading` when given.
     #[allow(clippy::too_many_arguments)]
@@ -812,7 +812,7 @@ impl NearbyImpostors {
         } else {
             let blayout = PipelineLayout::new(ctx, BACK_PASS, &[frame_layout], push_size)?;
             // The nearest back faces. Meshes are wound counter-clockwise seen from outside
-            // (src/passes/refractor_layers.rs), but this projection, unlike the camera's, is
+            // (src/technique/refraction/refractor_layers.rs), but this projection, unlike the camera's, is
             // not y-flipped: its back faces come out counter-clockwise, i.e. as the
             // pipeline's front faces, so BACK is the mode that culls the faces towards O_R.
             let bpipeline = GraphicsPipeline::new(
@@ -949,20 +949,20 @@ impl NearbyImpostors {
                     let r = &self.layout.rects[*i];
                     // Empty texels: no normal (the test for a surface), depth the far plane.
                     let clears = [Clear::Color([0.0, 0.0, 0.0, r.far]), Clear::Depth(1.0)];
-                    cmd.begin_render_pass(&self.render_pass, fb, &clears);
-                    cmd.bind_graphics(pipeline, &[frame_set]);
-                    cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
-                    let d = &scene.draws[self.draws[*i]];
-                    let push = ImpostorPush {
-                        view_proj: r.view_proj.to_cols_array_2d(),
-                        origin: origins[*i],
-                        axis: r.axis.extend(0.0).to_array(),
-                        material: [d.material, r.layer, self.lookup_set[*i], 0],
-                        sphere: r.center.extend(r.half_size).to_array(),
-                    };
-                    cmd.push_graphics(pipeline, &push);
-                    cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
-                    cmd.end_render_pass();
+                    cmd.in_render_pass(&self.render_pass, fb, &clears, |cmd| {
+                        cmd.bind_graphics(pipeline, &[frame_set]);
+                        cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
+                        let d = &scene.draws[self.draws[*i]];
+                        let push = ImpostorPush {
+                            view_proj: r.view_proj.to_cols_array_2d(),
+                            origin: origins[*i],
+                            axis: r.axis.extend(0.0).to_array(),
+                            material: [d.material, r.layer, self.lookup_set[*i], 0],
+                            sphere: r.center.extend(r.half_size).to_array(),
+                        };
+                        cmd.push_graphics(pipeline, &push);
+                        cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
+                    });
                 }
             });
         }
@@ -998,36 +998,36 @@ impl NearbyImpostors {
                     }
                     // Empty texels: TEX_DEPTH = the far plane (never a surface, see DEPTH_MARGIN).
                     let clears = [Clear::Color([0.0, 0.0, 0.0, r.far]), Clear::Depth(1.0)];
-                    cmd.begin_render_pass(&self.render_pass, fb, &clears);
-                    let pipeline = match recursive {
-                        // Specular layers read the other array.
-                        Some(rec) if self.specular[i] => {
-                            cmd.bind_graphics(&rec.pipeline, &[frame_set, rec.sets[1 - dst]]);
-                            &rec.pipeline
-                        }
-                        // Level 0 reads no array: the set reading `texture` only fills set 1.
-                        _ => {
-                            match &self.extra {
-                                Some((set, _)) => {
-                                    cmd.bind_graphics(&self.pipeline, &[frame_set, self.set_texture, *set])
-                                }
-                                None => cmd.bind_graphics(&self.pipeline, &[frame_set, self.set_texture]),
+                    cmd.in_render_pass(&self.render_pass, fb, &clears, |cmd| {
+                        let pipeline = match recursive {
+                            // Specular layers read the other array.
+                            Some(rec) if self.specular[i] => {
+                                cmd.bind_graphics(&rec.pipeline, &[frame_set, rec.sets[1 - dst]]);
+                                &rec.pipeline
                             }
-                            &self.pipeline
-                        }
-                    };
-                    cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
-                    let d = &scene.draws[self.draws[i]];
-                    let push = ImpostorPush {
-                        view_proj: r.view_proj.to_cols_array_2d(),
-                        origin: origins[i],
-                        axis: r.axis.extend(0.0).to_array(),
-                        material: [d.material, r.layer, self.lookup_set[i], 0],
-                        sphere: r.center.extend(r.half_size).to_array(),
-                    };
-                    cmd.push_graphics(pipeline, &push);
-                    cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
-                    cmd.end_render_pass();
+                            // Level 0 reads no array: the set reading `texture` only fills set 1.
+                            _ => {
+                                match &self.extra {
+                                    Some((set, _)) => {
+                                        cmd.bind_graphics(&self.pipeline, &[frame_set, self.set_texture, *set])
+                                    }
+                                    None => cmd.bind_graphics(&self.pipeline, &[frame_set, self.set_texture]),
+                                }
+                                &self.pipeline
+                            }
+                        };
+                        cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
+                        let d = &scene.draws[self.draws[i]];
+                        let push = ImpostorPush {
+                            view_proj: r.view_proj.to_cols_array_2d(),
+                            origin: origins[i],
+                            axis: r.axis.extend(0.0).to_array(),
+                            material: [d.material, r.layer, self.lookup_set[i], 0],
+                            sphere: r.center.extend(r.half_size).to_array(),
+                        };
+                        cmd.push_graphics(pipeline, &push);
+                        cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
+                    });
                 }
             });
             if level == 0 && !self.diffuse_layers.is_empty() {

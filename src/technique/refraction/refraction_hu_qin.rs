@@ -5,7 +5,7 @@
 //!
 //! - `refraction_hu_qin_nearby` (with `nearby = true` and other objects in the scene): §2.2,
 //!   the impostor rectangles and textures TEX_i of the nearby objects, one rectangle set per
-//!   dielectric (src/passes/nearby_impostors.rs), and `_r1`.. the §2.2.1 recursion levels;
+//!   dielectric (src/technique/refraction/nearby_impostors.rs), and `_r1`.. the §2.2.1 recursion levels;
 //!   before them `refraction_hu_qin_nearby_back`, the back faces of the dielectric impostors.
 //! - `refraction_hu_qin_layers`: depth and normal of the refractors' nearest back faces and
 //!   nearest front faces (Fig. 4, "initial pass").

@@ -18,7 +18,7 @@
 //!   times too bright), into an additive accumulator that light_resolve.comp turns into the
 //!   irradiance and (vector) direction volumes.
 //! - Section 5.2.3: each patch is classified 0/1/4 and the list is compacted and expanded by
-//!   the HistoPyramid (src/passes/histopyramid.rs) and glsl/eikonal/light_expand.comp.
+//!   the HistoPyramid (src/technique/eikonal/histopyramid.rs) and glsl/eikonal/light_expand.comp.
 //!
 //! Because the accumulator only adds, the simulation is a sequence of independent runs
 //! ([`LightRun`]) depositing into it: one per light (section 3.2: "a discrete number of
@@ -56,7 +56,7 @@ use crate::{
     LIGHT_BINDING_FIELD, LIGHT_BINDING_IRRADIANCE, LIGHT_BINDING_SRC,
 };
 
-use super::eikonal::RayState;
+use super::eikonal_view::RayState;
 use super::histopyramid::{HistoPyramid, HpState};
 
 /// Simulation steps recorded per command buffer between two patch-count readbacks.
@@ -374,7 +374,7 @@ impl LightSim {
         params: &EikonalParams,
         volume: &Volume,
         lights: &[Light],
-        textures: &super::eikonal::VolumeTextures,
+        textures: &super::eikonal_view::VolumeTextures,
         sampler: &Sampler,
         graph: &mut FrameGraph,
     ) -> GpuResult<Self> {
@@ -804,7 +804,7 @@ impl LightSim {
 pub struct StandaloneLight {
     pub sim: LightSim,
     pub graph: FrameGraph,
-    _volume: super::eikonal::VolumeTextures,
+    _volume: super::eikonal_view::VolumeTextures,
     _sampler: Sampler,
 }
 
@@ -821,7 +821,7 @@ impl StandaloneLight {
         lights: &[Light],
     ) -> GpuResult<Self> {
         let mut graph = FrameGraph::new();
-        let textures = super::eikonal::prepare_volume(ctx, *params, volume, &mut graph)?;
+        let textures = super::eikonal_view::prepare_volume(ctx, *params, volume, &mut graph)?;
         let sampler = Sampler::new(ctx, "eikonal_light_field", crate::gpu::SamplerDesc::NEAREST_CLAMP)?;
         let sim = LightSim::new(ctx, params, volume, lights, &textures, &sampler, &mut graph)?;
         Ok(StandaloneLight { sim, graph, _volume: textures, _sampler: sampler })
@@ -861,7 +861,7 @@ impl StandaloneLight {
 
 /// One equal-time step of Eqs. 14-15 (dx/dt = v / n^2, dv/dt = grad n / n) by classical
 /// RK4 in f64 on an analytic field: the CPU version of light_step.comp's particle update.
-pub fn light_rk4_step(field: &impl super::eikonal::IndexField, s: RayState, h: f64) -> RayState {
+pub fn light_rk4_step(field: &impl super::eikonal_view::IndexField, s: RayState, h: f64) -> RayState {
     let rhs = |x: DVec3, v: DVec3| {
         let n = field.n(x);
         (v / (n * n), field.gradient(x) / n)
@@ -878,7 +878,7 @@ pub fn light_rk4_step(field: &impl super::eikonal::IndexField, s: RayState, h: f
 
 /// The optical path (integral of n ds, trapezoid rule) along a polyline: with Eqs. 14-15
 /// every particle of one wavefront has covered the same S = t (Appendix, Eqs. 23-24).
-pub fn optical_path(field: &impl super::eikonal::IndexField, path: &[DVec3]) -> f64 {
+pub fn optical_path(field: &impl super::eikonal_view::IndexField, path: &[DVec3]) -> f64 {
     path.windows(2).map(|w| 0.5 * (field.n(w[0]) + field.n(w[1])) * w[0].distance(w[1])).sum()
 }
 
@@ -886,9 +886,11 @@ pub fn optical_path(field: &impl super::eikonal::IndexField, path: &[DVec3]) -> 
 /// the volume are static), and the per-frame `eikonal_light` pass that lights the diffuse
 /// receivers inside the irradiance volume (glsl/eikonal/light_receiver.frag).
 pub struct EikonalLight {
-    sim: LightSim,
+    /// The simulation's volumes and statistics, shared through the technique cache with the
+    /// next instance when only what the simulation does not depend on changed.
+    sim: std::rc::Rc<(LightSim, LightStats)>,
     pub stats: LightStats,
-    receiver: super::fullscreen::FullscreenPass,
+    receiver: crate::technique::baseline::fullscreen::FullscreenPass,
 }
 
 impl EikonalLight {
@@ -898,20 +900,26 @@ impl EikonalLight {
         params: &EikonalParams,
         volume: &Volume,
         lights: &[Light],
-        textures: &super::eikonal::VolumeTextures,
+        textures: &super::eikonal_view::VolumeTextures,
         graph: &mut FrameGraph,
         frame_layout: &DescriptorSetLayout,
-        targets: &crate::renderer::targets::Targets,
+        targets: &crate::frame::targets::Targets,
         nearest: &Sampler,
+        cache: &mut crate::technique::Cache,
     ) -> GpuResult<Self> {
-        let mut sim = LightSim::new(ctx, params, volume, lights, textures, nearest, graph)?;
         // Dropped patches are reported by the caller from `stats.dropped_patches`.
-        let stats = sim.run(ctx, graph)?;
+        let key = crate::technique::cache_key(&(params, volume, lights));
+        let shared = cache.get_or_try_insert(key, || -> GpuResult<(LightSim, LightStats)> {
+            let mut sim = LightSim::new(ctx, params, volume, lights, textures, nearest, graph)?;
+            let stats = sim.run(ctx, graph)?;
+            Ok((sim, stats))
+        })?;
+        let (sim, stats) = (&shared.0, shared.1.clone());
         let (lo, hi) = (sim.light_min, sim.light_max);
-        let receiver = super::fullscreen::FullscreenPass::new(
+        let receiver = crate::technique::baseline::fullscreen::FullscreenPass::new(
             ctx,
-            &super::fullscreen::FullscreenDesc {
-                name: super::eikonal::EIKONAL_LIGHT,
+            &crate::technique::baseline::fullscreen::FullscreenDesc {
+                name: super::eikonal_view::EIKONAL_LIGHT,
                 fragment_shader: "eikonal/light_receiver.frag",
                 inputs: &[
                     (crate::BINDING_GBUF_NORMAL, &targets.gbuf_normal),
@@ -928,26 +936,26 @@ impl EikonalLight {
             frame_layout,
             nearest,
         )?;
-        Ok(EikonalLight { sim, stats, receiver })
+        Ok(EikonalLight { sim: shared, stats, receiver })
     }
 
     pub fn light_box(&self) -> (Vec3, Vec3) {
-        (self.sim.light_min, self.sim.light_max)
+        (self.sim.0.light_min, self.sim.0.light_max)
     }
 
     pub fn images(&self) -> (&Image, &Image) {
-        (&self.sim.irradiance, &self.sim.direction)
+        (&self.sim.0.irradiance, &self.sim.0.direction)
     }
 
     pub fn image_ids(&self) -> [ImageId; 2] {
-        [self.sim.irradiance_id, self.sim.direction_id]
+        [self.sim.0.irradiance_id, self.sim.0.direction_id]
     }
 
     pub fn record<'a>(
         &'a self,
         frame: &mut Frame<'_, 'a>,
-        scene: &crate::renderer::gpu_scene::GpuScene,
-        targets: &crate::renderer::targets::Targets,
+        scene: &crate::frame::gpu_scene::GpuScene,
+        targets: &crate::frame::targets::Targets,
         frame_set: DescriptorSet,
     ) {
         let reads = [
@@ -956,8 +964,8 @@ impl EikonalLight {
             targets.depth_id,
             scene.environment_id,
             targets.shadow_atlas_id,
-            self.sim.irradiance_id,
-            self.sim.direction_id,
+            self.sim.0.irradiance_id,
+            self.sim.0.direction_id,
         ];
         self.receiver.record(frame, frame_set, &reads);
     }

@@ -17,14 +17,14 @@
 //! counter-clockwise seen from outside.
 use std::sync::Arc;
 
+use crate::frame::gpu_scene::{Draw, GpuScene};
+use crate::frame::targets::{Targets, DEPTH_FORMAT, HDR_FORMAT};
 use crate::gpu::{
     vk, Access, Attachment, Blend, Buffer, Clear, DepthState, DescriptorSet, DescriptorSetLayout, DescriptorWrite,
     Framebuffer, GpuContext, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc, PipelineLayout,
     RenderPass, RenderPassDesc, Sampler, VertexLayout,
 };
 use crate::graph::{Frame, FrameGraph, ImageId};
-use crate::renderer::gpu_scene::{Draw, GpuScene};
-use crate::renderer::targets::{Targets, DEPTH_FORMAT, HDR_FORMAT};
 use crate::scene::{Material, Scene};
 use crate::technique::Setup;
 use crate::{BINDING_GBUF_DEPTH, BINDING_REFR_DN, LAYER_BACK_FURTHEST, LAYER_BACK_NEAREST, LAYER_FRONT, LAYER_SECOND};
@@ -236,17 +236,18 @@ impl RefractorLayers {
         }
         pass.record(move |cmd| {
             for p in &self.pipelines {
-                cmd.begin_render_pass(
+                cmd.in_render_pass(
                     &self.render_pass,
                     &p.framebuffer,
                     &[Clear::Color([0.0; 4]), Clear::Depth(p.clear_depth)],
+                    |cmd| {
+                        cmd.bind_graphics(&p.pipeline, &[frame_set, self.set]);
+                        cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
+                        for d in &self.draws {
+                            cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
+                        }
+                    },
                 );
-                cmd.bind_graphics(&p.pipeline, &[frame_set, self.set]);
-                cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
-                for d in &self.draws {
-                    cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
-                }
-                cmd.end_render_pass();
             }
         });
     }
@@ -388,10 +389,10 @@ impl ShadePass {
         pass.record(move |cmd| {
             let mut clears = vec![Clear::None];
             clears.extend(self.debug.iter().map(|_| Clear::Color([0.0; 4])));
-            cmd.begin_render_pass(&self.render_pass, &self.framebuffer, &clears);
-            cmd.bind_graphics(&self.pipeline, &[frame_set, self.set]);
-            cmd.draw(3, 1);
-            cmd.end_render_pass();
+            cmd.in_render_pass(&self.render_pass, &self.framebuffer, &clears, |cmd| {
+                cmd.bind_graphics(&self.pipeline, &[frame_set, self.set]);
+                cmd.draw(3, 1);
+            });
         });
     }
 }

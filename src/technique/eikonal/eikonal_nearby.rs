@@ -13,12 +13,12 @@
 //!   (Moller-Trumbore, [`ray_triangle`] is the CPU twin) and shades like deferred shading. The
 //!   other nearby objects (meshes, spheres, mirrors, ...) go through impostor rectangles.
 //! - `"impostor"`: every nearby object through Hu & Qin 2007 §2.2's impostor rectangles with
-//!   O_R = the volume's centre (src/passes/nearby_impostors.rs, glsl/include/nearby.glsl's
+//!   O_R = the volume's centre (src/technique/refraction/nearby_impostors.rs, glsl/include/nearby.glsl's
 //!   Fig. 16 lookup with `render.eikonal.nearby_iterations` correction iterations).
 //! - `"off"`: the environment only (the paper's section 5.3).
 //!
 //! The floor under the volume must show the volume's caustic and shadow: the light
-//! simulation (src/passes/eikonal_light.rs) has already run when the renderer is created, so
+//! simulation (src/technique/eikonal/eikonal_light.rs) has already run when the renderer is created, so
 //! both the exact shading and the impostor textures (glsl/eikonal/nearby_impostor.frag)
 //! replace the light's direct term by the simulated irradiance exactly as the
 //! `eikonal_light` receiver pass does for the camera (glsl/eikonal/receiver.glsl).
@@ -97,7 +97,7 @@ pub fn exact_triangles(scene: &Scene, mode: EikonalNearby) -> (Vec<(usize, GpuTr
 
 /// The objects that get an impostor rectangle around the volume: every non-dielectric object
 /// not intersected exactly (none with `"off"`). The nearest [`crate::MAX_NEARBY_RECTS`] are
-/// kept by [`crate::passes::nearby_impostors::nearby_objects`].
+/// kept by [`crate::technique::refraction::nearby_impostors::nearby_objects`].
 pub fn impostor_candidates(scene: &Scene, mode: EikonalNearby) -> Vec<usize> {
     if mode == EikonalNearby::Off {
         return Vec::new();
@@ -118,7 +118,7 @@ pub fn volume_origin(scene: &Scene) -> Option<Vec3> {
 pub fn impostor_objects(scene: &Scene, mode: EikonalNearby) -> (Vec<usize>, Vec<usize>) {
     let Some(origin) = volume_origin(scene) else { return (Vec::new(), Vec::new()) };
     let candidates = impostor_candidates(scene, mode);
-    let (kept, dropped) = crate::passes::nearby_impostors::nearby_objects(scene, origin);
+    let (kept, dropped) = crate::technique::refraction::nearby_impostors::nearby_objects(scene, origin);
     (
         kept.into_iter().filter(|i| candidates.contains(i)).collect(),
         dropped.into_iter().filter(|i| candidates.contains(i)).collect(),

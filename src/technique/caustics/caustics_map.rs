@@ -30,18 +30,18 @@ use std::sync::Arc;
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
 
+use crate::frame::gpu_scene::{cube_face_views, Draw, GpuScene};
+use crate::frame::gpu_types::ShadowPush;
+use crate::frame::targets::{Targets, CAUSTIC_FORMAT, DEPTH_FORMAT, SHADOW_FORMAT};
 use crate::gpu::{
     vk, Access, Attachment, Blend, Buffer, Clear, DepthState, DescriptorSet, DescriptorSetLayout, DescriptorWrite,
     Framebuffer, GpuContext, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc, ImageViewKind,
     MemoryLocation, OcclusionQueryPool, PipelineLayout, RenderPass, RenderPassDesc, Sampler, SamplerDesc, VertexLayout,
 };
 use crate::graph::{BufferId, Frame, FrameGraph, ImageId};
-use crate::passes::shadow_map::FAR_DISTANCE;
-use crate::renderer::gpu_scene::{cube_face_views, Draw, GpuScene};
-use crate::renderer::gpu_types::ShadowPush;
-use crate::renderer::targets::{Targets, CAUSTIC_FORMAT, DEPTH_FORMAT, SHADOW_FORMAT};
 use crate::scene::techniques::{CausticsMapParams, Flux, Newton};
 use crate::scene::{Light, Material, Scene};
+use crate::technique::baseline::shadow_map::FAR_DISTANCE;
 use crate::technique::{
     caustic_objects, list, params, tables_and_placement, FrameInputs, PlannedPass, Registration, RenderError, Setup,
     Stage, Technique,
@@ -519,18 +519,19 @@ impl CausticsMapPass {
             .write(self.receiver_depth_id, Access::DepthAttachment)
             .record(move |cmd| {
                 for face in &self.receiver_faces {
-                    cmd.begin_render_pass(
+                    cmd.in_render_pass(
                         &self.receiver_pass,
                         &face.framebuffer,
                         &[Clear::Color([FAR_DISTANCE; 4]), Clear::Depth(1.0)],
+                        |cmd| {
+                            cmd.bind_graphics(&self.receiver_pipeline, &[]);
+                            cmd.push_graphics(&self.receiver_pipeline, &face.push);
+                            cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
+                            for d in &self.receiver_draws {
+                                cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
+                            }
+                        },
                     );
-                    cmd.bind_graphics(&self.receiver_pipeline, &[]);
-                    cmd.push_graphics(&self.receiver_pipeline, &face.push);
-                    cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
-                    for d in &self.receiver_draws {
-                        cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
-                    }
-                    cmd.end_render_pass();
                 }
             });
 
@@ -546,11 +547,11 @@ impl CausticsMapPass {
         let grid = self.params.grid;
         pass.write(targets.caustic_atlas_id, Access::ColorAttachment).record(move |cmd| {
             for d in &self.destinations {
-                cmd.begin_render_pass(&self.splat_pass, &d.framebuffer, &[Clear::Color([0.0; 4])]);
-                cmd.bind_graphics(&self.splat_pipeline, &[self.set]);
-                cmd.push_graphics(&self.splat_pipeline, &d.push);
-                cmd.draw(d.push.face[1] * grid * grid, self.channels);
-                cmd.end_render_pass();
+                cmd.in_render_pass(&self.splat_pass, &d.framebuffer, &[Clear::Color([0.0; 4])], |cmd| {
+                    cmd.bind_graphics(&self.splat_pipeline, &[self.set]);
+                    cmd.push_graphics(&self.splat_pipeline, &d.push);
+                    cmd.draw(d.push.face[1] * grid * grid, self.channels);
+                });
             }
         });
     }
@@ -560,7 +561,7 @@ impl CausticsMapPass {
 /// positions and normals of the surface nearest the light and of the nearest surface facing
 /// away from it, one array layer per source face (`source_faces`). Caustics mapping splats
 /// its vertex grid from them; the photon buffer of Hu & Qin 2007 (§3.1,
-/// src/passes/photon_buffer.rs) traces its photons from them.
+/// src/technique/caustics/photon_buffer.rs) traces its photons from them.
 pub struct RefractorLayers {
     name: &'static str,
     pass: RenderPass,
@@ -730,31 +731,32 @@ impl RefractorLayers {
             for (face, s) in self.sources.iter().enumerate() {
                 let layers = [(&s.front, &self.front_pipeline), (&s.back, &self.back_pipeline)];
                 for (layer, (fb, pipeline)) in layers.into_iter().enumerate() {
-                    cmd.begin_render_pass(
+                    cmd.in_render_pass(
                         &self.pass,
                         fb,
                         &[Clear::Color([0.0; 4]), Clear::Color([0.0; 4]), Clear::Depth(1.0)],
+                        |cmd| {
+                            // V of Eq. 6: "the number of rasterized pixels" of the front surface.
+                            let query = self.queries.as_ref().filter(|_| layer == 0);
+                            if let Some(q) = query {
+                                cmd.begin_occlusion_query(q, face as u32);
+                            }
+                            cmd.bind_graphics(pipeline, &[]);
+                            cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
+                            for d in &self.specular_draws {
+                                let push = RefractorPush {
+                                    view_proj: s.view_proj.to_cols_array_2d(),
+                                    light: s.light,
+                                    info: [d.material, 0, 0, 0],
+                                };
+                                cmd.push_graphics(pipeline, &push);
+                                cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
+                            }
+                            if let Some(q) = query {
+                                cmd.end_occlusion_query(q, face as u32);
+                            }
+                        },
                     );
-                    // V of Eq. 6: "the number of rasterized pixels" of the front surface.
-                    let query = self.queries.as_ref().filter(|_| layer == 0);
-                    if let Some(q) = query {
-                        cmd.begin_occlusion_query(q, face as u32);
-                    }
-                    cmd.bind_graphics(pipeline, &[]);
-                    cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
-                    for d in &self.specular_draws {
-                        let push = RefractorPush {
-                            view_proj: s.view_proj.to_cols_array_2d(),
-                            light: s.light,
-                            info: [d.material, 0, 0, 0],
-                        };
-                        cmd.push_graphics(pipeline, &push);
-                        cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
-                    }
-                    if let Some(q) = query {
-                        cmd.end_occlusion_query(q, face as u32);
-                    }
-                    cmd.end_render_pass();
                 }
             }
             if let Some(q) = &self.queries {

@@ -34,14 +34,14 @@ use std::sync::Arc;
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
 
+use crate::frame::gpu_scene::{cube_face_views, GpuScene};
+use crate::frame::targets::{Targets, DEPTH_FORMAT};
 use crate::gpu::{
     vk, Access, Attachment, Blend, Buffer, Clear, Cmd, ComputePipeline, DepthState, DescriptorSet, DescriptorSetLayout,
     DescriptorWrite, Framebuffer, GpuContext, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc,
     ImageViewKind, PipelineLayout, RenderPass, RenderPassDesc, Sampler, SamplerDesc, VertexLayout,
 };
 use crate::graph::{Frame, FrameGraph, ImageId, PassBuilder};
-use crate::renderer::gpu_scene::{cube_face_views, GpuScene};
-use crate::renderer::targets::{Targets, DEPTH_FORMAT};
 use crate::scene::techniques::{ImpostorFresnel, ImpostorMaps, ImpostorParams, ImpostorUpdate};
 use crate::scene::{Analytic, Material, Scene};
 use crate::technique::{
@@ -131,33 +131,27 @@ pub const REFLECTION: Registration = Registration {
     inputs: |scene| tables_and_placement(scene, &["impostor"]),
 };
 
-impl Technique for ImpostorRefraction {
-    fn record<'a>(&'a self, _: Stage, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>) {
-        self.record(frame, inputs.scene, inputs.targets, inputs.frame_set, inputs.shadow_atlas);
-    }
+/// The reflection and the refraction technique record and react alike: their maps follow
+/// the objects (§6) and are rendered again at the start of a frame when needed.
+macro_rules! impostor_technique {
+    ($t:ty) => {
+        impl Technique for $t {
+            fn record<'a>(&'a self, _: Stage, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>) {
+                self.record(frame, inputs.scene, inputs.targets, inputs.frame_set, inputs.shadow_atlas);
+            }
 
-    fn begin_frame(&mut self) {
-        ImpostorRefraction::begin_frame(self);
-    }
+            fn begin_frame(&mut self) {
+                <$t>::begin_frame(self);
+            }
 
-    fn objects_moved(&mut self, bounds: &[(Vec3, f32)]) {
-        ImpostorRefraction::objects_moved(self, bounds);
-    }
+            fn objects_moved(&mut self, bounds: &[(Vec3, f32)]) {
+                <$t>::objects_moved(self, bounds);
+            }
+        }
+    };
 }
-
-impl Technique for ImpostorReflection {
-    fn record<'a>(&'a self, _: Stage, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>) {
-        self.record(frame, inputs.scene, inputs.targets, inputs.frame_set, inputs.shadow_atlas);
-    }
-
-    fn begin_frame(&mut self) {
-        ImpostorReflection::begin_frame(self);
-    }
-
-    fn objects_moved(&mut self, bounds: &[(Vec3, f32)]) {
-        ImpostorReflection::objects_moved(self, bounds);
-    }
-}
+impostor_technique!(ImpostorRefraction);
+impostor_technique!(ImpostorReflection);
 
 /// Cleared distance where no surface is seen: IMPOSTOR_NO_SURFACE of glsl/include/impostor.glsl.
 pub const NO_SURFACE: f32 = 1e15;
@@ -229,7 +223,7 @@ pub enum MapContent {
     /// §4: outward normal and distance of the map's own objects only.
     Refractor,
     /// §5: the uv map of light-map caustics: light-map (u, v), light-map slot + 1 and distance
-    /// of everything but the map's own objects (src/passes/impostor_lightmap.rs).
+    /// of everything but the map's own objects (src/technique/impostor/impostor_lightmap.rs).
     LightmapUv,
 }
 
@@ -495,29 +489,29 @@ impl ImpostorMap {
         }
         clears.push(Clear::Depth(1.0));
         for (view, fb) in views.iter().zip(&self.framebuffers) {
-            cmd.begin_render_pass(&self.render_pass, fb, &clears);
-            cmd.bind_graphics(&self.pipeline, &[frame_set]);
-            cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
-            for &i in &self.draws {
-                let d = &scene.draws[i];
-                let whole = [(0, d.index_count, 0, [0.0; 4], [0.0; 4])];
-                let parts = match self.charts.get(i) {
-                    Some(c) if !c.is_empty() => c.as_slice(),
-                    _ => &whole,
-                };
-                for &(first, count, slot, chart_u, chart_v) in parts {
-                    let push = MapPush {
-                        view_proj: (proj * *view).to_cols_array_2d(),
-                        reference,
-                        material: [d.material, slot, 0, 0],
-                        chart_u,
-                        chart_v,
+            cmd.in_render_pass(&self.render_pass, fb, &clears, |cmd| {
+                cmd.bind_graphics(&self.pipeline, &[frame_set]);
+                cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
+                for &i in &self.draws {
+                    let d = &scene.draws[i];
+                    let whole = [(0, d.index_count, 0, [0.0; 4], [0.0; 4])];
+                    let parts = match self.charts.get(i) {
+                        Some(c) if !c.is_empty() => c.as_slice(),
+                        _ => &whole,
                     };
-                    cmd.push_graphics(&self.pipeline, &push);
-                    cmd.draw_indexed(count, d.first_index + first, d.vertex_offset);
+                    for &(first, count, slot, chart_u, chart_v) in parts {
+                        let push = MapPush {
+                            view_proj: (proj * *view).to_cols_array_2d(),
+                            reference,
+                            material: [d.material, slot, 0, 0],
+                            chart_u,
+                            chart_v,
+                        };
+                        cmd.push_graphics(&self.pipeline, &push);
+                        cmd.draw_indexed(count, d.first_index + first, d.vertex_offset);
+                    }
                 }
-            }
-            cmd.end_render_pass();
+            });
         }
     }
 
@@ -745,13 +739,13 @@ impl ShadePass {
         pass.write(targets.hdr_id, Access::ColorAttachment).record(move |cmd| {
             // Keeps the deferred result and overwrites only the pixels of its materials (and,
             // per object, of the instance's object).
-            cmd.begin_render_pass(&self.render_pass, &self.framebuffer, &[Clear::None]);
-            for (set, push) in self.sets.iter().zip(&pushes) {
-                cmd.bind_graphics(&self.pipeline, &[frame_set, *set]);
-                cmd.push_graphics(&self.pipeline, push);
-                cmd.draw(3, 1);
-            }
-            cmd.end_render_pass();
+            cmd.in_render_pass(&self.render_pass, &self.framebuffer, &[Clear::None], |cmd| {
+                for (set, push) in self.sets.iter().zip(&pushes) {
+                    cmd.bind_graphics(&self.pipeline, &[frame_set, *set]);
+                    cmd.push_graphics(&self.pipeline, push);
+                    cmd.draw(3, 1);
+                }
+            });
         });
     }
 }

@@ -42,17 +42,17 @@ use std::sync::Arc;
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
 
+use crate::frame::gpu_scene::GpuScene;
+use crate::frame::targets::{Targets, DEPTH_FORMAT};
 use crate::gpu::{
     vk, Access, Attachment, Blend, Clear, DepthState, DescriptorSet, DescriptorSetLayout, DescriptorWrite, Framebuffer,
     GpuContext, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc, ImageViewKind, PipelineLayout,
     RenderPass, RenderPassDesc, Sampler, SamplerDesc, VertexLayout,
 };
 use crate::graph::{Frame, FrameGraph, ImageId};
-use crate::passes::distance_impostor::{object_bounds, record_maps, ImpostorMap, MapContent};
-use crate::renderer::gpu_scene::GpuScene;
-use crate::renderer::targets::{Targets, DEPTH_FORMAT};
 use crate::scene::techniques::{ImpostorLightmapParams, ImpostorParams};
 use crate::scene::{Light, Material, Scene};
+use crate::technique::impostor::distance_impostor::{object_bounds, record_maps, ImpostorMap, MapContent};
 use crate::technique::{
     dielectric_names, list, params, specular_names, tables_and_placement, FrameInputs, PlannedPass, Registration,
     RenderError, Setup, Stage, Technique,
@@ -718,21 +718,18 @@ impl ImpostorLightmap {
             .collect();
         pass.record(move |cmd| {
             for (m, (push, objects)) in self.maps.iter().zip(pushes) {
-                cmd.begin_render_pass(
-                    &self.caustic_pass,
-                    &m.framebuffer,
-                    &[Clear::Color([0.0, 0.0, 0.0, -1.0]), Clear::Color([0.0; 4]), Clear::Depth(1.0)],
-                );
-                cmd.bind_graphics(&self.caustic_pipeline, &[frame_set, self.caustic_set]);
-                cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
-                for i in objects {
-                    let Some(d) = scene.draws.get(i) else { continue };
-                    let mut p = push;
-                    p.intensity[3] = d.material as f32;
-                    cmd.push_graphics(&self.caustic_pipeline, &p);
-                    cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
-                }
-                cmd.end_render_pass();
+                let clears = [Clear::Color([0.0, 0.0, 0.0, -1.0]), Clear::Color([0.0; 4]), Clear::Depth(1.0)];
+                cmd.in_render_pass(&self.caustic_pass, &m.framebuffer, &clears, |cmd| {
+                    cmd.bind_graphics(&self.caustic_pipeline, &[frame_set, self.caustic_set]);
+                    cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
+                    for i in objects {
+                        let Some(d) = scene.draws.get(i) else { continue };
+                        let mut p = push;
+                        p.intensity[3] = d.material as f32;
+                        cmd.push_graphics(&self.caustic_pipeline, &p);
+                        cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
+                    }
+                });
             }
         });
 
@@ -744,18 +741,18 @@ impl ImpostorLightmap {
         let photons = self.params.caustic_map_size * self.params.caustic_map_size;
         pass.record(move |cmd| {
             for (slot, (chart, fb)) in self.charts.iter().zip(&self.splat_framebuffers).enumerate() {
-                cmd.begin_render_pass(&self.splat_pass, fb, &[Clear::Color([0.0; 4])]);
-                let texel_area = chart.area() / (n as f32 * n as f32);
-                let push = SplatPush {
-                    params: [self.params.filter_radius, n as f32, 1.0 / texel_area.max(1e-30), 0.0],
-                    info: [slot as u32, self.params.caustic_map_size, 0, 0],
-                };
-                for m in &self.maps {
-                    cmd.bind_graphics(&self.splat_pipeline, &[m.splat_set]);
-                    cmd.push_graphics(&self.splat_pipeline, &push);
-                    cmd.draw(photons, 1);
-                }
-                cmd.end_render_pass();
+                cmd.in_render_pass(&self.splat_pass, fb, &[Clear::Color([0.0; 4])], |cmd| {
+                    let texel_area = chart.area() / (n as f32 * n as f32);
+                    let push = SplatPush {
+                        params: [self.params.filter_radius, n as f32, 1.0 / texel_area.max(1e-30), 0.0],
+                        info: [slot as u32, self.params.caustic_map_size, 0, 0],
+                    };
+                    for m in &self.maps {
+                        cmd.bind_graphics(&self.splat_pipeline, &[m.splat_set]);
+                        cmd.push_graphics(&self.splat_pipeline, &push);
+                        cmd.draw(photons, 1);
+                    }
+                });
             }
         });
     }
@@ -770,18 +767,18 @@ impl ImpostorLightmap {
             .read(self.lightmaps_id, Access::FragmentSampled)
             .write(targets.hdr_id, Access::ColorAttachment)
             .record(move |cmd| {
-                cmd.begin_render_pass(&self.apply_pass, &self.apply_framebuffer, &[Clear::None]);
-                cmd.bind_graphics(&self.apply_pipeline, &[frame_set, self.apply_set]);
-                for (slot, c) in self.charts.iter().enumerate() {
-                    let push = ApplyPush {
-                        origin: c.origin.extend(slot as f32).to_array(),
-                        edge_u: c.edge_u.extend(c.object as f32).to_array(),
-                        edge_v: c.edge_v.extend(0.0).to_array(),
-                    };
-                    cmd.push_graphics(&self.apply_pipeline, &push);
-                    cmd.draw(3, 1);
-                }
-                cmd.end_render_pass();
+                cmd.in_render_pass(&self.apply_pass, &self.apply_framebuffer, &[Clear::None], |cmd| {
+                    cmd.bind_graphics(&self.apply_pipeline, &[frame_set, self.apply_set]);
+                    for (slot, c) in self.charts.iter().enumerate() {
+                        let push = ApplyPush {
+                            origin: c.origin.extend(slot as f32).to_array(),
+                            edge_u: c.edge_u.extend(c.object as f32).to_array(),
+                            edge_v: c.edge_v.extend(0.0).to_array(),
+                        };
+                        cmd.push_graphics(&self.apply_pipeline, &push);
+                        cmd.draw(3, 1);
+                    }
+                });
             });
     }
 

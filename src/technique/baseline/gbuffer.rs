@@ -2,13 +2,13 @@
 //! for what each channel encodes) plus reversed-Z depth.
 use std::sync::Arc;
 
+use crate::frame::gpu_scene::GpuScene;
+use crate::frame::targets::Targets;
 use crate::gpu::{
     vk, Access, Attachment, Blend, Clear, DepthState, DescriptorSet, DescriptorSetLayout, Framebuffer, GpuContext,
     GpuResult, GraphicsPipeline, GraphicsPipelineDesc, PipelineLayout, RenderPass, RenderPassDesc, VertexLayout,
 };
 use crate::graph::Frame;
-use crate::renderer::gpu_scene::GpuScene;
-use crate::renderer::targets::Targets;
 use crate::technique::{no_inputs, FrameInputs, PlannedPass, Registration, RenderError, Setup, Stage, Technique};
 
 pub const GBUFFER: &str = "gbuffer";
@@ -99,19 +99,20 @@ impl GBufferPass {
             .write(targets.depth_id, Access::DepthAttachment)
             .record(move |cmd| {
                 // Reversed Z: clear to 0 (infinitely far).
-                cmd.begin_render_pass(
+                cmd.in_render_pass(
                     &self.render_pass,
                     &self.framebuffer,
                     &[Clear::Color([0.0; 4]), Clear::Color([0.0; 4]), Clear::Depth(0.0)],
+                    |cmd| {
+                        cmd.bind_graphics(&self.pipeline, &[frame_set]);
+                        cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
+                        // `draws[i]` is object i.
+                        for (object, d) in scene.draws.iter().enumerate() {
+                            cmd.push_graphics(&self.pipeline, &[d.material, object as u32]);
+                            cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
+                        }
+                    },
                 );
-                cmd.bind_graphics(&self.pipeline, &[frame_set]);
-                cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
-                // `draws[i]` is object i.
-                for (object, d) in scene.draws.iter().enumerate() {
-                    cmd.push_graphics(&self.pipeline, &[d.material, object as u32]);
-                    cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
-                }
-                cmd.end_render_pass();
             });
     }
 }

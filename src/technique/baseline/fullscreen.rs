@@ -144,10 +144,10 @@ impl FullscreenPass {
         }
         pass.write(self.target, Access::ColorAttachment).record(move |cmd| {
             let clear = if self.clear { Clear::Color([0.0; 4]) } else { Clear::None };
-            cmd.begin_render_pass(&self.render_pass, &self.framebuffer, &[clear]);
-            cmd.bind_graphics(&self.pipeline, &[frame_set, self.set]);
-            cmd.draw(3, 1);
-            cmd.end_render_pass();
+            cmd.in_render_pass(&self.render_pass, &self.framebuffer, &[clear], |cmd| {
+                cmd.bind_graphics(&self.pipeline, &[frame_set, self.set]);
+                cmd.draw(3, 1);
+            });
         });
     }
 }

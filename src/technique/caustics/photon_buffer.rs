@@ -37,22 +37,22 @@
 //! 2 d_i centred at the object's centre O_i (mean of its vertices), perpendicular to O_R O_i
 //! (O_R: the mean of the specular objects' vertices), with the parallel projection from O_R
 //! along O_R O_i of glOrtho(-d_i, d_i, -d_i, d_i, near, far): the nearby-geometry impostors'
-//! rectangles (src/passes/nearby_impostors.rs, `rect_for`), see `receiver_rectangles`.
+//! rectangles (src/technique/refraction/nearby_impostors.rs, `rect_for`), see `receiver_rectangles`.
 use std::sync::Arc;
 
 use bytemuck::{Pod, Zeroable};
 
+use crate::frame::gpu_scene::GpuScene;
 use crate::gpu::{
     vk, Access, Attachment, Blend, Buffer, Clear, DepthState, DescriptorSet, DescriptorSetLayout, DescriptorWrite,
     Framebuffer, GpuContext, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc, ImageViewKind,
     PipelineLayout, RenderPass, RenderPassDesc, Sampler, SamplerDesc, VertexLayout,
 };
 use crate::graph::{Frame, FrameGraph, ImageId};
-use crate::passes::caustics_map::{is_specular, RefractorLayers};
-use crate::passes::nearby_impostors::{nearby_objects, rect_for};
-use crate::renderer::gpu_scene::GpuScene;
 use crate::scene::techniques::{PhotonBufferParams, PhotonNormalization};
 use crate::scene::Scene;
+use crate::technique::caustics::caustics_map::{is_specular, RefractorLayers};
+use crate::technique::refraction::nearby_impostors::{nearby_objects, rect_for};
 use crate::technique::{
     caustic_objects, list, params, tables_and_placement, FrameInputs, PlannedPass, Registration, RenderError, Setup,
     Stage, Technique,
@@ -133,7 +133,7 @@ pub struct GpuPhotonRect {
 const _: () = assert!(std::mem::size_of::<GpuPhotonRect>() == 112);
 
 /// Hu & Qin 2007 §2.2.1 (Fig. 12): RECT_i for the diffuse objects OBJ_i seen from O_R, as
-/// the nearby-geometry impostors build them (src/passes/nearby_impostors.rs: same O_i, d_i,
+/// the nearby-geometry impostors build them (src/technique/refraction/nearby_impostors.rs: same O_i, d_i,
 /// square, up vector and parallel projection; at most MAX_NEARBY_RECTS, the nearest first).
 /// O_R is the mean of the vertices of every specular object (dielectric, mirror or
 /// conductor): caustics also form by reflection (metal_ring), which nearby_impostors' O_R
@@ -542,11 +542,16 @@ impl PhotonBufferPass {
         pass.write(self.photons.1, Access::ColorAttachment).write(self.flux.1, Access::ColorAttachment).record(
             move |cmd| {
                 for (s, fb) in self.photon_framebuffers.iter().enumerate() {
-                    cmd.begin_render_pass(&self.photon_pass, fb, &[Clear::Color([0.0; 4]), Clear::Color([0.0; 4])]);
-                    cmd.bind_graphics(&self.photon_pipeline, &[self.photon_set]);
-                    cmd.push_graphics(&self.photon_pipeline, &[s as u32, size, rects, 0]);
-                    cmd.draw(3, 1);
-                    cmd.end_render_pass();
+                    cmd.in_render_pass(
+                        &self.photon_pass,
+                        fb,
+                        &[Clear::Color([0.0; 4]), Clear::Color([0.0; 4])],
+                        |cmd| {
+                            cmd.bind_graphics(&self.photon_pipeline, &[self.photon_set]);
+                            cmd.push_graphics(&self.photon_pipeline, &[s as u32, size, rects, 0]);
+                            cmd.draw(3, 1);
+                        },
+                    );
                 }
             },
         );
@@ -558,11 +563,11 @@ impl PhotonBufferPass {
             .write(self.counts.1, Access::ColorAttachment)
             .record(move |cmd| {
                 for (i, fb) in self.scatter_framebuffers.iter().enumerate() {
-                    cmd.begin_render_pass(&self.scatter_pass, fb, &[Clear::Color([0.0; 4])]);
-                    cmd.bind_graphics(&self.scatter_pipeline, &[self.scatter_set]);
-                    cmd.push_graphics(&self.scatter_pipeline, &[size, self.faces, i as u32 + 1, 0]);
-                    cmd.draw(size * size * self.faces, 1);
-                    cmd.end_render_pass();
+                    cmd.in_render_pass(&self.scatter_pass, fb, &[Clear::Color([0.0; 4])], |cmd| {
+                        cmd.bind_graphics(&self.scatter_pipeline, &[self.scatter_set]);
+                        cmd.push_graphics(&self.scatter_pipeline, &[size, self.faces, i as u32 + 1, 0]);
+                        cmd.draw(size * size * self.faces, 1);
+                    });
                 }
             });
 
@@ -572,11 +577,11 @@ impl PhotonBufferPass {
             .write(caustics.id, Access::ColorAttachment)
             .record(move |cmd| {
                 for (fb, push) in &self.filter_layers {
-                    cmd.begin_render_pass(&self.filter_pass, fb, &[Clear::Color([0.0; 4])]);
-                    cmd.bind_graphics(&self.filter_pipeline, &[self.filter_set]);
-                    cmd.push_graphics(&self.filter_pipeline, push);
-                    cmd.draw(3, 1);
-                    cmd.end_render_pass();
+                    cmd.in_render_pass(&self.filter_pass, fb, &[Clear::Color([0.0; 4])], |cmd| {
+                        cmd.bind_graphics(&self.filter_pipeline, &[self.filter_set]);
+                        cmd.push_graphics(&self.filter_pipeline, push);
+                        cmd.draw(3, 1);
+                    });
                 }
             });
     }

@@ -3,14 +3,14 @@
 //! (see glsl/shadow/shadow.frag for why distance rather than depth).
 use std::sync::Arc;
 
+use crate::frame::gpu_scene::{GpuScene, ShadowFace};
+use crate::frame::gpu_types::ShadowPush;
+use crate::frame::targets::Targets;
 use crate::gpu::{
     vk, Access, Attachment, Blend, Clear, DepthState, Framebuffer, GpuContext, GpuResult, GraphicsPipeline,
     GraphicsPipelineDesc, PipelineLayout, RenderPass, RenderPassDesc, VertexLayout,
 };
 use crate::graph::Frame;
-use crate::renderer::gpu_scene::{GpuScene, ShadowFace};
-use crate::renderer::gpu_types::ShadowPush;
-use crate::renderer::targets::Targets;
 use crate::technique::{
     describe_lights, diffuse_names, list, placement, FrameInputs, PlannedPass, Registration, RenderError, Setup, Stage,
     Technique,
@@ -101,21 +101,26 @@ impl ShadowMapPass {
             .write(targets.shadow_depth_id, Access::DepthAttachment)
             .record(move |cmd| {
                 for (face, fb) in self.faces.iter().zip(&self.framebuffers) {
-                    cmd.begin_render_pass(&self.render_pass, fb, &[Clear::Color([FAR_DISTANCE; 4]), Clear::Depth(1.0)]);
-                    cmd.bind_graphics(&self.pipeline, &[]);
-                    cmd.push_graphics(
-                        &self.pipeline,
-                        &ShadowPush {
-                            view_proj: face.view_proj.to_cols_array_2d(),
-                            light: face.light,
-                            origin: face.origin,
+                    cmd.in_render_pass(
+                        &self.render_pass,
+                        fb,
+                        &[Clear::Color([FAR_DISTANCE; 4]), Clear::Depth(1.0)],
+                        |cmd| {
+                            cmd.bind_graphics(&self.pipeline, &[]);
+                            cmd.push_graphics(
+                                &self.pipeline,
+                                &ShadowPush {
+                                    view_proj: face.view_proj.to_cols_array_2d(),
+                                    light: face.light,
+                                    origin: face.origin,
+                                },
+                            );
+                            cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
+                            for d in &scene.draws {
+                                cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
+                            }
                         },
                     );
-                    cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
-                    for d in &scene.draws {
-                        cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
-                    }
-                    cmd.end_render_pass();
                 }
             });
     }

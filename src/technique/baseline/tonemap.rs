@@ -34,12 +34,12 @@
 //! mesopic vision, and the loss of visual acuity. [`crate::app::output::tonemap_adaptive`] is
 //! the same operator on the CPU (compare, report, reference PNGs).
 
+use crate::frame::targets::Targets;
 use crate::gpu::{
     vk, Access, Buffer, ComputePipeline, DescriptorSet, DescriptorSetLayout, DescriptorWrite, GpuResult, Image,
     ImageDesc, MemoryLocation, PipelineLayout,
 };
 use crate::graph::{BufferId, Frame, ImageId};
-use crate::renderer::targets::Targets;
 use crate::scene::techniques::TonemapAdaptiveParams;
 use crate::scene::Scene;
 use crate::technique::{params, tables, FrameInputs, PlannedPass, Registration, RenderError, Setup, Stage, Technique};

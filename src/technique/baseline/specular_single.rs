@@ -6,10 +6,10 @@
 //! refraction technique's cost is compared.
 use std::sync::Arc;
 
+use crate::frame::gpu_scene::GpuScene;
+use crate::frame::targets::Targets;
 use crate::gpu::{DescriptorSet, DescriptorSetLayout, GpuContext, GpuResult, Sampler};
 use crate::graph::Frame;
-use crate::renderer::gpu_scene::GpuScene;
-use crate::renderer::targets::Targets;
 use crate::scene::Scene;
 use crate::technique::{
     dielectric_names, list, metal_names, no_inputs, FrameInputs, PlannedPass, Registration, Stage, Technique,

@@ -2,10 +2,10 @@
 //! irradiance) and the environment background: glsl/shading/deferred.frag.
 use std::sync::Arc;
 
+use crate::frame::gpu_scene::GpuScene;
+use crate::frame::targets::Targets;
 use crate::gpu::{DescriptorSet, DescriptorSetLayout, GpuContext, GpuResult, Sampler};
 use crate::graph::{Frame, ImageId};
-use crate::renderer::gpu_scene::GpuScene;
-use crate::renderer::targets::Targets;
 use crate::scene::techniques::CausticsMapParams;
 use crate::technique::{
     diffuse_names, list, params, placement, tables, FrameInputs, PlannedPass, Registration, RenderError, Setup, Stage,
@@ -49,13 +49,13 @@ fn plan(scene: &crate::scene::Scene) -> Vec<(Stage, PlannedPass)> {
 
 /// Reads whatever the shadow and caustic techniques planned before it.
 fn create(s: &mut Setup<'_>) -> Result<Box<dyn Technique>, RenderError> {
-    let caustic_filter = if s.planned(super::caustics_map::CAUSTICS_MAP) {
+    let caustic_filter = if s.planned(crate::technique::caustics::caustics_map::CAUSTICS_MAP) {
         Some(params("caustics_map", CausticsMapParams::from_settings(&s.scene.render))?.filter)
     } else {
         None
     };
     let c = s.photon_caustics;
-    let photon = s.planned(super::photon_buffer::PHOTON_BUFFER).then_some((c.count, c.mode, c.id));
+    let photon = s.planned(crate::technique::caustics::photon_buffer::PHOTON_BUFFER).then_some((c.count, c.mode, c.id));
     let shadowed = s.planned(super::shadow_map::SHADOW_MAP);
     Ok(Box::new(DeferredShadingPass::new(
         s.ctx,

@@ -1,0 +1,7 @@
+//! Image-space refraction through two interfaces: Wyman 2005 and Hu & Qin 2007 (with §2.2's
+//! impostors of the nearby geometry), and the refractor layers they share.
+pub mod nearby_impostors;
+pub mod refraction_hu_qin;
+pub mod refraction_wyman;
+pub mod refractor_layers;
+pub mod wyman_distance;
