@@ -23,4 +23,10 @@ macro_rules! shared_constants {
         $(pub const $name: $ty = $value;)*
     };
 }
+/// Rust side of `shared_floats!` (src/shader_shared.rs): plain `pub const`s.
+macro_rules! shared_floats {
+    ($($name:ident : $ty:ty = $value:expr;)*) => {
+        $(pub const $name: $ty = $value;)*
+    };
+}
 include!("shader_shared.rs");

@@ -1,7 +1,7 @@
 // Constants shared by Rust and GLSL: the single source of truth (../shared/DESIGN.md, rule 7).
 //
-// This file is `include!`d twice: by the library (src/lib.rs, where the macro makes
-// `pub const`s) and by build.rs (where the same macro emits `#define`s into the generated
+// This file is `include!`d twice: by the library (src/lib.rs, where the macros make
+// `pub const`s) and by build.rs (where the same macros emit `#define`s into the generated
 // GLSL header `prism_shared.glsl`). Edit a value here and both sides change together.
 shared_constants! {
     // Material kinds (GpuMaterial.albedo_a.w).
@@ -227,4 +227,15 @@ shared_constants! {
     BINDING_EIKONAL_NEARBY_TEXTURE: u32 = 24;
     BINDING_EIKONAL_TRIANGLES: u32 = 25;
     MAX_EIKONAL_TRIANGLES: u32 = 64;
+}
+
+// Float constants, written into the GLSL header as float literals.
+shared_floats! {
+    // Cleared distance where a distance impostor sees no surface from its centre: far beyond
+    // any scene (prism handles 1e-3..1e4 m) yet small enough that its square stays finite in
+    // float (length()). glsl/include/impostor.glsl, src/technique/impostor/distance_impostor.rs.
+    IMPOSTOR_NO_SURFACE: f32 = 1e15;
+    // A looked-up distance above this is (a texel filtered with) "no surface": the ray leaves
+    // the map and the environment is seen. 1e-5 of IMPOSTOR_NO_SURFACE still exceeds any scene.
+    IMPOSTOR_MISS: f32 = 1e10;
 }

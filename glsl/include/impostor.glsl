@@ -9,12 +9,9 @@
 #ifndef PRISM_IMPOSTOR_GLSL
 #define PRISM_IMPOSTOR_GLSL
 
-// Cleared distance where no surface is seen from o: far beyond any scene (prism handles
-// 1e-3..1e4 m) yet small enough that its square stays finite in float (length()).
-const float IMPOSTOR_NO_SURFACE = 1e15;
-// A looked-up distance above this is (a texel filtered with) "no surface": the ray leaves
-// the map and the environment is seen. 1e-5 of IMPOSTOR_NO_SURFACE still exceeds any scene.
-const float IMPOSTOR_MISS = 1e10;
+// IMPOSTOR_NO_SURFACE (the cleared distance where no surface is seen from o) and
+// IMPOSTOR_MISS (a looked-up distance above it is "no surface") come from
+// src/shader_shared.rs, shared with the passes that clear the maps.
 
 // |v'|: distance of the surface visible from o in direction v (any length, not 0).
 float impostor_distance(samplerCube map, uint channel, vec3 v) {

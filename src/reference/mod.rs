@@ -118,6 +118,8 @@ struct RefLight {
     position: [f32; 4],
     intensity: [f32; 4],
 }
+// Two vec4s (glsl/reference/scene.glsl, std430).
+const _: () = assert!(std::mem::size_of::<RefLight>() == 32);
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
@@ -222,6 +224,8 @@ struct PixelState {
     vp_normal: [f32; 4],
     vp_weight: [f32; 4],
 }
+// Four vec4s (glsl/reference/sppm.glsl, std430).
+const _: () = assert!(std::mem::size_of::<PixelState>() == 64);
 
 const FLAG_DISPERSION: u32 = 1;
 const FLAG_JITTER: u32 = 2;

@@ -153,8 +153,8 @@ macro_rules! impostor_technique {
 impostor_technique!(ImpostorRefraction);
 impostor_technique!(ImpostorReflection);
 
-/// Cleared distance where no surface is seen: IMPOSTOR_NO_SURFACE of glsl/include/impostor.glsl.
-pub const NO_SURFACE: f32 = 1e15;
+/// Cleared distance where no surface is seen (src/shader_shared.rs, shared with the shaders).
+pub const NO_SURFACE: f32 = crate::IMPOSTOR_NO_SURFACE;
 /// Radiance (rgb) + distance (a), or the refractor map's normal (xyz) + distance (w).
 pub const CUBE_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 pub const DISTANCE_FORMAT: vk::Format = vk::Format::R32_SFLOAT;
