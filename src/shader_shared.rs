@@ -71,7 +71,7 @@ shared_constants! {
     REF_BINDING_GRID: u32 = 11;
     REF_BINDING_COUNTERS: u32 = 12;
     REF_BINDING_DEBUG: u32 = 13;
-    // volsrc (issue 7): a volume's voxel fields (glsl/reference/volume.glsl).
+    // A volume's voxel fields (glsl/reference/volume.glsl).
     REF_BINDING_VOLUME: u32 = 14;
     // Specular objects photons are aimed at, at most.
     REF_MAX_TARGETS: u32 = 16;
@@ -173,7 +173,7 @@ shared_constants! {
     EIKONAL_BINDING_SRC: u32 = 0;
     EIKONAL_BINDING_DST: u32 = 1;
     BINDING_EIKONAL_FIELD: u32 = 13;
-    // volsrc (issue 7): the material volumes of eikonal_view (src/scene/volume_sources.rs):
+    // The material volumes of eikonal_view (src/scene/volume_sources.rs):
     // (extinction RGB, HG g), (albedo RGB, reflectance), (emission RGB, boundary band).
     BINDING_EIKONAL_EXTINCTION: u32 = 20;
     BINDING_EIKONAL_ALBEDO: u32 = 21;
@@ -218,8 +218,8 @@ shared_constants! {
     // The irradiance and direction volumes in set 1 of eikonal_view and deferred_shading.
     BINDING_EIKONAL_IRRADIANCE: u32 = 14;
     BINDING_EIKONAL_LIGHT_DIR: u32 = 15;
-    // --- branch `eikview` (issue 7; src/technique/eikonal/eikonal_nearby.rs): what exit and reflected
-    // view rays meet. Set 1 of eikonal_view also holds the impostor rectangles and TEX_i of
+    // What exit and reflected view rays meet (src/technique/eikonal/eikonal_nearby.rs). Set 1
+    // of eikonal_view also holds the impostor rectangles and TEX_i of
     // Hu & Qin 2007 §2.2 around the volume (the 14/15 of BINDING_NEARBY_* are taken by the
     // light volumes there) and the triangles of the exactly intersected flat receivers
     // (Ihrke et al. 2007 §6, Fig. 7), at most MAX_EIKONAL_TRIANGLES.

@@ -276,7 +276,7 @@ fn absurd_photon_buffer_and_caustics_map_parameters() {
 
 #[test]
 fn absurd_eikonal_nearby_parameters() {
-    // Branch `eikview`: render.eikonal.nearby and its impostor settings name the key, the
+    // render.eikonal.nearby and its impostor settings name the key, the
     // allowed values, the file and line; no output file is written.
     let c = Case::new("eikonal_nearby");
     let scene = c.file("scene.toml", &format!("{GOOD}\n[render.eikonal]\nnearby = \"mirror\"\n"));

@@ -181,7 +181,7 @@ fn caustics_map_approaches_the_reference_on_caustic_sphere() {
     assert!(errors[2] < 0.5 * e_none, "caustics_map must beat no caustics: {} vs {e_none}", errors[2]);
 }
 
-/// A scene with two lights (issue 6), with each caustic technique: caustic_sphere with its
+/// A scene with two lights, with each caustic technique: caustic_sphere with its
 /// point light A (above the ball) and a second point light B off to the side. Every
 /// technique builds one caustic map (or photon buffer) per light; the caustic light they
 /// add must be additive: caustic(A and B) = caustic(A) + caustic(B), where caustic(L) is the

@@ -80,6 +80,62 @@ fn demo(display: &Display, args: &[&str]) -> Output {
         .expect("cannot run prism")
 }
 
+/// A `prism demo` running in the background, its stderr read line by line.
+struct Running {
+    child: Child,
+    lines: std::sync::mpsc::Receiver<String>,
+    log: String,
+}
+
+impl Running {
+    fn spawn(display: &Display, args: &[&str]) -> Running {
+        use std::io::{BufRead, BufReader};
+        let mut child = Command::new(env!("CARGO_BIN_EXE_prism"))
+            .arg("demo")
+            .args(args)
+            .env("DISPLAY", &display.name)
+            .env_remove("WAYLAND_DISPLAY")
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let (tx, lines) = std::sync::mpsc::channel();
+        let stderr = child.stderr.take().unwrap();
+        std::thread::spawn(move || {
+            for line in BufReader::new(stderr).lines().map_while(Result::ok) {
+                let _ = tx.send(line);
+            }
+        });
+        Running { child, lines, log: String::new() }
+    }
+
+    /// Read the log until a line contains `needle` (true), or `secs` seconds pass (false).
+    fn wait_for(&mut self, needle: &str, secs: u64) -> bool {
+        let deadline = Instant::now() + Duration::from_secs(secs);
+        while let Some(left) = deadline.checked_duration_since(Instant::now()) {
+            match self.lines.recv_timeout(left) {
+                Ok(line) => {
+                    self.log.push_str(&line);
+                    self.log.push('\n');
+                    if line.contains(needle) {
+                        return true;
+                    }
+                }
+                Err(_) => return false,
+            }
+        }
+        false
+    }
+
+    /// Read what is left of the log once the process has exited.
+    fn drain(&mut self) {
+        while let Ok(line) = self.lines.recv_timeout(Duration::from_millis(500)) {
+            self.log.push_str(&line);
+            self.log.push('\n');
+        }
+    }
+}
+
 fn out_dir(name: &str) -> PathBuf {
     let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
     let _ = std::fs::remove_dir_all(&d);
@@ -177,7 +233,6 @@ fn demo_screenshot_is_the_frame_without_the_overlay() {
 
 #[test]
 fn demo_hot_reload_shows_a_scene_error_and_recovers() {
-    use std::io::{BufRead, BufReader};
     let Some(display) = display() else { return };
     let dir = out_dir("demo_reload");
     let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes");
@@ -185,50 +240,21 @@ fn demo_hot_reload_shows_a_scene_error_and_recovers() {
     let scene = dir.join("scene.toml");
     std::fs::write(&scene, &good).unwrap();
     // Runs until killed: the test reads its progress from stderr.
-    let mut child = Command::new(env!("CARGO_BIN_EXE_prism"))
-        .args(["demo", scene.to_str().unwrap(), "--frames", "1000000", "--width", "64", "--height", "48"])
-        .env("DISPLAY", &display.name)
-        .env_remove("WAYLAND_DISPLAY")
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let (tx, rx) = std::sync::mpsc::channel();
-    let stderr = child.stderr.take().unwrap();
-    std::thread::spawn(move || {
-        for line in BufReader::new(stderr).lines().map_while(Result::ok) {
-            let _ = tx.send(line);
-        }
-    });
-    let mut log = String::new();
-    let wait_for = |needle: &str, log: &mut String| -> bool {
-        let deadline = Instant::now() + Duration::from_secs(60);
-        while let Some(left) = deadline.checked_duration_since(Instant::now()) {
-            match rx.recv_timeout(left) {
-                Ok(line) => {
-                    log.push_str(&line);
-                    log.push('\n');
-                    if line.contains(needle) {
-                        return true;
-                    }
-                }
-                Err(_) => return false,
-            }
-        }
-        false
-    };
-    let started = wait_for("swapchain", &mut log);
+    let mut demo =
+        Running::spawn(&display, &[scene.to_str().unwrap(), "--frames", "1000000", "--width", "64", "--height", "48"]);
+    let started = demo.wait_for("swapchain", 60);
     // A syntax error on disk: reported, and the window keeps running.
     std::thread::sleep(Duration::from_millis(600));
     std::fs::write(&scene, format!("{good}\nbroken = = 1\n")).unwrap();
-    let errored = started && wait_for("scene error", &mut log);
+    let errored = started && demo.wait_for("scene error", 60);
     // Fixed again, with a different exposure: reloaded.
     std::thread::sleep(Duration::from_millis(600));
     std::fs::write(&scene, good.replace("[render]", "[render]\nexposure = 2.0")).unwrap();
-    let reloaded = errored && wait_for("demo: reloaded", &mut log);
-    let still_running = child.try_wait().unwrap().is_none();
-    let _ = child.kill();
-    let _ = child.wait();
+    let reloaded = errored && demo.wait_for("demo: reloaded", 60);
+    let still_running = demo.child.try_wait().unwrap().is_none();
+    let _ = demo.child.kill();
+    let _ = demo.child.wait();
+    let log = demo.log;
     assert!(started, "the demo did not start:\n{log}");
     assert!(errored, "the broken scene was not reported:\n{log}");
     assert!(reloaded, "the fixed scene was not reloaded:\n{log}");
@@ -333,7 +359,6 @@ fn copy_tree(from: &Path, to: &Path) {
 
 #[test]
 fn demo_recompiles_an_edited_shader_and_shows_its_errors() {
-    use std::io::{BufRead, BufReader};
     let Some(display) = display() else { return };
     let dir = out_dir("demo_shaders");
     let glsl = dir.join("glsl");
@@ -344,70 +369,38 @@ fn demo_recompiles_an_edited_shader_and_shows_its_errors() {
     let (shot, reference) = (dir.join("shot.png"), dir.join("reference.png"));
     let _ = std::fs::remove_file(&shot);
     let size = ["--width", "64", "--height", "48"];
-    let mut child = Command::new(env!("CARGO_BIN_EXE_prism"))
-        .args(["demo", "sphere_env", "--frames", "1000000", "--validation", "--no-overlay"])
-        .args(["--shaders", glsl.to_str().unwrap(), "--exit-after-shader-reloads", "1"])
-        .args(["--screenshot", shot.to_str().unwrap()])
-        .args(size)
-        .env("DISPLAY", &display.name)
-        .env_remove("WAYLAND_DISPLAY")
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let (tx, rx) = std::sync::mpsc::channel();
-    let stderr = child.stderr.take().unwrap();
-    std::thread::spawn(move || {
-        for line in BufReader::new(stderr).lines().map_while(Result::ok) {
-            let _ = tx.send(line);
-        }
-    });
-    let mut log = String::new();
-    let mut wait_for = |needle: &str| -> bool {
-        let deadline = Instant::now() + Duration::from_secs(120);
-        while let Some(left) = deadline.checked_duration_since(Instant::now()) {
-            match rx.recv_timeout(left) {
-                Ok(line) => {
-                    log.push_str(&line);
-                    log.push('\n');
-                    if line.contains(needle) {
-                        return true;
-                    }
-                }
-                Err(_) => return false,
-            }
-        }
-        false
-    };
-    let started = wait_for("for shader changes");
+    let mut args = vec!["sphere_env", "--frames", "1000000", "--validation", "--no-overlay"];
+    args.extend(["--shaders", glsl.to_str().unwrap(), "--exit-after-shader-reloads", "1"]);
+    args.extend(["--screenshot", shot.to_str().unwrap()]);
+    args.extend(size);
+    let mut demo = Running::spawn(&display, &args);
+    let started = demo.wait_for("for shader changes", 120);
     // A syntax error on line 9: reported with its file and line, and the window goes on.
     std::thread::sleep(Duration::from_millis(600));
     let broken = original.replacen("void main() {", "void main() {\n    this is not glsl;", 1);
     std::fs::write(&tonemap, broken).unwrap();
-    let errored = started && wait_for("glsl/tonemap/tonemap.frag:9:");
-    let running_after_error = child.try_wait().unwrap().is_none();
+    let errored = started && demo.wait_for("glsl/tonemap/tonemap.frag:9:", 120);
+    let running_after_error = demo.child.try_wait().unwrap().is_none();
     // A valid edit: a quarter of the exposure. Only the tone map is re-created.
     std::thread::sleep(Duration::from_millis(600));
     std::fs::write(&tonemap, original.replace("frame.camera_position.w * L", "0.25 * frame.camera_position.w * L"))
         .unwrap();
-    let reloaded = errored && wait_for("glsl/tonemap/tonemap.frag recompiled: re-created tonemap (");
+    let reloaded = errored && demo.wait_for("glsl/tonemap/tonemap.frag recompiled: re-created tonemap (", 120);
     let deadline = Instant::now() + Duration::from_secs(120);
     let status = loop {
-        match child.try_wait().unwrap() {
+        match demo.child.try_wait().unwrap() {
             Some(s) => break Some(s),
             None if Instant::now() > deadline => break None,
             None => std::thread::sleep(Duration::from_millis(100)),
         }
     };
     if status.is_none() {
-        let _ = child.kill();
+        let _ = demo.child.kill();
     }
-    let _ = child.wait();
+    let _ = demo.child.wait();
     // The rest of the log (validation messages come at exit).
-    while let Ok(line) = rx.recv_timeout(Duration::from_millis(500)) {
-        log.push_str(&line);
-        log.push('\n');
-    }
+    demo.drain();
+    let log = demo.log;
     assert!(started, "the demo did not start:\n{log}");
     assert!(errored, "the broken shader was not reported with its file and line:\n{log}");
     assert!(running_after_error, "the demo stopped on a shader error:\n{log}");

@@ -105,7 +105,7 @@ fn rk4_converges_at_fourth_order_and_euler_at_first() {
 
 /// The scenes as these view-renderer tests know them: "eikonal_sphere" is the constant
 /// n = 1.5 ball of radius 1 at the origin in the grid environment (sphere_env's ball; the
-/// layout of eikonal_sphere before it got caustic_sphere's floor and light, issue 7), built
+/// layout of eikonal_sphere before it got caustic_sphere's floor and light), built
 /// from eikonal_luneburg's camera and box at 128^3.
 fn view_scene(name: &str, size: u32, overrides: &[&str]) -> scene::Scene {
     if name != "eikonal_sphere" {
@@ -241,7 +241,7 @@ fn invalid_volumes_and_parameters_give_clear_errors() {
         (format!("{GOOD}{lens}"), "[render.eikonal]\nstep = 0", "step"),
         (format!("{GOOD}{lens}"), "[render.eikonal]\nsigma = -1", "sigma"),
         (format!("{GOOD}{lens}"), "[render.eikonal]\nsteps = 1", "unknown parameter `steps`"),
-        // The light simulator's keys (issue 7).
+        // The light simulator's keys.
         (format!("{GOOD}{lens}"), "[render.eikonal]\nenergy_threshold = 1", "energy_threshold"),
         (format!("{GOOD}{lens}"), "[render.eikonal]\nlight_dt = 0", "light_dt"),
         (format!("{GOOD}{lens}"), "[render.eikonal]\nmax_patches = 10000000", "max_patches"),
@@ -283,7 +283,7 @@ fn the_reference_sees_the_volumes() {
     let (same, none) = (rmse_rgba(&ball, &glass), rmse_rgba(&background, &glass));
     eprintln!("reference: eikonal_sphere vs sphere_env RMSE {same:.4}, no volume vs sphere_env {none:.4}");
     assert!(same < 0.25 * none, "eikonal_sphere's reference should match sphere_env's: {same} vs {none}");
-    // The view renderer's ball (Fresnel at the boundary band since issue 7; the numbers
+    // The view renderer's ball (Fresnel at the boundary band; the numbers
     // below were measured before it) approaches it as the volume is
     // sampled finer (at 64^2, 32 spp: RMSE 0.33 at 128^3, 0.24 at 256^3 with step 0.25;
     // sphere_env's single-interface baseline: 0.41).

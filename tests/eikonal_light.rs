@@ -412,7 +412,7 @@ fn eikonal_sphere_floor_shows_the_focused_light() {
 /// unclamped (HDR) radiance: the caustic's peak. Measured at 48^2 with the highest-energy
 /// midpoint voxelization of before: HDR RMSE 1.08 with the simulation, 0.40 without (the
 /// peak several times too bright; clamped 0.094 vs 0.232). With the track-length deposit,
-/// quarter-flux tessellation and keep_crossed (issue 7): HDR 0.157 vs 0.40, clamped 0.103
+/// quarter-flux tessellation and keep_crossed: HDR 0.157 vs 0.40, clamped 0.103
 /// vs 0.232. The rest of the gap: the simulator has no Fresnel loss at the ball (11.07 W
 /// through it against the reference's 9.24 W), and the smoothed rim's penumbra.
 #[test]
@@ -427,7 +427,7 @@ fn eikonal_sphere_floor_approaches_caustic_sphere_reference() {
     let truth = reference.image();
     let o = "volume.resolution=[48, 48, 48]";
     let on = common::render_on(&ctx, &common::scene("eikonal_sphere", size, &[o]));
-    // Branch `eikview`: exit rays see the floor through the ball by default; "off" keeps the
+    // Exit rays see the floor through the ball by default; "off" keeps the
     // ball black here, so that the mask below selects the floor seen directly.
     let off = common::render_on(
         &ctx,
@@ -457,11 +457,11 @@ fn eikonal_sphere_floor_approaches_caustic_sphere_reference() {
     // Measured (clamped) at 48^2: 0.094 vs 0.232 (0.080 vs 0.233 at 64^2); half leaves room for the
     // reference's noise at 16 spp.
     assert!(on_1 < 0.5 * off_1, "light simulation {on_1} vs direct light {off_1}");
-    // The caustic's peak (the bug of issue 7: 1.08 vs 0.40 before); measured 0.157 vs 0.40.
+    // The caustic's peak (1.08 vs 0.40 before); measured 0.157 vs 0.40.
     assert!(hdr_on < 0.6 * hdr_off, "HDR: light simulation {hdr_on} vs direct light {hdr_off}");
 }
 
-/// The reference carries light through volumes (issue 7): its shadow rays stop at a
+/// The reference carries light through volumes: its shadow rays stop at a
 /// refractive volume and its photons cross it along the curved path, so eikonal_sphere's
 /// reference (the glass ball as a constant-index volume, traced exactly) shows the ball's
 /// shadow and caustic on the floor like caustic_sphere's reference (the same ball as a glass
@@ -596,7 +596,7 @@ fn ball_floor_rings(intensity: f64, h: f64, c: f64, r: f64, ior: f64, dr: f64, r
     flux
 }
 
-/// Item 1 of issue 7, the caustic's peak: the simulated floor irradiance of eikonal_sphere
+/// The caustic's peak: the simulated floor irradiance of eikonal_sphere
 /// (48^3, the irradiance volume widened to 1.65 m around the axis) against the point light
 /// and the exact refraction of the ball on the CPU (no Fresnel: the simulator has none).
 /// - Unobstructed light (beside the ball, on the floor beyond its shadow): I cos / d^2.
@@ -859,7 +859,7 @@ fn tiled_simulation_equals_the_untiled_one() {
     common::assert_no_validation_errors(&ctx);
 }
 
-/// Item 3 on the scene of issue 7: eikonal_dispersion_cube (three nested glasses, each with
+/// eikonal_dispersion_cube (three nested glasses, each with
 /// an index per channel) over a floor under a tilted directional light. Its floor caustic
 /// separates in colour: the red and blue centroids of the image differ; with each glass's
 /// green index for all channels they coincide (absorption made grey in both).

@@ -1,4 +1,4 @@
-//! Branch `eikview` (issue 7; src/technique/eikonal/eikonal_nearby.rs): eikonal view rays that leave the
+//! What exit rays meet (src/technique/eikonal/eikonal_nearby.rs): eikonal view rays that leave the
 //! volume, or that its boundary reflects, meet the nearby scene geometry (Ihrke et al. 2007
 //! §6, Fig. 7: exact ray/plane; Hu & Qin 2007 §2.2: impostor rectangles) instead of only the
 //! environment. Checked against the exact reference, which traces the same volume.

@@ -279,7 +279,7 @@ fn prism_passes_prints_the_passes_and_why() {
 #[test]
 fn eikonal_passes_only_with_a_volume() {
     assert_eq!(names("eikonal_luneburg", &[]), ["gbuffer", "deferred_shading", "eikonal_view", "tonemap"]);
-    // eikonal_sphere has a light (issue 7): the light simulation's receiver pass follows
+    // eikonal_sphere has a light: the light simulation's receiver pass follows
     // deferred shading; without the light, or with render.eikonal.light = false, it is gone.
     let lit = ["shadow_map", "gbuffer", "deferred_shading", "eikonal_light", "eikonal_view", "tonemap"];
     assert_eq!(names("eikonal_sphere", &[]), lit);
@@ -299,7 +299,7 @@ fn eikonal_passes_only_with_a_volume() {
     let light: Vec<_> = p.iter().filter(|p| p.name == "eikonal_light").collect();
     assert_eq!(light.len(), 1, "{p:?}");
     assert!(light[0].reason.contains("light 0") && light[0].reason.contains("light 1"), "{}", light[0].reason);
-    // The volume-source scenes (issue 7): the wine glass's light adds its shadow map and the
+    // The volume-source scenes: the wine glass's light adds its shadow map and the
     // light simulation (the caustic on the table); the others have no light.
     for scene in ["eikonal_amber_bunny", "eikonal_dispersion_cube"] {
         assert_eq!(names(scene, &[]), ["gbuffer", "deferred_shading", "eikonal_view", "tonemap"]);
@@ -314,7 +314,7 @@ fn eikonal_passes_only_with_a_volume() {
     assert!(!plan(&no_volume).iter().any(|p| p.name.starts_with("eikonal")));
 }
 
-/// Branch `eikview` (issue 7): the impostor textures around a volume (`eikonal_nearby`) are
+/// The impostor textures around a volume (`eikonal_nearby`) are
 /// recorded only when an object is left to them: eikonal_sphere's floor quad is intersected
 /// exactly by default (no pass), goes through an impostor with render.eikonal.nearby =
 /// "impostor" (the pass between the light simulation's receivers and the view pass, whose

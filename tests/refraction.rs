@@ -1,4 +1,4 @@
-//! The image-space refraction techniques (issue 4): Wyman 2005 (`wyman`) and Hu & Qin 2007
+//! The image-space refraction techniques: Wyman 2005 (`wyman`) and Hu & Qin 2007
 //! (`hu_qin`) against the analytic sphere, stability at every ior, the ior-1 identity, and
 //! golden images.
 mod common;

@@ -2,7 +2,7 @@
 //! 5.3; src/scene/volume_sources.rs, glsl/eikonal/view.frag): the CPU rasterization of
 //! meshes, implicit shapes and lathes against analytic answers, the region override rule,
 //! and on the GPU Fresnel reflection, emission, RGB extinction and dispersion against
-//! closed forms, the three scenes of issue 7 and their extremes, and the scene checks.
+//! closed forms, the three volume-source scenes and their extremes, and the scene checks.
 mod common;
 
 use std::path::PathBuf;

@@ -10,7 +10,7 @@
 //   patch area goes to 0 and that value to infinity (the "catastrophic points" of 5.2.3),
 //   and a voxel that a focus narrower than itself crosses kept the focus's peak, not its
 //   mean over the voxel: on eikonal_sphere's floor the caustic came out several times too
-//   bright (issue 7). Instead the stream tube's energy is binned by the track-length
+//   bright. Instead the stream tube's energy is binned by the track-length
 //   estimate of the intensity law: a tube of flux Phi = dE A crossing a voxel of volume V
 //   over a length l adds Phi l / V to its irradiance, which for a uniform beam filling the
 //   voxel (cross-section h^2, l = h) is exactly dE, and which near a focus is the flux

@@ -1,4 +1,4 @@
-// Branch `eikview` (issue 7; src/technique/eikonal/eikonal_nearby.rs): what an eikonal view ray meets
+// What an eikonal view ray meets
 // after it leaves the volume, or after the boundary reflects it. Section 5.3 of Ihrke et al.
 // 2007 looks up the environment only; for Fig. 7 the paper "replaced the environment map
 // lookup by a ray-plane intersection in the fragment shader" and points to Hu and Qin [2007]

@@ -1,5 +1,5 @@
 #version 450
-// TE_i of the impostor rectangles around an eikonal volume (branch `eikview`; Hu & Qin 2007
+// TE_i of the impostor rectangles around an eikonal volume (Hu & Qin 2007
 // §2.2, src/technique/eikonal/eikonal_nearby.rs) when a light simulation ran: glsl/nearby/impostor.frag's
 // level 0 with the diffuse radiance of glsl/eikonal/receiver.glsl, so that the floor seen
 // through the volume carries the simulated caustic and shadow (Ihrke et al. 2007 §5.2).

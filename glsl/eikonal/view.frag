@@ -5,12 +5,12 @@
 // equation dx/ds = v/n, dv/ds = grad n (Eqs. 9-10; Euler Eqs. 11-12 or classical RK4), and
 // its exit direction looks up the environment (the background radiance L_bg of Eq. 1).
 // No explicit ray-surface intersection: the bending comes from grad n alone.
-// Along the path (volsrc, issue 7; the material volumes of src/scene/volume_sources.rs):
+// Along the path (the material volumes of src/scene/volume_sources.rs):
 // RGB extinction (Eq. 5), emission (L_e of Eq. 2, integrated with Eq. 1), Fresnel reflection
 // at the boundary indicator (delta rho L_r of Eq. 2, the reflected ray looks up the
 // environment: section 5.3's "first reflection"; T of Eq. 5 takes the transmitted part),
 // and dispersion: one march per RGB channel through its own index field (section 5.3).
-// Branch `eikview` (issue 7): exit and reflected rays meet the nearby scene geometry (exact
+// Exit and reflected rays meet the nearby scene geometry (exact
 // triangles of flat receivers, Hu & Qin impostors; §6, Fig. 7) before the environment.
 #include "frame.glsl"
 #include "environment.glsl"
@@ -24,11 +24,11 @@ layout(constant_id = 5) const float BOX_MIN_Z = -1.0;
 layout(constant_id = 6) const float BOX_MAX_X = 1.0;
 layout(constant_id = 7) const float BOX_MAX_Y = 1.0;
 layout(constant_id = 8) const float BOX_MAX_Z = 1.0;
-// ---- volsrc (issue 7): channels and materials ----
+// ---- channels and materials ----
 layout(constant_id = 9) const uint CHANNELS = 1u;    // index slabs: 3 = per-channel index
 layout(constant_id = 10) const uint MATERIALS = 0u;  // 0: the material volumes are stand-ins
-// ---- end volsrc ----
-// ---- light (issue 7): single scattering from the light simulator (scatter.glsl) ----
+// ---- end of the material volumes ----
+// ---- single scattering from the light simulator (scatter.glsl) ----
 layout(constant_id = 11) const uint SCATTER = 0u;           // 1: a light simulation ran
 layout(constant_id = 12) const float LIGHT_MIN_X = 0.0;    // the irradiance volume's box
 layout(constant_id = 13) const float LIGHT_MIN_Y = 0.0;
@@ -37,8 +37,8 @@ layout(constant_id = 15) const float LIGHT_MAX_X = 1.0;
 layout(constant_id = 16) const float LIGHT_MAX_Y = 1.0;
 layout(constant_id = 17) const float LIGHT_MAX_Z = 1.0;
 #include "scatter.glsl"
-// ---- end light ----
-// ---- eikview (issue 7): nearby geometry for exit and reflected rays (nearby_exit.glsl) ----
+// ---- end of single scattering ----
+// ---- nearby geometry for exit and reflected rays (nearby_exit.glsl) ----
 layout(constant_id = 18) const uint TRIANGLES_IN_BOX = 0u;  // 1: test every step against the triangles
 layout(constant_id = 19) const uint NEARBY_ITERATIONS = 3u; // Fig. 16 correction iterations
 layout(constant_id = 20) const float NEARBY_TOLERANCE = 1e-3;
@@ -46,15 +46,15 @@ layout(constant_id = 21) const uint NEARBY_SEEDS = 8u;
 #include "lighting.glsl"
 #include "receiver.glsl"
 #include "nearby_exit.glsl"
-// ---- end eikview ----
+// ---- end of the nearby geometry ----
 layout(set = 1, binding = BINDING_GBUF_DEPTH) uniform sampler2D gbuf_depth;
 // xyz: grad n per metre, w: n - 1, at the voxel centres; CHANNELS slabs stacked along z.
 layout(set = 1, binding = BINDING_EIKONAL_FIELD) uniform sampler3D field;
-// ---- volsrc (issue 7): material volumes ----
+// ---- material volumes ----
 layout(set = 1, binding = BINDING_EIKONAL_EXTINCTION) uniform sampler3D extinction_map;  // sigma_a + sigma_s, g
 layout(set = 1, binding = BINDING_EIKONAL_ALBEDO) uniform sampler3D albedo_map;          // albedo, reflectance
 layout(set = 1, binding = BINDING_EIKONAL_EMISSION) uniform sampler3D emission_map;      // emission, boundary band
-// ---- end volsrc ----
+// ---- end of the material volumes ----
 layout(location = 0) in vec2 in_uv;
 layout(location = 0) out vec4 out_radiance;
 
@@ -94,7 +94,7 @@ void rhs(vec3 x, vec3 v, int c, out vec3 dx, out vec3 dv) {
     dv = s.xyz;
 }
 
-// ---- volsrc (issue 7): material lookups ----
+// ---- material lookups ----
 // Trilinear interpolation of a material volume (clamped to the box's voxels).
 vec4 sample_material(sampler3D map, vec3 x) {
     ivec3 size = textureSize(map, 0);
@@ -124,7 +124,7 @@ float band_reflectance(vec3 x) {
     ivec3 q = clamp(ivec3((x - BOX_MIN) / (BOX_MAX - BOX_MIN) * vec3(size)), ivec3(0), size - 1);
     return texelFetch(albedo_map, q, 0).a;
 }
-// ---- end volsrc ----
+// ---- end of the material volumes ----
 
 // Slab test; (t_near, t_far) with t_near > t_far on a miss.
 vec2 ray_box(vec3 o, vec3 d) {
@@ -139,7 +139,7 @@ bool in_box(vec3 x, float margin) {
 }
 
 
-// ---- volsrc (issue 7): one march through index slab `c` (all of RGB when CHANNELS = 1) ----
+// ---- one march through index slab `c` (all of RGB when CHANNELS = 1) ----
 // Fresnel at a boundary (Eq. 2's delta rho L_r with T of Eq. 5). Inside the band of the
 // boundary indicator the smoothed index crosses a jump; the march splits the index along
 // the path into monotone runs (a thin layer such as a glass wall, or two faces whose bands
@@ -166,7 +166,7 @@ void run_start(inout Run r, float n, vec3 v, vec3 T) {
 }
 
 // The Fresnel event at the end of run r; v is the ray's current optical direction, x its
-// position (eikview: where the reflected ray starts towards the nearby geometry).
+// position (where the reflected ray starts towards the nearby geometry).
 void run_end(inout Run r, vec3 x, vec3 v, inout vec3 L, inout vec3 T) {
     vec3 N = dot(r.grad_sum, r.grad_sum) > 1e-20 ? normalize(r.grad_sum) : -r.d_a;
     bool crossed = dot(normalize(v), N) * dot(r.d_a, N) > 0.0;
@@ -193,7 +193,7 @@ vec3 march(vec3 o, vec3 d, float t_enter, int c, inout bool touched) {
     if (banded) r.rho = band_reflectance(x);
     // Rays that leave the box stop one step past its face at most.
     float margin = STEP;
-    // eikview: the last point inside the box proper, where the exit ray starts.
+    // The last point inside the box proper, where the exit ray starts.
     vec3 x_in = x;
     for (uint i = 0u; i <= MAX_STEPS; ++i) {
         bool inside = i < MAX_STEPS && in_box(x, margin);
@@ -231,7 +231,7 @@ vec3 march(vec3 o, vec3 d, float t_enter, int c, inout bool touched) {
         vec4 s = sample_field(x, c);
         n_cur = 1.0 + s.w;
         touched = touched || abs(s.w) > 1e-4;
-        // ---- eikview: a receiver inside (or touching) the box ends the path where the
+        // ---- a receiver inside (or touching) the box ends the path where the
         // step's chord crosses it (e.g. the table a wine glass stands on).
         if (TRIANGLES_IN_BOX != 0u) {
             vec3 seg = x - x0;
@@ -244,7 +244,7 @@ vec3 march(vec3 o, vec3 d, float t_enter, int c, inout bool touched) {
             }
         }
         if (in_box(x, 0.0)) x_in = x;
-        // ---- end eikview
+        // ---- end of the receiver inside the box
         if (banded) {
             float up = r.n_peak - r.n_a;
             if (up * (n_cur - r.n_peak) < 0.0 && abs(n_cur - r.n_peak) > 0.02 * abs(up) + 1e-4) {
@@ -271,7 +271,7 @@ vec3 march(vec3 o, vec3 d, float t_enter, int c, inout bool touched) {
                 vec3 trans = exp(-tau);
                 vec3 path = mix(vec3(len), (1.0 - trans) / max(sigma, vec3(1e-30)), greaterThan(tau, vec3(1e-4)));
                 L += T * E * path;
-                // ---- light (issue 7): Eq. 1's in-scattering T sigma_s p dE_omega (Eq. 6)
+                // ---- Eq. 1's in-scattering T sigma_s p dE_omega (Eq. 6)
                 // over the segment, with sigma_s = albedo * extinction and g from the
                 // material volumes; constant over the segment like E.
                 if (SCATTER != 0u) {
@@ -290,11 +290,11 @@ vec3 march(vec3 o, vec3 d, float t_enter, int c, inout bool touched) {
     }
     // A degenerate momentum (never for n > 0) keeps the incoming direction.
     vec3 exit_dir = dot(v, v) > 1e-20 ? normalize(v) : d;
-    // eikview: the exit ray from the last point inside the box meets the nearby geometry
+    // The exit ray from the last point inside the box meets the nearby geometry
     // (a hit a hair behind that point counts: a floor the box stands on).
     return L + T * exit_radiance(x_in, exit_dir, -1e-4);
 }
-// ---- end volsrc ----
+// ---- end of the material volumes ----
 
 void main() {
     vec3 o = frame.camera_position.xyz;
@@ -314,7 +314,7 @@ void main() {
     } else {
         L = march(o, d, t_enter, 0, touched);
     }
-    // ---- light (issue 7): a ray that crossed only air (no index change, extinction or
+    // ---- a ray that crossed only air (no index change, extinction or
     // emission) keeps what deferred shading drew behind it (e.g. the floor under the volume,
     // lit by the simulated light) instead of the environment.
     if (!touched) discard;

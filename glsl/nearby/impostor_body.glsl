@@ -13,7 +13,7 @@
 #include "fresnel.glsl"
 #include "refraction.glsl"
 #include "push.glsl"
-// Branch `eikview`: glsl/eikonal/nearby_impostor.frag shades diffuse objects with the
+// glsl/eikonal/nearby_impostor.frag shades diffuse objects with the
 // eikonal light simulation's irradiance (eikonal_receiver, declared before this include).
 #ifndef NEARBY_EIKONAL_LIGHT
 #define NEARBY_EIKONAL_LIGHT 0

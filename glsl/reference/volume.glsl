@@ -8,14 +8,14 @@
 #define PRISM_REFERENCE_VOLUME_GLSL
 #include "scene.glsl"
 
-// volsrc (issue 7): 3 vec4 per voxel (VOLUME_FIELDS; a one-element stand-in otherwise).
+// 3 vec4 per voxel (VOLUME_FIELDS; a one-element stand-in otherwise).
 layout(set = 0, binding = REF_BINDING_VOLUME, std430) readonly buffer VolumeVoxels { vec4 volume_voxels[]; };
 
 // ref.volume rows: [0] box min, kind; [1] box max, RK4 step; [2] region centre, radius
 // (0: the box); [3] profile (Luneburg: centre, R; linear: gradient, n0; constant: -, n);
 // [4] sigma_a rgb, most steps; [5] (VOLUME_FIELDS only) -, voxels along x, y, z.
 const uint VOLUME_NONE = 0u, VOLUME_LUNEBURG = 1u, VOLUME_LINEAR = 2u, VOLUME_CONSTANT = 3u;
-// volsrc (issue 7): a volume with `[[volume.region]]`s is traced through the same voxel
+// A volume with `[[volume.region]]`s is traced through the same voxel
 // fields the view renderer gets (src/scene/volume_sources.rs), see volume_cross_fields.
 const uint VOLUME_FIELDS = 4u;
 uint volume_kind() { return uint(ref.volume[0].w + 0.5); }
@@ -148,7 +148,7 @@ bool volume_cross(inout vec3 o, inout vec3 d, float t, inout vec3 beta, inout ve
     }
     return false;
 }
-// ---- volsrc (issue 7): the voxel fields (volumes with regions) ----
+// ---- the voxel fields (volumes with regions) ----
 // The reference for a volume built from sources integrates the ray equation by RK4 with
 // small steps through the same rasterized fields as the view renderer (the index per
 // channel, the extinction, the emission), but *unsmoothed* (trilinear over the one-voxel
@@ -332,5 +332,5 @@ bool volume_cross_fields(inout vec3 o, inout vec3 d, float t, inout vec3 beta, i
     }
     return false;
 }
-// ---- end volsrc ----
+// ---- end of the material volumes ----
 #endif

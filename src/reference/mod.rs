@@ -20,7 +20,7 @@
 //! not seen. Photons cross volumes the same way (photons.comp) and the volume is a photon
 //! target; shadow rays stop at it, so the light behind it arrives as caustics.
 //!
-//! A volume with `[[volume.region]]`s (volume sources, issue 7) is traced instead through
+//! A volume with `[[volume.region]]`s (volume sources) is traced instead through
 //! the same voxel fields the view renderer gets (src/scene/volume_sources.rs): the index per
 //! channel (one channel per path when dispersive), the extinction and the emission,
 //! unsmoothed and trilinear, RK4 steps of 1/8 voxel, stochastic exact Fresnel at the index
@@ -145,7 +145,7 @@ const _: () = assert!(
 const REF_VOLUME_LUNEBURG: f32 = 1.0;
 const REF_VOLUME_LINEAR: f32 = 2.0;
 const REF_VOLUME_CONSTANT: f32 = 3.0;
-/// volsrc (issue 7): a volume with regions, traced through its voxel fields.
+/// A volume with regions, traced through its voxel fields.
 const REF_VOLUME_FIELDS: f32 = 4.0;
 
 /// The voxel fields of a volume with regions for volume.glsl's VOLUME_FIELDS: 3 vec4 per

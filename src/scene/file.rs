@@ -249,7 +249,7 @@ pub(crate) struct FileVolume {
     pub name: Option<String>,
     pub bounds: FileBounds,
     pub resolution: [u32; 3],
-    /// Optional since the sources (issue 7): without it the box holds air (n = 1).
+    /// Optional: without it the box holds air (n = 1).
     pub index: Option<FileIndex>,
     pub attenuation: Option<Rgb>,
     // The base material of the profile's region (src/scene/volume_sources.rs).

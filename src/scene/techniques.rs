@@ -769,7 +769,7 @@ pub enum Integrator {
     Rk4,
 }
 
-// --- branch `eikview` (issue 7): what exit and reflected view rays meet besides the environment.
+// What exit and reflected view rays meet besides the environment.
 /// `render.eikonal.nearby` (src/technique/eikonal/eikonal_nearby.rs).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum EikonalNearby {
@@ -814,12 +814,12 @@ pub struct EikonalParams {
     /// Initial wavefront patches per side (0: the largest volume resolution).
     pub light_patches: u32,
     /// Metres below the volume's box that the irradiance volume also covers, so a floor
-    /// just under the volume receives the caustic (issue 7, item 6).
+    /// just under the volume receives the caustic.
     pub light_below: f32,
     /// Metres the irradiance volume also covers beside the volume's box along x and z (the
     /// receiver area that the volume's refracted light and shadow reach).
     pub light_side: f32,
-    // --- branch `eikview`: nearby geometry for exit and reflected rays.
+    // Nearby geometry for exit and reflected rays.
     pub nearby: EikonalNearby,
     /// Fig. 16 correction iterations of the impostor lookup (0: the plain lookup of Fig. 13).
     pub nearby_iterations: u32,

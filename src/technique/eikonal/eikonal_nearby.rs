@@ -1,5 +1,5 @@
 //! What eikonal view rays meet when they leave the volume or are reflected at its boundary
-//! (issue 7; Ihrke et al. 2007, ../shared/papers/ihrke2007-eikonal-rendering.md, §5.3 and §6).
+//! (Ihrke et al. 2007, ../shared/papers/ihrke2007-eikonal-rendering.md, §5.3 and §6).
 //!
 //! Section 5.3 looks up only the environment map in the exit direction. For its Fig. 7
 //! comparison the paper "replaced the environment map lookup by a ray-plane intersection in

@@ -10,7 +10,7 @@
 //!   enters the volume's box with the ray equation, Eqs. 9-10, by Euler (Eqs. 11-12) or RK4,
 //!   absorbs along the curved path (Eq. 5) and looks up the environment in the exit
 //!   direction, over the deferred result.
-//! - Volume sources (issue 7; src/scene/volume_sources.rs): the fields of `[[volume.region]]`s
+//! - Volume sources (src/scene/volume_sources.rs): the fields of `[[volume.region]]`s
 //!   are evaluated on the CPU; a per-channel index is uploaded as three slabs stacked along z
 //!   and smoothed/differentiated slab by slab (dispersion: one march per channel), and the
 //!   materials go to three RGBA16F volumes ([`VolumeTextures`]) for RGB extinction, emission
@@ -212,7 +212,7 @@ pub fn sphere_crossing(a: DVec3, b: DVec3, center: DVec3, radius: f64) -> DVec3 
 /// The volume's GPU textures: the sampled index (n - 1, one slab of `nz` slices per channel,
 /// stacked along z: 1 slab, or 3 with dispersion), a scratch texture of the separable blur,
 /// (grad n, n - 1) per slab after smoothing and differentiation, and the three material
-/// volumes of src/scene/volume_sources.rs (issue 7).
+/// volumes of src/scene/volume_sources.rs.
 ///
 /// Bytes per voxel: 24 per index slab (R32F raw + R32F scratch + RGBA32F field), so 24 or
 /// 72, plus 24 for the materials (3 x RGBA16F: extinction + g, albedo + reflectance,
@@ -242,13 +242,13 @@ pub struct VolumeTextures {
 pub struct EikonalPass {
     volume: VolumeTextures,
     view: FullscreenPass,
-    // --- branch `eikview` (issue 7): the nearby geometry of exit rays
+    // The nearby geometry of exit rays
     // (src/technique/eikonal/eikonal_nearby.rs): impostors (a 1x1 stand-in without rectangles), the
     // set layout of their light-simulation shading, and the exact triangles.
     nearby: NearbyImpostors,
     _nearby_layout: Option<DescriptorSetLayout>,
     _triangles: crate::gpu::Buffer,
-    // --- branch `light` (issue 7): the light simulation and its receiver pass.
+    // The light simulation and its receiver pass.
     light: Option<super::eikonal_light::EikonalLight>,
 }
 
@@ -268,8 +268,8 @@ impl EikonalPass {
             (s.ctx, s.scene, s.gpu, s.frame_layout, s.targets, s.nearest);
         let graph = &mut *s.graph;
         let textures = prepare_volume(ctx, params, volume, graph)?;
-        // --- branch `light`: section 5.2's light simulation before the view pass is built.
-        // Every light of the scene (issue 7): their runs add into one pair of volumes.
+        // Section 5.2's light simulation before the view pass is built.
+        // Every light of the scene: their runs add into one pair of volumes.
         let light = match lights {
             [_, ..] if params.light => Some(super::eikonal_light::EikonalLight::new(
                 ctx,
@@ -297,7 +297,7 @@ impl EikonalPass {
         let (light_min, light_max) = light.as_ref().map_or((glam::Vec3::ZERO, glam::Vec3::ONE), |l| l.light_box());
         // Without a simulation the field stands in for the light volumes (never read).
         let (irradiance, direction) = light.as_ref().map_or((&textures.field, &textures.field), |l| l.images());
-        // --- branch `eikview`: what exit and reflected rays meet (src/technique/eikonal/eikonal_nearby.rs).
+        // What exit and reflected rays meet (src/technique/eikonal/eikonal_nearby.rs).
         let tris: Vec<_> =
             eikonal_nearby::exact_triangles(scene, params.nearby).0.into_iter().map(|(_, t)| t).collect();
         let triangles = crate::gpu::Buffer::with_data(
@@ -383,10 +383,10 @@ impl EikonalPass {
             f(volume.max.x),
             f(volume.max.y),
             f(volume.max.z),
-            // volsrc (issue 7): index slabs (3: dispersion) and whether materials are bound.
+            // Index slabs (3: dispersion) and whether materials are bound.
             textures.channels,
             textures.materials as u32,
-            // --- branch `light`: single scattering (glsl/eikonal/scatter.glsl) with the
+            // Single scattering (glsl/eikonal/scatter.glsl) with the
             // irradiance and direction volumes of the light simulation.
             u32::from(light.is_some()),
             f(light_min.x),
@@ -395,7 +395,7 @@ impl EikonalPass {
             f(light_max.x),
             f(light_max.y),
             f(light_max.z),
-            // --- branch `eikview`: nearby_exit.glsl.
+            // What exit rays meet: nearby_exit.glsl.
             u32::from(in_box),
             params.nearby_iterations,
             f(NEARBY_TOLERANCE),
@@ -468,7 +468,7 @@ impl EikonalPass {
         if let Some(l) = &self.light {
             reads.extend(l.image_ids());
         }
-        // eikview: the exit rays' shading reads the shadow maps and the impostor textures.
+        // The exit rays' shading reads the shadow maps and the impostor textures.
         reads.push(self.nearby.texture_id);
         reads.extend(shadow_atlas);
         self.view.record(frame, frame_set, &reads);

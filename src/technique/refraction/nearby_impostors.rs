@@ -218,7 +218,7 @@ pub fn rect_for(scene: &Scene, object: usize, origin_r: Vec3, layer: u32) -> Opt
     (half_size > 0.0).then(|| NearbyRect::new(object, layer, origin_r, center, half_size))
 }
 
-/// Another way to shade level 0 of the textures than glsl/nearby/impostor.frag (issue 7: the
+/// Another way to shade level 0 of the textures than glsl/nearby/impostor.frag (the
 /// eikonal light volumes for the caustic under a volume, src/technique/eikonal/eikonal_nearby.rs): a
 /// fragment shader including impostor_body.glsl with a third descriptor set (set 2, owned by
 /// the caller, alive as long as the impostors), its specialisation constants (ids from 6 on,
@@ -560,7 +560,7 @@ impl NearbyImpostors {
         Self::build(ctx, name, desc, layout, specular, lookup_set, back, graph, frame_layout, None)
     }
 
-    /// One rectangle set around `origin` that belongs to no object (issue 7: the eikonal
+    /// One rectangle set around `origin` that belongs to no object (the eikonal
     /// volume's centre, src/technique/eikonal/eikonal_nearby.rs) over `objects`, without recursion or
     /// back faces (mirrors reflect the environment, dielectrics refract it), shaded by
     /// `shading` when given.
