@@ -327,6 +327,9 @@ fn demo_applies_changes_to_the_running_renderer() {
             "4:render.caustics=caustics_map",
             "--at",
             "5:render.caustics_map.grid=64",
+            "--resize-at",
+            "6",
+            "120x100",
         ],
     );
     let stderr = String::from_utf8_lossy(&out.stderr);
@@ -342,6 +345,11 @@ fn demo_applies_changes_to_the_running_renderer() {
         "{stderr}"
     );
     assert!(line("render.caustics_map.grid=64").contains("re-created caustics = \"caustics_map\" ("), "{stderr}");
+    // A resize makes the image-sized targets and the techniques drawn at the image's size;
+    // the shadow and caustic maps keep theirs.
+    let resize = line(": resize to 120x100:");
+    assert!(resize.contains("made the targets at the new size; re-created gbuffer,"), "{stderr}");
+    assert!(!resize.contains("shadow_map") && !resize.contains("caustics_map"), "{stderr}");
     assert!(!stderr.contains("whole renderer"), "{stderr}");
 }
 

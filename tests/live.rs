@@ -141,6 +141,14 @@ fn a_resize_makes_new_targets_and_keeps_the_scene() {
     for scene in ["sphere_nearby", "caustic_sphere"] {
         let u = live(scene, &["render.caustics=caustics_map"], &["render.caustics=caustics_map", "camera.width=48"]);
         assert!(!u.rebuilt && u.resized, "{scene}: {u:?}");
+        // The light-space techniques draw into the atlases, which keep their size: kept.
+        // The techniques at the image's size are made on the new targets.
+        for kept in ["shadow_map", "caustics = \"caustics_map\""] {
+            assert!(!u.recreated.contains(&kept), "{scene}: {kept} re-created by a resize: {u:?}");
+        }
+        for made in ["gbuffer", "deferred_shading", "tonemap"] {
+            assert!(u.recreated.contains(&made), "{scene}: {made} not re-created by a resize: {u:?}");
+        }
     }
 }
 

@@ -29,12 +29,13 @@ pub struct Targets {
     pub hdr: Image,
     pub ldr: Image,
     /// Distance-to-light atlas: SHADOW_LAYERS_PER_LIGHT layers per light, cube-compatible.
-    pub shadow_atlas: Image,
+    /// The atlases are shared with the targets of the next image size (see [`Targets::resized`]).
+    pub shadow_atlas: Arc<Image>,
     /// One depth layer per atlas layer, so faces never wait on each other's depth buffer.
-    pub shadow_depth: Image,
+    pub shadow_depth: Arc<Image>,
     /// Caustic-map atlas, laid out like `shadow_atlas` (six cube-compatible layers per light);
     /// a cleared 1x1 stand-in when no caustic pass writes it.
-    pub caustic_atlas: Image,
+    pub caustic_atlas: Arc<Image>,
     pub gbuf_normal_id: ImageId,
     pub gbuf_albedo_id: ImageId,
     pub depth_id: ImageId,
@@ -43,6 +44,17 @@ pub struct Targets {
     pub shadow_atlas_id: ImageId,
     pub shadow_depth_id: ImageId,
     pub caustic_atlas_id: ImageId,
+}
+
+/// The light-space images of [`Targets`], which do not depend on the image size.
+struct Atlases {
+    shadow_lights: u32,
+    shadow_atlas: Arc<Image>,
+    shadow_depth: Arc<Image>,
+    caustic_atlas: Arc<Image>,
+    shadow_atlas_id: ImageId,
+    shadow_depth_id: ImageId,
+    caustic_atlas_id: ImageId,
 }
 
 impl Targets {
@@ -55,16 +67,83 @@ impl Targets {
         shadow_size: u32,
         caustic_size: Option<u32>,
     ) -> Result<Targets, RenderError> {
-        let max = ctx.limits().max_image_dimension2_d;
-        if width == 0 || height == 0 || width > max || height > max {
-            return Err(RenderError::Limit(format!(
-                "image size {width}x{height} is outside 1..={max} (the device's maxImageDimension2D)"
-            )));
-        }
         if shadow_size == 0 || shadow_size > ctx.limits().max_image_dimension_cube {
             return Err(RenderError::Limit(format!(
                 "render.shadow_map_size = {shadow_size} is outside 1..={}",
                 ctx.limits().max_image_dimension_cube
+            )));
+        }
+        use vk::ImageUsageFlags as U;
+        // Without lights the atlas is a 1x1 stand-in that is still bound (and cleared).
+        let (size, layers) =
+            if lights == 0 { (1, SHADOW_LAYERS_PER_LIGHT) } else { (shadow_size, lights * SHADOW_LAYERS_PER_LIGHT) };
+        let layered = |name: &str, format, usage, view| ImageDesc {
+            name: name.into(),
+            format,
+            width: size,
+            height: size,
+            layers,
+            usage,
+            view,
+        };
+        let shadow_atlas = Image::new(
+            ctx,
+            &layered(
+                "shadow_atlas",
+                SHADOW_FORMAT,
+                U::COLOR_ATTACHMENT | U::SAMPLED | U::TRANSFER_DST | U::TRANSFER_SRC,
+                ImageViewKind::CubeArray,
+            ),
+        )?;
+        let shadow_depth = Image::new(
+            ctx,
+            &layered("shadow_depth", DEPTH_FORMAT, U::DEPTH_STENCIL_ATTACHMENT, ImageViewKind::D2Array),
+        )?;
+        let caustic_atlas = Self::caustic_atlas(ctx, lights, caustic_size)?;
+        let atlases = Atlases {
+            shadow_lights: lights,
+            shadow_atlas_id: graph.register_image(&shadow_atlas),
+            shadow_depth_id: graph.register_image(&shadow_depth),
+            caustic_atlas_id: graph.register_image(&caustic_atlas),
+            shadow_atlas: Arc::new(shadow_atlas),
+            shadow_depth: Arc::new(shadow_depth),
+            caustic_atlas: Arc::new(caustic_atlas),
+        };
+        Self::with_atlases(ctx, graph, width, height, atlases)
+    }
+
+    /// The image-sized targets made anew at `width` x `height`, around the same atlases: they
+    /// do not depend on the image size, and keep what the light-space passes wrote.
+    pub fn resized(
+        &self,
+        ctx: &Arc<GpuContext>,
+        graph: &mut FrameGraph,
+        width: u32,
+        height: u32,
+    ) -> Result<Targets, RenderError> {
+        let atlases = Atlases {
+            shadow_lights: self.shadow_lights,
+            shadow_atlas: self.shadow_atlas.clone(),
+            shadow_depth: self.shadow_depth.clone(),
+            caustic_atlas: self.caustic_atlas.clone(),
+            shadow_atlas_id: self.shadow_atlas_id,
+            shadow_depth_id: self.shadow_depth_id,
+            caustic_atlas_id: self.caustic_atlas_id,
+        };
+        Self::with_atlases(ctx, graph, width, height, atlases)
+    }
+
+    fn with_atlases(
+        ctx: &Arc<GpuContext>,
+        graph: &mut FrameGraph,
+        width: u32,
+        height: u32,
+        a: Atlases,
+    ) -> Result<Targets, RenderError> {
+        let max = ctx.limits().max_image_dimension2_d;
+        if width == 0 || height == 0 || width > max || height > max {
+            return Err(RenderError::Limit(format!(
+                "image size {width}x{height} is outside 1..={max} (the device's maxImageDimension2D)"
             )));
         }
         use vk::ImageUsageFlags as U;
@@ -75,60 +154,38 @@ impl Targets {
         let depth = mk("depth", DEPTH_FORMAT, U::DEPTH_STENCIL_ATTACHMENT | U::SAMPLED | U::TRANSFER_SRC)?;
         let hdr = mk("hdr", HDR_FORMAT, attach_sampled | U::STORAGE)?;
         let ldr = mk("ldr", LDR_FORMAT, U::COLOR_ATTACHMENT | U::TRANSFER_SRC)?;
-        // Without lights the atlas is a 1x1 stand-in that is still bound (and cleared).
-        let (size, layers) =
-            if lights == 0 { (1, SHADOW_LAYERS_PER_LIGHT) } else { (shadow_size, lights * SHADOW_LAYERS_PER_LIGHT) };
-        let shadow_atlas = Image::new(
-            ctx,
-            &ImageDesc {
-                name: "shadow_atlas".into(),
-                format: SHADOW_FORMAT,
-                width: size,
-                height: size,
-                layers,
-                usage: U::COLOR_ATTACHMENT | U::SAMPLED | U::TRANSFER_DST | U::TRANSFER_SRC,
-                view: ImageViewKind::CubeArray,
-            },
-        )?;
-        let shadow_depth = Image::new(
-            ctx,
-            &ImageDesc {
-                name: "shadow_depth".into(),
-                format: DEPTH_FORMAT,
-                width: size,
-                height: size,
-                layers,
-                usage: U::DEPTH_STENCIL_ATTACHMENT,
-                view: ImageViewKind::D2Array,
-            },
-        )?;
-        let caustic_atlas = Self::caustic_atlas(ctx, lights, caustic_size)?;
         Ok(Targets {
             width,
             height,
-            shadow_lights: lights,
+            shadow_lights: a.shadow_lights,
             gbuf_normal_id: graph.register_image(&gbuf_normal),
             gbuf_albedo_id: graph.register_image(&gbuf_albedo),
             depth_id: graph.register_image(&depth),
             hdr_id: graph.register_image(&hdr),
             ldr_id: graph.register_image(&ldr),
-            shadow_atlas_id: graph.register_image(&shadow_atlas),
-            shadow_depth_id: graph.register_image(&shadow_depth),
-            caustic_atlas_id: graph.register_image(&caustic_atlas),
+            shadow_atlas_id: a.shadow_atlas_id,
+            shadow_depth_id: a.shadow_depth_id,
+            caustic_atlas_id: a.caustic_atlas_id,
             gbuf_normal,
             gbuf_albedo,
             depth,
             hdr,
             ldr,
-            shadow_atlas,
-            shadow_depth,
-            caustic_atlas,
+            shadow_atlas: a.shadow_atlas,
+            shadow_depth: a.shadow_depth,
+            caustic_atlas: a.caustic_atlas,
         })
+    }
+
+    /// The image-sized targets, which the light-space stages never touch
+    /// ([`crate::technique::Stage::is_image_space`]).
+    pub fn image_sized(&self) -> [ImageId; 5] {
+        [self.gbuf_normal_id, self.gbuf_albedo_id, self.depth_id, self.hdr_id, self.ldr_id]
     }
 
     /// Put `atlas` (registered with the frame graph as `id`) in place of the caustic atlas,
     /// and return the one it replaces (to swap back, or to drop once the GPU is done with it).
-    pub fn swap_caustic_atlas(&mut self, atlas: (Image, ImageId)) -> (Image, ImageId) {
+    pub fn swap_caustic_atlas(&mut self, atlas: (Arc<Image>, ImageId)) -> (Arc<Image>, ImageId) {
         let id = std::mem::replace(&mut self.caustic_atlas_id, atlas.1);
         (std::mem::replace(&mut self.caustic_atlas, atlas.0), id)
     }

@@ -351,6 +351,14 @@ impl<'g, 'a> Frame<'g, 'a> {
         self.passes[first..].iter().map(|p| p.name.as_str())
     }
 
+    /// Whether a pass declared from index `first` on reads or writes one of `images`.
+    pub fn uses_any_since(&self, first: usize, images: &[ImageId]) -> bool {
+        self.passes[first..]
+            .iter()
+            .flat_map(|p| &p.uses)
+            .any(|(r, _)| matches!(r, Res::Image(i) if images.iter().any(|id| id.0 == *i)))
+    }
+
     /// Record every pass into `cmd`: barriers, label, timestamps, the pass's commands.
     /// Returns the timestamp query pairs written (if a pool is given).
     pub fn execute(self, cmd: &Cmd, timestamps: Option<&TimestampPool>) -> Vec<TimestampQuery> {

@@ -118,8 +118,9 @@ pub struct Renderer {
     photon_params: Option<PhotonBufferParams>,
     /// The shaders each technique's pipelines were created from (for the hot reload).
     technique_shaders: Vec<Vec<String>>,
-    /// [`crate::technique::placement`] of the scene the vertices and lights hold.
-    placement: String,
+    /// [`crate::technique::placement_hash`] of the scene the vertices and lights hold (none
+    /// after an object was dragged).
+    placement: Option<u64>,
     /// What techniques keep across their re-creation (the eikonal light simulation).
     cache: Cache,
     /// Every object's vertex range and current (centre, bounding radius), for moving objects.
@@ -290,8 +291,9 @@ impl Renderer {
             timestamps.push(TimestampPool::new(ctx, &format!("timestamps_{i}"), 2 * pairs as u32)?);
         }
         let shared_fingerprint = update::shared_fingerprint(scene, &recipe);
+        let placement = crate::technique::placement_hash(scene);
         let technique_fingerprints =
-            (0..TECHNIQUES.len()).map(|i| update::technique_fingerprint(scene, &recipe, i)).collect();
+            (0..TECHNIQUES.len()).map(|i| update::technique_fingerprint(scene, &recipe, i, placement)).collect();
         Ok(Renderer {
             techniques,
             photon_caustics,
@@ -310,7 +312,7 @@ impl Renderer {
             caustic_size,
             photon_params,
             technique_shaders,
-            placement: crate::technique::placement(scene),
+            placement: Some(placement),
             cache,
             objects,
             uniforms,
@@ -490,6 +492,13 @@ impl Renderer {
                 recorded.collect::<Vec<_>>(),
                 step.stage,
                 planned.collect::<Vec<_>>()
+            );
+            // What lets a resize keep the light-space techniques.
+            assert!(
+                step.stage.is_image_space() || !frame.uses_any_since(first, &targets.image_sized()),
+                "technique `{}` used an image-sized target in the light-space stage {:?}",
+                TECHNIQUES[step.technique].key,
+                step.stage
             );
         }
         extra(&mut frame, FinalImage { ldr: &targets.ldr, ldr_id: targets.ldr_id });
@@ -765,7 +774,7 @@ impl Renderer {
         self.scene.vertices.write(range.start, bytemuck::cast_slice(&vertices));
         o.bounds.0 = center;
         // The vertices no longer hold any scene's placement: the next update rewrites them.
-        self.placement.clear();
+        self.placement = None;
         let bounds: Vec<_> = self.objects.iter().map(|o| o.bounds).collect();
         for t in self.techniques.iter_mut().flatten() {
             t.objects_moved(&bounds);

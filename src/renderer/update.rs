@@ -7,7 +7,7 @@
 //!   built from (the objects' topology and materials' kinds, the number and kinds of lights,
 //!   the environment, the volume, the image size, the shadow map size). It leaves out what
 //!   is written in place: where objects and lights are (the vertices and the light uniforms,
-//!   [`crate::technique::placement`]), the camera, the exposure, the material values, the
+//!   [`crate::technique::placement_hash`]), the camera, the exposure, the material values, the
 //!   caustic atlas and photon-buffer textures (made anew and bound when the caustic technique
 //!   changes), and every technique's own settings. When it changes, the whole renderer is
 //!   re-created;
@@ -50,7 +50,8 @@ pub struct Update {
     pub materials: bool,
     /// Objects, lights or the camera position moved: the vertices were rewritten in place.
     pub moved: bool,
-    /// The image size changed: new targets, every technique re-created on them.
+    /// The image size changed: new image-sized targets, and the techniques with passes at
+    /// the image's size re-created on them.
     pub resized: bool,
     /// Wall-clock time of the update, in ms.
     pub ms: u64,
@@ -146,7 +147,9 @@ pub(super) fn photon_params(scene: &Scene, recipe: &Recipe) -> Result<Option<Pho
 }
 
 /// Technique `index`'s steps in `recipe` and its inputs; `None` when it is not in the recipe.
-pub(super) fn technique_fingerprint(scene: &Scene, recipe: &Recipe, index: usize) -> Option<u64> {
+/// Technique `index`'s fingerprint: its steps in `recipe` and its inputs, with `placement`
+/// ([`crate::technique::placement_hash`] of `scene`) when it is built from positions.
+pub(super) fn technique_fingerprint(scene: &Scene, recipe: &Recipe, index: usize, placement: u64) -> Option<u64> {
     if !recipe.uses(index) {
         return None;
     }
@@ -157,7 +160,11 @@ pub(super) fn technique_fingerprint(scene: &Scene, recipe: &Recipe, index: usize
             (p.name, &p.reason).hash(&mut h);
         }
     }
-    (TECHNIQUES[index].inputs)(scene).hash(&mut h);
+    let inputs = (TECHNIQUES[index].inputs)(scene);
+    inputs.settings.hash(&mut h);
+    if inputs.placement {
+        placement.hash(&mut h);
+    }
     Some(h.finish())
 }
 
@@ -195,8 +202,8 @@ impl Renderer {
         }
         // Moved objects or lights (same topology): the vertices are rewritten in place and the
         // techniques built from positions have changed fingerprints.
-        let placement = crate::technique::placement(scene);
-        if placement != self.placement {
+        let placement = crate::technique::placement_hash(scene);
+        if Some(placement) != self.placement {
             self.scene.update_placement(scene, scene.render.shadow_map_size);
             for (o, i) in self.objects.iter_mut().zip(0..) {
                 o.bounds = crate::technique::impostor::distance_impostor::object_bounds(scene, i);
@@ -204,31 +211,23 @@ impl Renderer {
             for (i, l) in self.scene.lights.iter().enumerate() {
                 self.uniforms.lights[i] = *l;
             }
-            self.placement = placement;
+            self.placement = Some(placement);
             update.moved = true;
         }
         // Everything new is made first, then swapped in: a failure leaves the old state.
         let caustic_size = caustic_size(scene, &new_recipe)?;
-        // A new image size: new targets, and every technique re-created on them (the
-        // technique cache keeps what does not depend on the size).
+        // A new image size: the image-sized targets made anew around the same atlases, and
+        // the techniques with passes at the image's size re-created on them.
         let (width, height) = (scene.camera.width, scene.camera.height);
         let targets = match (width, height) != (self.targets.width, self.targets.height) {
-            true => Some(Targets::new(
-                &self.ctx,
-                &mut self.graph,
-                width,
-                height,
-                self.targets.shadow_lights,
-                scene.render.shadow_map_size,
-                caustic_size,
-            )?),
+            true => Some(self.targets.resized(&self.ctx, &mut self.graph, width, height)?),
             false => None,
         };
-        let atlas = match caustic_size != self.caustic_size && targets.is_none() {
+        let atlas = match caustic_size != self.caustic_size {
             true => {
                 let atlas = Targets::caustic_atlas(&self.ctx, self.targets.shadow_lights, caustic_size)?;
                 let id = self.graph.register_image(&atlas);
-                Some((atlas, id))
+                Some((std::sync::Arc::new(atlas), id))
             }
             false => None,
         };
@@ -238,13 +237,20 @@ impl Renderer {
             true => Some(PhotonCaustics::new(&self.ctx, &mut self.graph, scene, photon_params.as_ref())?),
             false => None,
         };
-        let old_atlas = atlas.map(|a| self.targets.swap_caustic_atlas(a));
+        let mut targets = targets;
+        let old_atlas = atlas.map(|a| match targets.as_mut() {
+            Some(t) => t.swap_caustic_atlas(a),
+            None => self.targets.swap_caustic_atlas(a),
+        });
         let fingerprints: Vec<Option<u64>> =
-            (0..TECHNIQUES.len()).map(|i| technique_fingerprint(scene, &new_recipe, i)).collect();
+            (0..TECHNIQUES.len()).map(|i| technique_fingerprint(scene, &new_recipe, i, placement)).collect();
         let forced = |i: usize| force.get(i).copied().unwrap_or(false);
         let resized = targets.is_some();
         let changed = |i: usize| {
-            fingerprints[i].is_some() && (fingerprints[i] != self.technique_fingerprints[i] || forced(i) || resized)
+            fingerprints[i].is_some()
+                && (fingerprints[i] != self.technique_fingerprints[i]
+                    || forced(i)
+                    || (resized && new_recipe.is_image_space(i)))
         };
         let mut setup = Setup {
             ctx: &self.ctx,
@@ -267,7 +273,7 @@ impl Renderer {
                 Ok(t) => created.push((i, t, self.ctx.take_shader_log())),
                 Err(e) => {
                     drop(created);
-                    if let Some(old) = old_atlas {
+                    if let (Some(old), None) = (old_atlas, &targets) {
                         self.targets.swap_caustic_atlas(old);
                     }
                     return Err(e);
@@ -285,12 +291,7 @@ impl Renderer {
         // Commit. The GPU is idle: the old resources can go, the frame sets can be rewritten.
         self.cache.end();
         let old_targets = targets.map(|t| std::mem::replace(&mut self.targets, t));
-        if old_targets.is_some() {
-            self.clear_and_bind_shadow_atlas()?;
-            self.clear_and_bind_caustic_atlas()?;
-            self.caustic_size = caustic_size;
-            update.resized = true;
-        }
+        update.resized = old_targets.is_some();
         if old_atlas.is_some() {
             self.clear_and_bind_caustic_atlas()?;
             self.caustic_size = caustic_size;
@@ -327,20 +328,6 @@ impl Renderer {
         set_camera_uniforms(&mut self.uniforms, &scene.camera, scene.render.exposure, &self.scene);
         update.ms = start.elapsed().as_millis() as u64;
         Ok(update)
-    }
-
-    /// "Nothing occludes" in a new shadow atlas, bound in every frame set.
-    fn clear_and_bind_shadow_atlas(&mut self) -> Result<(), RenderError> {
-        let (atlas, id) = (&self.targets.shadow_atlas, self.targets.shadow_atlas_id);
-        clear_atlas(&self.ctx, &mut self.graph, atlas, id, crate::technique::baseline::shadow_map::FAR_DISTANCE)?;
-        bind_atlas(
-            &self.ctx,
-            &self.frame_sets,
-            [crate::BINDING_SHADOW_CUBE, crate::BINDING_SHADOW_2D],
-            atlas,
-            &self._samplers[0],
-        );
-        Ok(())
     }
 
     /// "No caustic light" in a new caustic atlas, bound in every frame set.

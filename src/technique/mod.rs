@@ -67,6 +67,16 @@ pub enum Stage {
     Tonemap,
 }
 
+impl Stage {
+    /// Whether the stage's passes work at the image's size. The light-space stages (shadows,
+    /// caustics) render from the lights into the atlases and never touch an image-sized
+    /// target (the renderer checks this for every step it records), so a resize keeps their
+    /// techniques.
+    pub fn is_image_space(self) -> bool {
+        !matches!(self, Stage::Shadows | Stage::Caustics)
+    }
+}
+
 /// The frame recipe's order of stages.
 pub const RECIPE: [Stage; 9] = [
     Stage::Shadows,
@@ -124,9 +134,10 @@ pub struct Registration {
     /// Its resources. Called only when `plan` returned passes.
     pub create: fn(&mut Setup<'_>) -> Result<Box<dyn Technique>, RenderError>,
     /// What its resources depend on besides its own plan and the frame's shared resources
-    /// (the GPU scene, the targets): usually its `[render.<table>]`s ([`tables`]). When a
-    /// scene changes and neither this nor its plan did, the running technique is kept.
-    pub inputs: fn(&Scene) -> String,
+    /// (the GPU scene, the targets): usually its `[render.<table>]`s ([`tables`]), and
+    /// whether it is built from positions. When a scene changes and neither this nor its
+    /// plan did, the running technique is kept.
+    pub inputs: fn(&Scene) -> Inputs,
 }
 
 /// What a technique's creation can use: the device, the scene, the frame's shared resources
@@ -262,6 +273,12 @@ impl Recipe {
     pub fn uses(&self, index: usize) -> bool {
         self.steps.iter().any(|s| s.technique == index)
     }
+
+    /// Whether technique `index` has a pass at the image's size ([`Stage::is_image_space`]):
+    /// a resize re-creates it.
+    pub fn is_image_space(&self, index: usize) -> bool {
+        self.steps.iter().any(|s| s.technique == index && s.stage.is_image_space())
+    }
 }
 
 /// The frame recipe for `scene`: each technique's plan, ordered by [`RECIPE`] stage, then
@@ -302,11 +319,27 @@ pub fn tables(scene: &Scene, names: &[&str]) -> String {
     names.iter().map(|n| format!("[{n}] {:?}\n", scene.render.params.get(*n))).collect()
 }
 
+/// What a technique's resources depend on besides its plan and the frame's shared
+/// resources ([`Registration::inputs`]).
+#[derive(Clone, Debug, Default, PartialEq, Eq, Hash)]
+pub struct Inputs {
+    /// Its settings, usually its `[render.<table>]`s as they are in the scene ([`tables`]).
+    pub settings: String,
+    /// Whether it is built from where things are ([`placement_hash`]): impostor rectangles,
+    /// light frusta, shadow faces. It is re-created when something moves.
+    pub placement: bool,
+}
+
+impl Inputs {
+    pub fn settings(settings: impl Into<String>) -> Self {
+        Inputs { settings: settings.into(), placement: false }
+    }
+}
+
 /// Where everything is: every vertex of every object, the analytic shapes, the lights and the
-/// camera position (the GPU scene's bounds include it), as one hash. A technique whose
-/// resources are built from positions (impostor rectangles, light frusta, shadow faces) puts
-/// it in its [`Registration::inputs`], and is re-created when something moves.
-pub fn placement(scene: &Scene) -> String {
+/// camera position (the GPU scene's bounds include it), as one hash. Computed once per
+/// update, for every technique whose [`Inputs::placement`] is set.
+pub fn placement_hash(scene: &Scene) -> u64 {
     use std::hash::{Hash, Hasher};
     let mut h = std::collections::hash_map::DefaultHasher::new();
     for o in &scene.objects {
@@ -319,18 +352,23 @@ pub fn placement(scene: &Scene) -> String {
         format!("{:?}", o.analytic).hash(&mut h);
     }
     format!("{:?} {:?}", scene.lights, scene.camera.position).hash(&mut h);
-    format!("placement {:016x}", h.finish())
+    h.finish()
 }
 
-/// [`tables`] and [`placement`]: the inputs of a technique built from its settings and from
+/// [`Registration::inputs`] of a technique built from where things are and nothing else.
+pub fn placement(_: &Scene) -> Inputs {
+    Inputs { settings: String::new(), placement: true }
+}
+
+/// [`tables`] and placement: the inputs of a technique built from its settings and from
 /// where things are.
-pub fn tables_and_placement(scene: &Scene, names: &[&str]) -> String {
-    tables(scene, names) + &placement(scene)
+pub fn tables_and_placement(scene: &Scene, names: &[&str]) -> Inputs {
+    Inputs { settings: tables(scene, names), placement: true }
 }
 
 /// [`Registration::inputs`] of a technique that depends on nothing but its plan.
-pub fn no_inputs(_: &Scene) -> String {
-    String::new()
+pub fn no_inputs(_: &Scene) -> Inputs {
+    Inputs::default()
 }
 
 /// Names of the objects whose material satisfies `pred`, for the plans' reasons.

@@ -8,7 +8,7 @@ use crate::gpu::{DescriptorSet, DescriptorSetLayout, GpuContext, GpuResult, Samp
 use crate::graph::{Frame, ImageId};
 use crate::scene::techniques::CausticsMapParams;
 use crate::technique::{
-    diffuse_names, list, params, placement, tables, FrameInputs, PlannedPass, Registration, RenderError, Setup, Stage,
+    diffuse_names, list, params, tables, FrameInputs, Inputs, PlannedPass, Registration, RenderError, Setup, Stage,
     Technique,
 };
 use crate::{BINDING_GBUF_ALBEDO, BINDING_GBUF_DEPTH, BINDING_GBUF_NORMAL};
@@ -27,11 +27,10 @@ pub const TECHNIQUE: Registration = Registration {
     // The photon rectangles (their count) follow the receivers.
     inputs: |scene| {
         let filter = CausticsMapParams::from_settings(&scene.render).map(|p| p.filter).ok();
-        let mut inputs = format!("{} {filter:?} {}", scene.render.caustics, tables(scene, &["photon_buffer"]));
-        if scene.render.caustics == "photon_buffer" {
-            inputs += &placement(scene);
+        Inputs {
+            settings: format!("{} {filter:?} {}", scene.render.caustics, tables(scene, &["photon_buffer"])),
+            placement: scene.render.caustics == "photon_buffer",
         }
-        inputs
     },
 };
 

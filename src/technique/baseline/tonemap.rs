@@ -42,7 +42,9 @@ use crate::gpu::{
 use crate::graph::{BufferId, Frame, ImageId};
 use crate::scene::techniques::TonemapAdaptiveParams;
 use crate::scene::Scene;
-use crate::technique::{params, tables, FrameInputs, PlannedPass, Registration, RenderError, Setup, Stage, Technique};
+use crate::technique::{
+    params, tables, FrameInputs, Inputs, PlannedPass, Registration, RenderError, Setup, Stage, Technique,
+};
 use crate::{
     BINDING_HDR, BINDING_TONEMAP_STATE, TONEMAP_BINDING_HDR, TONEMAP_BINDING_PARTIALS, TONEMAP_BINDING_STATE,
     TONEMAP_BINDING_STATS, TONEMAP_BLOCK, TONEMAP_GROUP,
@@ -64,8 +66,8 @@ pub const TECHNIQUE: Registration = Registration {
     create,
     // The adaptive tone map starts from the exposure; the clamp reads it from the uniforms.
     inputs: |scene| match scene.render.tonemap.as_str() {
-        "adaptive" => format!("{} {}", scene.render.exposure, tables(scene, &["tonemap_adaptive"])),
-        _ => String::new(),
+        "adaptive" => Inputs::settings(format!("{} {}", scene.render.exposure, tables(scene, &["tonemap_adaptive"]))),
+        _ => Inputs::default(),
     },
 };
 
