@@ -227,6 +227,11 @@ shared_constants! {
     BINDING_EIKONAL_NEARBY_TEXTURE: u32 = 24;
     BINDING_EIKONAL_TRIANGLES: u32 = 25;
     MAX_EIKONAL_TRIANGLES: u32 = 64;
+    // The window's water animation (glsl/common/heightfield.comp; src/frame/heightfield.rs):
+    // one set 0.
+    HEIGHTFIELD_BINDING_FIELDS: u32 = 0;
+    HEIGHTFIELD_BINDING_WAVES: u32 = 1;
+    HEIGHTFIELD_BINDING_VERTICES: u32 = 2;
 }
 
 // Float constants, written into the GLSL header as float literals.

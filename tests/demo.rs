@@ -429,3 +429,15 @@ fn demo_recompiles_an_edited_shader_and_shows_its_errors() {
         a.pixels().zip(b.pixels()).filter(|(p, q)| p.0.iter().zip(q.0.iter()).any(|(x, y)| x.abs_diff(*y) > 8)).count();
     assert!((differing as f64) < (64.0 * 48.0) * 0.002, "{differing} pixels differ from the exposure-0.25 render");
 }
+
+#[test]
+fn demo_animates_the_water_without_updating_the_renderer() {
+    // The water moves by a compute pass on the GPU: no frame re-creates anything.
+    let Some(display) = display() else { return };
+    let out = demo(&display, &["water_pool", "--frames", "6", "--width", "96", "--height", "96", "--validation"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "prism demo failed:\n{stderr}");
+    assert!(!stderr.contains("VUID") && !stderr.contains("SYNC-HAZARD"), "validation messages:\n{stderr}");
+    assert!(!stderr.contains("re-created"), "{stderr}");
+    assert!(stderr.contains("demo: 6 frames, 0 renderer updates"), "{stderr}");
+}

@@ -181,3 +181,31 @@ fn the_eikonal_light_simulation_survives_a_resize_and_moves_elsewhere() {
     drop((running, fresh));
     common::assert_no_validation_errors(&ctx);
 }
+
+#[test]
+fn the_water_animates_on_the_gpu() {
+    // The window moves the water's vertices with a compute pass instead of a scene update.
+    // Against a renderer created at the new time the image may differ only as much as the
+    // golden threshold allows (tests/common/mod.rs): the GPU's sin rounds differently from
+    // the CPU's, and the shadow faces stay fitted to the loaded time's bounds.
+    use prism::metrics::image::{fraction_differing_rgba8, psnr_rgba8};
+    let ctx = common::context(false);
+    let mut running = Renderer::new(&ctx, &common::scene("water_pool", SIZE, &[])).unwrap();
+    let (_, still) = frame(&mut running);
+    assert!(running.animate(0.7));
+    let (hdr, animated) = frame(&mut running);
+    common::assert_finite("water_pool animated", &hdr);
+    let later = common::scene("water_pool", SIZE, &["objects.5.time=0.7"]);
+    let (_, expected) = frame(&mut Renderer::new(&ctx, &later).unwrap());
+    let (differing, psnr) = (fraction_differing_rgba8(&animated, &expected, 8), psnr_rgba8(&animated, &expected));
+    assert!(differing <= common::MAX_DIFFERING && psnr >= common::MIN_PSNR, "{differing} {psnr}");
+    // The waves moved far more than that: the comparison can fail.
+    let moved = fraction_differing_rgba8(&still, &expected, 8);
+    assert!(moved > common::MAX_DIFFERING, "time 0 and 0.7 differ in only {moved} of the pixels");
+    // An update to the new time puts everything where a created renderer has it.
+    let u = running.update(&later).unwrap();
+    assert!(u.moved && !running.animated(), "{u:?}");
+    assert_eq!(frame(&mut running).1, expected);
+    drop(running);
+    common::assert_no_validation_errors(&ctx);
+}

@@ -220,6 +220,8 @@ struct Running {
     /// (`--exit-after-shader-reloads`).
     shader_reloads: u32,
     exit_at: Option<u64>,
+    /// Scene updates applied to the renderer (changes, resizes, reloads).
+    updates: u32,
     /// An object was moved in the renderer (Ctrl + drag): reload the CPU scene (picking, the
     /// overlay's fields) from the overrides once the drag ends, without a new renderer.
     scene_stale: bool,
@@ -234,6 +236,8 @@ struct Running {
     /// An object or the light being dragged in the view.
     grab: Option<Grab>,
     start: Instant,
+    /// The water's time while the overlay animates it (on the GPU), kept when it stops.
+    water_time: Option<f32>,
     last_frame: Instant,
     scene_mtime: Option<SystemTime>,
     last_poll: Instant,
@@ -278,6 +282,7 @@ impl ApplicationHandler for App {
                     }
                 }
                 if self.args.frames.is_some_and(|n| r.frames >= n) || r.exit_at.is_some_and(|f| r.frames >= f) {
+                    eprintln!("demo: {} frames, {} renderer updates", r.frames, r.updates);
                     self.finish(event_loop)
                 }
             }
@@ -407,6 +412,7 @@ impl Running {
             shader_watch: shader_dir(args).map(shaders::ShaderWatch::new),
             shader_reloads: 0,
             exit_at: None,
+            updates: 0,
             scene_stale: false,
             reloading: false,
             ui: ui::UiState::new(!args.no_overlay),
@@ -415,6 +421,7 @@ impl Running {
             modifiers: Default::default(),
             grab: None,
             start: now,
+            water_time: None,
             last_frame: now,
             scene_mtime: mtime(path),
             last_poll: now,
@@ -453,8 +460,7 @@ impl Running {
         o.push(format!("camera.width={}", size.0));
         o.push(format!("camera.height={}", size.1));
         o.extend(self.ui.overrides.iter().map(|(k, v)| format!("{k}={v}")));
-        if self.ui.animate {
-            let t = self.start.elapsed().as_secs_f32();
+        if let Some(t) = self.water_time {
             for (i, obj) in self.scene.objects.iter().enumerate() {
                 if obj.shape == "heightfield" {
                     o.push(format!("objects.{i}.time={t}"));
@@ -480,6 +486,7 @@ impl Running {
         };
         match self.renderer.update(&scene) {
             Ok(update) => {
+                self.updates += 1;
                 if update.rebuilt {
                     self.register_swapchain();
                 }
@@ -795,11 +802,20 @@ impl Running {
         self.poll_scene_file(&path);
         self.poll_shaders(args)?;
         let resized = (self.renderer.width(), self.renderer.height()) != (extent.width, extent.height);
-        let animating = self.ui.animate && self.has_heightfield();
+        if self.ui.animate && self.has_heightfield() {
+            // Only the water's vertices move, on the GPU; when the animation stops, what is
+            // fitted to where things are catches up at the time it stopped at.
+            let t = self.start.elapsed().as_secs_f32();
+            self.water_time = Some(t);
+            self.renderer.animate(t);
+        } else if self.renderer.animated() {
+            self.scene_stale = true;
+            self.change.get_or_insert_with(|| "water animation stopped".to_string());
+        }
         if resized && self.change.is_none() {
             self.change = Some(format!("resize to {}x{}", extent.width, extent.height));
         }
-        if self.needs_rebuild || resized || animating {
+        if self.needs_rebuild || resized {
             self.needs_rebuild = false;
             self.scene_stale = false;
             self.rebuild(args, &path, (extent.width, extent.height))?;
@@ -808,7 +824,7 @@ impl Running {
             // cursor; now everything built from positions catches up (impostor rectangles,
             // light frusta, photon rectangles, distance impostors, shadow faces).
             self.scene_stale = false;
-            self.change = Some("object moved".to_string());
+            self.change.get_or_insert_with(|| "object moved".to_string());
             self.rebuild(args, &path, (extent.width, extent.height))?;
         }
         self.camera.update(dt);

@@ -3,6 +3,7 @@
 //! and the error creating any of them returns.
 pub mod gpu_scene;
 pub mod gpu_types;
+pub mod heightfield;
 pub mod targets;
 
 use crate::gpu::GpuError;

@@ -6,7 +6,7 @@ use ash::vk;
 
 use super::context::GpuContext;
 use super::error::{GpuResult, VkContext};
-use super::sync::{BufferBarrier, ImageBarrier};
+use super::sync::{Access, BufferBarrier, ImageBarrier};
 use super::{
     Buffer, ComputePipeline, DescriptorSet, Framebuffer, GraphicsPipeline, Image, OcclusionQueryPool, RenderPass,
     TimestampPool,
@@ -51,6 +51,22 @@ impl<'a> Cmd<'a> {
 
     fn dev(&self) -> &ash::Device {
         self.ctx.raw()
+    }
+
+    /// Order the accesses `from` of `buffer` before the accesses `to`, for a buffer the
+    /// frame graph does not track.
+    pub fn buffer_barrier(&self, buffer: &Buffer, from: Access, to: Access) {
+        let (from, to) = (from.info(false), to.info(false));
+        self.barriers(
+            &[],
+            &[BufferBarrier {
+                buffer: buffer.raw,
+                src_stages: from.stages,
+                src_access: from.access,
+                dst_stages: to.stages,
+                dst_access: to.access,
+            }],
+        );
     }
 
     pub fn barriers(&self, images: &[ImageBarrier], buffers: &[BufferBarrier]) {

@@ -29,6 +29,9 @@ pub enum Access {
     FragmentStorageRead,
     /// Indirect draw/dispatch arguments (HistoPyramid output counts).
     IndirectArgs,
+    /// The scene's vertices as every pass reads them: vertex attributes, and storage reads
+    /// in any shader stage.
+    VertexData,
     /// Source of a copy.
     TransferRead,
     /// Destination of a copy or clear.
@@ -84,6 +87,12 @@ impl Access {
             Access::VertexStorageRead => (S::VERTEX_SHADER, A::SHADER_READ, L::GENERAL, false),
             Access::FragmentStorageRead => (S::FRAGMENT_SHADER, A::SHADER_READ, L::GENERAL, false),
             Access::IndirectArgs => (S::DRAW_INDIRECT, A::INDIRECT_COMMAND_READ, L::UNDEFINED, false),
+            Access::VertexData => (
+                S::VERTEX_INPUT | S::VERTEX_SHADER | S::FRAGMENT_SHADER | S::COMPUTE_SHADER,
+                A::VERTEX_ATTRIBUTE_READ | A::SHADER_READ,
+                L::UNDEFINED,
+                false,
+            ),
             Access::TransferRead => (S::TRANSFER, A::TRANSFER_READ, L::TRANSFER_SRC_OPTIMAL, false),
             Access::TransferWrite => (S::TRANSFER, A::TRANSFER_WRITE, L::TRANSFER_DST_OPTIMAL, true),
             Access::HostRead => (S::HOST, A::HOST_READ, L::GENERAL, false),

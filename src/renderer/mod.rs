@@ -38,6 +38,7 @@ use crate::{
 
 use crate::frame::gpu_scene::GpuScene;
 use crate::frame::gpu_types::{self, FrameUniforms};
+use crate::frame::heightfield::HeightfieldAnimation;
 use crate::frame::targets::Targets;
 pub use crate::frame::RenderError;
 use plan::PlannedPass;
@@ -123,6 +124,11 @@ pub struct Renderer {
     placement: Option<u64>,
     /// What techniques keep across their re-creation (the eikonal light simulation).
     cache: Cache,
+    /// The heightfields' animation on the GPU, and the time the next frame moves them to.
+    animation: Option<HeightfieldAnimation>,
+    animation_time: Option<f32>,
+    /// The vertices were animated since the last update.
+    animated: bool,
     /// Every object's vertex range and current (centre, bounding radius), for moving objects.
     objects: Vec<ObjectState>,
     uniforms: FrameUniforms,
@@ -294,6 +300,7 @@ impl Renderer {
         let placement = crate::technique::placement_hash(scene);
         let technique_fingerprints =
             (0..TECHNIQUES.len()).map(|i| update::technique_fingerprint(scene, &recipe, i, placement)).collect();
+        let animation = HeightfieldAnimation::new(ctx, scene, &gpu_scene)?;
         Ok(Renderer {
             techniques,
             photon_caustics,
@@ -314,6 +321,9 @@ impl Renderer {
             technique_shaders,
             placement: Some(placement),
             cache,
+            animation,
+            animation_time: None,
+            animated: false,
             objects,
             uniforms,
             pending: vec![None; FRAMES_IN_FLIGHT],
@@ -323,6 +333,24 @@ impl Renderer {
             tonemap_stats: None,
             ctx: ctx.clone(),
         })
+    }
+
+    /// Move the heightfields (the water's surface) to `time` on the GPU with the next frame,
+    /// without a scene update (see [`HeightfieldAnimation`]). False: the scene has none.
+    pub fn animate(&mut self, time: f32) -> bool {
+        if self.animation.is_none() {
+            return false;
+        }
+        self.animation_time = Some(time);
+        self.animated = true;
+        // The vertices no longer hold the loaded scene's placement: the next update rewrites them.
+        self.placement = None;
+        true
+    }
+
+    /// Whether [`Renderer::animate`] moved the vertices since the last update.
+    pub fn animated(&self) -> bool {
+        self.animated
     }
 
     /// The created technique of type `T`, if the scene planned it.
@@ -452,6 +480,7 @@ impl Renderer {
             t.begin_frame();
         }
         let dt = if self.frame_index == 0 { None } else { self.tonemap_dt };
+        let animate = self.animation.as_ref().zip(self.animation_time.take());
         let Renderer {
             techniques,
             photon_caustics,
@@ -476,6 +505,9 @@ impl Renderer {
         };
         let cmd = commands.begin(slot)?;
         let mut frame = graph.frame();
+        if let Some((animation, time)) = animate {
+            animation.record(&mut frame, &scene.vertices, time);
+        }
         // The frame recipe: the steps in the order they were planned. Each step must record
         // exactly the passes its technique planned for that stage, or `prism passes`, the
         // timings and the frame would disagree: checked in every build.

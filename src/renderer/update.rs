@@ -35,6 +35,7 @@ use super::{
     bind_atlas, bind_photon_caustics, clear_atlas, set_camera_uniforms, RenderError, Renderer, FRAMES_IN_FLIGHT,
 };
 use crate::frame::gpu_scene::gpu_material;
+use crate::frame::heightfield::HeightfieldAnimation;
 use crate::frame::targets::Targets;
 
 /// What [`Renderer::update`] did.
@@ -212,6 +213,9 @@ impl Renderer {
                 self.uniforms.lights[i] = *l;
             }
             self.placement = Some(placement);
+            // The heightfields' waves may have changed with them.
+            self.animation = HeightfieldAnimation::new(&self.ctx, scene, &self.scene)?;
+            self.animated = false;
             update.moved = true;
         }
         // Everything new is made first, then swapped in: a failure leaves the old state.

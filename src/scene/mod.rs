@@ -242,6 +242,8 @@ pub struct Object {
     pub mesh: Mesh,
     /// The exact shape, where the reference renderer should not use the tessellation.
     pub analytic: Option<Analytic>,
+    /// A heightfield's surface without its time, which the window animates on the GPU.
+    pub heightfield: Option<shapes::Heightfield>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -804,7 +806,7 @@ fn object(
     };
     let radius = |key: &str, v: Option<f32>| positive(src, &p(key), v.unwrap_or(0.0));
 
-    let mut analytic = None;
+    let (mut analytic, mut heightfield) = (None, None);
     let mut mesh = match shape {
         "sphere" => {
             let r = radius("radius", o.radius)?;
@@ -856,7 +858,11 @@ fn object(
                 });
             }
             let time = finite(src, &p("time"), o.time.unwrap_or(0.0))?;
-            shapes::heightfield(center, Vec2::new(s[0], s[1]), res, &waves, time)
+            let h =
+                shapes::Heightfield { center, size: Vec2::new(s[0], s[1]), resolution: res, waves, transform: matrix };
+            let mesh = h.mesh(time);
+            heightfield = Some(h);
+            mesh
         }
         _ => mesh_object(o, &path, rotation, src)?,
     };
@@ -878,7 +884,14 @@ fn object(
     } else {
         mesh.set_checker_uv_xz();
     }
-    Ok(Object { name: o.name.clone().unwrap_or_else(|| format!("{shape}{i}")), material, shape, mesh, analytic })
+    Ok(Object {
+        name: o.name.clone().unwrap_or_else(|| format!("{shape}{i}")),
+        material,
+        shape,
+        mesh,
+        analytic,
+        heightfield,
+    })
 }
 
 fn profile(o: &FileObject, path: &str, src: &Source) -> Result<Vec<Vec2>, SceneError> {

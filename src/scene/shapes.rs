@@ -8,7 +8,7 @@
 
 use std::f32::consts::{PI, TAU};
 
-use glam::{Vec2, Vec3};
+use glam::{Mat4, Vec2, Vec3};
 
 use super::mesh::Mesh;
 
@@ -182,14 +182,34 @@ pub fn wave_normal(waves: &[Wave], x: f32, z: f32, time: f32) -> Vec3 {
 /// A heightfield y = center.y + h(x, z) over `size` = (sx, sz) centred on `center`,
 /// `resolution` = (nx, nz) cells. h is evaluated at the shape's own (x, z), centre
 /// included, so a pool centred on the origin reads its formula in world coordinates.
-pub fn heightfield(center: Vec3, size: Vec2, resolution: [u32; 2], waves: &[Wave], time: f32) -> Mesh {
-    let [nx, nz] = resolution.map(|n| n.max(1));
-    grid(nz, nx, |i, j| {
-        let x = center.x + size.x * (j as f32 / nx as f32 - 0.5);
-        let z = center.z + size.y * (i as f32 / nz as f32 - 0.5);
-        let y = center.y + wave_height(waves, x, z, time);
-        (Vec3::new(x, y, z), wave_normal(waves, x, z, time))
-    })
+#[derive(Debug, Clone, PartialEq)]
+pub struct Heightfield {
+    pub center: Vec3,
+    pub size: Vec2,
+    pub resolution: [u32; 2],
+    pub waves: Vec<Wave>,
+    /// The object's transform, applied after the formula (the loader applies it to
+    /// [`Heightfield::mesh`]; the GPU animation applies it per vertex).
+    pub transform: Mat4,
+}
+
+impl Heightfield {
+    /// The grid's vertices, row by row along z: (nx + 1) (nz + 1) of them, the order the
+    /// GPU animation (glsl/common/heightfield.comp) writes them in.
+    pub fn cells(&self) -> [u32; 2] {
+        self.resolution.map(|n| n.max(1))
+    }
+
+    /// The surface at `time`, before the transform.
+    pub fn mesh(&self, time: f32) -> Mesh {
+        let ([nx, nz], c, s) = (self.cells(), self.center, self.size);
+        grid(nz, nx, |i, j| {
+            let x = c.x + s.x * (j as f32 / nx as f32 - 0.5);
+            let z = c.z + s.y * (i as f32 / nz as f32 - 0.5);
+            let y = c.y + wave_height(&self.waves, x, z, time);
+            (Vec3::new(x, y, z), wave_normal(&self.waves, x, z, time))
+        })
+    }
 }
 
 #[cfg(test)]
@@ -298,7 +318,14 @@ mod tests {
             Wave { amplitude: 0.03, kx: 4.0, kz: 0.0, omega: 3.0, phase: 0.0 },
             Wave { amplitude: 0.02, kx: 0.0, kz: 5.0, omega: -2.0, phase: 1.0 },
         ];
-        let m = heightfield(Vec3::ZERO, Vec2::new(6.0, 6.0), [8, 8], &waves, 0.0);
+        let h = Heightfield {
+            center: Vec3::ZERO,
+            size: Vec2::new(6.0, 6.0),
+            resolution: [8, 8],
+            waves: waves.to_vec(),
+            transform: Mat4::IDENTITY,
+        };
+        let m = h.mesh(0.0);
         check_consistent(&m);
         for p in &m.positions {
             let h = 0.03 * (4.0 * p.x).sin() + 0.02 * (5.0 * p.z + 1.0).sin();
