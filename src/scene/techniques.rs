@@ -1,7 +1,7 @@
 //! Typed, validated parameters of the techniques: the `[render.<technique>]` tables.
 //!
-//! Each parameter is declared once, in [`params!`] below: its field and doc comment, its
-//! default and its range (numbers) or accepted names ([`choice!`] enums). From that one
+//! Each parameter is declared once, in `params!` below: its field and doc comment, its
+//! default and its range (numbers) or accepted names (`choice!` enums). From that one
 //! declaration come the struct, its `Default`, its parser (`from_table`, `from_settings`),
 //! the list of valid keys behind "did you mean" hints, the list of tables the scene loader
 //! accepts ([`TABLES`]) and the tables of docs/scene-format.md ([`docs_table`]; a unit test
@@ -729,12 +729,12 @@ params! {
     /// (Ihrke et al. 2007 §5.3 after Krawczyk, Myszkowski & Seidel 2005;
     /// src/technique/baseline/tonemap.rs).
     TonemapAdaptiveParams "tonemap_adaptive" {
-        /// Reinhard et al. 2002's L_white in units of the scaled luminance; `None` ("auto"):
+        /// Reinhard et al. 2002's L_white in units of the scaled luminance; `"auto"` (`None`):
         /// the largest scaled luminance of the frame, at least 1 (Reinhard's own choice is the
         /// largest; with 1 the curve is the identity L_d = L for images that never exceed 1).
         // Below 1e-3 almost every pixel maps to white; above 1e6 the curve is L/(1+L).
         white: Option<f32> = None, 1e-3..=1e6;
-        /// The key a (Reinhard: 0.18 for an average scene); `None` ("auto"): Krawczyk et al.
+        /// The key a (Reinhard: 0.18 for an average scene); `"auto"` (`None`): Krawczyk et al.
         /// 2005's a = 1.03 - 2 / (2 + log10(L_a + 1)) (§3.1, Eq. 11).
         // Reinhard's keys run from 0.045 (low key) to 0.72 (high key); 0 would be black.
         key: Option<f32> = None, 1e-3..=4.0;
