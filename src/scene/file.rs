@@ -57,6 +57,32 @@ impl<'de> Deserialize<'de> for Rgb {
     }
 }
 
+/// A flat table: the keys every variant (`type` or `shape`) takes, then the optional keys
+/// that only some variants take, each declared once; `present()` names the variant keys a
+/// table has, for [`check_keys`].
+macro_rules! flat_table {
+    (
+        $(#[doc = $doc:literal])*
+        struct $name:ident { $($(#[$attr:meta])* pub $field:ident: $ty:ty,)* }
+        variant keys { $($key:ident: $kty:ty,)* }
+    ) => {
+        $(#[doc = $doc])*
+        #[derive(Debug, Deserialize)]
+        #[serde(deny_unknown_fields)]
+        pub(crate) struct $name {
+            $($(#[$attr])* pub $field: $ty,)*
+            $(pub $key: Option<$kty>,)*
+        }
+
+        impl $name {
+            pub fn present(&self) -> Vec<&'static str> {
+                let keys = [$((stringify!($key), self.$key.is_some())),*];
+                keys.into_iter().filter(|(_, p)| *p).map(|(k, _)| k).collect()
+            }
+        }
+    };
+}
+
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct FileScene {
@@ -87,40 +113,27 @@ pub(crate) struct FileCamera {
     pub height: Option<u32>,
 }
 
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(crate) struct FileEnvironment {
-    #[serde(rename = "type")]
-    pub kind: String,
-    pub radiance: Option<Rgb>,
-    pub file: Option<String>,
-}
-
-impl FileEnvironment {
-    pub fn present(&self) -> Vec<&'static str> {
-        present(&[("radiance", self.radiance.is_some()), ("file", self.file.is_some())])
+flat_table! {
+    struct FileEnvironment {
+        #[serde(rename = "type")]
+        pub kind: String,
+    }
+    variant keys {
+        radiance: Rgb,
+        file: String,
     }
 }
 
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(crate) struct FileLight {
-    #[serde(rename = "type")]
-    pub kind: String,
-    pub position: Option<[f32; 3]>,
-    pub intensity: Option<Rgb>,
-    pub direction: Option<[f32; 3]>,
-    pub irradiance: Option<Rgb>,
-}
-
-impl FileLight {
-    pub fn present(&self) -> Vec<&'static str> {
-        present(&[
-            ("position", self.position.is_some()),
-            ("intensity", self.intensity.is_some()),
-            ("direction", self.direction.is_some()),
-            ("irradiance", self.irradiance.is_some()),
-        ])
+flat_table! {
+    struct FileLight {
+        #[serde(rename = "type")]
+        pub kind: String,
+    }
+    variant keys {
+        position: [f32; 3],
+        intensity: Rgb,
+        direction: [f32; 3],
+        irradiance: Rgb,
     }
 }
 
@@ -132,31 +145,19 @@ pub(crate) struct FileChecker {
     pub size: f32,
 }
 
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(crate) struct FileMaterial {
-    #[serde(rename = "type")]
-    pub kind: String,
-    pub albedo: Option<Rgb>,
-    pub checker: Option<FileChecker>,
-    pub reflectance: Option<Rgb>,
-    pub eta: Option<Rgb>,
-    pub k: Option<Rgb>,
-    pub ior: Option<Rgb>,
-    pub absorption: Option<Rgb>,
-}
-
-impl FileMaterial {
-    pub fn present(&self) -> Vec<&'static str> {
-        present(&[
-            ("albedo", self.albedo.is_some()),
-            ("checker", self.checker.is_some()),
-            ("reflectance", self.reflectance.is_some()),
-            ("eta", self.eta.is_some()),
-            ("k", self.k.is_some()),
-            ("ior", self.ior.is_some()),
-            ("absorption", self.absorption.is_some()),
-        ])
+flat_table! {
+    struct FileMaterial {
+        #[serde(rename = "type")]
+        pub kind: String,
+    }
+    variant keys {
+        albedo: Rgb,
+        checker: FileChecker,
+        reflectance: Rgb,
+        eta: Rgb,
+        k: Rgb,
+        ior: Rgb,
+        absorption: Rgb,
     }
 }
 
@@ -190,49 +191,28 @@ pub(crate) struct FileWave {
     pub phase: f32,
 }
 
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(crate) struct FileObject {
-    pub name: Option<String>,
-    pub material: String,
-    pub shape: String,
-    pub transform: Option<FileTransform>,
-    pub center: Option<[f32; 3]>,
-    pub radius: Option<f32>,
-    pub segments: Option<u32>,
-    pub size: Option<Vec<f32>>,
-    pub normal: Option<[f32; 3]>,
-    pub major_radius: Option<f32>,
-    pub minor_radius: Option<f32>,
-    pub height: Option<f32>,
-    pub profile: Option<Vec<[f32; 2]>>,
-    pub resolution: Option<[u32; 2]>,
-    pub waves: Option<Vec<FileWave>>,
-    pub time: Option<f32>,
-    pub file: Option<String>,
-    pub fit: Option<FileFit>,
-}
-
-impl FileObject {
-    /// The shape-specific keys present (the common ones, name, material, shape and
-    /// transform, are accepted by every shape).
-    pub fn present(&self) -> Vec<&'static str> {
-        present(&[
-            ("center", self.center.is_some()),
-            ("radius", self.radius.is_some()),
-            ("segments", self.segments.is_some()),
-            ("size", self.size.is_some()),
-            ("normal", self.normal.is_some()),
-            ("major_radius", self.major_radius.is_some()),
-            ("minor_radius", self.minor_radius.is_some()),
-            ("height", self.height.is_some()),
-            ("profile", self.profile.is_some()),
-            ("resolution", self.resolution.is_some()),
-            ("waves", self.waves.is_some()),
-            ("time", self.time.is_some()),
-            ("file", self.file.is_some()),
-            ("fit", self.fit.is_some()),
-        ])
+flat_table! {
+    struct FileObject {
+        pub name: Option<String>,
+        pub material: String,
+        pub shape: String,
+        pub transform: Option<FileTransform>,
+    }
+    variant keys {
+        center: [f32; 3],
+        radius: f32,
+        segments: u32,
+        size: Vec<f32>,
+        normal: [f32; 3],
+        major_radius: f32,
+        minor_radius: f32,
+        height: f32,
+        profile: Vec<[f32; 2]>,
+        resolution: [u32; 2],
+        waves: Vec<FileWave>,
+        time: f32,
+        file: String,
+        fit: FileFit,
     }
 }
 
@@ -262,71 +242,43 @@ pub(crate) struct FileVolume {
     pub region: Vec<FileRegion>,
 }
 
-/// One `[[volume.region]]`: a shape (flat keys, like the objects) and its material.
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(crate) struct FileRegion {
-    pub name: Option<String>,
-    pub shape: String,
-    pub transform: Option<FileTransform>,
-    pub center: Option<[f32; 3]>,
-    pub radius: Option<f32>,
-    pub size: Option<[f32; 3]>,
-    pub height: Option<f32>,
-    pub profile: Option<Vec<[f32; 2]>>,
-    pub file: Option<String>,
-    pub fit: Option<FileFit>,
-    pub n: Option<Rgb>,
-    pub sigma_a: Option<Rgb>,
-    pub sigma_s: Option<Rgb>,
-    pub hg_g: Option<f32>,
-    pub emission: Option<Rgb>,
-    pub reflectance: Option<f32>,
-}
-
-impl FileRegion {
-    /// The shape-specific keys present (name, shape, transform and the material keys are
-    /// accepted by every shape).
-    pub fn present(&self) -> Vec<&'static str> {
-        present(&[
-            ("center", self.center.is_some()),
-            ("radius", self.radius.is_some()),
-            ("size", self.size.is_some()),
-            ("height", self.height.is_some()),
-            ("profile", self.profile.is_some()),
-            ("file", self.file.is_some()),
-            ("fit", self.fit.is_some()),
-        ])
+flat_table! {
+    /// One `[[volume.region]]`: a shape (flat keys, like the objects) and its material.
+    struct FileRegion {
+        pub name: Option<String>,
+        pub shape: String,
+        pub transform: Option<FileTransform>,
+        pub n: Option<Rgb>,
+        pub sigma_a: Option<Rgb>,
+        pub sigma_s: Option<Rgb>,
+        pub hg_g: Option<f32>,
+        pub emission: Option<Rgb>,
+        pub reflectance: Option<f32>,
+    }
+    variant keys {
+        center: [f32; 3],
+        radius: f32,
+        size: [f32; 3],
+        height: f32,
+        profile: Vec<[f32; 2]>,
+        file: String,
+        fit: FileFit,
     }
 }
 
-/// `volume.index`: one flat struct for every profile `type`, like the shapes.
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(crate) struct FileIndex {
-    #[serde(rename = "type")]
-    pub kind: String,
-    pub n: Option<f32>,
-    pub center: Option<[f32; 3]>,
-    pub radius: Option<f32>,
-    pub n0: Option<f32>,
-    pub gradient: Option<[f32; 3]>,
-}
-
-impl FileIndex {
-    pub fn present(&self) -> Vec<&'static str> {
-        present(&[
-            ("n", self.n.is_some()),
-            ("center", self.center.is_some()),
-            ("radius", self.radius.is_some()),
-            ("n0", self.n0.is_some()),
-            ("gradient", self.gradient.is_some()),
-        ])
+flat_table! {
+    /// `volume.index`: one flat struct for every profile `type`, like the shapes.
+    struct FileIndex {
+        #[serde(rename = "type")]
+        pub kind: String,
     }
-}
-
-fn present(keys: &[(&'static str, bool)]) -> Vec<&'static str> {
-    keys.iter().filter(|(_, p)| *p).map(|(k, _)| *k).collect()
+    variant keys {
+        n: f32,
+        center: [f32; 3],
+        radius: f32,
+        n0: f32,
+        gradient: [f32; 3],
+    }
 }
 
 /// Checks that a table of the given variant (`what`, e.g. "shape `sphere`") has every

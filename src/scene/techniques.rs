@@ -1,5 +1,11 @@
-//! Typed, validated parameters of the techniques: the `[render.wyman]`, `[render.hu_qin]`,
-//! `[render.impostor]` and `[render.caustics_map]` tables (docs/scene-format.md lists every key with its default).
+//! Typed, validated parameters of the techniques: the `[render.<technique>]` tables.
+//!
+//! Each parameter is declared once, in `params!` below: its field and doc comment, its
+//! default and its range (numbers) or accepted names (`choice!` enums). From that one
+//! declaration come the struct, its `Default`, its parser (`from_table`, `from_settings`),
+//! the list of valid keys behind "did you mean" hints, the list of tables the scene loader
+//! accepts ([`TABLES`]) and the tables of docs/scene-format.md ([`docs_table`]; a unit test
+//! fails when the file is out of date, and `PRISM_BLESS=1` makes it write them).
 //!
 //! The scene loader checks a table when it reads it, so that a misspelt key or an absurd
 //! value is an error naming `file:line` or the `--set` that put it there; the passes parse
@@ -22,375 +28,270 @@ impl std::fmt::Display for ParamError {
     }
 }
 
-/// Which surface Wyman 2005 (§3.2) refracts through the second time on a concave object.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum BackSurface {
-    /// The surface furthest from the eye (yellow point of Fig. 2): shows the geometry users
-    /// expect on objects of high depth complexity.
-    Furthest,
-    /// The second surface from the eye, found by depth peeling (black point of Fig. 2):
-    /// smoother, ignores more distant surfaces.
-    Second,
-}
-
-/// `[render.wyman]`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct WymanParams {
-    pub back_surface: BackSurface,
-    /// Also write P2 and T2 to the debug targets `refraction_wyman_p2` / `_t2`.
-    pub debug: bool,
-}
-
-impl Default for WymanParams {
-    fn default() -> Self {
-        WymanParams { back_surface: BackSurface::Furthest, debug: false }
+/// A kind of parameter value: how it is read from TOML and how the docs table writes it.
+trait Param: Sized {
+    /// Where a value must lie: `lo..=hi` for numbers, `()` where the type says it all.
+    type Range;
+    /// The docs table's type column.
+    const TYPE: &'static str;
+    fn parse(key: &str, v: &toml::Value, range: &Self::Range) -> Result<Self, ParamError>;
+    /// The docs table's range column.
+    fn accepted(range: &Self::Range) -> String;
+    /// A value (the default) as the docs table writes it.
+    fn show(&self) -> String;
+    /// A choice's names with what each means, for the docs table's meaning column.
+    fn meanings() -> Vec<(&'static str, String)> {
+        Vec::new()
     }
 }
 
-/// `[render.hu_qin]`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct HuQinParams {
-    /// Binary-search steps for the dividing pixel p_e (Hu & Qin 2007, Fig. 7; "eight steps
-    /// ... are sufficient").
-    pub search_steps: u32,
-    /// Convergence tolerance of the d_T iteration (Fig. 9), as a fraction of the eye's
-    /// distance to P1, so that it means the same at every scene scale.
-    pub tolerance: f32,
-    /// Upper bound on the d_T iterations (Fig. 9 loops until the tolerance is met).
-    pub max_iterations: u32,
-    /// Section 4's acceleration: assume a back-facing exit, and decide "front-facing" only
-    /// when P2 leaves the refractor's silhouette (skips the binary search).
-    pub assume_back_facing: bool,
-    /// Also write P2 and T2 to the debug targets `refraction_hu_qin_p2` / `_t2`.
-    pub debug: bool,
-    /// §2.2: look R and T2 up in the impostor rectangles of the nearby diffuse objects
-    /// (src/technique/refraction/nearby_impostors.rs) before the environment map.
-    pub nearby: bool,
-    /// Edge of each impostor texture TEX_i in texels (§2.2.1).
-    pub impostor_resolution: u32,
-    /// Iterations of the lookup correction (§2.2.2, Fig. 16); 0 = the plain lookup of Fig. 13.
-    pub correction_iterations: u32,
-    /// Stop correcting when |depth - z| < tolerance x d_i (the rectangle's half side), so that
-    /// it means the same at every object size.
-    pub correction_tolerance: f32,
-    /// Points P + alpha_j Ray, 0 < alpha_j <= d_far, tried as seeds of the correction (Fig. 17).
-    pub seed_samples: u32,
-    /// §2.2.1 recursive reflections: mirrors/conductors in the impostor textures reflect the
-    /// environment only (0) or the impostors of the level below (1, 2, 3).
-    pub recursion_depth: u32,
-    /// The second interface of a dielectric OBJ_k in its impostor texture (`recursive_exit`).
-    pub recursive_exit: RecursiveExit,
-}
-
-/// Where a dielectric OBJ_k's refracted ray leaves it inside its impostor texture (Hu & Qin
-/// 2007 §2.2.1 with §2.1's exit search in the rectangle's parallel projection).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum RecursiveExit {
-    /// `"full"`: Fig. 7's dividing pixel and Fig. 5's front/back test, then Fig. 9's search on
-    /// OBJ_k's front or back faces.
-    Full,
-    /// `"back_facing"`: §4's acceleration, the exit assumed back-facing (Fig. 9 on the back
-    /// faces only).
-    BackFacing,
-    /// `"bounding_sphere"`: where T1 leaves OBJ_k's bounding sphere.
-    BoundingSphere,
-}
-
-impl RecursiveExit {
-    pub const NAMES: [&'static str; 3] = ["full", "back_facing", "bounding_sphere"];
-    pub fn name(self) -> &'static str {
-        match self {
-            RecursiveExit::Full => "full",
-            RecursiveExit::BackFacing => "back_facing",
-            RecursiveExit::BoundingSphere => "bounding_sphere",
+impl Param for u32 {
+    type Range = std::ops::RangeInclusive<i64>;
+    const TYPE: &'static str = "integer";
+    fn parse(key: &str, v: &toml::Value, range: &Self::Range) -> Result<Self, ParamError> {
+        let (lo, hi) = (*range.start(), *range.end());
+        match v.as_integer() {
+            Some(n) if range.contains(&n) => Ok(n as u32),
+            _ => Err(ParamError {
+                key: key.to_string(),
+                message: format!("`{key}` must be an integer from {lo} to {hi}, not {v}"),
+                hint: "use a whole number in range".into(),
+            }),
         }
     }
-    /// Whether the exit search reads OBJ_k's back faces (and front faces with `Full`).
-    pub fn uses_layers(self) -> bool {
-        self != RecursiveExit::BoundingSphere
+    fn accepted(range: &Self::Range) -> String {
+        format!("{} to {}", range.start(), range.end())
+    }
+    fn show(&self) -> String {
+        self.to_string()
     }
 }
 
-impl Default for HuQinParams {
-    fn default() -> Self {
-        HuQinParams {
-            search_steps: 8,
-            tolerance: 1e-4,
-            max_iterations: 32,
-            assume_back_facing: false,
-            debug: false,
-            nearby: true,
-            impostor_resolution: 256,
-            // "using a good initial point ... we can obtain a satisfactory result after two or
-            // three iteration steps" (§2.2.2).
-            correction_iterations: 3,
-            correction_tolerance: 1e-3,
-            seed_samples: 8,
-            recursion_depth: 1,
-            // Measured (tests/recursion.rs: two balls, a cube, a torus, a cone; docs/scene-format.md):
-            // the full search changes at most a few pixels over the back-facing one, and costs
-            // the front faces' pass; so §4's acceleration by default.
-            recursive_exit: RecursiveExit::BackFacing,
+impl Param for f32 {
+    type Range = std::ops::RangeInclusive<f64>;
+    const TYPE: &'static str = "number";
+    fn parse(key: &str, v: &toml::Value, range: &Self::Range) -> Result<Self, ParamError> {
+        let (lo, hi) = (*range.start(), *range.end());
+        match v.as_float().or_else(|| v.as_integer().map(|i| i as f64)) {
+            Some(x) if x.is_finite() && x >= lo && x <= hi => Ok(x as f32),
+            _ => Err(ParamError {
+                key: key.to_string(),
+                message: format!("`{key}` must be a number from {lo:e} to {hi:e}, not {v}"),
+                hint: "use a finite number in range".into(),
+            }),
         }
     }
-}
-
-/// Which conductor Fresnel term the impostor shading uses (Szirmay-Kalos et al. 2005, §3).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum ImpostorFresnel {
-    /// The paper's Schlick-like approximation with n and k.
-    Approximate,
-    /// The exact formula for a complex index (glsl/include/fresnel.glsl).
-    Exact,
-}
-
-/// When a distance impostor is rendered again (Szirmay-Kalos et al. 2005, §6: "this
-/// preparation phase is usually not executed in each frame, only if the object movements
-/// are large enough").
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum ImpostorUpdate {
-    /// When its object moved farther than `regenerate_distance` from the reference point.
-    OnMove,
-    /// Every frame (the map's full cost shows in every frame's timing).
-    EveryFrame,
-}
-
-/// Which distance impostors the specular objects of an effect share (Szirmay-Kalos et al.
-/// 2005, §6: "we may generate only a single environment map for all of them, or we may
-/// maintain a separate map for each of them").
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum ImpostorMaps {
-    /// One map per effect around the mean centre of its objects, without any of them.
-    Shared,
-    /// One map per specular object, centred on it, holding everything but that object (the
-    /// other specular objects appear in it, black as in deferred shading), each regenerated
-    /// independently when its own object moves.
-    PerObject,
-}
-
-/// `[render.impostor]`: distance impostors, `render.reflection = "impostor"` and
-/// `render.refraction = "impostor"`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ImpostorParams {
-    /// Edge of each cube face in texels (§6 uses 256).
-    pub resolution: u32,
-    /// Hit() refinement steps after the initial guesses (§2.2; 0 = d_l of Eq. 4 only).
-    pub iterations: u32,
-    /// Distance in a separate R32F cube instead of the radiance cube's alpha (§6).
-    pub separate_distance: bool,
-    pub fresnel: ImpostorFresnel,
-    pub update: ImpostorUpdate,
-    /// How far an object's centre may move from its map's reference point before the map is
-    /// rendered again, as a fraction of the object's bounding radius (scale-free).
-    pub regenerate_distance: f32,
-    pub maps: ImpostorMaps,
-}
-
-impl Default for ImpostorParams {
-    fn default() -> Self {
-        ImpostorParams {
-            resolution: 256,
-            iterations: 4,
-            separate_distance: false,
-            fresnel: ImpostorFresnel::Approximate,
-            update: ImpostorUpdate::OnMove,
-            regenerate_distance: 0.25,
-            maps: ImpostorMaps::Shared,
-        }
+    fn accepted(range: &Self::Range) -> String {
+        format!("{} to {}", short(*range.start()), short(*range.end()))
+    }
+    fn show(&self) -> String {
+        short(*self)
     }
 }
 
-/// `[render.impostor_lightmap]`: light-map caustics with distance impostors (Szirmay-Kalos
-/// et al. 2005, §5, Fig. 9), `render.caustics = "impostor_lightmap"`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ImpostorLightmapParams {
-    /// Texels per side of the caustic map rendered from the light (one photon per texel).
-    pub caustic_map_size: u32,
-    /// Texels per side of each receiver's light map.
-    pub lightmap_size: u32,
-    /// Support radius of the Gaussian splat in light-map texels (sigma = radius / 2).
-    pub filter_radius: f32,
-    /// Hit() refinement steps (§2.2) of the photons' rays, in the refractor map and the uv map.
-    pub iterations: u32,
-    /// Texels per uv cube-map face edge.
-    pub uv_map_size: u32,
-}
-
-impl Default for ImpostorLightmapParams {
-    fn default() -> Self {
-        ImpostorLightmapParams {
-            caustic_map_size: 128,
-            lightmap_size: 256,
-            filter_radius: 2.0,
-            iterations: 4,
-            uv_map_size: 256,
+/// A number, or `"auto"` (`None`) for a value the technique works out itself.
+impl Param for Option<f32> {
+    type Range = std::ops::RangeInclusive<f64>;
+    const TYPE: &'static str = "number or `\"auto\"`";
+    fn parse(key: &str, v: &toml::Value, range: &Self::Range) -> Result<Self, ParamError> {
+        if v.as_str() == Some("auto") {
+            return Ok(None);
         }
+        let (lo, hi) = (*range.start(), *range.end());
+        <f32 as Param>::parse(key, v, range).map(Some).map_err(|e| ParamError {
+            message: format!("`{key}` must be \"auto\" or a number from {lo:e} to {hi:e}, not {v}"),
+            ..e
+        })
+    }
+    fn accepted(range: &Self::Range) -> String {
+        format!("`\"auto\"` or {}", <f32 as Param>::accepted(range))
+    }
+    fn show(&self) -> String {
+        self.map_or("`\"auto\"`".into(), short)
     }
 }
 
-impl ImpostorLightmapParams {
-    pub const KEYS: &'static [&'static str] =
-        &["caustic_map_size", "lightmap_size", "filter_radius", "iterations", "uv_map_size"];
+impl Param for bool {
+    type Range = ();
+    const TYPE: &'static str = "boolean";
+    fn parse(key: &str, v: &toml::Value, _: &()) -> Result<Self, ParamError> {
+        v.as_bool().ok_or_else(|| ParamError {
+            key: key.to_string(),
+            message: format!("`{key}` must be true or false, not {v}"),
+            hint: "write a boolean without quotes".into(),
+        })
+    }
+    fn accepted(_: &()) -> String {
+        "true, false".into()
+    }
+    fn show(&self) -> String {
+        self.to_string()
+    }
+}
 
-    pub fn from_table(t: Option<&toml::Table>) -> Result<Self, ParamError> {
-        let mut p = ImpostorLightmapParams::default();
-        for (key, v) in t.into_iter().flatten() {
-            match key.as_str() {
-                // 2048^2 = 4M photons, each a point sprite: far beyond a CPU device's budget.
-                "caustic_map_size" => p.caustic_map_size = integer(key, v, 4, 2048)?,
-                // 4096^2 x 16 bytes = 256 MB per receiver.
-                "lightmap_size" => p.lightmap_size = integer(key, v, 4, 4096)?,
-                // Below sqrt(2)/2 texels a splat centred at a texel corner covers no texel
-                // centre and its power would be lost; the point sprite (2 ceil(radius) + 3
-                // texels) must stay within the point-size range.
-                "filter_radius" => p.filter_radius = number(key, v, 0.75, 16.0)?,
-                "iterations" => p.iterations = integer(key, v, 0, 64)?,
-                "uv_map_size" => p.uv_map_size = integer(key, v, 4, 4096)?,
-                _ => return Err(unknown("impostor_lightmap", key, Self::KEYS)),
+/// The shorter of `x`'s plain and exponent forms (`0.75`, `1e-4`, `1e6`), for the docs.
+fn short<T: std::fmt::Display + std::fmt::LowerExp>(x: T) -> String {
+    let (plain, exp) = (format!("{x}"), format!("{x:e}"));
+    if exp.len() < plain.len() {
+        exp
+    } else {
+        plain
+    }
+}
+
+/// The index of `v` in `names`. A TOML boolean counts as the name it spells, because
+/// `--set render.caustics_map.newton=true` arrives as one.
+fn choose(key: &str, v: &toml::Value, names: &[&str], hint: &str) -> Result<usize, ParamError> {
+    let spelt = v.as_bool().map(|b| if b { "true" } else { "false" });
+    let found = v.as_str().or(spelt).and_then(|s| names.iter().position(|n| *n == s));
+    found.ok_or_else(|| {
+        let quoted: Vec<String> = names.iter().map(|n| format!("\"{n}\"")).collect();
+        let listed = match quoted.split_last() {
+            Some((last, rest)) if !rest.is_empty() => format!("{} or {last}", rest.join(", ")),
+            _ => quoted.concat(),
+        };
+        ParamError { key: key.to_string(), message: format!("`{key}` must be {listed}, not {v}"), hint: hint.into() }
+    })
+}
+
+/// Joins a doc comment's lines into one line of a markdown table cell.
+fn prose(lines: &[&str]) -> String {
+    let words: Vec<&str> = lines.iter().map(|l| l.trim()).filter(|l| !l.is_empty()).collect();
+    words.join(" ").replace('|', "\\|")
+}
+
+/// One row of a docs table.
+fn row<T: Param>(key: &str, doc: &[&str], default: &T, range: &T::Range) -> String {
+    let mut meaning = prose(doc);
+    for (name, doc) in T::meanings() {
+        meaning += &format!(" `\"{name}\"`: {doc}");
+    }
+    format!("| `{key}` | {} | {} | {} | {meaning} |\n", T::TYPE, default.show(), T::accepted(range))
+}
+
+/// An enum parameter: a doc comment, the name, the hint shown when a value is not one of
+/// the names, and each variant with its doc comment and the name it is written as.
+macro_rules! choice {
+    ($(#[doc = $doc:literal])* $name:ident, hint $hint:literal {
+        $($(#[doc = $vdoc:literal])* $variant:ident = $spelt:literal,)*
+    }) => {
+        $(#[doc = $doc])*
+        #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+        pub enum $name {
+            $($(#[doc = $vdoc])* $variant,)*
+        }
+
+        impl $name {
+            /// The names a scene file writes, in declaration order.
+            pub const NAMES: [&'static str; [$($spelt),*].len()] = [$($spelt),*];
+            const ALL: [Self; [$($spelt),*].len()] = [$(Self::$variant),*];
+
+            pub fn name(self) -> &'static str {
+                match self {
+                    $(Self::$variant => $spelt,)*
+                }
             }
         }
-        Ok(p)
-    }
 
-    pub fn from_settings(r: &RenderSettings) -> Result<Self, ParamError> {
-        Self::from_table(r.params.get("impostor_lightmap"))
-    }
-}
-
-/// How caustics mapping estimates where a refracted or reflected ray meets the receivers
-/// (Shah et al. 2007, §III.C-D).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Newton {
-    /// The paper's approximation (§III.C, Eq. 1-2): the next distance is the distance from
-    /// the ray origin to the receiver point looked up at the current estimate (one texture
-    /// fetch per iteration, no derivative).
-    Approximate,
-    /// The true Newton-Raphson iteration of the appendix (Eq. 4, derivative by the finite
-    /// difference of Eq. 5), falling back to bisection when it oscillates (§III.D).
-    True,
-}
-
-/// The flux each caustics-mapping vertex carries (Shah et al. 2007, §III.E).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Flux {
-    /// The light's intensity times the grid texel's own solid angle (or irradiance times its
-    /// area): the flux through the texel, exact for any grid.
-    SolidAngle,
-    /// Eq. 6: Phi_i = (N_i . L_i) / V of the flux through the object's visible surface, V
-    /// counted by an occlusion query on the refractor pass.
-    OcclusionQuery,
-}
-
-/// `[render.caustics_map]` (Shah et al. 2007).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct CausticsMapParams {
-    /// Vertices per side of the refractor grid, which is also the resolution of the
-    /// refractor textures rendered from the light (§III.B step 2; §III.F uses 128 x 128).
-    pub grid: u32,
-    /// Iterations of the intersection estimate (§III.D: "a single iteration is sufficient",
-    /// Fig. 6 uses 3).
-    pub iterations: u32,
-    pub newton: Newton,
-    /// Standard deviation of the Gaussian point splats, in caustic-map texels (§III.F).
-    pub splat_sigma: f32,
-    /// Radius in texels of the optional box low-pass filter applied at lookup (§III.F,
-    /// "the caustic-map texture can also be low-pass filtered"); 0 = off.
-    pub filter: u32,
-    /// Texels per side of each caustic-map face (and of the receivers' positions map).
-    pub map_size: u32,
-    pub flux: Flux,
-}
-
-impl Default for CausticsMapParams {
-    fn default() -> Self {
-        CausticsMapParams {
-            grid: 128,
-            iterations: 3,
-            newton: Newton::Approximate,
-            splat_sigma: 1.0,
-            filter: 0,
-            map_size: 512,
-            flux: Flux::SolidAngle,
+        impl Param for $name {
+            type Range = ();
+            const TYPE: &'static str = "string";
+            fn parse(key: &str, v: &toml::Value, _: &()) -> Result<Self, ParamError> {
+                choose(key, v, &Self::NAMES, $hint).map(|i| Self::ALL[i])
+            }
+            fn accepted(_: &()) -> String {
+                Self::NAMES.iter().map(|n| format!("`\"{n}\"`")).collect::<Vec<_>>().join(", ")
+            }
+            fn show(&self) -> String {
+                format!("`\"{}\"`", self.name())
+            }
+            fn meanings() -> Vec<(&'static str, String)> {
+                vec![$(($spelt, prose(&[$($vdoc),*]))),*]
+            }
         }
-    }
+    };
 }
 
-/// What the photon-buffer caustic textures hold (Hu & Qin 2007 §3.2).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum PhotonNormalization {
-    /// Irradiance in W/m^2: each photon carries its share of the light's flux (and its
-    /// Fresnel and absorption weights), the filter kernel is divided by its sum, and the
-    /// result by a texel's area on the rectangle. Comparable with the reference.
-    Physical,
-    /// The paper's c(u, v) = s * (filtered photon count), a brightness blended with the
-    /// receiver's colour: s is an arbitrary scale, so the result is not in physical units.
-    Paper,
+/// `lo..=hi` where a parameter has one, `()` where its type says it all.
+macro_rules! range {
+    () => {
+        ()
+    };
+    ($range:expr) => {
+        $range
+    };
 }
 
-/// `[render.photon_buffer]`: photon-buffer caustics (Hu & Qin 2007 §3,
-/// src/technique/caustics/photon_buffer.rs).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PhotonBufferParams {
-    /// Pixels per side of the photon buffer rendered from the light (§3.1; one photon per
-    /// pixel). The issue asks for 128 by default.
-    pub size: u32,
-    /// Texels per side of each caustic texture TEX_CAUSTICS_i (§3.2).
-    pub texture_size: u32,
-    /// The filter's k (§3.2: "k is equal to 2").
-    pub filter_k: u32,
-    /// The filter's s (§3.2: "s is equal to 0.01"); used by `normalization = "paper"` only.
-    pub filter_s: f32,
-    pub normalization: PhotonNormalization,
-}
-
-impl Default for PhotonBufferParams {
-    fn default() -> Self {
-        PhotonBufferParams {
-            size: 128,
-            texture_size: 512,
-            filter_k: 2,
-            filter_s: 0.01,
-            normalization: PhotonNormalization::Physical,
+/// Every parameter table: its doc comment, struct name, `[render.<table>]` name and
+/// optionally a check across its keys; then each key with its doc comment (the docs table's
+/// meaning), type, default and range. Declaring a table here is all it takes for the
+/// scene loader to accept it and for docs/scene-format.md to list it.
+macro_rules! params {
+    ($(
+        $(#[doc = $tdoc:literal])*
+        $name:ident $table:literal $(check $check:path)? {
+            $($(#[doc = $doc:literal])* $field:ident: $ty:ty = $default:expr $(, $range:expr)?;)*
         }
-    }
-}
+    )*) => {
+        $(
+            $(#[doc = $tdoc])*
+            #[derive(Debug, Clone, Copy, PartialEq)]
+            pub struct $name {
+                $($(#[doc = $doc])* pub $field: $ty,)*
+            }
 
-impl PhotonBufferParams {
-    pub const KEYS: &'static [&'static str] = &["size", "texture_size", "filter_k", "filter_s", "normalization"];
+            impl Default for $name {
+                fn default() -> Self {
+                    $name { $($field: $default,)* }
+                }
+            }
 
-    pub fn from_table(t: Option<&toml::Table>) -> Result<Self, ParamError> {
-        let mut p = PhotonBufferParams::default();
-        for (key, v) in t.into_iter().flatten() {
-            match key.as_str() {
-                // 4096^2 photons is 16M points per rectangle per frame on a CPU device.
-                "size" => p.size = integer(key, v, 1, 4096)?,
-                "texture_size" => p.texture_size = integer(key, v, 1, 4096)?,
-                // (2k+1)^2 taps per texel: k = 16 is already 1089.
-                "filter_k" => p.filter_k = integer(key, v, 0, 16)?,
-                "filter_s" => p.filter_s = number(key, v, 1e-12, 1e12)?,
-                "normalization" => {
-                    p.normalization = match v.as_str() {
-                        Some("physical") => PhotonNormalization::Physical,
-                        Some("paper") => PhotonNormalization::Paper,
-                        _ => {
-                            return Err(ParamError {
-                                key: key.clone(),
-                                message: format!("`normalization` must be \"physical\" or \"paper\", not {v}"),
-                                hint: "irradiance in W/m^2 (comparable with the reference) or the paper's s * count"
-                                    .into(),
-                            })
+            impl $name {
+                pub const KEYS: &'static [&'static str] = &[$(stringify!($field)),*];
+
+                pub fn from_table(t: Option<&toml::Table>) -> Result<Self, ParamError> {
+                    let mut p = Self::default();
+                    for (key, v) in t.into_iter().flatten() {
+                        match key.as_str() {
+                            $(stringify!($field) => p.$field = Param::parse(key, v, &range!($($range)?))?,)*
+                            _ => return Err(unknown($table, key, Self::KEYS)),
                         }
                     }
+                    $($check(&p)?;)?
+                    Ok(p)
                 }
-                _ => return Err(unknown("photon_buffer", key, Self::KEYS)),
+
+                pub fn from_settings(r: &RenderSettings) -> Result<Self, ParamError> {
+                    Self::from_table(r.params.get($table))
+                }
+            }
+        )*
+
+        /// The parameter tables `[render.<technique>]` there are.
+        pub const TABLES: &[&str] = &[$($table),*];
+
+        /// Check the parameter table `[render.<technique>]` if the technique is one of these.
+        pub fn check(technique: &str, t: &toml::Table) -> Result<(), ParamError> {
+            match technique {
+                $($table => $name::from_table(Some(t)).map(|_| ()),)*
+                // The scene loader refuses unknown tables before it gets here (`TABLES`).
+                _ => unreachable!("render.{technique} is not a technique table"),
             }
         }
-        Ok(p)
-    }
 
-    pub fn from_settings(r: &RenderSettings) -> Result<Self, ParamError> {
-        Self::from_table(r.params.get("photon_buffer"))
-    }
+        /// The markdown table of `[render.<table>]`'s keys (key, type, default, range,
+        /// meaning), as docs/scene-format.md holds it.
+        pub fn docs_table(table: &str) -> Option<String> {
+            let rows: Vec<String> = match table {
+                $($table => {
+                    let d = $name::default();
+                    vec![$(row::<$ty>(stringify!($field), &[$($doc),*], &d.$field, &range!($($range)?))),*]
+                })*
+                _ => return None,
+            };
+            Some(format!("| key | type | default | range | meaning |\n|---|---|---|---|---|\n{}", rows.concat()))
+        }
+    };
 }
 
 fn unknown(technique: &str, key: &str, accepted: &[&str]) -> ParamError {
@@ -400,18 +301,6 @@ fn unknown(technique: &str, key: &str, accepted: &[&str]) -> ParamError {
     }
     ParamError { key: key.to_string(), message: format!("unknown parameter `{key}` of render.{technique}"), hint }
 }
-
-/// The parameter tables `[render.<technique>]` there are.
-pub const TABLES: &[&str] = &[
-    "wyman",
-    "hu_qin",
-    "caustics_map",
-    "photon_buffer",
-    "impostor",
-    "impostor_lightmap",
-    "eikonal",
-    "tonemap_adaptive",
-];
 
 /// The candidate a misspelt `name` most likely meant: the nearest by edit distance, if it is
 /// within a third of the name's length (at least 2 edits: `huqin` -> `hu_qin`, `hu_quin` ->
@@ -426,522 +315,461 @@ pub fn closest<'a>(name: &str, candidates: &[&'a str]) -> Option<&'a str> {
         .map(|(_, c)| c)
 }
 
-fn boolean(key: &str, v: &toml::Value) -> Result<bool, ParamError> {
-    v.as_bool().ok_or_else(|| ParamError {
-        key: key.to_string(),
-        message: format!("`{key}` must be true or false, not {v}"),
-        hint: "write a boolean without quotes".into(),
-    })
-}
-
-fn integer(key: &str, v: &toml::Value, lo: i64, hi: i64) -> Result<u32, ParamError> {
-    match v.as_integer() {
-        Some(n) if (lo..=hi).contains(&n) => Ok(n as u32),
-        _ => Err(ParamError {
-            key: key.to_string(),
-            message: format!("`{key}` must be an integer from {lo} to {hi}, not {v}"),
-            hint: "use a whole number in range".into(),
-        }),
+choice! {
+    /// Which surface Wyman 2005 (§3.2) refracts through the second time on a concave object.
+    BackSurface, hint "Wyman 2005 §3.2: the furthest surface, or the second by depth peeling" {
+        /// The surface furthest from the eye (yellow point of Fig. 2): shows the geometry users
+        /// expect on objects of high depth complexity.
+        Furthest = "furthest",
+        /// The second surface from the eye, behind the first, found by depth peeling against
+        /// the G-buffer (black point of Fig. 2): smoother, ignores more distant surfaces.
+        Second = "second",
     }
 }
 
-fn number(key: &str, v: &toml::Value, lo: f64, hi: f64) -> Result<f32, ParamError> {
-    match v.as_float().or_else(|| v.as_integer().map(|i| i as f64)) {
-        Some(x) if x.is_finite() && x >= lo && x <= hi => Ok(x as f32),
-        _ => Err(ParamError {
-            key: key.to_string(),
-            message: format!("`{key}` must be a number from {lo:e} to {hi:e}, not {v}"),
-            hint: "use a finite number in range".into(),
-        }),
+choice! {
+    /// Where a dielectric OBJ_k's refracted ray leaves it inside its impostor texture (Hu & Qin
+    /// 2007 §2.2.1 with §2.1's exit search in the rectangle's parallel projection).
+    RecursiveExit,
+    hint "Hu & Qin 2007 §2.2.1: a dielectric impostor's exit point, by §2.1's whole search \
+          (Figs. 5, 7, 9) on its front and back faces, by Fig. 9 on its back faces only (§4), \
+          or where its bounding sphere is left" {
+        /// OBJ_k's nearest back and front faces (normal and axial depth) are rendered in that
+        /// projection (pass `refraction_hu_qin_nearby_back`, once per frame); Fig. 7's binary
+        /// search for the dividing pixel p_e along T1's projection (`search_steps` halvings of
+        /// the texture's side: OBJ_k lies within its bounding sphere, whose diameter is that
+        /// side), Fig. 5's theta_1/theta_2 test with the eye ray V = the projection direction,
+        /// then Fig. 9's iterative d_T search on OBJ_k's front or back faces (`max_iterations`,
+        /// first step the back faces' thickness at P1, or 1% of d_k on the front faces) and N2
+        /// from the matching layer; the bounding sphere where the search finds no face.
+        Full = "full",
+        /// §4's acceleration, the exit assumed back-facing (Fig. 9 on the back faces only; no
+        /// front faces rendered).
+        BackFacing = "back_facing",
+        /// Where T1 leaves OBJ_k's bounding sphere (O_k, d_k), with its normal; no extra pass
+        /// (exact for balls up to their tessellation).
+        BoundingSphere = "bounding_sphere",
     }
 }
 
-impl WymanParams {
-    pub const KEYS: &'static [&'static str] = &["back_surface", "debug"];
-
-    pub fn from_table(t: Option<&toml::Table>) -> Result<Self, ParamError> {
-        let mut p = WymanParams::default();
-        for (key, v) in t.into_iter().flatten() {
-            match key.as_str() {
-                "back_surface" => {
-                    p.back_surface = match v.as_str() {
-                        Some("furthest") => BackSurface::Furthest,
-                        Some("second") => BackSurface::Second,
-                        _ => {
-                            return Err(ParamError {
-                                key: key.clone(),
-                                message: format!("`back_surface` must be \"furthest\" or \"second\", not {v}"),
-                                hint: "Wyman 2005 §3.2: the furthest surface, or the second by depth peeling".into(),
-                            })
-                        }
-                    }
-                }
-                "debug" => p.debug = boolean(key, v)?,
-                _ => return Err(unknown("wyman", key, Self::KEYS)),
-            }
-        }
-        Ok(p)
-    }
-
-    pub fn from_settings(r: &RenderSettings) -> Result<Self, ParamError> {
-        Self::from_table(r.params.get("wyman"))
+impl RecursiveExit {
+    /// Whether the exit search reads OBJ_k's back faces (and front faces with `Full`).
+    pub fn uses_layers(self) -> bool {
+        self != RecursiveExit::BoundingSphere
     }
 }
 
-impl HuQinParams {
-    pub const KEYS: &'static [&'static str] = &[
-        "search_steps",
-        "tolerance",
-        "max_iterations",
-        "assume_back_facing",
-        "debug",
-        "nearby",
-        "impostor_resolution",
-        "correction_iterations",
-        "correction_tolerance",
-        "seed_samples",
-        "recursion_depth",
-        "recursive_exit",
-    ];
-
-    pub fn from_table(t: Option<&toml::Table>) -> Result<Self, ParamError> {
-        let mut p = HuQinParams::default();
-        for (key, v) in t.into_iter().flatten() {
-            match key.as_str() {
-                // 2^24 intervals already resolve far below a texel of the largest image.
-                "search_steps" => p.search_steps = integer(key, v, 1, 24)?,
-                "tolerance" => p.tolerance = number(key, v, 1e-7, 0.5)?,
-                "max_iterations" => p.max_iterations = integer(key, v, 1, 1024)?,
-                "assume_back_facing" => p.assume_back_facing = boolean(key, v)?,
-                "debug" => p.debug = boolean(key, v)?,
-                "nearby" => p.nearby = boolean(key, v)?,
-                // 2048^2 texels x 16 bytes x MAX_NEARBY_RECTS (8) layers = 512 MiB per rectangle
-                // set, a quarter of lavapipe's 2 GiB allocation limit; with several sets the
-                // renderer refuses arrays over 1 GiB (src/technique/refraction/nearby_impostors.rs).
-                "impostor_resolution" => p.impostor_resolution = integer(key, v, 4, 2048)?,
-                // Fig. 16 converges in "two or three" steps; beyond 64 it only burns time.
-                "correction_iterations" => p.correction_iterations = integer(key, v, 0, 64)?,
-                "correction_tolerance" => p.correction_tolerance = number(key, v, 1e-7, 0.5)?,
-                // Each seed is one texture fetch per rectangle per ray.
-                "seed_samples" => p.seed_samples = integer(key, v, 1, 256)?,
-                // One pass per level (src/technique/refraction/nearby_impostors.rs, MAX_RECURSION).
-                "recursion_depth" => p.recursion_depth = integer(key, v, 0, 3)?,
-                "recursive_exit" => {
-                    p.recursive_exit =
-                        match v.as_str() {
-                            Some("full") => RecursiveExit::Full,
-                            Some("back_facing") => RecursiveExit::BackFacing,
-                            Some("bounding_sphere") => RecursiveExit::BoundingSphere,
-                            _ => return Err(ParamError {
-                                key: key.clone(),
-                                message: format!(
-                                    "`recursive_exit` must be \"full\", \"back_facing\" or \"bounding_sphere\", \
-                                     not {v}"
-                                ),
-                                hint:
-                                    "Hu & Qin 2007 §2.2.1: a dielectric impostor's exit point, by §2.1's whole search \
-                                       (Figs. 5, 7, 9) on its front and back faces, by Fig. 9 on its back faces only \
-                                       (§4), or where its bounding sphere is left"
-                                        .into(),
-                            }),
-                        }
-                }
-                _ => return Err(unknown("hu_qin", key, Self::KEYS)),
-            }
-        }
-        Ok(p)
-    }
-
-    pub fn from_settings(r: &RenderSettings) -> Result<Self, ParamError> {
-        Self::from_table(r.params.get("hu_qin"))
+choice! {
+    /// Which conductor Fresnel term the impostor shading uses (Szirmay-Kalos et al. 2005, §3).
+    ImpostorFresnel, hint "the paper's n,k approximation (§3) or the exact conductor formula" {
+        /// The paper's Schlick-like approximation with n and k, ((n-1)^2 + k^2 + 4n(1-cos)^5) /
+        /// ((n+1)^2 + k^2).
+        Approximate = "approximate",
+        /// The exact formula for a complex index (glsl/include/fresnel.glsl).
+        Exact = "exact",
     }
 }
 
-impl ImpostorParams {
-    pub const KEYS: &'static [&'static str] =
-        &["resolution", "iterations", "separate_distance", "fresnel", "update", "regenerate_distance", "maps"];
-
-    pub fn from_table(t: Option<&toml::Table>) -> Result<Self, ParamError> {
-        let mut p = ImpostorParams::default();
-        for (key, v) in t.into_iter().flatten() {
-            match key.as_str() {
-                // 4096^2 x 6 x 16 bytes = 1.6 GB, near lavapipe's 2 GiB allocation limit.
-                "resolution" => p.resolution = integer(key, v, 4, 4096)?,
-                "iterations" => p.iterations = integer(key, v, 0, 64)?,
-                "separate_distance" => p.separate_distance = boolean(key, v)?,
-                "fresnel" => {
-                    p.fresnel = match v.as_str() {
-                        Some("approximate") => ImpostorFresnel::Approximate,
-                        Some("exact") => ImpostorFresnel::Exact,
-                        _ => {
-                            return Err(ParamError {
-                                key: key.clone(),
-                                message: format!("`fresnel` must be \"approximate\" or \"exact\", not {v}"),
-                                hint: "the paper's n,k approximation (§3) or the exact conductor formula".into(),
-                            })
-                        }
-                    }
-                }
-                "update" => {
-                    p.update = match v.as_str() {
-                        Some("on_move") => ImpostorUpdate::OnMove,
-                        Some("every_frame") => ImpostorUpdate::EveryFrame,
-                        _ => {
-                            return Err(ParamError {
-                                key: key.clone(),
-                                message: format!("`update` must be \"on_move\" or \"every_frame\", not {v}"),
-                                hint: "render the maps again when objects move, or every frame".into(),
-                            })
-                        }
-                    }
-                }
-                "regenerate_distance" => p.regenerate_distance = number(key, v, 0.0, 1e6)?,
-                "maps" => {
-                    p.maps = match v.as_str() {
-                        Some("shared") => ImpostorMaps::Shared,
-                        Some("per_object") => ImpostorMaps::PerObject,
-                        _ => {
-                            return Err(ParamError {
-                                key: key.clone(),
-                                message: format!("`maps` must be \"shared\" or \"per_object\", not {v}"),
-                                hint: "one map for all specular objects of an effect, or one per object (§6)".into(),
-                            })
-                        }
-                    }
-                }
-                _ => return Err(unknown("impostor", key, Self::KEYS)),
-            }
-        }
-        Ok(p)
-    }
-
-    pub fn from_settings(r: &RenderSettings) -> Result<Self, ParamError> {
-        Self::from_table(r.params.get("impostor"))
+choice! {
+    /// When a distance impostor is rendered again (Szirmay-Kalos et al. 2005, §6: "this
+    /// preparation phase is usually not executed in each frame, only if the object movements
+    /// are large enough").
+    ImpostorUpdate, hint "render the maps again when objects move, or every frame" {
+        /// In the first frame, then when its object moved farther than `regenerate_distance`
+        /// from the reference point.
+        OnMove = "on_move",
+        /// Every frame (the map's full cost shows in every frame's timing).
+        EveryFrame = "every_frame",
     }
 }
 
-impl CausticsMapParams {
-    pub const KEYS: &'static [&'static str] =
-        &["grid", "iterations", "newton", "splat_sigma", "filter", "map_size", "flux"];
-
-    pub fn from_table(t: Option<&toml::Table>) -> Result<Self, ParamError> {
-        let mut p = CausticsMapParams::default();
-        for (key, v) in t.into_iter().flatten() {
-            match key.as_str() {
-                // 4096^2 vertices per face is already 16M splats per face on a CPU device.
-                "grid" => p.grid = integer(key, v, 2, 4096)?,
-                "iterations" => p.iterations = integer(key, v, 0, 64)?,
-                "newton" => {
-                    // `--set render.caustics_map.newton=true` arrives as the TOML boolean
-                    // true: accept it as the value "true" it spells.
-                    p.newton = match (v.as_str(), v.as_bool()) {
-                        (Some("approximate"), _) => Newton::Approximate,
-                        (Some("true"), _) | (None, Some(true)) => Newton::True,
-                        _ => {
-                            return Err(ParamError {
-                                key: key.clone(),
-                                message: format!("`newton` must be \"approximate\" or \"true\", not {v}"),
-                                hint: "Shah et al. 2007: the approximate iteration of §III.C or the appendix's".into(),
-                            })
-                        }
-                    }
-                }
-                // Below half a texel a splat no longer covers the texel grid evenly, and the
-                // point size (6 sigma + 1) must stay within lavapipe's point-size range.
-                "splat_sigma" => p.splat_sigma = number(key, v, 0.5, 16.0)?,
-                "filter" => p.filter = integer(key, v, 0, 16)?,
-                "map_size" => p.map_size = integer(key, v, 8, 4096)?,
-                "flux" => {
-                    p.flux =
-                        match v.as_str() {
-                            Some("solid_angle") => Flux::SolidAngle,
-                            Some("occlusion_query") => Flux::OcclusionQuery,
-                            _ => return Err(ParamError {
-                                key: key.clone(),
-                                message: format!("`flux` must be \"solid_angle\" or \"occlusion_query\", not {v}"),
-                                hint: "each vertex's flux: its texel's solid angle, or Eq. 6's (N.L)/V with V counted \
-                                       by an occlusion query"
-                                    .into(),
-                            }),
-                        }
-                }
-                _ => return Err(unknown("caustics_map", key, Self::KEYS)),
-            }
-        }
-        Ok(p)
-    }
-
-    pub fn from_settings(r: &RenderSettings) -> Result<Self, ParamError> {
-        Self::from_table(r.params.get("caustics_map"))
+choice! {
+    /// Which distance impostors the specular objects of an effect share (Szirmay-Kalos et al.
+    /// 2005, §6: "we may generate only a single environment map for all of them, or we may
+    /// maintain a separate map for each of them").
+    ImpostorMaps, hint "one map for all specular objects of an effect, or one per object (§6)" {
+        /// One map per effect around the mean centre of its objects, without any of them.
+        Shared = "shared",
+        /// One map (and, for refraction, one refractor map) per specular object, centred on
+        /// it, holding everything but that object (the other specular objects appear in it,
+        /// black as in deferred shading), each regenerated independently when its own object
+        /// moves.
+        PerObject = "per_object",
     }
 }
 
-/// Check the parameter table `[render.<technique>]` if the technique is one of these.
-pub fn check(technique: &str, t: &toml::Table) -> Result<(), ParamError> {
-    match technique {
-        "wyman" => WymanParams::from_table(Some(t)).map(|_| ()),
-        "hu_qin" => HuQinParams::from_table(Some(t)).map(|_| ()),
-        "caustics_map" => CausticsMapParams::from_table(Some(t)).map(|_| ()),
-        "photon_buffer" => PhotonBufferParams::from_table(Some(t)).map(|_| ()),
-        "impostor" => ImpostorParams::from_table(Some(t)).map(|_| ()),
-        "impostor_lightmap" => ImpostorLightmapParams::from_table(Some(t)).map(|_| ()),
-        "eikonal" => EikonalParams::from_table(Some(t)).map(|_| ()),
-        "tonemap_adaptive" => TonemapAdaptiveParams::from_table(Some(t)).map(|_| ()),
-        // The scene loader refuses unknown tables before it gets here (`TABLES`).
-        _ => unreachable!("render.{technique} is not a technique table"),
+choice! {
+    /// How caustics mapping estimates where a refracted or reflected ray meets the receivers
+    /// (Shah et al. 2007, §III.C-D).
+    Newton, hint "Shah et al. 2007: the approximate iteration of §III.C or the appendix's" {
+        /// The paper's approximation (§III.C, Eq. 1-2): the next distance is the distance from
+        /// the ray origin to the receiver point looked up at the current estimate (one texture
+        /// fetch per iteration, no derivative).
+        Approximate = "approximate",
+        /// The true Newton-Raphson iteration of the appendix (Eq. 4, derivative by the finite
+        /// difference of Eq. 5: two lookups per iteration) on the signed distance to the
+        /// receiver, falling back to bisection when it oscillates or leaves the bracket
+        /// (§III.D).
+        True = "true",
     }
 }
 
-/// `[render.tonemap_adaptive]`: the adaptive tone map of `render.tonemap = "adaptive"`
-/// (Ihrke et al. 2007 §5.3 after Krawczyk, Myszkowski & Seidel 2005; src/technique/baseline/tonemap.rs).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct TonemapAdaptiveParams {
-    /// Reinhard et al. 2002's L_white in units of the scaled luminance; `None` ("auto"):
-    /// the largest scaled luminance of the frame, at least 1 (Reinhard's own choice is the
-    /// largest; with 1 the curve is the identity for images that never exceed 1).
-    pub white: Option<f32>,
-    /// The key a; `None` ("auto"): Krawczyk et al. 2005's a = 1.03 - 2 / (2 + log10(L_a + 1))
-    /// (§3.1, Eq. 11).
-    pub key: Option<f32>,
-    /// The delta of the log-average L_avg = exp(mean(log(delta + L_w))), in cd/m^2: keeps
-    /// black pixels from sending the average to 0 (Reinhard et al. 2002, Eq. 1).
-    pub delta: f32,
-    /// Time constants of the rods and the cones in seconds (Krawczyk et al. 2005, Eq. 6: 0.4 s
-    /// and 0.1 s), blended by the rods' sensitivity 0.04 / (0.04 + L_a) (Eqs. 7, 12).
-    pub tau_rod: f32,
-    pub tau_cone: f32,
-    /// cd/m^2 per unit of the scene's radiance: the absolute scale that the key and the
-    /// rod/cone blend depend on (1: radiance read as cd/m^2).
-    pub luminance_scale: f32,
-}
-
-impl Default for TonemapAdaptiveParams {
-    fn default() -> Self {
-        TonemapAdaptiveParams { white: None, key: None, delta: 1e-4, tau_rod: 0.4, tau_cone: 0.1, luminance_scale: 1.0 }
+choice! {
+    /// The flux each caustics-mapping vertex carries (Shah et al. 2007, §III.E).
+    Flux,
+    hint "each vertex's flux: its texel's solid angle, or Eq. 6's (N.L)/V with V counted by an \
+          occlusion query" {
+        /// The light's intensity times the grid texel's own solid angle (or irradiance times its
+        /// area for a directional light): the flux through the texel, exact for any grid; it
+        /// matches the closed-form flux through caustic_sphere's ball within 1%.
+        SolidAngle = "solid_angle",
+        /// Eq. 6: Phi_i = (N_i . L_i) / V of the flux through the object's visible surface, V
+        /// counted by an occlusion query on the front refractor layer (copied into a buffer on
+        /// the GPU and read by the splat pass in the same frame). In physical units V cancels
+        /// against the visible area it measures, so Eq. 6 differs by its extra N . L (0.58 of
+        /// the flux on caustic_sphere, independent of the grid within 1%).
+        OcclusionQuery = "occlusion_query",
     }
 }
 
-impl TonemapAdaptiveParams {
-    pub const KEYS: &'static [&'static str] = &["white", "key", "delta", "tau_rod", "tau_cone", "luminance_scale"];
-
-    pub fn from_table(t: Option<&toml::Table>) -> Result<Self, ParamError> {
-        let mut p = TonemapAdaptiveParams::default();
-        // "auto" or a number in range.
-        let auto_or = |key: &str, v: &toml::Value, lo: f64, hi: f64| -> Result<Option<f32>, ParamError> {
-            if v.as_str() == Some("auto") {
-                return Ok(None);
-            }
-            number(key, v, lo, hi).map(Some).map_err(|e| ParamError {
-                message: format!("`{key}` must be \"auto\" or a number from {lo:e} to {hi:e}, not {v}"),
-                ..e
-            })
-        };
-        for (key, v) in t.into_iter().flatten() {
-            match key.as_str() {
-                // Below 1e-3 almost every pixel maps to white; above 1e6 the curve is L/(1+L).
-                "white" => p.white = auto_or(key, v, 1e-3, 1e6)?,
-                // Reinhard's keys run from 0.045 (low key) to 0.72 (high key); 0 would be black.
-                "key" => p.key = auto_or(key, v, 1e-3, 4.0)?,
-                // 0 would let one black pixel make L_avg 0 (log 0); above 1e3 cd/m^2 it
-                // dominates every luminance a scene is lit with.
-                "delta" => p.delta = number(key, v, 1e-12, 1e3)?,
-                // 0 s is instant adaptation (allowed); an hour is a frozen state.
-                "tau_rod" => p.tau_rod = number(key, v, 0.0, 3600.0)?,
-                "tau_cone" => p.tau_cone = number(key, v, 0.0, 3600.0)?,
-                "luminance_scale" => p.luminance_scale = number(key, v, 1e-6, 1e6)?,
-                _ => return Err(unknown("tonemap_adaptive", key, Self::KEYS)),
-            }
-        }
-        Ok(p)
-    }
-
-    pub fn from_settings(r: &RenderSettings) -> Result<Self, ParamError> {
-        Self::from_table(r.params.get("tonemap_adaptive"))
+choice! {
+    /// What the photon-buffer caustic textures hold (Hu & Qin 2007 §3.2).
+    PhotonNormalization,
+    hint "irradiance in W/m^2 (comparable with the reference) or the paper's s * count" {
+        /// Irradiance in W/m^2: each photon carries its share of the light's flux (intensity
+        /// times the photon-buffer pixel's solid angle, or irradiance times its area) times its
+        /// Fresnel and Beer-Lambert weights, the filter kernel is divided by its sum (the filter
+        /// conserves energy) and the result by a texel's area on the rectangle; receivers turn
+        /// it into radiance albedo/pi E. Comparable with the reference, so the default (and
+        /// what `prism compare` measures).
+        Physical = "physical",
+        /// The paper's c(u, v) = s * (filtered photon count), a grey brightness added as
+        /// albedo c: s is an arbitrary scale, so the result is not in physical units.
+        Paper = "paper",
     }
 }
 
-/// How eikonal_view integrates the ray equation (Ihrke et al. 2007, section 4.1).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Integrator {
-    /// Forward Euler, Eqs. 11-12 (the paper's view renderer).
-    Euler,
-    /// Classical fourth-order Runge-Kutta of Eqs. 9-10.
-    Rk4,
-}
-
-// What exit and reflected view rays meet besides the environment.
-/// `render.eikonal.nearby` (src/technique/eikonal/eikonal_nearby.rs).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum EikonalNearby {
-    /// The environment only (section 5.3 as written).
-    Off,
-    /// Hu & Qin 2007 §2.2 impostor rectangles around the volume for every nearby object.
-    Impostor,
-    /// Ihrke et al. 2007 §6, Fig. 7: an exact ray/quad intersection for quad receivers (the
-    /// other nearby objects through impostor rectangles).
-    Exact,
-}
-
-/// `[render.eikonal]`: eikonal rendering of a `[volume]` (src/technique/eikonal/eikonal_view.rs).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct EikonalParams {
-    /// Standard deviation of the Gaussian pre-smoothing in voxels (section 5.1: "typically
-    /// 0.5 - 1.0 voxels"); 0 keeps the sharp field.
-    pub sigma: f32,
-    pub integrator: Integrator,
-    /// Arc length per step, in voxels (of the smallest voxel edge).
-    pub step: f32,
-    // --- light simulator (section 5.2; src/technique/eikonal/eikonal_light.rs) ---
-    /// Run the wavefront light simulation when the scene has a light (`light`).
-    pub light: bool,
-    /// Patches whose flux falls below this fraction of an initial patch's flux are
-    /// eliminated (section 5.2.3, "patch termination").
-    pub energy_threshold: f32,
-    /// Time step of Eqs. 14-15 in voxels of optical path (dS/dt = 1, Eq. 23).
-    pub light_dt: f32,
-    /// Capacity of the patch list (one storage-buffer binding); a tile of the initial
-    /// wavefront whose tessellation outgrows it is taken back and split into four.
-    pub max_patches: u32,
-    /// Initial patches per tile of the wavefront (0: max_patches / 8), simulated one tile
-    /// after the other into the same volumes.
-    pub tile_patches: u32,
-    /// Keep patches whose orientation flipped (they crossed a wavefront singularity, a
-    /// focus) instead of discarding them (section 5.2.3; false is the paper). The paper
-    /// discards them because flux / area is infinite there; the track-length deposit stays
-    /// finite, and the light past a focus reaches the floor: on eikonal_sphere half of the
-    /// ball's light crosses the caustic before the floor (tests/eikonal_light.rs).
-    pub keep_crossed: bool,
-    /// Initial wavefront patches per side (0: the largest volume resolution).
-    pub light_patches: u32,
-    /// Metres below the volume's box that the irradiance volume also covers, so a floor
-    /// just under the volume receives the caustic.
-    pub light_below: f32,
-    /// Metres the irradiance volume also covers beside the volume's box along x and z (the
-    /// receiver area that the volume's refracted light and shadow reach).
-    pub light_side: f32,
-    // Nearby geometry for exit and reflected rays.
-    pub nearby: EikonalNearby,
-    /// Fig. 16 correction iterations of the impostor lookup (0: the plain lookup of Fig. 13).
-    pub nearby_iterations: u32,
-    /// Edge of each impostor texture TEX_i in texels.
-    pub nearby_resolution: u32,
-}
-
-impl Default for EikonalParams {
-    fn default() -> Self {
-        EikonalParams {
-            sigma: 0.75,
-            integrator: Integrator::Euler,
-            step: 0.5,
-            light: true,
-            energy_threshold: 1e-4,
-            light_dt: 0.5,
-            max_patches: 1 << 19,
-            tile_patches: 0,
-            keep_crossed: true,
-            light_patches: 0,
-            light_below: 0.0,
-            light_side: 0.0,
-            nearby: EikonalNearby::Exact,
-            nearby_iterations: 3,
-            nearby_resolution: 256,
-        }
+choice! {
+    /// How eikonal_view integrates the ray equation (Ihrke et al. 2007, section 4.1).
+    Integrator, hint "Euler of Eqs. 11-12 (Ihrke et al. 2007) or fourth-order Runge-Kutta" {
+        /// Forward Euler, Eqs. 11-12 (the paper's view renderer).
+        Euler = "euler",
+        /// Classical fourth-order Runge-Kutta of Eqs. 9-10.
+        Rk4 = "rk4",
     }
 }
 
-impl EikonalParams {
-    pub const KEYS: &'static [&'static str] = &[
-        "sigma",
-        "integrator",
-        "step",
-        "light",
-        "energy_threshold",
-        "light_dt",
-        "max_patches",
-        "tile_patches",
-        "keep_crossed",
-        "light_patches",
-        "light_below",
-        "light_side",
-        "nearby",
-        "nearby_iterations",
-        "nearby_resolution",
-    ];
+choice! {
+    /// What exit and reflected view rays of the eikonal volume meet besides the environment
+    /// (src/technique/eikonal/eikonal_nearby.rs).
+    EikonalNearby,
+    hint "what rays leaving the volume meet: exact quads (Ihrke et al. 2007 Fig. 7), Hu & Qin \
+          2007 impostor rectangles, or the environment only" {
+        /// The environment only (section 5.3 as written).
+        Off = "off",
+        /// Every non-dielectric object through Hu & Qin 2007 §2.2's impostor rectangles around
+        /// the box's centre (pass `eikonal_nearby`; their textures carry the same simulated
+        /// irradiance; mirrors and conductors in them reflect the environment only).
+        Impostor = "impostor",
+        /// Ihrke et al. 2007 §6, Fig. 7 ("a ray-plane intersection in the fragment shader"):
+        /// diffuse quads and boxes (at most 64 triangles in all) are intersected exactly and
+        /// shaded like deferred shading, with the light simulation's irradiance where it
+        /// reaches them (the caustic and shadow under the volume); the other non-dielectric
+        /// objects through impostor rectangles.
+        Exact = "exact",
+    }
+}
 
-    pub fn from_table(t: Option<&toml::Table>) -> Result<Self, ParamError> {
-        let mut p = EikonalParams::default();
-        for (key, v) in t.into_iter().flatten() {
-            match key.as_str() {
-                // 8 voxels already blur a 64^3 volume to a third of its width.
-                "sigma" => p.sigma = number(key, v, 0.0, 8.0)?,
-                "integrator" => {
-                    p.integrator = match v.as_str() {
-                        Some("euler") => Integrator::Euler,
-                        Some("rk4") => Integrator::Rk4,
-                        _ => {
-                            return Err(ParamError {
-                                key: key.clone(),
-                                message: format!("`integrator` must be \"euler\" or \"rk4\", not {v}"),
-                                hint: "Euler of Eqs. 11-12 (Ihrke et al. 2007) or fourth-order Runge-Kutta".into(),
-                            })
-                        }
-                    }
-                }
-                // Below 0.01 voxel a 256^3 volume needs more than 10^5 steps per ray.
-                "step" => p.step = number(key, v, 0.01, 4.0)?,
-                "light" => p.light = boolean(key, v)?,
-                // 1 would eliminate every patch at its first step; 0 keeps them all.
-                "energy_threshold" => p.energy_threshold = number(key, v, 0.0, 0.99)?,
-                // Above 2 voxels a patch skips voxels between two depositions.
-                "light_dt" => p.light_dt = number(key, v, 0.01, 2.0)?,
-                // A list of 900 000 patches of 144 bytes is 124 MiB: one storage-buffer
-                // binding may span at most 128 MiB (lavapipe's maxStorageBufferRange).
-                "max_patches" => p.max_patches = integer(key, v, 4, 900_000)?,
-                // A tile larger than the list could not even be uploaded.
-                "tile_patches" => p.tile_patches = integer(key, v, 0, 900_000)?,
-                "keep_crossed" => p.keep_crossed = boolean(key, v)?,
-                "light_patches" => p.light_patches = integer(key, v, 0, 1024)?,
-                "light_below" => p.light_below = number(key, v, 0.0, 100.0)?,
-                "light_side" => p.light_side = number(key, v, 0.0, 100.0)?,
-                "nearby" => {
-                    p.nearby = match v.as_str() {
-                        Some("exact") => EikonalNearby::Exact,
-                        Some("impostor") => EikonalNearby::Impostor,
-                        Some("off") => EikonalNearby::Off,
-                        _ => {
-                            return Err(ParamError {
-                                key: key.clone(),
-                                message: format!("`nearby` must be \"exact\", \"impostor\" or \"off\", not {v}"),
-                                hint: "what rays leaving the volume meet: exact quads (Ihrke et al. 2007 Fig. 7), \
-                                       Hu & Qin 2007 impostor rectangles, or the environment only"
-                                    .into(),
-                            })
-                        }
-                    }
-                }
-                // As render.hu_qin.correction_iterations: beyond 64 the lookup has converged or cycles.
-                "nearby_iterations" => p.nearby_iterations = integer(key, v, 0, 64)?,
-                // As render.hu_qin.impostor_resolution (one RGBA32F layer per object).
-                "nearby_resolution" => p.nearby_resolution = integer(key, v, 4, 2048)?,
-                _ => return Err(unknown("eikonal", key, Self::KEYS)),
-            }
-        }
-        if p.tile_patches > p.max_patches {
-            return Err(ParamError {
-                key: "tile_patches".into(),
-                message: format!(
-                    "`tile_patches` = {} exceeds `max_patches` = {}: a tile must fit the patch list",
-                    p.tile_patches, p.max_patches
-                ),
-                hint: "use at most max_patches / 4 (room for tessellation), or 0 for max_patches / 8".into(),
-            });
-        }
-        Ok(p)
+params! {
+    /// `[render.wyman]`: Wyman 2005 (src/technique/refraction/refraction_wyman.rs).
+    WymanParams "wyman" {
+        /// The second interface on concave objects (Wyman 2005 §3.2).
+        back_surface: BackSurface = BackSurface::Furthest;
+        /// Also write the exit point P2 and direction T2 of every refracting pixel to the debug
+        /// targets `refraction_wyman_p2` and `refraction_wyman_t2` (`Renderer::read_target`).
+        debug: bool = false;
     }
 
-    pub fn from_settings(r: &RenderSettings) -> Result<Self, ParamError> {
-        Self::from_table(r.params.get("eikonal"))
+    /// `[render.hu_qin]`: Hu & Qin 2007 §2 and §4 (src/technique/refraction/refraction_hu_qin.rs).
+    HuQinParams "hu_qin" {
+        /// Binary-search steps for the dividing pixel p_e (Hu & Qin 2007, Fig. 7; "eight steps
+        /// ... are sufficient"): the search interval is 0.75 of the image, so 8 steps resolve
+        /// 0.75/256 of it.
+        // 2^24 intervals already resolve far below a texel of the largest image.
+        search_steps: u32 = 8, 1..=24;
+        /// Convergence tolerance of the d_T iteration (Fig. 9): it stops when its step is below
+        /// this fraction of the eye's distance to P1, so that it means the same at every scene
+        /// scale.
+        tolerance: f32 = 1e-4, 1e-7..=0.5;
+        /// Upper bound on the d_T iterations (Fig. 9 loops until the tolerance is met).
+        max_iterations: u32 = 32, 1..=1024;
+        /// Section 4's acceleration: skip the binary search, assume a back-facing exit, and
+        /// decide "front-facing" (the front-facing layer) only when P2 leaves the refractor's
+        /// silhouette.
+        assume_back_facing: bool = false;
+        /// Also write P2 and T2 to the debug targets `refraction_hu_qin_p2` and
+        /// `refraction_hu_qin_t2`, as for `wyman`.
+        debug: bool = false;
+        /// §2.2: the reflected ray R (at P1) and the exit ray T2 (at P2) see the scene's other
+        /// objects (diffuse, mirrors, conductors, other dielectrics) through impostor
+        /// rectangles (Fig. 13; src/technique/refraction/nearby_impostors.rs) before the
+        /// environment map; false: the environment only (§2.1 alone). Without another object
+        /// there is nothing to stand in for and no `refraction_hu_qin_nearby` pass.
+        nearby: bool = true;
+        /// Edge in texels of each impostor texture TEX_i (§2.2.1).
+        // 2048^2 texels x 16 bytes x MAX_NEARBY_RECTS (8) layers = 512 MiB per rectangle
+        // set, a quarter of lavapipe's 2 GiB allocation limit; with several sets the
+        // renderer refuses arrays over 1 GiB (src/technique/refraction/nearby_impostors.rs).
+        impostor_resolution: u32 = 256, 4..=2048;
+        /// Iterations of the lookup correction against TEX_DEPTH_i (§2.2.2, Fig. 16); 0 = the
+        /// plain rectangle lookup of Fig. 13 ("two or three iteration steps" suffice, §2.2.2).
+        // "using a good initial point ... we can obtain a satisfactory result after two or
+        // three iteration steps" (§2.2.2); beyond 64 it only burns time.
+        correction_iterations: u32 = 3, 0..=64;
+        /// Stop correcting when the point's depth is within this fraction of d_i (the
+        /// rectangle's half side) of the texture's depth, |depth - z| < tolerance x d_i, so that
+        /// it means the same at every object size.
+        correction_tolerance: f32 = 1e-3, 1e-7..=0.5;
+        /// Points P + alpha_j Ray, alpha_j = d_far (j+1)/N, tried as seeds of the correction
+        /// (Fig. 17); 1 = start at the rectangle hit P_rect.
+        // Each seed is one texture fetch per rectangle per ray.
+        seed_samples: u32 = 8, 1..=256;
+        /// §2.2.1 recursive reflections and refractions (Fig. 24g): mirrors, conductors and
+        /// dielectrics among the nearby objects get impostors whose textures show them
+        /// reflecting (and refracting) the environment only (0) or the impostors of the level
+        /// below of their own rectangle set (n: `refraction_hu_qin_nearby_r1` ... `_rn`, one
+        /// more rendering of every specular texture per level, the diffuse ones being rendered
+        /// once at level 0 and copied into the other array of the ping-pong by
+        /// `refraction_hu_qin_nearby_copy`; none when no rectangle stands for a specular object,
+        /// e.g. one glass ball among diffuse objects).
+        // One pass per level (src/technique/refraction/nearby_impostors.rs, MAX_RECURSION).
+        recursion_depth: u32 = 1, 0..=3;
+        /// §2.2.1 ("we render TEX_k using the above method"): where the refracted ray leaves a
+        /// dielectric OBJ_k in its impostor texture, found with §2.1's search in the
+        /// rectangle's parallel projection (glsl/include/hu_qin_exit.glsl, shared with the main
+        /// pass).
+        // Measured (tests/recursion.rs: two balls, a cube, a torus, a cone; docs/scene-format.md):
+        // the full search changes at most a few pixels over the back-facing one, and costs
+        // the front faces' pass; so §4's acceleration by default.
+        recursive_exit: RecursiveExit = RecursiveExit::BackFacing;
     }
+
+    /// `[render.impostor]`: distance impostors (Szirmay-Kalos et al. 2005),
+    /// `render.reflection = "impostor"` and `render.refraction = "impostor"`.
+    ImpostorParams "impostor" {
+        /// Texels per cube face edge (§6: the paper's game uses 256).
+        // 4096^2 x 6 x 16 bytes = 1.6 GB, near lavapipe's 2 GiB allocation limit.
+        resolution: u32 = 256, 4..=4096;
+        /// Refinement steps of `Hit()` after the initial guesses (§2.2; 0 = d_l of Eq. 4 only).
+        iterations: u32 = 4, 0..=64;
+        /// Store the distance in a separate R32F cube instead of the radiance cube's alpha (§6).
+        separate_distance: bool = false;
+        /// The conductor Fresnel term (§3).
+        fresnel: ImpostorFresnel = ImpostorFresnel::Approximate;
+        /// When the maps are rendered (§6).
+        update: ImpostorUpdate = ImpostorUpdate::OnMove;
+        /// How far an object's centre may move from its map's reference point before the map
+        /// is rendered again, in bounding radii of the largest object (scale-free).
+        regenerate_distance: f32 = 0.25, 0.0..=1e6;
+        /// Which maps the specular objects share (§6). The passes stay the same: the map pass
+        /// renders every map that is due, the shading pass draws once per object.
+        maps: ImpostorMaps = ImpostorMaps::Shared;
+    }
+
+    /// `[render.impostor_lightmap]`: light-map caustics with distance impostors (Szirmay-Kalos
+    /// et al. 2005, §5, Fig. 9), `render.caustics = "impostor_lightmap"`.
+    ImpostorLightmapParams "impostor_lightmap" {
+        /// Texels per side of each light's caustic map (one photon per texel).
+        // 2048^2 = 4M photons, each a point sprite: far beyond a CPU device's budget.
+        caustic_map_size: u32 = 128, 4..=2048;
+        /// Texels per side of each receiver's light map.
+        // 4096^2 x 16 bytes = 256 MB per receiver.
+        lightmap_size: u32 = 256, 4..=4096;
+        /// Support radius of the Gaussian splat in light-map texels (sigma = radius / 2).
+        // Below sqrt(2)/2 texels a splat centred at a texel corner covers no texel
+        // centre and its power would be lost; the point sprite (2 ceil(radius) + 3
+        // texels) must stay within the point-size range.
+        filter_radius: f32 = 2.0, 0.75..=16.0;
+        /// `Hit()` refinement steps (§2.2) of the photons' rays, in the refractor map and the
+        /// uv map.
+        iterations: u32 = 4, 0..=64;
+        /// Texels per uv cube-map face edge.
+        uv_map_size: u32 = 256, 4..=4096;
+    }
+
+    /// `[render.caustics_map]`: caustics mapping (Shah et al. 2007,
+    /// src/technique/caustics/caustics_map.rs).
+    CausticsMapParams "caustics_map" {
+        /// Vertices per side of the refractor grid (128 = 128 x 128), which is also the
+        /// resolution of the refractor textures rendered from the light (§III.B step 2; §III.F
+        /// uses 128 x 128): one face fitted to the specular objects' bounding sphere, or six
+        /// cube faces for a point light within 1/0.9 of its radius.
+        // 4096^2 vertices per face is already 16M splats per face on a CPU device.
+        grid: u32 = 128, 2..=4096;
+        /// Iterations of the receiver-intersection estimate (§III.D: "a single iteration is
+        /// sufficient", Fig. 6 uses 3); 0 = the receiver straight along the light ray. Also
+        /// bounds the exit-point iterations of double-surface refraction.
+        iterations: u32 = 3, 0..=64;
+        /// The intersection estimate (§III.C-D).
+        newton: Newton = Newton::Approximate;
+        /// Standard deviation of the Gaussian point splats, in caustic-map texels (§III.F); the
+        /// point is 2 ceil(3 sigma) + 1 texels wide and its weights sum to 1.
+        // Below half a texel a splat no longer covers the texel grid evenly, and the
+        // point size (6 sigma + 1) must stay within lavapipe's point-size range.
+        splat_sigma: f32 = 1.0, 0.5..=16.0;
+        /// Radius in texels of the optional box low-pass filter applied at lookup ((2 filter +
+        /// 1)^2 taps; §III.F, "the caustic-map texture can also be low-pass filtered"); 0 = off.
+        filter: u32 = 0, 0..=16;
+        /// Texels per side of each caustic-map face (and of the receivers' positions map).
+        map_size: u32 = 512, 8..=4096;
+        /// The flux each vertex carries (§III.E).
+        flux: Flux = Flux::SolidAngle;
+    }
+
+    /// `[render.photon_buffer]`: photon-buffer caustics (Hu & Qin 2007 §3,
+    /// src/technique/caustics/photon_buffer.rs).
+    PhotonBufferParams "photon_buffer" {
+        /// Pixels per side of the photon buffer rendered from the light, per light face (§3.1;
+        /// one photon per pixel).
+        // 4096^2 photons is 16M points per rectangle per frame on a CPU device.
+        size: u32 = 128, 1..=4096;
+        /// Texels per side of each caustic texture TEX_CAUSTICS_i (§3.2). Measured RMSE against
+        /// the reference on caustic_sphere at 128^2 (64 spp, 2^22 photons) with size 128 and
+        /// k = 2, texture 256 / 512 / 1024: 0.366 / 0.262 / 0.173 (caustics_map: 0.171); the
+        /// filter's cost grows with the texels.
+        texture_size: u32 = 512, 1..=4096;
+        /// The filter's k (§3.2: "k is equal to 2"): c(u, v) sums (2k + 1)^2 texels weighted
+        /// sqrt(1 + 2k^2 - (i^2 + j^2)). On caustic_sphere at 128^2 (texture 512) k = 1 / 2 / 3
+        /// gave RMSE 0.202 / 0.262 / 0.319 at size 128: the wider filter blurs the ball lens's
+        /// focus.
+        // (2k+1)^2 taps per texel: k = 16 is already 1089.
+        filter_k: u32 = 2, 0..=16;
+        /// The filter's s (§3.2: "s is equal to 0.01"), an arbitrary brightness; used by
+        /// `normalization = "paper"` only.
+        filter_s: f32 = 0.01, 1e-12..=1e12;
+        /// What the caustic textures hold (§3.2).
+        normalization: PhotonNormalization = PhotonNormalization::Physical;
+    }
+
+    /// `[render.eikonal]`: eikonal rendering of a `[volume]` (Ihrke et al. 2007,
+    /// src/technique/eikonal/eikonal_view.rs).
+    EikonalParams "eikonal" check tile_fits {
+        /// Standard deviation of the Gaussian pre-smoothing of the index field in voxels
+        /// (section 5.1: "typically 0.5 - 1.0 voxels"); 0 keeps the sharp field.
+        // 8 voxels already blur a 64^3 volume to a third of its width.
+        sigma: f32 = 0.75, 0.0..=8.0;
+        /// How the view rays integrate the ray equation (section 4.1).
+        integrator: Integrator = Integrator::Euler;
+        /// Arc length per step, in voxels (of the smallest voxel edge).
+        // Below 0.01 voxel a 256^3 volume needs more than 10^5 steps per ray.
+        step: f32 = 0.5, 0.01..=4.0;
+        // --- light simulator (section 5.2; src/technique/eikonal/eikonal_light.rs) ---
+        /// Run the light simulator (§4.2, §5.2) when the scene has a light: every light's
+        /// wavefront (per channel for a per-channel index) is traced through the volume into an
+        /// irradiance and a direction volume, used for single scattering and by the
+        /// `eikonal_light` pass for diffuse receivers inside the irradiance volume. It runs once
+        /// when the renderer is created.
+        light: bool = true;
+        /// Patches whose flux falls below this fraction of the largest initial patch's flux are
+        /// eliminated (section 5.2.3, "patch termination").
+        // 1 would eliminate every patch at its first step; 0 keeps them all.
+        energy_threshold: f32 = 1e-4, 0.0..=0.99;
+        /// Time step of the equal-time ray equation (Eqs. 14-15) in voxels of optical path
+        /// (dS/dt = 1, Eq. 23).
+        // Above 2 voxels a patch skips voxels between two depositions.
+        light_dt: f32 = 0.5, 0.01..=2.0;
+        /// Capacity of the patch list (one storage-buffer binding). The initial wavefront is
+        /// simulated in tiles (`tile_patches`); a tile whose tessellation outgrows the list is
+        /// taken back (rerun with negative deposits) and split into four, so nothing is dropped
+        /// unless a tile of a single patch overflows; that count is reported (`prism render`
+        /// prints it, bench JSON `light_simulation.dropped_patches`, `split_tiles`, `runs`).
+        // A list of 900 000 patches of 144 bytes is 124 MiB: one storage-buffer
+        // binding may span at most 128 MiB (lavapipe's maxStorageBufferRange).
+        max_patches: u32 = 1 << 19, 4..=900_000;
+        /// Initial patches per tile of the wavefront, at most `max_patches` (an error above
+        /// it); 0: max_patches / 8. Tiles run one after the other into the same volumes (the
+        /// additive deposits make the result independent of the tiling up to f32 rounding).
+        // A tile larger than the list could not even be uploaded.
+        tile_patches: u32 = 0, 0..=900_000;
+        /// Keep patches whose orientation flipped (they crossed a wavefront singularity, a
+        /// focus) instead of discarding them (section 5.2.3; false is the paper). The paper
+        /// discards them because flux / area is infinite there; the track-length deposit (flux
+        /// x track length / voxel volume, trilinear) stays finite, and the light past a focus
+        /// reaches the floor: on eikonal_sphere half of the ball's light crosses the caustic
+        /// before the floor (tests/eikonal_light.rs).
+        keep_crossed: bool = true;
+        /// Initial wavefront patches per side (per cube face for a point light inside the box's
+        /// bounding sphere); 0: the largest volume resolution. Clamped so that the initial
+        /// wavefront has at most 900000 patches (948 per side, 387 per face for six faces).
+        light_patches: u32 = 0, 0..=1024;
+        /// Metres below the volume's box that the irradiance volume also covers (whole
+        /// voxels), so that a floor just under the volume receives the caustic.
+        light_below: f32 = 0.0, 0.0..=100.0;
+        /// Metres the irradiance volume also covers beside the volume's box along -x, +x, -z
+        /// and +z (the receiver area that the volume's refracted light and shadow reach).
+        light_side: f32 = 0.0, 0.0..=100.0;
+        // Nearby geometry for exit and reflected rays.
+        /// What rays leaving the volume (and rays its boundaries reflect) meet before the
+        /// environment. The default is the more accurate one measured against the reference:
+        /// at 128² (16 spp, 2^20 photons) eikonal_sphere's RMSE is 0.614 off, 0.543 exact,
+        /// 0.552 impostor, and eikonal_wine_glass's 0.240, 0.215, 0.213 (the impostor slightly
+        /// ahead there; FLIP mean 0.158, 0.160, 0.160). docs/images/eikonal_sphere_nearby.png
+        /// and eikonal_wine_glass_nearby.png show off | exact | impostor | reference at 128².
+        nearby: EikonalNearby = EikonalNearby::Exact;
+        /// Correction iterations of the impostor lookup (Hu & Qin 2007 Fig. 16; 0: the plain
+        /// lookup of Fig. 13).
+        // As render.hu_qin.correction_iterations: beyond 64 the lookup has converged or cycles.
+        nearby_iterations: u32 = 3, 0..=64;
+        /// Texels per edge of each impostor texture TEX_i (RGBA32F).
+        // As render.hu_qin.impostor_resolution (one RGBA32F layer per object).
+        nearby_resolution: u32 = 256, 4..=2048;
+    }
+
+    /// `[render.tonemap_adaptive]`: the adaptive tone map of `render.tonemap = "adaptive"`
+    /// (Ihrke et al. 2007 §5.3 after Krawczyk, Myszkowski & Seidel 2005;
+    /// src/technique/baseline/tonemap.rs).
+    TonemapAdaptiveParams "tonemap_adaptive" {
+        /// Reinhard et al. 2002's L_white in units of the scaled luminance; `"auto"` (`None`):
+        /// the largest scaled luminance of the frame, at least 1 (Reinhard's own choice is the
+        /// largest; with 1 the curve is the identity L_d = L for images that never exceed 1).
+        // Below 1e-3 almost every pixel maps to white; above 1e6 the curve is L/(1+L).
+        white: Option<f32> = None, 1e-3..=1e6;
+        /// The key a (Reinhard: 0.18 for an average scene); `"auto"` (`None`): Krawczyk et al.
+        /// 2005's a = 1.03 - 2 / (2 + log10(L_a + 1)) (§3.1, Eq. 11).
+        // Reinhard's keys run from 0.045 (low key) to 0.72 (high key); 0 would be black.
+        key: Option<f32> = None, 1e-3..=4.0;
+        /// The delta of the log-average L_avg = exp(mean(log(delta + L_w))), in cd/m^2: keeps
+        /// black pixels from sending the average to 0 (Reinhard et al. 2002, Eq. 1).
+        // 0 would let one black pixel make L_avg 0 (log 0); above 1e3 cd/m^2 it
+        // dominates every luminance a scene is lit with.
+        delta: f32 = 1e-4, 1e-12..=1e3;
+        /// Time constant of the rods' adaptation in seconds (Krawczyk et al. 2005, Eq. 6: 0.4
+        /// s), blended with the cones' by the rods' sensitivity 0.04 / (0.04 + L_a) (Eqs. 7,
+        /// 12); 0: instant.
+        // 0 s is instant adaptation (allowed); an hour is a frozen state.
+        tau_rod: f32 = 0.4, 0.0..=3600.0;
+        /// Time constant of the cones' adaptation in seconds (Krawczyk et al. 2005, Eq. 6: 0.1
+        /// s).
+        tau_cone: f32 = 0.1, 0.0..=3600.0;
+        /// cd/m^2 per unit of the scene's radiance: the absolute scale that the key and the
+        /// rod/cone blend depend on (1: radiance read as cd/m^2).
+        luminance_scale: f32 = 1.0, 1e-6..=1e6;
+    }
+}
+
+/// A tile of the initial wavefront must fit the patch list (Ihrke et al. 2007 §5.2).
+fn tile_fits(p: &EikonalParams) -> Result<(), ParamError> {
+    if p.tile_patches > p.max_patches {
+        return Err(ParamError {
+            key: "tile_patches".into(),
+            message: format!(
+                "`tile_patches` = {} exceeds `max_patches` = {}: a tile must fit the patch list",
+                p.tile_patches, p.max_patches
+            ),
+            hint: "use at most max_patches / 4 (room for tessellation), or 0 for max_patches / 8".into(),
+        });
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -1051,5 +879,37 @@ mod tests {
         assert_eq!(PhotonBufferParams::from_table(None).unwrap(), PhotonBufferParams::default());
         let e = WymanParams::from_table(Some(&table("back_surface = \"first\""))).unwrap_err();
         assert!(e.message.contains("back_surface"), "{e}");
+    }
+
+    /// `text` with the table between each `[render.<table>]`'s markers generated afresh.
+    fn splice_docs_tables(text: &str) -> Result<String, String> {
+        let mut out = text.to_string();
+        for t in TABLES {
+            let begin = format!("<!-- BEGIN generated [render.{t}]");
+            let end = format!("<!-- END generated [render.{t}] -->");
+            let b = out.find(&begin).ok_or(format!("no `{begin}: ... -->` line"))?;
+            let body = b + out[b..].find("-->\n").ok_or("a marker without its `-->`")? + 4;
+            let e = body + out[body..].find(&end).ok_or(format!("no `{end}` line"))?;
+            out.replace_range(body..e, &docs_table(t).expect("a declared table"));
+        }
+        Ok(out)
+    }
+
+    /// docs/scene-format.md holds every table's generated key list between marker comments;
+    /// `PRISM_BLESS=1` writes them.
+    #[test]
+    fn scene_format_docs_list_every_parameter() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/scene-format.md");
+        let text = std::fs::read_to_string(&path).unwrap();
+        let fresh = splice_docs_tables(&text).unwrap_or_else(|e| panic!("docs/scene-format.md: {e}"));
+        if std::env::var_os("PRISM_BLESS").is_some() {
+            std::fs::write(&path, &fresh).unwrap();
+        } else {
+            assert!(
+                fresh == text,
+                "docs/scene-format.md's parameter tables are out of date: \
+                 PRISM_BLESS=1 cargo test --release --lib scene_format_docs writes them"
+            );
+        }
     }
 }
