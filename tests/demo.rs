@@ -441,3 +441,38 @@ fn demo_animates_the_water_without_updating_the_renderer() {
     assert!(!stderr.contains("re-created"), "{stderr}");
     assert!(stderr.contains("demo: 6 frames, 0 renderer updates"), "{stderr}");
 }
+
+#[test]
+fn demo_re_runs_the_light_simulation_with_its_progress_after_a_light_moves() {
+    // Moving the light re-creates only the volume technique, whose light simulation runs
+    // again; its progress is logged (and shown in the window's title) while it runs.
+    let Some(display) = display() else { return };
+    let out = demo(
+        &display,
+        &[
+            "eikonal_sphere",
+            "--set",
+            "volume.resolution=[24, 24, 24]",
+            "--set",
+            "render.eikonal.light_patches=16",
+            "--width",
+            "64",
+            "--height",
+            "64",
+            "--frames",
+            "4",
+            "--at",
+            "2:lights.0.position=[0.3, 5, 0]",
+        ],
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "prism demo failed:\n{stderr}");
+    let change = stderr.lines().position(|l| l.contains("lights.0.position")).expect("no log line for the move");
+    let line = stderr.lines().nth(change).unwrap();
+    assert!(line.contains("re-created shadow_map, [volume];"), "{stderr}");
+    // Once when the window opened, once after the move, each with its progress.
+    assert_eq!(stderr.matches("demo: light simulation done").count(), 2, "{stderr}");
+    let progress = stderr.lines().take(change).filter(|l| l.starts_with("demo: light simulation ") && l.contains('%'));
+    assert!(progress.count() >= 2, "{stderr}");
+    assert!(!stderr.contains("whole renderer"), "{stderr}");
+}

@@ -368,6 +368,7 @@ impl Running {
         let window = Arc::new(event_loop.create_window(attributes).context("cannot open a window")?);
         let display = window.display_handle().context("the window has no display handle")?.as_raw();
         let ctx = GpuContext::for_display(&args.gpu.desc(), display)?;
+        ctx.set_progress(window_progress(window.clone(), format!("prism: {}", scene.name)));
         let size = window.inner_size();
         let swapchain =
             Swapchain::new(&ctx, &*window, (size.width, size.height), args.vsync == OnOff::On, FRAMES_IN_FLIGHT)
@@ -921,6 +922,28 @@ impl Running {
             self.screenshot_now();
         }
     }
+}
+
+/// Long work inside the renderer (the eikonal light simulation after a light moved) blocks
+/// the frame loop: its progress goes to the window's title, which the window system draws
+/// meanwhile, and to the log every tenth of the way.
+fn window_progress(window: Arc<Window>, title: String) -> crate::gpu::ProgressSink {
+    let logged = std::sync::Mutex::new(None::<u64>);
+    Box::new(move |p| {
+        let percent = (100 * p.done).checked_div(p.total).unwrap_or(100u64).min(100);
+        if p.finished {
+            window.set_title(&title);
+            eprintln!("demo: {} done", p.task);
+            *logged.lock().unwrap_or_else(|e| e.into_inner()) = None;
+            return;
+        }
+        window.set_title(&format!("{title} ({} {percent}%)", p.task));
+        let mut logged = logged.lock().unwrap_or_else(|e| e.into_inner());
+        if logged.is_none_or(|l| percent >= l + 10) {
+            eprintln!("demo: {} {percent}%: {}", p.task, p.detail);
+            *logged = Some(percent);
+        }
+    })
 }
 
 #[cfg(test)]

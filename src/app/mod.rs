@@ -150,8 +150,12 @@ impl SceneArgs {
 }
 
 impl GpuArgs {
+    /// The headless context, with long work's progress on a terminal bar (see
+    /// [`terminal_progress`]).
     pub fn context(&self) -> Result<Arc<GpuContext>> {
-        Ok(GpuContext::new(&self.desc())?)
+        let ctx = GpuContext::new(&self.desc())?;
+        ctx.set_progress(terminal_progress());
+        Ok(ctx)
     }
 
     /// The context description these flags (and PRISM_VALIDATION / PRISM_DEVICE) ask for.
@@ -264,4 +268,28 @@ fn passes(args: PassesArgs) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// A progress bar on stderr for the library's long tasks (hidden when stderr is not a
+/// terminal), cleared when the task finishes.
+pub fn terminal_progress() -> crate::gpu::ProgressSink {
+    let bar: std::sync::Mutex<Option<indicatif::ProgressBar>> = std::sync::Mutex::default();
+    Box::new(move |p| {
+        let mut bar = bar.lock().unwrap_or_else(|e| e.into_inner());
+        if p.finished {
+            if let Some(b) = bar.take() {
+                b.finish_and_clear();
+            }
+            return;
+        }
+        let b = bar.get_or_insert_with(|| {
+            indicatif::ProgressBar::new(p.total).with_style(
+                indicatif::ProgressStyle::with_template(&format!("{} {{bar:40}} {{pos}}/{{len}}, {{msg}}", p.task))
+                    .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+            )
+        });
+        b.set_length(p.total);
+        b.set_position(p.done);
+        b.set_message(p.detail.to_string());
+    })
 }

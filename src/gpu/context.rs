@@ -61,6 +61,19 @@ pub(crate) enum Garbage {
 
 /// Everything that outlives single resources. Shared through `Arc` by every wrapper so that
 /// a wrapper can free itself (kajiya / wgpu-hal style RAII with deferred deletion).
+/// How far a long task is: `done` of `total` units (their meaning is the task's), what it
+/// is doing now, and whether it has finished.
+#[derive(Clone, Copy, Debug)]
+pub struct Progress<'a> {
+    pub task: &'a str,
+    pub done: u64,
+    pub total: u64,
+    pub detail: &'a str,
+    pub finished: bool,
+}
+
+pub type ProgressSink = Box<dyn Fn(&Progress<'_>) + Send + Sync>;
+
 pub struct GpuContext {
     pub(crate) entry: ash::Entry,
     pub(crate) instance: ash::Instance,
@@ -87,6 +100,8 @@ pub struct GpuContext {
     /// Names of the shaders loaded since the last [`GpuContext::take_shader_log`]: which
     /// pipelines a hot-reloaded shader affects.
     shader_log: Mutex<Vec<String>>,
+    /// Where long work reports its progress ([`GpuContext::set_progress`]).
+    progress: Mutex<Option<ProgressSink>>,
     /// Live render passes and samplers by description (src/gpu/render_pass.rs, image.rs).
     pub(crate) render_passes:
         Mutex<std::collections::HashMap<super::RenderPassDesc, std::sync::Weak<super::render_pass::SharedRenderPass>>>,
@@ -113,6 +128,19 @@ impl GpuContext {
     /// The shaders loaded since the last call.
     pub fn take_shader_log(&self) -> Vec<String> {
         std::mem::take(&mut *self.shader_log.lock().unwrap_or_else(|e| e.into_inner()))
+    }
+
+    /// Where long work on this device (the eikonal light simulation) reports its progress:
+    /// the library never prints, the app shows it (a terminal bar, the window's title).
+    pub fn set_progress(&self, sink: ProgressSink) {
+        *self.progress.lock().unwrap_or_else(|e| e.into_inner()) = Some(sink);
+    }
+
+    /// Report `progress` to the sink, if the app set one.
+    pub fn report_progress(&self, progress: &Progress<'_>) {
+        if let Some(sink) = &*self.progress.lock().unwrap_or_else(|e| e.into_inner()) {
+            sink(progress);
+        }
     }
 
     /// A headless context: no surface or swapchain extension.
@@ -318,6 +346,7 @@ impl GpuContext {
             oneshot_pool: Mutex::new(oneshot_pool),
             shader_overrides: Mutex::default(),
             shader_log: Mutex::default(),
+            progress: Mutex::default(),
             render_passes: Mutex::default(),
             samplers: Mutex::default(),
         }))

@@ -24,7 +24,7 @@ mod timing;
 pub use ash::vk;
 pub use buffer::Buffer;
 pub use command::{Clear, Cmd, CommandPool, SubmitSync};
-pub use context::{ContextDesc, DeviceInfo, GpuContext};
+pub use context::{ContextDesc, DeviceInfo, GpuContext, Progress, ProgressSink};
 pub use descriptor::{DescriptorSet, DescriptorSetLayout, DescriptorWrite};
 pub use error::{GpuError, GpuResult};
 pub use image::{Image, ImageDesc, ImageViewKind, Sampler, SamplerDesc};

@@ -46,7 +46,7 @@ use glam::{DVec3, Vec3};
 
 use crate::gpu::{
     vk, Access, Buffer, ComputePipeline, DescriptorSet, DescriptorSetLayout, DescriptorWrite, GpuContext, GpuResult,
-    Image, ImageDesc, MemoryLocation, PipelineLayout, Sampler,
+    Image, ImageDesc, MemoryLocation, PipelineLayout, Progress, Sampler,
 };
 use crate::graph::{BufferId, Frame, FrameGraph, ImageId};
 use crate::scene::techniques::{EikonalParams, Integrator};
@@ -61,6 +61,8 @@ use super::histopyramid::{HistoPyramid, HpState};
 
 /// Simulation steps recorded per command buffer between two patch-count readbacks.
 pub const LIGHT_BATCH: u32 = 16;
+/// The task name of the simulation's [`Progress`] reports.
+pub const LIGHT_SIMULATION: &str = "light simulation";
 
 /// Most patches of an initial wavefront: a list of them (144 bytes each) fits one 128 MiB
 /// storage-buffer binding (lavapipe's maxStorageBufferRange), like `max_patches`.
@@ -717,11 +719,11 @@ impl LightSim {
     pub fn run(&mut self, ctx: &Arc<GpuContext>, graph: &mut FrameGraph) -> GpuResult<LightStats> {
         let start = Instant::now();
         let max_steps = self.max_steps as u64;
-        let bar = indicatif::ProgressBar::new((self.queue.len() as u64 + 1) * max_steps);
-        bar.set_style(
-            indicatif::ProgressStyle::with_template("light simulation {bar:40} {pos}/{len} steps, {msg}")
-                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-        );
+        // In steps of max_steps per run: a run that ends early counts as whole.
+        let mut total = (self.queue.len() as u64 + 1) * max_steps;
+        let report = |done: u64, total: u64, detail: &str, finished: bool| {
+            ctx.report_progress(&Progress { task: LIGHT_SIMULATION, done, total, detail, finished })
+        };
         let mut stats = LightStats {
             initial_patches: self.wavefronts.iter().map(|w| w.len() as u32).sum(),
             ..LightStats::default()
@@ -741,8 +743,8 @@ impl LightSim {
             let mut taken = 0u64;
             let (run_stats, counts) = self.finish_run(ctx, graph, |n, count| {
                 taken += n as u64;
-                bar.set_position(done_runs * max_steps + taken.min(max_steps));
-                bar.set_message(format!("{label}: {count} patches"));
+                let detail = format!("{label}: {count} patches");
+                report(done_runs * max_steps + taken.min(max_steps), total, &detail, false);
             })?;
             done_runs += 1;
             stats.steps += run_stats.steps;
@@ -771,13 +773,13 @@ impl LightSim {
                 stats.dropped_patches += run_stats.dropped_patches;
             }
             stats.runs.push(run_stats);
-            bar.set_length((done_runs + self.queue.len() as u64) * max_steps);
+            total = (done_runs + self.queue.len() as u64) * max_steps;
             match self.queue.pop_front() {
                 Some(next) => self.begin(next),
                 None => break,
             }
         }
-        bar.finish_and_clear();
+        report(total, total, "done", true);
         self.resolve(ctx, graph)?;
         stats.seconds = start.elapsed().as_secs_f64();
         Ok(stats)
