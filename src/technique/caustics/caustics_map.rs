@@ -289,7 +289,7 @@ impl CausticsMapPass {
         )?;
         let receiver_layout =
             PipelineLayout::new(ctx, CAUSTICS_MAP_RECEIVERS, &[], std::mem::size_of::<ShadowPush>() as u32)?;
-        let receiver_pipeline = GraphicsPipeline::new(
+        let receiver_pipeline = GraphicsPipeline::with_layout(
             ctx,
             &GraphicsPipelineDesc {
                 name: CAUSTICS_MAP_RECEIVERS,
@@ -419,7 +419,7 @@ impl CausticsMapPass {
         )?;
         let splat_layout =
             PipelineLayout::new(ctx, CAUSTICS_MAP, &[&set_layout], std::mem::size_of::<SplatPush>() as u32)?;
-        let splat_pipeline = GraphicsPipeline::new(
+        let splat_pipeline = GraphicsPipeline::with_layout(
             ctx,
             &GraphicsPipelineDesc {
                 name: CAUSTICS_MAP,
@@ -626,7 +626,7 @@ impl RefractorLayers {
         )?;
         let refractor_layout = PipelineLayout::new(ctx, name, &[], std::mem::size_of::<RefractorPush>() as u32)?;
         let refractor_pipeline = |mode: u32, name: &str| {
-            GraphicsPipeline::new(
+            GraphicsPipeline::with_layout(
                 ctx,
                 &GraphicsPipelineDesc {
                     name,

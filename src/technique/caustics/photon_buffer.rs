@@ -367,7 +367,7 @@ impl PhotonBufferPass {
             ],
         )?;
         let photon_layout = PipelineLayout::new(ctx, PHOTON_BUFFER, &[&photon_set_layout], 16)?;
-        let photon_pipeline = GraphicsPipeline::new(
+        let photon_pipeline = GraphicsPipeline::with_layout(
             ctx,
             &GraphicsPipelineDesc {
                 name: PHOTON_BUFFER,
@@ -437,7 +437,7 @@ impl PhotonBufferPass {
             ],
         )?;
         let scatter_layout = PipelineLayout::new(ctx, PHOTON_BUFFER_SCATTER, &[&scatter_set_layout], 16)?;
-        let scatter_pipeline = GraphicsPipeline::new(
+        let scatter_pipeline = GraphicsPipeline::with_layout(
             ctx,
             &GraphicsPipelineDesc {
                 name: PHOTON_BUFFER_SCATTER,
@@ -467,7 +467,7 @@ impl PhotonBufferPass {
             &[&filter_set_layout],
             std::mem::size_of::<FilterPush>() as u32,
         )?;
-        let filter_pipeline = GraphicsPipeline::new(
+        let filter_pipeline = GraphicsPipeline::with_layout(
             ctx,
             &GraphicsPipelineDesc {
                 name: PHOTON_BUFFER_FILTER,

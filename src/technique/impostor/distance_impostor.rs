@@ -333,7 +333,7 @@ impl ImpostorMap {
             (MapContent::LightmapUv, _) => "impostor/uv_map.frag",
         };
         let blend = vec![Blend::Off; if separate { 2 } else { 1 }];
-        let pipeline = GraphicsPipeline::new(
+        let pipeline = GraphicsPipeline::with_layout(
             ctx,
             &GraphicsPipelineDesc {
                 name,
@@ -563,8 +563,13 @@ impl ImpostorMap {
         )?;
         let layout =
             PipelineLayout::new(ctx, "impostor_probe", &[&set_layout], std::mem::size_of::<ProbePush>() as u32)?;
-        let pipeline =
-            ComputePipeline::new(ctx, "impostor_probe", "impostor/probe.comp", &layout, &[iterations, channel])?;
+        let pipeline = ComputePipeline::with_layout(
+            ctx,
+            "impostor_probe",
+            "impostor/probe.comp",
+            &layout,
+            &[iterations, channel],
+        )?;
         let buffer_id = graph.register_buffer(&buffer);
         let mode = if fresnel { IMPOSTOR_PROBE_FRESNEL } else { IMPOSTOR_PROBE_HIT };
         let push =
@@ -693,7 +698,7 @@ impl ShadePass {
         }
         let layout =
             PipelineLayout::new(ctx, name, &[frame_layout, &set_layout], std::mem::size_of::<ShadePush>() as u32)?;
-        let pipeline = GraphicsPipeline::new(
+        let pipeline = GraphicsPipeline::with_layout(
             ctx,
             &GraphicsPipelineDesc {
                 name,

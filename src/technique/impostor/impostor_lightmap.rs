@@ -410,7 +410,7 @@ impl ImpostorLightmap {
             &[frame_layout, &caustic_set_layout],
             std::mem::size_of::<CausticPush>() as u32,
         )?;
-        let caustic_pipeline = GraphicsPipeline::new(
+        let caustic_pipeline = GraphicsPipeline::with_layout(
             ctx,
             &GraphicsPipelineDesc {
                 name: IMPOSTOR_LIGHTMAP_CAUSTIC_MAP,
@@ -473,7 +473,7 @@ impl ImpostorLightmap {
             &[&splat_set_layout],
             std::mem::size_of::<SplatPush>() as u32,
         )?;
-        let splat_pipeline = GraphicsPipeline::new(
+        let splat_pipeline = GraphicsPipeline::with_layout(
             ctx,
             &GraphicsPipelineDesc {
                 name: IMPOSTOR_LIGHTMAP_SPLAT,
@@ -568,7 +568,7 @@ impl ImpostorLightmap {
             &[frame_layout, &apply_set_layout],
             std::mem::size_of::<ApplyPush>() as u32,
         )?;
-        let apply_pipeline = GraphicsPipeline::new(
+        let apply_pipeline = GraphicsPipeline::with_layout(
             ctx,
             &GraphicsPipelineDesc {
                 name: IMPOSTOR_LIGHTMAP_APPLY,

@@ -797,13 +797,13 @@ impl NearbyImpostors {
             Some(sh) => {
                 let layout = PipelineLayout::new(ctx, name, &[frame_layout, &set_layout, sh.set_layout], push_size)?;
                 let desc = pipeline_desc(sh.fragment_shader, &shading_spec[..], vk::CullModeFlags::NONE);
-                let pipeline = GraphicsPipeline::new(ctx, &desc, &layout, &render_pass)?;
+                let pipeline = GraphicsPipeline::with_layout(ctx, &desc, &layout, &render_pass)?;
                 (layout, pipeline, Some((sh.set, sh.reads.clone())))
             }
             None => {
                 let layout = PipelineLayout::new(ctx, name, &[frame_layout, &set_layout], push_size)?;
                 let desc = pipeline_desc("nearby/impostor.frag", &spec[..], vk::CullModeFlags::NONE);
-                let pipeline = GraphicsPipeline::new(ctx, &desc, &layout, &render_pass)?;
+                let pipeline = GraphicsPipeline::with_layout(ctx, &desc, &layout, &render_pass)?;
                 (layout, pipeline, None)
             }
         };
@@ -815,7 +815,7 @@ impl NearbyImpostors {
             // (src/technique/refraction/refractor_layers.rs), but this projection, unlike the camera's, is
             // not y-flipped: its back faces come out counter-clockwise, i.e. as the
             // pipeline's front faces, so BACK is the mode that culls the faces towards O_R.
-            let bpipeline = GraphicsPipeline::new(
+            let bpipeline = GraphicsPipeline::with_layout(
                 ctx,
                 &pipeline_desc("nearby/impostor_back.frag", &[0], vk::CullModeFlags::BACK),
                 &blayout,
@@ -840,7 +840,7 @@ impl NearbyImpostors {
             let fbs = fbs_of(&back, BACK_PASS)?;
             // The nearest front faces: the other cull mode (FRONT 1 flips the normal to face O_R).
             let front_faces = if with_front {
-                let fpipeline = GraphicsPipeline::new(
+                let fpipeline = GraphicsPipeline::with_layout(
                     ctx,
                     &pipeline_desc("nearby/impostor_back.frag", &[1], vk::CullModeFlags::FRONT),
                     &blayout,
@@ -873,7 +873,7 @@ impl NearbyImpostors {
             let id = graph.register_image(&image);
             let fbs = framebuffers_of(&image, &format!("{name}_b"))?;
             let sets = [set_texture, set_reading(image.view())?];
-            let rpipeline = GraphicsPipeline::new(
+            let rpipeline = GraphicsPipeline::with_layout(
                 ctx,
                 &pipeline_desc("nearby/impostor_recursive.frag", &spec, vk::CullModeFlags::NONE),
                 &layout,
