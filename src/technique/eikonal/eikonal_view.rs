@@ -43,7 +43,7 @@ use crate::{
 
 use super::eikonal_nearby;
 use crate::technique::baseline::fullscreen::{fragment_set, FullscreenDesc, FullscreenPass};
-use crate::technique::refraction::nearby_impostors::{ImpostorShading, NearbyDesc, NearbyImpostors};
+use crate::technique::refraction::nearby_impostors::{ImpostorShading, NearbyDesc, NearbyImpostors, NearbyRects};
 
 pub const EIKONAL_VIEW: &str = "eikonal_view";
 /// §5.2's light simulation (run when the technique is created) and the diffuse receivers
@@ -308,7 +308,7 @@ impl EikonalPass {
             correction_iterations: params.nearby_iterations,
             correction_tolerance: NEARBY_TOLERANCE,
             seed_samples: NEARBY_SEEDS,
-            // Around a volume (NearbyImpostors::around) no object refracts: the exit settings
+            // Around a volume (NearbyRects::around) no object refracts: the exit settings
             // are never used.
             exit: crate::scene::techniques::RecursiveExit::BoundingSphere,
             search_steps: 8,
@@ -353,17 +353,8 @@ impl EikonalPass {
                 specialization: &spec,
                 reads,
             });
-            let nearby = NearbyImpostors::around(
-                ctx,
-                EIKONAL_NEARBY,
-                &desc,
-                origin,
-                &kept,
-                scene,
-                graph,
-                frame_layout,
-                shading,
-            )?;
+            let rects = NearbyRects::around(origin, &kept, scene);
+            let nearby = NearbyImpostors::build(ctx, EIKONAL_NEARBY, &desc, rects, graph, frame_layout, shading)?;
             (nearby, shading_layout)
         };
         let spec = [
