@@ -11,11 +11,8 @@ use std::sync::Arc;
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat3, Mat4};
 
-use crate::gpu::{
-    vk, Access, Buffer, ComputePipeline, DescriptorSet, DescriptorSetLayout, DescriptorWrite, GpuContext,
-    PipelineLayout,
-};
-use crate::graph::Frame;
+use crate::gpu::{vk, Access, Buffer, ComputePipeline, GpuContext};
+use crate::graph::{Bindings, BoundSet, Frame};
 use crate::scene::Scene;
 use crate::{HEIGHTFIELD_BINDING_FIELDS, HEIGHTFIELD_BINDING_VERTICES, HEIGHTFIELD_BINDING_WAVES, WORKGROUP_2D};
 
@@ -48,9 +45,7 @@ pub struct HeightfieldAnimation {
     cells: Vec<[u32; 2]>,
     _fields: Buffer,
     _waves: Buffer,
-    _set_layout: DescriptorSetLayout,
-    set: DescriptorSet,
-    _layout: PipelineLayout,
+    set: BoundSet,
     pipeline: ComputePipeline,
 }
 
@@ -81,36 +76,16 @@ impl HeightfieldAnimation {
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         let field_buffer = Buffer::with_data(ctx, "heightfield_fields", bytemuck::cast_slice(&fields), storage)?;
         let wave_buffer = Buffer::with_data(ctx, "heightfield_waves", bytemuck::cast_slice(&waves), storage)?;
-        let (ty, stage) = (vk::DescriptorType::STORAGE_BUFFER, vk::ShaderStageFlags::COMPUTE);
-        let set_layout = DescriptorSetLayout::new(
-            ctx,
-            WATER_ANIMATION,
-            &[
-                (HEIGHTFIELD_BINDING_FIELDS, ty, stage),
-                (HEIGHTFIELD_BINDING_WAVES, ty, stage),
-                (HEIGHTFIELD_BINDING_VERTICES, ty, stage),
-            ],
-            1,
-        )?;
-        let set = set_layout.allocate(
-            WATER_ANIMATION,
-            &[
-                DescriptorWrite::Storage(HEIGHTFIELD_BINDING_FIELDS, &field_buffer),
-                DescriptorWrite::Storage(HEIGHTFIELD_BINDING_WAVES, &wave_buffer),
-                DescriptorWrite::Storage(HEIGHTFIELD_BINDING_VERTICES, &gpu.vertices),
-            ],
-        )?;
-        let layout = PipelineLayout::new(ctx, WATER_ANIMATION, &[&set_layout], std::mem::size_of::<Push>() as u32)?;
-        let pipeline = ComputePipeline::new(ctx, WATER_ANIMATION, "common/heightfield.comp", &layout, &[])?;
-        Ok(Some(HeightfieldAnimation {
-            cells,
-            _fields: field_buffer,
-            _waves: wave_buffer,
-            _set_layout: set_layout,
-            set,
-            _layout: layout,
-            pipeline,
-        }))
+        // The vertices are not tracked by the frame graph: the pass orders itself (`record`).
+        let set = Bindings::new(vk::ShaderStageFlags::COMPUTE)
+            .storage(HEIGHTFIELD_BINDING_FIELDS, &field_buffer)
+            .storage(HEIGHTFIELD_BINDING_WAVES, &wave_buffer)
+            .storage(HEIGHTFIELD_BINDING_VERTICES, &gpu.vertices)
+            .build(ctx, WATER_ANIMATION)?;
+        let push = std::mem::size_of::<Push>() as u32;
+        let pipeline =
+            ComputePipeline::new(ctx, WATER_ANIMATION, "common/heightfield.comp", &[set.layout()], push, &[])?;
+        Ok(Some(HeightfieldAnimation { cells, _fields: field_buffer, _waves: wave_buffer, set, pipeline }))
     }
 
     /// Record the pass that moves every heightfield's vertices to `time`. The draws read the
@@ -119,7 +94,7 @@ impl HeightfieldAnimation {
     pub fn record<'a>(&'a self, frame: &mut Frame<'_, 'a>, vertices: &'a Buffer, time: f32) {
         frame.pass(WATER_ANIMATION).record(move |cmd| {
             cmd.buffer_barrier(vertices, Access::VertexData, Access::ComputeWrite);
-            cmd.bind_compute(&self.pipeline, &[self.set]);
+            cmd.bind_compute(&self.pipeline, &[self.set.set()]);
             for (field, [nx, nz]) in self.cells.iter().enumerate() {
                 cmd.push_compute(&self.pipeline, &Push { field: field as u32, time });
                 cmd.dispatch((nx + 1).div_ceil(WORKGROUP_2D), (nz + 1).div_ceil(WORKGROUP_2D), 1);

@@ -1,9 +1,9 @@
 //! Render targets of a frame, registered with the frame graph.
 use std::sync::Arc;
 
-use crate::gpu::{vk, GpuContext, Image, ImageDesc, ImageViewKind};
-use crate::graph::{FrameGraph, ImageId};
-use crate::SHADOW_LAYERS_PER_LIGHT;
+use crate::gpu::{vk, GpuContext, Image, ImageDesc, ImageViewKind, Sampler};
+use crate::graph::{Bindings, FrameGraph, ImageId};
+use crate::{BINDING_GBUF_ALBEDO, BINDING_GBUF_DEPTH, BINDING_GBUF_NORMAL, SHADOW_LAYERS_PER_LIGHT};
 
 use super::RenderError;
 
@@ -216,6 +216,18 @@ impl Targets {
                 view: ImageViewKind::CubeArray,
             },
         )?)
+    }
+
+    /// The G-buffer's normal and depth (and, with `albedo`, its albedo) at their shared
+    /// bindings, fetched per texel with `nearest` and read by the passes using the set.
+    pub fn gbuffer<'a>(&'a self, b: Bindings<'a>, nearest: &'a Sampler, albedo: bool) -> Bindings<'a> {
+        let b = b.sampled(BINDING_GBUF_NORMAL, &self.gbuf_normal, nearest).read(self.gbuf_normal_id);
+        let b = if albedo {
+            b.sampled(BINDING_GBUF_ALBEDO, &self.gbuf_albedo, nearest).read(self.gbuf_albedo_id)
+        } else {
+            b
+        };
+        b.sampled(BINDING_GBUF_DEPTH, &self.depth, nearest).read(self.depth_id)
     }
 
     pub fn extent(&self) -> vk::Extent2D {

@@ -9,7 +9,7 @@ use super::error::{GpuResult, VkContext};
 use super::sync::{Access, BufferBarrier, ImageBarrier};
 use super::{
     Buffer, ComputePipeline, DescriptorSet, Framebuffer, GraphicsPipeline, Image, OcclusionQueryPool, RenderPass,
-    TimestampPool,
+    RenderTarget, TimestampPool,
 };
 
 /// A tightly packed copy of every layer of `image` to or from a buffer.
@@ -146,6 +146,17 @@ impl<'a> Cmd<'a> {
     /// Begin `pass` on `fb` and set the viewport and scissor to the framebuffer.
     /// Record `draw` inside `pass` on `fb`: the pass begins before and ends after it, so a
     /// begin is never left without its end.
+    /// [`Self::in_render_pass`] into framebuffer `framebuffer` of `target`.
+    pub fn in_target<R>(
+        &self,
+        target: &RenderTarget,
+        framebuffer: usize,
+        clears: &[Clear],
+        draw: impl FnOnce(&Cmd) -> R,
+    ) -> R {
+        self.in_render_pass(&target.pass, &target.framebuffers()[framebuffer], clears, draw)
+    }
+
     pub fn in_render_pass<R>(
         &self,
         pass: &RenderPass,

@@ -78,12 +78,33 @@ pub struct DescriptorSet {
     pub(crate) raw: vk::DescriptorSet,
 }
 
+#[derive(Clone, Copy)]
 pub enum DescriptorWrite<'a> {
     Uniform(u32, &'a Buffer),
     Storage(u32, &'a Buffer),
     /// binding, view, sampler, layout the image will be in when sampled.
     Sampled(u32, vk::ImageView, &'a Sampler, vk::ImageLayout),
     StorageImage(u32, vk::ImageView),
+}
+
+impl DescriptorWrite<'_> {
+    pub fn binding(&self) -> u32 {
+        match *self {
+            DescriptorWrite::Uniform(b, _)
+            | DescriptorWrite::Storage(b, _)
+            | DescriptorWrite::Sampled(b, ..)
+            | DescriptorWrite::StorageImage(b, _) => b,
+        }
+    }
+
+    pub fn ty(&self) -> vk::DescriptorType {
+        match self {
+            DescriptorWrite::Uniform(..) => vk::DescriptorType::UNIFORM_BUFFER,
+            DescriptorWrite::Storage(..) => vk::DescriptorType::STORAGE_BUFFER,
+            DescriptorWrite::Sampled(..) => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+            DescriptorWrite::StorageImage(..) => vk::DescriptorType::STORAGE_IMAGE,
+        }
+    }
 }
 
 impl DescriptorSet {
@@ -111,28 +132,18 @@ impl DescriptorSet {
         let raw_writes: Vec<_> = writes
             .iter()
             .map(|w| {
-                let base = vk::WriteDescriptorSet::default().dst_set(self.raw);
+                let base = vk::WriteDescriptorSet::default()
+                    .dst_set(self.raw)
+                    .dst_binding(w.binding())
+                    .descriptor_type(w.ty());
                 match w {
-                    DescriptorWrite::Uniform(b, _) | DescriptorWrite::Storage(b, _) => {
-                        let ty = if matches!(w, DescriptorWrite::Uniform(..)) {
-                            vk::DescriptorType::UNIFORM_BUFFER
-                        } else {
-                            vk::DescriptorType::STORAGE_BUFFER
-                        };
+                    DescriptorWrite::Uniform(..) | DescriptorWrite::Storage(..) => {
                         bi += 1;
-                        base.dst_binding(*b).descriptor_type(ty).buffer_info(&buffer_infos[bi - 1])
+                        base.buffer_info(&buffer_infos[bi - 1])
                     }
-                    DescriptorWrite::Sampled(b, ..) => {
+                    DescriptorWrite::Sampled(..) | DescriptorWrite::StorageImage(..) => {
                         ii += 1;
-                        base.dst_binding(*b)
-                            .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
-                            .image_info(&image_infos[ii - 1])
-                    }
-                    DescriptorWrite::StorageImage(b, _) => {
-                        ii += 1;
-                        base.dst_binding(*b)
-                            .descriptor_type(vk::DescriptorType::STORAGE_IMAGE)
-                            .image_info(&image_infos[ii - 1])
+                        base.image_info(&image_infos[ii - 1])
                     }
                 }
             })

@@ -47,6 +47,18 @@ impl ImageDesc {
         }
     }
 
+    /// A square image of `size`^2 texels and `layers` layers.
+    pub fn square(
+        name: &str,
+        format: vk::Format,
+        size: u32,
+        layers: u32,
+        view: ImageViewKind,
+        usage: vk::ImageUsageFlags,
+    ) -> Self {
+        ImageDesc { name: name.into(), format, width: size, height: size, layers, usage, view }
+    }
+
     pub fn d2(name: &str, format: vk::Format, width: u32, height: u32, usage: vk::ImageUsageFlags) -> Self {
         ImageDesc { name: name.into(), format, width, height, layers: 1, usage, view: ImageViewKind::D2 }
     }

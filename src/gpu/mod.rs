@@ -6,6 +6,7 @@
 //! [`Cmd`] records commands; [`Access`] names how a pass touches a resource so that the
 //! frame graph can derive barriers.
 
+mod bindings;
 mod buffer;
 mod command;
 mod context;
@@ -22,6 +23,7 @@ mod sync;
 mod timing;
 
 pub use ash::vk;
+pub use bindings::{Bindings, BoundSet};
 pub use buffer::Buffer;
 pub use command::{Clear, Cmd, CommandPool, SubmitSync};
 pub use context::{ContextDesc, DeviceInfo, GpuContext, Progress, ProgressSink};
@@ -32,7 +34,7 @@ pub use overlay::Overlay;
 pub use pipeline::{
     Blend, ComputePipeline, DepthState, GraphicsPipeline, GraphicsPipelineDesc, PipelineLayout, VertexLayout,
 };
-pub use render_pass::{Attachment, Framebuffer, RenderPass, RenderPassDesc};
+pub use render_pass::{Attachment, Framebuffer, RenderPass, RenderPassDesc, RenderTarget};
 pub use swapchain::{Acquired, Presented, Semaphore, Swapchain, SwapchainImage};
 pub use sync::{Access, BufferBarrier, ImageBarrier};
 pub use timing::{OcclusionQueryPool, TimestampPool, TimestampQuery};

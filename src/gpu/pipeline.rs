@@ -80,10 +80,40 @@ pub struct GraphicsPipelineDesc<'a> {
     pub specialization: &'a [u32],
 }
 
+impl<'a> GraphicsPipelineDesc<'a> {
+    /// One full-screen triangle (common/fullscreen.vert) into one colour target, no depth.
+    pub fn fullscreen(name: &'a str, fragment_shader: &'a str) -> Self {
+        GraphicsPipelineDesc {
+            name,
+            vertex_shader: "common/fullscreen.vert",
+            fragment_shader,
+            vertex: VertexLayout::None,
+            topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+            cull: vk::CullModeFlags::NONE,
+            depth: DepthState::OFF,
+            blend: &[Blend::Off],
+            specialization: &[],
+        }
+    }
+
+    /// The scene's meshes as triangles, unculled: quads are one-sided and cameras, lights
+    /// and reference points may sit on either side of a surface.
+    pub fn mesh(name: &'a str, vertex_shader: &'a str, fragment_shader: &'a str, depth: DepthState) -> Self {
+        GraphicsPipelineDesc {
+            vertex_shader,
+            vertex: VertexLayout::Mesh,
+            depth,
+            ..Self::fullscreen(name, fragment_shader)
+        }
+    }
+}
+
 pub struct GraphicsPipeline {
     ctx: Arc<GpuContext>,
     pub(crate) raw: vk::Pipeline,
     pub(crate) layout: vk::PipelineLayout,
+    /// The layout, when the pipeline made its own (dropped after the pipeline).
+    _owned: Option<PipelineLayout>,
 }
 
 fn shader_module(ctx: &GpuContext, path: &str) -> GpuResult<vk::ShaderModule> {
@@ -96,7 +126,23 @@ fn shader_module(ctx: &GpuContext, path: &str) -> GpuResult<vk::ShaderModule> {
 }
 
 impl GraphicsPipeline {
+    /// A pipeline with a layout of its own: descriptor set layouts `sets` (set 0, 1, ...) and
+    /// `push_bytes` of push constants.
     pub fn new(
+        ctx: &Arc<GpuContext>,
+        desc: &GraphicsPipelineDesc<'_>,
+        sets: &[&DescriptorSetLayout],
+        push_bytes: u32,
+        pass: &RenderPass,
+    ) -> GpuResult<Self> {
+        let layout = PipelineLayout::new(ctx, desc.name, sets, push_bytes)?;
+        let mut pipeline = Self::with_layout(ctx, desc, &layout, pass)?;
+        pipeline._owned = Some(layout);
+        Ok(pipeline)
+    }
+
+    /// A pipeline of a layout the caller owns and keeps alive as long as the pipeline.
+    pub fn with_layout(
         ctx: &Arc<GpuContext>,
         desc: &GraphicsPipelineDesc<'_>,
         layout: &PipelineLayout,
@@ -205,7 +251,7 @@ impl GraphicsPipeline {
         }
         let raw = result.map_err(|(_, e)| e).vk("vkCreateGraphicsPipelines")?[0];
         ctx.set_name(raw, desc.name);
-        Ok(GraphicsPipeline { ctx: ctx.clone(), raw, layout: layout.raw })
+        Ok(GraphicsPipeline { ctx: ctx.clone(), raw, layout: layout.raw, _owned: None })
     }
 }
 
@@ -220,10 +266,26 @@ pub struct ComputePipeline {
     ctx: Arc<GpuContext>,
     pub(crate) raw: vk::Pipeline,
     pub(crate) layout: vk::PipelineLayout,
+    _owned: Option<PipelineLayout>,
 }
 
 impl ComputePipeline {
+    /// As [`GraphicsPipeline::new`]: a compute pipeline with a layout of its own.
     pub fn new(
+        ctx: &Arc<GpuContext>,
+        name: &str,
+        shader: &str,
+        sets: &[&DescriptorSetLayout],
+        push_bytes: u32,
+        specialization: &[u32],
+    ) -> GpuResult<Self> {
+        let layout = PipelineLayout::new(ctx, name, sets, push_bytes)?;
+        let mut pipeline = Self::with_layout(ctx, name, shader, &layout, specialization)?;
+        pipeline._owned = Some(layout);
+        Ok(pipeline)
+    }
+
+    pub fn with_layout(
         ctx: &Arc<GpuContext>,
         name: &str,
         shader: &str,
@@ -248,7 +310,7 @@ impl ComputePipeline {
         unsafe { ctx.raw().destroy_shader_module(module, None) };
         let raw = result.map_err(|(_, e)| e).vk("vkCreateComputePipelines")?[0];
         ctx.set_name(raw, name);
-        Ok(ComputePipeline { ctx: ctx.clone(), raw, layout: layout.raw })
+        Ok(ComputePipeline { ctx: ctx.clone(), raw, layout: layout.raw, _owned: None })
     }
 }
 

@@ -8,7 +8,7 @@ use ash::vk;
 
 use super::context::GpuContext;
 use super::error::{GpuResult, VkContext};
-use super::image::aspect_of;
+use super::image::{aspect_of, Image};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct Attachment {
@@ -149,5 +149,74 @@ impl Drop for Framebuffer {
     fn drop(&mut self) {
         // SAFETY: dropped with its owner after the device is idle.
         unsafe { self.ctx.raw().destroy_framebuffer(self.raw, None) };
+    }
+}
+
+/// A render pass and its framebuffers over a set of images: one framebuffer over their
+/// default views, or one per layer over that layer of each (cube faces, array layers).
+pub struct RenderTarget {
+    pub pass: RenderPass,
+    framebuffers: Vec<Framebuffer>,
+}
+
+impl RenderTarget {
+    /// Colour attachments `colors` and an optional depth attachment, every one cleared on
+    /// load (`clear`) or keeping what earlier passes wrote; one framebuffer.
+    pub fn new(
+        ctx: &Arc<GpuContext>,
+        name: &str,
+        colors: &[&Image],
+        depth: Option<&Image>,
+        clear: bool,
+    ) -> GpuResult<RenderTarget> {
+        Self::build(ctx, name, colors, depth, clear, None)
+    }
+
+    /// As [`Self::new`], with framebuffer `l` over layer `l` of every attachment, for `l` in
+    /// `0..layers`.
+    pub fn layered(
+        ctx: &Arc<GpuContext>,
+        name: &str,
+        colors: &[&Image],
+        depth: Option<&Image>,
+        clear: bool,
+        layers: u32,
+    ) -> GpuResult<RenderTarget> {
+        Self::build(ctx, name, colors, depth, clear, Some(layers))
+    }
+
+    fn build(
+        ctx: &Arc<GpuContext>,
+        name: &str,
+        colors: &[&Image],
+        depth: Option<&Image>,
+        clear: bool,
+        layers: Option<u32>,
+    ) -> GpuResult<RenderTarget> {
+        let desc = RenderPassDesc {
+            colors: colors.iter().map(|i| Attachment { format: i.format(), clear }).collect(),
+            depth: depth.map(|d| Attachment { format: d.format(), clear }),
+            depth_read_only: false,
+        };
+        let pass = RenderPass::new(ctx, name, &desc)?;
+        let attachments: Vec<&Image> = colors.iter().copied().chain(depth).collect();
+        let extent = attachments.first().map_or(vk::Extent2D { width: 1, height: 1 }, |i| i.extent());
+        let framebuffers = match layers {
+            None => {
+                let views: Vec<_> = attachments.iter().map(|i| i.view()).collect();
+                vec![Framebuffer::new(ctx, name, &pass, &views, extent)?]
+            }
+            Some(n) => (0..n)
+                .map(|l| {
+                    let views: Vec<_> = attachments.iter().map(|i| i.layer_view(l)).collect();
+                    Framebuffer::new(ctx, &format!("{name}_{l}"), &pass, &views, extent)
+                })
+                .collect::<GpuResult<_>>()?,
+        };
+        Ok(RenderTarget { pass, framebuffers })
+    }
+
+    pub fn framebuffers(&self) -> &[Framebuffer] {
+        &self.framebuffers
     }
 }

@@ -9,8 +9,8 @@ use std::collections::HashSet;
 use std::sync::Arc;
 
 use crate::gpu::{
-    vk, Access, Buffer, BufferBarrier, Cmd, GpuContext, GpuResult, Image, ImageBarrier, MemoryLocation, TimestampPool,
-    TimestampQuery,
+    vk, Access, Buffer, BufferBarrier, Cmd, GpuContext, GpuResult, Image, ImageBarrier, ImageDesc, MemoryLocation,
+    TimestampPool, TimestampQuery,
 };
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -19,11 +19,30 @@ pub struct ImageId(usize);
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct BufferId(usize);
 
+/// A resource the graph tracks: what a [`Bindings`] entry names for its barriers.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-enum Res {
+pub enum Res {
     Image(usize),
     Buffer(usize),
 }
+
+impl From<ImageId> for Res {
+    fn from(id: ImageId) -> Res {
+        Res::Image(id.0)
+    }
+}
+
+impl From<BufferId> for Res {
+    fn from(id: BufferId) -> Res {
+        Res::Buffer(id.0)
+    }
+}
+
+/// A descriptor set declared once, its resources tracked by this graph
+/// ([`crate::gpu::Bindings`]).
+pub type Bindings<'a> = crate::gpu::Bindings<'a, Res>;
+/// A built [`Bindings`]: a pass declares all its accesses with [`PassBuilder::uses`].
+pub type BoundSet = crate::gpu::BoundSet<Res>;
 
 /// What the graph remembers about a resource between passes and between frames.
 #[derive(Clone, Copy, Debug)]
@@ -180,6 +199,13 @@ impl FrameGraph {
             visible: vk::PipelineStageFlags::empty(),
             reads: vk::PipelineStageFlags::empty(),
         };
+    }
+
+    /// A new image, registered.
+    pub fn image(&mut self, ctx: &Arc<GpuContext>, desc: &ImageDesc) -> GpuResult<(Image, ImageId)> {
+        let image = Image::new(ctx, desc)?;
+        let id = self.register_image(&image);
+        Ok((image, id))
     }
 
     pub fn register_buffer(&mut self, buffer: &Buffer) -> BufferId {
@@ -401,6 +427,11 @@ impl<'f, 'g, 'a> PassBuilder<'f, 'g, 'a> {
     }
     pub fn write_buffer(mut self, id: BufferId, access: Access) -> Self {
         self.uses.push((Res::Buffer(id.0), access));
+        self
+    }
+    /// Every access of the resources `set` binds.
+    pub fn uses(mut self, set: &BoundSet) -> Self {
+        self.uses.extend_from_slice(set.uses());
         self
     }
     /// Finish the pass with the closure that records its commands.

@@ -485,10 +485,10 @@ impl Reference {
             ],
         )?;
         let layout = PipelineLayout::new(ctx, "reference", &[&set_layout], std::mem::size_of::<RefPush>() as u32)?;
-        let camera = ComputePipeline::new(ctx, "reference_camera", "reference/camera.comp", &layout, &[])?;
-        let photons = ComputePipeline::new(ctx, "reference_photons", "reference/photons.comp", &layout, &[])?;
-        let gather = ComputePipeline::new(ctx, "reference_gather", "reference/gather.comp", &layout, &[])?;
-        let probe = ComputePipeline::new(ctx, "reference_probe", "reference/probe.comp", &layout, &[])?;
+        let camera = ComputePipeline::with_layout(ctx, "reference_camera", "reference/camera.comp", &layout, &[])?;
+        let photons = ComputePipeline::with_layout(ctx, "reference_photons", "reference/photons.comp", &layout, &[])?;
+        let gather = ComputePipeline::with_layout(ctx, "reference_gather", "reference/gather.comp", &layout, &[])?;
+        let probe = ComputePipeline::with_layout(ctx, "reference_probe", "reference/probe.comp", &layout, &[])?;
         let ids = [
             graph.register_buffer(&accum),
             graph.register_buffer(&pixels),

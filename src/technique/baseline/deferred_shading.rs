@@ -11,9 +11,8 @@ use crate::technique::{
     diffuse_names, list, params, tables, FrameInputs, Inputs, PlannedPass, Registration, RenderError, Setup, Stage,
     Technique,
 };
-use crate::{BINDING_GBUF_ALBEDO, BINDING_GBUF_DEPTH, BINDING_GBUF_NORMAL};
 
-use super::fullscreen::{FullscreenDesc, FullscreenPass};
+use super::fullscreen::{fragment_set, FullscreenDesc, FullscreenPass};
 
 pub const DEFERRED_SHADING: &str = "deferred_shading";
 
@@ -98,11 +97,6 @@ impl DeferredShadingPass {
             &FullscreenDesc {
                 name: DEFERRED_SHADING,
                 fragment_shader: "shading/deferred.frag",
-                inputs: &[
-                    (BINDING_GBUF_NORMAL, &targets.gbuf_normal),
-                    (BINDING_GBUF_ALBEDO, &targets.gbuf_albedo),
-                    (BINDING_GBUF_DEPTH, &targets.depth),
-                ],
                 target: (&targets.hdr, targets.hdr_id),
                 clear: true,
                 // Caustics mapping on/off and its low-pass filter radius; photon-buffer
@@ -114,8 +108,8 @@ impl DeferredShadingPass {
                     photon.map_or(0, |p| p.1),
                 ],
             },
+            targets.gbuffer(fragment_set(), nearest, true),
             frame_layout,
-            nearest,
         )?;
         Ok(DeferredShadingPass { pass, shadowed, caustics: caustic_filter.is_some(), photon: photon.map(|p| p.2) })
     }
@@ -127,7 +121,7 @@ impl DeferredShadingPass {
         targets: &Targets,
         frame_set: DescriptorSet,
     ) {
-        let mut reads = vec![targets.gbuf_normal_id, targets.gbuf_albedo_id, targets.depth_id, scene.environment_id];
+        let mut reads = vec![scene.environment_id];
         if self.shadowed {
             reads.push(targets.shadow_atlas_id);
         }

@@ -5,8 +5,8 @@ use std::sync::Arc;
 use crate::frame::gpu_scene::GpuScene;
 use crate::frame::targets::Targets;
 use crate::gpu::{
-    vk, Access, Attachment, Blend, Clear, DepthState, DescriptorSet, DescriptorSetLayout, Framebuffer, GpuContext,
-    GpuResult, GraphicsPipeline, GraphicsPipelineDesc, PipelineLayout, RenderPass, RenderPassDesc, VertexLayout,
+    Access, Blend, Clear, DepthState, DescriptorSet, DescriptorSetLayout, GpuContext, GpuResult, GraphicsPipeline,
+    GraphicsPipelineDesc, RenderTarget,
 };
 use crate::graph::Frame;
 use crate::technique::{no_inputs, FrameInputs, PlannedPass, Registration, RenderError, Setup, Stage, Technique};
@@ -36,53 +36,31 @@ impl Technique for GBufferPass {
 }
 
 pub struct GBufferPass {
-    render_pass: RenderPass,
-    _layout: PipelineLayout,
+    target: RenderTarget,
     pipeline: GraphicsPipeline,
-    framebuffer: Framebuffer,
 }
 
 impl GBufferPass {
     pub fn new(ctx: &Arc<GpuContext>, frame_layout: &DescriptorSetLayout, targets: &Targets) -> GpuResult<Self> {
-        let render_pass = RenderPass::new(
-            ctx,
-            GBUFFER,
-            &RenderPassDesc {
-                colors: vec![
-                    Attachment { format: targets.gbuf_normal.format(), clear: true },
-                    Attachment { format: targets.gbuf_albedo.format(), clear: true },
-                ],
-                depth: Some(Attachment { format: targets.depth.format(), clear: true }),
-                depth_read_only: false,
-            },
-        )?;
-        // Push constants: material index, object index (glsl/gbuffer/gbuffer.frag).
-        let layout = PipelineLayout::new(ctx, GBUFFER, &[frame_layout], 8)?;
+        let target =
+            RenderTarget::new(ctx, GBUFFER, &[&targets.gbuf_normal, &targets.gbuf_albedo], Some(&targets.depth), true)?;
         let pipeline = GraphicsPipeline::new(
             ctx,
             &GraphicsPipelineDesc {
-                name: GBUFFER,
-                vertex_shader: "common/mesh.vert",
-                fragment_shader: "gbuffer/gbuffer.frag",
-                vertex: VertexLayout::Mesh,
-                topology: vk::PrimitiveTopology::TRIANGLE_LIST,
-                // No culling: quads are one-sided and the camera may sit inside a refractor.
-                cull: vk::CullModeFlags::NONE,
-                depth: DepthState::REVERSED_Z,
                 blend: &[Blend::Off, Blend::Off],
-                specialization: &[],
+                ..GraphicsPipelineDesc::mesh(
+                    GBUFFER,
+                    "common/mesh.vert",
+                    "gbuffer/gbuffer.frag",
+                    DepthState::REVERSED_Z,
+                )
             },
-            &layout,
-            &render_pass,
+            &[frame_layout],
+            // Push constants: material index, object index (glsl/gbuffer/gbuffer.frag).
+            8,
+            &target.pass,
         )?;
-        let framebuffer = Framebuffer::new(
-            ctx,
-            GBUFFER,
-            &render_pass,
-            &[targets.gbuf_normal.view(), targets.gbuf_albedo.view(), targets.depth.view()],
-            targets.extent(),
-        )?;
-        Ok(GBufferPass { render_pass, _layout: layout, pipeline, framebuffer })
+        Ok(GBufferPass { target, pipeline })
     }
 
     pub fn record<'a>(
@@ -99,9 +77,9 @@ impl GBufferPass {
             .write(targets.depth_id, Access::DepthAttachment)
             .record(move |cmd| {
                 // Reversed Z: clear to 0 (infinitely far).
-                cmd.in_render_pass(
-                    &self.render_pass,
-                    &self.framebuffer,
+                cmd.in_target(
+                    &self.target,
+                    0,
                     &[Clear::Color([0.0; 4]), Clear::Color([0.0; 4]), Clear::Depth(0.0)],
                     |cmd| {
                         cmd.bind_graphics(&self.pipeline, &[frame_set]);

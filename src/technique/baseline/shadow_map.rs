@@ -7,8 +7,7 @@ use crate::frame::gpu_scene::{GpuScene, ShadowFace};
 use crate::frame::gpu_types::ShadowPush;
 use crate::frame::targets::Targets;
 use crate::gpu::{
-    vk, Access, Attachment, Blend, Clear, DepthState, Framebuffer, GpuContext, GpuResult, GraphicsPipeline,
-    GraphicsPipelineDesc, PipelineLayout, RenderPass, RenderPassDesc, VertexLayout,
+    Access, Clear, DepthState, GpuContext, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, RenderTarget,
 };
 use crate::graph::Frame;
 use crate::technique::{
@@ -45,53 +44,20 @@ impl Technique for ShadowMapPass {
 pub const FAR_DISTANCE: f32 = 3.0e38;
 
 pub struct ShadowMapPass {
-    render_pass: RenderPass,
-    _layout: PipelineLayout,
+    /// One framebuffer per atlas layer.
+    target: RenderTarget,
     pipeline: GraphicsPipeline,
-    framebuffers: Vec<Framebuffer>,
     faces: Vec<ShadowFace>,
 }
 
 impl ShadowMapPass {
     pub fn new(ctx: &Arc<GpuContext>, scene: &GpuScene, targets: &Targets) -> GpuResult<Self> {
-        let render_pass = RenderPass::new(
-            ctx,
-            SHADOW_MAP,
-            &RenderPassDesc {
-                colors: vec![Attachment { format: targets.shadow_atlas.format(), clear: true }],
-                depth: Some(Attachment { format: targets.shadow_depth.format(), clear: true }),
-                depth_read_only: false,
-            },
-        )?;
-        let layout = PipelineLayout::new(ctx, SHADOW_MAP, &[], std::mem::size_of::<ShadowPush>() as u32)?;
-        let pipeline = GraphicsPipeline::new(
-            ctx,
-            &GraphicsPipelineDesc {
-                name: SHADOW_MAP,
-                vertex_shader: "shadow/shadow.vert",
-                fragment_shader: "shadow/shadow.frag",
-                vertex: VertexLayout::Mesh,
-                topology: vk::PrimitiveTopology::TRIANGLE_LIST,
-                // Both sides cast: open shapes (quads, the ring) have no back to rely on.
-                cull: vk::CullModeFlags::NONE,
-                depth: DepthState::LESS,
-                blend: &[Blend::Off],
-                specialization: &[],
-            },
-            &layout,
-            &render_pass,
-        )?;
-        let mut framebuffers = Vec::new();
-        for face in &scene.shadow_faces {
-            framebuffers.push(Framebuffer::new(
-                ctx,
-                &format!("shadow_face_{}", face.layer),
-                &render_pass,
-                &[targets.shadow_atlas.layer_view(face.layer), targets.shadow_depth.layer_view(face.layer)],
-                targets.shadow_atlas.extent(),
-            )?);
-        }
-        Ok(ShadowMapPass { render_pass, _layout: layout, pipeline, framebuffers, faces: scene.shadow_faces.clone() })
+        let (atlas, depth) = (&targets.shadow_atlas, &targets.shadow_depth);
+        let target = RenderTarget::layered(ctx, SHADOW_MAP, &[atlas], Some(depth), true, atlas.layers())?;
+        // Both sides cast: open shapes (quads, the ring) have no back to rely on.
+        let desc = GraphicsPipelineDesc::mesh(SHADOW_MAP, "shadow/shadow.vert", "shadow/shadow.frag", DepthState::LESS);
+        let pipeline = GraphicsPipeline::new(ctx, &desc, &[], std::mem::size_of::<ShadowPush>() as u32, &target.pass)?;
+        Ok(ShadowMapPass { target, pipeline, faces: scene.shadow_faces.clone() })
     }
 
     pub fn record<'a>(&'a self, frame: &mut Frame<'_, 'a>, scene: &'a GpuScene, targets: &Targets) {
@@ -100,10 +66,10 @@ impl ShadowMapPass {
             .write(targets.shadow_atlas_id, Access::ColorAttachment)
             .write(targets.shadow_depth_id, Access::DepthAttachment)
             .record(move |cmd| {
-                for (face, fb) in self.faces.iter().zip(&self.framebuffers) {
-                    cmd.in_render_pass(
-                        &self.render_pass,
-                        fb,
+                for face in &self.faces {
+                    cmd.in_target(
+                        &self.target,
+                        face.layer as usize,
                         &[Clear::Color([FAR_DISTANCE; 4]), Clear::Depth(1.0)],
                         |cmd| {
                             cmd.bind_graphics(&self.pipeline, &[]);

@@ -14,9 +14,9 @@ use crate::scene::Scene;
 use crate::technique::{
     dielectric_names, list, metal_names, no_inputs, FrameInputs, PlannedPass, Registration, Stage, Technique,
 };
-use crate::{BINDING_GBUF_DEPTH, BINDING_GBUF_NORMAL, SPECULAR_MODE_REFLECTION, SPECULAR_MODE_REFRACTION};
+use crate::{SPECULAR_MODE_REFLECTION, SPECULAR_MODE_REFRACTION};
 
-use super::fullscreen::{FullscreenDesc, FullscreenPass};
+use super::fullscreen::{fragment_set, FullscreenDesc, FullscreenPass};
 
 pub const REFRACTION_SINGLE: &str = "refraction_single";
 pub const REFLECTION_SINGLE: &str = "reflection_single";
@@ -62,7 +62,7 @@ fn plan(scene: &Scene, mode: Mode) -> Vec<(Stage, PlannedPass)> {
 
 impl Technique for SpecularSinglePass {
     fn record<'a>(&'a self, _: Stage, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>) {
-        self.record(frame, inputs.scene, inputs.targets, inputs.frame_set);
+        self.record(frame, inputs.scene, inputs.frame_set);
     }
 }
 
@@ -93,25 +93,18 @@ impl SpecularSinglePass {
             &FullscreenDesc {
                 name,
                 fragment_shader: "specular/single.frag",
-                inputs: &[(BINDING_GBUF_NORMAL, &targets.gbuf_normal), (BINDING_GBUF_DEPTH, &targets.depth)],
                 target: (&targets.hdr, targets.hdr_id),
                 // Keeps the deferred result and overwrites only the pixels of its materials.
                 clear: false,
                 specialization: &[spec],
             },
+            targets.gbuffer(fragment_set(), nearest, false),
             frame_layout,
-            nearest,
         )?;
         Ok(SpecularSinglePass { pass })
     }
 
-    pub fn record<'a>(
-        &'a self,
-        frame: &mut Frame<'_, 'a>,
-        scene: &GpuScene,
-        targets: &Targets,
-        frame_set: DescriptorSet,
-    ) {
-        self.pass.record(frame, frame_set, &[targets.gbuf_normal_id, targets.depth_id, scene.environment_id]);
+    pub fn record<'a>(&'a self, frame: &mut Frame<'_, 'a>, scene: &GpuScene, frame_set: DescriptorSet) {
+        self.pass.record(frame, frame_set, &[scene.environment_id]);
     }
 }

@@ -35,11 +35,8 @@
 //! the same operator on the CPU (compare, report, reference PNGs).
 
 use crate::frame::targets::Targets;
-use crate::gpu::{
-    vk, Access, Buffer, ComputePipeline, DescriptorSet, DescriptorSetLayout, DescriptorWrite, GpuResult, Image,
-    ImageDesc, MemoryLocation, PipelineLayout,
-};
-use crate::graph::{BufferId, Frame, ImageId};
+use crate::gpu::{vk, Access, Buffer, ComputePipeline, DescriptorSet, GpuResult, Image, ImageDesc, MemoryLocation};
+use crate::graph::{Bindings, BoundSet, BufferId, Frame, ImageId};
 use crate::scene::techniques::TonemapAdaptiveParams;
 use crate::scene::Scene;
 use crate::technique::{
@@ -50,7 +47,7 @@ use crate::{
     TONEMAP_BINDING_STATS, TONEMAP_BLOCK, TONEMAP_GROUP,
 };
 
-use super::fullscreen::{FullscreenDesc, FullscreenPass};
+use super::fullscreen::{fragment_set, FullscreenDesc, FullscreenPass};
 
 pub const TONEMAP: &str = "tonemap";
 /// The adaptive tone map (`render.tonemap = "adaptive"`): the log-average luminance by a
@@ -137,9 +134,7 @@ struct Adaptive {
     params: TonemapAdaptiveParams,
     exposure: f32,
     groups: [u32; 2],
-    _set_layout: DescriptorSetLayout,
-    set: DescriptorSet,
-    _layout: PipelineLayout,
+    set: BoundSet,
     log_average: ComputePipeline,
     adapt: ComputePipeline,
     _partials: Buffer,
@@ -163,28 +158,23 @@ impl TonemapPass {
     pub fn new(s: &mut Setup<'_>, adaptive: Option<(TonemapAdaptiveParams, f32)>) -> GpuResult<Self> {
         let (ctx, frame_layout, targets, nearest, slots) = (s.ctx, s.frame_layout, s.targets, s.nearest, s.slots);
         let graph = &mut *s.graph;
+        let desc = |fragment_shader| FullscreenDesc {
+            name: TONEMAP,
+            fragment_shader,
+            target: (&targets.ldr, targets.ldr_id),
+            clear: true,
+            specialization: &[],
+        };
+        let hdr = fragment_set().sampled(BINDING_HDR, &targets.hdr, nearest).read(targets.hdr_id);
         let Some((params, exposure)) = adaptive else {
-            let pass = FullscreenPass::new(
-                ctx,
-                &FullscreenDesc {
-                    name: TONEMAP,
-                    fragment_shader: "tonemap/tonemap.frag",
-                    inputs: &[(BINDING_HDR, &targets.hdr)],
-                    target: (&targets.ldr, targets.ldr_id),
-                    clear: true,
-                    specialization: &[],
-                },
-                frame_layout,
-                nearest,
-            )?;
+            let pass = FullscreenPass::new(ctx, &desc("tonemap/tonemap.frag"), hdr, frame_layout)?;
             return Ok(TonemapPass { pass, adaptive: None });
         };
         use vk::ImageUsageFlags as U;
-        let state = Image::new(
+        let (state, state_id) = graph.image(
             ctx,
             &ImageDesc::d2("tonemap_state", vk::Format::R32G32B32A32_SFLOAT, 2, 1, U::STORAGE | U::SAMPLED),
         )?;
-        let state_id = graph.register_image(&state);
         let tile = TONEMAP_GROUP * TONEMAP_BLOCK;
         let groups = [targets.width.div_ceil(tile), targets.height.div_ceil(tile)];
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
@@ -197,54 +187,28 @@ impl TonemapPass {
         )?;
         let stats = Buffer::new(ctx, "tonemap_stats", 16 * slots.max(1) as u64, storage, MemoryLocation::GpuToCpu)?;
         let (partials_id, stats_id) = (graph.register_buffer(&partials), graph.register_buffer(&stats));
-        let stage = vk::ShaderStageFlags::COMPUTE;
-        let set_layout = DescriptorSetLayout::new(
-            ctx,
-            "tonemap_reduce",
-            &[
-                (TONEMAP_BINDING_HDR, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, stage),
-                (TONEMAP_BINDING_PARTIALS, vk::DescriptorType::STORAGE_BUFFER, stage),
-                (TONEMAP_BINDING_STATE, vk::DescriptorType::STORAGE_IMAGE, stage),
-                (TONEMAP_BINDING_STATS, vk::DescriptorType::STORAGE_BUFFER, stage),
-            ],
-            1,
-        )?;
-        let sampled = Access::ComputeSampled.info(false).layout;
-        let set = set_layout.allocate(
-            "tonemap_reduce",
-            &[
-                DescriptorWrite::Sampled(TONEMAP_BINDING_HDR, targets.hdr.view(), nearest, sampled),
-                DescriptorWrite::Storage(TONEMAP_BINDING_PARTIALS, &partials),
-                DescriptorWrite::StorageImage(TONEMAP_BINDING_STATE, state.view()),
-                DescriptorWrite::Storage(TONEMAP_BINDING_STATS, &stats),
-            ],
-        )?;
-        let layout =
-            PipelineLayout::new(ctx, "tonemap_reduce", &[&set_layout], std::mem::size_of::<AdaptPush>() as u32)?;
-        let log_average = ComputePipeline::new(ctx, TONEMAP_LOG_AVERAGE, "tonemap/log_average.comp", &layout, &[])?;
-        let adapt = ComputePipeline::new(ctx, TONEMAP_ADAPT, "tonemap/adapt.comp", &layout, &[])?;
-        let pass = FullscreenPass::new(
-            ctx,
-            &FullscreenDesc {
-                name: TONEMAP,
-                fragment_shader: "tonemap/adaptive.frag",
-                inputs: &[(BINDING_HDR, &targets.hdr), (BINDING_TONEMAP_STATE, &state)],
-                target: (&targets.ldr, targets.ldr_id),
-                clear: true,
-                specialization: &[],
-            },
-            frame_layout,
-            nearest,
-        )?;
+        // One set for both kernels; each pass declares the accesses of its own kernel.
+        let set = Bindings::new(vk::ShaderStageFlags::COMPUTE)
+            .sampled(TONEMAP_BINDING_HDR, &targets.hdr, nearest)
+            .storage(TONEMAP_BINDING_PARTIALS, &partials)
+            .storage_image(TONEMAP_BINDING_STATE, &state)
+            .storage(TONEMAP_BINDING_STATS, &stats)
+            .build(ctx, "tonemap_reduce")?;
+        let push = std::mem::size_of::<AdaptPush>() as u32;
+        let sets = [set.layout()];
+        let log_average = ComputePipeline::new(ctx, TONEMAP_LOG_AVERAGE, "tonemap/log_average.comp", &sets, push, &[])?;
+        let adapt = ComputePipeline::new(ctx, TONEMAP_ADAPT, "tonemap/adapt.comp", &sets, push, &[])?;
+        // The host reads this frame's statistics after its fence: the pass makes them visible.
+        let inputs =
+            hdr.sampled(BINDING_TONEMAP_STATE, &state, nearest).read(state_id).access(stats_id, Access::HostRead);
+        let pass = FullscreenPass::new(ctx, &desc("tonemap/adaptive.frag"), inputs, frame_layout)?;
         Ok(TonemapPass {
             pass,
             adaptive: Some(Adaptive {
                 params,
                 exposure,
                 groups,
-                _set_layout: set_layout,
                 set,
-                _layout: layout,
                 log_average,
                 adapt,
                 _partials: partials,
@@ -269,7 +233,7 @@ impl TonemapPass {
         dt: Option<f32>,
     ) {
         let Some(a) = &self.adaptive else {
-            self.pass.record(frame, frame_set, &[targets.hdr_id]);
+            self.pass.record(frame, frame_set, &[]);
             return;
         };
         let p = &a.params;
@@ -278,7 +242,7 @@ impl TonemapPass {
             params: [dt.map_or(-1.0, |t| t.max(0.0)), p.delta, p.key.unwrap_or(0.0), p.white.unwrap_or(0.0)],
             params2: [p.tau_rod, p.tau_cone, p.luminance_scale, a.exposure],
         };
-        let (set, pipeline, groups) = (a.set, &a.log_average, a.groups);
+        let (set, pipeline, groups) = (a.set.set(), &a.log_average, a.groups);
         frame
             .pass(TONEMAP_LOG_AVERAGE)
             .read(targets.hdr_id, Access::ComputeSampled)
@@ -299,8 +263,7 @@ impl TonemapPass {
                 cmd.push_compute(pipeline, &push);
                 cmd.dispatch(1, 1, 1);
             });
-        // The host reads this frame's statistics after its fence: make them visible to it.
-        self.pass.record_with(frame, frame_set, &[targets.hdr_id, a.state_id], &[(a.stats_id, Access::HostRead)]);
+        self.pass.record(frame, frame_set, &[]);
     }
 
     /// The statistics frame slot `slot` wrote (call after the slot's fence); `None` with the

@@ -25,20 +25,18 @@
 //! Units: the map holds flux per texel (W). Deferred shading divides by the receiver area a
 //! texel covers (glsl/shading/deferred.frag, `caustic_irradiance`), giving irradiance in
 //! W/m^2 comparable with the reference's photon-mapped caustics.
-use std::sync::Arc;
 
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
 
 use crate::frame::gpu_scene::{cube_face_views, Draw, GpuScene};
 use crate::frame::gpu_types::ShadowPush;
-use crate::frame::targets::{Targets, CAUSTIC_FORMAT, DEPTH_FORMAT, SHADOW_FORMAT};
+use crate::frame::targets::{Targets, DEPTH_FORMAT, SHADOW_FORMAT};
 use crate::gpu::{
-    vk, Access, Attachment, Blend, Buffer, Clear, DepthState, DescriptorSet, DescriptorSetLayout, DescriptorWrite,
-    Framebuffer, GpuContext, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc, ImageViewKind,
-    MemoryLocation, OcclusionQueryPool, PipelineLayout, RenderPass, RenderPassDesc, Sampler, SamplerDesc, VertexLayout,
+    vk, Access, Blend, Buffer, Clear, DepthState, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc,
+    ImageViewKind, MemoryLocation, OcclusionQueryPool, RenderTarget, Sampler, SamplerDesc,
 };
-use crate::graph::{BufferId, Frame, FrameGraph, ImageId};
+use crate::graph::{Bindings, BoundSet, BufferId, Frame, ImageId};
 use crate::scene::techniques::{CausticsMapParams, Flux, Newton};
 use crate::scene::{Light, Material, Scene};
 use crate::technique::baseline::shadow_map::FAR_DISTANCE;
@@ -95,7 +93,7 @@ fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
 
 fn create(s: &mut Setup<'_>) -> Result<Box<dyn Technique>, RenderError> {
     let p = params("caustics_map", CausticsMapParams::from_settings(&s.scene.render))?;
-    Ok(Box::new(CausticsMapPass::new(s.ctx, p, s.scene, s.gpu, s.graph, s.targets)?))
+    Ok(Box::new(CausticsMapPass::new(s, p)?))
 }
 
 impl Technique for CausticsMapPass {
@@ -146,20 +144,19 @@ struct SplatPush {
 const _: () = assert!(std::mem::size_of::<SplatPush>() <= 128);
 
 /// One layer of the caustic atlas to splat into, with the source faces of its light.
+/// A layer of the caustic atlas and what is splatted into it.
 struct Destination {
-    framebuffer: Framebuffer,
+    layer: u32,
     push: SplatPush,
 }
 
 /// A face of the receivers' distance atlas.
 struct ReceiverFace {
-    framebuffer: Framebuffer,
+    layer: u32,
     push: ShadowPush,
 }
 
 struct SourceFace {
-    front: Framebuffer,
-    back: Framebuffer,
     view_proj: Mat4,
     light: [f32; 4],
 }
@@ -236,9 +233,8 @@ fn specular_bounds(scene: &Scene) -> (Vec3, f32) {
 
 pub struct CausticsMapPass {
     params: CausticsMapParams,
-    // Receivers.
-    receiver_pass: RenderPass,
-    _receiver_layout: PipelineLayout,
+    // Receivers: a framebuffer per atlas layer.
+    receiver_target: RenderTarget,
     receiver_pipeline: GraphicsPipeline,
     _receiver_atlas: Image,
     _receiver_depth: Image,
@@ -248,11 +244,9 @@ pub struct CausticsMapPass {
     receiver_draws: Vec<Draw>,
     // Refractors.
     refractors: RefractorLayers,
-    // Splats.
-    splat_pass: RenderPass,
-    _set_layout: DescriptorSetLayout,
-    set: DescriptorSet,
-    _splat_layout: PipelineLayout,
+    // Splats: a framebuffer per caustic-atlas layer.
+    splat_target: RenderTarget,
+    set: BoundSet,
     splat_pipeline: GraphicsPipeline,
     destinations: Vec<Destination>,
     /// Splat instances: 3 with a dispersive (RGB ior) dielectric, one per channel; else 1.
@@ -262,15 +256,9 @@ pub struct CausticsMapPass {
 }
 
 impl CausticsMapPass {
-    pub fn new(
-        ctx: &Arc<GpuContext>,
-        params: CausticsMapParams,
-        scene: &Scene,
-        gpu: &GpuScene,
-        graph: &mut FrameGraph,
-        targets: &Targets,
-    ) -> GpuResult<Self> {
+    pub fn new(s: &mut Setup<'_>, params: CausticsMapParams) -> GpuResult<Self> {
         use vk::ImageUsageFlags as U;
+        let (ctx, scene, gpu, targets) = (s.ctx, s.scene, s.gpu, s.targets);
         let size = params.map_size;
         let grid = params.grid;
         let occlusion = params.flux == Flux::OcclusionQuery;
@@ -278,91 +266,68 @@ impl CausticsMapPass {
         let layers = lights * SHADOW_LAYERS_PER_LIGHT;
 
         // 1. Receivers: the shadow pass's shaders, the diffuse draws only.
-        let receiver_pass = RenderPass::new(
+        let (receiver_atlas, receiver_atlas_id) = s.graph.image(
+            ctx,
+            &ImageDesc::square(
+                "caustic_receivers",
+                SHADOW_FORMAT,
+                size,
+                layers,
+                ImageViewKind::CubeArray,
+                U::COLOR_ATTACHMENT | U::SAMPLED,
+            ),
+        )?;
+        let (receiver_depth, receiver_depth_id) = s.graph.image(
+            ctx,
+            &ImageDesc::square(
+                "caustic_receivers_depth",
+                DEPTH_FORMAT,
+                size,
+                layers,
+                ImageViewKind::D2Array,
+                U::DEPTH_STENCIL_ATTACHMENT,
+            ),
+        )?;
+        let receiver_target = RenderTarget::layered(
             ctx,
             CAUSTICS_MAP_RECEIVERS,
-            &RenderPassDesc {
-                colors: vec![Attachment { format: SHADOW_FORMAT, clear: true }],
-                depth: Some(Attachment { format: DEPTH_FORMAT, clear: true }),
-                depth_read_only: false,
-            },
+            &[&receiver_atlas],
+            Some(&receiver_depth),
+            true,
+            layers,
         )?;
-        let receiver_layout =
-            PipelineLayout::new(ctx, CAUSTICS_MAP_RECEIVERS, &[], std::mem::size_of::<ShadowPush>() as u32)?;
         let receiver_pipeline = GraphicsPipeline::new(
             ctx,
-            &GraphicsPipelineDesc {
-                name: CAUSTICS_MAP_RECEIVERS,
-                vertex_shader: "shadow/shadow.vert",
-                fragment_shader: "shadow/shadow.frag",
-                vertex: VertexLayout::Mesh,
-                topology: vk::PrimitiveTopology::TRIANGLE_LIST,
-                cull: vk::CullModeFlags::NONE,
-                depth: DepthState::LESS,
-                blend: &[Blend::Off],
-                specialization: &[],
-            },
-            &receiver_layout,
-            &receiver_pass,
+            &GraphicsPipelineDesc::mesh(
+                CAUSTICS_MAP_RECEIVERS,
+                "shadow/shadow.vert",
+                "shadow/shadow.frag",
+                DepthState::LESS,
+            ),
+            &[],
+            std::mem::size_of::<ShadowPush>() as u32,
+            &receiver_target.pass,
         )?;
-        let receiver_atlas = Image::new(
-            ctx,
-            &ImageDesc {
-                name: "caustic_receivers".into(),
-                format: SHADOW_FORMAT,
-                width: size,
-                height: size,
-                layers,
-                usage: U::COLOR_ATTACHMENT | U::SAMPLED,
-                view: ImageViewKind::CubeArray,
-            },
-        )?;
-        let receiver_depth = Image::new(
-            ctx,
-            &ImageDesc {
-                name: "caustic_receivers_depth".into(),
-                format: DEPTH_FORMAT,
-                width: size,
-                height: size,
-                layers,
-                usage: U::DEPTH_STENCIL_ATTACHMENT,
-                view: ImageViewKind::D2Array,
-            },
-        )?;
-        let mut receiver_faces = Vec::new();
-        for face in &gpu.shadow_faces {
-            receiver_faces.push(ReceiverFace {
-                framebuffer: Framebuffer::new(
-                    ctx,
-                    &format!("caustic_receivers_{}", face.layer),
-                    &receiver_pass,
-                    &[receiver_atlas.layer_view(face.layer), receiver_depth.layer_view(face.layer)],
-                    receiver_atlas.extent(),
-                )?,
+        let receiver_faces = gpu
+            .shadow_faces
+            .iter()
+            .map(|face| ReceiverFace {
+                layer: face.layer,
                 push: ShadowPush {
                     view_proj: face.view_proj.to_cols_array_2d(),
                     light: face.light,
                     origin: face.origin,
                 },
-            });
-        }
+            })
+            .collect();
         let draws_where = |pred: fn(&Material) -> bool| -> Vec<Draw> {
             gpu.draws.iter().filter(|d| pred(&scene.materials[d.material as usize])).copied().collect()
         };
         let receiver_draws = draws_where(Material::is_diffuse);
 
         // 2. Source faces of every light, and the refractor textures.
-        let (refractors, faces, light_sources) = RefractorLayers::new(
-            ctx,
-            CAUSTICS_MAP_REFRACTORS,
-            scene,
-            gpu,
-            graph,
-            grid,
-            specular_bounds(scene),
-            occlusion,
-        )?;
-        let layer_images = &refractors.layers;
+        let (refractors, faces, light_sources) =
+            RefractorLayers::new(s, CAUSTICS_MAP_REFRACTORS, grid, specular_bounds(scene), occlusion)?;
 
         // 3. The splat pass.
         let faces_buffer = Buffer::with_data(
@@ -375,66 +340,41 @@ impl CausticsMapPass {
         // instead of piecewise constant, so that the finite difference of Eq. 5 is not zero.
         let linear = Sampler::new(ctx, "caustic_linear", SamplerDesc::LINEAR_CLAMP)?;
         let nearest = Sampler::new(ctx, "caustic_nearest", SamplerDesc::NEAREST_CLAMP)?;
-        let vs = vk::ShaderStageFlags::VERTEX;
-        let sampled = vk::DescriptorType::COMBINED_IMAGE_SAMPLER;
-        let set_layout = DescriptorSetLayout::new(
+        let mut set = Bindings::new(vk::ShaderStageFlags::VERTEX)
+            .storage(CAUSTIC_BINDING_FACES, &faces_buffer)
+            .storage(CAUSTIC_BINDING_MATERIALS, &gpu.materials)
+            .sampled(CAUSTIC_BINDING_RECEIVER_CUBE, &receiver_atlas, &linear)
+            .read(receiver_atlas_id)
+            .sampled_view(CAUSTIC_BINDING_RECEIVER_2D, &receiver_atlas, receiver_atlas.array_view(), &linear);
+        for (binding, (image, id)) in refractor_bindings().into_iter().zip(&refractors.layers) {
+            set = set.sampled(binding, image, &nearest).read(*id);
+        }
+        set = set.storage(CAUSTIC_BINDING_VISIBLE, &refractors.visible);
+        if occlusion {
+            set = set.read(refractors.visible_id);
+        }
+        let set = set.build(ctx, CAUSTICS_MAP)?;
+        let splat_target = RenderTarget::layered(
             ctx,
             CAUSTICS_MAP,
-            &[
-                (CAUSTIC_BINDING_FACES, vk::DescriptorType::STORAGE_BUFFER, vs),
-                (CAUSTIC_BINDING_MATERIALS, vk::DescriptorType::STORAGE_BUFFER, vs),
-                (CAUSTIC_BINDING_RECEIVER_CUBE, sampled, vs),
-                (CAUSTIC_BINDING_RECEIVER_2D, sampled, vs),
-                (CAUSTIC_BINDING_FRONT_POSITION, sampled, vs),
-                (CAUSTIC_BINDING_FRONT_NORMAL, sampled, vs),
-                (CAUSTIC_BINDING_BACK_POSITION, sampled, vs),
-                (CAUSTIC_BINDING_BACK_NORMAL, sampled, vs),
-                (CAUSTIC_BINDING_VISIBLE, vk::DescriptorType::STORAGE_BUFFER, vs),
-            ],
-            1,
+            &[&targets.caustic_atlas],
+            None,
+            true,
+            targets.caustic_atlas.layers(),
         )?;
-        let read_only = Access::VertexSampled.info(false).layout;
-        let set = set_layout.allocate(
-            CAUSTICS_MAP,
-            &[
-                DescriptorWrite::Storage(CAUSTIC_BINDING_FACES, &faces_buffer),
-                DescriptorWrite::Storage(CAUSTIC_BINDING_MATERIALS, &gpu.materials),
-                DescriptorWrite::Sampled(CAUSTIC_BINDING_RECEIVER_CUBE, receiver_atlas.view(), &linear, read_only),
-                DescriptorWrite::Sampled(CAUSTIC_BINDING_RECEIVER_2D, receiver_atlas.array_view(), &linear, read_only),
-                DescriptorWrite::Sampled(CAUSTIC_BINDING_FRONT_POSITION, layer_images[0].0.view(), &nearest, read_only),
-                DescriptorWrite::Sampled(CAUSTIC_BINDING_FRONT_NORMAL, layer_images[1].0.view(), &nearest, read_only),
-                DescriptorWrite::Sampled(CAUSTIC_BINDING_BACK_POSITION, layer_images[2].0.view(), &nearest, read_only),
-                DescriptorWrite::Sampled(CAUSTIC_BINDING_BACK_NORMAL, layer_images[3].0.view(), &nearest, read_only),
-                DescriptorWrite::Storage(CAUSTIC_BINDING_VISIBLE, &refractors.visible),
-            ],
-        )?;
-        let splat_pass = RenderPass::new(
-            ctx,
-            CAUSTICS_MAP,
-            &RenderPassDesc {
-                colors: vec![Attachment { format: CAUSTIC_FORMAT, clear: true }],
-                depth: None,
-                depth_read_only: false,
-            },
-        )?;
-        let splat_layout =
-            PipelineLayout::new(ctx, CAUSTICS_MAP, &[&set_layout], std::mem::size_of::<SplatPush>() as u32)?;
         let splat_pipeline = GraphicsPipeline::new(
             ctx,
             &GraphicsPipelineDesc {
-                name: CAUSTICS_MAP,
                 vertex_shader: "caustics/splat.vert",
-                fragment_shader: "caustics/splat.frag",
-                vertex: VertexLayout::None,
                 topology: vk::PrimitiveTopology::POINT_LIST,
-                cull: vk::CullModeFlags::NONE,
-                depth: DepthState::OFF,
                 blend: &[Blend::Additive],
                 // Eq. 6's flux weight: FLUX_SOLID_ANGLE or FLUX_OCCLUSION_QUERY.
                 specialization: &[if occlusion { FLUX_OCCLUSION_QUERY } else { FLUX_SOLID_ANGLE }],
+                ..GraphicsPipelineDesc::fullscreen(CAUSTICS_MAP, "caustics/splat.frag")
             },
-            &splat_layout,
-            &splat_pass,
+            &[set.layout()],
+            std::mem::size_of::<SplatPush>() as u32,
+            &splat_target.pass,
         )?;
         let dispersive = scene.materials.iter().any(|m| match m {
             Material::Dielectric { ior, .. } => ior.x != ior.y || ior.y != ior.z,
@@ -463,13 +403,7 @@ impl CausticsMapPass {
             };
             for (layer, view_proj, cube_face) in dest {
                 destinations.push(Destination {
-                    framebuffer: Framebuffer::new(
-                        ctx,
-                        &format!("caustic_map_{layer}"),
-                        &splat_pass,
-                        &[targets.caustic_atlas.layer_view(layer)],
-                        targets.caustic_atlas.extent(),
-                    )?,
+                    layer,
                     push: SplatPush {
                         dest_view_proj: view_proj.to_cols_array_2d(),
                         face: [first, count, cube_face, channels],
@@ -481,20 +415,17 @@ impl CausticsMapPass {
 
         Ok(CausticsMapPass {
             params,
-            receiver_pass,
-            _receiver_layout: receiver_layout,
+            receiver_target,
             receiver_pipeline,
-            receiver_atlas_id: graph.register_image(&receiver_atlas),
-            receiver_depth_id: graph.register_image(&receiver_depth),
+            receiver_atlas_id,
+            receiver_depth_id,
             _receiver_atlas: receiver_atlas,
             _receiver_depth: receiver_depth,
             receiver_faces,
             receiver_draws,
             refractors,
-            splat_pass,
-            _set_layout: set_layout,
+            splat_target,
             set,
-            _splat_layout: splat_layout,
             splat_pipeline,
             destinations,
             channels,
@@ -519,9 +450,9 @@ impl CausticsMapPass {
             .write(self.receiver_depth_id, Access::DepthAttachment)
             .record(move |cmd| {
                 for face in &self.receiver_faces {
-                    cmd.in_render_pass(
-                        &self.receiver_pass,
-                        &face.framebuffer,
+                    cmd.in_target(
+                        &self.receiver_target,
+                        face.layer as usize,
                         &[Clear::Color([FAR_DISTANCE; 4]), Clear::Depth(1.0)],
                         |cmd| {
                             cmd.bind_graphics(&self.receiver_pipeline, &[]);
@@ -537,18 +468,12 @@ impl CausticsMapPass {
 
         self.refractors.record(frame, scene);
 
-        let mut pass = frame.pass(CAUSTICS_MAP).read(self.receiver_atlas_id, Access::VertexSampled);
-        for (_, id) in &self.refractors.layers[..4] {
-            pass = pass.read(*id, Access::VertexSampled);
-        }
-        if self.params.flux == Flux::OcclusionQuery {
-            pass = pass.read_buffer(self.refractors.visible_id, Access::VertexStorageRead);
-        }
+        let pass = frame.pass(CAUSTICS_MAP).uses(&self.set);
         let grid = self.params.grid;
         pass.write(targets.caustic_atlas_id, Access::ColorAttachment).record(move |cmd| {
             for d in &self.destinations {
-                cmd.in_render_pass(&self.splat_pass, &d.framebuffer, &[Clear::Color([0.0; 4])], |cmd| {
-                    cmd.bind_graphics(&self.splat_pipeline, &[self.set]);
+                cmd.in_target(&self.splat_target, d.layer as usize, &[Clear::Color([0.0; 4])], |cmd| {
+                    cmd.bind_graphics(&self.splat_pipeline, &[self.set.set()]);
                     cmd.push_graphics(&self.splat_pipeline, &d.push);
                     cmd.draw(d.push.face[1] * grid * grid, self.channels);
                 });
@@ -564,8 +489,9 @@ impl CausticsMapPass {
 /// src/technique/caustics/photon_buffer.rs) traces its photons from them.
 pub struct RefractorLayers {
     name: &'static str,
-    pass: RenderPass,
-    _layout: PipelineLayout,
+    /// Per source face: the front layers' framebuffer, then the back layers'.
+    front: RenderTarget,
+    back: RenderTarget,
     front_pipeline: GraphicsPipeline,
     back_pipeline: GraphicsPipeline,
     /// front position, front normal, back position, back normal, front depth, back depth.
@@ -580,24 +506,33 @@ pub struct RefractorLayers {
     pub visible_id: BufferId,
 }
 
+/// Where the caustic shaders (glsl/caustics/light_path.glsl) read the first four of
+/// [`RefractorLayers::layers`].
+pub fn refractor_bindings() -> [u32; 4] {
+    [
+        CAUSTIC_BINDING_FRONT_POSITION,
+        CAUSTIC_BINDING_FRONT_NORMAL,
+        CAUSTIC_BINDING_BACK_POSITION,
+        CAUSTIC_BINDING_BACK_NORMAL,
+    ]
+}
+
 impl RefractorLayers {
     /// The layers at `grid`^2 texels per face, recorded as the pass `name`, with the light's
     /// faces fitted to the sphere `bounds` (centre, radius) around the specular objects.
     /// Returns the source faces of every light and, per light, (its first face, its number
     /// of faces).
-    #[allow(clippy::type_complexity, clippy::too_many_arguments)] // reason: the three results are built together; the
-                                                                  // arguments are the scene, the graph and the three settings each caller differs in
+    #[allow(clippy::type_complexity)] // reason: the three results are built together
     pub fn new(
-        ctx: &Arc<GpuContext>,
+        s: &mut Setup<'_>,
         name: &'static str,
-        scene: &Scene,
-        gpu: &GpuScene,
-        graph: &mut FrameGraph,
         grid: u32,
         bounds: (Vec3, f32),
         occlusion_queries: bool,
     ) -> GpuResult<(Self, Vec<GpuCausticFace>, Vec<(u32, u32)>)> {
         use vk::ImageUsageFlags as U;
+        let (ctx, scene, gpu) = (s.ctx, s.scene, s.gpu);
+        let graph = &mut *s.graph;
         let (center, radius) = bounds;
         let mut faces: Vec<GpuCausticFace> = Vec::new();
         let mut light_sources = Vec::new();
@@ -612,39 +547,6 @@ impl RefractorLayers {
             }
             light_sources.push((first, faces.len() as u32 - first));
         }
-        let refractor_pass = RenderPass::new(
-            ctx,
-            name,
-            &RenderPassDesc {
-                colors: vec![
-                    Attachment { format: LAYER_FORMAT, clear: true },
-                    Attachment { format: LAYER_FORMAT, clear: true },
-                ],
-                depth: Some(Attachment { format: DEPTH_FORMAT, clear: true }),
-                depth_read_only: false,
-            },
-        )?;
-        let refractor_layout = PipelineLayout::new(ctx, name, &[], std::mem::size_of::<RefractorPush>() as u32)?;
-        let refractor_pipeline = |mode: u32, name: &str| {
-            GraphicsPipeline::new(
-                ctx,
-                &GraphicsPipelineDesc {
-                    name,
-                    vertex_shader: "caustics/refractor.vert",
-                    fragment_shader: "caustics/refractor.frag",
-                    vertex: VertexLayout::Mesh,
-                    topology: vk::PrimitiveTopology::TRIANGLE_LIST,
-                    cull: vk::CullModeFlags::NONE,
-                    depth: DepthState::LESS,
-                    blend: &[Blend::Off, Blend::Off],
-                    specialization: &[mode],
-                },
-                &refractor_layout,
-                &refractor_pass,
-            )
-        };
-        let front_pipeline = refractor_pipeline(CAUSTIC_LAYER_FRONT, &format!("{name}_front"))?;
-        let back_pipeline = refractor_pipeline(CAUSTIC_LAYER_BACK, &format!("{name}_back"))?;
         let n_faces = faces.len() as u32;
         let mut layer_images = Vec::new();
         for (image_name, format, usage) in [
@@ -655,35 +557,43 @@ impl RefractorLayers {
             ("front_depth", DEPTH_FORMAT, U::DEPTH_STENCIL_ATTACHMENT),
             ("back_depth", DEPTH_FORMAT, U::DEPTH_STENCIL_ATTACHMENT),
         ] {
-            let image = Image::new(
+            let desc = ImageDesc::square(
+                &format!("{name}_{image_name}"),
+                format,
+                grid,
+                n_faces,
+                ImageViewKind::D2Array,
+                usage,
+            );
+            layer_images.push(graph.image(ctx, &desc)?);
+        }
+        let l = |i: usize| &layer_images[i].0;
+        let front = RenderTarget::layered(ctx, &format!("{name}_front"), &[l(0), l(1)], Some(l(4)), true, n_faces)?;
+        let back = RenderTarget::layered(ctx, &format!("{name}_back"), &[l(2), l(3)], Some(l(5)), true, n_faces)?;
+        let refractor_pipeline = |mode: u32, name: &str| {
+            GraphicsPipeline::new(
                 ctx,
-                &ImageDesc {
-                    name: format!("{name}_{image_name}"),
-                    format,
-                    width: grid,
-                    height: grid,
-                    layers: n_faces,
-                    usage,
-                    view: ImageViewKind::D2Array,
+                &GraphicsPipelineDesc {
+                    blend: &[Blend::Off, Blend::Off],
+                    specialization: &[mode],
+                    ..GraphicsPipelineDesc::mesh(
+                        name,
+                        "caustics/refractor.vert",
+                        "caustics/refractor.frag",
+                        DepthState::LESS,
+                    )
                 },
-            )?;
-            let id = graph.register_image(&image);
-            layer_images.push((image, id));
-        }
-        let extent = vk::Extent2D { width: grid, height: grid };
-        let mut sources = Vec::new();
-        for (s, f) in faces.iter().enumerate() {
-            let s = s as u32;
-            let views = |a: usize, b: usize, depth: usize| {
-                [layer_images[a].0.layer_view(s), layer_images[b].0.layer_view(s), layer_images[depth].0.layer_view(s)]
-            };
-            sources.push(SourceFace {
-                front: Framebuffer::new(ctx, &format!("{name}_front_{s}"), &refractor_pass, &views(0, 1, 4), extent)?,
-                back: Framebuffer::new(ctx, &format!("{name}_back_{s}"), &refractor_pass, &views(2, 3, 5), extent)?,
-                view_proj: Mat4::from_cols_array_2d(&f.view_proj),
-                light: f.light,
-            });
-        }
+                &[],
+                std::mem::size_of::<RefractorPush>() as u32,
+                &front.pass,
+            )
+        };
+        let front_pipeline = refractor_pipeline(CAUSTIC_LAYER_FRONT, &format!("{name}_front"))?;
+        let back_pipeline = refractor_pipeline(CAUSTIC_LAYER_BACK, &format!("{name}_back"))?;
+        let sources = faces
+            .iter()
+            .map(|f| SourceFace { view_proj: Mat4::from_cols_array_2d(&f.view_proj), light: f.light })
+            .collect();
         let specular_draws =
             gpu.draws.iter().filter(|d| is_specular(&scene.materials[d.material as usize])).copied().collect();
         let queries = if occlusion_queries {
@@ -705,8 +615,8 @@ impl RefractorLayers {
             visible,
             visible_id,
             name,
-            pass: refractor_pass,
-            _layout: refractor_layout,
+            front,
+            back,
             front_pipeline,
             back_pipeline,
             layers: layer_images,
@@ -729,11 +639,11 @@ impl RefractorLayers {
                 cmd.reset_occlusion_queries(q);
             }
             for (face, s) in self.sources.iter().enumerate() {
-                let layers = [(&s.front, &self.front_pipeline), (&s.back, &self.back_pipeline)];
-                for (layer, (fb, pipeline)) in layers.into_iter().enumerate() {
-                    cmd.in_render_pass(
-                        &self.pass,
-                        fb,
+                let layers = [(&self.front, &self.front_pipeline), (&self.back, &self.back_pipeline)];
+                for (layer, (target, pipeline)) in layers.into_iter().enumerate() {
+                    cmd.in_target(
+                        target,
+                        face,
                         &[Clear::Color([0.0; 4]), Clear::Color([0.0; 4]), Clear::Depth(1.0)],
                         |cmd| {
                             // V of Eq. 6: "the number of rasterized pixels" of the front surface.

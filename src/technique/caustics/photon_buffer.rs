@@ -44,23 +44,19 @@ use bytemuck::{Pod, Zeroable};
 
 use crate::frame::gpu_scene::GpuScene;
 use crate::gpu::{
-    vk, Access, Attachment, Blend, Buffer, Clear, DepthState, DescriptorSet, DescriptorSetLayout, DescriptorWrite,
-    Framebuffer, GpuContext, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc, ImageViewKind,
-    PipelineLayout, RenderPass, RenderPassDesc, Sampler, SamplerDesc, VertexLayout,
+    vk, Access, Blend, Buffer, Clear, GpuContext, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc,
+    ImageViewKind, RenderTarget, Sampler, SamplerDesc,
 };
-use crate::graph::{Frame, FrameGraph, ImageId};
+use crate::graph::{Bindings, BoundSet, Frame, FrameGraph, ImageId};
 use crate::scene::techniques::{PhotonBufferParams, PhotonNormalization};
 use crate::scene::Scene;
-use crate::technique::caustics::caustics_map::{is_specular, RefractorLayers};
+use crate::technique::caustics::caustics_map::{is_specular, refractor_bindings, RefractorLayers};
 use crate::technique::refraction::nearby_impostors::{nearby_objects, rect_for};
 use crate::technique::{
     caustic_objects, list, params, tables_and_placement, FrameInputs, PlannedPass, Registration, RenderError, Setup,
     Stage, Technique,
 };
-use crate::{
-    CAUSTIC_BINDING_BACK_NORMAL, CAUSTIC_BINDING_BACK_POSITION, CAUSTIC_BINDING_FACES, CAUSTIC_BINDING_FRONT_NORMAL,
-    CAUSTIC_BINDING_FRONT_POSITION, CAUSTIC_BINDING_MATERIALS, PHOTON_BINDING_RECTS, PHOTON_PAPER, PHOTON_PHYSICAL,
-};
+use crate::{CAUSTIC_BINDING_FACES, CAUSTIC_BINDING_MATERIALS, PHOTON_BINDING_RECTS, PHOTON_PAPER, PHOTON_PHYSICAL};
 
 /// Photon buffer and caustic textures: 32-bit float, so that counts stay exact to 2^24
 /// photons per texel and (u, v) resolves far below a texel of the largest texture.
@@ -106,7 +102,7 @@ fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
 
 fn create(s: &mut Setup<'_>) -> Result<Box<dyn Technique>, RenderError> {
     let p = params("photon_buffer", PhotonBufferParams::from_settings(&s.scene.render))?;
-    Ok(Box::new(PhotonBufferPass::new(s.ctx, p, s.scene, s.gpu, s.graph, s.photon_caustics)?))
+    Ok(Box::new(PhotonBufferPass::new(s, p)?))
 }
 
 impl Technique for PhotonBufferPass {
@@ -255,273 +251,138 @@ struct FilterPush {
 pub struct PhotonBufferPass {
     params: PhotonBufferParams,
     refractors: RefractorLayers,
-    // §3.1 photon buffer.
-    photon_pass: RenderPass,
-    _photon_set_layout: DescriptorSetLayout,
-    photon_set: DescriptorSet,
-    _photon_layout: PipelineLayout,
+    // §3.1 photon buffer: one framebuffer per source face.
+    photon_target: RenderTarget,
+    photon_set: BoundSet,
     photon_pipeline: GraphicsPipeline,
     /// (u, v, k, 0) and the photons' power (rgb), one layer per source face.
     pub photons: (Image, ImageId),
     pub flux: (Image, ImageId),
-    photon_framebuffers: Vec<Framebuffer>,
     faces: u32,
-    // §3.2 counting.
+    // §3.2 counting: one framebuffer per rectangle.
     /// Photon power (rgb, W) and count (a) per texel, one layer per rectangle.
     pub counts: (Image, ImageId),
-    scatter_pass: RenderPass,
-    _scatter_set_layout: DescriptorSetLayout,
-    scatter_set: DescriptorSet,
-    _scatter_layout: PipelineLayout,
+    scatter_target: RenderTarget,
+    scatter_set: BoundSet,
     scatter_pipeline: GraphicsPipeline,
-    scatter_framebuffers: Vec<Framebuffer>,
-    // §3.2 filter.
-    filter_pass: RenderPass,
-    _filter_set_layout: DescriptorSetLayout,
-    filter_set: DescriptorSet,
-    _filter_layout: PipelineLayout,
+    // §3.2 filter: one framebuffer per rectangle into the caustic textures, and its push
+    // constants.
+    filter_target: RenderTarget,
+    filter_set: BoundSet,
     filter_pipeline: GraphicsPipeline,
-    /// Per rectangle: its framebuffer into the caustic textures and its push constants.
-    filter_layers: Vec<(Framebuffer, FilterPush)>,
+    filter_pushes: Vec<FilterPush>,
     _faces: Buffer,
     _sampler: Sampler,
 }
 
 impl PhotonBufferPass {
-    pub fn new(
-        ctx: &Arc<GpuContext>,
-        params: PhotonBufferParams,
-        scene: &Scene,
-        gpu: &GpuScene,
-        graph: &mut FrameGraph,
-        caustics: &PhotonCaustics,
-    ) -> GpuResult<Self> {
+    pub fn new(s: &mut Setup<'_>, params: PhotonBufferParams) -> GpuResult<Self> {
         use vk::ImageUsageFlags as U;
+        let (ctx, scene, gpu, caustics) = (s.ctx, s.scene, s.gpu, s.photon_caustics);
         let size = params.size;
-        let (refractors, faces, _) =
-            RefractorLayers::new(ctx, PHOTON_BUFFER_REFRACTORS, scene, gpu, graph, size, tight_bounds(scene), false)?;
+        let bounds = tight_bounds(scene);
+        let (refractors, faces, _) = RefractorLayers::new(s, PHOTON_BUFFER_REFRACTORS, size, bounds, false)?;
+        let graph = &mut *s.graph;
         let n_faces = faces.len() as u32;
         let faces_buffer =
             Buffer::with_data(ctx, "photon_faces", bytemuck::cast_slice(&faces), vk::BufferUsageFlags::STORAGE_BUFFER)?;
         let sampler = Sampler::new(ctx, "photon_nearest", SamplerDesc::NEAREST_CLAMP)?;
-        let read_only = Access::FragmentSampled.info(false).layout;
-        let fs = vk::ShaderStageFlags::FRAGMENT;
-        let vs = vk::ShaderStageFlags::VERTEX;
-        let sampled = vk::DescriptorType::COMBINED_IMAGE_SAMPLER;
-        let storage = vk::DescriptorType::STORAGE_BUFFER;
+        let usage = U::COLOR_ATTACHMENT | U::SAMPLED | U::TRANSFER_SRC;
+        let mut image = |name: &str, width: u32, layers: u32| {
+            graph.image(ctx, &ImageDesc::square(name, PHOTON_FORMAT, width, layers, ImageViewKind::D2Array, usage))
+        };
 
         // 1. The photon buffer: a full-screen triangle per source face.
-        let image = |name: &str, width: u32, layers: u32| {
-            Image::new(
-                ctx,
-                &ImageDesc {
-                    name: name.into(),
-                    format: PHOTON_FORMAT,
-                    width,
-                    height: width,
-                    layers,
-                    usage: U::COLOR_ATTACHMENT | U::SAMPLED | U::TRANSFER_SRC,
-                    view: ImageViewKind::D2Array,
-                },
-            )
-        };
         let photons = image("photon_buffer", size, n_faces)?;
         let flux = image("photon_buffer_flux", size, n_faces)?;
-        let photon_pass = RenderPass::new(
-            ctx,
-            PHOTON_BUFFER,
-            &RenderPassDesc {
-                colors: vec![
-                    Attachment { format: PHOTON_FORMAT, clear: true },
-                    Attachment { format: PHOTON_FORMAT, clear: true },
-                ],
-                depth: None,
-                depth_read_only: false,
-            },
-        )?;
-        let photon_set_layout = DescriptorSetLayout::new(
-            ctx,
-            PHOTON_BUFFER,
-            &[
-                (CAUSTIC_BINDING_FACES, storage, fs),
-                (CAUSTIC_BINDING_MATERIALS, storage, fs),
-                (CAUSTIC_BINDING_FRONT_POSITION, sampled, fs),
-                (CAUSTIC_BINDING_FRONT_NORMAL, sampled, fs),
-                (CAUSTIC_BINDING_BACK_POSITION, sampled, fs),
-                (CAUSTIC_BINDING_BACK_NORMAL, sampled, fs),
-                (PHOTON_BINDING_RECTS, storage, fs),
-            ],
-            1,
-        )?;
-        let layers = &refractors.layers;
-        let photon_set = photon_set_layout.allocate(
-            PHOTON_BUFFER,
-            &[
-                DescriptorWrite::Storage(CAUSTIC_BINDING_FACES, &faces_buffer),
-                DescriptorWrite::Storage(CAUSTIC_BINDING_MATERIALS, &gpu.materials),
-                DescriptorWrite::Sampled(CAUSTIC_BINDING_FRONT_POSITION, layers[0].0.view(), &sampler, read_only),
-                DescriptorWrite::Sampled(CAUSTIC_BINDING_FRONT_NORMAL, layers[1].0.view(), &sampler, read_only),
-                DescriptorWrite::Sampled(CAUSTIC_BINDING_BACK_POSITION, layers[2].0.view(), &sampler, read_only),
-                DescriptorWrite::Sampled(CAUSTIC_BINDING_BACK_NORMAL, layers[3].0.view(), &sampler, read_only),
-                DescriptorWrite::Storage(PHOTON_BINDING_RECTS, &caustics.rects),
-            ],
-        )?;
-        let photon_layout = PipelineLayout::new(ctx, PHOTON_BUFFER, &[&photon_set_layout], 16)?;
+        let photon_target = RenderTarget::layered(ctx, PHOTON_BUFFER, &[&photons.0, &flux.0], None, true, n_faces)?;
+        let mut photon_set = Bindings::new(vk::ShaderStageFlags::FRAGMENT)
+            .storage(CAUSTIC_BINDING_FACES, &faces_buffer)
+            .storage(CAUSTIC_BINDING_MATERIALS, &gpu.materials);
+        for (binding, (image, id)) in refractor_bindings().into_iter().zip(&refractors.layers) {
+            photon_set = photon_set.sampled(binding, image, &sampler).read(*id);
+        }
+        let photon_set = photon_set.storage(PHOTON_BINDING_RECTS, &caustics.rects).build(ctx, PHOTON_BUFFER)?;
         let photon_pipeline = GraphicsPipeline::new(
             ctx,
             &GraphicsPipelineDesc {
-                name: PHOTON_BUFFER,
-                vertex_shader: "common/fullscreen.vert",
-                fragment_shader: "caustics/photon_buffer.frag",
-                vertex: VertexLayout::None,
-                topology: vk::PrimitiveTopology::TRIANGLE_LIST,
-                cull: vk::CullModeFlags::NONE,
-                depth: DepthState::OFF,
                 blend: &[Blend::Off, Blend::Off],
-                specialization: &[],
+                ..GraphicsPipelineDesc::fullscreen(PHOTON_BUFFER, "caustics/photon_buffer.frag")
             },
-            &photon_layout,
-            &photon_pass,
+            &[photon_set.layout()],
+            16,
+            &photon_target.pass,
         )?;
-        let extent = vk::Extent2D { width: size, height: size };
-        let photon_framebuffers = (0..n_faces)
-            .map(|s| {
-                Framebuffer::new(
-                    ctx,
-                    &format!("photon_buffer_{s}"),
-                    &photon_pass,
-                    &[photons.layer_view(s), flux.layer_view(s)],
-                    extent,
-                )
-            })
-            .collect::<GpuResult<Vec<_>>>()?;
 
         // 2. Counting: points into the caustic textures, additively.
         let t = caustics.textures.desc.width;
         let n_rects = caustics.count;
-        let counts = Image::new(
-            ctx,
-            &ImageDesc {
-                name: "photon_counts".into(),
-                format: PHOTON_FORMAT,
-                width: t,
-                height: t,
-                layers: n_rects.max(1),
-                usage: U::COLOR_ATTACHMENT | U::SAMPLED | U::TRANSFER_SRC,
-                view: ImageViewKind::D2Array,
-            },
-        )?;
-        let single = |name: &str, target: &Image, layer: u32, pass: &RenderPass| {
-            Framebuffer::new(ctx, &format!("{name}_{layer}"), pass, &[target.layer_view(layer)], target.extent())
-        };
-        let one_target = |name: &str| {
-            RenderPass::new(
-                ctx,
-                name,
-                &RenderPassDesc {
-                    colors: vec![Attachment { format: PHOTON_FORMAT, clear: true }],
-                    depth: None,
-                    depth_read_only: false,
-                },
-            )
-        };
-        let scatter_pass = one_target(PHOTON_BUFFER_SCATTER)?;
-        let scatter_set_layout =
-            DescriptorSetLayout::new(ctx, PHOTON_BUFFER_SCATTER, &[(0, sampled, vs), (1, sampled, vs)], 1)?;
-        let vertex_read = Access::VertexSampled.info(false).layout;
-        let scatter_set = scatter_set_layout.allocate(
-            PHOTON_BUFFER_SCATTER,
-            &[
-                DescriptorWrite::Sampled(0, photons.view(), &sampler, vertex_read),
-                DescriptorWrite::Sampled(1, flux.view(), &sampler, vertex_read),
-            ],
-        )?;
-        let scatter_layout = PipelineLayout::new(ctx, PHOTON_BUFFER_SCATTER, &[&scatter_set_layout], 16)?;
+        let counts = image("photon_counts", t, n_rects.max(1))?;
+        let scatter_target = RenderTarget::layered(ctx, PHOTON_BUFFER_SCATTER, &[&counts.0], None, true, n_rects)?;
+        let scatter_set = Bindings::new(vk::ShaderStageFlags::VERTEX)
+            .sampled(0, &photons.0, &sampler)
+            .read(photons.1)
+            .sampled(1, &flux.0, &sampler)
+            .read(flux.1)
+            .build(ctx, PHOTON_BUFFER_SCATTER)?;
         let scatter_pipeline = GraphicsPipeline::new(
             ctx,
             &GraphicsPipelineDesc {
-                name: PHOTON_BUFFER_SCATTER,
                 vertex_shader: "caustics/photon_scatter.vert",
-                fragment_shader: "caustics/photon_scatter.frag",
-                vertex: VertexLayout::None,
                 topology: vk::PrimitiveTopology::POINT_LIST,
-                cull: vk::CullModeFlags::NONE,
-                depth: DepthState::OFF,
                 blend: &[Blend::Additive],
-                specialization: &[],
+                ..GraphicsPipelineDesc::fullscreen(PHOTON_BUFFER_SCATTER, "caustics/photon_scatter.frag")
             },
-            &scatter_layout,
-            &scatter_pass,
+            &[scatter_set.layout()],
+            16,
+            &scatter_target.pass,
         )?;
-        let scatter_framebuffers =
-            (0..n_rects).map(|i| single("photon_counts", &counts, i, &scatter_pass)).collect::<GpuResult<Vec<_>>>()?;
 
         // 3. The filter, one full-screen triangle per rectangle.
-        let filter_pass = one_target(PHOTON_BUFFER_FILTER)?;
-        let filter_set_layout = DescriptorSetLayout::new(ctx, PHOTON_BUFFER_FILTER, &[(0, sampled, fs)], 1)?;
-        let filter_set = filter_set_layout
-            .allocate(PHOTON_BUFFER_FILTER, &[DescriptorWrite::Sampled(0, counts.view(), &sampler, read_only)])?;
-        let filter_layout = PipelineLayout::new(
-            ctx,
-            PHOTON_BUFFER_FILTER,
-            &[&filter_set_layout],
-            std::mem::size_of::<FilterPush>() as u32,
-        )?;
+        let filter_target =
+            RenderTarget::layered(ctx, PHOTON_BUFFER_FILTER, &[&caustics.textures], None, true, n_rects)?;
+        let filter_set = Bindings::new(vk::ShaderStageFlags::FRAGMENT)
+            .sampled(0, &counts.0, &sampler)
+            .read(counts.1)
+            .build(ctx, PHOTON_BUFFER_FILTER)?;
         let filter_pipeline = GraphicsPipeline::new(
             ctx,
-            &GraphicsPipelineDesc {
-                name: PHOTON_BUFFER_FILTER,
-                vertex_shader: "common/fullscreen.vert",
-                fragment_shader: "caustics/photon_filter.frag",
-                vertex: VertexLayout::None,
-                topology: vk::PrimitiveTopology::TRIANGLE_LIST,
-                cull: vk::CullModeFlags::NONE,
-                depth: DepthState::OFF,
-                blend: &[Blend::Off],
-                specialization: &[],
-            },
-            &filter_layout,
-            &filter_pass,
+            &GraphicsPipelineDesc::fullscreen(PHOTON_BUFFER_FILTER, "caustics/photon_filter.frag"),
+            &[filter_set.layout()],
+            std::mem::size_of::<FilterPush>() as u32,
+            &filter_target.pass,
         )?;
-        let mut filter_layers = Vec::new();
-        for (i, r) in caustics.rectangles().iter().enumerate() {
-            // A texel of TEX_CAUSTICS_i covers (2 d_i / T)^2 of the rectangle.
-            let texel = 2.0 * r.axis[3] / t as f32;
-            let push = FilterPush {
-                info: [i as i32, params.filter_k as i32, caustics.mode as i32, 0],
-                params: [params.filter_s, texel * texel, 0.0, 0.0],
-            };
-            filter_layers.push((single("photon_caustics", &caustics.textures, i as u32, &filter_pass)?, push));
-        }
+        let filter_pushes = caustics
+            .rectangles()
+            .iter()
+            .enumerate()
+            .map(|(i, r)| {
+                // A texel of TEX_CAUSTICS_i covers (2 d_i / T)^2 of the rectangle.
+                let texel = 2.0 * r.axis[3] / t as f32;
+                FilterPush {
+                    info: [i as i32, params.filter_k as i32, caustics.mode as i32, 0],
+                    params: [params.filter_s, texel * texel, 0.0, 0.0],
+                }
+            })
+            .collect();
 
-        let photons_id = graph.register_image(&photons);
-        let flux_id = graph.register_image(&flux);
-        let counts_id = graph.register_image(&counts);
         Ok(PhotonBufferPass {
             params,
             refractors,
-            photon_pass,
-            _photon_set_layout: photon_set_layout,
+            photon_target,
             photon_set,
-            _photon_layout: photon_layout,
             photon_pipeline,
-            photons: (photons, photons_id),
-            flux: (flux, flux_id),
-            photon_framebuffers,
+            photons,
+            flux,
             faces: n_faces,
-            counts: (counts, counts_id),
-            scatter_pass,
-            _scatter_set_layout: scatter_set_layout,
+            counts,
+            scatter_target,
             scatter_set,
-            _scatter_layout: scatter_layout,
             scatter_pipeline,
-            scatter_framebuffers,
-            filter_pass,
-            _filter_set_layout: filter_set_layout,
+            filter_target,
             filter_set,
-            _filter_layout: filter_layout,
             filter_pipeline,
-            filter_layers,
+            filter_pushes,
             _faces: faces_buffer,
             _sampler: sampler,
         })
@@ -534,55 +395,45 @@ impl PhotonBufferPass {
     pub fn record<'a>(&'a self, frame: &mut Frame<'_, 'a>, scene: &'a GpuScene, caustics: &'a PhotonCaustics) {
         self.refractors.record(frame, scene);
 
-        let mut pass = frame.pass(PHOTON_BUFFER);
-        for (_, id) in &self.refractors.layers[..4] {
-            pass = pass.read(*id, Access::FragmentSampled);
-        }
         let (size, rects) = (self.params.size, caustics.count);
-        pass.write(self.photons.1, Access::ColorAttachment).write(self.flux.1, Access::ColorAttachment).record(
-            move |cmd| {
-                for (s, fb) in self.photon_framebuffers.iter().enumerate() {
-                    cmd.in_render_pass(
-                        &self.photon_pass,
-                        fb,
-                        &[Clear::Color([0.0; 4]), Clear::Color([0.0; 4])],
-                        |cmd| {
-                            cmd.bind_graphics(&self.photon_pipeline, &[self.photon_set]);
-                            cmd.push_graphics(&self.photon_pipeline, &[s as u32, size, rects, 0]);
-                            cmd.draw(3, 1);
-                        },
-                    );
-                }
-            },
-        );
-
         frame
-            .pass(PHOTON_BUFFER_SCATTER)
-            .read(self.photons.1, Access::VertexSampled)
-            .read(self.flux.1, Access::VertexSampled)
-            .write(self.counts.1, Access::ColorAttachment)
+            .pass(PHOTON_BUFFER)
+            .uses(&self.photon_set)
+            .write(self.photons.1, Access::ColorAttachment)
+            .write(self.flux.1, Access::ColorAttachment)
             .record(move |cmd| {
-                for (i, fb) in self.scatter_framebuffers.iter().enumerate() {
-                    cmd.in_render_pass(&self.scatter_pass, fb, &[Clear::Color([0.0; 4])], |cmd| {
-                        cmd.bind_graphics(&self.scatter_pipeline, &[self.scatter_set]);
-                        cmd.push_graphics(&self.scatter_pipeline, &[size, self.faces, i as u32 + 1, 0]);
-                        cmd.draw(size * size * self.faces, 1);
-                    });
-                }
-            });
-
-        frame
-            .pass(PHOTON_BUFFER_FILTER)
-            .read(self.counts.1, Access::FragmentSampled)
-            .write(caustics.id, Access::ColorAttachment)
-            .record(move |cmd| {
-                for (fb, push) in &self.filter_layers {
-                    cmd.in_render_pass(&self.filter_pass, fb, &[Clear::Color([0.0; 4])], |cmd| {
-                        cmd.bind_graphics(&self.filter_pipeline, &[self.filter_set]);
-                        cmd.push_graphics(&self.filter_pipeline, push);
+                for s in 0..self.faces {
+                    let clears = [Clear::Color([0.0; 4]), Clear::Color([0.0; 4])];
+                    cmd.in_target(&self.photon_target, s as usize, &clears, |cmd| {
+                        cmd.bind_graphics(&self.photon_pipeline, &[self.photon_set.set()]);
+                        cmd.push_graphics(&self.photon_pipeline, &[s, size, rects, 0]);
                         cmd.draw(3, 1);
                     });
                 }
             });
+
+        frame.pass(PHOTON_BUFFER_SCATTER).uses(&self.scatter_set).write(self.counts.1, Access::ColorAttachment).record(
+            move |cmd| {
+                for i in 0..rects {
+                    cmd.in_target(&self.scatter_target, i as usize, &[Clear::Color([0.0; 4])], |cmd| {
+                        cmd.bind_graphics(&self.scatter_pipeline, &[self.scatter_set.set()]);
+                        cmd.push_graphics(&self.scatter_pipeline, &[size, self.faces, i + 1, 0]);
+                        cmd.draw(size * size * self.faces, 1);
+                    });
+                }
+            },
+        );
+
+        frame.pass(PHOTON_BUFFER_FILTER).uses(&self.filter_set).write(caustics.id, Access::ColorAttachment).record(
+            move |cmd| {
+                for (i, push) in self.filter_pushes.iter().enumerate() {
+                    cmd.in_target(&self.filter_target, i, &[Clear::Color([0.0; 4])], |cmd| {
+                        cmd.bind_graphics(&self.filter_pipeline, &[self.filter_set.set()]);
+                        cmd.push_graphics(&self.filter_pipeline, push);
+                        cmd.draw(3, 1);
+                    });
+                }
+            },
+        );
     }
 }

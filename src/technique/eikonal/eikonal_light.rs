@@ -45,10 +45,10 @@ use std::time::Instant;
 use glam::{DVec3, Vec3};
 
 use crate::gpu::{
-    vk, Access, Buffer, ComputePipeline, DescriptorSet, DescriptorSetLayout, DescriptorWrite, GpuContext, GpuResult,
-    Image, ImageDesc, MemoryLocation, PipelineLayout, Progress, Sampler,
+    vk, Access, Buffer, ComputePipeline, DescriptorSet, GpuContext, GpuResult, Image, ImageDesc, MemoryLocation,
+    Progress, Sampler,
 };
-use crate::graph::{BufferId, Frame, FrameGraph, ImageId};
+use crate::graph::{Bindings, BoundSet, BufferId, Frame, FrameGraph, ImageId};
 use crate::scene::techniques::{EikonalParams, Integrator};
 use crate::scene::{IndexProfile, Light, Volume};
 use crate::{
@@ -58,6 +58,7 @@ use crate::{
 
 use super::eikonal_view::RayState;
 use super::histopyramid::{HistoPyramid, HpState};
+use crate::technique::baseline::fullscreen::{fragment_set, FullscreenDesc, FullscreenPass};
 
 /// Simulation steps recorded per command buffer between two patch-count readbacks.
 pub const LIGHT_BATCH: u32 = 16;
@@ -306,9 +307,8 @@ pub struct LightSim {
     /// xyz: the vector irradiance sum_j (E_r + E_g + E_b)_j l_j; w: sum_j (E_r + E_g + E_b)_j.
     pub direction: Image,
     pub direction_id: ImageId,
-    _set_layout: DescriptorSetLayout,
-    sets: [DescriptorSet; 2],
-    _layout: PipelineLayout,
+    /// List 0 -> 1 and list 1 -> 0.
+    sets: BoundSet,
     step: ComputePipeline,
     expand: ComputePipeline,
     resolve: ComputePipeline,
@@ -367,19 +367,26 @@ pub fn plan_runs(wavefronts: &[Vec<Patch>], channels: u32, tile: usize) -> VecDe
     runs
 }
 
+/// What the light simulation depends on: its settings, the medium and the lights (one
+/// cache entry per distinct triple).
+#[derive(Clone, Copy)]
+pub struct LitVolume<'a> {
+    pub params: &'a EikonalParams,
+    pub volume: &'a Volume,
+    pub lights: &'a [Light],
+}
+
 impl LightSim {
     /// Buffers, images and pipelines for simulating `lights` through `volume` whose smoothed
     /// (grad n, n - 1) texture is `field`; uploads the first run's initial wavefront.
-    #[allow(clippy::too_many_arguments)] // reason: the volume's textures, the graph and the sampler are separate owners
     pub fn new(
         ctx: &Arc<GpuContext>,
-        params: &EikonalParams,
-        volume: &Volume,
-        lights: &[Light],
+        lit: LitVolume<'_>,
         textures: &super::eikonal_view::VolumeTextures,
         sampler: &Sampler,
         graph: &mut FrameGraph,
     ) -> GpuResult<Self> {
+        let LitVolume { params, volume, lights } = lit;
         let (light_min, light_max, resolution) = light_grid(volume, params.light_below, params.light_side);
         let per_side = if params.light_patches > 0 {
             params.light_patches
@@ -424,54 +431,17 @@ impl LightSim {
         let accum =
             Image::new(ctx, &ImageDesc::d3("eikonal_light_accum", vk::Format::R32_UINT, accum_extent, accum_usage))?;
 
-        let sb = vk::DescriptorType::STORAGE_BUFFER;
-        let si = vk::DescriptorType::STORAGE_IMAGE;
-        let stage = vk::ShaderStageFlags::COMPUTE;
-        let set_layout = DescriptorSetLayout::new(
-            ctx,
-            "eikonal_light",
-            &[
-                (LIGHT_BINDING_SRC, sb, stage),
-                (LIGHT_BINDING_DST, sb, stage),
-                (LIGHT_BINDING_FIELD, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, stage),
-                (crate::LIGHT_BINDING_EXTINCTION, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, stage),
-                (LIGHT_BINDING_ACCUM, si, stage),
-                (LIGHT_BINDING_IRRADIANCE, si, stage),
-                (LIGHT_BINDING_DIRECTION, si, stage),
-            ],
-            2,
-        )?;
-        let set = |name: &str, a: &Buffer, b: &Buffer| {
-            set_layout.allocate(
-                name,
-                &[
-                    DescriptorWrite::Storage(LIGHT_BINDING_SRC, a),
-                    DescriptorWrite::Storage(LIGHT_BINDING_DST, b),
-                    DescriptorWrite::Sampled(
-                        LIGHT_BINDING_FIELD,
-                        textures.field.view(),
-                        sampler,
-                        vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-                    ),
-                    DescriptorWrite::Sampled(
-                        crate::LIGHT_BINDING_EXTINCTION,
-                        textures.extinction.view(),
-                        sampler,
-                        vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-                    ),
-                    DescriptorWrite::StorageImage(LIGHT_BINDING_ACCUM, accum.view()),
-                    DescriptorWrite::StorageImage(LIGHT_BINDING_IRRADIANCE, irradiance.view()),
-                    DescriptorWrite::StorageImage(LIGHT_BINDING_DIRECTION, direction.view()),
-                ],
-            )
+        let set = |src: usize| {
+            Bindings::new(vk::ShaderStageFlags::COMPUTE)
+                .storage(LIGHT_BINDING_SRC, &lists[src])
+                .storage(LIGHT_BINDING_DST, &lists[1 - src])
+                .sampled(LIGHT_BINDING_FIELD, &textures.field, sampler)
+                .sampled(crate::LIGHT_BINDING_EXTINCTION, &textures.extinction, sampler)
+                .storage_image(LIGHT_BINDING_ACCUM, &accum)
+                .storage_image(LIGHT_BINDING_IRRADIANCE, &irradiance)
+                .storage_image(LIGHT_BINDING_DIRECTION, &direction)
         };
-        let sets = [set("eikonal_light_0to1", &lists[0], &lists[1])?, set("eikonal_light_1to0", &lists[1], &lists[0])?];
-        let layout = PipelineLayout::new(
-            ctx,
-            "eikonal_light",
-            &[hp.set_layout(), &set_layout],
-            std::mem::size_of::<RunPush>() as u32,
-        )?;
+        let sets = Bindings::build_each(ctx, "eikonal_light", vec![set(0), set(1)])?;
 
         let integrator = match params.integrator {
             Integrator::Euler => EIKONAL_EULER,
@@ -499,7 +469,9 @@ impl LightSim {
             u32::from(params.keep_crossed),
             integrator,
         ];
-        let pipeline = |name: &str, shader: &str| ComputePipeline::new(ctx, name, shader, &layout, &spec);
+        let layouts = [hp.set_layout(), sets.layout()];
+        let push = std::mem::size_of::<RunPush>() as u32;
+        let pipeline = |name: &str, shader: &str| ComputePipeline::new(ctx, name, shader, &layouts, push, &spec);
         let step = pipeline("eikonal_light_step", "eikonal/light_step.comp")?;
         let expand = pipeline("eikonal_light_expand", "eikonal/light_expand.comp")?;
         let resolve = pipeline("eikonal_light_resolve", "eikonal/light_resolve.comp")?;
@@ -533,9 +505,7 @@ impl LightSim {
             irradiance_id,
             direction,
             direction_id,
-            _set_layout: set_layout,
             sets,
-            _layout: layout,
             step,
             expand,
             resolve,
@@ -597,7 +567,7 @@ impl LightSim {
 
     fn record_step<'a>(&'a self, frame: &mut Frame<'_, 'a>, from: usize) {
         let hp = &self.hp;
-        let (set0, set1) = (hp.set, self.sets[from]);
+        let (set0, set1) = (hp.set, self.sets.sets()[from]);
         let (src, dst) = (self.list_ids[from], self.list_ids[1 - from]);
         let state = &hp.state;
         let (step, expand) = (&self.step, &self.expand);
@@ -660,7 +630,7 @@ impl LightSim {
     /// Turn the accumulator into the irradiance and direction volumes (after the runs; again
     /// after more runs, it always reflects everything deposited so far).
     pub fn resolve(&self, ctx: &Arc<GpuContext>, graph: &mut FrameGraph) -> GpuResult<()> {
-        let (set0, set1) = (self.hp.set, self.sets[0]);
+        let (set0, set1) = (self.hp.set, self.sets.set());
         let resolve = &self.resolve;
         let push = self.push();
         let groups = self.resolution.map(|r| r.div_ceil(EIKONAL_GROUP));
@@ -825,7 +795,7 @@ impl StandaloneLight {
         let mut graph = FrameGraph::new();
         let textures = super::eikonal_view::prepare_volume(ctx, *params, volume, &mut graph)?;
         let sampler = Sampler::new(ctx, "eikonal_light_field", crate::gpu::SamplerDesc::NEAREST_CLAMP)?;
-        let sim = LightSim::new(ctx, params, volume, lights, &textures, &sampler, &mut graph)?;
+        let sim = LightSim::new(ctx, LitVolume { params, volume, lights }, &textures, &sampler, &mut graph)?;
         Ok(StandaloneLight { sim, graph, _volume: textures, _sampler: sampler })
     }
 
@@ -892,51 +862,44 @@ pub struct EikonalLight {
     /// next instance when only what the simulation does not depend on changed.
     sim: std::rc::Rc<(LightSim, LightStats)>,
     pub stats: LightStats,
-    receiver: crate::technique::baseline::fullscreen::FullscreenPass,
+    receiver: FullscreenPass,
 }
 
 impl EikonalLight {
-    #[allow(clippy::too_many_arguments)] // reason: the volume's textures, the graph and the targets are separate owners
     pub fn new(
-        ctx: &Arc<GpuContext>,
-        params: &EikonalParams,
-        volume: &Volume,
-        lights: &[Light],
+        s: &mut crate::technique::Setup<'_>,
+        lit: LitVolume<'_>,
         textures: &super::eikonal_view::VolumeTextures,
-        graph: &mut FrameGraph,
-        frame_layout: &DescriptorSetLayout,
-        targets: &crate::frame::targets::Targets,
-        nearest: &Sampler,
-        cache: &mut crate::technique::Cache,
     ) -> GpuResult<Self> {
+        let (ctx, targets, nearest) = (s.ctx, s.targets, s.nearest);
         // Dropped patches are reported by the caller from `stats.dropped_patches`.
-        let key = crate::technique::cache_key(&(params, volume, lights));
-        let shared = cache.get_or_try_insert(key, || -> GpuResult<(LightSim, LightStats)> {
-            let mut sim = LightSim::new(ctx, params, volume, lights, textures, nearest, graph)?;
+        let key = crate::technique::cache_key(&(lit.params, lit.volume, lit.lights));
+        let graph = &mut *s.graph;
+        let shared = s.cache.get_or_try_insert(key, || -> GpuResult<(LightSim, LightStats)> {
+            let mut sim = LightSim::new(ctx, lit, textures, nearest, graph)?;
             let stats = sim.run(ctx, graph)?;
             Ok((sim, stats))
         })?;
         let (sim, stats) = (&shared.0, shared.1.clone());
         let (lo, hi) = (sim.light_min, sim.light_max);
-        let receiver = crate::technique::baseline::fullscreen::FullscreenPass::new(
+        let set = targets
+            .gbuffer(fragment_set(), nearest, true)
+            .sampled(crate::BINDING_EIKONAL_IRRADIANCE, &sim.irradiance, nearest)
+            .read(sim.irradiance_id)
+            .sampled(crate::BINDING_EIKONAL_LIGHT_DIR, &sim.direction, nearest)
+            .read(sim.direction_id);
+        let receiver = FullscreenPass::new(
             ctx,
-            &crate::technique::baseline::fullscreen::FullscreenDesc {
+            &FullscreenDesc {
                 name: super::eikonal_view::EIKONAL_LIGHT,
                 fragment_shader: "eikonal/light_receiver.frag",
-                inputs: &[
-                    (crate::BINDING_GBUF_NORMAL, &targets.gbuf_normal),
-                    (crate::BINDING_GBUF_ALBEDO, &targets.gbuf_albedo),
-                    (crate::BINDING_GBUF_DEPTH, &targets.depth),
-                    (crate::BINDING_EIKONAL_IRRADIANCE, &sim.irradiance),
-                    (crate::BINDING_EIKONAL_LIGHT_DIR, &sim.direction),
-                ],
                 target: (&targets.hdr, targets.hdr_id),
                 // Overwrites deferred shading's receivers inside the irradiance volume only.
                 clear: false,
                 specialization: &[f(lo.x), f(lo.y), f(lo.z), f(hi.x), f(hi.y), f(hi.z)],
             },
-            frame_layout,
-            nearest,
+            set,
+            s.frame_layout,
         )?;
         Ok(EikonalLight { sim: shared, stats, receiver })
     }
@@ -960,15 +923,6 @@ impl EikonalLight {
         targets: &crate::frame::targets::Targets,
         frame_set: DescriptorSet,
     ) {
-        let reads = [
-            targets.gbuf_normal_id,
-            targets.gbuf_albedo_id,
-            targets.depth_id,
-            scene.environment_id,
-            targets.shadow_atlas_id,
-            self.sim.0.irradiance_id,
-            self.sim.0.direction_id,
-        ];
-        self.receiver.record(frame, frame_set, &reads);
+        self.receiver.record(frame, frame_set, &[scene.environment_id, targets.shadow_atlas_id]);
     }
 }

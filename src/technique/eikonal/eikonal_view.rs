@@ -42,8 +42,8 @@ use crate::{
 };
 
 use super::eikonal_nearby;
-use crate::technique::baseline::fullscreen::{FullscreenDesc, FullscreenPass};
-use crate::technique::refraction::nearby_impostors::{ImpostorShading, NearbyDesc, NearbyImpostors};
+use crate::technique::baseline::fullscreen::{fragment_set, FullscreenDesc, FullscreenPass};
+use crate::technique::refraction::nearby_impostors::{ImpostorShading, NearbyDesc, NearbyImpostors, NearbyRects};
 
 pub const EIKONAL_VIEW: &str = "eikonal_view";
 /// §5.2's light simulation (run when the technique is created) and the diffuse receivers
@@ -104,7 +104,7 @@ impl Technique for EikonalPass {
         if stage == Stage::Lighting {
             self.record_light(frame, inputs.scene, inputs.targets, inputs.frame_set);
         } else {
-            self.record(frame, inputs.scene, inputs.targets, inputs.frame_set, inputs.shadow_atlas);
+            self.record(frame, inputs.scene, inputs.frame_set, inputs.shadow_atlas);
         }
     }
 }
@@ -240,7 +240,8 @@ pub struct VolumeTextures {
 
 /// The `eikonal_view` pass and the volume it renders.
 pub struct EikonalPass {
-    volume: VolumeTextures,
+    // Bound by the view pass.
+    _volume: VolumeTextures,
     view: FullscreenPass,
     // The nearby geometry of exit rays
     // (src/technique/eikonal/eikonal_nearby.rs): impostors (a 1x1 stand-in without rectangles), the
@@ -264,27 +265,19 @@ impl EikonalPass {
         volume: &Volume,
         lights: &[crate::scene::Light],
     ) -> GpuResult<Self> {
-        let (ctx, scene, gpu, frame_layout, targets, nearest) =
-            (s.ctx, s.scene, s.gpu, s.frame_layout, s.targets, s.nearest);
-        let graph = &mut *s.graph;
-        let textures = prepare_volume(ctx, params, volume, graph)?;
+        let textures = prepare_volume(s.ctx, params, volume, s.graph)?;
         // Section 5.2's light simulation before the view pass is built.
         // Every light of the scene: their runs add into one pair of volumes.
         let light = match lights {
-            [_, ..] if params.light => Some(super::eikonal_light::EikonalLight::new(
-                ctx,
-                &params,
-                volume,
-                lights,
-                &textures,
-                graph,
-                frame_layout,
-                targets,
-                nearest,
-                s.cache,
-            )?),
+            [_, ..] if params.light => {
+                let lit = super::eikonal_light::LitVolume { params: &params, volume, lights };
+                Some(super::eikonal_light::EikonalLight::new(s, lit, &textures)?)
+            }
             _ => None,
         };
+        let (ctx, scene, gpu, frame_layout, targets, nearest) =
+            (s.ctx, s.scene, s.gpu, s.frame_layout, s.targets, s.nearest);
+        let graph = &mut *s.graph;
         let voxel = volume.voxel_size();
         let h = params.step * voxel.min_element();
         // Enough steps for four crossings of the box diagonal (curved and internally
@@ -315,7 +308,7 @@ impl EikonalPass {
             correction_iterations: params.nearby_iterations,
             correction_tolerance: NEARBY_TOLERANCE,
             seed_samples: NEARBY_SEEDS,
-            // Around a volume (NearbyImpostors::around) no object refracts: the exit settings
+            // Around a volume (NearbyRects::around) no object refracts: the exit settings
             // are never used.
             exit: crate::scene::techniques::RecursiveExit::BoundingSphere,
             search_steps: 8,
@@ -360,17 +353,8 @@ impl EikonalPass {
                 specialization: &spec,
                 reads,
             });
-            let nearby = NearbyImpostors::around(
-                ctx,
-                EIKONAL_NEARBY,
-                &desc,
-                origin,
-                &kept,
-                scene,
-                graph,
-                frame_layout,
-                shading,
-            )?;
+            let rects = NearbyRects::around(origin, &kept, scene);
+            let nearby = NearbyImpostors::build(ctx, EIKONAL_NEARBY, &desc, rects, graph, frame_layout, shading)?;
             (nearby, shading_layout)
         };
         let spec = [
@@ -401,34 +385,38 @@ impl EikonalPass {
             f(NEARBY_TOLERANCE),
             NEARBY_SEEDS,
         ];
-        let view = FullscreenPass::with_buffers(
+        let set = fragment_set()
+            .sampled(BINDING_GBUF_DEPTH, &targets.depth, nearest)
+            .read(targets.depth_id)
+            .sampled(BINDING_EIKONAL_FIELD, &textures.field, nearest)
+            .read(textures.field_id)
+            .sampled(BINDING_EIKONAL_EXTINCTION, &textures.extinction, nearest)
+            .read(textures.extinction_id)
+            .sampled(BINDING_EIKONAL_ALBEDO, &textures.albedo, nearest)
+            .read(textures.albedo_id)
+            .sampled(BINDING_EIKONAL_EMISSION, &textures.emission, nearest)
+            .read(textures.emission_id)
+            // Read when the simulation wrote them (`record`); the field stands in otherwise.
+            .sampled(crate::BINDING_EIKONAL_IRRADIANCE, irradiance, nearest)
+            .sampled(crate::BINDING_EIKONAL_LIGHT_DIR, direction, nearest)
+            .sampled(crate::BINDING_EIKONAL_NEARBY_TEXTURE, &nearby.texture, nearest)
+            .read(nearby.texture_id)
+            .storage(crate::BINDING_EIKONAL_NEARBY_RECTS, &nearby.rect_buffer)
+            .storage(crate::BINDING_EIKONAL_TRIANGLES, &triangles);
+        let view = FullscreenPass::new(
             ctx,
             &FullscreenDesc {
                 name: EIKONAL_VIEW,
                 fragment_shader: "eikonal/view.frag",
-                inputs: &[
-                    (BINDING_GBUF_DEPTH, &targets.depth),
-                    (BINDING_EIKONAL_FIELD, &textures.field),
-                    (BINDING_EIKONAL_EXTINCTION, &textures.extinction),
-                    (BINDING_EIKONAL_ALBEDO, &textures.albedo),
-                    (BINDING_EIKONAL_EMISSION, &textures.emission),
-                    (crate::BINDING_EIKONAL_IRRADIANCE, irradiance),
-                    (crate::BINDING_EIKONAL_LIGHT_DIR, direction),
-                    (crate::BINDING_EIKONAL_NEARBY_TEXTURE, &nearby.texture),
-                ],
                 target: (&targets.hdr, targets.hdr_id),
                 // Keeps the deferred result and overwrites the pixels whose ray enters the box.
                 clear: false,
                 specialization: &spec,
             },
-            &[
-                (crate::BINDING_EIKONAL_NEARBY_RECTS, &nearby.rect_buffer),
-                (crate::BINDING_EIKONAL_TRIANGLES, &triangles),
-            ],
+            set,
             frame_layout,
-            nearest,
         )?;
-        Ok(EikonalPass { volume: textures, view, nearby, _nearby_layout: nearby_layout, _triangles: triangles, light })
+        Ok(EikonalPass { _volume: textures, view, nearby, _nearby_layout: nearby_layout, _triangles: triangles, light })
     }
 
     /// The light simulation's statistics (None without a simulation).
@@ -455,21 +443,17 @@ impl EikonalPass {
         &'a self,
         frame: &mut Frame<'_, 'a>,
         scene: &'a GpuScene,
-        targets: &Targets,
         frame_set: DescriptorSet,
         shadow_atlas: Option<ImageId>,
     ) {
         if !self.nearby.is_empty() {
             self.nearby.record(frame, scene, frame_set, shadow_atlas);
         }
-        let v = &self.volume;
-        let mut reads =
-            vec![targets.depth_id, v.field_id, v.extinction_id, v.albedo_id, v.emission_id, scene.environment_id];
+        let mut reads = vec![scene.environment_id];
         if let Some(l) = &self.light {
             reads.extend(l.image_ids());
         }
-        // The exit rays' shading reads the shadow maps and the impostor textures.
-        reads.push(self.nearby.texture_id);
+        // The exit rays' shading reads the shadow maps (and the impostor textures, in set 1).
         reads.extend(shadow_atlas);
         self.view.record(frame, frame_set, &reads);
     }
@@ -593,7 +577,7 @@ pub(crate) fn prepare_volume(
     let pipeline_layout = PipelineLayout::new(ctx, "eikonal_volume", &[&layout], 0)?;
     let smooth: Vec<ComputePipeline> = (0..3u32)
         .map(|axis| {
-            ComputePipeline::new(
+            ComputePipeline::with_layout(
                 ctx,
                 &format!("eikonal_smooth_{axis}"),
                 "eikonal/smooth.comp",
@@ -603,7 +587,7 @@ pub(crate) fn prepare_volume(
         })
         .collect::<GpuResult<_>>()?;
     let voxel = volume.voxel_size();
-    let gradient = ComputePipeline::new(
+    let gradient = ComputePipeline::with_layout(
         ctx,
         "eikonal_gradient",
         "eikonal/gradient.comp",

@@ -173,11 +173,22 @@ impl HistoPyramid {
         )?;
         let layout = PipelineLayout::new(ctx, "histopyramid", &[&set_layout], 4)?;
         let spec = [capacity, history_len];
-        let reduce =
-            ComputePipeline::new(ctx, "histopyramid_reduce", "eikonal/histopyramid_reduce.comp", &layout, &spec)?;
-        let total = ComputePipeline::new(ctx, "histopyramid_total", "eikonal/histopyramid_total.comp", &layout, &spec)?;
-        let traverse =
-            ComputePipeline::new(ctx, "histopyramid_traverse", "eikonal/histopyramid_traverse.comp", &layout, &spec)?;
+        let reduce = ComputePipeline::with_layout(
+            ctx,
+            "histopyramid_reduce",
+            "eikonal/histopyramid_reduce.comp",
+            &layout,
+            &spec,
+        )?;
+        let total =
+            ComputePipeline::with_layout(ctx, "histopyramid_total", "eikonal/histopyramid_total.comp", &layout, &spec)?;
+        let traverse = ComputePipeline::with_layout(
+            ctx,
+            "histopyramid_traverse",
+            "eikonal/histopyramid_traverse.comp",
+            &layout,
+            &spec,
+        )?;
         let (state_id, classes_id, levels_id, pairs_id, history_id) = (
             graph.register_buffer(&state),
             graph.register_buffer(&classes),

@@ -39,9 +39,9 @@ use crate::frame::targets::{Targets, DEPTH_FORMAT};
 use crate::gpu::{
     vk, Access, Attachment, Blend, Buffer, Clear, Cmd, ComputePipeline, DepthState, DescriptorSet, DescriptorSetLayout,
     DescriptorWrite, Framebuffer, GpuContext, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc,
-    ImageViewKind, PipelineLayout, RenderPass, RenderPassDesc, Sampler, SamplerDesc, VertexLayout,
+    ImageViewKind, PipelineLayout, RenderPass, RenderPassDesc, RenderTarget, Sampler, SamplerDesc, VertexLayout,
 };
-use crate::graph::{Frame, FrameGraph, ImageId, PassBuilder};
+use crate::graph::{Bindings, BoundSet, Frame, FrameGraph, ImageId, PassBuilder};
 use crate::scene::techniques::{ImpostorFresnel, ImpostorMaps, ImpostorParams, ImpostorUpdate};
 use crate::scene::{Analytic, Material, Scene};
 use crate::technique::{
@@ -49,8 +49,8 @@ use crate::technique::{
     Stage, Technique,
 };
 use crate::{
-    BINDING_GBUF_ALBEDO, BINDING_GBUF_DEPTH, BINDING_GBUF_NORMAL, BINDING_IMPOSTOR_DISTANCE, BINDING_IMPOSTOR_PROBE,
-    BINDING_IMPOSTOR_RADIANCE, BINDING_IMPOSTOR_REFRACTOR, IMPOSTOR_PROBE_FRESNEL, IMPOSTOR_PROBE_HIT, WORKGROUP_2D,
+    BINDING_IMPOSTOR_DISTANCE, BINDING_IMPOSTOR_PROBE, BINDING_IMPOSTOR_RADIANCE, BINDING_IMPOSTOR_REFRACTOR,
+    IMPOSTOR_PROBE_FRESNEL, IMPOSTOR_PROBE_HIT, WORKGROUP_2D,
 };
 
 pub const REFLECTION_IMPOSTOR_MAP: &str = "reflection_impostor_map";
@@ -264,20 +264,26 @@ pub struct ImpostorMap {
     generations: u32,
 }
 
+/// Which map: its pass name, its resources' label (the pass name, or with the object's name
+/// per object), what it stores and whose it is.
+pub struct MapDesc<'a> {
+    pub name: &'static str,
+    pub label: &'a str,
+    pub content: MapContent,
+    pub objects: Vec<usize>,
+}
+
 impl ImpostorMap {
-    #[allow(clippy::too_many_arguments)]
     pub fn new(
         ctx: &Arc<GpuContext>,
-        name: &'static str,
-        label: &str,
-        content: MapContent,
-        objects: Vec<usize>,
+        desc: MapDesc<'_>,
         params: &ImpostorParams,
         scene: &Scene,
         gpu: &GpuScene,
         graph: &mut FrameGraph,
         frame_layout: &DescriptorSetLayout,
     ) -> GpuResult<Self> {
+        let MapDesc { name, label, content, objects } = desc;
         let size = params.resolution;
         let separate = content == MapContent::Environment && params.separate_distance;
         use vk::ImageUsageFlags as U;
@@ -333,7 +339,7 @@ impl ImpostorMap {
             (MapContent::LightmapUv, _) => "impostor/uv_map.frag",
         };
         let blend = vec![Blend::Off; if separate { 2 } else { 1 }];
-        let pipeline = GraphicsPipeline::new(
+        let pipeline = GraphicsPipeline::with_layout(
             ctx,
             &GraphicsPipelineDesc {
                 name,
@@ -563,8 +569,13 @@ impl ImpostorMap {
         )?;
         let layout =
             PipelineLayout::new(ctx, "impostor_probe", &[&set_layout], std::mem::size_of::<ProbePush>() as u32)?;
-        let pipeline =
-            ComputePipeline::new(ctx, "impostor_probe", "impostor/probe.comp", &layout, &[iterations, channel])?;
+        let pipeline = ComputePipeline::with_layout(
+            ctx,
+            "impostor_probe",
+            "impostor/probe.comp",
+            &layout,
+            &[iterations, channel],
+        )?;
         let buffer_id = graph.register_buffer(&buffer);
         let mode = if fresnel { IMPOSTOR_PROBE_FRESNEL } else { IMPOSTOR_PROBE_HIT };
         let push =
@@ -616,112 +627,57 @@ pub(crate) fn record_maps<'a>(
 /// draw per (environment map, refractor map) instance, each with its own descriptor set.
 struct ShadePass {
     name: &'static str,
-    render_pass: RenderPass,
-    _set_layout: DescriptorSetLayout,
-    sets: Vec<DescriptorSet>,
-    _layout: PipelineLayout,
+    target: RenderTarget,
+    /// One set per instance.
+    sets: BoundSet,
     pipeline: GraphicsPipeline,
-    framebuffer: Framebuffer,
     _linear: Sampler,
-    reads: Vec<ImageId>,
 }
 
 impl ShadePass {
-    #[allow(clippy::too_many_arguments)]
     fn new(
-        ctx: &Arc<GpuContext>,
+        s: &Setup<'_>,
         name: &'static str,
         fragment_shader: &str,
         params: &ImpostorParams,
         instances: &[(&ImpostorMap, Option<&ImpostorMap>)],
-        gpu: &GpuScene,
-        frame_layout: &DescriptorSetLayout,
-        targets: &Targets,
-        nearest: &Sampler,
     ) -> GpuResult<Self> {
-        let render_pass = RenderPass::new(
-            ctx,
-            name,
-            &RenderPassDesc {
-                colors: vec![Attachment { format: targets.hdr.format(), clear: false }],
-                depth: None,
-                depth_read_only: false,
-            },
-        )?;
+        let (ctx, targets) = (s.ctx, s.targets);
+        let target = RenderTarget::new(ctx, name, &[&targets.hdr], None, false)?;
         // Cube maps are filtered: bilinear distances follow planar walls between texels
         // (§2.1 assumes the surface planar between samples); the G-buffer is fetched per texel.
         let linear = Sampler::new(ctx, &format!("{name}_linear"), SamplerDesc::LINEAR_CLAMP)?;
-        let with_refractor = instances.iter().any(|(_, r)| r.is_some());
-        let frag = vk::ShaderStageFlags::FRAGMENT;
-        let sampler_binding = |b: u32| (b, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, frag);
-        let mut bindings = vec![
-            sampler_binding(BINDING_GBUF_NORMAL),
-            sampler_binding(BINDING_GBUF_DEPTH),
-            sampler_binding(BINDING_GBUF_ALBEDO),
-            sampler_binding(BINDING_IMPOSTOR_RADIANCE),
-            sampler_binding(BINDING_IMPOSTOR_DISTANCE),
-        ];
-        if with_refractor {
-            bindings.push(sampler_binding(BINDING_IMPOSTOR_REFRACTOR));
-        }
-        let set_layout = DescriptorSetLayout::new(ctx, name, &bindings, instances.len().max(1) as u32)?;
-        let sampled = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
-        let depth_layout = vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL;
-        let mut reads = vec![targets.gbuf_normal_id, targets.gbuf_albedo_id, targets.depth_id, gpu.environment_id];
-        let mut sets = Vec::new();
         // All instances share one distance channel: they come from the same parameters.
         let mut channel = 3;
-        for (env, refractor) in instances {
+        let sets = instances.iter().map(|(env, refractor)| {
             let (dist_image, dist_id, c) = env.distance_view();
             channel = c;
-            let mut writes = vec![
-                DescriptorWrite::Sampled(BINDING_GBUF_NORMAL, targets.gbuf_normal.view(), nearest, sampled),
-                DescriptorWrite::Sampled(BINDING_GBUF_DEPTH, targets.depth.view(), nearest, depth_layout),
-                DescriptorWrite::Sampled(BINDING_GBUF_ALBEDO, targets.gbuf_albedo.view(), nearest, sampled),
-                DescriptorWrite::Sampled(BINDING_IMPOSTOR_RADIANCE, env.cube.view(), &linear, sampled),
-                DescriptorWrite::Sampled(BINDING_IMPOSTOR_DISTANCE, dist_image.view(), &linear, sampled),
-            ];
-            reads.push(env.cube_id);
+            let mut b = targets
+                .gbuffer(Bindings::new(vk::ShaderStageFlags::FRAGMENT), s.nearest, true)
+                .sampled(BINDING_IMPOSTOR_RADIANCE, &env.cube, &linear)
+                .read(env.cube_id)
+                .sampled(BINDING_IMPOSTOR_DISTANCE, dist_image, &linear);
             if dist_id != env.cube_id {
-                reads.push(dist_id);
+                b = b.read(dist_id);
             }
             if let Some(r) = refractor {
-                writes.push(DescriptorWrite::Sampled(BINDING_IMPOSTOR_REFRACTOR, r.cube.view(), &linear, sampled));
-                reads.push(r.cube_id);
+                b = b.sampled(BINDING_IMPOSTOR_REFRACTOR, &r.cube, &linear).read(r.cube_id);
             }
-            sets.push(set_layout.allocate(name, &writes)?);
-        }
-        let layout =
-            PipelineLayout::new(ctx, name, &[frame_layout, &set_layout], std::mem::size_of::<ShadePush>() as u32)?;
+            b
+        });
+        let sets = Bindings::build_each(ctx, name, sets.collect())?;
         let pipeline = GraphicsPipeline::new(
             ctx,
             &GraphicsPipelineDesc {
-                name,
-                vertex_shader: "common/fullscreen.vert",
-                fragment_shader,
-                vertex: VertexLayout::None,
-                topology: vk::PrimitiveTopology::TRIANGLE_LIST,
-                cull: vk::CullModeFlags::NONE,
-                depth: DepthState::OFF,
-                blend: &[Blend::Off],
                 // Constants 0..2 of glsl/impostor/shade_common.glsl.
                 specialization: &[params.iterations, channel, u32::from(params.fresnel == ImpostorFresnel::Exact)],
+                ..GraphicsPipelineDesc::fullscreen(name, fragment_shader)
             },
-            &layout,
-            &render_pass,
+            &[s.frame_layout, sets.layout()],
+            std::mem::size_of::<ShadePush>() as u32,
+            &target.pass,
         )?;
-        let framebuffer = Framebuffer::new(ctx, name, &render_pass, &[targets.hdr.view()], targets.extent())?;
-        Ok(ShadePass {
-            name,
-            render_pass,
-            _set_layout: set_layout,
-            sets,
-            _layout: layout,
-            pipeline,
-            framebuffer,
-            _linear: linear,
-            reads,
-        })
+        Ok(ShadePass { name, target, sets, pipeline, _linear: linear })
     }
 
     /// One full-screen draw per instance (`pushes[i]` with `sets[i]`).
@@ -730,17 +686,15 @@ impl ShadePass {
         frame: &mut Frame<'_, 'a>,
         targets: &Targets,
         frame_set: DescriptorSet,
+        environment: ImageId,
         pushes: Vec<ShadePush>,
     ) {
-        let mut pass = frame.pass(self.name);
-        for &id in &self.reads {
-            pass = pass.read(id, Access::FragmentSampled);
-        }
+        let pass = frame.pass(self.name).uses(&self.sets).read(environment, Access::FragmentSampled);
         pass.write(targets.hdr_id, Access::ColorAttachment).record(move |cmd| {
             // Keeps the deferred result and overwrites only the pixels of its materials (and,
             // per object, of the instance's object).
-            cmd.in_render_pass(&self.render_pass, &self.framebuffer, &[Clear::None], |cmd| {
-                for (set, push) in self.sets.iter().zip(&pushes) {
+            cmd.in_target(&self.target, 0, &[Clear::None], |cmd| {
+                for (set, push) in self.sets.sets().iter().zip(&pushes) {
                     cmd.bind_graphics(&self.pipeline, &[frame_set, *set]);
                     cmd.push_graphics(&self.pipeline, push);
                     cmd.draw(3, 1);
@@ -781,8 +735,7 @@ pub struct ImpostorReflection {
 
 impl ImpostorReflection {
     pub fn new(s: &mut Setup<'_>, params: ImpostorParams) -> GpuResult<Self> {
-        let (ctx, scene, gpu, frame_layout, targets, nearest) =
-            (s.ctx, s.scene, s.gpu, s.frame_layout, s.targets, s.nearest);
+        let (ctx, scene, gpu, frame_layout) = (s.ctx, s.scene, s.gpu, s.frame_layout);
         let graph = &mut *s.graph;
         let metals = objects_where(scene, |m| matches!(m, Material::Mirror { .. } | Material::Conductor { .. }));
         let mut maps = Vec::new();
@@ -793,10 +746,12 @@ impl ImpostorReflection {
             };
             maps.push(ImpostorMap::new(
                 ctx,
-                REFLECTION_IMPOSTOR_MAP,
-                &label,
-                MapContent::Environment,
-                group,
+                MapDesc {
+                    name: REFLECTION_IMPOSTOR_MAP,
+                    label: &label,
+                    content: MapContent::Environment,
+                    objects: group,
+                },
                 &params,
                 scene,
                 gpu,
@@ -805,17 +760,7 @@ impl ImpostorReflection {
             )?);
         }
         let instances: Vec<_> = maps.iter().map(|m| (m, None)).collect();
-        let shade = ShadePass::new(
-            ctx,
-            REFLECTION_IMPOSTOR,
-            "impostor/reflect.frag",
-            &params,
-            &instances,
-            gpu,
-            frame_layout,
-            targets,
-            nearest,
-        )?;
+        let shade = ShadePass::new(s, REFLECTION_IMPOSTOR, "impostor/reflect.frag", &params, &instances)?;
         Ok(ImpostorReflection { maps, shade, params })
     }
 
@@ -850,7 +795,7 @@ impl ImpostorReflection {
                 object: [shaded_object(&self.params, &m.objects), 0, 0, 0],
             })
             .collect();
-        self.shade.record(frame, targets, frame_set, pushes);
+        self.shade.record(frame, targets, frame_set, scene.environment_id, pushes);
     }
 }
 
@@ -872,8 +817,7 @@ pub struct ImpostorRefraction {
 
 impl ImpostorRefraction {
     pub fn new(s: &mut Setup<'_>, params: ImpostorParams) -> GpuResult<Self> {
-        let (ctx, scene, gpu, frame_layout, targets, nearest) =
-            (s.ctx, s.scene, s.gpu, s.frame_layout, s.targets, s.nearest);
+        let (ctx, scene, gpu, frame_layout) = (s.ctx, s.scene, s.gpu, s.frame_layout);
         let graph = &mut *s.graph;
         let glass = objects_where(scene, |m| matches!(m, Material::Dielectric { .. }));
         let mut instances = Vec::new();
@@ -884,10 +828,12 @@ impl ImpostorRefraction {
             };
             let map = ImpostorMap::new(
                 ctx,
-                REFRACTION_IMPOSTOR_MAP,
-                &format!("{REFRACTION_IMPOSTOR_MAP}{suffix}"),
-                MapContent::Environment,
-                group.clone(),
+                MapDesc {
+                    name: REFRACTION_IMPOSTOR_MAP,
+                    label: &format!("{REFRACTION_IMPOSTOR_MAP}{suffix}"),
+                    content: MapContent::Environment,
+                    objects: group.clone(),
+                },
                 &params,
                 scene,
                 gpu,
@@ -896,10 +842,12 @@ impl ImpostorRefraction {
             )?;
             let refractor = ImpostorMap::new(
                 ctx,
-                REFRACTION_IMPOSTOR_REFRACTOR_MAP,
-                &format!("{REFRACTION_IMPOSTOR_REFRACTOR_MAP}{suffix}"),
-                MapContent::Refractor,
-                group,
+                MapDesc {
+                    name: REFRACTION_IMPOSTOR_REFRACTOR_MAP,
+                    label: &format!("{REFRACTION_IMPOSTOR_REFRACTOR_MAP}{suffix}"),
+                    content: MapContent::Refractor,
+                    objects: group,
+                },
                 &params,
                 scene,
                 gpu,
@@ -910,17 +858,7 @@ impl ImpostorRefraction {
             instances.push(RefractionInstance { map, refractor, refractor_center });
         }
         let pairs: Vec<_> = instances.iter().map(|i| (&i.map, Some(&i.refractor))).collect();
-        let shade = ShadePass::new(
-            ctx,
-            REFRACTION_IMPOSTOR,
-            "impostor/refract.frag",
-            &params,
-            &pairs,
-            gpu,
-            frame_layout,
-            targets,
-            nearest,
-        )?;
+        let shade = ShadePass::new(s, REFRACTION_IMPOSTOR, "impostor/refract.frag", &params, &pairs)?;
         Ok(ImpostorRefraction { instances, shade, params })
     }
 
@@ -960,6 +898,6 @@ impl ImpostorRefraction {
                 object: [shaded_object(&self.params, &i.map.objects), 0, 0, 0],
             })
             .collect();
-        self.shade.record(frame, targets, frame_set, pushes);
+        self.shade.record(frame, targets, frame_set, scene.environment_id, pushes);
     }
 }

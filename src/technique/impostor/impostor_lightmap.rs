@@ -52,7 +52,7 @@ use crate::gpu::{
 use crate::graph::{Frame, FrameGraph, ImageId};
 use crate::scene::techniques::{ImpostorLightmapParams, ImpostorParams};
 use crate::scene::{Light, Material, Scene};
-use crate::technique::impostor::distance_impostor::{object_bounds, record_maps, ImpostorMap, MapContent};
+use crate::technique::impostor::distance_impostor::{object_bounds, record_maps, ImpostorMap, MapContent, MapDesc};
 use crate::technique::{
     dielectric_names, list, params, specular_names, tables_and_placement, FrameInputs, PlannedPass, Registration,
     RenderError, Setup, Stage, Technique,
@@ -328,18 +328,13 @@ impl ImpostorLightmap {
             .filter(|&i| matches!(scene.materials[scene.objects[i].material], Material::Dielectric { .. }))
             .collect();
         let map_params = ImpostorParams { resolution: params.uv_map_size, ..Default::default() };
-        let mut uv_map = ImpostorMap::new(
-            ctx,
-            IMPOSTOR_LIGHTMAP_UV_MAP,
-            IMPOSTOR_LIGHTMAP_UV_MAP,
-            MapContent::LightmapUv,
-            specular.clone(),
-            &map_params,
-            scene,
-            gpu,
-            graph,
-            frame_layout,
-        )?;
+        let uv = MapDesc {
+            name: IMPOSTOR_LIGHTMAP_UV_MAP,
+            label: IMPOSTOR_LIGHTMAP_UV_MAP,
+            content: MapContent::LightmapUv,
+            objects: specular.clone(),
+        };
+        let mut uv_map = ImpostorMap::new(ctx, uv, &map_params, scene, gpu, graph, frame_layout)?;
         let charts: Vec<Chart> =
             lightmap_receivers(scene).into_iter().flat_map(|i| Chart::of_receiver(scene, i)).collect();
         for (slot, c) in charts.iter().enumerate() {
@@ -349,18 +344,13 @@ impl ImpostorLightmap {
         let refractor = if dielectric.is_empty() {
             None
         } else {
-            Some(ImpostorMap::new(
-                ctx,
-                IMPOSTOR_LIGHTMAP_REFRACTOR_MAP,
-                IMPOSTOR_LIGHTMAP_REFRACTOR_MAP,
-                MapContent::Refractor,
-                dielectric,
-                &map_params,
-                scene,
-                gpu,
-                graph,
-                frame_layout,
-            )?)
+            let desc = MapDesc {
+                name: IMPOSTOR_LIGHTMAP_REFRACTOR_MAP,
+                label: IMPOSTOR_LIGHTMAP_REFRACTOR_MAP,
+                content: MapContent::Refractor,
+                objects: dielectric,
+            };
+            Some(ImpostorMap::new(ctx, desc, &map_params, scene, gpu, graph, frame_layout)?)
         };
         let refractor_center = refractor.as_ref().map_or(Vec3::ZERO, |r| r.reference());
         let linear = Sampler::new(ctx, "impostor_lightmap_linear", SamplerDesc::LINEAR_CLAMP)?;
@@ -410,7 +400,7 @@ impl ImpostorLightmap {
             &[frame_layout, &caustic_set_layout],
             std::mem::size_of::<CausticPush>() as u32,
         )?;
-        let caustic_pipeline = GraphicsPipeline::new(
+        let caustic_pipeline = GraphicsPipeline::with_layout(
             ctx,
             &GraphicsPipelineDesc {
                 name: IMPOSTOR_LIGHTMAP_CAUSTIC_MAP,
@@ -473,7 +463,7 @@ impl ImpostorLightmap {
             &[&splat_set_layout],
             std::mem::size_of::<SplatPush>() as u32,
         )?;
-        let splat_pipeline = GraphicsPipeline::new(
+        let splat_pipeline = GraphicsPipeline::with_layout(
             ctx,
             &GraphicsPipelineDesc {
                 name: IMPOSTOR_LIGHTMAP_SPLAT,
@@ -568,7 +558,7 @@ impl ImpostorLightmap {
             &[frame_layout, &apply_set_layout],
             std::mem::size_of::<ApplyPush>() as u32,
         )?;
-        let apply_pipeline = GraphicsPipeline::new(
+        let apply_pipeline = GraphicsPipeline::with_layout(
             ctx,
             &GraphicsPipelineDesc {
                 name: IMPOSTOR_LIGHTMAP_APPLY,

@@ -500,6 +500,41 @@ struct BackPass {
     front: Option<(GraphicsPipeline, Vec<(usize, Framebuffer)>)>,
 }
 
+/// The rectangles impostors are built over, and per rectangle whether its object is
+/// specular and which set its object's own rectangles are (u32::MAX: none); `back`: the
+/// rectangles whose dielectric back faces are rendered.
+pub struct NearbyRects {
+    layout: NearbyLayout,
+    specular: Vec<bool>,
+    lookup_set: Vec<u32>,
+    back: Vec<usize>,
+}
+
+impl NearbyRects {
+    /// No rectangles (the stand-in's).
+    pub fn none() -> Self {
+        NearbyRects { layout: NearbyLayout::default(), specular: Vec::new(), lookup_set: Vec::new(), back: Vec::new() }
+    }
+
+    /// One rectangle set around `origin` that belongs to no object (the eikonal volume's
+    /// centre, src/technique/eikonal/eikonal_nearby.rs) over `objects`, without recursion or
+    /// back faces (mirrors reflect the environment, dielectrics refract it): build it with
+    /// `recursion_depth` 0 and the bounding-sphere exit.
+    pub fn around(origin: Vec3, objects: &[usize], scene: &Scene) -> Self {
+        let mut layout = NearbyLayout::default();
+        for &i in objects.iter().take(MAX_NEARBY_RECTS as usize) {
+            if let Some(r) = rect_for(scene, i, origin, layout.rects.len() as u32) {
+                layout.rects.push(r);
+            }
+        }
+        let dropped = objects.iter().skip(MAX_NEARBY_RECTS as usize).copied().collect();
+        let count = layout.rects.len() as u32;
+        layout.sets.push(NearbySet { object: usize::MAX, origin, first: 0, count, dropped });
+        let n = layout.rects.len();
+        NearbyRects { layout, specular: vec![false; n], lookup_set: vec![u32::MAX; n], back: Vec::new() }
+    }
+}
+
 impl NearbyImpostors {
     /// The rectangle sets of [`nearby_layout`] and their textures, `resolution`^2 texels each, no
     /// recursion.
@@ -557,38 +592,8 @@ impl NearbyImpostors {
         } else {
             Vec::new()
         };
-        Self::build(ctx, name, desc, layout, specular, lookup_set, back, graph, frame_layout, None)
-    }
-
-    /// One rectangle set around `origin` that belongs to no object (the eikonal
-    /// volume's centre, src/technique/eikonal/eikonal_nearby.rs) over `objects`, without recursion or
-    /// back faces (mirrors reflect the environment, dielectrics refract it), shaded by
-    /// `shading` when given.
-    #[allow(clippy::too_many_arguments)]
-    pub fn around(
-        ctx: &Arc<GpuContext>,
-        name: &'static str,
-        desc: &NearbyDesc,
-        origin: Vec3,
-        objects: &[usize],
-        scene: &Scene,
-        graph: &mut FrameGraph,
-        frame_layout: &DescriptorSetLayout,
-        shading: Option<ImpostorShading<'_>>,
-    ) -> GpuResult<Self> {
-        let mut layout = NearbyLayout::default();
-        for &i in objects.iter().take(MAX_NEARBY_RECTS as usize) {
-            if let Some(r) = rect_for(scene, i, origin, layout.rects.len() as u32) {
-                layout.rects.push(r);
-            }
-        }
-        let dropped = objects.iter().skip(MAX_NEARBY_RECTS as usize).copied().collect();
-        let count = layout.rects.len() as u32;
-        layout.sets.push(NearbySet { object: usize::MAX, origin, first: 0, count, dropped });
-        let specular = vec![false; layout.rects.len()];
-        let lookup_set = vec![u32::MAX; layout.rects.len()];
-        let desc = NearbyDesc { recursion_depth: 0, exit: RecursiveExit::BoundingSphere, ..*desc };
-        Self::build(ctx, name, &desc, layout, specular, lookup_set, Vec::new(), graph, frame_layout, shading)
+        let rects = NearbyRects { layout, specular, lookup_set, back };
+        Self::build(ctx, name, desc, rects, graph, frame_layout, None)
     }
 
     /// No rectangles: a cleared 1x1 stand-in texture and an empty rectangle buffer, for
@@ -610,18 +615,7 @@ impl NearbyImpostors {
             search_steps: 8,
             max_iterations: 32,
         };
-        Self::build(
-            ctx,
-            name,
-            &desc,
-            NearbyLayout::default(),
-            Vec::new(),
-            Vec::new(),
-            Vec::new(),
-            graph,
-            frame_layout,
-            None,
-        )
+        Self::build(ctx, name, &desc, NearbyRects::none(), graph, frame_layout, None)
     }
 
     /// Whether any rectangle exists (otherwise [`Self::record`] must not be called).
@@ -629,19 +623,18 @@ impl NearbyImpostors {
         self.layout.rects.is_empty()
     }
 
-    #[allow(clippy::too_many_arguments)]
-    fn build(
+    /// The impostors of `rects` (their textures, passes and buffers), shaded by `shading`
+    /// when given.
+    pub fn build(
         ctx: &Arc<GpuContext>,
         name: &'static str,
         desc: &NearbyDesc,
-        nearby: NearbyLayout,
-        specular: Vec<bool>,
-        lookup_set: Vec<u32>,
-        back_rects: Vec<usize>,
+        rects: NearbyRects,
         graph: &mut FrameGraph,
         frame_layout: &DescriptorSetLayout,
         shading: Option<ImpostorShading<'_>>,
     ) -> GpuResult<Self> {
+        let NearbyRects { layout: nearby, specular, lookup_set, back: back_rects } = rects;
         let (rects, levels) = (&nearby.rects, nearby.levels);
         let layers_n = rects.len().max(1) as u32;
         let size = if rects.is_empty() { 1 } else { desc.resolution };
@@ -797,13 +790,13 @@ impl NearbyImpostors {
             Some(sh) => {
                 let layout = PipelineLayout::new(ctx, name, &[frame_layout, &set_layout, sh.set_layout], push_size)?;
                 let desc = pipeline_desc(sh.fragment_shader, &shading_spec[..], vk::CullModeFlags::NONE);
-                let pipeline = GraphicsPipeline::new(ctx, &desc, &layout, &render_pass)?;
+                let pipeline = GraphicsPipeline::with_layout(ctx, &desc, &layout, &render_pass)?;
                 (layout, pipeline, Some((sh.set, sh.reads.clone())))
             }
             None => {
                 let layout = PipelineLayout::new(ctx, name, &[frame_layout, &set_layout], push_size)?;
                 let desc = pipeline_desc("nearby/impostor.frag", &spec[..], vk::CullModeFlags::NONE);
-                let pipeline = GraphicsPipeline::new(ctx, &desc, &layout, &render_pass)?;
+                let pipeline = GraphicsPipeline::with_layout(ctx, &desc, &layout, &render_pass)?;
                 (layout, pipeline, None)
             }
         };
@@ -815,7 +808,7 @@ impl NearbyImpostors {
             // (src/technique/refraction/refractor_layers.rs), but this projection, unlike the camera's, is
             // not y-flipped: its back faces come out counter-clockwise, i.e. as the
             // pipeline's front faces, so BACK is the mode that culls the faces towards O_R.
-            let bpipeline = GraphicsPipeline::new(
+            let bpipeline = GraphicsPipeline::with_layout(
                 ctx,
                 &pipeline_desc("nearby/impostor_back.frag", &[0], vk::CullModeFlags::BACK),
                 &blayout,
@@ -840,7 +833,7 @@ impl NearbyImpostors {
             let fbs = fbs_of(&back, BACK_PASS)?;
             // The nearest front faces: the other cull mode (FRONT 1 flips the normal to face O_R).
             let front_faces = if with_front {
-                let fpipeline = GraphicsPipeline::new(
+                let fpipeline = GraphicsPipeline::with_layout(
                     ctx,
                     &pipeline_desc("nearby/impostor_back.frag", &[1], vk::CullModeFlags::FRONT),
                     &blayout,
@@ -873,7 +866,7 @@ impl NearbyImpostors {
             let id = graph.register_image(&image);
             let fbs = framebuffers_of(&image, &format!("{name}_b"))?;
             let sets = [set_texture, set_reading(image.view())?];
-            let rpipeline = GraphicsPipeline::new(
+            let rpipeline = GraphicsPipeline::with_layout(
                 ctx,
                 &pipeline_desc("nearby/impostor_recursive.frag", &spec, vk::CullModeFlags::NONE),
                 &layout,

@@ -175,7 +175,7 @@ impl RefractorLayers {
                 ),
             )?;
             let (depth_state, clear_depth) = kind.depth();
-            let pipeline = GraphicsPipeline::new(
+            let pipeline = GraphicsPipeline::with_layout(
                 ctx,
                 &GraphicsPipelineDesc {
                     name: &label,
@@ -343,7 +343,7 @@ impl ShadePass {
         let mut specialization = vec![u32::from(desc.debug)];
         specialization.extend_from_slice(desc.specialization);
         let blend = vec![Blend::Off; 1 + debug.len()];
-        let pipeline = GraphicsPipeline::new(
+        let pipeline = GraphicsPipeline::with_layout(
             ctx,
             &GraphicsPipelineDesc {
                 name,
