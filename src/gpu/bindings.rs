@@ -159,4 +159,14 @@ impl<H: Copy> BoundSet<H> {
     pub fn uses(&self) -> &[(H, Access)] {
         &self.uses
     }
+
+    /// Write the resources `b` declares into every set again, with no set in use by the
+    /// device: the frame sets when an atlas they bind is replaced. The layout stays, so the
+    /// pipelines made with it stay valid.
+    pub fn rewrite(&self, ctx: &GpuContext, b: Bindings<'_, H>) {
+        let writes = b.writes();
+        for set in &self.sets {
+            set.update(ctx, &writes);
+        }
+    }
 }

@@ -36,11 +36,8 @@ use glam::{Mat4, Vec3};
 
 use crate::frame::gpu_scene::GpuScene;
 use crate::frame::RenderError;
-use crate::gpu::{
-    vk, Access, Buffer, ComputePipeline, DescriptorSet, DescriptorSetLayout, DescriptorWrite, GpuContext,
-    MemoryLocation, PipelineLayout, Sampler, SamplerDesc,
-};
-use crate::graph::{BufferId, FrameGraph};
+use crate::gpu::{vk, Access, Buffer, ComputePipeline, GpuContext, MemoryLocation, Sampler, SamplerDesc};
+use crate::graph::{Bindings, BoundSet, BufferId, FrameGraph};
 use crate::scene::{Analytic, Light, Material, Scene};
 use crate::*;
 
@@ -248,9 +245,7 @@ pub struct Reference {
     height: u32,
     iterations_done: u32,
     photons_per_iteration: u32,
-    _set_layout: DescriptorSetLayout,
-    set: DescriptorSet,
-    _layout: PipelineLayout,
+    set: BoundSet,
     camera: ComputePipeline,
     photons: ComputePipeline,
     gather: ComputePipeline,
@@ -435,60 +430,29 @@ impl Reference {
         )?;
 
         let sampler = Sampler::new(ctx, "reference_latlong", SamplerDesc::LATLONG)?;
-        let c = vk::ShaderStageFlags::COMPUTE;
-        let sb = vk::DescriptorType::STORAGE_BUFFER;
-        let set_layout = DescriptorSetLayout::new(
-            ctx,
-            "reference",
-            &[
-                (REF_BINDING_UNIFORMS, vk::DescriptorType::UNIFORM_BUFFER, c),
-                (REF_BINDING_MATERIALS, sb, c),
-                (REF_BINDING_ENVIRONMENT, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, c),
-                (REF_BINDING_VERTICES, sb, c),
-                (REF_BINDING_TRIANGLES, sb, c),
-                (REF_BINDING_NODES, sb, c),
-                (REF_BINDING_SPHERES, sb, c),
-                (REF_BINDING_OBJECTS, sb, c),
-                (REF_BINDING_ACCUM, sb, c),
-                (REF_BINDING_PIXELS, sb, c),
-                (REF_BINDING_PHOTONS, sb, c),
-                (REF_BINDING_GRID, sb, c),
-                (REF_BINDING_COUNTERS, sb, c),
-                (REF_BINDING_DEBUG, sb, c),
-                (REF_BINDING_VOLUME, sb, c),
-            ],
-            1,
-        )?;
-        let set = set_layout.allocate(
-            "reference",
-            &[
-                DescriptorWrite::Uniform(REF_BINDING_UNIFORMS, &ubo),
-                DescriptorWrite::Storage(REF_BINDING_MATERIALS, &gpu_scene.materials),
-                DescriptorWrite::Sampled(
-                    REF_BINDING_ENVIRONMENT,
-                    gpu_scene.environment.view(),
-                    &sampler,
-                    vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-                ),
-                DescriptorWrite::Storage(REF_BINDING_VERTICES, &gpu_scene.vertices),
-                DescriptorWrite::Storage(REF_BINDING_TRIANGLES, &triangles),
-                DescriptorWrite::Storage(REF_BINDING_NODES, &nodes),
-                DescriptorWrite::Storage(REF_BINDING_SPHERES, &sphere_buf),
-                DescriptorWrite::Storage(REF_BINDING_OBJECTS, &object_buf),
-                DescriptorWrite::Storage(REF_BINDING_ACCUM, &accum),
-                DescriptorWrite::Storage(REF_BINDING_PIXELS, &pixels),
-                DescriptorWrite::Storage(REF_BINDING_PHOTONS, &photon_buffer),
-                DescriptorWrite::Storage(REF_BINDING_GRID, &grid),
-                DescriptorWrite::Storage(REF_BINDING_COUNTERS, &counters),
-                DescriptorWrite::Storage(REF_BINDING_DEBUG, &debug),
-                DescriptorWrite::Storage(REF_BINDING_VOLUME, &voxel_buf),
-            ],
-        )?;
-        let layout = PipelineLayout::new(ctx, "reference", &[&set_layout], std::mem::size_of::<RefPush>() as u32)?;
-        let camera = ComputePipeline::with_layout(ctx, "reference_camera", "reference/camera.comp", &layout, &[])?;
-        let photons = ComputePipeline::with_layout(ctx, "reference_photons", "reference/photons.comp", &layout, &[])?;
-        let gather = ComputePipeline::with_layout(ctx, "reference_gather", "reference/gather.comp", &layout, &[])?;
-        let probe = ComputePipeline::with_layout(ctx, "reference_probe", "reference/probe.comp", &layout, &[])?;
+        let set = Bindings::new(vk::ShaderStageFlags::COMPUTE)
+            .uniform(REF_BINDING_UNIFORMS, &ubo)
+            .storage(REF_BINDING_MATERIALS, &gpu_scene.materials)
+            .sampled(REF_BINDING_ENVIRONMENT, &gpu_scene.environment, &sampler)
+            .storage(REF_BINDING_VERTICES, &gpu_scene.vertices)
+            .storage(REF_BINDING_TRIANGLES, &triangles)
+            .storage(REF_BINDING_NODES, &nodes)
+            .storage(REF_BINDING_SPHERES, &sphere_buf)
+            .storage(REF_BINDING_OBJECTS, &object_buf)
+            .storage(REF_BINDING_ACCUM, &accum)
+            .storage(REF_BINDING_PIXELS, &pixels)
+            .storage(REF_BINDING_PHOTONS, &photon_buffer)
+            .storage(REF_BINDING_GRID, &grid)
+            .storage(REF_BINDING_COUNTERS, &counters)
+            .storage(REF_BINDING_DEBUG, &debug)
+            .storage(REF_BINDING_VOLUME, &voxel_buf)
+            .build(ctx, "reference")?;
+        let push = std::mem::size_of::<RefPush>() as u32;
+        let pipeline = |name: &str, shader: &str| ComputePipeline::new(ctx, name, shader, &[set.layout()], push, &[]);
+        let camera = pipeline("reference_camera", "reference/camera.comp")?;
+        let photons = pipeline("reference_photons", "reference/photons.comp")?;
+        let gather = pipeline("reference_gather", "reference/gather.comp")?;
+        let probe = pipeline("reference_probe", "reference/probe.comp")?;
         let ids = [
             graph.register_buffer(&accum),
             graph.register_buffer(&pixels),
@@ -503,9 +467,7 @@ impl Reference {
             height,
             iterations_done: 0,
             photons_per_iteration,
-            _set_layout: set_layout,
             set,
-            _layout: layout,
             camera,
             photons,
             gather,
@@ -560,7 +522,7 @@ impl Reference {
         } = self;
         let (camera, photon_pipe, gather, grid_buf, counter_buf) =
             (&*camera, &*photon_pipe, &*gather, &*grid_buf, &*counter_buf);
-        let set = *set;
+        let set = set.set();
         let seed = settings.seed;
         let has_photons = *has_photons;
         self.ctx.one_shot(|cmd| {
@@ -702,7 +664,7 @@ impl Reference {
         for chunk in records.chunks(capacity.max(1)) {
             self.debug.write(0, bytemuck::cast_slice(chunk));
             let debug = self.ids[5];
-            let (graph, probe, set) = (&mut self.graph, &self.probe, self.set);
+            let (graph, probe, set) = (&mut self.graph, &self.probe, self.set.set());
             let push = RefPush { iteration: 0, seed: 0, mode: mode as u32, count: chunk.len() as u32 };
             self.ctx.one_shot(|cmd| {
                 let mut frame = graph.frame();

@@ -14,10 +14,10 @@ use std::sync::Arc;
 use glam::{Mat4, Vec3};
 
 use crate::gpu::{
-    vk, Access, Buffer, CommandPool, DescriptorSet, DescriptorSetLayout, DescriptorWrite, GpuContext, Image,
-    MemoryLocation, Sampler, SamplerDesc, SubmitSync, TimestampPool, TimestampQuery,
+    vk, Access, Buffer, CommandPool, GpuContext, Image, MemoryLocation, Sampler, SamplerDesc, SubmitSync,
+    TimestampPool, TimestampQuery,
 };
-use crate::graph::{Frame, FrameGraph, ImageId};
+use crate::graph::{Bindings, BoundSet, Frame, FrameGraph, ImageId};
 use crate::scene::techniques::{Flux, PhotonBufferParams};
 use crate::scene::{Camera, Scene};
 use crate::technique::baseline::shadow_map::FAR_DISTANCE;
@@ -99,9 +99,8 @@ pub struct Renderer {
     /// Hu & Qin 2007 §3's caustic textures and rectangles (a stand-in without photon_buffer),
     /// bound in the frame set.
     photon_caustics: PhotonCaustics,
-    frame_sets: Vec<DescriptorSet>,
-    /// Owns the pool the frame sets come from; kept alive for them.
-    _frame_layout: DescriptorSetLayout,
+    /// Set 0 of every pass, one per frame in flight.
+    frame_sets: BoundSet,
     frame_buffers: Vec<Buffer>,
     _samplers: Vec<Sampler>,
     scene: GpuScene,
@@ -198,55 +197,25 @@ impl Renderer {
 
         let nearest = Sampler::new(ctx, "nearest_clamp", SamplerDesc::NEAREST_CLAMP)?;
         let latlong = Sampler::new(ctx, "latlong", SamplerDesc::LATLONG)?;
-        let stages = vk::ShaderStageFlags::ALL_GRAPHICS | vk::ShaderStageFlags::COMPUTE;
-        let frame_layout = DescriptorSetLayout::new(
-            ctx,
-            "frame",
-            &[
-                (BINDING_FRAME, vk::DescriptorType::UNIFORM_BUFFER, stages),
-                (BINDING_MATERIALS, vk::DescriptorType::STORAGE_BUFFER, stages),
-                (BINDING_ENVIRONMENT, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, stages),
-                (BINDING_SHADOW_CUBE, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, stages),
-                (BINDING_SHADOW_2D, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, stages),
-                (BINDING_CAUSTIC_CUBE, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, stages),
-                (BINDING_CAUSTIC_2D, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, stages),
-                (BINDING_PHOTON_CAUSTICS, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, stages),
-                (BINDING_PHOTON_RECTS, vk::DescriptorType::STORAGE_BUFFER, stages),
-            ],
-            FRAMES_IN_FLIGHT as u32,
-        )?;
-        let mut frame_buffers = Vec::new();
-        let mut frame_sets = Vec::new();
-        for i in 0..FRAMES_IN_FLIGHT {
-            let ubo = Buffer::new(
-                ctx,
-                &format!("frame_uniforms_{i}"),
-                std::mem::size_of::<FrameUniforms>() as u64,
-                vk::BufferUsageFlags::UNIFORM_BUFFER,
-                MemoryLocation::CpuToGpu,
-            )?;
-            let set = frame_layout.allocate(
-                &format!("frame_set_{i}"),
-                &[
-                    DescriptorWrite::Uniform(BINDING_FRAME, &ubo),
-                    DescriptorWrite::Storage(BINDING_MATERIALS, &gpu_scene.materials),
-                    DescriptorWrite::Sampled(
-                        BINDING_ENVIRONMENT,
-                        gpu_scene.environment.view(),
-                        &latlong,
-                        vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-                    ),
-                ],
-            )?;
-            frame_buffers.push(ubo);
-            frame_sets.push(set);
-        }
-
+        let frame_buffers = (0..FRAMES_IN_FLIGHT)
+            .map(|i| {
+                let size = std::mem::size_of::<FrameUniforms>() as u64;
+                let name = format!("frame_uniforms_{i}");
+                Buffer::new(ctx, &name, size, vk::BufferUsageFlags::UNIFORM_BUFFER, MemoryLocation::CpuToGpu)
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let frame_set = |ubo| {
+            let set = Bindings::new(FRAME_STAGES)
+                .uniform(BINDING_FRAME, ubo)
+                .storage(BINDING_MATERIALS, &gpu_scene.materials)
+                .sampled(BINDING_ENVIRONMENT, &gpu_scene.environment, &latlong);
+            let set = bind_atlas(set, [BINDING_SHADOW_CUBE, BINDING_SHADOW_2D], &targets.shadow_atlas, &nearest);
+            let set = bind_atlas(set, [BINDING_CAUSTIC_CUBE, BINDING_CAUSTIC_2D], &targets.caustic_atlas, &nearest);
+            bind_photon_caustics(set, &photon_caustics, &nearest)
+        };
+        let frame_sets = Bindings::build_each(ctx, "frame", frame_buffers.iter().map(frame_set).collect())?;
         // The atlases are bound even when no pass writes them: give them defined contents
         // ("nothing occludes", "no caustic light") and the layout the shaders expect.
-        bind_atlas(ctx, &frame_sets, [BINDING_SHADOW_CUBE, BINDING_SHADOW_2D], &targets.shadow_atlas, &nearest);
-        bind_atlas(ctx, &frame_sets, [BINDING_CAUSTIC_CUBE, BINDING_CAUSTIC_2D], &targets.caustic_atlas, &nearest);
-        bind_photon_caustics(ctx, &frame_sets, &photon_caustics, &nearest);
         clear_atlas(ctx, &mut graph, &targets.shadow_atlas, targets.shadow_atlas_id, FAR_DISTANCE)?;
         clear_atlas(ctx, &mut graph, &targets.caustic_atlas, targets.caustic_atlas_id, 0.0)?;
         let objects = (0..scene.objects.len())
@@ -264,7 +233,7 @@ impl Renderer {
             scene,
             gpu: &gpu_scene,
             graph: &mut graph,
-            frame_layout: &frame_layout,
+            frame_layout: frame_sets.layout(),
             targets: &targets,
             nearest: &nearest,
             photon_caustics: &photon_caustics,
@@ -305,7 +274,6 @@ impl Renderer {
             techniques,
             photon_caustics,
             frame_sets,
-            _frame_layout: frame_layout,
             frame_buffers,
             _samplers: vec![nearest, latlong],
             scene: gpu_scene,
@@ -498,7 +466,7 @@ impl Renderer {
             scene,
             targets,
             photon_caustics,
-            frame_set: frame_sets[slot],
+            frame_set: frame_sets.sets()[slot],
             slot,
             shadow_atlas: shadowed.then_some(targets.shadow_atlas_id),
             dt,
@@ -712,33 +680,20 @@ pub struct PhotonBufferImages {
     pub rectangles: Vec<crate::technique::caustics::photon_buffer::GpuPhotonRect>,
 }
 
-/// Bind `atlas` in every frame set: its cube-array view at `bindings[0]`, its 2D-array view at
+/// The stages that see the frame set.
+const FRAME_STAGES: vk::ShaderStageFlags = vk::ShaderStageFlags::from_raw(
+    vk::ShaderStageFlags::ALL_GRAPHICS.as_raw() | vk::ShaderStageFlags::COMPUTE.as_raw(),
+);
+
+/// `atlas` in a frame set: its cube-array view at `bindings[0]`, its 2D-array view at
 /// `bindings[1]`.
-fn bind_atlas(ctx: &GpuContext, sets: &[DescriptorSet], bindings: [u32; 2], atlas: &Image, sampler: &Sampler) {
-    let sampled = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
-    for set in sets {
-        set.update(
-            ctx,
-            &[
-                DescriptorWrite::Sampled(bindings[0], atlas.view(), sampler, sampled),
-                DescriptorWrite::Sampled(bindings[1], atlas.array_view(), sampler, sampled),
-            ],
-        );
-    }
+fn bind_atlas<'a>(set: Bindings<'a>, bindings: [u32; 2], atlas: &'a Image, sampler: &'a Sampler) -> Bindings<'a> {
+    set.sampled(bindings[0], atlas, sampler).sampled_view(bindings[1], atlas, atlas.array_view(), sampler)
 }
 
-/// Bind Hu & Qin 2007 §3's caustic textures and rectangles in every frame set.
-fn bind_photon_caustics(ctx: &GpuContext, sets: &[DescriptorSet], c: &PhotonCaustics, sampler: &Sampler) {
-    let sampled = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
-    for set in sets {
-        set.update(
-            ctx,
-            &[
-                DescriptorWrite::Sampled(BINDING_PHOTON_CAUSTICS, c.textures.view(), sampler, sampled),
-                DescriptorWrite::Storage(BINDING_PHOTON_RECTS, &c.rects),
-            ],
-        );
-    }
+/// Hu & Qin 2007 §3's caustic textures and rectangles in a frame set.
+fn bind_photon_caustics<'a>(set: Bindings<'a>, c: &'a PhotonCaustics, sampler: &'a Sampler) -> Bindings<'a> {
+    set.sampled(BINDING_PHOTON_CAUSTICS, &c.textures, sampler).storage(BINDING_PHOTON_RECTS, &c.rects)
 }
 
 /// Fill every layer of `atlas` with `value`, ready to be sampled.

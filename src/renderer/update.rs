@@ -26,6 +26,7 @@ use std::hash::{Hash, Hasher};
 use std::time::Instant;
 
 use crate::gpu::TimestampPool;
+use crate::graph::Bindings;
 use crate::scene::techniques::{CausticsMapParams, PhotonBufferParams};
 use crate::scene::{Environment, Material, Scene};
 use crate::technique::caustics::photon_buffer::PhotonCaustics;
@@ -33,6 +34,7 @@ use crate::technique::{params, recipe, Recipe, Setup, TECHNIQUES};
 
 use super::{
     bind_atlas, bind_photon_caustics, clear_atlas, set_camera_uniforms, RenderError, Renderer, FRAMES_IN_FLIGHT,
+    FRAME_STAGES,
 };
 use crate::frame::gpu_scene::gpu_material;
 use crate::frame::heightfield::HeightfieldAnimation;
@@ -261,7 +263,7 @@ impl Renderer {
             scene,
             gpu: &self.scene,
             graph: &mut self.graph,
-            frame_layout: &self._frame_layout,
+            frame_layout: self.frame_sets.layout(),
             targets: targets.as_ref().unwrap_or(&self.targets),
             nearest: &self._samplers[0],
             photon_caustics: photon.as_ref().unwrap_or(&self.photon_caustics),
@@ -338,18 +340,15 @@ impl Renderer {
     fn clear_and_bind_caustic_atlas(&mut self) -> Result<(), RenderError> {
         let (atlas, id) = (&self.targets.caustic_atlas, self.targets.caustic_atlas_id);
         clear_atlas(&self.ctx, &mut self.graph, atlas, id, 0.0)?;
-        bind_atlas(
-            &self.ctx,
-            &self.frame_sets,
-            [crate::BINDING_CAUSTIC_CUBE, crate::BINDING_CAUSTIC_2D],
-            atlas,
-            &self._samplers[0],
-        );
+        let bindings = [crate::BINDING_CAUSTIC_CUBE, crate::BINDING_CAUSTIC_2D];
+        self.frame_sets
+            .rewrite(&self.ctx, bind_atlas(Bindings::new(FRAME_STAGES), bindings, atlas, &self._samplers[0]));
         Ok(())
     }
 
     /// The photon-buffer caustic textures and rectangles, bound in every frame set.
     fn bind_photon_caustics(&self) {
-        bind_photon_caustics(&self.ctx, &self.frame_sets, &self.photon_caustics, &self._samplers[0]);
+        let set = bind_photon_caustics(Bindings::new(FRAME_STAGES), &self.photon_caustics, &self._samplers[0]);
+        self.frame_sets.rewrite(&self.ctx, set);
     }
 }

@@ -567,7 +567,7 @@ impl LightSim {
 
     fn record_step<'a>(&'a self, frame: &mut Frame<'_, 'a>, from: usize) {
         let hp = &self.hp;
-        let (set0, set1) = (hp.set, self.sets.sets()[from]);
+        let (set0, set1) = (hp.set(), self.sets.sets()[from]);
         let (src, dst) = (self.list_ids[from], self.list_ids[1 - from]);
         let state = &hp.state;
         let (step, expand) = (&self.step, &self.expand);
@@ -630,7 +630,7 @@ impl LightSim {
     /// Turn the accumulator into the irradiance and direction volumes (after the runs; again
     /// after more runs, it always reflects everything deposited so far).
     pub fn resolve(&self, ctx: &Arc<GpuContext>, graph: &mut FrameGraph) -> GpuResult<()> {
-        let (set0, set1) = (self.hp.set, self.sets.set());
+        let (set0, set1) = (self.hp.set(), self.sets.set());
         let resolve = &self.resolve;
         let push = self.push();
         let groups = self.resolution.map(|r| r.div_ceil(EIKONAL_GROUP));

@@ -14,10 +14,9 @@
 use std::sync::Arc;
 
 use crate::gpu::{
-    vk, Access, Buffer, ComputePipeline, DescriptorSet, DescriptorSetLayout, DescriptorWrite, GpuContext, GpuResult,
-    MemoryLocation, PipelineLayout,
+    vk, Access, Buffer, ComputePipeline, DescriptorSet, DescriptorSetLayout, GpuContext, GpuResult, MemoryLocation,
 };
-use crate::graph::{BufferId, Frame, FrameGraph};
+use crate::graph::{Bindings, BoundSet, BufferId, Frame, FrameGraph};
 use crate::{
     LIGHT_BINDING_CLASSES, LIGHT_BINDING_HISTORY, LIGHT_BINDING_LEVELS, LIGHT_BINDING_PAIRS, LIGHT_BINDING_STATE,
     LIGHT_GROUP,
@@ -103,9 +102,8 @@ pub struct HistoPyramid {
     pub capacity: u32,
     pub history_len: u32,
     top: u32,
-    set_layout: DescriptorSetLayout,
-    pub set: DescriptorSet,
-    layout: PipelineLayout,
+    /// Set 0 of every light-simulation kernel.
+    set: BoundSet,
     reduce: ComputePipeline,
     total: ComputePipeline,
     traverse: ComputePipeline,
@@ -147,48 +145,18 @@ impl HistoPyramid {
         let levels = Buffer::new(ctx, "histopyramid_levels", 4 * level_words, storage, MemoryLocation::GpuOnly)?;
         let pairs = Buffer::new(ctx, "histopyramid_pairs", 8 * capacity as u64, storage, host)?;
         let history = Buffer::new(ctx, "histopyramid_history", 4 * history_len as u64, storage, host)?;
-        let ty = vk::DescriptorType::STORAGE_BUFFER;
-        let stage = vk::ShaderStageFlags::COMPUTE;
-        let set_layout = DescriptorSetLayout::new(
-            ctx,
-            "histopyramid",
-            &[
-                (LIGHT_BINDING_STATE, ty, stage),
-                (LIGHT_BINDING_CLASSES, ty, stage),
-                (LIGHT_BINDING_LEVELS, ty, stage),
-                (LIGHT_BINDING_PAIRS, ty, stage),
-                (LIGHT_BINDING_HISTORY, ty, stage),
-            ],
-            1,
-        )?;
-        let set = set_layout.allocate(
-            "histopyramid",
-            &[
-                DescriptorWrite::Storage(LIGHT_BINDING_STATE, &state),
-                DescriptorWrite::Storage(LIGHT_BINDING_CLASSES, &classes),
-                DescriptorWrite::Storage(LIGHT_BINDING_LEVELS, &levels),
-                DescriptorWrite::Storage(LIGHT_BINDING_PAIRS, &pairs),
-                DescriptorWrite::Storage(LIGHT_BINDING_HISTORY, &history),
-            ],
-        )?;
-        let layout = PipelineLayout::new(ctx, "histopyramid", &[&set_layout], 4)?;
+        let set = Bindings::new(vk::ShaderStageFlags::COMPUTE)
+            .storage(LIGHT_BINDING_STATE, &state)
+            .storage(LIGHT_BINDING_CLASSES, &classes)
+            .storage(LIGHT_BINDING_LEVELS, &levels)
+            .storage(LIGHT_BINDING_PAIRS, &pairs)
+            .storage(LIGHT_BINDING_HISTORY, &history)
+            .build(ctx, "histopyramid")?;
         let spec = [capacity, history_len];
-        let reduce = ComputePipeline::with_layout(
-            ctx,
-            "histopyramid_reduce",
-            "eikonal/histopyramid_reduce.comp",
-            &layout,
-            &spec,
-        )?;
-        let total =
-            ComputePipeline::with_layout(ctx, "histopyramid_total", "eikonal/histopyramid_total.comp", &layout, &spec)?;
-        let traverse = ComputePipeline::with_layout(
-            ctx,
-            "histopyramid_traverse",
-            "eikonal/histopyramid_traverse.comp",
-            &layout,
-            &spec,
-        )?;
+        let pipeline = |name: &str, shader: &str| ComputePipeline::new(ctx, name, shader, &[set.layout()], 4, &spec);
+        let reduce = pipeline("histopyramid_reduce", "eikonal/histopyramid_reduce.comp")?;
+        let total = pipeline("histopyramid_total", "eikonal/histopyramid_total.comp")?;
+        let traverse = pipeline("histopyramid_traverse", "eikonal/histopyramid_traverse.comp")?;
         let (state_id, classes_id, levels_id, pairs_id, history_id) = (
             graph.register_buffer(&state),
             graph.register_buffer(&classes),
@@ -200,9 +168,7 @@ impl HistoPyramid {
             capacity,
             history_len,
             top,
-            set_layout,
             set,
-            layout,
             reduce,
             total,
             traverse,
@@ -221,7 +187,12 @@ impl HistoPyramid {
 
     /// The set-0 layout that the light kernels share.
     pub fn set_layout(&self) -> &DescriptorSetLayout {
-        &self.set_layout
+        self.set.layout()
+    }
+
+    /// Set 0 of the light kernels.
+    pub fn set(&self) -> DescriptorSet {
+        self.set.set()
     }
 
     /// Reset the bookkeeping for an input list of `count` entries (host write; call while
@@ -245,7 +216,7 @@ impl HistoPyramid {
     /// Record the build (one pass per level), the total and the traversal into `frame`; the
     /// classes must be written by an earlier pass of the frame.
     pub fn record<'a>(&'a self, frame: &mut Frame<'_, 'a>) {
-        let set = self.set;
+        let set = self.set.set();
         for level in 1..=self.top {
             let len = level_lengths(self.capacity)[level as usize];
             let pipeline = &self.reduce;
@@ -282,11 +253,6 @@ impl HistoPyramid {
                 cmd.bind_compute(traverse, &[set]);
                 cmd.dispatch_indirect(state, 0);
             });
-    }
-
-    /// The pipeline layout of the HistoPyramid kernels (set 0, a 4-byte push constant).
-    pub fn pipeline_layout(&self) -> &PipelineLayout {
-        &self.layout
     }
 }
 
