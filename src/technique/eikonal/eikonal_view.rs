@@ -25,11 +25,8 @@ use glam::DVec3;
 
 use crate::frame::gpu_scene::GpuScene;
 use crate::frame::targets::Targets;
-use crate::gpu::{
-    vk, Access, ComputePipeline, DescriptorSet, DescriptorSetLayout, DescriptorWrite, GpuContext, GpuResult, Image,
-    ImageDesc, PipelineLayout,
-};
-use crate::graph::{Frame, FrameGraph, ImageId};
+use crate::gpu::{vk, Access, ComputePipeline, DescriptorSet, GpuContext, GpuResult, Image, ImageDesc};
+use crate::graph::{Bindings, Frame, FrameGraph, ImageId};
 use crate::scene::techniques::{EikonalParams, Integrator};
 use crate::scene::{IndexProfile, Scene, Volume};
 use crate::technique::{
@@ -244,10 +241,9 @@ pub struct EikonalPass {
     _volume: VolumeTextures,
     view: FullscreenPass,
     // The nearby geometry of exit rays
-    // (src/technique/eikonal/eikonal_nearby.rs): impostors (a 1x1 stand-in without rectangles), the
-    // set layout of their light-simulation shading, and the exact triangles.
+    // (src/technique/eikonal/eikonal_nearby.rs): impostors (a 1x1 stand-in without rectangles)
+    // and the exact triangles.
     nearby: NearbyImpostors,
-    _nearby_layout: Option<DescriptorSetLayout>,
     _triangles: crate::gpu::Buffer,
     // The light simulation and its receiver pass.
     light: Option<super::eikonal_light::EikonalLight>,
@@ -314,48 +310,32 @@ impl EikonalPass {
             search_steps: 8,
             max_iterations: 32,
         };
-        let (nearby, nearby_layout) = if kept.is_empty() {
-            (NearbyImpostors::stand_in(ctx, EIKONAL_NEARBY, gpu, graph, frame_layout)?, None)
+        let nearby = if kept.is_empty() {
+            NearbyImpostors::stand_in(ctx, EIKONAL_NEARBY, gpu, graph, frame_layout)?
         } else {
             let origin = eikonal_nearby::volume_origin(scene).unwrap_or(glam::Vec3::ZERO);
             // With a light simulation the textures carry the simulated caustic and shadow
             // (glsl/eikonal/nearby_impostor.frag): its volumes in a set of their own.
             let spec = [light_min.x, light_min.y, light_min.z, light_max.x, light_max.y, light_max.z].map(f);
-            let mut shading_layout = None;
-            let mut shading = None;
-            if let Some(l) = &light {
-                let stage = vk::ShaderStageFlags::FRAGMENT;
-                let sampled = vk::DescriptorType::COMBINED_IMAGE_SAMPLER;
-                let layout = shading_layout.insert(DescriptorSetLayout::new(
-                    ctx,
-                    EIKONAL_NEARBY,
-                    &[
-                        (crate::BINDING_EIKONAL_IRRADIANCE, sampled, stage),
-                        (crate::BINDING_EIKONAL_LIGHT_DIR, sampled, stage),
-                    ],
-                    1,
-                )?);
-                let (irr, dir) = l.images();
-                let at = Access::FragmentSampled.info(false).layout;
-                let set = layout.allocate(
-                    EIKONAL_NEARBY,
-                    &[
-                        DescriptorWrite::Sampled(crate::BINDING_EIKONAL_IRRADIANCE, irr.view(), nearest, at),
-                        DescriptorWrite::Sampled(crate::BINDING_EIKONAL_LIGHT_DIR, dir.view(), nearest, at),
-                    ],
-                )?;
-                shading = Some((set, l.image_ids().to_vec()));
-            }
-            let shading = shading_layout.as_ref().zip(shading).map(|(layout, (set, reads))| ImpostorShading {
-                fragment_shader: "eikonal/nearby_impostor.frag",
-                set_layout: layout,
-                set,
-                specialization: &spec,
-                reads,
-            });
+            let shading = match &light {
+                Some(l) => {
+                    let ((irr, dir), [irr_id, dir_id]) = (l.images(), l.image_ids());
+                    let set = fragment_set()
+                        .sampled(crate::BINDING_EIKONAL_IRRADIANCE, irr, nearest)
+                        .read(irr_id)
+                        .sampled(crate::BINDING_EIKONAL_LIGHT_DIR, dir, nearest)
+                        .read(dir_id)
+                        .build(ctx, EIKONAL_NEARBY)?;
+                    Some(ImpostorShading {
+                        fragment_shader: "eikonal/nearby_impostor.frag",
+                        set,
+                        specialization: &spec,
+                    })
+                }
+                None => None,
+            };
             let rects = NearbyRects::around(origin, &kept, scene);
-            let nearby = NearbyImpostors::build(ctx, EIKONAL_NEARBY, &desc, rects, graph, frame_layout, shading)?;
-            (nearby, shading_layout)
+            NearbyImpostors::build(ctx, EIKONAL_NEARBY, &desc, rects, graph, frame_layout, shading)?
         };
         let spec = [
             integrator,
@@ -416,7 +396,7 @@ impl EikonalPass {
             set,
             frame_layout,
         )?;
-        Ok(EikonalPass { _volume: textures, view, nearby, _nearby_layout: nearby_layout, _triangles: triangles, light })
+        Ok(EikonalPass { _volume: textures, view, nearby, _triangles: triangles, light })
     }
 
     /// The light simulation's statistics (None without a simulation).
@@ -550,50 +530,21 @@ pub(crate) fn prepare_volume(
     let alb_data = pack(&mut fields.albedo.iter().zip(&band_reflectance).map(|(a, &r)| [a[0], a[1], a[2], r]));
     let emi_data = pack(&mut fields.emission.iter().zip(&band).map(|(e, &b)| [e[0], e[1], e[2], b]));
 
-    let storage = vk::DescriptorType::STORAGE_IMAGE;
-    let stage = vk::ShaderStageFlags::COMPUTE;
-    let layout = DescriptorSetLayout::new(
-        ctx,
-        "eikonal_volume",
-        &[(EIKONAL_BINDING_SRC, storage, stage), (EIKONAL_BINDING_DST, storage, stage)],
-        4,
-    )?;
-    let set = |name: &str, src: &Image, dst: &Image| {
-        layout.allocate(
-            name,
-            &[
-                DescriptorWrite::StorageImage(EIKONAL_BINDING_SRC, src.view()),
-                DescriptorWrite::StorageImage(EIKONAL_BINDING_DST, dst.view()),
-            ],
-        )
-    };
     // The blur ping-pongs raw -> scratch -> raw -> scratch; the gradient reads scratch.
-    let sets = [
-        set("eikonal_smooth_x", &raw, &scratch)?,
-        set("eikonal_smooth_y", &scratch, &raw)?,
-        set("eikonal_smooth_z", &raw, &scratch)?,
-        set("eikonal_gradient", &scratch, &field)?,
-    ];
-    let pipeline_layout = PipelineLayout::new(ctx, "eikonal_volume", &[&layout], 0)?;
+    let passes = [(&raw, &scratch), (&scratch, &raw), (&raw, &scratch), (&scratch, &field)];
+    let sets = passes.iter().map(|&(src, dst)| {
+        Bindings::new(vk::ShaderStageFlags::COMPUTE)
+            .storage_image(EIKONAL_BINDING_SRC, src)
+            .storage_image(EIKONAL_BINDING_DST, dst)
+    });
+    let sets = Bindings::build_each(ctx, "eikonal_volume", sets.collect())?;
+    let pipeline =
+        |name: &str, shader: &str, spec: &[u32]| ComputePipeline::new(ctx, name, shader, &[sets.layout()], 0, spec);
     let smooth: Vec<ComputePipeline> = (0..3u32)
-        .map(|axis| {
-            ComputePipeline::with_layout(
-                ctx,
-                &format!("eikonal_smooth_{axis}"),
-                "eikonal/smooth.comp",
-                &pipeline_layout,
-                &[axis, f(params.sigma), nz],
-            )
-        })
+        .map(|axis| pipeline(&format!("eikonal_smooth_{axis}"), "eikonal/smooth.comp", &[axis, f(params.sigma), nz]))
         .collect::<GpuResult<_>>()?;
     let voxel = volume.voxel_size();
-    let gradient = ComputePipeline::with_layout(
-        ctx,
-        "eikonal_gradient",
-        "eikonal/gradient.comp",
-        &pipeline_layout,
-        &[f(voxel.x), f(voxel.y), f(voxel.z), nz],
-    )?;
+    let gradient = pipeline("eikonal_gradient", "eikonal/gradient.comp", &[f(voxel.x), f(voxel.y), f(voxel.z), nz])?;
 
     let mut samples: Vec<f32> = Vec::with_capacity(fields.voxels() * channels as usize);
     for c in 0..channels as usize {
@@ -628,7 +579,7 @@ pub(crate) fn prepare_volume(
         let mut frame = graph.frame();
         for (i, &(src, dst)) in ids.iter().enumerate() {
             let pipeline = if i < 3 { &smooth[i] } else { &gradient };
-            let set = sets[i];
+            let set = sets.sets()[i];
             frame.pass(names[i]).read(src, Access::ComputeRead).write(dst, Access::ComputeWrite).record(move |cmd| {
                 cmd.bind_compute(pipeline, &[set]);
                 cmd.dispatch(groups[0], groups[1], groups[2]);

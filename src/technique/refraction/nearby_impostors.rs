@@ -57,11 +57,10 @@ use glam::{Mat4, Vec3};
 use crate::frame::gpu_scene::GpuScene;
 use crate::frame::targets::DEPTH_FORMAT;
 use crate::gpu::{
-    vk, Access, Attachment, Blend, Buffer, Clear, DepthState, DescriptorSet, DescriptorSetLayout, DescriptorWrite,
-    Framebuffer, GpuContext, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc, ImageViewKind,
-    PipelineLayout, RenderPass, RenderPassDesc, Sampler, SamplerDesc, VertexLayout,
+    vk, Access, Buffer, Clear, DepthState, DescriptorSet, DescriptorSetLayout, GpuContext, GpuResult, GraphicsPipeline,
+    GraphicsPipelineDesc, Image, ImageDesc, ImageViewKind, RenderTarget, Sampler, SamplerDesc,
 };
-use crate::graph::{Frame, FrameGraph, ImageId};
+use crate::graph::{Bindings, BoundSet, Frame, FrameGraph, ImageId};
 use crate::scene::techniques::RecursiveExit;
 use crate::scene::{Material, Scene};
 use crate::{BINDING_NEARBY_BACK, BINDING_NEARBY_FRONT, BINDING_NEARBY_RECTS, BINDING_NEARBY_TEXTURE};
@@ -221,14 +220,12 @@ pub fn rect_for(scene: &Scene, object: usize, origin_r: Vec3, layer: u32) -> Opt
 /// Another way to shade level 0 of the textures than glsl/nearby/impostor.frag (the
 /// eikonal light volumes for the caustic under a volume, src/technique/eikonal/eikonal_nearby.rs): a
 /// fragment shader including impostor_body.glsl with a third descriptor set (set 2, owned by
-/// the caller, alive as long as the impostors), its specialisation constants (ids from 6 on,
-/// after impostor_body.glsl's 0..5), and the images that set samples.
+/// whose tracked resources level 0 reads) and its specialisation constants (ids from 6 on,
+/// after impostor_body.glsl's 0..5).
 pub struct ImpostorShading<'a> {
     pub fragment_shader: &'static str,
-    pub set_layout: &'a DescriptorSetLayout,
-    pub set: DescriptorSet,
+    pub set: BoundSet,
     pub specialization: &'a [u32],
-    pub reads: Vec<ImageId>,
 }
 
 /// The rectangle set of one OBJ_R: its rectangles are `rects[first .. first + count]` of
@@ -434,8 +431,8 @@ pub const MAX_RECURSION: u32 = RECURSION_PASSES.len() as u32;
 struct TextureArray {
     image: Image,
     id: ImageId,
-    /// One per rectangle.
-    framebuffers: Vec<Framebuffer>,
+    /// A framebuffer per layer.
+    target: RenderTarget,
 }
 
 /// TEX_i / TEX_DEPTH_i of every rectangle, rendered each frame (the paper's "Rendering
@@ -457,18 +454,17 @@ pub struct NearbyImpostors {
     pub levels: u32,
     /// The other array of the ping-pong (with recursion levels).
     other: Option<TextureArray>,
-    framebuffers: Vec<Framebuffer>,
+    /// A framebuffer per layer of `texture`.
+    target: RenderTarget,
     _depth: Image,
     depth_id: ImageId,
-    render_pass: RenderPass,
-    _layout: PipelineLayout,
     pipeline: GraphicsPipeline,
-    /// Recursive levels: pipeline and the sets reading array 0 / 1.
-    recursive: Option<Recursive>,
-    _set_layout: DescriptorSetLayout,
+    /// The recursive levels' pipeline.
+    recursive: Option<GraphicsPipeline>,
     _sampler: Sampler,
-    /// Set 1 reading `texture` (level 0 binds it without reading the array).
-    set_texture: DescriptorSet,
+    /// Set 1 reading `texture` (level 0 binds it without reading the array), and with
+    /// recursion levels one reading `other`.
+    sets: BoundSet,
     _back: Image,
     back_id: ImageId,
     _front: Image,
@@ -481,23 +477,16 @@ pub struct NearbyImpostors {
     diffuse_layers: Vec<u32>,
     /// Per rectangle: OBJ_k's own set (u32::MAX: none).
     lookup_set: Vec<u32>,
-    /// [`ImpostorShading`]'s set and the images it reads (level 0).
-    extra: Option<(DescriptorSet, Vec<ImageId>)>,
+    /// [`ImpostorShading`]'s set (level 0).
+    extra: Option<BoundSet>,
 }
 
-struct Recursive {
-    pipeline: GraphicsPipeline,
-    /// [reads `texture`, reads `other`].
-    sets: [DescriptorSet; 2],
-}
-
-/// [`BACK_PASS`]: one framebuffer per dielectric rectangle (index into the rectangles), for
-/// the back faces and (full exit search) the front faces.
+/// [`BACK_PASS`]: the dielectric rectangles (indices into the rectangles), drawn into the
+/// layers of the back faces and (full exit search) of the front faces.
 struct BackPass {
-    _layout: PipelineLayout,
-    pipeline: GraphicsPipeline,
-    framebuffers: Vec<(usize, Framebuffer)>,
-    front: Option<(GraphicsPipeline, Vec<(usize, Framebuffer)>)>,
+    rects: Vec<usize>,
+    back: (GraphicsPipeline, RenderTarget),
+    front: Option<(GraphicsPipeline, RenderTarget)>,
 }
 
 /// The rectangles impostors are built over, and per rectangle whether its object is
@@ -639,72 +628,27 @@ impl NearbyImpostors {
         let layers_n = rects.len().max(1) as u32;
         let size = if rects.is_empty() { 1 } else { desc.resolution };
         use vk::ImageUsageFlags as U;
-        let array_desc = |label: String| ImageDesc {
-            name: label,
-            format: NEARBY_FORMAT,
-            width: size,
-            height: size,
-            layers: layers_n,
-            usage: U::COLOR_ATTACHMENT | U::SAMPLED | U::TRANSFER_SRC | U::TRANSFER_DST,
-            view: ImageViewKind::D2Array,
+        let array = |label: String, format, size, layers, usage| {
+            ImageDesc::square(&label, format, size, layers, ImageViewKind::D2Array, usage)
         };
-        let texture = Image::new(ctx, &array_desc(format!("{name}_texture")))?;
-        let texture_id = graph.register_image(&texture);
-        let depth = Image::new(
-            ctx,
-            &ImageDesc {
-                name: format!("{name}_depth"),
-                format: DEPTH_FORMAT,
-                width: size,
-                height: size,
-                layers: layers_n,
-                usage: U::DEPTH_STENCIL_ATTACHMENT,
-                view: ImageViewKind::D2Array,
-            },
-        )?;
-        let depth_id = graph.register_image(&depth);
-        // The dielectrics' back faces (a 1x1 stand-in when none is rendered).
-        let back_size = if back_rects.is_empty() { 1 } else { size };
-        let back = Image::new(
-            ctx,
-            &ImageDesc {
-                name: format!("{name}_back"),
-                format: NEARBY_FORMAT,
-                width: back_size,
-                height: back_size,
-                layers: if back_rects.is_empty() { 1 } else { layers_n },
-                usage: U::COLOR_ATTACHMENT | U::SAMPLED | U::TRANSFER_DST,
-                view: ImageViewKind::D2Array,
-            },
-        )?;
-        let back_id = graph.register_image(&back);
-        // Their front faces, with the full exit search only (else a 1x1 stand-in).
-        let with_front = !back_rects.is_empty() && desc.exit == RecursiveExit::Full;
-        let front_size = if with_front { size } else { 1 };
-        let front = Image::new(
-            ctx,
-            &ImageDesc {
-                name: format!("{name}_front"),
-                format: NEARBY_FORMAT,
-                width: front_size,
-                height: front_size,
-                layers: if with_front { layers_n } else { 1 },
-                usage: U::COLOR_ATTACHMENT | U::SAMPLED | U::TRANSFER_DST,
-                view: ImageViewKind::D2Array,
-            },
-        )?;
-        let front_id = graph.register_image(&front);
-        let mut stand_ins = Vec::new();
-        if rects.is_empty() {
-            stand_ins.push((&texture, texture_id));
-        }
-        if back_rects.is_empty() {
-            stand_ins.push((&back, back_id));
-        }
-        if !with_front {
-            stand_ins.push((&front, front_id));
-        }
-        for (image, id) in stand_ins {
+        let array_usage = U::COLOR_ATTACHMENT | U::SAMPLED | U::TRANSFER_SRC | U::TRANSFER_DST;
+        let (texture, texture_id) =
+            graph.image(ctx, &array(format!("{name}_texture"), NEARBY_FORMAT, size, layers_n, array_usage))?;
+        let depth_desc = array(format!("{name}_depth"), DEPTH_FORMAT, size, layers_n, U::DEPTH_STENCIL_ATTACHMENT);
+        let (depth, depth_id) = graph.image(ctx, &depth_desc)?;
+        // The dielectrics' back faces (a 1x1 stand-in when none is rendered), and their front
+        // faces with the full exit search only (else a 1x1 stand-in).
+        let with_back = !back_rects.is_empty();
+        let with_front = with_back && desc.exit == RecursiveExit::Full;
+        let faces = |label: String, rendered: bool| {
+            let (size, layers) = if rendered { (size, layers_n) } else { (1, 1) };
+            array(label, NEARBY_FORMAT, size, layers, U::COLOR_ATTACHMENT | U::SAMPLED | U::TRANSFER_DST)
+        };
+        let (back, back_id) = graph.image(ctx, &faces(format!("{name}_back"), with_back))?;
+        let (front, front_id) = graph.image(ctx, &faces(format!("{name}_front"), with_front))?;
+        let stand_ins =
+            [(&texture, texture_id, rects.is_empty()), (&back, back_id, !with_back), (&front, front_id, !with_front)];
+        for (image, id, _) in stand_ins.into_iter().filter(|s| s.2) {
             // Nothing renders a stand-in: give it defined contents and the sampled layout.
             ctx.one_shot(|cmd| {
                 graph.access_now(cmd, &[(id, Access::TransferWrite)], &[]);
@@ -712,64 +656,45 @@ impl NearbyImpostors {
                 graph.access_now(cmd, &[(id, Access::FragmentSampled)], &[]);
             })?;
         }
+        let other = if levels > 0 {
+            Some(graph.image(ctx, &array(format!("{name}_texture_b"), NEARBY_FORMAT, size, layers_n, array_usage))?)
+        } else {
+            None
+        };
         let rect_buffer = Buffer::with_data(
             ctx,
             &format!("{name}_rects"),
             &rect_buffer_bytes(&nearby),
             vk::BufferUsageFlags::STORAGE_BUFFER,
         )?;
-        let render_pass = RenderPass::new(
-            ctx,
-            name,
-            &RenderPassDesc {
-                colors: vec![Attachment { format: NEARBY_FORMAT, clear: true }],
-                depth: Some(Attachment { format: DEPTH_FORMAT, clear: true }),
-                depth_read_only: false,
-            },
-        )?;
+        // A framebuffer per layer of `image` (the layer of each rectangle).
+        let layered = |label: &str, image: &Image| {
+            RenderTarget::layered(ctx, label, &[image], Some(&depth), true, image.layers())
+        };
+        let target = layered(name, &texture)?;
         let push_size = std::mem::size_of::<ImpostorPush>() as u32;
         let pipeline_desc = |fragment_shader, specialization, cull| GraphicsPipelineDesc {
-            name,
-            vertex_shader: "nearby/impostor.vert",
-            fragment_shader,
-            vertex: VertexLayout::Mesh,
-            topology: vk::PrimitiveTopology::TRIANGLE_LIST,
             cull,
-            depth: DepthState::LESS,
-            blend: &[Blend::Off],
             specialization,
+            ..GraphicsPipelineDesc::mesh(name, "nearby/impostor.vert", fragment_shader, DepthState::LESS)
         };
         // Set 1 of both texture pipelines: the rectangles and the array of the level below
-        // (read by the recursive levels only) and the dielectrics' back faces.
-        let stage = vk::ShaderStageFlags::FRAGMENT;
-        let set_layout = DescriptorSetLayout::new(
-            ctx,
-            name,
-            &[
-                (BINDING_NEARBY_RECTS, vk::DescriptorType::STORAGE_BUFFER, stage),
-                (BINDING_NEARBY_TEXTURE, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, stage),
-                (BINDING_NEARBY_BACK, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, stage),
-                (BINDING_NEARBY_FRONT, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, stage),
-            ],
-            2,
-        )?;
+        // (read by the recursive levels only) and the dielectrics' back faces; one set
+        // reading `texture`, one reading `other`.
         let sampler = Sampler::new(ctx, &format!("{name}_nearest"), SamplerDesc::NEAREST_CLAMP)?;
-        let sampled = Access::FragmentSampled.info(false).layout;
-        let set_reading = |view| {
-            set_layout.allocate(
-                name,
-                &[
-                    DescriptorWrite::Storage(BINDING_NEARBY_RECTS, &rect_buffer),
-                    DescriptorWrite::Sampled(BINDING_NEARBY_TEXTURE, view, &sampler, sampled),
-                    DescriptorWrite::Sampled(BINDING_NEARBY_BACK, back.view(), &sampler, sampled),
-                    DescriptorWrite::Sampled(BINDING_NEARBY_FRONT, front.view(), &sampler, sampled),
-                ],
-            )
-        };
+        let arrays = std::iter::once(&texture).chain(other.as_ref().map(|(image, _)| image));
+        let set_reading = arrays.map(|array| {
+            Bindings::new(vk::ShaderStageFlags::FRAGMENT)
+                .storage(BINDING_NEARBY_RECTS, &rect_buffer)
+                .sampled(BINDING_NEARBY_TEXTURE, array, &sampler)
+                .sampled(BINDING_NEARBY_BACK, &back, &sampler)
+                .sampled(BINDING_NEARBY_FRONT, &front, &sampler)
+        });
+        let sets = Bindings::build_each(ctx, name, set_reading.collect())?;
         // Specialisation constants 0..5 of impostor_body.glsl (NEARBY_EXIT: 2 full, 1 back-facing,
         // 0 bounding sphere).
         let exit_mode = match desc.exit {
-            _ if back_rects.is_empty() => 0,
+            _ if !with_back => 0,
             RecursiveExit::Full => 2,
             RecursiveExit::BackFacing => 1,
             RecursiveExit::BoundingSphere => 0,
@@ -785,96 +710,46 @@ impl NearbyImpostors {
         // An ImpostorShading's constants follow those 0..5.
         let shading_spec: Vec<u32> =
             spec.iter().chain(shading.as_ref().map_or(&[][..], |sh| sh.specialization)).copied().collect();
-        // Quads are one-sided; O_R may see either side.
-        let (layout, pipeline, extra) = match &shading {
-            Some(sh) => {
-                let layout = PipelineLayout::new(ctx, name, &[frame_layout, &set_layout, sh.set_layout], push_size)?;
-                let desc = pipeline_desc(sh.fragment_shader, &shading_spec[..], vk::CullModeFlags::NONE);
-                let pipeline = GraphicsPipeline::with_layout(ctx, &desc, &layout, &render_pass)?;
-                (layout, pipeline, Some((sh.set, sh.reads.clone())))
-            }
-            None => {
-                let layout = PipelineLayout::new(ctx, name, &[frame_layout, &set_layout], push_size)?;
-                let desc = pipeline_desc("nearby/impostor.frag", &spec[..], vk::CullModeFlags::NONE);
-                let pipeline = GraphicsPipeline::with_layout(ctx, &desc, &layout, &render_pass)?;
-                (layout, pipeline, None)
-            }
+        let mut layouts = vec![frame_layout, sets.layout()];
+        layouts.extend(shading.as_ref().map(|sh| sh.set.layout()));
+        let level_pipeline = |fragment_shader, specialization| {
+            // Quads are one-sided; O_R may see either side.
+            let desc = pipeline_desc(fragment_shader, specialization, vk::CullModeFlags::NONE);
+            GraphicsPipeline::new(ctx, &desc, &layouts, push_size, &target.pass)
         };
-        let back_pass = if back_rects.is_empty() {
+        let pipeline = match &shading {
+            Some(sh) => level_pipeline(sh.fragment_shader, &shading_spec[..])?,
+            None => level_pipeline("nearby/impostor.frag", &spec[..])?,
+        };
+        let back_pass = if !with_back {
             None
         } else {
-            let blayout = PipelineLayout::new(ctx, BACK_PASS, &[frame_layout], push_size)?;
             // The nearest back faces. Meshes are wound counter-clockwise seen from outside
             // (src/technique/refraction/refractor_layers.rs), but this projection, unlike the camera's, is
             // not y-flipped: its back faces come out counter-clockwise, i.e. as the
             // pipeline's front faces, so BACK is the mode that culls the faces towards O_R.
-            let bpipeline = GraphicsPipeline::with_layout(
-                ctx,
-                &pipeline_desc("nearby/impostor_back.frag", &[0], vk::CullModeFlags::BACK),
-                &blayout,
-                &render_pass,
-            )?;
-            let fbs_of = |image: &Image, label: &str| {
-                back_rects
-                    .iter()
-                    .map(|&i| {
-                        let r = &rects[i];
-                        Framebuffer::new(
-                            ctx,
-                            &format!("{label}_{}", r.layer),
-                            &render_pass,
-                            &[image.layer_view(r.layer), depth.layer_view(r.layer)],
-                            image.extent(),
-                        )
-                        .map(|fb| (i, fb))
-                    })
-                    .collect::<GpuResult<Vec<_>>>()
-            };
-            let fbs = fbs_of(&back, BACK_PASS)?;
             // The nearest front faces: the other cull mode (FRONT 1 flips the normal to face O_R).
+            let faces_pass = |label: &str, image: &Image, side: &'static [u32], cull| -> GpuResult<_> {
+                let target = layered(label, image)?;
+                let desc = pipeline_desc("nearby/impostor_back.frag", side, cull);
+                let pipeline = GraphicsPipeline::new(ctx, &desc, &[frame_layout], push_size, &target.pass)?;
+                Ok((pipeline, target))
+            };
+            let back_faces = faces_pass(BACK_PASS, &back, &[0], vk::CullModeFlags::BACK)?;
             let front_faces = if with_front {
-                let fpipeline = GraphicsPipeline::with_layout(
-                    ctx,
-                    &pipeline_desc("nearby/impostor_back.frag", &[1], vk::CullModeFlags::FRONT),
-                    &blayout,
-                    &render_pass,
-                )?;
-                Some((fpipeline, fbs_of(&front, &format!("{BACK_PASS}_front"))?))
+                Some(faces_pass(&format!("{BACK_PASS}_front"), &front, &[1], vk::CullModeFlags::FRONT)?)
             } else {
                 None
             };
-            Some(BackPass { _layout: blayout, pipeline: bpipeline, framebuffers: fbs, front: front_faces })
+            Some(BackPass { rects: back_rects, back: back_faces, front: front_faces })
         };
-        let framebuffers_of = |image: &Image, label: &str| -> GpuResult<Vec<Framebuffer>> {
-            rects
-                .iter()
-                .map(|r| {
-                    Framebuffer::new(
-                        ctx,
-                        &format!("{label}_{}", r.layer),
-                        &render_pass,
-                        &[image.layer_view(r.layer), depth.layer_view(r.layer)],
-                        image.extent(),
-                    )
-                })
-                .collect()
-        };
-        let framebuffers = framebuffers_of(&texture, name)?;
-        let set_texture = set_reading(texture.view())?;
-        let (other, recursive) = if levels > 0 {
-            let image = Image::new(ctx, &array_desc(format!("{name}_texture_b")))?;
-            let id = graph.register_image(&image);
-            let fbs = framebuffers_of(&image, &format!("{name}_b"))?;
-            let sets = [set_texture, set_reading(image.view())?];
-            let rpipeline = GraphicsPipeline::with_layout(
-                ctx,
-                &pipeline_desc("nearby/impostor_recursive.frag", &spec, vk::CullModeFlags::NONE),
-                &layout,
-                &render_pass,
-            )?;
-            (Some(TextureArray { image, id, framebuffers: fbs }), Some(Recursive { pipeline: rpipeline, sets }))
-        } else {
-            (None, None)
+        let (other, recursive) = match other {
+            Some((image, id)) => {
+                let target = layered(&format!("{name}_b"), &image)?;
+                let pipeline = level_pipeline("nearby/impostor_recursive.frag", &spec[..])?;
+                (Some(TextureArray { image, id, target }), Some(pipeline))
+            }
+            None => (None, None),
         };
         let draws = rects.iter().map(|r| r.object).collect();
         let diffuse_layers = rects.iter().zip(&specular).filter(|(_, &sp)| !sp).map(|(r, _)| r.layer).collect();
@@ -886,16 +761,13 @@ impl NearbyImpostors {
             rect_buffer,
             levels,
             other,
-            framebuffers,
+            target,
             _depth: depth,
             depth_id,
-            render_pass,
-            _layout: layout,
             pipeline,
             recursive,
-            _set_layout: set_layout,
             _sampler: sampler,
-            set_texture,
+            sets,
             _back: back,
             back_id,
             _front: front,
@@ -905,7 +777,7 @@ impl NearbyImpostors {
             specular,
             diffuse_layers,
             lookup_set,
-            extra,
+            extra: shading.map(|sh| sh.set),
             layout: nearby,
         })
     }
@@ -937,12 +809,13 @@ impl NearbyImpostors {
             }
             let origins = origins.clone();
             pass.record(move |cmd| {
-                let front = bp.front.iter().flat_map(|(p, fbs)| fbs.iter().map(move |f| (p, f)));
-                for (pipeline, (i, fb)) in bp.framebuffers.iter().map(|f| (&bp.pipeline, f)).chain(front) {
+                for ((pipeline, target), i) in
+                    std::iter::once(&bp.back).chain(&bp.front).flat_map(|p| bp.rects.iter().map(move |i| (p, i)))
+                {
                     let r = &self.layout.rects[*i];
                     // Empty texels: no normal (the test for a surface), depth the far plane.
                     let clears = [Clear::Color([0.0, 0.0, 0.0, r.far]), Clear::Depth(1.0)];
-                    cmd.in_render_pass(&self.render_pass, fb, &clears, |cmd| {
+                    cmd.in_target(target, r.layer as usize, &clears, |cmd| {
                         cmd.bind_graphics(pipeline, &[frame_set]);
                         cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
                         let d = &scene.draws[self.draws[*i]];
@@ -962,9 +835,9 @@ impl NearbyImpostors {
         for level in 0..=self.levels {
             // Level `level` writes array (levels - level) % 2: 0 is `texture`, 1 `other`.
             let dst = ((self.levels - level) % 2) as usize;
-            let (dst_id, dst_fbs) = match (dst, &self.other) {
-                (1, Some(o)) => (o.id, &o.framebuffers),
-                _ => (self.texture_id, &self.framebuffers),
+            let (dst_id, dst_target) = match (dst, &self.other) {
+                (1, Some(o)) => (o.id, &o.target),
+                _ => (self.texture_id, &self.target),
             };
             let name = if level == 0 { self.name } else { RECURSION_PASSES[level as usize - 1] };
             let mut pass = frame.pass(name);
@@ -973,10 +846,8 @@ impl NearbyImpostors {
             if let Some(atlas) = shadow_atlas {
                 pass = pass.read(atlas, Access::FragmentSampled);
             }
-            if let (0, Some((_, reads))) = (level, &self.extra) {
-                for &id in reads {
-                    pass = pass.read(id, Access::FragmentSampled);
-                }
+            if let (0, Some(set)) = (level, &self.extra) {
+                pass = pass.uses(set);
             }
             let recursive = if level > 0 { self.recursive.as_ref() } else { None };
             if let (Some(_), Some(o)) = (recursive, &self.other) {
@@ -984,27 +855,27 @@ impl NearbyImpostors {
             }
             let origins = origins.clone();
             pass.record(move |cmd| {
-                for (i, (r, fb)) in self.layout.rects.iter().zip(dst_fbs).enumerate() {
+                for (i, r) in self.layout.rects.iter().enumerate() {
                     if level > 0 && !self.specular[i] {
                         // Kept from level 0 (rendered there or copied by COPY_PASS).
                         continue;
                     }
                     // Empty texels: TEX_DEPTH = the far plane (never a surface, see DEPTH_MARGIN).
                     let clears = [Clear::Color([0.0, 0.0, 0.0, r.far]), Clear::Depth(1.0)];
-                    cmd.in_render_pass(&self.render_pass, fb, &clears, |cmd| {
+                    cmd.in_target(dst_target, r.layer as usize, &clears, |cmd| {
                         let pipeline = match recursive {
                             // Specular layers read the other array.
                             Some(rec) if self.specular[i] => {
-                                cmd.bind_graphics(&rec.pipeline, &[frame_set, rec.sets[1 - dst]]);
-                                &rec.pipeline
+                                cmd.bind_graphics(rec, &[frame_set, self.sets.sets()[1 - dst]]);
+                                rec
                             }
                             // Level 0 reads no array: the set reading `texture` only fills set 1.
                             _ => {
                                 match &self.extra {
-                                    Some((set, _)) => {
-                                        cmd.bind_graphics(&self.pipeline, &[frame_set, self.set_texture, *set])
+                                    Some(set) => {
+                                        cmd.bind_graphics(&self.pipeline, &[frame_set, self.sets.set(), set.set()])
                                     }
-                                    None => cmd.bind_graphics(&self.pipeline, &[frame_set, self.set_texture]),
+                                    None => cmd.bind_graphics(&self.pipeline, &[frame_set, self.sets.set()]),
                                 }
                                 &self.pipeline
                             }
