@@ -169,7 +169,14 @@ impl RenderTarget {
         depth: Option<&Image>,
         clear: bool,
     ) -> GpuResult<RenderTarget> {
-        Self::build(ctx, name, colors, depth, clear, None)
+        let colors: Vec<_> = colors.iter().map(|&i| (i, clear)).collect();
+        Self::build(ctx, name, &colors, depth.map(|d| (d, clear)), None)
+    }
+
+    /// As [`Self::new`] without depth, each colour attachment cleared or kept by its own
+    /// flag (a pass that draws over a target and fills debug targets of its own).
+    pub fn with_clears(ctx: &Arc<GpuContext>, name: &str, colors: &[(&Image, bool)]) -> GpuResult<RenderTarget> {
+        Self::build(ctx, name, colors, None, None)
     }
 
     /// As [`Self::new`], with framebuffer `l` over layer `l` of every attachment, for `l` in
@@ -182,24 +189,25 @@ impl RenderTarget {
         clear: bool,
         layers: u32,
     ) -> GpuResult<RenderTarget> {
-        Self::build(ctx, name, colors, depth, clear, Some(layers))
+        let colors: Vec<_> = colors.iter().map(|&i| (i, clear)).collect();
+        Self::build(ctx, name, &colors, depth.map(|d| (d, clear)), Some(layers))
     }
 
     fn build(
         ctx: &Arc<GpuContext>,
         name: &str,
-        colors: &[&Image],
-        depth: Option<&Image>,
-        clear: bool,
+        colors: &[(&Image, bool)],
+        depth: Option<(&Image, bool)>,
         layers: Option<u32>,
     ) -> GpuResult<RenderTarget> {
+        let attachment = |&(i, clear): &(&Image, bool)| Attachment { format: i.format(), clear };
         let desc = RenderPassDesc {
-            colors: colors.iter().map(|i| Attachment { format: i.format(), clear }).collect(),
-            depth: depth.map(|d| Attachment { format: d.format(), clear }),
+            colors: colors.iter().map(attachment).collect(),
+            depth: depth.as_ref().map(attachment),
             depth_read_only: false,
         };
         let pass = RenderPass::new(ctx, name, &desc)?;
-        let attachments: Vec<&Image> = colors.iter().copied().chain(depth).collect();
+        let attachments: Vec<&Image> = colors.iter().chain(&depth).map(|&(i, _)| i).collect();
         let extent = attachments.first().map_or(vk::Extent2D { width: 1, height: 1 }, |i| i.extent());
         let framebuffers = match layers {
             None => {

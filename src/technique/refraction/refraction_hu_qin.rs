@@ -167,7 +167,7 @@ impl Technique for HuQinPass {
         if !self.nearby.is_empty() {
             self.nearby.record(frame, scene, frame_set, inputs.shadow_atlas);
         }
-        self.layers.record(frame, scene, inputs.targets, frame_set);
+        self.layers.record(frame, scene, frame_set);
         self.shade.record(frame, scene.environment_id, frame_set);
     }
 

@@ -65,7 +65,7 @@ fn create(s: &mut Setup<'_>) -> Result<Box<dyn Technique>, RenderError> {
 
 impl Technique for WymanPass {
     fn record<'a>(&'a self, _: Stage, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>) {
-        self.layers.record(frame, inputs.scene, inputs.targets, inputs.frame_set);
+        self.layers.record(frame, inputs.scene, inputs.frame_set);
         self.shade.record(frame, inputs.scene.environment_id, inputs.frame_set);
     }
 

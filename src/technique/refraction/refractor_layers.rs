@@ -20,11 +20,10 @@ use std::sync::Arc;
 use crate::frame::gpu_scene::{Draw, GpuScene};
 use crate::frame::targets::{Targets, DEPTH_FORMAT, HDR_FORMAT};
 use crate::gpu::{
-    vk, Access, Attachment, Blend, Buffer, Clear, DepthState, DescriptorSet, DescriptorSetLayout, DescriptorWrite,
-    Framebuffer, GpuContext, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc, PipelineLayout,
-    RenderPass, RenderPassDesc, Sampler, VertexLayout,
+    vk, Access, Blend, Buffer, Clear, DepthState, DescriptorSet, DescriptorSetLayout, GpuContext, GpuResult,
+    GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc, RenderTarget, Sampler,
 };
-use crate::graph::{Frame, FrameGraph, ImageId};
+use crate::graph::{Bindings, BoundSet, Frame, FrameGraph, ImageId};
 use crate::scene::{Material, Scene};
 use crate::technique::Setup;
 use crate::{BINDING_GBUF_DEPTH, BINDING_REFR_DN, LAYER_BACK_FURTHEST, LAYER_BACK_NEAREST, LAYER_FRONT, LAYER_SECOND};
@@ -78,24 +77,21 @@ pub struct Layer {
 
 struct LayerPipeline {
     pipeline: GraphicsPipeline,
-    framebuffer: Framebuffer,
+    target: RenderTarget,
     clear_depth: f32,
 }
 
 /// The refractors' layers, drawn in one graph pass named `name`.
 pub struct RefractorLayers {
     name: &'static str,
-    render_pass: RenderPass,
-    _set_layout: DescriptorSetLayout,
-    set: DescriptorSet,
-    _layout: PipelineLayout,
+    /// d_N, and the G-buffer's depth (read by the depth-peeled layer only).
+    set: BoundSet,
     pipelines: Vec<LayerPipeline>,
     pub layers: Vec<Layer>,
     /// The draws of dielectric objects.
     draws: Vec<Draw>,
     /// Per scene vertex d_N (Wyman) or a one-float stand-in; bound at BINDING_REFR_DN.
     _d_n: Buffer,
-    reads_gbuffer_depth: bool,
 }
 
 /// The draws whose material is a dielectric.
@@ -113,24 +109,6 @@ impl RefractorLayers {
         let (ctx, scene, gpu, frame_layout, targets, nearest) =
             (s.ctx, s.scene, s.gpu, s.frame_layout, s.targets, s.nearest);
         let graph = &mut *s.graph;
-        let render_pass = RenderPass::new(
-            ctx,
-            name,
-            &RenderPassDesc {
-                colors: vec![Attachment { format: LAYER_FORMAT, clear: true }],
-                depth: Some(Attachment { format: DEPTH_FORMAT, clear: true }),
-                depth_read_only: false,
-            },
-        )?;
-        let set_layout = DescriptorSetLayout::new(
-            ctx,
-            name,
-            &[
-                (BINDING_REFR_DN, vk::DescriptorType::STORAGE_BUFFER, vk::ShaderStageFlags::VERTEX),
-                (BINDING_GBUF_DEPTH, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, vk::ShaderStageFlags::FRAGMENT),
-            ],
-            1,
-        )?;
         // A one-float stand-in where the technique has no d_N (the shader never reads it).
         let data: Vec<f32> = d_n.map(|d| d.to_vec()).filter(|d| !d.is_empty()).unwrap_or_else(|| vec![0.0]);
         let d_n_buffer = Buffer::with_data(
@@ -139,115 +117,68 @@ impl RefractorLayers {
             bytemuck::cast_slice(&data),
             vk::BufferUsageFlags::STORAGE_BUFFER,
         )?;
-        let depth_layout = Access::FragmentSampled.info(true).layout;
-        let set = set_layout.allocate(
-            name,
-            &[
-                DescriptorWrite::Storage(BINDING_REFR_DN, &d_n_buffer),
-                DescriptorWrite::Sampled(BINDING_GBUF_DEPTH, targets.depth.view(), nearest, depth_layout),
-            ],
-        )?;
-        let layout = PipelineLayout::new(ctx, name, &[frame_layout, &set_layout], 0)?;
+        let reads_gbuffer_depth = kinds.contains(&LayerKind::Second);
+        let set = Bindings::new(vk::ShaderStageFlags::VERTEX)
+            .storage(BINDING_REFR_DN, &d_n_buffer)
+            .stages(vk::ShaderStageFlags::FRAGMENT)
+            .sampled(BINDING_GBUF_DEPTH, &targets.depth, nearest);
+        let set = if reads_gbuffer_depth { set.read(targets.depth_id) } else { set };
+        let set = set.build(ctx, name)?;
         let has_d_n = u32::from(d_n.is_some());
         use vk::ImageUsageFlags as U;
         let mut layers = Vec::new();
         let mut pipelines = Vec::new();
         for (i, &kind) in kinds.iter().enumerate() {
             let label = format!("{name}_{i}");
-            let normal = Image::new(
-                ctx,
-                &ImageDesc::d2(
-                    &format!("{label}_normal"),
-                    LAYER_FORMAT,
-                    targets.width,
-                    targets.height,
-                    U::COLOR_ATTACHMENT | U::SAMPLED | U::TRANSFER_SRC,
-                ),
-            )?;
-            let depth = Image::new(
-                ctx,
-                &ImageDesc::d2(
-                    &format!("{label}_depth"),
-                    DEPTH_FORMAT,
-                    targets.width,
-                    targets.height,
-                    U::DEPTH_STENCIL_ATTACHMENT | U::SAMPLED | U::TRANSFER_SRC,
-                ),
-            )?;
+            let image = |what: &str, format, usage| {
+                ImageDesc::d2(&format!("{label}_{what}"), format, targets.width, targets.height, usage)
+            };
+            let (normal, normal_id) =
+                graph.image(ctx, &image("normal", LAYER_FORMAT, U::COLOR_ATTACHMENT | U::SAMPLED | U::TRANSFER_SRC))?;
+            let depth_usage = U::DEPTH_STENCIL_ATTACHMENT | U::SAMPLED | U::TRANSFER_SRC;
+            let (depth, depth_id) = graph.image(ctx, &image("depth", DEPTH_FORMAT, depth_usage))?;
             let (depth_state, clear_depth) = kind.depth();
-            let pipeline = GraphicsPipeline::with_layout(
+            let target = RenderTarget::new(ctx, &label, &[&normal], Some(&depth), true)?;
+            let pipeline = GraphicsPipeline::new(
                 ctx,
                 &GraphicsPipelineDesc {
-                    name: &label,
-                    vertex_shader: "refraction/layers.vert",
-                    fragment_shader: "refraction/layers.frag",
-                    vertex: VertexLayout::Mesh,
-                    topology: vk::PrimitiveTopology::TRIANGLE_LIST,
                     cull: kind.cull(),
-                    depth: depth_state,
-                    blend: &[Blend::Off],
                     specialization: &[kind.mode(), has_d_n],
+                    ..GraphicsPipelineDesc::mesh(
+                        &label,
+                        "refraction/layers.vert",
+                        "refraction/layers.frag",
+                        depth_state,
+                    )
                 },
-                &layout,
-                &render_pass,
+                &[frame_layout, set.layout()],
+                0,
+                &target.pass,
             )?;
-            let framebuffer =
-                Framebuffer::new(ctx, &label, &render_pass, &[normal.view(), depth.view()], targets.extent())?;
-            pipelines.push(LayerPipeline { pipeline, framebuffer, clear_depth });
-            layers.push(Layer {
-                kind,
-                normal_id: graph.register_image(&normal),
-                depth_id: graph.register_image(&depth),
-                normal,
-                depth,
-            });
+            pipelines.push(LayerPipeline { pipeline, target, clear_depth });
+            layers.push(Layer { kind, normal_id, depth_id, normal, depth });
         }
-        Ok(RefractorLayers {
-            name,
-            render_pass,
-            _set_layout: set_layout,
-            set,
-            _layout: layout,
-            pipelines,
-            layers,
-            draws: refractor_draws(scene, gpu),
-            _d_n: d_n_buffer,
-            reads_gbuffer_depth: kinds.contains(&LayerKind::Second),
-        })
+        Ok(RefractorLayers { name, set, pipelines, layers, draws: refractor_draws(scene, gpu), _d_n: d_n_buffer })
     }
 
     pub fn layer(&self, kind: LayerKind) -> Option<&Layer> {
         self.layers.iter().find(|l| l.kind == kind)
     }
 
-    pub fn record<'a>(
-        &'a self,
-        frame: &mut Frame<'_, 'a>,
-        scene: &'a GpuScene,
-        targets: &Targets,
-        frame_set: DescriptorSet,
-    ) {
-        let mut pass = frame.pass(self.name);
-        if self.reads_gbuffer_depth {
-            pass = pass.read(targets.depth_id, Access::FragmentSampled);
-        }
+    pub fn record<'a>(&'a self, frame: &mut Frame<'_, 'a>, scene: &'a GpuScene, frame_set: DescriptorSet) {
+        let mut pass = frame.pass(self.name).uses(&self.set);
         for l in &self.layers {
             pass = pass.write(l.normal_id, Access::ColorAttachment).write(l.depth_id, Access::DepthAttachment);
         }
         pass.record(move |cmd| {
             for p in &self.pipelines {
-                cmd.in_render_pass(
-                    &self.render_pass,
-                    &p.framebuffer,
-                    &[Clear::Color([0.0; 4]), Clear::Depth(p.clear_depth)],
-                    |cmd| {
-                        cmd.bind_graphics(&p.pipeline, &[frame_set, self.set]);
-                        cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
-                        for d in &self.draws {
-                            cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
-                        }
-                    },
-                );
+                cmd.in_target(&p.target, 0, &[Clear::Color([0.0; 4]), Clear::Depth(p.clear_depth)], |cmd| {
+                    cmd.bind_graphics(&p.pipeline, &[frame_set, self.set.set()]);
+                    cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
+                    for d in &self.draws {
+                        cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
+                    }
+                });
             }
         });
     }
@@ -266,13 +197,9 @@ pub struct DebugTarget {
 /// direction) into [`DebugTarget`]s named `<name>_p2` and `<name>_t2`.
 pub struct ShadePass {
     name: &'static str,
-    render_pass: RenderPass,
-    _set_layout: DescriptorSetLayout,
-    set: DescriptorSet,
-    _layout: PipelineLayout,
+    target: RenderTarget,
+    set: BoundSet,
     pipeline: GraphicsPipeline,
-    framebuffer: Framebuffer,
-    reads: Vec<ImageId>,
     hdr: ImageId,
     pub debug: Vec<DebugTarget>,
 }
@@ -299,89 +226,49 @@ impl ShadePass {
         nearest: &Sampler,
     ) -> GpuResult<Self> {
         let name = desc.name;
-        let mut colors = vec![Attachment { format: HDR_FORMAT, clear: false }];
         let mut debug = Vec::new();
         if desc.debug {
             for what in ["p2", "t2"] {
                 let target = format!("{name}_{what}");
-                let image = Image::new(
-                    ctx,
-                    &ImageDesc::d2(
-                        &target,
-                        HDR_FORMAT,
-                        targets.width,
-                        targets.height,
-                        vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC,
-                    ),
-                )?;
-                colors.push(Attachment { format: HDR_FORMAT, clear: true });
-                debug.push(DebugTarget { name: target, id: graph.register_image(&image), image });
+                let usage = vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC;
+                let (image, id) =
+                    graph.image(ctx, &ImageDesc::d2(&target, HDR_FORMAT, targets.width, targets.height, usage))?;
+                debug.push(DebugTarget { name: target, id, image });
             }
         }
-        let render_pass = RenderPass::new(ctx, name, &RenderPassDesc { colors, depth: None, depth_read_only: false })?;
-        let mut bindings: Vec<_> = desc
-            .inputs
-            .iter()
-            .map(|&(b, _, _)| (b, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, vk::ShaderStageFlags::FRAGMENT))
-            .collect();
-        bindings.extend(
-            desc.buffers.iter().map(|&(b, _)| (b, vk::DescriptorType::STORAGE_BUFFER, vk::ShaderStageFlags::FRAGMENT)),
-        );
-        let set_layout = DescriptorSetLayout::new(ctx, name, &bindings, 1)?;
-        let mut writes: Vec<_> = desc
-            .inputs
-            .iter()
-            .map(|&(b, image, _)| {
-                let layout = Access::FragmentSampled.info(image.aspect().contains(vk::ImageAspectFlags::DEPTH)).layout;
-                DescriptorWrite::Sampled(b, image.view(), nearest, layout)
-            })
-            .collect();
+        // The HDR target keeps what earlier passes wrote; the debug targets are cleared.
+        let mut colors = vec![(&targets.hdr, false)];
+        colors.extend(debug.iter().map(|d| (&d.image, true)));
+        let target = RenderTarget::with_clears(ctx, name, &colors)?;
+        let mut set = Bindings::new(vk::ShaderStageFlags::FRAGMENT);
+        for &(b, image, id) in desc.inputs {
+            set = set.sampled(b, image, nearest).read(id);
+        }
         // Host-written once at creation (the graph tracks images only): visible at submission.
-        writes.extend(desc.buffers.iter().map(|&(b, buffer)| DescriptorWrite::Storage(b, buffer)));
-        let set = set_layout.allocate(name, &writes)?;
-        let layout = PipelineLayout::new(ctx, name, &[frame_layout, &set_layout], 0)?;
+        for &(b, buffer) in desc.buffers {
+            set = set.storage(b, buffer);
+        }
+        let set = set.build(ctx, name)?;
         let mut specialization = vec![u32::from(desc.debug)];
         specialization.extend_from_slice(desc.specialization);
         let blend = vec![Blend::Off; 1 + debug.len()];
-        let pipeline = GraphicsPipeline::with_layout(
+        let pipeline = GraphicsPipeline::new(
             ctx,
             &GraphicsPipelineDesc {
-                name,
-                vertex_shader: "common/fullscreen.vert",
-                fragment_shader: desc.fragment_shader,
-                vertex: VertexLayout::None,
-                topology: vk::PrimitiveTopology::TRIANGLE_LIST,
-                cull: vk::CullModeFlags::NONE,
-                depth: DepthState::OFF,
                 blend: &blend,
                 specialization: &specialization,
+                ..GraphicsPipelineDesc::fullscreen(name, desc.fragment_shader)
             },
-            &layout,
-            &render_pass,
+            &[frame_layout, set.layout()],
+            0,
+            &target.pass,
         )?;
-        let mut views = vec![targets.hdr.view()];
-        views.extend(debug.iter().map(|d| d.image.view()));
-        let framebuffer = Framebuffer::new(ctx, name, &render_pass, &views, targets.extent())?;
-        Ok(ShadePass {
-            name,
-            render_pass,
-            _set_layout: set_layout,
-            set,
-            _layout: layout,
-            pipeline,
-            framebuffer,
-            reads: desc.inputs.iter().map(|&(_, _, id)| id).collect(),
-            hdr: targets.hdr_id,
-            debug,
-        })
+        Ok(ShadePass { name, target, set, pipeline, hdr: targets.hdr_id, debug })
     }
 
     /// Add the pass to `frame`; `environment` is sampled through the frame set.
     pub fn record<'a>(&'a self, frame: &mut Frame<'_, 'a>, environment: ImageId, frame_set: DescriptorSet) {
-        let mut pass = frame.pass(self.name).read(environment, Access::FragmentSampled);
-        for &id in &self.reads {
-            pass = pass.read(id, Access::FragmentSampled);
-        }
+        let mut pass = frame.pass(self.name).read(environment, Access::FragmentSampled).uses(&self.set);
         pass = pass.write(self.hdr, Access::ColorAttachment);
         for d in &self.debug {
             pass = pass.write(d.id, Access::ColorAttachment);
@@ -389,8 +276,8 @@ impl ShadePass {
         pass.record(move |cmd| {
             let mut clears = vec![Clear::None];
             clears.extend(self.debug.iter().map(|_| Clear::Color([0.0; 4])));
-            cmd.in_render_pass(&self.render_pass, &self.framebuffer, &clears, |cmd| {
-                cmd.bind_graphics(&self.pipeline, &[frame_set, self.set]);
+            cmd.in_target(&self.target, 0, &clears, |cmd| {
+                cmd.bind_graphics(&self.pipeline, &[frame_set, self.set.set()]);
                 cmd.draw(3, 1);
             });
         });
