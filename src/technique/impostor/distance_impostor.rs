@@ -37,9 +37,9 @@ use glam::{Mat4, Vec3};
 use crate::frame::gpu_scene::{cube_face_views, GpuScene};
 use crate::frame::targets::{Targets, DEPTH_FORMAT};
 use crate::gpu::{
-    vk, Access, Attachment, Blend, Buffer, Clear, Cmd, ComputePipeline, DepthState, DescriptorSet, DescriptorSetLayout,
-    DescriptorWrite, Framebuffer, GpuContext, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc,
-    ImageViewKind, PipelineLayout, RenderPass, RenderPassDesc, RenderTarget, Sampler, SamplerDesc, VertexLayout,
+    vk, Access, Blend, Buffer, Clear, Cmd, ComputePipeline, DepthState, DescriptorSet, DescriptorSetLayout, GpuContext,
+    GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc, ImageViewKind, RenderTarget, Sampler,
+    SamplerDesc,
 };
 use crate::graph::{Bindings, BoundSet, Frame, FrameGraph, ImageId, PassBuilder};
 use crate::scene::techniques::{ImpostorFresnel, ImpostorMaps, ImpostorParams, ImpostorUpdate};
@@ -230,10 +230,9 @@ pub enum MapContent {
 /// A cube map around a reference point: a distance impostor or a refractor map.
 pub struct ImpostorMap {
     content: MapContent,
-    render_pass: RenderPass,
-    _layout: PipelineLayout,
+    /// A framebuffer per cube face.
+    target: RenderTarget,
     pipeline: GraphicsPipeline,
-    framebuffers: Vec<Framebuffer>,
     /// RGBA32F cube: radiance + distance (environment) or normal + distance (refractor).
     pub cube: Image,
     pub cube_id: ImageId,
@@ -287,100 +286,47 @@ impl ImpostorMap {
         let size = params.resolution;
         let separate = content == MapContent::Environment && params.separate_distance;
         use vk::ImageUsageFlags as U;
-        let cube_desc = |name: String, format| ImageDesc {
-            name,
-            format,
-            width: size,
-            height: size,
-            layers: 6,
-            usage: U::COLOR_ATTACHMENT | U::SAMPLED | U::TRANSFER_SRC,
-            view: ImageViewKind::Cube,
-        };
-        let cube = Image::new(ctx, &cube_desc(label.to_string(), CUBE_FORMAT))?;
-        let cube_id = graph.register_image(&cube);
+        let cube_desc = |name: &str, format, view, usage| ImageDesc::square(name, format, size, 6, view, usage);
+        let color_usage = U::COLOR_ATTACHMENT | U::SAMPLED | U::TRANSFER_SRC;
+        let (cube, cube_id) = graph.image(ctx, &cube_desc(label, CUBE_FORMAT, ImageViewKind::Cube, color_usage))?;
         let distance = if separate {
-            let image = Image::new(ctx, &cube_desc(format!("{label}_distance"), DISTANCE_FORMAT))?;
-            let id = graph.register_image(&image);
-            Some((image, id))
+            let desc = cube_desc(&format!("{label}_distance"), DISTANCE_FORMAT, ImageViewKind::Cube, color_usage);
+            Some(graph.image(ctx, &desc)?)
         } else {
             None
         };
-        let depth = Image::new(
-            ctx,
-            &ImageDesc {
-                name: format!("{label}_depth"),
-                format: DEPTH_FORMAT,
-                width: size,
-                height: size,
-                layers: 6,
-                usage: U::DEPTH_STENCIL_ATTACHMENT,
-                view: ImageViewKind::D2Array,
-            },
-        )?;
-        let depth_id = graph.register_image(&depth);
-        let mut colors = vec![Attachment { format: CUBE_FORMAT, clear: true }];
-        if separate {
-            colors.push(Attachment { format: DISTANCE_FORMAT, clear: true });
-        }
-        let render_pass = RenderPass::new(
-            ctx,
-            label,
-            &RenderPassDesc {
-                colors,
-                depth: Some(Attachment { format: DEPTH_FORMAT, clear: true }),
-                depth_read_only: false,
-            },
-        )?;
-        let layout = PipelineLayout::new(ctx, label, &[frame_layout], std::mem::size_of::<MapPush>() as u32)?;
+        let depth_desc =
+            cube_desc(&format!("{label}_depth"), DEPTH_FORMAT, ImageViewKind::D2Array, U::DEPTH_STENCIL_ATTACHMENT);
+        let (depth, depth_id) = graph.image(ctx, &depth_desc)?;
+        // A framebuffer per face.
+        let colors: Vec<&Image> = std::iter::once(&cube).chain(distance.as_ref().map(|(d, _)| d)).collect();
+        let target = RenderTarget::layered(ctx, label, &colors, Some(&depth), true, 6)?;
         let fragment_shader = match (content, separate) {
             (MapContent::Refractor, _) => "impostor/refractor.frag",
             (MapContent::Environment, false) => "impostor/map.frag",
             (MapContent::Environment, true) => "impostor/map_separate.frag",
             (MapContent::LightmapUv, _) => "impostor/uv_map.frag",
         };
-        let blend = vec![Blend::Off; if separate { 2 } else { 1 }];
-        let pipeline = GraphicsPipeline::with_layout(
+        let blend = vec![Blend::Off; colors.len()];
+        let pipeline = GraphicsPipeline::new(
             ctx,
             &GraphicsPipelineDesc {
-                name,
-                vertex_shader: "impostor/map.vert",
-                fragment_shader,
-                vertex: VertexLayout::Mesh,
-                topology: vk::PrimitiveTopology::TRIANGLE_LIST,
                 // Quads are one-sided and the reference point may sit on either side.
-                cull: vk::CullModeFlags::NONE,
-                depth: DepthState::LESS,
                 blend: &blend,
-                specialization: &[],
+                ..GraphicsPipelineDesc::mesh(name, "impostor/map.vert", fragment_shader, DepthState::LESS)
             },
-            &layout,
-            &render_pass,
+            &[frame_layout],
+            std::mem::size_of::<MapPush>() as u32,
+            &target.pass,
         )?;
-        let mut framebuffers = Vec::new();
-        for face in 0..6 {
-            let mut views = vec![cube.layer_view(face)];
-            if let Some((d, _)) = &distance {
-                views.push(d.layer_view(face));
-            }
-            views.push(depth.layer_view(face));
-            framebuffers.push(Framebuffer::new(
-                ctx,
-                &format!("{label}_face_{face}"),
-                &render_pass,
-                &views,
-                cube.extent(),
-            )?);
-        }
         let draws = (0..scene.objects.len())
             .filter(|i| objects.contains(i) == (content == MapContent::Refractor))
             .filter(|&i| i < gpu.draws.len())
             .collect();
         let mut map = ImpostorMap {
             content,
-            render_pass,
-            _layout: layout,
+            target,
             pipeline,
-            framebuffers,
             cube,
             cube_id,
             distance,
@@ -494,8 +440,8 @@ impl ImpostorMap {
             clears.push(Clear::Color([NO_SURFACE; 4]));
         }
         clears.push(Clear::Depth(1.0));
-        for (view, fb) in views.iter().zip(&self.framebuffers) {
-            cmd.in_render_pass(&self.render_pass, fb, &clears, |cmd| {
+        for (face, view) in views.iter().enumerate() {
+            cmd.in_target(&self.target, face, &clears, |cmd| {
                 cmd.bind_graphics(&self.pipeline, &[frame_set]);
                 cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
                 for &i in &self.draws {
@@ -533,16 +479,6 @@ impl ImpostorMap {
         iterations: u32,
         records: &[[[f32; 4]; 3]],
     ) -> GpuResult<Vec<[[f32; 4]; 3]>> {
-        let stage = vk::ShaderStageFlags::COMPUTE;
-        let set_layout = DescriptorSetLayout::new(
-            ctx,
-            "impostor_probe",
-            &[
-                (BINDING_IMPOSTOR_PROBE, vk::DescriptorType::STORAGE_BUFFER, stage),
-                (BINDING_IMPOSTOR_DISTANCE, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, stage),
-            ],
-            1,
-        )?;
         let mut data = records.to_vec();
         if data.is_empty() {
             return Ok(data);
@@ -555,25 +491,17 @@ impl ImpostorMap {
         )?;
         let sampler = Sampler::new(ctx, "impostor_probe_linear", SamplerDesc::LINEAR_CLAMP)?;
         let (image, image_id, channel) = self.distance_view();
-        let set = set_layout.allocate(
-            "impostor_probe",
-            &[
-                DescriptorWrite::Storage(BINDING_IMPOSTOR_PROBE, &buffer),
-                DescriptorWrite::Sampled(
-                    BINDING_IMPOSTOR_DISTANCE,
-                    image.view(),
-                    &sampler,
-                    vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-                ),
-            ],
-        )?;
-        let layout =
-            PipelineLayout::new(ctx, "impostor_probe", &[&set_layout], std::mem::size_of::<ProbePush>() as u32)?;
-        let pipeline = ComputePipeline::with_layout(
+        let set = Bindings::new(vk::ShaderStageFlags::COMPUTE)
+            .storage(BINDING_IMPOSTOR_PROBE, &buffer)
+            .sampled(BINDING_IMPOSTOR_DISTANCE, image, &sampler)
+            .read(image_id)
+            .build(ctx, "impostor_probe")?;
+        let pipeline = ComputePipeline::new(
             ctx,
             "impostor_probe",
             "impostor/probe.comp",
-            &layout,
+            &[set.layout()],
+            std::mem::size_of::<ProbePush>() as u32,
             &[iterations, channel],
         )?;
         let buffer_id = graph.register_buffer(&buffer);
@@ -583,15 +511,11 @@ impl ImpostorMap {
         let groups = (data.len() as u32).div_ceil(WORKGROUP_2D * WORKGROUP_2D);
         ctx.one_shot(|cmd| {
             let mut frame = graph.frame();
-            frame
-                .pass("impostor_probe")
-                .read(image_id, Access::ComputeSampled)
-                .write_buffer(buffer_id, Access::ComputeWrite)
-                .record(|cmd| {
-                    cmd.bind_compute(&pipeline, &[set]);
-                    cmd.push_compute(&pipeline, &push);
-                    cmd.dispatch(groups, 1, 1);
-                });
+            frame.pass("impostor_probe").uses(&set).write_buffer(buffer_id, Access::ComputeWrite).record(|cmd| {
+                cmd.bind_compute(&pipeline, &[set.set()]);
+                cmd.push_compute(&pipeline, &push);
+                cmd.dispatch(groups, 1, 1);
+            });
             frame.execute(cmd, None);
             graph.access_now(cmd, &[], &[(buffer_id, Access::HostRead)]);
         })?;
