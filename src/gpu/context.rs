@@ -103,8 +103,12 @@ pub struct GpuContext {
     /// Where long work reports its progress ([`GpuContext::set_progress`]).
     progress: Mutex<Option<ProgressSink>>,
     /// Live render passes and samplers by description (src/gpu/render_pass.rs, image.rs).
-    pub(crate) render_passes:
-        Mutex<std::collections::HashMap<super::RenderPassDesc, std::sync::Weak<super::render_pass::SharedRenderPass>>>,
+    pub(crate) render_passes: Mutex<
+        std::collections::HashMap<
+            super::render_pass::RenderPassDesc,
+            std::sync::Weak<super::render_pass::SharedRenderPass>,
+        >,
+    >,
     pub(crate) samplers:
         Mutex<std::collections::HashMap<super::SamplerDesc, std::sync::Weak<super::image::SharedSampler>>>,
 }

@@ -15,11 +15,11 @@ pub struct DescriptorSetLayout {
 
 /// One binding: (binding, type, stages). Arrays are not needed: lavapipe has no descriptor
 /// indexing, and prism binds a fixed set of resources per pass.
-pub type Binding = (u32, vk::DescriptorType, vk::ShaderStageFlags);
+pub(super) type Binding = (u32, vk::DescriptorType, vk::ShaderStageFlags);
 
 impl DescriptorSetLayout {
     /// A layout with `bindings` and room for `max_sets` sets.
-    pub fn new(ctx: &Arc<GpuContext>, name: &str, bindings: &[Binding], max_sets: u32) -> GpuResult<Self> {
+    pub(super) fn new(ctx: &Arc<GpuContext>, name: &str, bindings: &[Binding], max_sets: u32) -> GpuResult<Self> {
         let raw_bindings: Vec<_> = bindings
             .iter()
             .map(|&(b, ty, stages)| {
@@ -50,7 +50,7 @@ impl DescriptorSetLayout {
     }
 
     /// Allocate a set and fill it with `writes`.
-    pub fn allocate(&self, name: &str, writes: &[DescriptorWrite<'_>]) -> GpuResult<DescriptorSet> {
+    pub(super) fn allocate(&self, name: &str, writes: &[DescriptorWrite<'_>]) -> GpuResult<DescriptorSet> {
         let layouts = [self.raw];
         let info = vk::DescriptorSetAllocateInfo::default().descriptor_pool(self.pool).set_layouts(&layouts);
         // SAFETY: pool has room (sized by max_sets).
@@ -79,7 +79,7 @@ pub struct DescriptorSet {
 }
 
 #[derive(Clone, Copy)]
-pub enum DescriptorWrite<'a> {
+pub(super) enum DescriptorWrite<'a> {
     Uniform(u32, &'a Buffer),
     Storage(u32, &'a Buffer),
     /// binding, view, sampler, layout the image will be in when sampled.
@@ -88,7 +88,7 @@ pub enum DescriptorWrite<'a> {
 }
 
 impl DescriptorWrite<'_> {
-    pub fn binding(&self) -> u32 {
+    pub(super) fn binding(&self) -> u32 {
         match *self {
             DescriptorWrite::Uniform(b, _)
             | DescriptorWrite::Storage(b, _)
@@ -97,7 +97,7 @@ impl DescriptorWrite<'_> {
         }
     }
 
-    pub fn ty(&self) -> vk::DescriptorType {
+    pub(super) fn ty(&self) -> vk::DescriptorType {
         match self {
             DescriptorWrite::Uniform(..) => vk::DescriptorType::UNIFORM_BUFFER,
             DescriptorWrite::Storage(..) => vk::DescriptorType::STORAGE_BUFFER,
@@ -108,7 +108,7 @@ impl DescriptorWrite<'_> {
 }
 
 impl DescriptorSet {
-    pub fn update(&self, ctx: &GpuContext, writes: &[DescriptorWrite<'_>]) {
+    pub(super) fn update(&self, ctx: &GpuContext, writes: &[DescriptorWrite<'_>]) {
         let mut buffer_infos = Vec::with_capacity(writes.len());
         let mut image_infos = Vec::with_capacity(writes.len());
         for w in writes {

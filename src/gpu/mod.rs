@@ -27,14 +27,13 @@ pub use bindings::{Bindings, BoundSet};
 pub use buffer::Buffer;
 pub use command::{Clear, Cmd, CommandPool, SubmitSync};
 pub use context::{ContextDesc, DeviceInfo, GpuContext, Progress, ProgressSink};
-pub use descriptor::{DescriptorSet, DescriptorSetLayout, DescriptorWrite};
+use descriptor::DescriptorWrite;
+pub use descriptor::{DescriptorSet, DescriptorSetLayout};
 pub use error::{GpuError, GpuResult};
 pub use image::{Image, ImageDesc, ImageViewKind, Sampler, SamplerDesc};
 pub use overlay::Overlay;
-pub use pipeline::{
-    Blend, ComputePipeline, DepthState, GraphicsPipeline, GraphicsPipelineDesc, PipelineLayout, VertexLayout,
-};
-pub use render_pass::{Attachment, Framebuffer, RenderPass, RenderPassDesc, RenderTarget};
+pub use pipeline::{Blend, ComputePipeline, DepthState, GraphicsPipeline, GraphicsPipelineDesc, VertexLayout};
+pub use render_pass::{Framebuffer, RenderPass, RenderTarget};
 pub use swapchain::{Acquired, Presented, Semaphore, Swapchain, SwapchainImage};
 pub use sync::{Access, BufferBarrier, ImageBarrier};
 pub use timing::{OcclusionQueryPool, TimestampPool, TimestampQuery};

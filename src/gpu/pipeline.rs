@@ -7,14 +7,14 @@ use super::context::GpuContext;
 use super::error::{GpuResult, VkContext};
 use super::{DescriptorSetLayout, RenderPass};
 
-pub struct PipelineLayout {
+struct PipelineLayout {
     ctx: Arc<GpuContext>,
     pub(crate) raw: vk::PipelineLayout,
 }
 
 impl PipelineLayout {
     /// Push constants are visible to every stage; lavapipe allows 128 bytes.
-    pub fn new(ctx: &Arc<GpuContext>, name: &str, sets: &[&DescriptorSetLayout], push_bytes: u32) -> GpuResult<Self> {
+    fn new(ctx: &Arc<GpuContext>, name: &str, sets: &[&DescriptorSetLayout], push_bytes: u32) -> GpuResult<Self> {
         let raw_sets: Vec<_> = sets.iter().map(|s| s.raw).collect();
         let ranges = [vk::PushConstantRange { stage_flags: vk::ShaderStageFlags::ALL, offset: 0, size: push_bytes }];
         let mut info = vk::PipelineLayoutCreateInfo::default().set_layouts(&raw_sets);
@@ -112,8 +112,8 @@ pub struct GraphicsPipeline {
     ctx: Arc<GpuContext>,
     pub(crate) raw: vk::Pipeline,
     pub(crate) layout: vk::PipelineLayout,
-    /// The layout, when the pipeline made its own (dropped after the pipeline).
-    _owned: Option<PipelineLayout>,
+    /// The pipeline's own layout (its fields drop after `Drop::drop` destroyed the pipeline).
+    _layout: PipelineLayout,
 }
 
 fn shader_module(ctx: &GpuContext, path: &str) -> GpuResult<vk::ShaderModule> {
@@ -136,18 +136,6 @@ impl GraphicsPipeline {
         pass: &RenderPass,
     ) -> GpuResult<Self> {
         let layout = PipelineLayout::new(ctx, desc.name, sets, push_bytes)?;
-        let mut pipeline = Self::with_layout(ctx, desc, &layout, pass)?;
-        pipeline._owned = Some(layout);
-        Ok(pipeline)
-    }
-
-    /// A pipeline of a layout the caller owns and keeps alive as long as the pipeline.
-    pub fn with_layout(
-        ctx: &Arc<GpuContext>,
-        desc: &GraphicsPipelineDesc<'_>,
-        layout: &PipelineLayout,
-        pass: &RenderPass,
-    ) -> GpuResult<Self> {
         let vs = shader_module(ctx, desc.vertex_shader)?;
         let fs = shader_module(ctx, desc.fragment_shader)?;
         let spec_entries: Vec<_> = (0..desc.specialization.len() as u32)
@@ -251,7 +239,7 @@ impl GraphicsPipeline {
         }
         let raw = result.map_err(|(_, e)| e).vk("vkCreateGraphicsPipelines")?[0];
         ctx.set_name(raw, desc.name);
-        Ok(GraphicsPipeline { ctx: ctx.clone(), raw, layout: layout.raw, _owned: None })
+        Ok(GraphicsPipeline { ctx: ctx.clone(), raw, layout: layout.raw, _layout: layout })
     }
 }
 
@@ -266,7 +254,7 @@ pub struct ComputePipeline {
     ctx: Arc<GpuContext>,
     pub(crate) raw: vk::Pipeline,
     pub(crate) layout: vk::PipelineLayout,
-    _owned: Option<PipelineLayout>,
+    _layout: PipelineLayout,
 }
 
 impl ComputePipeline {
@@ -280,18 +268,6 @@ impl ComputePipeline {
         specialization: &[u32],
     ) -> GpuResult<Self> {
         let layout = PipelineLayout::new(ctx, name, sets, push_bytes)?;
-        let mut pipeline = Self::with_layout(ctx, name, shader, &layout, specialization)?;
-        pipeline._owned = Some(layout);
-        Ok(pipeline)
-    }
-
-    pub fn with_layout(
-        ctx: &Arc<GpuContext>,
-        name: &str,
-        shader: &str,
-        layout: &PipelineLayout,
-        specialization: &[u32],
-    ) -> GpuResult<Self> {
         let module = shader_module(ctx, shader)?;
         let spec_entries: Vec<_> = (0..specialization.len() as u32)
             .map(|i| vk::SpecializationMapEntry { constant_id: i, offset: i * 4, size: 4 })
@@ -310,7 +286,7 @@ impl ComputePipeline {
         unsafe { ctx.raw().destroy_shader_module(module, None) };
         let raw = result.map_err(|(_, e)| e).vk("vkCreateComputePipelines")?[0];
         ctx.set_name(raw, name);
-        Ok(ComputePipeline { ctx: ctx.clone(), raw, layout: layout.raw, _owned: None })
+        Ok(ComputePipeline { ctx: ctx.clone(), raw, layout: layout.raw, _layout: layout })
     }
 }
 

@@ -7,7 +7,7 @@ use std::sync::Arc;
 use ash::vk;
 
 use super::context::GpuContext;
-use super::error::{GpuResult, VkContext};
+use super::error::{GpuError, GpuResult, VkContext};
 use super::image::{aspect_of, Image};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -48,7 +48,7 @@ pub struct RenderPass {
 impl RenderPass {
     /// The render pass of `desc`: the cached one if a live pass has the same description,
     /// else a new one named `name` (the debug name of the first creator).
-    pub fn new(ctx: &Arc<GpuContext>, name: &str, desc: &RenderPassDesc) -> GpuResult<RenderPass> {
+    pub(super) fn new(ctx: &Arc<GpuContext>, name: &str, desc: &RenderPassDesc) -> GpuResult<RenderPass> {
         let mut cache = ctx.render_passes.lock().unwrap_or_else(|e| e.into_inner());
         if let Some(shared) = cache.get(desc).and_then(std::sync::Weak::upgrade) {
             return Ok(RenderPass { raw: shared.raw, _shared: shared, desc: desc.clone() });
@@ -125,7 +125,7 @@ pub struct Framebuffer {
 
 impl Framebuffer {
     /// `views` in attachment order (colours, then depth).
-    pub fn new(
+    pub(super) fn new(
         ctx: &Arc<GpuContext>,
         name: &str,
         pass: &RenderPass,
@@ -191,6 +191,26 @@ impl RenderTarget {
     ) -> GpuResult<RenderTarget> {
         let colors: Vec<_> = colors.iter().map(|&i| (i, clear)).collect();
         Self::build(ctx, name, &colors, depth.map(|d| (d, clear)), Some(layers))
+    }
+
+    /// As [`Self::new`], with framebuffer `i` over the colour images and depth image of
+    /// `sets[i]`, all of the formats and extent of the first (one light's maps each).
+    pub fn each(
+        ctx: &Arc<GpuContext>,
+        name: &str,
+        sets: &[(Vec<&Image>, Option<&Image>)],
+        clear: bool,
+    ) -> GpuResult<RenderTarget> {
+        let Some((colors, depth)) = sets.first() else {
+            return Err(GpuError::Unsupported(format!("{name}: a render target without framebuffers")));
+        };
+        let mut target = Self::new(ctx, name, colors, *depth, clear)?;
+        for (i, (colors, depth)) in sets.iter().enumerate().skip(1) {
+            let views: Vec<_> = colors.iter().copied().chain(*depth).map(|image| image.view()).collect();
+            let extent = target.framebuffers[0].extent;
+            target.framebuffers.push(Framebuffer::new(ctx, &format!("{name}_{i}"), &target.pass, &views, extent)?);
+        }
+        Ok(target)
     }
 
     fn build(

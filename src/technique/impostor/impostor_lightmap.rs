@@ -45,11 +45,10 @@ use glam::{Mat4, Vec3};
 use crate::frame::gpu_scene::GpuScene;
 use crate::frame::targets::{Targets, DEPTH_FORMAT};
 use crate::gpu::{
-    vk, Access, Attachment, Blend, Clear, DepthState, DescriptorSet, DescriptorSetLayout, DescriptorWrite, Framebuffer,
-    GpuContext, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc, ImageViewKind, PipelineLayout,
-    RenderPass, RenderPassDesc, Sampler, SamplerDesc, VertexLayout,
+    vk, Access, Blend, Clear, DepthState, DescriptorSet, DescriptorSetLayout, GpuContext, GpuResult, GraphicsPipeline,
+    GraphicsPipelineDesc, Image, ImageDesc, ImageViewKind, RenderTarget, Sampler, SamplerDesc,
 };
-use crate::graph::{Frame, FrameGraph, ImageId};
+use crate::graph::{Bindings, BoundSet, Frame, FrameGraph, ImageId};
 use crate::scene::techniques::{ImpostorLightmapParams, ImpostorParams};
 use crate::scene::{Light, Material, Scene};
 use crate::technique::impostor::distance_impostor::{object_bounds, record_maps, ImpostorMap, MapContent, MapDesc};
@@ -254,14 +253,12 @@ impl Chart {
 
 /// One light's caustic map.
 struct CausticMap {
-    _hit: Image,
+    hit: Image,
     hit_id: ImageId,
-    _power: Image,
+    power: Image,
     power_id: ImageId,
     _depth: Image,
     depth_id: ImageId,
-    framebuffer: Framebuffer,
-    splat_set: DescriptorSet,
     light: Light,
 }
 
@@ -276,24 +273,20 @@ pub struct ImpostorLightmap {
     bounds: Vec<(Vec3, f32)>,
     pub charts: Vec<Chart>,
     maps: Vec<CausticMap>,
-    caustic_pass: RenderPass,
-    _caustic_set_layout: DescriptorSetLayout,
-    caustic_set: DescriptorSet,
-    _caustic_layout: PipelineLayout,
+    /// A framebuffer per light.
+    caustic_target: RenderTarget,
+    caustic_set: BoundSet,
     caustic_pipeline: GraphicsPipeline,
     /// One layer per receiver (`charts[i]` in layer i): irradiance in W/m^2.
     pub lightmaps: Image,
     lightmaps_id: ImageId,
-    splat_pass: RenderPass,
-    splat_framebuffers: Vec<Framebuffer>,
-    _splat_set_layout: DescriptorSetLayout,
-    _splat_layout: PipelineLayout,
+    /// A framebuffer per chart.
+    splat_target: RenderTarget,
+    /// A set per light.
+    splat_sets: BoundSet,
     splat_pipeline: GraphicsPipeline,
-    apply_pass: RenderPass,
-    apply_framebuffer: Framebuffer,
-    _apply_set_layout: DescriptorSetLayout,
-    apply_set: DescriptorSet,
-    _apply_layout: PipelineLayout,
+    apply_target: RenderTarget,
+    apply_set: BoundSet,
     apply_pipeline: GraphicsPipeline,
     _linear: Sampler,
     _nearest: Sampler,
@@ -355,227 +348,108 @@ impl ImpostorLightmap {
         let refractor_center = refractor.as_ref().map_or(Vec3::ZERO, |r| r.reference());
         let linear = Sampler::new(ctx, "impostor_lightmap_linear", SamplerDesc::LINEAR_CLAMP)?;
         let nearest = Sampler::new(ctx, "impostor_lightmap_nearest", SamplerDesc::NEAREST_CLAMP)?;
-        let sampled = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
-        let frag = vk::ShaderStageFlags::FRAGMENT;
-        let vert = vk::ShaderStageFlags::VERTEX;
-        let sampler = vk::DescriptorType::COMBINED_IMAGE_SAMPLER;
 
-        // The caustic maps.
+        // The caustic maps: per light, a photon hit and a power map.
         let size = params.caustic_map_size;
-        let caustic_pass = RenderPass::new(
-            ctx,
-            IMPOSTOR_LIGHTMAP_CAUSTIC_MAP,
-            &RenderPassDesc {
-                colors: vec![
-                    Attachment { format: MAP_FORMAT, clear: true },
-                    Attachment { format: MAP_FORMAT, clear: true },
-                ],
-                depth: Some(Attachment { format: DEPTH_FORMAT, clear: true }),
-                depth_read_only: false,
-            },
-        )?;
-        let caustic_set_layout = DescriptorSetLayout::new(
-            ctx,
-            IMPOSTOR_LIGHTMAP_CAUSTIC_MAP,
-            &[
-                (LIGHTMAP_BINDING_UV_LINEAR, sampler, frag),
-                (LIGHTMAP_BINDING_UV_NEAREST, sampler, frag),
-                (LIGHTMAP_BINDING_REFRACTOR, sampler, frag),
-            ],
-            1,
-        )?;
-        // Without dielectrics the refractor map is never read: the uv map stands in.
-        let refractor_view = refractor.as_ref().map_or(uv_map.cube.view(), |r| r.cube.view());
-        let caustic_set = caustic_set_layout.allocate(
-            IMPOSTOR_LIGHTMAP_CAUSTIC_MAP,
-            &[
-                DescriptorWrite::Sampled(LIGHTMAP_BINDING_UV_LINEAR, uv_map.cube.view(), &linear, sampled),
-                DescriptorWrite::Sampled(LIGHTMAP_BINDING_UV_NEAREST, uv_map.cube.view(), &nearest, sampled),
-                DescriptorWrite::Sampled(LIGHTMAP_BINDING_REFRACTOR, refractor_view, &linear, sampled),
-            ],
-        )?;
-        let caustic_layout = PipelineLayout::new(
-            ctx,
-            IMPOSTOR_LIGHTMAP_CAUSTIC_MAP,
-            &[frame_layout, &caustic_set_layout],
-            std::mem::size_of::<CausticPush>() as u32,
-        )?;
-        let caustic_pipeline = GraphicsPipeline::with_layout(
-            ctx,
-            &GraphicsPipelineDesc {
-                name: IMPOSTOR_LIGHTMAP_CAUSTIC_MAP,
-                vertex_shader: "impostor/lightmap_caustic.vert",
-                fragment_shader: "impostor/lightmap_caustic.frag",
-                vertex: VertexLayout::Mesh,
-                topology: vk::PrimitiveTopology::TRIANGLE_LIST,
-                cull: vk::CullModeFlags::NONE,
-                depth: DepthState::LESS,
-                blend: &[Blend::Off, Blend::Off],
-                specialization: &[params.iterations],
-            },
-            &caustic_layout,
-            &caustic_pass,
-        )?;
-
-        // The light maps and the splat pass.
-        let n = params.lightmap_size;
-        let lightmaps = Image::new(
-            ctx,
-            &ImageDesc {
-                name: "impostor_lightmaps".into(),
-                format: MAP_FORMAT,
-                width: n,
-                height: n,
-                layers: charts.len().max(1) as u32,
-                usage: U::COLOR_ATTACHMENT | U::SAMPLED | U::TRANSFER_SRC,
-                view: ImageViewKind::D2Array,
-            },
-        )?;
-        let lightmaps_id = graph.register_image(&lightmaps);
-        let splat_pass = RenderPass::new(
-            ctx,
-            IMPOSTOR_LIGHTMAP_SPLAT,
-            &RenderPassDesc {
-                colors: vec![Attachment { format: MAP_FORMAT, clear: true }],
-                depth: None,
-                depth_read_only: false,
-            },
-        )?;
-        let mut splat_framebuffers = Vec::new();
-        for layer in 0..charts.len() as u32 {
-            splat_framebuffers.push(Framebuffer::new(
-                ctx,
-                &format!("impostor_lightmap_{layer}"),
-                &splat_pass,
-                &[lightmaps.layer_view(layer)],
-                lightmaps.extent(),
-            )?);
-        }
-        let splat_set_layout = DescriptorSetLayout::new(
-            ctx,
-            IMPOSTOR_LIGHTMAP_SPLAT,
-            &[(LIGHTMAP_BINDING_PHOTON_HIT, sampler, vert), (LIGHTMAP_BINDING_PHOTON_POWER, sampler, vert)],
-            scene.lights.len().max(1) as u32,
-        )?;
-        let splat_layout = PipelineLayout::new(
-            ctx,
-            IMPOSTOR_LIGHTMAP_SPLAT,
-            &[&splat_set_layout],
-            std::mem::size_of::<SplatPush>() as u32,
-        )?;
-        let splat_pipeline = GraphicsPipeline::with_layout(
-            ctx,
-            &GraphicsPipelineDesc {
-                name: IMPOSTOR_LIGHTMAP_SPLAT,
-                vertex_shader: "impostor/lightmap_splat.vert",
-                fragment_shader: "impostor/lightmap_splat.frag",
-                vertex: VertexLayout::None,
-                topology: vk::PrimitiveTopology::POINT_LIST,
-                cull: vk::CullModeFlags::NONE,
-                depth: DepthState::OFF,
-                blend: &[Blend::Additive],
-                specialization: &[],
-            },
-            &splat_layout,
-            &splat_pass,
-        )?;
         let mut maps = Vec::new();
         for (i, light) in scene.lights.iter().enumerate() {
-            let image = |name: String, format, usage| {
-                Image::new(
-                    ctx,
-                    &ImageDesc { name, format, width: size, height: size, layers: 1, usage, view: ImageViewKind::D2 },
-                )
+            let mut image = |what: &str, format, usage| {
+                graph.image(ctx, &ImageDesc::d2(&format!("impostor_lightmap_{what}_{i}"), format, size, size, usage))
             };
-            let hit = image(format!("impostor_lightmap_hit_{i}"), MAP_FORMAT, U::COLOR_ATTACHMENT | U::SAMPLED)?;
-            let power = image(format!("impostor_lightmap_power_{i}"), MAP_FORMAT, U::COLOR_ATTACHMENT | U::SAMPLED)?;
-            let depth = image(format!("impostor_lightmap_depth_{i}"), DEPTH_FORMAT, U::DEPTH_STENCIL_ATTACHMENT)?;
-            let framebuffer = Framebuffer::new(
-                ctx,
-                &format!("impostor_lightmap_caustic_{i}"),
-                &caustic_pass,
-                &[hit.view(), power.view(), depth.view()],
-                hit.extent(),
-            )?;
-            let splat_set = splat_set_layout.allocate(
-                IMPOSTOR_LIGHTMAP_SPLAT,
-                &[
-                    DescriptorWrite::Sampled(LIGHTMAP_BINDING_PHOTON_HIT, hit.view(), &nearest, sampled),
-                    DescriptorWrite::Sampled(LIGHTMAP_BINDING_PHOTON_POWER, power.view(), &nearest, sampled),
-                ],
-            )?;
-            maps.push(CausticMap {
-                hit_id: graph.register_image(&hit),
-                power_id: graph.register_image(&power),
-                depth_id: graph.register_image(&depth),
-                _hit: hit,
-                _power: power,
-                _depth: depth,
-                framebuffer,
-                splat_set,
-                light: *light,
-            });
+            let (hit, hit_id) = image("hit", MAP_FORMAT, U::COLOR_ATTACHMENT | U::SAMPLED)?;
+            let (power, power_id) = image("power", MAP_FORMAT, U::COLOR_ATTACHMENT | U::SAMPLED)?;
+            let (depth, depth_id) = image("depth", DEPTH_FORMAT, U::DEPTH_STENCIL_ATTACHMENT)?;
+            maps.push(CausticMap { hit, hit_id, power, power_id, _depth: depth, depth_id, light: *light });
         }
-
-        // The apply pass: additive onto the deferred result.
-        let apply_pass = RenderPass::new(
-            ctx,
-            IMPOSTOR_LIGHTMAP_APPLY,
-            &RenderPassDesc {
-                colors: vec![Attachment { format: targets.hdr.format(), clear: false }],
-                depth: None,
-                depth_read_only: false,
-            },
-        )?;
-        let apply_set_layout = DescriptorSetLayout::new(
-            ctx,
-            IMPOSTOR_LIGHTMAP_APPLY,
-            &[
-                (BINDING_GBUF_NORMAL, sampler, frag),
-                (BINDING_GBUF_ALBEDO, sampler, frag),
-                (BINDING_GBUF_DEPTH, sampler, frag),
-                (BINDING_LIGHTMAPS, sampler, frag),
-            ],
-            1,
-        )?;
-        let apply_set = apply_set_layout.allocate(
-            IMPOSTOR_LIGHTMAP_APPLY,
-            &[
-                DescriptorWrite::Sampled(BINDING_GBUF_NORMAL, targets.gbuf_normal.view(), &nearest, sampled),
-                DescriptorWrite::Sampled(BINDING_GBUF_ALBEDO, targets.gbuf_albedo.view(), &nearest, sampled),
-                DescriptorWrite::Sampled(
-                    BINDING_GBUF_DEPTH,
-                    targets.depth.view(),
-                    &nearest,
-                    vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL,
-                ),
-                DescriptorWrite::Sampled(BINDING_LIGHTMAPS, lightmaps.view(), &linear, sampled),
-            ],
-        )?;
-        let apply_layout = PipelineLayout::new(
-            ctx,
-            IMPOSTOR_LIGHTMAP_APPLY,
-            &[frame_layout, &apply_set_layout],
-            std::mem::size_of::<ApplyPush>() as u32,
-        )?;
-        let apply_pipeline = GraphicsPipeline::with_layout(
+        let attachments: Vec<_> = maps.iter().map(|m| (vec![&m.hit, &m.power], Some(&m._depth))).collect();
+        let caustic_target = RenderTarget::each(ctx, IMPOSTOR_LIGHTMAP_CAUSTIC_MAP, &attachments, true)?;
+        // Without dielectrics the refractor map is never read: the uv map stands in.
+        let refractor_cube = refractor.as_ref().unwrap_or(&uv_map);
+        let caustic_set = Bindings::new(vk::ShaderStageFlags::FRAGMENT)
+            .sampled(LIGHTMAP_BINDING_UV_LINEAR, &uv_map.cube, &linear)
+            .read(uv_map.cube_id)
+            .sampled(LIGHTMAP_BINDING_UV_NEAREST, &uv_map.cube, &nearest)
+            .sampled(LIGHTMAP_BINDING_REFRACTOR, &refractor_cube.cube, &linear);
+        let caustic_set = match &refractor {
+            Some(r) => caustic_set.read(r.cube_id),
+            None => caustic_set,
+        };
+        let caustic_set = caustic_set.build(ctx, IMPOSTOR_LIGHTMAP_CAUSTIC_MAP)?;
+        let caustic_pipeline = GraphicsPipeline::new(
             ctx,
             &GraphicsPipelineDesc {
-                name: IMPOSTOR_LIGHTMAP_APPLY,
-                vertex_shader: "common/fullscreen.vert",
-                fragment_shader: "impostor/lightmap_apply.frag",
-                vertex: VertexLayout::None,
-                topology: vk::PrimitiveTopology::TRIANGLE_LIST,
-                cull: vk::CullModeFlags::NONE,
-                depth: DepthState::OFF,
-                blend: &[Blend::Additive],
-                specialization: &[],
+                blend: &[Blend::Off, Blend::Off],
+                specialization: &[params.iterations],
+                ..GraphicsPipelineDesc::mesh(
+                    IMPOSTOR_LIGHTMAP_CAUSTIC_MAP,
+                    "impostor/lightmap_caustic.vert",
+                    "impostor/lightmap_caustic.frag",
+                    DepthState::LESS,
+                )
             },
-            &apply_layout,
-            &apply_pass,
+            &[frame_layout, caustic_set.layout()],
+            std::mem::size_of::<CausticPush>() as u32,
+            &caustic_target.pass,
         )?;
-        let apply_framebuffer =
-            Framebuffer::new(ctx, IMPOSTOR_LIGHTMAP_APPLY, &apply_pass, &[targets.hdr.view()], targets.extent())?;
+
+        // The light maps and the splat pass: a framebuffer per chart, a set per light.
+        let n = params.lightmap_size;
+        let (lightmaps, lightmaps_id) = graph.image(
+            ctx,
+            &ImageDesc::square(
+                "impostor_lightmaps",
+                MAP_FORMAT,
+                n,
+                charts.len().max(1) as u32,
+                ImageViewKind::D2Array,
+                U::COLOR_ATTACHMENT | U::SAMPLED | U::TRANSFER_SRC,
+            ),
+        )?;
+        let splat_target =
+            RenderTarget::layered(ctx, IMPOSTOR_LIGHTMAP_SPLAT, &[&lightmaps], None, true, charts.len() as u32)?;
+        let splat_sets = maps.iter().map(|m| {
+            Bindings::new(vk::ShaderStageFlags::VERTEX)
+                .sampled(LIGHTMAP_BINDING_PHOTON_HIT, &m.hit, &nearest)
+                .read(m.hit_id)
+                .sampled(LIGHTMAP_BINDING_PHOTON_POWER, &m.power, &nearest)
+                .read(m.power_id)
+        });
+        let splat_sets = Bindings::build_each(ctx, IMPOSTOR_LIGHTMAP_SPLAT, splat_sets.collect())?;
+        let splat_pipeline = GraphicsPipeline::new(
+            ctx,
+            &GraphicsPipelineDesc {
+                vertex_shader: "impostor/lightmap_splat.vert",
+                topology: vk::PrimitiveTopology::POINT_LIST,
+                blend: &[Blend::Additive],
+                ..GraphicsPipelineDesc::fullscreen(IMPOSTOR_LIGHTMAP_SPLAT, "impostor/lightmap_splat.frag")
+            },
+            &[splat_sets.layout()],
+            std::mem::size_of::<SplatPush>() as u32,
+            &splat_target.pass,
+        )?;
+
+        // The apply pass: additive onto the deferred result.
+        let apply_target = RenderTarget::new(ctx, IMPOSTOR_LIGHTMAP_APPLY, &[&targets.hdr], None, false)?;
+        let apply_set = Bindings::new(vk::ShaderStageFlags::FRAGMENT)
+            .sampled(BINDING_GBUF_NORMAL, &targets.gbuf_normal, &nearest)
+            .read(targets.gbuf_normal_id)
+            .sampled(BINDING_GBUF_ALBEDO, &targets.gbuf_albedo, &nearest)
+            .read(targets.gbuf_albedo_id)
+            .sampled(BINDING_GBUF_DEPTH, &targets.depth, &nearest)
+            .read(targets.depth_id)
+            .sampled(BINDING_LIGHTMAPS, &lightmaps, &linear)
+            .read(lightmaps_id)
+            .build(ctx, IMPOSTOR_LIGHTMAP_APPLY)?;
+        let apply_pipeline = GraphicsPipeline::new(
+            ctx,
+            &GraphicsPipelineDesc {
+                blend: &[Blend::Additive],
+                ..GraphicsPipelineDesc::fullscreen(IMPOSTOR_LIGHTMAP_APPLY, "impostor/lightmap_apply.frag")
+            },
+            &[frame_layout, apply_set.layout()],
+            std::mem::size_of::<ApplyPush>() as u32,
+            &apply_target.pass,
+        )?;
         let bounds = (0..scene.objects.len()).map(|i| object_bounds(scene, i)).collect();
         Ok(ImpostorLightmap {
             params,
@@ -586,23 +460,16 @@ impl ImpostorLightmap {
             bounds,
             charts,
             maps,
-            caustic_pass,
-            _caustic_set_layout: caustic_set_layout,
+            caustic_target,
             caustic_set,
-            _caustic_layout: caustic_layout,
             caustic_pipeline,
             lightmaps,
             lightmaps_id,
-            splat_pass,
-            splat_framebuffers,
-            _splat_set_layout: splat_set_layout,
-            _splat_layout: splat_layout,
+            splat_target,
+            splat_sets,
             splat_pipeline,
-            apply_pass,
-            apply_framebuffer,
-            _apply_set_layout: apply_set_layout,
+            apply_target,
             apply_set,
-            _apply_layout: apply_layout,
             apply_pipeline,
             _linear: linear,
             _nearest: nearest,
@@ -680,10 +547,7 @@ impl ImpostorLightmap {
         if let Some(r) = &self.refractor {
             record_maps(frame, IMPOSTOR_LIGHTMAP_REFRACTOR_MAP, vec![r], scene, frame_set, None);
         }
-        let mut pass = frame.pass(IMPOSTOR_LIGHTMAP_CAUSTIC_MAP).read(self.uv_map.cube_id, Access::FragmentSampled);
-        if let Some(r) = &self.refractor {
-            pass = pass.read(r.cube_id, Access::FragmentSampled);
-        }
+        let mut pass = frame.pass(IMPOSTOR_LIGHTMAP_CAUSTIC_MAP).uses(&self.caustic_set);
         for m in &self.maps {
             pass = pass
                 .write(m.hit_id, Access::ColorAttachment)
@@ -707,10 +571,10 @@ impl ImpostorLightmap {
             })
             .collect();
         pass.record(move |cmd| {
-            for (m, (push, objects)) in self.maps.iter().zip(pushes) {
+            for (i, (push, objects)) in pushes.into_iter().enumerate() {
                 let clears = [Clear::Color([0.0, 0.0, 0.0, -1.0]), Clear::Color([0.0; 4]), Clear::Depth(1.0)];
-                cmd.in_render_pass(&self.caustic_pass, &m.framebuffer, &clears, |cmd| {
-                    cmd.bind_graphics(&self.caustic_pipeline, &[frame_set, self.caustic_set]);
+                cmd.in_target(&self.caustic_target, i, &clears, |cmd| {
+                    cmd.bind_graphics(&self.caustic_pipeline, &[frame_set, self.caustic_set.set()]);
                     cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
                     for i in objects {
                         let Some(d) = scene.draws.get(i) else { continue };
@@ -723,22 +587,22 @@ impl ImpostorLightmap {
             }
         });
 
-        let mut pass = frame.pass(IMPOSTOR_LIGHTMAP_SPLAT).write(self.lightmaps_id, Access::ColorAttachment);
-        for m in &self.maps {
-            pass = pass.read(m.hit_id, Access::VertexSampled).read(m.power_id, Access::VertexSampled);
-        }
+        let pass = frame
+            .pass(IMPOSTOR_LIGHTMAP_SPLAT)
+            .write(self.lightmaps_id, Access::ColorAttachment)
+            .uses(&self.splat_sets);
         let n = self.params.lightmap_size;
         let photons = self.params.caustic_map_size * self.params.caustic_map_size;
         pass.record(move |cmd| {
-            for (slot, (chart, fb)) in self.charts.iter().zip(&self.splat_framebuffers).enumerate() {
-                cmd.in_render_pass(&self.splat_pass, fb, &[Clear::Color([0.0; 4])], |cmd| {
+            for (slot, chart) in self.charts.iter().enumerate() {
+                cmd.in_target(&self.splat_target, slot, &[Clear::Color([0.0; 4])], |cmd| {
                     let texel_area = chart.area() / (n as f32 * n as f32);
                     let push = SplatPush {
                         params: [self.params.filter_radius, n as f32, 1.0 / texel_area.max(1e-30), 0.0],
                         info: [slot as u32, self.params.caustic_map_size, 0, 0],
                     };
-                    for m in &self.maps {
-                        cmd.bind_graphics(&self.splat_pipeline, &[m.splat_set]);
+                    for &set in self.splat_sets.sets() {
+                        cmd.bind_graphics(&self.splat_pipeline, &[set]);
                         cmd.push_graphics(&self.splat_pipeline, &push);
                         cmd.draw(photons, 1);
                     }
@@ -751,14 +615,11 @@ impl ImpostorLightmap {
     pub fn record_apply<'a>(&'a self, frame: &mut Frame<'_, 'a>, targets: &Targets, frame_set: DescriptorSet) {
         frame
             .pass(IMPOSTOR_LIGHTMAP_APPLY)
-            .read(targets.gbuf_normal_id, Access::FragmentSampled)
-            .read(targets.gbuf_albedo_id, Access::FragmentSampled)
-            .read(targets.depth_id, Access::FragmentSampled)
-            .read(self.lightmaps_id, Access::FragmentSampled)
+            .uses(&self.apply_set)
             .write(targets.hdr_id, Access::ColorAttachment)
             .record(move |cmd| {
-                cmd.in_render_pass(&self.apply_pass, &self.apply_framebuffer, &[Clear::None], |cmd| {
-                    cmd.bind_graphics(&self.apply_pipeline, &[frame_set, self.apply_set]);
+                cmd.in_target(&self.apply_target, 0, &[Clear::None], |cmd| {
+                    cmd.bind_graphics(&self.apply_pipeline, &[frame_set, self.apply_set.set()]);
                     for (slot, c) in self.charts.iter().enumerate() {
                         let push = ApplyPush {
                             origin: c.origin.extend(slot as f32).to_array(),
