@@ -124,6 +124,20 @@ impl PlannedPass {
     }
 }
 
+/// The [`Registration`] of a technique selected by `key`, whose resources depend on its
+/// `[render.<table>]`s and the placement ([`tables_and_placement`]).
+macro_rules! registration {
+    ($key:expr, $plan:expr, $create:expr, [$($table:literal),+]) => {
+        $crate::technique::Registration {
+            key: $key,
+            plan: $plan,
+            create: $create,
+            inputs: |scene| $crate::technique::tables_and_placement(scene, &[$($table),+]),
+        }
+    };
+}
+pub(crate) use registration;
+
 /// A technique's entry in [`TECHNIQUES`].
 pub struct Registration {
     /// What selects it: `refraction = "wyman"`, or the baseline pass's name.

@@ -41,8 +41,8 @@ use crate::scene::techniques::{CausticsMapParams, Flux, Newton};
 use crate::scene::{Light, Material, Scene};
 use crate::technique::baseline::shadow_map::FAR_DISTANCE;
 use crate::technique::{
-    caustic_objects, list, params, tables_and_placement, FrameInputs, PlannedPass, Registration, RenderError, Setup,
-    Stage, Technique,
+    caustic_objects, list, params, registration, FrameInputs, PlannedPass, Registration, RenderError, Setup, Stage,
+    Technique,
 };
 use crate::{
     CAUSTIC_BINDING_BACK_NORMAL, CAUSTIC_BINDING_BACK_POSITION, CAUSTIC_BINDING_FACES, CAUSTIC_BINDING_FRONT_NORMAL,
@@ -57,12 +57,7 @@ pub const CAUSTICS_MAP_REFRACTORS: &str = "caustics_map_refractors";
 pub const CAUSTICS_MAP: &str = "caustics_map";
 
 /// `render.caustics = "caustics_map"`, parameters `[render.caustics_map]`.
-pub const TECHNIQUE: Registration = Registration {
-    key: "caustics = \"caustics_map\"",
-    plan,
-    create,
-    inputs: |scene| tables_and_placement(scene, &["caustics_map"]),
-};
+pub const TECHNIQUE: Registration = registration!("caustics = \"caustics_map\"", plan, create, ["caustics_map"]);
 
 fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
     let Some((diffuse, specular)) = caustic_objects(scene, "caustics_map") else {

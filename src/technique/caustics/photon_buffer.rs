@@ -53,8 +53,8 @@ use crate::scene::Scene;
 use crate::technique::caustics::caustics_map::{is_specular, refractor_bindings, RefractorLayers};
 use crate::technique::refraction::nearby_impostors::{nearby_objects, rect_for};
 use crate::technique::{
-    caustic_objects, list, params, tables_and_placement, FrameInputs, PlannedPass, Registration, RenderError, Setup,
-    Stage, Technique,
+    caustic_objects, list, params, registration, FrameInputs, PlannedPass, Registration, RenderError, Setup, Stage,
+    Technique,
 };
 use crate::{CAUSTIC_BINDING_FACES, CAUSTIC_BINDING_MATERIALS, PHOTON_BINDING_RECTS, PHOTON_PAPER, PHOTON_PHYSICAL};
 
@@ -68,12 +68,7 @@ pub const PHOTON_BUFFER_SCATTER: &str = "photon_buffer_scatter";
 pub const PHOTON_BUFFER_FILTER: &str = "photon_buffer_filter";
 
 /// `render.caustics = "photon_buffer"`, parameters `[render.photon_buffer]`.
-pub const TECHNIQUE: Registration = Registration {
-    key: "caustics = \"photon_buffer\"",
-    plan,
-    create,
-    inputs: |scene| tables_and_placement(scene, &["photon_buffer"]),
-};
+pub const TECHNIQUE: Registration = registration!("caustics = \"photon_buffer\"", plan, create, ["photon_buffer"]);
 
 fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
     let Some((diffuse, specular)) = caustic_objects(scene, "photon_buffer") else {

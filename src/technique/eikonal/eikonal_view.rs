@@ -30,8 +30,8 @@ use crate::graph::{Bindings, Frame, FrameGraph, ImageId};
 use crate::scene::techniques::{EikonalParams, Integrator};
 use crate::scene::{IndexProfile, Scene, Volume};
 use crate::technique::{
-    describe_lights, list, params, tables_and_placement, FrameInputs, PlannedPass, Registration, RenderError, Setup,
-    Stage, Technique,
+    describe_lights, list, params, registration, FrameInputs, PlannedPass, Registration, RenderError, Setup, Stage,
+    Technique,
 };
 use crate::{
     BINDING_EIKONAL_ALBEDO, BINDING_EIKONAL_EMISSION, BINDING_EIKONAL_EXTINCTION, BINDING_EIKONAL_FIELD,
@@ -51,8 +51,7 @@ pub const EIKONAL_LIGHT: &str = "eikonal_light";
 pub const EIKONAL_NEARBY: &str = "eikonal_nearby";
 
 /// Every scene with a `[volume]`; parameters `[render.eikonal]`.
-pub const TECHNIQUE: Registration =
-    Registration { key: "[volume]", plan, create, inputs: |scene| tables_and_placement(scene, &["eikonal"]) };
+pub const TECHNIQUE: Registration = registration!("[volume]", plan, create, ["eikonal"]);
 
 fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
     let Some(v) = &scene.volume else {

@@ -37,16 +37,15 @@ use glam::{Mat4, Vec3};
 use crate::frame::gpu_scene::{cube_face_views, GpuScene};
 use crate::frame::targets::{Targets, DEPTH_FORMAT};
 use crate::gpu::{
-    vk, Access, Blend, Buffer, Clear, Cmd, ComputePipeline, DepthState, DescriptorSet, DescriptorSetLayout, GpuContext,
-    GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc, ImageViewKind, RenderTarget, Sampler,
-    SamplerDesc,
+    vk, Access, Blend, Buffer, Clear, Cmd, ComputePipeline, DepthState, DescriptorSet, GpuContext, GpuResult,
+    GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc, ImageViewKind, RenderTarget, Sampler, SamplerDesc,
 };
 use crate::graph::{Bindings, BoundSet, Frame, FrameGraph, ImageId, PassBuilder};
 use crate::scene::techniques::{ImpostorFresnel, ImpostorMaps, ImpostorParams, ImpostorUpdate};
 use crate::scene::{Analytic, Material, Scene};
 use crate::technique::{
-    dielectric_names, list, metal_names, params, tables_and_placement, FrameInputs, PlannedPass, Registration, Setup,
-    Stage, Technique,
+    dielectric_names, list, metal_names, params, registration, FrameInputs, PlannedPass, Registration, RenderError,
+    Setup, Stage, Technique,
 };
 use crate::{
     BINDING_IMPOSTOR_DISTANCE, BINDING_IMPOSTOR_PROBE, BINDING_IMPOSTOR_RADIANCE, BINDING_IMPOSTOR_REFRACTOR,
@@ -60,76 +59,73 @@ pub const REFRACTION_IMPOSTOR_REFRACTOR_MAP: &str = "refraction_impostor_refract
 pub const REFRACTION_IMPOSTOR: &str = "refraction_impostor";
 
 /// `render.refraction = "impostor"` (§4), parameters `[render.impostor]`.
-pub const REFRACTION: Registration = Registration {
-    key: "refraction = \"impostor\"",
-    plan: |scene| {
-        let dielectric = dielectric_names(scene);
-        if dielectric.is_empty() || scene.render.refraction != "impostor" {
-            return Vec::new();
-        }
-        let list = list(&dielectric);
-        [
-            PlannedPass::new(
-                REFRACTION_IMPOSTOR_MAP,
-                format!("distance impostor around dielectric {list} (render.refraction = \"impostor\")"),
-            ),
-            PlannedPass::new(
-                REFRACTION_IMPOSTOR_REFRACTOR_MAP,
-                format!("refractor map (distance + normal cube) of {list}"),
-            ),
-            PlannedPass::new(
-                REFRACTION_IMPOSTOR,
-                format!("double refraction of {list} through the refractor map (Szirmay-Kalos et al. 2005, §4)"),
-            ),
-        ]
-        .into_iter()
-        .map(|p| (Stage::Refraction, p))
-        .collect()
-    },
-    create: |s| {
-        let p = params("impostor", ImpostorParams::from_settings(&s.scene.render))?;
-        let t = ImpostorRefraction::new(s, p)?;
-        Ok(Box::new(t))
-    },
-    inputs: |scene| tables_and_placement(scene, &["impostor"]),
-};
+pub const REFRACTION: Registration =
+    registration!("refraction = \"impostor\"", plan_refraction, create_refraction, ["impostor"]);
 
 /// `render.reflection = "impostor"` (§3), parameters `[render.impostor]`.
-pub const REFLECTION: Registration = Registration {
-    key: "reflection = \"impostor\"",
-    plan: |scene| {
-        let metal = metal_names(scene);
-        if metal.is_empty() || scene.render.reflection != "impostor" {
-            return Vec::new();
-        }
-        let list = list(&metal);
-        vec![
-            (
-                Stage::Reflection,
-                PlannedPass::new(
-                    REFLECTION_IMPOSTOR_MAP,
-                    format!(
-                        "distance impostor (radiance + distance cube) around mirror/conductor {list} \
-                         (render.reflection = \"impostor\")"
-                    ),
-                ),
+pub const REFLECTION: Registration =
+    registration!("reflection = \"impostor\"", plan_reflection, create_reflection, ["impostor"]);
+
+fn impostor_params(s: &Setup<'_>) -> Result<ImpostorParams, RenderError> {
+    params("impostor", ImpostorParams::from_settings(&s.scene.render))
+}
+
+fn create_refraction(s: &mut Setup<'_>) -> Result<Box<dyn Technique>, RenderError> {
+    Ok(Box::new(ImpostorRefraction::new(s)?))
+}
+
+fn create_reflection(s: &mut Setup<'_>) -> Result<Box<dyn Technique>, RenderError> {
+    Ok(Box::new(ImpostorReflection::new(s)?))
+}
+
+fn plan_refraction(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
+    let dielectric = dielectric_names(scene);
+    if dielectric.is_empty() || scene.render.refraction != "impostor" {
+        return Vec::new();
+    }
+    let list = list(&dielectric);
+    [
+        PlannedPass::new(
+            REFRACTION_IMPOSTOR_MAP,
+            format!("distance impostor around dielectric {list} (render.refraction = \"impostor\")"),
+        ),
+        PlannedPass::new(
+            REFRACTION_IMPOSTOR_REFRACTOR_MAP,
+            format!("refractor map (distance + normal cube) of {list}"),
+        ),
+        PlannedPass::new(
+            REFRACTION_IMPOSTOR,
+            format!("double refraction of {list} through the refractor map (Szirmay-Kalos et al. 2005, §4)"),
+        ),
+    ]
+    .into_iter()
+    .map(|p| (Stage::Refraction, p))
+    .collect()
+}
+
+fn plan_reflection(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
+    let metal = metal_names(scene);
+    if metal.is_empty() || scene.render.reflection != "impostor" {
+        return Vec::new();
+    }
+    let list = list(&metal);
+    [
+        PlannedPass::new(
+            REFLECTION_IMPOSTOR_MAP,
+            format!(
+                "distance impostor (radiance + distance cube) around mirror/conductor {list} \
+                     (render.reflection = \"impostor\")"
             ),
-            (
-                Stage::Reflection,
-                PlannedPass::new(
-                    REFLECTION_IMPOSTOR,
-                    format!("localized reflection of {list} (Hit(), Szirmay-Kalos et al. 2005)"),
-                ),
-            ),
-        ]
-    },
-    create: |s| {
-        let p = params("impostor", ImpostorParams::from_settings(&s.scene.render))?;
-        let t = ImpostorReflection::new(s, p)?;
-        Ok(Box::new(t))
-    },
-    inputs: |scene| tables_and_placement(scene, &["impostor"]),
-};
+        ),
+        PlannedPass::new(
+            REFLECTION_IMPOSTOR,
+            format!("localized reflection of {list} (Hit(), Szirmay-Kalos et al. 2005)"),
+        ),
+    ]
+    .into_iter()
+    .map(|p| (Stage::Reflection, p))
+    .collect()
+}
 
 /// The reflection and the refraction technique record and react alike: their maps follow
 /// the objects (§6) and are rendered again at the start of a frame when needed.
@@ -273,15 +269,9 @@ pub struct MapDesc<'a> {
 }
 
 impl ImpostorMap {
-    pub fn new(
-        ctx: &Arc<GpuContext>,
-        desc: MapDesc<'_>,
-        params: &ImpostorParams,
-        scene: &Scene,
-        gpu: &GpuScene,
-        graph: &mut FrameGraph,
-        frame_layout: &DescriptorSetLayout,
-    ) -> GpuResult<Self> {
+    pub fn new(s: &mut Setup<'_>, desc: MapDesc<'_>, params: &ImpostorParams) -> GpuResult<Self> {
+        let (ctx, scene, gpu, frame_layout) = (s.ctx, s.scene, s.gpu, s.frame_layout);
+        let graph = &mut *s.graph;
         let MapDesc { name, label, content, objects } = desc;
         let size = params.resolution;
         let separate = content == MapContent::Environment && params.separate_distance;
@@ -641,6 +631,14 @@ fn map_groups(params: &ImpostorParams, objects: Vec<usize>) -> Vec<Vec<usize>> {
     }
 }
 
+/// What a map's label adds to its pass name: nothing when shared, the object's name per object.
+fn map_suffix(scene: &Scene, params: &ImpostorParams, objects: &[usize]) -> String {
+    match params.maps {
+        ImpostorMaps::Shared => String::new(),
+        ImpostorMaps::PerObject => format!("_{}", scene.objects[objects[0]].name),
+    }
+}
+
 /// The shading push constant's object: the group's only object per object, all when shared.
 fn shaded_object(params: &ImpostorParams, objects: &[usize]) -> u32 {
     match (params.maps, objects) {
@@ -658,30 +656,19 @@ pub struct ImpostorReflection {
 }
 
 impl ImpostorReflection {
-    pub fn new(s: &mut Setup<'_>, params: ImpostorParams) -> GpuResult<Self> {
-        let (ctx, scene, gpu, frame_layout) = (s.ctx, s.scene, s.gpu, s.frame_layout);
-        let graph = &mut *s.graph;
-        let metals = objects_where(scene, |m| matches!(m, Material::Mirror { .. } | Material::Conductor { .. }));
+    pub fn new(s: &mut Setup<'_>) -> Result<Self, RenderError> {
+        let params = impostor_params(s)?;
+        let metals = objects_where(s.scene, |m| matches!(m, Material::Mirror { .. } | Material::Conductor { .. }));
         let mut maps = Vec::new();
         for group in map_groups(&params, metals) {
-            let label = match params.maps {
-                ImpostorMaps::Shared => REFLECTION_IMPOSTOR_MAP.to_string(),
-                ImpostorMaps::PerObject => format!("{REFLECTION_IMPOSTOR_MAP}_{}", scene.objects[group[0]].name),
+            let label = format!("{REFLECTION_IMPOSTOR_MAP}{}", map_suffix(s.scene, &params, &group));
+            let desc = MapDesc {
+                name: REFLECTION_IMPOSTOR_MAP,
+                label: &label,
+                content: MapContent::Environment,
+                objects: group,
             };
-            maps.push(ImpostorMap::new(
-                ctx,
-                MapDesc {
-                    name: REFLECTION_IMPOSTOR_MAP,
-                    label: &label,
-                    content: MapContent::Environment,
-                    objects: group,
-                },
-                &params,
-                scene,
-                gpu,
-                graph,
-                frame_layout,
-            )?);
+            maps.push(ImpostorMap::new(s, desc, &params)?);
         }
         let instances: Vec<_> = maps.iter().map(|m| (m, None)).collect();
         let shade = ShadePass::new(s, REFLECTION_IMPOSTOR, "impostor/reflect.frag", &params, &instances)?;
@@ -740,44 +727,20 @@ pub struct ImpostorRefraction {
 }
 
 impl ImpostorRefraction {
-    pub fn new(s: &mut Setup<'_>, params: ImpostorParams) -> GpuResult<Self> {
-        let (ctx, scene, gpu, frame_layout) = (s.ctx, s.scene, s.gpu, s.frame_layout);
-        let graph = &mut *s.graph;
-        let glass = objects_where(scene, |m| matches!(m, Material::Dielectric { .. }));
+    pub fn new(s: &mut Setup<'_>) -> Result<Self, RenderError> {
+        let params = impostor_params(s)?;
+        let glass = objects_where(s.scene, |m| matches!(m, Material::Dielectric { .. }));
         let mut instances = Vec::new();
         for group in map_groups(&params, glass) {
-            let suffix = match params.maps {
-                ImpostorMaps::Shared => String::new(),
-                ImpostorMaps::PerObject => format!("_{}", scene.objects[group[0]].name),
-            };
-            let map = ImpostorMap::new(
-                ctx,
-                MapDesc {
-                    name: REFRACTION_IMPOSTOR_MAP,
-                    label: &format!("{REFRACTION_IMPOSTOR_MAP}{suffix}"),
-                    content: MapContent::Environment,
-                    objects: group.clone(),
-                },
-                &params,
-                scene,
-                gpu,
-                graph,
-                frame_layout,
-            )?;
-            let refractor = ImpostorMap::new(
-                ctx,
-                MapDesc {
-                    name: REFRACTION_IMPOSTOR_REFRACTOR_MAP,
-                    label: &format!("{REFRACTION_IMPOSTOR_REFRACTOR_MAP}{suffix}"),
-                    content: MapContent::Refractor,
-                    objects: group,
-                },
-                &params,
-                scene,
-                gpu,
-                graph,
-                frame_layout,
-            )?;
+            let suffix = map_suffix(s.scene, &params, &group);
+            let label = format!("{REFRACTION_IMPOSTOR_MAP}{suffix}");
+            let objects = group.clone();
+            let desc =
+                MapDesc { name: REFRACTION_IMPOSTOR_MAP, label: &label, content: MapContent::Environment, objects };
+            let map = ImpostorMap::new(s, desc, &params)?;
+            let label = format!("{REFRACTION_IMPOSTOR_REFRACTOR_MAP}{suffix}");
+            let (name, content) = (REFRACTION_IMPOSTOR_REFRACTOR_MAP, MapContent::Refractor);
+            let refractor = ImpostorMap::new(s, MapDesc { name, label: &label, content, objects: group }, &params)?;
             let refractor_center = refractor.reference;
             instances.push(RefractionInstance { map, refractor, refractor_center });
         }

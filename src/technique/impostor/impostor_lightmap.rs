@@ -45,16 +45,16 @@ use glam::{Mat4, Vec3};
 use crate::frame::gpu_scene::GpuScene;
 use crate::frame::targets::{Targets, DEPTH_FORMAT};
 use crate::gpu::{
-    vk, Access, Blend, Clear, DepthState, DescriptorSet, DescriptorSetLayout, GpuContext, GpuResult, GraphicsPipeline,
-    GraphicsPipelineDesc, Image, ImageDesc, ImageViewKind, RenderTarget, Sampler, SamplerDesc,
+    vk, Access, Blend, Clear, DepthState, DescriptorSet, GpuContext, GpuResult, GraphicsPipeline, GraphicsPipelineDesc,
+    Image, ImageDesc, ImageViewKind, RenderTarget, Sampler, SamplerDesc,
 };
 use crate::graph::{Bindings, BoundSet, Frame, FrameGraph, ImageId};
 use crate::scene::techniques::{ImpostorLightmapParams, ImpostorParams};
 use crate::scene::{Light, Material, Scene};
 use crate::technique::impostor::distance_impostor::{object_bounds, record_maps, ImpostorMap, MapContent, MapDesc};
 use crate::technique::{
-    dielectric_names, list, params, specular_names, tables_and_placement, FrameInputs, PlannedPass, Registration,
-    RenderError, Setup, Stage, Technique,
+    dielectric_names, list, params, registration, specular_names, FrameInputs, PlannedPass, Registration, RenderError,
+    Setup, Stage, Technique,
 };
 use crate::{
     BINDING_GBUF_ALBEDO, BINDING_GBUF_DEPTH, BINDING_GBUF_NORMAL, BINDING_LIGHTMAPS, LIGHTMAP_BINDING_PHOTON_HIT,
@@ -69,12 +69,8 @@ pub const IMPOSTOR_LIGHTMAP_SPLAT: &str = "impostor_lightmap_splat";
 pub const IMPOSTOR_LIGHTMAP_APPLY: &str = "impostor_lightmap_apply";
 
 /// `render.caustics = "impostor_lightmap"`, parameters `[render.impostor_lightmap]`.
-pub const TECHNIQUE: Registration = Registration {
-    key: "caustics = \"impostor_lightmap\"",
-    plan,
-    create,
-    inputs: |scene| tables_and_placement(scene, &["impostor_lightmap", "impostor"]),
-};
+pub const TECHNIQUE: Registration =
+    registration!("caustics = \"impostor_lightmap\"", plan, create, ["impostor_lightmap", "impostor"]);
 
 /// The diffuse receivers that get light maps: quads (one planar chart) and boxes (one per
 /// face).
@@ -127,7 +123,7 @@ fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
 
 fn create(s: &mut Setup<'_>) -> Result<Box<dyn Technique>, RenderError> {
     let p = params("impostor_lightmap", ImpostorLightmapParams::from_settings(&s.scene.render))?;
-    Ok(Box::new(ImpostorLightmap::new(s.ctx, p, s.scene, s.gpu, s.graph, s.frame_layout, s.targets)?))
+    Ok(Box::new(ImpostorLightmap::new(s, p)?))
 }
 
 impl Technique for ImpostorLightmap {
@@ -304,16 +300,9 @@ fn specular_objects(scene: &Scene) -> Vec<usize> {
 }
 
 impl ImpostorLightmap {
-    pub fn new(
-        ctx: &Arc<GpuContext>,
-        params: ImpostorLightmapParams,
-        scene: &Scene,
-        gpu: &GpuScene,
-        graph: &mut FrameGraph,
-        frame_layout: &DescriptorSetLayout,
-        targets: &Targets,
-    ) -> GpuResult<Self> {
+    pub fn new(s: &mut Setup<'_>, params: ImpostorLightmapParams) -> GpuResult<Self> {
         use vk::ImageUsageFlags as U;
+        let (ctx, scene, frame_layout, targets) = (s.ctx, s.scene, s.frame_layout, s.targets);
         let specular = specular_objects(scene);
         let dielectric: Vec<usize> = specular
             .iter()
@@ -327,7 +316,7 @@ impl ImpostorLightmap {
             content: MapContent::LightmapUv,
             objects: specular.clone(),
         };
-        let mut uv_map = ImpostorMap::new(ctx, uv, &map_params, scene, gpu, graph, frame_layout)?;
+        let mut uv_map = ImpostorMap::new(s, uv, &map_params)?;
         let charts: Vec<Chart> =
             lightmap_receivers(scene).into_iter().flat_map(|i| Chart::of_receiver(scene, i)).collect();
         for (slot, c) in charts.iter().enumerate() {
@@ -343,9 +332,10 @@ impl ImpostorLightmap {
                 content: MapContent::Refractor,
                 objects: dielectric,
             };
-            Some(ImpostorMap::new(ctx, desc, &map_params, scene, gpu, graph, frame_layout)?)
+            Some(ImpostorMap::new(s, desc, &map_params)?)
         };
         let refractor_center = refractor.as_ref().map_or(Vec3::ZERO, |r| r.reference());
+        let graph = &mut *s.graph;
         let linear = Sampler::new(ctx, "impostor_lightmap_linear", SamplerDesc::LINEAR_CLAMP)?;
         let nearest = Sampler::new(ctx, "impostor_lightmap_nearest", SamplerDesc::NEAREST_CLAMP)?;
 

@@ -23,8 +23,8 @@ use crate::graph::Frame;
 use crate::scene::techniques::{HuQinParams, RecursiveExit};
 use crate::scene::{Material, Scene};
 use crate::technique::{
-    dielectric_names, list, params, tables_and_placement, FrameInputs, PlannedPass, Registration, RenderError, Setup,
-    Stage, Technique,
+    dielectric_names, list, params, registration, FrameInputs, PlannedPass, Registration, RenderError, Setup, Stage,
+    Technique,
 };
 use crate::{
     BINDING_GBUF_ALBEDO, BINDING_GBUF_DEPTH, BINDING_GBUF_NORMAL, BINDING_NEARBY_RECTS, BINDING_NEARBY_TEXTURE,
@@ -43,12 +43,7 @@ pub const REFRACTION_HU_QIN: &str = "refraction_hu_qin";
 pub const REFRACTION_HU_QIN_NEARBY: &str = "refraction_hu_qin_nearby";
 
 /// `render.refraction = "hu_qin"`, parameters `[render.hu_qin]`.
-pub const TECHNIQUE: Registration = Registration {
-    key: "refraction = \"hu_qin\"",
-    plan,
-    create,
-    inputs: |scene| tables_and_placement(scene, &["hu_qin"]),
-};
+pub const TECHNIQUE: Registration = registration!("refraction = \"hu_qin\"", plan, create, ["hu_qin"]);
 
 fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
     let dielectric = dielectric_names(scene);

@@ -17,8 +17,8 @@ use crate::graph::Frame;
 use crate::scene::techniques::{BackSurface, WymanParams};
 use crate::scene::{Material, Scene};
 use crate::technique::{
-    dielectric_names, list, params, tables_and_placement, FrameInputs, PlannedPass, Registration, RenderError, Setup,
-    Stage, Technique,
+    dielectric_names, list, params, registration, FrameInputs, PlannedPass, Registration, RenderError, Setup, Stage,
+    Technique,
 };
 use crate::{
     BINDING_GBUF_DEPTH, BINDING_GBUF_NORMAL, BINDING_REFR_BACK_DEPTH, BINDING_REFR_BACK_NORMAL,
@@ -32,12 +32,7 @@ pub const REFRACTION_WYMAN_LAYERS: &str = "refraction_wyman_layers";
 pub const REFRACTION_WYMAN: &str = "refraction_wyman";
 
 /// `render.refraction = "wyman"`, parameters `[render.wyman]`.
-pub const TECHNIQUE: Registration = Registration {
-    key: "refraction = \"wyman\"",
-    plan,
-    create,
-    inputs: |scene| tables_and_placement(scene, &["wyman"]),
-};
+pub const TECHNIQUE: Registration = registration!("refraction = \"wyman\"", plan, create, ["wyman"]);
 
 fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
     let dielectric = dielectric_names(scene);
