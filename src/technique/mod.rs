@@ -124,14 +124,15 @@ impl PlannedPass {
     }
 }
 
-/// The [`Registration`] of a technique selected by `key`, whose resources depend on its
-/// `[render.<table>]`s and the placement ([`tables_and_placement`]).
+/// The [`Registration`] of a technique selected by `key`, created by `T::new(&mut Setup)`,
+/// whose resources depend on its `[render.<table>]`s and the placement
+/// ([`tables_and_placement`]).
 macro_rules! registration {
-    ($key:expr, $plan:expr, $create:expr, [$($table:literal),+]) => {
+    ($key:expr, $plan:expr, $technique:ty, [$($table:literal),+]) => {
         $crate::technique::Registration {
             key: $key,
             plan: $plan,
-            create: $create,
+            create: |s| Ok(Box::new(<$technique>::new(s)?)),
             inputs: |scene| $crate::technique::tables_and_placement(scene, &[$($table),+]),
         }
     };

@@ -57,7 +57,8 @@ pub const CAUSTICS_MAP_REFRACTORS: &str = "caustics_map_refractors";
 pub const CAUSTICS_MAP: &str = "caustics_map";
 
 /// `render.caustics = "caustics_map"`, parameters `[render.caustics_map]`.
-pub const TECHNIQUE: Registration = registration!("caustics = \"caustics_map\"", plan, create, ["caustics_map"]);
+pub const TECHNIQUE: Registration =
+    registration!("caustics = \"caustics_map\"", plan, CausticsMapPass, ["caustics_map"]);
 
 fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
     let Some((diffuse, specular)) = caustic_objects(scene, "caustics_map") else {
@@ -84,11 +85,6 @@ fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
     .into_iter()
     .map(|p| (Stage::Caustics, p))
     .collect()
-}
-
-fn create(s: &mut Setup<'_>) -> Result<Box<dyn Technique>, RenderError> {
-    let p = params("caustics_map", CausticsMapParams::from_settings(&s.scene.render))?;
-    Ok(Box::new(CausticsMapPass::new(s, p)?))
 }
 
 impl Technique for CausticsMapPass {
@@ -251,7 +247,8 @@ pub struct CausticsMapPass {
 }
 
 impl CausticsMapPass {
-    pub fn new(s: &mut Setup<'_>, params: CausticsMapParams) -> GpuResult<Self> {
+    pub fn new(s: &mut Setup<'_>) -> Result<Self, RenderError> {
+        let params = params("caustics_map", CausticsMapParams::from_settings(&s.scene.render))?;
         use vk::ImageUsageFlags as U;
         let (ctx, scene, gpu, targets) = (s.ctx, s.scene, s.gpu, s.targets);
         let size = params.map_size;

@@ -68,7 +68,8 @@ pub const PHOTON_BUFFER_SCATTER: &str = "photon_buffer_scatter";
 pub const PHOTON_BUFFER_FILTER: &str = "photon_buffer_filter";
 
 /// `render.caustics = "photon_buffer"`, parameters `[render.photon_buffer]`.
-pub const TECHNIQUE: Registration = registration!("caustics = \"photon_buffer\"", plan, create, ["photon_buffer"]);
+pub const TECHNIQUE: Registration =
+    registration!("caustics = \"photon_buffer\"", plan, PhotonBufferPass, ["photon_buffer"]);
 
 fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
     let Some((diffuse, specular)) = caustic_objects(scene, "photon_buffer") else {
@@ -93,11 +94,6 @@ fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
     .into_iter()
     .map(|p| (Stage::Caustics, p))
     .collect()
-}
-
-fn create(s: &mut Setup<'_>) -> Result<Box<dyn Technique>, RenderError> {
-    let p = params("photon_buffer", PhotonBufferParams::from_settings(&s.scene.render))?;
-    Ok(Box::new(PhotonBufferPass::new(s, p)?))
 }
 
 impl Technique for PhotonBufferPass {
@@ -271,7 +267,8 @@ pub struct PhotonBufferPass {
 }
 
 impl PhotonBufferPass {
-    pub fn new(s: &mut Setup<'_>, params: PhotonBufferParams) -> GpuResult<Self> {
+    pub fn new(s: &mut Setup<'_>) -> Result<Self, RenderError> {
+        let params = params("photon_buffer", PhotonBufferParams::from_settings(&s.scene.render))?;
         use vk::ImageUsageFlags as U;
         let (ctx, scene, gpu, caustics) = (s.ctx, s.scene, s.gpu, s.photon_caustics);
         let size = params.size;

@@ -51,7 +51,7 @@ pub const EIKONAL_LIGHT: &str = "eikonal_light";
 pub const EIKONAL_NEARBY: &str = "eikonal_nearby";
 
 /// Every scene with a `[volume]`; parameters `[render.eikonal]`.
-pub const TECHNIQUE: Registration = registration!("[volume]", plan, create, ["eikonal"]);
+pub const TECHNIQUE: Registration = registration!("[volume]", plan, EikonalPass, ["eikonal"]);
 
 fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
     let Some(v) = &scene.volume else {
@@ -85,14 +85,6 @@ fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
     let reason = format!("volume {} ({nx}x{ny}x{nz}): curved view rays, Ihrke et al. 2007 §4.1, §5.3", v.name);
     passes.push((Stage::Volume, PlannedPass::new(EIKONAL_VIEW, reason)));
     passes
-}
-
-fn create(s: &mut Setup<'_>) -> Result<Box<dyn Technique>, RenderError> {
-    let p = params("eikonal", EikonalParams::from_settings(&s.scene.render))?;
-    let scene = s.scene;
-    let volume = scene.volume.as_ref().expect("planned only with a volume");
-    let lights: &[crate::scene::Light] = if s.planned(EIKONAL_LIGHT) { &scene.lights } else { &[] };
-    Ok(Box::new(EikonalPass::new(s, p, volume, lights)?))
 }
 
 impl Technique for EikonalPass {
@@ -254,7 +246,16 @@ fn f(x: f32) -> u32 {
 
 impl EikonalPass {
     /// Sample, upload, smooth and differentiate `volume`, and create the view pass.
-    pub fn new(
+    /// The scene's volume, lit by its lights when the plan has the light simulation.
+    pub fn new(s: &mut Setup<'_>) -> Result<Self, RenderError> {
+        let p = params("eikonal", EikonalParams::from_settings(&s.scene.render))?;
+        let scene = s.scene;
+        let volume = scene.volume.as_ref().expect("planned only with a volume");
+        let lights: &[crate::scene::Light] = if s.planned(EIKONAL_LIGHT) { &scene.lights } else { &[] };
+        Ok(Self::build(s, p, volume, lights)?)
+    }
+
+    fn build(
         s: &mut Setup<'_>,
         params: EikonalParams,
         volume: &Volume,

@@ -60,22 +60,14 @@ pub const REFRACTION_IMPOSTOR: &str = "refraction_impostor";
 
 /// `render.refraction = "impostor"` (§4), parameters `[render.impostor]`.
 pub const REFRACTION: Registration =
-    registration!("refraction = \"impostor\"", plan_refraction, create_refraction, ["impostor"]);
+    registration!("refraction = \"impostor\"", plan_refraction, ImpostorRefraction, ["impostor"]);
 
 /// `render.reflection = "impostor"` (§3), parameters `[render.impostor]`.
 pub const REFLECTION: Registration =
-    registration!("reflection = \"impostor\"", plan_reflection, create_reflection, ["impostor"]);
+    registration!("reflection = \"impostor\"", plan_reflection, ImpostorReflection, ["impostor"]);
 
 fn impostor_params(s: &Setup<'_>) -> Result<ImpostorParams, RenderError> {
     params("impostor", ImpostorParams::from_settings(&s.scene.render))
-}
-
-fn create_refraction(s: &mut Setup<'_>) -> Result<Box<dyn Technique>, RenderError> {
-    Ok(Box::new(ImpostorRefraction::new(s)?))
-}
-
-fn create_reflection(s: &mut Setup<'_>) -> Result<Box<dyn Technique>, RenderError> {
-    Ok(Box::new(ImpostorReflection::new(s)?))
 }
 
 fn plan_refraction(scene: &Scene) -> Vec<(Stage, PlannedPass)> {

@@ -70,7 +70,7 @@ pub const IMPOSTOR_LIGHTMAP_APPLY: &str = "impostor_lightmap_apply";
 
 /// `render.caustics = "impostor_lightmap"`, parameters `[render.impostor_lightmap]`.
 pub const TECHNIQUE: Registration =
-    registration!("caustics = \"impostor_lightmap\"", plan, create, ["impostor_lightmap", "impostor"]);
+    registration!("caustics = \"impostor_lightmap\"", plan, ImpostorLightmap, ["impostor_lightmap", "impostor"]);
 
 /// The diffuse receivers that get light maps: quads (one planar chart) and boxes (one per
 /// face).
@@ -119,11 +119,6 @@ fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
     let mut out: Vec<_> = passes.into_iter().map(|p| (Stage::Caustics, p)).collect();
     out.push((Stage::Lighting, apply));
     out
-}
-
-fn create(s: &mut Setup<'_>) -> Result<Box<dyn Technique>, RenderError> {
-    let p = params("impostor_lightmap", ImpostorLightmapParams::from_settings(&s.scene.render))?;
-    Ok(Box::new(ImpostorLightmap::new(s, p)?))
 }
 
 impl Technique for ImpostorLightmap {
@@ -300,7 +295,8 @@ fn specular_objects(scene: &Scene) -> Vec<usize> {
 }
 
 impl ImpostorLightmap {
-    pub fn new(s: &mut Setup<'_>, params: ImpostorLightmapParams) -> GpuResult<Self> {
+    pub fn new(s: &mut Setup<'_>) -> Result<Self, RenderError> {
+        let params = params("impostor_lightmap", ImpostorLightmapParams::from_settings(&s.scene.render))?;
         use vk::ImageUsageFlags as U;
         let (ctx, scene, frame_layout, targets) = (s.ctx, s.scene, s.frame_layout, s.targets);
         let specular = specular_objects(scene);

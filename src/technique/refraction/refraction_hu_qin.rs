@@ -18,7 +18,6 @@
 //!   `correction_tolerance`), the environment map where no rectangle is hit
 //!   (glsl/include/nearby.glsl); reflection and refraction are weighted by Fresnel.
 
-use crate::gpu::GpuResult;
 use crate::graph::Frame;
 use crate::scene::techniques::{HuQinParams, RecursiveExit};
 use crate::scene::{Material, Scene};
@@ -43,7 +42,7 @@ pub const REFRACTION_HU_QIN: &str = "refraction_hu_qin";
 pub const REFRACTION_HU_QIN_NEARBY: &str = "refraction_hu_qin_nearby";
 
 /// `render.refraction = "hu_qin"`, parameters `[render.hu_qin]`.
-pub const TECHNIQUE: Registration = registration!("refraction = \"hu_qin\"", plan, create, ["hu_qin"]);
+pub const TECHNIQUE: Registration = registration!("refraction = \"hu_qin\"", plan, HuQinPass, ["hu_qin"]);
 
 fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
     let dielectric = dielectric_names(scene);
@@ -151,11 +150,6 @@ fn nearby_plan(scene: &Scene) -> Vec<PlannedPass> {
     passes
 }
 
-fn create(s: &mut Setup<'_>) -> Result<Box<dyn Technique>, RenderError> {
-    let p = params("hu_qin", HuQinParams::from_settings(&s.scene.render))?;
-    Ok(Box::new(HuQinPass::new(s, p)?))
-}
-
 impl Technique for HuQinPass {
     fn record<'a>(&'a self, _: Stage, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>) {
         let (scene, frame_set) = (inputs.scene, inputs.frame_set);
@@ -181,7 +175,8 @@ pub struct HuQinPass {
 }
 
 impl HuQinPass {
-    pub fn new(s: &mut Setup<'_>, params: HuQinParams) -> GpuResult<Self> {
+    pub fn new(s: &mut Setup<'_>) -> Result<Self, RenderError> {
+        let params = params("hu_qin", HuQinParams::from_settings(&s.scene.render))?;
         let (ctx, scene, gpu, frame_layout) = (s.ctx, s.scene, s.gpu, s.frame_layout);
         let graph = &mut *s.graph;
         // The same rule as the plan's REFRACTION_HU_QIN_NEARBY: rectangles only when asked for.

@@ -12,7 +12,6 @@
 //!
 //! d_N is precomputed per vertex on the CPU ([`super::wyman_distance`]).
 
-use crate::gpu::GpuResult;
 use crate::graph::Frame;
 use crate::scene::techniques::{BackSurface, WymanParams};
 use crate::scene::{Material, Scene};
@@ -32,7 +31,7 @@ pub const REFRACTION_WYMAN_LAYERS: &str = "refraction_wyman_layers";
 pub const REFRACTION_WYMAN: &str = "refraction_wyman";
 
 /// `render.refraction = "wyman"`, parameters `[render.wyman]`.
-pub const TECHNIQUE: Registration = registration!("refraction = \"wyman\"", plan, create, ["wyman"]);
+pub const TECHNIQUE: Registration = registration!("refraction = \"wyman\"", plan, WymanPass, ["wyman"]);
 
 fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
     let dielectric = dielectric_names(scene);
@@ -51,11 +50,6 @@ fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
         format!("two-interface refraction of {list} (d_V/d_N interpolation, Wyman 2005)"),
     );
     vec![(Stage::Refraction, layers), (Stage::Refraction, shade)]
-}
-
-fn create(s: &mut Setup<'_>) -> Result<Box<dyn Technique>, RenderError> {
-    let p = params("wyman", WymanParams::from_settings(&s.scene.render))?;
-    Ok(Box::new(WymanPass::new(s, p)?))
 }
 
 impl Technique for WymanPass {
@@ -89,7 +83,8 @@ pub fn scene_distance_along_normals(scene: &Scene) -> Vec<f32> {
 }
 
 impl WymanPass {
-    pub fn new(s: &mut Setup<'_>, params: WymanParams) -> GpuResult<Self> {
+    pub fn new(s: &mut Setup<'_>) -> Result<Self, RenderError> {
+        let params = params("wyman", WymanParams::from_settings(&s.scene.render))?;
         let (ctx, scene, frame_layout, targets, nearest) = (s.ctx, s.scene, s.frame_layout, s.targets, s.nearest);
         let back = match params.back_surface {
             BackSurface::Furthest => LayerKind::BackFurthest,
