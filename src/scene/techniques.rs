@@ -43,6 +43,52 @@ trait Param: Sized {
     fn meanings() -> Vec<(&'static str, String)> {
         Vec::new()
     }
+    /// How the window edits the value.
+    fn control(&self, range: &Self::Range) -> Control;
+}
+
+/// A parameter as the window's controls edit it: its value now and what it may be.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Control {
+    Integer {
+        value: i64,
+        range: std::ops::RangeInclusive<i64>,
+    },
+    Number {
+        value: f64,
+        range: std::ops::RangeInclusive<f64>,
+    },
+    /// A number or `"auto"` (`None`).
+    Auto {
+        value: Option<f64>,
+        range: std::ops::RangeInclusive<f64>,
+    },
+    Bool(bool),
+    Choice {
+        value: &'static str,
+        names: &'static [&'static str],
+    },
+}
+
+impl Control {
+    /// The value as a `--set` writes it.
+    pub fn toml(&self) -> String {
+        match self {
+            Control::Integer { value, .. } => value.to_string(),
+            Control::Number { value, .. } | Control::Auto { value: Some(value), .. } => format!("{value:e}"),
+            Control::Auto { value: None, .. } => "\"auto\"".into(),
+            Control::Bool(b) => b.to_string(),
+            Control::Choice { value, .. } => format!("\"{value}\""),
+        }
+    }
+}
+
+/// One key of a `[render.<table>]` for the window: its name, its meaning and its control.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ParamView {
+    pub key: &'static str,
+    pub doc: String,
+    pub control: Control,
 }
 
 impl Param for u32 {
@@ -64,6 +110,9 @@ impl Param for u32 {
     }
     fn show(&self) -> String {
         self.to_string()
+    }
+    fn control(&self, range: &Self::Range) -> Control {
+        Control::Integer { value: *self as i64, range: range.clone() }
     }
 }
 
@@ -87,6 +136,9 @@ impl Param for f32 {
     fn show(&self) -> String {
         short(*self)
     }
+    fn control(&self, range: &Self::Range) -> Control {
+        Control::Number { value: *self as f64, range: range.clone() }
+    }
 }
 
 /// A number, or `"auto"` (`None`) for a value the technique works out itself.
@@ -109,6 +161,9 @@ impl Param for Option<f32> {
     fn show(&self) -> String {
         self.map_or("`\"auto\"`".into(), short)
     }
+    fn control(&self, range: &Self::Range) -> Control {
+        Control::Auto { value: self.map(f64::from), range: range.clone() }
+    }
 }
 
 impl Param for bool {
@@ -126,6 +181,9 @@ impl Param for bool {
     }
     fn show(&self) -> String {
         self.to_string()
+    }
+    fn control(&self, _: &()) -> Control {
+        Control::Bool(*self)
     }
 }
 
@@ -208,6 +266,9 @@ macro_rules! choice {
             fn meanings() -> Vec<(&'static str, String)> {
                 vec![$(($spelt, prose(&[$($vdoc),*]))),*]
             }
+            fn control(&self, _: &()) -> Control {
+                Control::Choice { value: self.name(), names: &Self::NAMES }
+            }
         }
     };
 }
@@ -276,6 +337,22 @@ macro_rules! params {
                 $($table => $name::from_table(Some(t)).map(|_| ()),)*
                 // The scene loader refuses unknown tables before it gets here (`TABLES`).
                 _ => unreachable!("render.{technique} is not a technique table"),
+            }
+        }
+
+        /// `[render.<table>]`'s keys as `settings` have them (defaults where absent), for the
+        /// window's controls; `None`: no such table, or it does not parse.
+        pub fn controls(table: &str, settings: &RenderSettings) -> Option<Vec<ParamView>> {
+            match table {
+                $($table => {
+                    let p = $name::from_settings(settings).ok()?;
+                    Some(vec![$(ParamView {
+                        key: stringify!($field),
+                        doc: prose(&[$($doc),*]),
+                        control: Param::control(&p.$field, &range!($($range)?)),
+                    }),*])
+                })*
+                _ => None,
             }
         }
 
