@@ -411,6 +411,7 @@ pub const TABLES: &[&str] = &[
     "impostor_lightmap",
     "eikonal",
     "tonemap_adaptive",
+    "raytrace",
 ];
 
 /// The candidate a misspelt `name` most likely meant: the nearest by edit distance, if it is
@@ -687,6 +688,7 @@ pub fn check(technique: &str, t: &toml::Table) -> Result<(), ParamError> {
         "impostor_lightmap" => ImpostorLightmapParams::from_table(Some(t)).map(|_| ()),
         "eikonal" => EikonalParams::from_table(Some(t)).map(|_| ()),
         "tonemap_adaptive" => TonemapAdaptiveParams::from_table(Some(t)).map(|_| ()),
+        "raytrace" => RaytraceParams::from_table(Some(t)).map(|_| ()),
         // The scene loader refuses unknown tables before it gets here (`TABLES`).
         _ => unreachable!("render.{technique} is not a technique table"),
     }
@@ -757,6 +759,44 @@ impl TonemapAdaptiveParams {
 
     pub fn from_settings(r: &RenderSettings) -> Result<Self, ParamError> {
         Self::from_table(r.params.get("tonemap_adaptive"))
+    }
+}
+
+/// `[render.raytrace]`: exact ray tracing with deterministic splitting
+/// (src/technique/raytrace.rs).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RaytraceParams {
+    /// Specular interactions a branch may make (the reference's `max_depth`, its default).
+    pub max_depth: u32,
+    /// Throughput below which a branch is dropped (its largest channel).
+    pub cutoff: f32,
+}
+
+impl Default for RaytraceParams {
+    fn default() -> Self {
+        RaytraceParams { max_depth: 16, cutoff: 1e-3 }
+    }
+}
+
+impl RaytraceParams {
+    pub const KEYS: &'static [&'static str] = &["max_depth", "cutoff"];
+
+    pub fn from_table(t: Option<&toml::Table>) -> Result<Self, ParamError> {
+        let mut p = RaytraceParams::default();
+        for (key, v) in t.into_iter().flatten() {
+            match key.as_str() {
+                // The shader keeps one pending branch per depth in a fixed array.
+                "max_depth" => p.max_depth = integer(key, v, 1, crate::RAYTRACE_MAX_DEPTH as i64)?,
+                // Below 1e-6 a concave refractor's branches multiply for no visible change.
+                "cutoff" => p.cutoff = number(key, v, 1e-6, 1.0)?,
+                _ => return Err(unknown("raytrace", key, Self::KEYS)),
+            }
+        }
+        Ok(p)
+    }
+
+    pub fn from_settings(r: &RenderSettings) -> Result<Self, ParamError> {
+        Self::from_table(r.params.get("raytrace"))
     }
 }
 
