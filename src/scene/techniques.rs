@@ -802,6 +802,20 @@ params! {
         nearby_resolution: u32 = 256, 4..=2048;
     }
 
+    /// `[render.raytrace]`: exact ray tracing with deterministic splitting
+    /// (src/technique/raytrace.rs).
+    RaytraceParams "raytrace" {
+        /// Specular interactions a branch may make (the reference's `max_depth` and its
+        /// default).
+        // The shader keeps one pending branch per depth in a fixed array.
+        max_depth: u32 = 16, 1..=crate::RAYTRACE_MAX_DEPTH as i64;
+        /// A branch whose largest throughput channel (with the (n_i/n_t)^2 radiance scaling)
+        /// falls below this is dropped; what a dropped branch would have carried out of a
+        /// dielectric of index n is at most `cutoff` n^2 of its radiance.
+        // Below 1e-6 a concave refractor's branches multiply for no visible change.
+        cutoff: f32 = 1e-3, 1e-6..=1.0;
+    }
+
     /// `[render.tonemap_adaptive]`: the adaptive tone map of `render.tonemap = "adaptive"`
     /// (Ihrke et al. 2007 §5.3 after Krawczyk, Myszkowski & Seidel 2005;
     /// src/technique/baseline/tonemap.rs).
