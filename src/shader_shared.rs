@@ -79,6 +79,9 @@ shared_constants! {
     REF_STACK_SIZE: u32 = 64;
     // Threads per workgroup of the 1D reference kernels.
     REF_WORKGROUP: u32 = 64;
+    // The raytrace technique's most specular interactions per branch: its shader keeps one
+    // pending branch per depth (40 bytes each) in a fixed array.
+    RAYTRACE_MAX_DEPTH: u32 = 64;
     // Photon outcomes written to the debug buffer (tests of energy conservation).
     PHOTON_MISSED: u32 = 0;
     PHOTON_DEPOSITED: u32 = 1;

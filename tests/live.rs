@@ -209,3 +209,12 @@ fn the_water_animates_on_the_gpu() {
     drop(running);
     common::assert_no_validation_errors(&ctx);
 }
+
+#[test]
+fn exact_ray_tracing_follows_a_moved_light_and_a_material_value() {
+    let rt = "render.refraction=raytrace";
+    let u = live("sphere_nearby", &[rt], &[rt, "lights.0.position=[-2, 4, 3]"]);
+    assert!(u.recreated.contains(&"refraction = \"raytrace\""), "{u:?}");
+    let u = live("sphere_nearby", &[rt], &[rt, "materials.glass.ior=1.33"]);
+    assert_eq!((u.rebuilt, u.recreated.len(), u.materials), (false, 0, true), "{u:?}");
+}

@@ -32,21 +32,4 @@ uint grid_bucket(ivec3 c) {
     return h % ref.photon.z;
 }
 ivec3 grid_cell(vec3 p) { return ivec3(floor(p / ref.grid.x)); }
-
-// An orthonormal basis around unit n (Duff et al. 2017, "Building an orthonormal basis,
-// revisited").
-void basis(vec3 n, out vec3 t, out vec3 b) {
-    float s = n.z >= 0.0 ? 1.0 : -1.0;
-    float a = -1.0 / (s + n.z);
-    float c = n.x * n.y * a;
-    t = vec3(1.0 + s * n.x * n.x * a, s * c, -s * n.x);
-    b = vec3(c, s + n.y * n.y * a, -n.y);
-}
-
-vec3 cosine_sample(vec3 n, inout uint rng) {
-    float r = sqrt(rand(rng)), phi = 2.0 * PI * rand(rng);
-    vec3 t, b;
-    basis(n, t, b);
-    return normalize(r * cos(phi) * t + r * sin(phi) * b + sqrt(max(0.0, 1.0 - r * r)) * n);
-}
 #endif

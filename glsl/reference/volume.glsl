@@ -6,10 +6,10 @@
 // equation is integrated exactly enough to serve as ground truth for the view renderer.
 #ifndef PRISM_REFERENCE_VOLUME_GLSL
 #define PRISM_REFERENCE_VOLUME_GLSL
-#include "scene.glsl"
+#include "trace.glsl"
 
 // 3 vec4 per voxel (VOLUME_FIELDS; a one-element stand-in otherwise).
-layout(set = 0, binding = REF_BINDING_VOLUME, std430) readonly buffer VolumeVoxels { vec4 volume_voxels[]; };
+layout(set = REF_SET, binding = REF_BINDING_VOLUME, std430) readonly buffer VolumeVoxels { vec4 volume_voxels[]; };
 
 // ref.volume rows: [0] box min, kind; [1] box max, RK4 step; [2] region centre, radius
 // (0: the box); [3] profile (Luneburg: centre, R; linear: gradient, n0; constant: -, n);

@@ -118,9 +118,10 @@ struct RefLight {
 // Two vec4s (glsl/reference/scene.glsl, std430).
 const _: () = assert!(std::mem::size_of::<RefLight>() == 32);
 
+/// The tracer's uniform block (glsl/reference/trace.glsl, `ref`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
-struct RefUniforms {
+pub struct RefUniforms {
     inv_view: [[f32; 4]; 4],
     camera_pos: [f32; 4],
     proj: [f32; 4],
@@ -132,6 +133,14 @@ struct RefUniforms {
     targets: [[f32; 4]; REF_MAX_TARGETS as usize],
     /// The scene's `[volume]` for glsl/reference/volume.glsl (zero: none).
     volume: [[f32; 4]; 6],
+}
+impl RefUniforms {
+    /// The raytrace technique's branch cutoff (glsl/raytrace/raytrace.frag; the reference
+    /// leaves it 0).
+    pub fn with_cutoff(mut self, cutoff: f32) -> Self {
+        self.grid[3] = cutoff;
+        self
+    }
 }
 const _: () = assert!(
     std::mem::size_of::<RefUniforms>()
@@ -238,6 +247,122 @@ pub enum Probe {
     Fresnel = 2,
 }
 
+/// Whether a dielectric has an RGB ior (the tracer then follows one channel at a time).
+fn dispersive_dielectric(scene: &Scene) -> bool {
+    scene.materials.iter().any(|m| matches!(m, Material::Dielectric { ior, .. } if ior.x != ior.y || ior.y != ior.z))
+}
+
+/// The exact tracer's scene besides the GPU scene's vertices and materials
+/// (glsl/reference/trace.glsl): the BVH-ordered triangles, the BVH, the exact spheres, each
+/// object's material and the volume's voxels. The reference binds them in set 0 of its compute
+/// passes; the raytrace technique (src/technique/raytrace.rs) in set 1 of its fragment pass,
+/// and keeps them across its re-creation while [`TraceGeometry::key`] is unchanged.
+pub struct TraceGeometry {
+    buffers: [(u32, Buffer); 5],
+    triangles: u32,
+    nodes: u32,
+    spheres: u32,
+    dispersion: bool,
+}
+
+impl TraceGeometry {
+    pub fn new(ctx: &Arc<GpuContext>, scene: &Scene) -> Result<TraceGeometry, RenderError> {
+        // Triangles of every object that is not an exact sphere, with global vertex indices.
+        let mut tris: Vec<[u32; 4]> = Vec::new();
+        let mut corners: Vec<[Vec3; 3]> = Vec::new();
+        let mut spheres: Vec<[f32; 8]> = Vec::new();
+        let mut vertex_base = 0u32;
+        for (oi, o) in scene.objects.iter().enumerate() {
+            match o.analytic {
+                Some(Analytic::Sphere { center, radius }) => {
+                    let info = f32::from_bits(oi as u32);
+                    spheres.push([center.x, center.y, center.z, radius, info, 0.0, 0.0, 0.0]);
+                }
+                None => {
+                    for t in o.mesh.indices.chunks_exact(3) {
+                        tris.push([vertex_base + t[0], vertex_base + t[1], vertex_base + t[2], oi as u32]);
+                        corners.push([0, 1, 2].map(|k| o.mesh.positions[t[k] as usize]));
+                    }
+                }
+            }
+            vertex_base += o.mesh.positions.len() as u32;
+        }
+        let bvh = Bvh::build(&corners);
+        let ordered: Vec<[u32; 4]> = bvh.order.iter().map(|&i| tris[i as usize]).collect();
+        let objects: Vec<u32> = scene.objects.iter().map(|o| o.material as u32).collect();
+        let (voxels, volume_dispersive) = volume_voxels(scene.volume.as_ref());
+        let dispersion = volume_dispersive || dispersive_dielectric(scene);
+        let storage =
+            |name: &str, data: &[u8]| Buffer::with_data(ctx, name, data, vk::BufferUsageFlags::STORAGE_BUFFER);
+        Ok(TraceGeometry {
+            buffers: [
+                (REF_BINDING_TRIANGLES, storage("reference_triangles", bytemuck::cast_slice(&ordered))?),
+                (REF_BINDING_NODES, storage("reference_bvh", bytemuck::cast_slice(&bvh.nodes))?),
+                (REF_BINDING_SPHERES, storage("reference_spheres", bytemuck::cast_slice(&spheres))?),
+                (REF_BINDING_OBJECTS, storage("reference_objects", bytemuck::cast_slice(&objects))?),
+                (REF_BINDING_VOLUME, storage("reference_volume_voxels", bytemuck::cast_slice(&voxels))?),
+            ],
+            triangles: ordered.len() as u32,
+            nodes: bvh.nodes.len() as u32,
+            spheres: spheres.len() as u32,
+            dispersion,
+        })
+    }
+
+    /// A hash of what the geometry is built from: every object's triangles or sphere and
+    /// material, whether a dielectric disperses, and the volume.
+    pub fn key(scene: &Scene) -> u64 {
+        use std::hash::{Hash, Hasher};
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        for o in &scene.objects {
+            (o.material, &o.mesh.indices).hash(&mut h);
+            o.mesh.positions.iter().for_each(|p| p.to_array().map(f32::to_bits).hash(&mut h));
+            format!("{:?}", o.analytic).hash(&mut h);
+        }
+        (dispersive_dielectric(scene), format!("{:?}", scene.volume)).hash(&mut h);
+        h.finish()
+    }
+
+    /// (binding, buffer) of each of its buffers.
+    pub fn buffers(&self) -> impl Iterator<Item = (u32, &Buffer)> {
+        self.buffers.iter().map(|(b, buffer)| (*b, buffer))
+    }
+
+    /// The tracer's uniforms for `scene` over this geometry, following at most `max_depth`
+    /// specular interactions per path; no photons.
+    pub fn uniforms(&self, scene: &Scene, gpu_scene: &GpuScene, max_depth: u32) -> RefUniforms {
+        let scene_radius = gpu_scene.bounds_radius.max(1e-20);
+        let cam = &scene.camera;
+        let tan_y = (cam.vfov_deg.to_radians() * 0.5).tan();
+        let mut uniforms = RefUniforms {
+            inv_view: cam.view().inverse().to_cols_array_2d(),
+            camera_pos: cam.position.extend(1.0).to_array(),
+            // The ray epsilon scales with the scene, so that 1e-3 and 1e4 scenes behave alike.
+            proj: [tan_y * cam.aspect(), tan_y, scene_radius * 2e-5, scene_radius],
+            dims: [cam.width, cam.height, scene.lights.len() as u32, self.spheres],
+            counts: [self.triangles, self.nodes, 0, max_depth],
+            photon: [0, 0, 0, self.dispersion as u32 * FLAG_DISPERSION],
+            grid: [0.0; 4],
+            lights: [RefLight::zeroed(); MAX_LIGHTS as usize],
+            targets: [[0.0; 4]; REF_MAX_TARGETS as usize],
+            volume: scene.volume.as_ref().map(volume_uniforms).unwrap_or_default(),
+        };
+        for (i, l) in scene.lights.iter().enumerate() {
+            uniforms.lights[i] = match l {
+                Light::Point { position, intensity } => RefLight {
+                    position: position.extend(LIGHT_POINT as f32).to_array(),
+                    intensity: intensity.extend(0.0).to_array(),
+                },
+                Light::Directional { direction, irradiance } => RefLight {
+                    position: direction.normalize().extend(LIGHT_DIRECTIONAL as f32).to_array(),
+                    intensity: irradiance.extend(0.0).to_array(),
+                },
+            };
+        }
+        uniforms
+    }
+}
+
 /// The reference renderer for one scene. Create it, `run` iterations, read the `image`.
 pub struct Reference {
     settings: ReferenceSettings,
@@ -258,7 +383,8 @@ pub struct Reference {
     counters: Buffer,
     debug: Buffer,
     ids: [BufferId; 6],
-    _static: Vec<Buffer>,
+    _uniforms: Buffer,
+    _trace: TraceGeometry,
     _sampler: Sampler,
     _scene: GpuScene,
     has_photons: bool,
@@ -287,30 +413,7 @@ impl Reference {
         let mut graph = FrameGraph::new();
         let gpu_scene = GpuScene::new(ctx, scene, &mut graph, 1)?;
 
-        // Triangles of every object that is not an exact sphere, with global vertex indices.
-        let mut tris: Vec<[u32; 4]> = Vec::new();
-        let mut corners: Vec<[Vec3; 3]> = Vec::new();
-        let mut spheres: Vec<[f32; 8]> = Vec::new();
-        let mut vertex_base = 0u32;
-        for (oi, o) in scene.objects.iter().enumerate() {
-            match o.analytic {
-                Some(Analytic::Sphere { center, radius }) => {
-                    let info = f32::from_bits(oi as u32);
-                    spheres.push([center.x, center.y, center.z, radius, info, 0.0, 0.0, 0.0]);
-                }
-                None => {
-                    for t in o.mesh.indices.chunks_exact(3) {
-                        tris.push([vertex_base + t[0], vertex_base + t[1], vertex_base + t[2], oi as u32]);
-                        corners.push([0, 1, 2].map(|k| o.mesh.positions[t[k] as usize]));
-                    }
-                }
-            }
-            vertex_base += o.mesh.positions.len() as u32;
-        }
-        let bvh = Bvh::build(&corners);
-        let ordered: Vec<[u32; 4]> = bvh.order.iter().map(|&i| tris[i as usize]).collect();
-        let objects: Vec<u32> = scene.objects.iter().map(|o| o.material as u32).collect();
-
+        let trace = TraceGeometry::new(ctx, scene)?;
         // Photon targets: bounding spheres of the specular objects.
         let mut targets = Vec::new();
         for o in &scene.objects {
@@ -340,62 +443,23 @@ impl Reference {
         }
         let has_photons = settings.photons > 0 && !targets.is_empty() && !scene.lights.is_empty();
         let photons_per_iteration = if has_photons { settings.photons_per_iteration() } else { 0 };
-        let (voxels, volume_dispersive) = volume_voxels(scene.volume.as_ref());
-        let dispersion = volume_dispersive
-            || scene
-                .materials
-                .iter()
-                .any(|m| matches!(m, Material::Dielectric { ior, .. } if ior.x != ior.y || ior.y != ior.z));
-
-        let scene_radius = gpu_scene.bounds_radius.max(1e-20);
-        let radius = settings.radius.unwrap_or(0.01 * scene_radius);
+        let radius = settings.radius.unwrap_or(0.01 * gpu_scene.bounds_radius.max(1e-20));
         let table = (2 * photons_per_iteration.max(1)).next_power_of_two().max(1 << 12);
-        let cam = &scene.camera;
-        let tan_y = (cam.vfov_deg.to_radians() * 0.5).tan();
-        let mut uniforms = RefUniforms {
-            inv_view: cam.view().inverse().to_cols_array_2d(),
-            camera_pos: cam.position.extend(1.0).to_array(),
-            // The ray epsilon scales with the scene, so that 1e-3 and 1e4 scenes behave alike.
-            proj: [tan_y * cam.aspect(), tan_y, scene_radius * 2e-5, scene_radius],
-            dims: [width, height, scene.lights.len() as u32, spheres.len() as u32],
-            counts: [ordered.len() as u32, bvh.nodes.len() as u32, targets.len() as u32, settings.max_depth],
-            photon: [
-                photons_per_iteration,
-                photons_per_iteration.max(1),
-                table,
-                (dispersion as u32 * FLAG_DISPERSION) | (settings.jitter as u32 * FLAG_JITTER),
-            ],
-            // Cells twice the initial radius: a ball of radius R <= R0 then overlaps at most
-            // 2 cells per axis, the 8 buckets the gather visits (0.1% margin for rounding).
-            grid: [2.002 * radius, radius, settings.alpha, 0.0],
-            lights: [RefLight::zeroed(); MAX_LIGHTS as usize],
-            targets: [[0.0; 4]; REF_MAX_TARGETS as usize],
-            volume: scene.volume.as_ref().map(volume_uniforms).unwrap_or_default(),
-        };
-        for (i, l) in scene.lights.iter().enumerate() {
-            uniforms.lights[i] = match l {
-                Light::Point { position, intensity } => RefLight {
-                    position: position.extend(LIGHT_POINT as f32).to_array(),
-                    intensity: intensity.extend(0.0).to_array(),
-                },
-                Light::Directional { direction, irradiance } => RefLight {
-                    position: direction.normalize().extend(LIGHT_DIRECTIONAL as f32).to_array(),
-                    intensity: irradiance.extend(0.0).to_array(),
-                },
-            };
-        }
+        let mut uniforms = trace.uniforms(scene, &gpu_scene, settings.max_depth);
+        uniforms.counts[2] = targets.len() as u32;
+        uniforms.photon[0] = photons_per_iteration;
+        uniforms.photon[1] = photons_per_iteration.max(1);
+        uniforms.photon[2] = table;
+        uniforms.photon[3] |= settings.jitter as u32 * FLAG_JITTER;
+        // Cells twice the initial radius: a ball of radius R <= R0 then overlaps at most
+        // 2 cells per axis, the 8 buckets the gather visits (0.1% margin for rounding).
+        uniforms.grid = [2.002 * radius, radius, settings.alpha, 0.0];
         for (i, t) in targets.iter().enumerate() {
             uniforms.targets[i] = *t;
         }
 
         use vk::BufferUsageFlags as U;
-        let storage = |name: &str, data: &[u8]| Buffer::with_data(ctx, name, data, U::STORAGE_BUFFER);
-        let ubo = Buffer::with_data(ctx, "reference_uniforms", bytemuck::bytes_of(&uniforms), U::UNIFORM_BUFFER)?;
-        let triangles = storage("reference_triangles", bytemuck::cast_slice(&ordered))?;
-        let nodes = storage("reference_bvh", bytemuck::cast_slice(&bvh.nodes))?;
-        let sphere_buf = storage("reference_spheres", bytemuck::cast_slice(&spheres))?;
-        let object_buf = storage("reference_objects", bytemuck::cast_slice(&objects))?;
-        let voxel_buf = storage("reference_volume_voxels", bytemuck::cast_slice(&voxels))?;
+        let ubo = Buffer::with_data(ctx, "reference_uniforms", bytemuck::bytes_of(&uniforms), U::STORAGE_BUFFER)?;
         let pixels_n = (width * height) as usize;
         let accum =
             Buffer::new(ctx, "reference_accum", (pixels_n * 16) as u64, U::STORAGE_BUFFER, MemoryLocation::CpuToGpu)?;
@@ -430,23 +494,21 @@ impl Reference {
         )?;
 
         let sampler = Sampler::new(ctx, "reference_latlong", SamplerDesc::LATLONG)?;
-        let set = Bindings::new(vk::ShaderStageFlags::COMPUTE)
-            .uniform(REF_BINDING_UNIFORMS, &ubo)
+        let mut bindings = Bindings::new(vk::ShaderStageFlags::COMPUTE)
+            .storage(REF_BINDING_UNIFORMS, &ubo)
             .storage(REF_BINDING_MATERIALS, &gpu_scene.materials)
             .sampled(REF_BINDING_ENVIRONMENT, &gpu_scene.environment, &sampler)
             .storage(REF_BINDING_VERTICES, &gpu_scene.vertices)
-            .storage(REF_BINDING_TRIANGLES, &triangles)
-            .storage(REF_BINDING_NODES, &nodes)
-            .storage(REF_BINDING_SPHERES, &sphere_buf)
-            .storage(REF_BINDING_OBJECTS, &object_buf)
             .storage(REF_BINDING_ACCUM, &accum)
             .storage(REF_BINDING_PIXELS, &pixels)
             .storage(REF_BINDING_PHOTONS, &photon_buffer)
             .storage(REF_BINDING_GRID, &grid)
             .storage(REF_BINDING_COUNTERS, &counters)
-            .storage(REF_BINDING_DEBUG, &debug)
-            .storage(REF_BINDING_VOLUME, &voxel_buf)
-            .build(ctx, "reference")?;
+            .storage(REF_BINDING_DEBUG, &debug);
+        for (binding, buffer) in trace.buffers() {
+            bindings = bindings.storage(binding, buffer);
+        }
+        let set = bindings.build(ctx, "reference")?;
         let push = std::mem::size_of::<RefPush>() as u32;
         let pipeline = |name: &str, shader: &str| ComputePipeline::new(ctx, name, shader, &[set.layout()], push, &[]);
         let camera = pipeline("reference_camera", "reference/camera.comp")?;
@@ -480,7 +542,8 @@ impl Reference {
             counters,
             debug,
             ids,
-            _static: vec![ubo, triangles, nodes, sphere_buf, object_buf, voxel_buf],
+            _uniforms: ubo,
+            _trace: trace,
             _sampler: sampler,
             _scene: gpu_scene,
             has_photons,

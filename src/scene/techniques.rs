@@ -43,6 +43,52 @@ trait Param: Sized {
     fn meanings() -> Vec<(&'static str, String)> {
         Vec::new()
     }
+    /// How the window edits the value.
+    fn control(&self, range: &Self::Range) -> Control;
+}
+
+/// A parameter as the window's controls edit it: its value now and what it may be.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Control {
+    Integer {
+        value: i64,
+        range: std::ops::RangeInclusive<i64>,
+    },
+    Number {
+        value: f64,
+        range: std::ops::RangeInclusive<f64>,
+    },
+    /// A number or `"auto"` (`None`).
+    Auto {
+        value: Option<f64>,
+        range: std::ops::RangeInclusive<f64>,
+    },
+    Bool(bool),
+    Choice {
+        value: &'static str,
+        names: &'static [&'static str],
+    },
+}
+
+impl Control {
+    /// The value as a `--set` writes it.
+    pub fn toml(&self) -> String {
+        match self {
+            Control::Integer { value, .. } => value.to_string(),
+            Control::Number { value, .. } | Control::Auto { value: Some(value), .. } => format!("{value:e}"),
+            Control::Auto { value: None, .. } => "\"auto\"".into(),
+            Control::Bool(b) => b.to_string(),
+            Control::Choice { value, .. } => format!("\"{value}\""),
+        }
+    }
+}
+
+/// One key of a `[render.<table>]` for the window: its name, its meaning and its control.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ParamView {
+    pub key: &'static str,
+    pub doc: String,
+    pub control: Control,
 }
 
 impl Param for u32 {
@@ -64,6 +110,9 @@ impl Param for u32 {
     }
     fn show(&self) -> String {
         self.to_string()
+    }
+    fn control(&self, range: &Self::Range) -> Control {
+        Control::Integer { value: *self as i64, range: range.clone() }
     }
 }
 
@@ -87,6 +136,9 @@ impl Param for f32 {
     fn show(&self) -> String {
         short(*self)
     }
+    fn control(&self, range: &Self::Range) -> Control {
+        Control::Number { value: *self as f64, range: range.clone() }
+    }
 }
 
 /// A number, or `"auto"` (`None`) for a value the technique works out itself.
@@ -109,6 +161,9 @@ impl Param for Option<f32> {
     fn show(&self) -> String {
         self.map_or("`\"auto\"`".into(), short)
     }
+    fn control(&self, range: &Self::Range) -> Control {
+        Control::Auto { value: self.map(f64::from), range: range.clone() }
+    }
 }
 
 impl Param for bool {
@@ -126,6 +181,9 @@ impl Param for bool {
     }
     fn show(&self) -> String {
         self.to_string()
+    }
+    fn control(&self, _: &()) -> Control {
+        Control::Bool(*self)
     }
 }
 
@@ -208,6 +266,9 @@ macro_rules! choice {
             fn meanings() -> Vec<(&'static str, String)> {
                 vec![$(($spelt, prose(&[$($vdoc),*]))),*]
             }
+            fn control(&self, _: &()) -> Control {
+                Control::Choice { value: self.name(), names: &Self::NAMES }
+            }
         }
     };
 }
@@ -276,6 +337,22 @@ macro_rules! params {
                 $($table => $name::from_table(Some(t)).map(|_| ()),)*
                 // The scene loader refuses unknown tables before it gets here (`TABLES`).
                 _ => unreachable!("render.{technique} is not a technique table"),
+            }
+        }
+
+        /// `[render.<table>]`'s keys as `settings` have them (defaults where absent), for the
+        /// window's controls; `None`: no such table, or it does not parse.
+        pub fn controls(table: &str, settings: &RenderSettings) -> Option<Vec<ParamView>> {
+            match table {
+                $($table => {
+                    let p = $name::from_settings(settings).ok()?;
+                    Some(vec![$(ParamView {
+                        key: stringify!($field),
+                        doc: prose(&[$($doc),*]),
+                        control: Param::control(&p.$field, &range!($($range)?)),
+                    }),*])
+                })*
+                _ => None,
             }
         }
 
@@ -723,6 +800,20 @@ params! {
         /// Texels per edge of each impostor texture TEX_i (RGBA32F).
         // As render.hu_qin.impostor_resolution (one RGBA32F layer per object).
         nearby_resolution: u32 = 256, 4..=2048;
+    }
+
+    /// `[render.raytrace]`: exact ray tracing with deterministic splitting
+    /// (src/technique/raytrace.rs).
+    RaytraceParams "raytrace" {
+        /// Specular interactions a branch may make (the reference's `max_depth` and its
+        /// default).
+        // The shader keeps one pending branch per depth in a fixed array.
+        max_depth: u32 = 16, 1..=crate::RAYTRACE_MAX_DEPTH as i64;
+        /// A branch whose largest throughput channel (with the (n_i/n_t)^2 radiance scaling)
+        /// falls below this is dropped; what a dropped branch would have carried out of a
+        /// dielectric of index n is at most `cutoff` n^2 of its radiance.
+        // Below 1e-6 a concave refractor's branches multiply for no visible change.
+        cutoff: f32 = 1e-3, 1e-6..=1.0;
     }
 
     /// `[render.tonemap_adaptive]`: the adaptive tone map of `render.tonemap = "adaptive"`

@@ -37,6 +37,7 @@ pub mod baseline;
 pub mod caustics;
 pub mod eikonal;
 pub mod impostor;
+pub mod raytrace;
 pub mod refraction;
 
 use caustics::photon_buffer::PhotonCaustics;
@@ -103,8 +104,10 @@ pub const TECHNIQUES: &[Registration] = &[
     refraction::refraction_wyman::TECHNIQUE,
     refraction::refraction_hu_qin::TECHNIQUE,
     impostor::distance_impostor::REFRACTION,
+    raytrace::REFRACTION,
     baseline::specular_single::REFLECTION,
     impostor::distance_impostor::REFLECTION,
+    raytrace::REFLECTION,
     eikonal::eikonal_view::TECHNIQUE,
     baseline::tonemap::TECHNIQUE,
 ];

@@ -6,7 +6,7 @@ use std::collections::{BTreeMap, VecDeque};
 
 use crate::renderer::plan::PlannedPass;
 use crate::renderer::FrameTiming;
-use crate::scene::techniques::{BackSurface, HuQinParams, WymanParams};
+use crate::scene::techniques::{controls, Control, TABLES};
 use crate::scene::{Light, Material, Scene, TECHNIQUE_KEYS};
 
 use super::camera::Mode;
@@ -316,32 +316,6 @@ fn parameters(ui: &mut egui::Ui, state: &mut UiState, view: &View, req: &mut Req
 
         technique_parameters(ui, state, scene, req);
 
-        // Other technique parameter tables, [render.<technique>]: every number is editable.
-        for (table, values) in scene.render.params.iter().filter(|(t, _)| !KNOWN_TABLES.contains(&t.as_str())) {
-            for (key, value) in values {
-                let full = format!("render.{table}.{key}");
-                match value {
-                    toml::Value::Integer(i) => {
-                        ui.label(format!("{table}.{key}"));
-                        let mut v = *i;
-                        if ui.add(egui::DragValue::new(&mut v)).changed() {
-                            state.set(req, full, v.to_string());
-                        }
-                        ui.end_row();
-                    }
-                    toml::Value::Float(f) => {
-                        ui.label(format!("{table}.{key}"));
-                        let mut v = *f;
-                        if ui.add(egui::DragValue::new(&mut v).speed(0.01)).changed() {
-                            state.set(req, full, format!("{v:?}"));
-                        }
-                        ui.end_row();
-                    }
-                    _ => {}
-                }
-            }
-        }
-
         if let Some(light) = scene.lights.first() {
             let (key, mut v) = match light {
                 Light::Point { position, .. } => ("lights.0.position", *position),
@@ -382,94 +356,70 @@ fn parameters(ui: &mut egui::Ui, state: &mut UiState, view: &View, req: &mut Req
     });
 }
 
-/// Parameter tables with their own controls (defaults included) in [`technique_parameters`].
-const KNOWN_TABLES: &[&str] = &["wyman", "hu_qin"];
+/// The parameter tables of the techniques the scene selects: one per selected refraction,
+/// reflection and caustics technique, the adaptive tone map's, the eikonal renderer's with a
+/// volume, and the distance impostors' for the light-map caustics built on them.
+fn selected_tables(scene: &Scene) -> Vec<String> {
+    let r = &scene.render;
+    let mut tables = vec![r.refraction.clone(), r.reflection.clone(), r.caustics.clone()];
+    tables.push(format!("tonemap_{}", r.tonemap));
+    if scene.volume.is_some() {
+        tables.push("eikonal".into());
+    }
+    if r.caustics == "impostor_lightmap" {
+        tables.push("impostor".into());
+    }
+    let mut seen = Vec::new();
+    tables.retain(|t| {
+        TABLES.contains(&t.as_str()) && !seen.contains(t) && {
+            seen.push(t.clone());
+            true
+        }
+    });
+    tables
+}
 
-/// The selected refraction technique's parameters, with their defaults when the file has
-/// no `[render.<technique>]` table (docs/scene-format.md lists them).
+/// Every key of the selected techniques' tables, with its value (the default when the file
+/// has none), its range and its meaning as a tooltip: the controls come from the same
+/// declarations as the parser and docs/scene-format.md (src/scene/techniques.rs).
 fn technique_parameters(ui: &mut egui::Ui, state: &mut UiState, scene: &Scene, req: &mut Requests) {
-    match scene.render.refraction.as_str() {
-        "wyman" => {
-            let Ok(p) = WymanParams::from_settings(&scene.render) else { return };
-            ui.label("wyman.back_surface");
-            let current = if p.back_surface == BackSurface::Furthest { "furthest" } else { "second" };
-            let mut chosen = current;
-            egui::ComboBox::from_id_salt("wyman_back_surface").selected_text(chosen).show_ui(ui, |ui| {
-                for v in ["furthest", "second"] {
-                    ui.selectable_value(&mut chosen, v, v);
+    for table in selected_tables(scene) {
+        let Some(views) = controls(&table, &scene.render) else { continue };
+        for view in views {
+            ui.label(format!("{table}.{}", view.key)).on_hover_text(&view.doc);
+            let mut control = view.control.clone();
+            let changed = match &mut control {
+                Control::Integer { value, range } => {
+                    let wide = *range.end() > 64 * range.start().max(&1);
+                    ui.add(egui::Slider::new(value, range.clone()).logarithmic(wide)).changed()
                 }
-            });
-            if chosen != current {
-                state.set(req, "render.wyman.back_surface".into(), format!("\"{chosen}\""));
+                Control::Number { value, range } | Control::Auto { value: Some(value), range } => {
+                    let wide = *range.start() > 0.0 && *range.end() > 100.0 * range.start();
+                    ui.add(egui::Slider::new(value, range.clone()).logarithmic(wide)).changed()
+                }
+                Control::Auto { value: None, .. } => {
+                    ui.label("auto");
+                    false
+                }
+                Control::Bool(b) => ui.checkbox(b, "").changed(),
+                Control::Choice { value, names } => {
+                    let before = *value;
+                    egui::ComboBox::from_id_salt(format!("{table}.{}", view.key)).selected_text(*value).show_ui(
+                        ui,
+                        |ui| {
+                            for n in names.iter() {
+                                ui.selectable_value(value, *n, *n);
+                            }
+                        },
+                    );
+                    *value != before
+                }
+            };
+            if changed {
+                state.set(req, format!("render.{table}.{}", view.key), control.toml());
             }
             ui.end_row();
         }
-        "hu_qin" => {
-            let Ok(p) = HuQinParams::from_settings(&scene.render) else { return };
-            ui.label("hu_qin.search_steps");
-            let mut steps = p.search_steps;
-            if ui.add(egui::Slider::new(&mut steps, 1..=24)).changed() {
-                state.set(req, "render.hu_qin.search_steps".into(), steps.to_string());
-            }
-            ui.end_row();
-            ui.label("hu_qin.tolerance");
-            let mut tolerance = p.tolerance;
-            if ui.add(egui::Slider::new(&mut tolerance, 1e-7..=0.5).logarithmic(true)).changed() {
-                state.set(req, "render.hu_qin.tolerance".into(), format!("{tolerance:e}"));
-            }
-            ui.end_row();
-            ui.label("hu_qin.max_iterations");
-            let mut iterations = p.max_iterations;
-            if ui.add(egui::Slider::new(&mut iterations, 1..=1024).logarithmic(true)).changed() {
-                state.set(req, "render.hu_qin.max_iterations".into(), iterations.to_string());
-            }
-            ui.end_row();
-            ui.label("hu_qin.assume_back_facing");
-            let mut back = p.assume_back_facing;
-            if ui.checkbox(&mut back, "").changed() {
-                state.set(req, "render.hu_qin.assume_back_facing".into(), back.to_string());
-            }
-            ui.end_row();
-            // §2.2 nearby geometry (src/technique/refraction/nearby_impostors.rs).
-            ui.label("hu_qin.nearby");
-            let mut nearby = p.nearby;
-            if ui.checkbox(&mut nearby, "").changed() {
-                state.set(req, "render.hu_qin.nearby".into(), nearby.to_string());
-            }
-            ui.end_row();
-            // §2.2.1: where a dielectric impostor's refracted ray leaves it.
-            ui.label("hu_qin.recursive_exit");
-            let current = p.recursive_exit.name();
-            let mut chosen = current;
-            egui::ComboBox::from_id_salt("hu_qin_recursive_exit").selected_text(chosen).show_ui(ui, |ui| {
-                for option in crate::scene::techniques::RecursiveExit::NAMES {
-                    ui.selectable_value(&mut chosen, option, option);
-                }
-            });
-            if chosen != current {
-                state.set(req, "render.hu_qin.recursive_exit".into(), format!("\"{chosen}\""));
-            }
-            ui.end_row();
-            for (key, value, max) in [
-                ("correction_iterations", p.correction_iterations, 64),
-                ("seed_samples", p.seed_samples, 256),
-                ("recursion_depth", p.recursion_depth, 3),
-                ("impostor_resolution", p.impostor_resolution, 2048),
-            ] {
-                ui.label(format!("hu_qin.{key}"));
-                let mut v = value;
-                let min = match key {
-                    "seed_samples" => 1,
-                    "impostor_resolution" => 4,
-                    _ => 0,
-                };
-                if ui.add(egui::Slider::new(&mut v, min..=max)).changed() {
-                    state.set(req, format!("render.hu_qin.{key}"), v.to_string());
-                }
-                ui.end_row();
-            }
-        }
-        _ => {}
     }
 }
 
