@@ -15,7 +15,7 @@ use std::sync::Arc;
 
 use crate::gpu::{
     vk, Access, Buffer, ComputePipeline, DescriptorSet, DescriptorSetLayout, DescriptorWrite, GpuContext, GpuResult,
-    MemoryLocation, PipelineLayout,
+    MemoryLocation, PipelineLayout, Spec,
 };
 use crate::graph::{BufferId, Frame, FrameGraph};
 use crate::{
@@ -172,7 +172,7 @@ impl HistoPyramid {
             ],
         )?;
         let layout = PipelineLayout::new(ctx, "histopyramid", &[&set_layout], 4)?;
-        let spec = [capacity, history_len];
+        let spec = [("CAPACITY", Spec::U32(capacity)), ("HISTORY_LEN", Spec::U32(history_len))];
         let reduce = ComputePipeline::with_layout(
             ctx,
             "histopyramid_reduce",

@@ -39,7 +39,7 @@ use crate::frame::targets::{Targets, DEPTH_FORMAT};
 use crate::gpu::{
     vk, Access, Attachment, Blend, Buffer, Clear, Cmd, ComputePipeline, DepthState, DescriptorSet, DescriptorSetLayout,
     DescriptorWrite, Framebuffer, GpuContext, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc,
-    ImageViewKind, PipelineLayout, RenderPass, RenderPassDesc, RenderTarget, Sampler, SamplerDesc, VertexLayout,
+    ImageViewKind, PipelineLayout, RenderPass, RenderPassDesc, RenderTarget, Sampler, SamplerDesc, Spec, VertexLayout,
 };
 use crate::graph::{Bindings, BoundSet, Frame, FrameGraph, ImageId, PassBuilder};
 use crate::scene::techniques::{ImpostorFresnel, ImpostorMaps, ImpostorParams, ImpostorUpdate};
@@ -574,7 +574,7 @@ impl ImpostorMap {
             "impostor_probe",
             "impostor/probe.comp",
             &layout,
-            &[iterations, channel],
+            &[("ITERATIONS", Spec::U32(iterations)), ("DISTANCE_CHANNEL", Spec::U32(channel))],
         )?;
         let buffer_id = graph.register_buffer(&buffer);
         let mode = if fresnel { IMPOSTOR_PROBE_FRESNEL } else { IMPOSTOR_PROBE_HIT };
@@ -669,8 +669,12 @@ impl ShadePass {
         let pipeline = GraphicsPipeline::new(
             ctx,
             &GraphicsPipelineDesc {
-                // Constants 0..2 of glsl/impostor/shade_common.glsl.
-                specialization: &[params.iterations, channel, u32::from(params.fresnel == ImpostorFresnel::Exact)],
+                // glsl/impostor/shade_common.glsl.
+                specialization: &[
+                    ("ITERATIONS", Spec::U32(params.iterations)),
+                    ("DISTANCE_CHANNEL", Spec::U32(channel)),
+                    ("FRESNEL_EXACT", Spec::U32(u32::from(params.fresnel == ImpostorFresnel::Exact))),
+                ],
                 ..GraphicsPipelineDesc::fullscreen(name, fragment_shader)
             },
             &[s.frame_layout, sets.layout()],

@@ -47,7 +47,7 @@ use crate::frame::targets::{Targets, DEPTH_FORMAT};
 use crate::gpu::{
     vk, Access, Attachment, Blend, Clear, DepthState, DescriptorSet, DescriptorSetLayout, DescriptorWrite, Framebuffer,
     GpuContext, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc, ImageViewKind, PipelineLayout,
-    RenderPass, RenderPassDesc, Sampler, SamplerDesc, VertexLayout,
+    RenderPass, RenderPassDesc, Sampler, SamplerDesc, Spec, VertexLayout,
 };
 use crate::graph::{Frame, FrameGraph, ImageId};
 use crate::scene::techniques::{ImpostorLightmapParams, ImpostorParams};
@@ -411,7 +411,7 @@ impl ImpostorLightmap {
                 cull: vk::CullModeFlags::NONE,
                 depth: DepthState::LESS,
                 blend: &[Blend::Off, Blend::Off],
-                specialization: &[params.iterations],
+                specialization: &[("ITERATIONS", Spec::U32(params.iterations))],
             },
             &caustic_layout,
             &caustic_pass,

@@ -59,7 +59,7 @@ use crate::frame::targets::DEPTH_FORMAT;
 use crate::gpu::{
     vk, Access, Attachment, Blend, Buffer, Clear, DepthState, DescriptorSet, DescriptorSetLayout, DescriptorWrite,
     Framebuffer, GpuContext, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc, ImageViewKind,
-    PipelineLayout, RenderPass, RenderPassDesc, Sampler, SamplerDesc, VertexLayout,
+    PipelineLayout, RenderPass, RenderPassDesc, Sampler, SamplerDesc, Spec, Specs, VertexLayout,
 };
 use crate::graph::{Frame, FrameGraph, ImageId};
 use crate::scene::techniques::RecursiveExit;
@@ -221,13 +221,13 @@ pub fn rect_for(scene: &Scene, object: usize, origin_r: Vec3, layer: u32) -> Opt
 /// Another way to shade level 0 of the textures than glsl/nearby/impostor.frag (the
 /// eikonal light volumes for the caustic under a volume, src/technique/eikonal/eikonal_nearby.rs): a
 /// fragment shader including impostor_body.glsl with a third descriptor set (set 2, owned by
-/// the caller, alive as long as the impostors), its specialisation constants (ids from 6 on,
-/// after impostor_body.glsl's 0..5), and the images that set samples.
+/// the caller, alive as long as the impostors), its specialisation constants (besides
+/// impostor_body.glsl's), and the images that set samples.
 pub struct ImpostorShading<'a> {
     pub fragment_shader: &'static str,
     pub set_layout: &'a DescriptorSetLayout,
     pub set: DescriptorSet,
-    pub specialization: &'a [u32],
+    pub specialization: Specs<'a>,
     pub reads: Vec<ImageId>,
 }
 
@@ -766,8 +766,8 @@ impl NearbyImpostors {
                 ],
             )
         };
-        // Specialisation constants 0..5 of impostor_body.glsl (NEARBY_EXIT: 2 full, 1 back-facing,
-        // 0 bounding sphere).
+        // Specialisation constants of impostor_body.glsl (NEARBY_EXIT: 2 full, 1 back-facing, 0
+        // bounding sphere).
         let exit_mode = match desc.exit {
             _ if back_rects.is_empty() => 0,
             RecursiveExit::Full => 2,
@@ -775,15 +775,14 @@ impl NearbyImpostors {
             RecursiveExit::BoundingSphere => 0,
         };
         let spec = [
-            desc.correction_iterations,
-            desc.correction_tolerance.to_bits(),
-            desc.seed_samples,
-            exit_mode,
-            desc.search_steps,
-            desc.max_iterations,
+            ("NEARBY_ITERATIONS", Spec::U32(desc.correction_iterations)),
+            ("NEARBY_TOLERANCE", Spec::F32(desc.correction_tolerance)),
+            ("NEARBY_SEEDS", Spec::U32(desc.seed_samples)),
+            ("NEARBY_EXIT", Spec::U32(exit_mode)),
+            ("SEARCH_STEPS", Spec::U32(desc.search_steps)),
+            ("MAX_ITERATIONS", Spec::U32(desc.max_iterations)),
         ];
-        // An ImpostorShading's constants follow those 0..5.
-        let shading_spec: Vec<u32> =
+        let shading_spec: Vec<_> =
             spec.iter().chain(shading.as_ref().map_or(&[][..], |sh| sh.specialization)).copied().collect();
         // Quads are one-sided; O_R may see either side.
         let (layout, pipeline, extra) = match &shading {
@@ -810,7 +809,7 @@ impl NearbyImpostors {
             // pipeline's front faces, so BACK is the mode that culls the faces towards O_R.
             let bpipeline = GraphicsPipeline::with_layout(
                 ctx,
-                &pipeline_desc("nearby/impostor_back.frag", &[0], vk::CullModeFlags::BACK),
+                &pipeline_desc("nearby/impostor_back.frag", &[("FRONT", Spec::U32(0))], vk::CullModeFlags::BACK),
                 &blayout,
                 &render_pass,
             )?;
@@ -835,7 +834,7 @@ impl NearbyImpostors {
             let front_faces = if with_front {
                 let fpipeline = GraphicsPipeline::with_layout(
                     ctx,
-                    &pipeline_desc("nearby/impostor_back.frag", &[1], vk::CullModeFlags::FRONT),
+                    &pipeline_desc("nearby/impostor_back.frag", &[("FRONT", Spec::U32(1))], vk::CullModeFlags::FRONT),
                     &blayout,
                     &render_pass,
                 )?;

@@ -22,7 +22,7 @@ use crate::frame::targets::{Targets, DEPTH_FORMAT, HDR_FORMAT};
 use crate::gpu::{
     vk, Access, Attachment, Blend, Buffer, Clear, DepthState, DescriptorSet, DescriptorSetLayout, DescriptorWrite,
     Framebuffer, GpuContext, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc, PipelineLayout,
-    RenderPass, RenderPassDesc, Sampler, VertexLayout,
+    RenderPass, RenderPassDesc, Sampler, Spec, Specs, VertexLayout,
 };
 use crate::graph::{Frame, FrameGraph, ImageId};
 use crate::scene::{Material, Scene};
@@ -186,7 +186,7 @@ impl RefractorLayers {
                     cull: kind.cull(),
                     depth: depth_state,
                     blend: &[Blend::Off],
-                    specialization: &[kind.mode(), has_d_n],
+                    specialization: &[("MODE", Spec::U32(kind.mode())), ("HAS_DN", Spec::U32(has_d_n))],
                 },
                 &layout,
                 &render_pass,
@@ -284,8 +284,8 @@ pub struct ShadeDesc<'a> {
     pub inputs: &'a [(u32, &'a Image, ImageId)],
     /// Set-1 storage buffers read by the fragment shader: (binding, buffer).
     pub buffers: &'a [(u32, &'a Buffer)],
-    /// Specialisation constants 1, 2, ... (constant 0 is the debug flag).
-    pub specialization: &'a [u32],
+    /// Specialisation constants besides `DEBUG` (the debug flag).
+    pub specialization: Specs<'a>,
     pub debug: bool,
 }
 
@@ -340,7 +340,7 @@ impl ShadePass {
         writes.extend(desc.buffers.iter().map(|&(b, buffer)| DescriptorWrite::Storage(b, buffer)));
         let set = set_layout.allocate(name, &writes)?;
         let layout = PipelineLayout::new(ctx, name, &[frame_layout, &set_layout], 0)?;
-        let mut specialization = vec![u32::from(desc.debug)];
+        let mut specialization = vec![("DEBUG", Spec::U32(u32::from(desc.debug)))];
         specialization.extend_from_slice(desc.specialization);
         let blend = vec![Blend::Off; 1 + debug.len()];
         let pipeline = GraphicsPipeline::with_layout(
