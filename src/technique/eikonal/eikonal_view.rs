@@ -398,9 +398,9 @@ impl EikonalPass {
             // Read when the simulation wrote them (`record`); the field stands in otherwise.
             .sampled(crate::BINDING_EIKONAL_IRRADIANCE, irradiance, nearest)
             .sampled(crate::BINDING_EIKONAL_LIGHT_DIR, direction, nearest)
-            .sampled(crate::BINDING_EIKONAL_NEARBY_TEXTURE, &nearby.texture, nearest)
+            .sampled(crate::BINDING_NEARBY_TEXTURE, &nearby.texture, nearest)
             .read(nearby.texture_id)
-            .storage(crate::BINDING_EIKONAL_NEARBY_RECTS, &nearby.rect_buffer)
+            .storage(crate::BINDING_NEARBY_RECTS, &nearby.rect_buffer)
             .storage(crate::BINDING_EIKONAL_TRIANGLES, &triangles);
         let view = FullscreenPass::new(
             ctx,
