@@ -531,8 +531,8 @@ impl Running {
         let (mut compiled, mut errors) = (Vec::new(), Vec::new());
         for rel in &changed {
             match crate::gpu::compile_shader(&dir, rel) {
-                Ok((words, _)) => {
-                    self.ctx.set_shader(rel, words);
+                Ok((code, _)) => {
+                    self.ctx.set_shader(rel, code);
                     compiled.push(rel.clone());
                 }
                 Err(e) => errors.push(e),

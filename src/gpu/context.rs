@@ -96,7 +96,7 @@ pub struct GpuContext {
     pub(crate) oneshot_pool: Mutex<vk::CommandPool>,
     /// Shaders recompiled at run time (the window's hot reload), in place of the embedded
     /// SPIR-V of the same name.
-    shader_overrides: Mutex<std::collections::HashMap<String, Vec<u32>>>,
+    shader_overrides: Mutex<std::collections::HashMap<String, super::ShaderCode>>,
     /// Names of the shaders loaded since the last [`GpuContext::take_shader_log`]: which
     /// pipelines a hot-reloaded shader affects.
     shader_log: Mutex<Vec<String>>,
@@ -114,19 +114,19 @@ pub struct GpuContext {
 }
 
 impl GpuContext {
-    /// The SPIR-V of shader `path` (relative to `glsl/`): a run-time override set by
+    /// Shader `path` (relative to `glsl/`): a run-time override set by
     /// [`GpuContext::set_shader`], or the embedded one. Logged for `take_shader_log`.
-    pub fn shader(&self, path: &str) -> GpuResult<Vec<u32>> {
+    pub fn shader(&self, path: &str) -> GpuResult<super::ShaderCode> {
         self.shader_log.lock().unwrap_or_else(|e| e.into_inner()).push(path.to_string());
-        if let Some(words) = self.shader_overrides.lock().unwrap_or_else(|e| e.into_inner()).get(path) {
-            return Ok(words.clone());
+        if let Some(code) = self.shader_overrides.lock().unwrap_or_else(|e| e.into_inner()).get(path) {
+            return Ok(code.clone());
         }
-        super::shader_spirv(path)
+        super::shader_code(path)
     }
 
-    /// Use `words` for shader `path` in every pipeline created from now on.
-    pub fn set_shader(&self, path: &str, words: Vec<u32>) {
-        self.shader_overrides.lock().unwrap_or_else(|e| e.into_inner()).insert(path.to_string(), words);
+    /// Use `code` for shader `path` in every pipeline created from now on.
+    pub fn set_shader(&self, path: &str, code: super::ShaderCode) {
+        self.shader_overrides.lock().unwrap_or_else(|e| e.into_inner()).insert(path.to_string(), code);
     }
 
     /// The shaders loaded since the last call.

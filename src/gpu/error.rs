@@ -28,6 +28,9 @@ pub enum GpuError {
     InvalidShader(String, String),
     #[error("{0}")]
     Unsupported(String),
+    /// A pipeline's named specialisation constants do not fit its shaders.
+    #[error("specialisation of {0}")]
+    Specialization(String),
     #[error("the window surface was lost (VK_ERROR_SURFACE_LOST_KHR)")]
     SurfaceLost,
     #[error("overlay (egui) renderer: {0}")]

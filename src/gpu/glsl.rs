@@ -3,6 +3,40 @@
 // `compile_shader`), so that both compile with the same options, includes and header.
 // Paths are spelt out in full: build.rs has imports of its own.
 
+/// A specialisation constant a shader declares: `layout(constant_id = id) const ty name`.
+/// Pipelines set constants by name (src/gpu/pipeline.rs); the SPIR-V alone cannot say which
+/// names a shader has, since glslang drops the constants a shader never reads.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SpecConstant {
+    pub name: String,
+    pub id: u32,
+    /// The GLSL type: `uint`, `int`, `float` or `bool`.
+    pub ty: String,
+}
+
+/// Every `layout(constant_id = N) const TYPE NAME` outside a `//` comment of `source`.
+pub fn spec_constants(source: &str) -> Vec<SpecConstant> {
+    let mut out = Vec::new();
+    for line in source.lines() {
+        let line = line.split("//").next().unwrap_or_default();
+        let Some((_, rest)) = line.split_once("constant_id") else { continue };
+        let Some((id, rest)) = rest.trim_start().strip_prefix('=').and_then(|r| r.split_once(')')) else { continue };
+        let Ok(id) = id.trim().parse() else { continue };
+        let mut words = rest.split_whitespace();
+        let (Some("const"), Some(ty), Some(name)) = (words.next(), words.next(), words.next()) else { continue };
+        let name: String = name.chars().take_while(|c| c.is_ascii_alphanumeric() || *c == '_').collect();
+        out.push(SpecConstant { name, id, ty: ty.to_string() });
+    }
+    out
+}
+
+/// A compiled shader: its SPIR-V bytes and the specialisation constants its source (with
+/// its includes) declares.
+pub struct Compiled {
+    pub spirv: Vec<u8>,
+    pub specs: Vec<SpecConstant>,
+}
+
 /// Compile `glsl/<rel>` (a `.vert`, `.frag`, `.comp` or `.geom` under `glsl`) to SPIR-V bytes.
 /// `header` is the generated `prism_shared.glsl`. Every file read through `#include` is
 /// pushed onto `includes`. Errors read `glsl/dir/file:LINE: error: ...`, naming the shader (or
@@ -13,7 +47,7 @@ pub fn compile_glsl(
     rel: &str,
     header: &str,
     includes: &mut Vec<std::path::PathBuf>,
-) -> Result<Vec<u8>, String> {
+) -> Result<Compiled, String> {
     let file = glsl.join(rel);
     let kind = match file.extension().and_then(|e| e.to_str()) {
         Some("vert") => shaderc::ShaderKind::Vertex,
@@ -43,7 +77,7 @@ pub fn compile_glsl(
                 // Relative to the tree's root, so that errors inside includes read
                 // glsl/include/x.glsl:LINE.
                 let resolved_name = p.strip_prefix(&root).unwrap_or(&p).to_string_lossy().into_owned();
-                read.borrow_mut().push(p);
+                read.borrow_mut().push((p, content.clone()));
                 return Ok(shaderc::ResolvedInclude { resolved_name, content });
             }
         }
@@ -51,6 +85,14 @@ pub fn compile_glsl(
     });
     let result = compiler.compile_into_spirv(&source, kind, &format!("glsl/{rel}"), "main", Some(&options));
     drop(options);
-    includes.extend(read.into_inner());
-    result.map(|a| a.as_binary_u8().to_vec()).map_err(|e| e.to_string())
+    let mut specs = spec_constants(&source);
+    for (p, content) in read.into_inner() {
+        specs.extend(spec_constants(&content));
+        includes.push(p);
+    }
+    // A guarded include read twice declares its constants once.
+    specs.sort_by_key(|s| s.id);
+    specs.dedup();
+    let spirv = result.map_err(|e| e.to_string())?.as_binary_u8().to_vec();
+    Ok(Compiled { spirv, specs })
 }

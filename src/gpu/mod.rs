@@ -14,6 +14,7 @@ mod debug;
 mod descriptor;
 mod error;
 mod glsl;
+pub use glsl::SpecConstant;
 mod image;
 mod overlay;
 mod pipeline;
@@ -32,7 +33,9 @@ pub use descriptor::{DescriptorSet, DescriptorSetLayout};
 pub use error::{GpuError, GpuResult};
 pub use image::{Image, ImageDesc, ImageViewKind, Sampler, SamplerDesc};
 pub use overlay::Overlay;
-pub use pipeline::{Blend, ComputePipeline, DepthState, GraphicsPipeline, GraphicsPipelineDesc, VertexLayout};
+pub use pipeline::{
+    Blend, ComputePipeline, DepthState, GraphicsPipeline, GraphicsPipelineDesc, Spec, Specs, VertexLayout,
+};
 pub use render_pass::{Framebuffer, RenderPass, RenderTarget};
 pub use swapchain::{Acquired, Presented, Semaphore, Swapchain, SwapchainImage};
 pub use sync::{Access, BufferBarrier, ImageBarrier};
@@ -45,15 +48,26 @@ mod shaders {
     include!(concat!(env!("OUT_DIR"), "/shaders.rs"));
 }
 
-/// The SPIR-V words of the shader at `path` (relative to `glsl/`, e.g. `"gbuffer/gbuffer.vert"`).
+/// A shader's SPIR-V words and the specialisation constants it declares.
+#[derive(Clone, Debug)]
+pub struct ShaderCode {
+    pub words: Vec<u32>,
+    pub specs: Vec<SpecConstant>,
+}
+
+/// The embedded shader at `path` (relative to `glsl/`, e.g. `"gbuffer/gbuffer.vert"`).
+pub fn shader_code(path: &str) -> GpuResult<ShaderCode> {
+    let (_, bytes, specs) =
+        shaders::SHADERS.iter().find(|(p, ..)| *p == path).ok_or_else(|| GpuError::MissingShader(path.to_string()))?;
+    let words = ash::util::read_spv(&mut std::io::Cursor::new(bytes))
+        .map_err(|e| GpuError::InvalidShader(path.to_string(), e.to_string()))?;
+    let specs = specs.iter().map(|&(name, id, ty)| SpecConstant { name: name.into(), id, ty: ty.into() }).collect();
+    Ok(ShaderCode { words, specs })
+}
+
+/// The SPIR-V words of the embedded shader at `path`.
 pub fn shader_spirv(path: &str) -> GpuResult<Vec<u32>> {
-    let bytes = shaders::SHADERS
-        .iter()
-        .find(|(p, _)| *p == path)
-        .map(|(_, b)| *b)
-        .ok_or_else(|| GpuError::MissingShader(path.to_string()))?;
-    ash::util::read_spv(&mut std::io::Cursor::new(bytes))
-        .map_err(|e| GpuError::InvalidShader(path.to_string(), e.to_string()))
+    shader_code(path).map(|c| c.words)
 }
 
 /// The shader-interface header build.rs generated (`prism_shared.glsl`), for run-time
@@ -61,17 +75,18 @@ pub fn shader_spirv(path: &str) -> GpuResult<Vec<u32>> {
 const SHARED_HEADER: &str = include_str!(concat!(env!("OUT_DIR"), "/prism_shared.glsl"));
 
 /// Compile the shader `rel` of the tree `glsl` at run time, exactly as build.rs compiles the
-/// embedded ones (the window's hot reload: [`GpuContext::set_shader`]). Returns the SPIR-V
-/// words and the files it included; an error names the file and line.
-pub fn compile_shader(glsl: &std::path::Path, rel: &str) -> Result<(Vec<u32>, Vec<std::path::PathBuf>), String> {
+/// embedded ones (the window's hot reload: [`GpuContext::set_shader`]). Returns the shader
+/// and the files it included; an error names the file and line.
+pub fn compile_shader(glsl: &std::path::Path, rel: &str) -> Result<(ShaderCode, Vec<std::path::PathBuf>), String> {
     let compiler = shaderc::Compiler::new().map_err(|e| format!("shaderc: {e}"))?;
     let mut includes = Vec::new();
-    let bytes = glsl::compile_glsl(&compiler, glsl, rel, SHARED_HEADER, &mut includes)?;
-    let words = ash::util::read_spv(&mut std::io::Cursor::new(bytes)).map_err(|e| format!("glsl/{rel}: {e}"))?;
-    Ok((words, includes))
+    let compiled = glsl::compile_glsl(&compiler, glsl, rel, SHARED_HEADER, &mut includes)?;
+    let words =
+        ash::util::read_spv(&mut std::io::Cursor::new(compiled.spirv)).map_err(|e| format!("glsl/{rel}: {e}"))?;
+    Ok((ShaderCode { words, specs: compiled.specs }, includes))
 }
 
 /// Names of every embedded shader (for tests and `--help` diagnostics).
 pub fn shader_names() -> impl Iterator<Item = &'static str> {
-    shaders::SHADERS.iter().map(|(p, _)| *p)
+    shaders::SHADERS.iter().map(|(p, ..)| *p)
 }

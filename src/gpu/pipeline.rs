@@ -4,8 +4,75 @@ use std::sync::Arc;
 use ash::vk;
 
 use super::context::GpuContext;
-use super::error::{GpuResult, VkContext};
-use super::{DescriptorSetLayout, RenderPass};
+use super::error::{GpuError, GpuResult, VkContext};
+use super::{DescriptorSetLayout, RenderPass, ShaderCode};
+
+/// The value of a specialisation constant. Pipelines name their constants as the shader
+/// declares them (`layout(constant_id = N) const uint NAME`, [`Specs`]) and the gpu layer
+/// finds N, so Rust and GLSL never match positions by hand.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Spec {
+    U32(u32),
+    I32(i32),
+    F32(f32),
+    Bool(bool),
+}
+
+impl Spec {
+    /// The GLSL type of a constant this value may set.
+    fn glsl_type(self) -> &'static str {
+        match self {
+            Spec::U32(_) => "uint",
+            Spec::I32(_) => "int",
+            Spec::F32(_) => "float",
+            Spec::Bool(_) => "bool",
+        }
+    }
+
+    /// The 4 bytes of specialisation data (a `bool` is a VkBool32).
+    fn bits(self) -> u32 {
+        match self {
+            Spec::U32(v) => v,
+            Spec::I32(v) => v as u32,
+            Spec::F32(v) => v.to_bits(),
+            Spec::Bool(v) => u32::from(v),
+        }
+    }
+}
+
+/// Named specialisation constants of one pipeline, for all of its stages.
+pub type Specs<'a> = &'a [(&'a str, Spec)];
+
+/// Specialisation of the shaders `stages` (path, code) by `specs`: one data block and each
+/// stage's map entries into it. A stage gets the constants its source declares; a name that
+/// no stage declares, or of another type than the value, is an error naming the shaders.
+fn specialize(
+    stages: &[(&str, &ShaderCode)],
+    specs: Specs<'_>,
+) -> GpuResult<(Vec<u32>, Vec<Vec<vk::SpecializationMapEntry>>)> {
+    let shaders = || stages.iter().map(|(path, _)| *path).collect::<Vec<_>>().join(" + ");
+    let mut entries = vec![Vec::new(); stages.len()];
+    for (i, &(name, value)) in specs.iter().enumerate() {
+        let problem = |what: String| GpuError::Specialization(format!("{}: {name}: {what}", shaders()));
+        if specs[..i].iter().any(|(n, _)| *n == name) {
+            return Err(problem("set twice".into()));
+        }
+        let mut declared = false;
+        for ((_, code), entries) in stages.iter().zip(&mut entries) {
+            let Some(decl) = code.specs.iter().find(|d| d.name == name) else { continue };
+            if decl.ty != value.glsl_type() {
+                return Err(problem(format!("declared {}, set as {value:?}", decl.ty)));
+            }
+            entries.push(vk::SpecializationMapEntry { constant_id: decl.id, offset: 4 * i as u32, size: 4 });
+            declared = true;
+        }
+        if !declared {
+            let names: Vec<_> = stages.iter().flat_map(|(_, c)| c.specs.iter().map(|d| d.name.as_str())).collect();
+            return Err(problem(format!("no such specialisation constant (declared: {})", names.join(", "))));
+        }
+    }
+    Ok((specs.iter().map(|(_, v)| v.bits()).collect(), entries))
+}
 
 struct PipelineLayout {
     ctx: Arc<GpuContext>,
@@ -76,8 +143,8 @@ pub struct GraphicsPipelineDesc<'a> {
     pub depth: DepthState,
     /// One entry per colour attachment of the render pass.
     pub blend: &'a [Blend],
-    /// Specialisation constants with ids 0, 1, ... (u32 each), for both stages.
-    pub specialization: &'a [u32],
+    /// Specialisation constants of both stages, by name.
+    pub specialization: Specs<'a>,
 }
 
 impl<'a> GraphicsPipelineDesc<'a> {
@@ -116,9 +183,8 @@ pub struct GraphicsPipeline {
     _layout: PipelineLayout,
 }
 
-fn shader_module(ctx: &GpuContext, path: &str) -> GpuResult<vk::ShaderModule> {
-    let code = ctx.shader(path)?;
-    let info = vk::ShaderModuleCreateInfo::default().code(&code);
+fn shader_module(ctx: &GpuContext, path: &str, code: &ShaderCode) -> GpuResult<vk::ShaderModule> {
+    let info = vk::ShaderModuleCreateInfo::default().code(&code.words);
     // SAFETY: code is SPIR-V compiled by shaderc, at build time or by the hot reload.
     let m = unsafe { ctx.raw().create_shader_module(&info, None) }.vk("vkCreateShaderModule")?;
     ctx.set_name(m, path);
@@ -136,24 +202,26 @@ impl GraphicsPipeline {
         pass: &RenderPass,
     ) -> GpuResult<Self> {
         let layout = PipelineLayout::new(ctx, desc.name, sets, push_bytes)?;
-        let vs = shader_module(ctx, desc.vertex_shader)?;
-        let fs = shader_module(ctx, desc.fragment_shader)?;
-        let spec_entries: Vec<_> = (0..desc.specialization.len() as u32)
-            .map(|i| vk::SpecializationMapEntry { constant_id: i, offset: i * 4, size: 4 })
+        let (vs_code, fs_code) = (ctx.shader(desc.vertex_shader)?, ctx.shader(desc.fragment_shader)?);
+        let (data, entries) =
+            specialize(&[(desc.vertex_shader, &vs_code), (desc.fragment_shader, &fs_code)], desc.specialization)?;
+        let vs = shader_module(ctx, desc.vertex_shader, &vs_code)?;
+        let fs = shader_module(ctx, desc.fragment_shader, &fs_code)?;
+        let spec: Vec<_> = entries
+            .iter()
+            .map(|e| vk::SpecializationInfo::default().map_entries(e).data(bytemuck::cast_slice(&data)))
             .collect();
-        let spec_data: &[u8] = bytemuck::cast_slice(desc.specialization);
-        let spec = vk::SpecializationInfo::default().map_entries(&spec_entries).data(spec_data);
         let stages = [
             vk::PipelineShaderStageCreateInfo::default()
                 .stage(vk::ShaderStageFlags::VERTEX)
                 .module(vs)
                 .name(c"main")
-                .specialization_info(&spec),
+                .specialization_info(&spec[0]),
             vk::PipelineShaderStageCreateInfo::default()
                 .stage(vk::ShaderStageFlags::FRAGMENT)
                 .module(fs)
                 .name(c"main")
-                .specialization_info(&spec),
+                .specialization_info(&spec[1]),
         ];
         let bindings =
             [vk::VertexInputBindingDescription { binding: 0, stride: 32, input_rate: vk::VertexInputRate::VERTEX }];
@@ -265,15 +333,13 @@ impl ComputePipeline {
         shader: &str,
         sets: &[&DescriptorSetLayout],
         push_bytes: u32,
-        specialization: &[u32],
+        specialization: Specs<'_>,
     ) -> GpuResult<Self> {
         let layout = PipelineLayout::new(ctx, name, sets, push_bytes)?;
-        let module = shader_module(ctx, shader)?;
-        let spec_entries: Vec<_> = (0..specialization.len() as u32)
-            .map(|i| vk::SpecializationMapEntry { constant_id: i, offset: i * 4, size: 4 })
-            .collect();
-        let spec =
-            vk::SpecializationInfo::default().map_entries(&spec_entries).data(bytemuck::cast_slice(specialization));
+        let code = ctx.shader(shader)?;
+        let (data, entries) = specialize(&[(shader, &code)], specialization)?;
+        let module = shader_module(ctx, shader, &code)?;
+        let spec = vk::SpecializationInfo::default().map_entries(&entries[0]).data(bytemuck::cast_slice(&data));
         let stage = vk::PipelineShaderStageCreateInfo::default()
             .stage(vk::ShaderStageFlags::COMPUTE)
             .module(module)
@@ -294,5 +360,78 @@ impl Drop for ComputePipeline {
     fn drop(&mut self) {
         // SAFETY: dropped with the renderer after the device is idle.
         unsafe { self.ctx.raw().destroy_pipeline(self.raw, None) };
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gpu::SpecConstant;
+
+    /// (name, SpecId) of every named specialisation constant in SPIR-V `words`.
+    fn spirv_spec_ids(words: &[u32]) -> Vec<(String, u32)> {
+        const OP_NAME: u32 = 5;
+        const OP_DECORATE: u32 = 71;
+        const SPEC_ID: u32 = 1;
+        let (mut names, mut ids) = (std::collections::HashMap::new(), Vec::new());
+        let mut at = 5;
+        while at < words.len() {
+            let (count, op) = ((words[at] >> 16) as usize, words[at] & 0xffff);
+            let operands = &words[at + 1..at + count];
+            if op == OP_NAME {
+                let bytes: Vec<u8> = bytemuck::cast_slice(&operands[1..]).to_vec();
+                let name = String::from_utf8_lossy(&bytes).trim_end_matches('\0').to_string();
+                names.insert(operands[0], name);
+            } else if op == OP_DECORATE && operands[1] == SPEC_ID {
+                ids.push((operands[0], operands[2]));
+            }
+            at += count.max(1);
+        }
+        ids.into_iter().map(|(target, id)| (names[&target].clone(), id)).collect()
+    }
+
+    /// The declarations found in the sources name every constant the SPIR-V kept, with its id:
+    /// pipelines can trust them for every shader.
+    #[test]
+    fn declared_constants_match_the_spirv() {
+        let mut checked = 0;
+        for path in crate::gpu::shader_names() {
+            let code = crate::gpu::shader_code(path).unwrap();
+            for (name, id) in spirv_spec_ids(&code.words) {
+                let decl = code.specs.iter().find(|d| d.name == name);
+                assert_eq!(decl.map(|d| d.id), Some(id), "{path}: {name}");
+                checked += 1;
+            }
+        }
+        assert!(checked > 60, "only {checked} specialisation constants found");
+    }
+
+    fn code(specs: &[(&str, u32, &str)]) -> ShaderCode {
+        let specs = specs.iter().map(|&(n, id, ty)| SpecConstant { name: n.into(), id, ty: ty.into() }).collect();
+        ShaderCode { words: Vec::new(), specs }
+    }
+
+    #[test]
+    fn constants_are_found_by_name_in_each_stage() {
+        let vs = code(&[("HAS_DN", 1, "uint")]);
+        let fs = code(&[("MODE", 0, "uint"), ("TOLERANCE", 3, "float")]);
+        let specs = [("TOLERANCE", Spec::F32(0.5)), ("HAS_DN", Spec::U32(1)), ("MODE", Spec::U32(2))];
+        let (data, entries) = specialize(&[("a.vert", &vs), ("a.frag", &fs)], &specs).unwrap();
+        assert_eq!(data, [0.5f32.to_bits(), 1, 2]);
+        let ids = |e: &[vk::SpecializationMapEntry]| e.iter().map(|e| (e.constant_id, e.offset)).collect::<Vec<_>>();
+        assert_eq!(ids(&entries[0]), [(1, 4)]);
+        assert_eq!(ids(&entries[1]), [(3, 0), (0, 8)]);
+    }
+
+    #[test]
+    fn unknown_or_mistyped_constants_name_the_shader() {
+        let fs = code(&[("MODE", 0, "uint")]);
+        let stages = [("x/y.frag", &fs)];
+        let e = specialize(&stages, &[("MOED", Spec::U32(1))]).unwrap_err().to_string();
+        assert!(e.contains("x/y.frag") && e.contains("MOED") && e.contains("declared: MODE"), "{e}");
+        let e = specialize(&stages, &[("MODE", Spec::F32(1.0))]).unwrap_err().to_string();
+        assert!(e.contains("x/y.frag") && e.contains("MODE") && e.contains("uint"), "{e}");
+        let e = specialize(&stages, &[("MODE", Spec::U32(1)), ("MODE", Spec::U32(2))]).unwrap_err().to_string();
+        assert!(e.contains("set twice"), "{e}");
     }
 }

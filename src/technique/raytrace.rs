@@ -32,7 +32,7 @@
 //! uniforms and the pass.
 use std::rc::Rc;
 
-use crate::gpu::{vk, Buffer};
+use crate::gpu::{vk, Buffer, Spec};
 use crate::graph::Frame;
 use crate::reference::TraceGeometry;
 use crate::scene::techniques::RaytraceParams;
@@ -149,7 +149,7 @@ fn create(s: &mut Setup<'_>, mode: Mode) -> Result<Box<dyn Technique>, RenderErr
             target: (&targets.hdr, targets.hdr_id),
             // Keeps the image and overwrites only the pixels of its objects.
             clear: false,
-            specialization: &[spec],
+            specialization: &[("MODE", Spec::U32(spec))],
         },
         set,
         s.frame_layout,

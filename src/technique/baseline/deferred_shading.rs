@@ -4,7 +4,7 @@ use std::sync::Arc;
 
 use crate::frame::gpu_scene::GpuScene;
 use crate::frame::targets::Targets;
-use crate::gpu::{DescriptorSet, DescriptorSetLayout, GpuContext, GpuResult, Sampler};
+use crate::gpu::{DescriptorSet, DescriptorSetLayout, GpuContext, GpuResult, Sampler, Spec};
 use crate::graph::{Frame, ImageId};
 use crate::scene::techniques::CausticsMapParams;
 use crate::technique::{
@@ -102,10 +102,10 @@ impl DeferredShadingPass {
                 // Caustics mapping on/off and its low-pass filter radius; photon-buffer
                 // caustics' rectangle count (0: off) and normalisation (deferred.frag).
                 specialization: &[
-                    u32::from(caustic_filter.is_some()),
-                    caustic_filter.unwrap_or(0),
-                    photon.map_or(0, |p| p.0),
-                    photon.map_or(0, |p| p.1),
+                    ("CAUSTICS", Spec::U32(u32::from(caustic_filter.is_some()))),
+                    ("CAUSTIC_FILTER", Spec::U32(caustic_filter.unwrap_or(0))),
+                    ("PHOTON_RECTS", Spec::U32(photon.map_or(0, |p| p.0))),
+                    ("PHOTON_MODE", Spec::U32(photon.map_or(0, |p| p.1))),
                 ],
             },
             targets.gbuffer(fragment_set(), nearest, true),

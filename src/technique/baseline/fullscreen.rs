@@ -5,7 +5,7 @@ use std::sync::Arc;
 
 use crate::gpu::{
     vk, Access, Clear, DescriptorSet, DescriptorSetLayout, GpuContext, GpuResult, GraphicsPipeline,
-    GraphicsPipelineDesc, Image, RenderTarget,
+    GraphicsPipelineDesc, Image, RenderTarget, Specs,
 };
 use crate::graph::{Bindings, BoundSet, Frame, ImageId};
 
@@ -26,8 +26,8 @@ pub struct FullscreenDesc<'a> {
     pub target: (&'a Image, ImageId),
     /// Clear the target first (true) or keep what earlier passes wrote (false).
     pub clear: bool,
-    /// Specialisation constants 0, 1, ... of the fragment shader.
-    pub specialization: &'a [u32],
+    /// Specialisation constants of the fragment shader, by name.
+    pub specialization: Specs<'a>,
 }
 
 /// Set 1 of a full-screen pass: fragment-stage resources.

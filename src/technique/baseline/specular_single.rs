@@ -8,7 +8,7 @@ use std::sync::Arc;
 
 use crate::frame::gpu_scene::GpuScene;
 use crate::frame::targets::Targets;
-use crate::gpu::{DescriptorSet, DescriptorSetLayout, GpuContext, GpuResult, Sampler};
+use crate::gpu::{DescriptorSet, DescriptorSetLayout, GpuContext, GpuResult, Sampler, Spec};
 use crate::graph::Frame;
 use crate::scene::Scene;
 use crate::technique::{
@@ -96,7 +96,7 @@ impl SpecularSinglePass {
                 target: (&targets.hdr, targets.hdr_id),
                 // Keeps the deferred result and overwrites only the pixels of its materials.
                 clear: false,
-                specialization: &[spec],
+                specialization: &[("MODE", Spec::U32(spec))],
             },
             targets.gbuffer(fragment_set(), nearest, false),
             frame_layout,

@@ -34,7 +34,7 @@ use crate::frame::gpu_types::ShadowPush;
 use crate::frame::targets::{Targets, DEPTH_FORMAT, SHADOW_FORMAT};
 use crate::gpu::{
     vk, Access, Blend, Buffer, Clear, DepthState, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc,
-    ImageViewKind, MemoryLocation, OcclusionQueryPool, RenderTarget, Sampler, SamplerDesc,
+    ImageViewKind, MemoryLocation, OcclusionQueryPool, RenderTarget, Sampler, SamplerDesc, Spec,
 };
 use crate::graph::{Bindings, BoundSet, BufferId, Frame, ImageId};
 use crate::scene::techniques::{CausticsMapParams, Flux, Newton};
@@ -361,7 +361,7 @@ impl CausticsMapPass {
                 topology: vk::PrimitiveTopology::POINT_LIST,
                 blend: &[Blend::Additive],
                 // Eq. 6's flux weight: FLUX_SOLID_ANGLE or FLUX_OCCLUSION_QUERY.
-                specialization: &[if occlusion { FLUX_OCCLUSION_QUERY } else { FLUX_SOLID_ANGLE }],
+                specialization: &[("FLUX", Spec::U32(if occlusion { FLUX_OCCLUSION_QUERY } else { FLUX_SOLID_ANGLE }))],
                 ..GraphicsPipelineDesc::fullscreen(CAUSTICS_MAP, "caustics/splat.frag")
             },
             &[set.layout()],
@@ -567,7 +567,7 @@ impl RefractorLayers {
                 ctx,
                 &GraphicsPipelineDesc {
                     blend: &[Blend::Off, Blend::Off],
-                    specialization: &[mode],
+                    specialization: &[("MODE", Spec::U32(mode))],
                     ..GraphicsPipelineDesc::mesh(
                         name,
                         "caustics/refractor.vert",

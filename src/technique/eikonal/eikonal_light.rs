@@ -46,7 +46,7 @@ use glam::{DVec3, Vec3};
 
 use crate::gpu::{
     vk, Access, Buffer, ComputePipeline, DescriptorSet, GpuContext, GpuResult, Image, ImageDesc, MemoryLocation,
-    Progress, Sampler,
+    Progress, Sampler, Spec,
 };
 use crate::graph::{Bindings, BoundSet, BufferId, Frame, FrameGraph, ImageId};
 use crate::scene::techniques::{EikonalParams, Integrator};
@@ -56,7 +56,7 @@ use crate::{
     LIGHT_BINDING_FIELD, LIGHT_BINDING_IRRADIANCE, LIGHT_BINDING_SRC,
 };
 
-use super::eikonal_view::RayState;
+use super::eikonal_view::{box_specs, RayState, LIGHT_BOX};
 use super::histopyramid::{HistoPyramid, HpState};
 use crate::technique::baseline::fullscreen::{fragment_set, FullscreenDesc, FullscreenPass};
 
@@ -337,10 +337,6 @@ pub struct LightSim {
     threshold: f32,
 }
 
-fn f(x: f32) -> u32 {
-    x.to_bits()
-}
-
 /// The runs for `wavefronts` (one per light) through a field of `channels` index slabs, in
 /// tiles of at most `tile` initial patches.
 pub fn plan_runs(wavefronts: &[Vec<Patch>], channels: u32, tile: usize) -> VecDeque<LightRun> {
@@ -447,28 +443,21 @@ impl LightSim {
             Integrator::Euler => EIKONAL_EULER,
             Integrator::Rk4 => EIKONAL_RK4,
         };
-        let spec = [
-            capacity,
-            max_steps,
-            f(dt),
-            f(volume.min.x),
-            f(volume.min.y),
-            f(volume.min.z),
-            f(volume.max.x),
-            f(volume.max.y),
-            f(volume.max.z),
-            f(light_min.x),
-            f(light_min.y),
-            f(light_min.z),
-            f(light_max.x),
-            f(light_max.y),
-            f(light_max.z),
+        let volume_names = ["VOL_MIN_X", "VOL_MIN_Y", "VOL_MIN_Z", "VOL_MAX_X", "VOL_MAX_Y", "VOL_MAX_Z"];
+        let spec: Vec<_> = [
+            ("CAPACITY", Spec::U32(capacity)),
+            ("HISTORY_LEN", Spec::U32(max_steps)),
+            ("DT", Spec::F32(dt)),
             // Extinction (Eq. 18) from the material volumes of src/scene/volume_sources.rs.
-            textures.channels,
-            textures.materials as u32,
-            u32::from(params.keep_crossed),
-            integrator,
-        ];
+            ("CHANNELS", Spec::U32(textures.channels)),
+            ("MATERIALS", Spec::U32(textures.materials as u32)),
+            ("KEEP_CROSSED", Spec::U32(u32::from(params.keep_crossed))),
+            ("INTEGRATOR", Spec::U32(integrator)),
+        ]
+        .into_iter()
+        .chain(box_specs(volume_names, volume.min, volume.max))
+        .chain(box_specs(LIGHT_BOX, light_min, light_max))
+        .collect();
         let layouts = [hp.set_layout(), sets.layout()];
         let push = std::mem::size_of::<RunPush>() as u32;
         let pipeline = |name: &str, shader: &str| ComputePipeline::new(ctx, name, shader, &layouts, push, &spec);
@@ -896,7 +885,7 @@ impl EikonalLight {
                 target: (&targets.hdr, targets.hdr_id),
                 // Overwrites deferred shading's receivers inside the irradiance volume only.
                 clear: false,
-                specialization: &[f(lo.x), f(lo.y), f(lo.z), f(hi.x), f(hi.y), f(hi.z)],
+                specialization: &box_specs(LIGHT_BOX, lo, hi),
             },
             set,
             s.frame_layout,

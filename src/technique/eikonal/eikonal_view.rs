@@ -25,7 +25,7 @@ use glam::DVec3;
 
 use crate::frame::gpu_scene::GpuScene;
 use crate::frame::targets::Targets;
-use crate::gpu::{vk, Access, ComputePipeline, DescriptorSet, GpuContext, GpuResult, Image, ImageDesc};
+use crate::gpu::{vk, Access, ComputePipeline, DescriptorSet, GpuContext, GpuResult, Image, ImageDesc, Spec, Specs};
 use crate::graph::{Bindings, Frame, FrameGraph, ImageId};
 use crate::scene::techniques::{EikonalParams, Integrator};
 use crate::scene::{IndexProfile, Scene, Volume};
@@ -240,8 +240,14 @@ pub struct EikonalPass {
     light: Option<super::eikonal_light::EikonalLight>,
 }
 
-fn f(x: f32) -> u32 {
-    x.to_bits()
+/// The names of the irradiance volume's box in glsl/eikonal (`LIGHT_{MIN,MAX}_{X,Y,Z}`).
+pub(super) const LIGHT_BOX: [&str; 6] =
+    ["LIGHT_MIN_X", "LIGHT_MIN_Y", "LIGHT_MIN_Z", "LIGHT_MAX_X", "LIGHT_MAX_Y", "LIGHT_MAX_Z"];
+
+/// Specialisation constants `names` (min x, y, z, max x, y, z) of the box `min`..`max`.
+pub(super) fn box_specs(names: [&'static str; 6], min: glam::Vec3, max: glam::Vec3) -> [(&'static str, Spec); 6] {
+    let v = [min.x, min.y, min.z, max.x, max.y, max.z];
+    std::array::from_fn(|i| (names[i], Spec::F32(v[i])))
 }
 
 impl EikonalPass {
@@ -316,7 +322,7 @@ impl EikonalPass {
             let origin = eikonal_nearby::volume_origin(scene).unwrap_or(glam::Vec3::ZERO);
             // With a light simulation the textures carry the simulated caustic and shadow
             // (glsl/eikonal/nearby_impostor.frag): its volumes in a set of their own.
-            let spec = [light_min.x, light_min.y, light_min.z, light_max.x, light_max.y, light_max.z].map(f);
+            let spec = box_specs(LIGHT_BOX, light_min, light_max);
             let shading = match &light {
                 Some(l) => {
                     let ((irr, dir), [irr_id, dir_id]) = (l.images(), l.image_ids());
@@ -337,34 +343,27 @@ impl EikonalPass {
             let rects = NearbyRects::around(origin, &kept, scene);
             NearbyImpostors::build(ctx, EIKONAL_NEARBY, &desc, rects, graph, frame_layout, shading)?
         };
-        let spec = [
-            integrator,
-            f(h),
-            steps.max(1),
-            f(volume.min.x),
-            f(volume.min.y),
-            f(volume.min.z),
-            f(volume.max.x),
-            f(volume.max.y),
-            f(volume.max.z),
+        let box_names = ["BOX_MIN_X", "BOX_MIN_Y", "BOX_MIN_Z", "BOX_MAX_X", "BOX_MAX_Y", "BOX_MAX_Z"];
+        let spec: Vec<_> = [
+            ("INTEGRATOR", Spec::U32(integrator)),
+            ("STEP", Spec::F32(h)),
+            ("MAX_STEPS", Spec::U32(steps.max(1))),
             // Index slabs (3: dispersion) and whether materials are bound.
-            textures.channels,
-            textures.materials as u32,
+            ("CHANNELS", Spec::U32(textures.channels)),
+            ("MATERIALS", Spec::U32(textures.materials as u32)),
             // Single scattering (glsl/eikonal/scatter.glsl) with the
             // irradiance and direction volumes of the light simulation.
-            u32::from(light.is_some()),
-            f(light_min.x),
-            f(light_min.y),
-            f(light_min.z),
-            f(light_max.x),
-            f(light_max.y),
-            f(light_max.z),
+            ("SCATTER", Spec::U32(u32::from(light.is_some()))),
             // What exit rays meet: nearby_exit.glsl.
-            u32::from(in_box),
-            params.nearby_iterations,
-            f(NEARBY_TOLERANCE),
-            NEARBY_SEEDS,
-        ];
+            ("TRIANGLES_IN_BOX", Spec::U32(u32::from(in_box))),
+            ("NEARBY_ITERATIONS", Spec::U32(params.nearby_iterations)),
+            ("NEARBY_TOLERANCE", Spec::F32(NEARBY_TOLERANCE)),
+            ("NEARBY_SEEDS", Spec::U32(NEARBY_SEEDS)),
+        ]
+        .into_iter()
+        .chain(box_specs(box_names, volume.min, volume.max))
+        .chain(box_specs(LIGHT_BOX, light_min, light_max))
+        .collect();
         let set = fragment_set()
             .sampled(BINDING_GBUF_DEPTH, &targets.depth, nearest)
             .read(targets.depth_id)
@@ -379,9 +378,9 @@ impl EikonalPass {
             // Read when the simulation wrote them (`record`); the field stands in otherwise.
             .sampled(crate::BINDING_EIKONAL_IRRADIANCE, irradiance, nearest)
             .sampled(crate::BINDING_EIKONAL_LIGHT_DIR, direction, nearest)
-            .sampled(crate::BINDING_EIKONAL_NEARBY_TEXTURE, &nearby.texture, nearest)
+            .sampled(crate::BINDING_NEARBY_TEXTURE, &nearby.texture, nearest)
             .read(nearby.texture_id)
-            .storage(crate::BINDING_EIKONAL_NEARBY_RECTS, &nearby.rect_buffer)
+            .storage(crate::BINDING_NEARBY_RECTS, &nearby.rect_buffer)
             .storage(crate::BINDING_EIKONAL_TRIANGLES, &triangles);
         let view = FullscreenPass::new(
             ctx,
@@ -539,12 +538,27 @@ pub(crate) fn prepare_volume(
     });
     let sets = Bindings::build_each(ctx, "eikonal_volume", sets.collect())?;
     let pipeline =
-        |name: &str, shader: &str, spec: &[u32]| ComputePipeline::new(ctx, name, shader, &[sets.layout()], 0, spec);
+        |name: &str, shader: &str, spec: Specs<'_>| ComputePipeline::new(ctx, name, shader, &[sets.layout()], 0, spec);
     let smooth: Vec<ComputePipeline> = (0..3u32)
-        .map(|axis| pipeline(&format!("eikonal_smooth_{axis}"), "eikonal/smooth.comp", &[axis, f(params.sigma), nz]))
+        .map(|axis| {
+            pipeline(
+                &format!("eikonal_smooth_{axis}"),
+                "eikonal/smooth.comp",
+                &[("AXIS", Spec::U32(axis)), ("SIGMA", Spec::F32(params.sigma)), ("SLAB", Spec::I32(nz as i32))],
+            )
+        })
         .collect::<GpuResult<_>>()?;
     let voxel = volume.voxel_size();
-    let gradient = pipeline("eikonal_gradient", "eikonal/gradient.comp", &[f(voxel.x), f(voxel.y), f(voxel.z), nz])?;
+    let gradient = pipeline(
+        "eikonal_gradient",
+        "eikonal/gradient.comp",
+        &[
+            ("VOXEL_X", Spec::F32(voxel.x)),
+            ("VOXEL_Y", Spec::F32(voxel.y)),
+            ("VOXEL_Z", Spec::F32(voxel.z)),
+            ("SLAB", Spec::I32(nz as i32)),
+        ],
+    )?;
 
     let mut samples: Vec<f32> = Vec::with_capacity(fields.voxels() * channels as usize);
     for c in 0..channels as usize {

@@ -15,6 +15,7 @@ use std::sync::Arc;
 
 use crate::gpu::{
     vk, Access, Buffer, ComputePipeline, DescriptorSet, DescriptorSetLayout, GpuContext, GpuResult, MemoryLocation,
+    Spec,
 };
 use crate::graph::{Bindings, BoundSet, BufferId, Frame, FrameGraph};
 use crate::{
@@ -152,7 +153,7 @@ impl HistoPyramid {
             .storage(LIGHT_BINDING_PAIRS, &pairs)
             .storage(LIGHT_BINDING_HISTORY, &history)
             .build(ctx, "histopyramid")?;
-        let spec = [capacity, history_len];
+        let spec = [("CAPACITY", Spec::U32(capacity)), ("HISTORY_LEN", Spec::U32(history_len))];
         let pipeline = |name: &str, shader: &str| ComputePipeline::new(ctx, name, shader, &[set.layout()], 4, &spec);
         let reduce = pipeline("histopyramid_reduce", "eikonal/histopyramid_reduce.comp")?;
         let total = pipeline("histopyramid_total", "eikonal/histopyramid_total.comp")?;

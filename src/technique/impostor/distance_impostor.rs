@@ -38,7 +38,7 @@ use crate::frame::gpu_scene::{cube_face_views, GpuScene};
 use crate::frame::targets::{Targets, DEPTH_FORMAT};
 use crate::gpu::{
     vk, Access, Blend, Buffer, Clear, Cmd, ComputePipeline, DepthState, DescriptorSet, GpuContext, GpuResult,
-    GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc, ImageViewKind, RenderTarget, Sampler, SamplerDesc,
+    GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc, ImageViewKind, RenderTarget, Sampler, SamplerDesc, Spec,
 };
 use crate::graph::{Bindings, BoundSet, Frame, FrameGraph, ImageId, PassBuilder};
 use crate::scene::techniques::{ImpostorFresnel, ImpostorMaps, ImpostorParams, ImpostorUpdate};
@@ -484,7 +484,7 @@ impl ImpostorMap {
             "impostor/probe.comp",
             &[set.layout()],
             std::mem::size_of::<ProbePush>() as u32,
-            &[iterations, channel],
+            &[("ITERATIONS", Spec::U32(iterations)), ("DISTANCE_CHANNEL", Spec::U32(channel))],
         )?;
         let buffer_id = graph.register_buffer(&buffer);
         let mode = if fresnel { IMPOSTOR_PROBE_FRESNEL } else { IMPOSTOR_PROBE_HIT };
@@ -575,8 +575,12 @@ impl ShadePass {
         let pipeline = GraphicsPipeline::new(
             ctx,
             &GraphicsPipelineDesc {
-                // Constants 0..2 of glsl/impostor/shade_common.glsl.
-                specialization: &[params.iterations, channel, u32::from(params.fresnel == ImpostorFresnel::Exact)],
+                // glsl/impostor/shade_common.glsl.
+                specialization: &[
+                    ("ITERATIONS", Spec::U32(params.iterations)),
+                    ("DISTANCE_CHANNEL", Spec::U32(channel)),
+                    ("FRESNEL_EXACT", Spec::U32(u32::from(params.fresnel == ImpostorFresnel::Exact))),
+                ],
                 ..GraphicsPipelineDesc::fullscreen(name, fragment_shader)
             },
             &[s.frame_layout, sets.layout()],

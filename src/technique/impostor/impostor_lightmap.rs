@@ -46,7 +46,7 @@ use crate::frame::gpu_scene::GpuScene;
 use crate::frame::targets::{Targets, DEPTH_FORMAT};
 use crate::gpu::{
     vk, Access, Blend, Clear, DepthState, DescriptorSet, GpuContext, GpuResult, GraphicsPipeline, GraphicsPipelineDesc,
-    Image, ImageDesc, ImageViewKind, RenderTarget, Sampler, SamplerDesc,
+    Image, ImageDesc, ImageViewKind, RenderTarget, Sampler, SamplerDesc, Spec,
 };
 use crate::graph::{Bindings, BoundSet, Frame, FrameGraph, ImageId};
 use crate::scene::techniques::{ImpostorLightmapParams, ImpostorParams};
@@ -365,7 +365,7 @@ impl ImpostorLightmap {
             ctx,
             &GraphicsPipelineDesc {
                 blend: &[Blend::Off, Blend::Off],
-                specialization: &[params.iterations],
+                specialization: &[("ITERATIONS", Spec::U32(params.iterations))],
                 ..GraphicsPipelineDesc::mesh(
                     IMPOSTOR_LIGHTMAP_CAUSTIC_MAP,
                     "impostor/lightmap_caustic.vert",

@@ -58,7 +58,7 @@ use crate::frame::gpu_scene::GpuScene;
 use crate::frame::targets::DEPTH_FORMAT;
 use crate::gpu::{
     vk, Access, Buffer, Clear, DepthState, DescriptorSet, DescriptorSetLayout, GpuContext, GpuResult, GraphicsPipeline,
-    GraphicsPipelineDesc, Image, ImageDesc, ImageViewKind, RenderTarget, Sampler, SamplerDesc,
+    GraphicsPipelineDesc, Image, ImageDesc, ImageViewKind, RenderTarget, Sampler, SamplerDesc, Spec, Specs,
 };
 use crate::graph::{Bindings, BoundSet, Frame, FrameGraph, ImageId};
 use crate::scene::techniques::RecursiveExit;
@@ -225,7 +225,7 @@ pub fn rect_for(scene: &Scene, object: usize, origin_r: Vec3, layer: u32) -> Opt
 pub struct ImpostorShading<'a> {
     pub fragment_shader: &'static str,
     pub set: BoundSet,
-    pub specialization: &'a [u32],
+    pub specialization: Specs<'a>,
 }
 
 /// The rectangle set of one OBJ_R: its rectangles are `rects[first .. first + count]` of
@@ -700,15 +700,14 @@ impl NearbyImpostors {
             RecursiveExit::BoundingSphere => 0,
         };
         let spec = [
-            desc.correction_iterations,
-            desc.correction_tolerance.to_bits(),
-            desc.seed_samples,
-            exit_mode,
-            desc.search_steps,
-            desc.max_iterations,
+            ("NEARBY_ITERATIONS", Spec::U32(desc.correction_iterations)),
+            ("NEARBY_TOLERANCE", Spec::F32(desc.correction_tolerance)),
+            ("NEARBY_SEEDS", Spec::U32(desc.seed_samples)),
+            ("NEARBY_EXIT", Spec::U32(exit_mode)),
+            ("SEARCH_STEPS", Spec::U32(desc.search_steps)),
+            ("MAX_ITERATIONS", Spec::U32(desc.max_iterations)),
         ];
-        // An ImpostorShading's constants follow those 0..5.
-        let shading_spec: Vec<u32> =
+        let shading_spec: Vec<_> =
             spec.iter().chain(shading.as_ref().map_or(&[][..], |sh| sh.specialization)).copied().collect();
         let mut layouts = vec![frame_layout, sets.layout()];
         layouts.extend(shading.as_ref().map(|sh| sh.set.layout()));
@@ -729,15 +728,20 @@ impl NearbyImpostors {
             // not y-flipped: its back faces come out counter-clockwise, i.e. as the
             // pipeline's front faces, so BACK is the mode that culls the faces towards O_R.
             // The nearest front faces: the other cull mode (FRONT 1 flips the normal to face O_R).
-            let faces_pass = |label: &str, image: &Image, side: &'static [u32], cull| -> GpuResult<_> {
+            let faces_pass = |label: &str, image: &Image, side: Specs<'static>, cull| -> GpuResult<_> {
                 let target = layered(label, image)?;
                 let desc = pipeline_desc("nearby/impostor_back.frag", side, cull);
                 let pipeline = GraphicsPipeline::new(ctx, &desc, &[frame_layout], push_size, &target.pass)?;
                 Ok((pipeline, target))
             };
-            let back_faces = faces_pass(BACK_PASS, &back, &[0], vk::CullModeFlags::BACK)?;
+            let back_faces = faces_pass(BACK_PASS, &back, &[("FRONT", Spec::U32(0))], vk::CullModeFlags::BACK)?;
             let front_faces = if with_front {
-                Some(faces_pass(&format!("{BACK_PASS}_front"), &front, &[1], vk::CullModeFlags::FRONT)?)
+                Some(faces_pass(
+                    &format!("{BACK_PASS}_front"),
+                    &front,
+                    &[("FRONT", Spec::U32(1))],
+                    vk::CullModeFlags::FRONT,
+                )?)
             } else {
                 None
             };

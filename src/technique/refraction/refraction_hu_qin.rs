@@ -18,6 +18,7 @@
 //!   `correction_tolerance`), the environment map where no rectangle is hit
 //!   (glsl/include/nearby.glsl); reflection and refraction are weighted by Fresnel.
 
+use crate::gpu::Spec;
 use crate::graph::Frame;
 use crate::scene::techniques::{HuQinParams, RecursiveExit};
 use crate::scene::{Material, Scene};
@@ -215,15 +216,14 @@ impl HuQinPass {
                     (BINDING_NEARBY_TEXTURE, &nearby.texture, nearby.texture_id),
                 ],
                 buffers: &[(BINDING_NEARBY_RECTS, &nearby.rect_buffer)],
-                // Specialisation constants 1..7 of hu_qin.frag.
                 specialization: &[
-                    params.search_steps,
-                    params.tolerance.to_bits(),
-                    params.max_iterations,
-                    u32::from(params.assume_back_facing),
-                    params.correction_iterations,
-                    params.correction_tolerance.to_bits(),
-                    params.seed_samples,
+                    ("SEARCH_STEPS", Spec::U32(params.search_steps)),
+                    ("TOLERANCE", Spec::F32(params.tolerance)),
+                    ("MAX_ITERATIONS", Spec::U32(params.max_iterations)),
+                    ("ASSUME_BACK_FACING", Spec::U32(u32::from(params.assume_back_facing))),
+                    ("NEARBY_ITERATIONS", Spec::U32(params.correction_iterations)),
+                    ("NEARBY_TOLERANCE", Spec::F32(params.correction_tolerance)),
+                    ("NEARBY_SEEDS", Spec::U32(params.seed_samples)),
                 ],
                 debug: params.debug,
             },

@@ -21,7 +21,7 @@ use crate::frame::gpu_scene::{Draw, GpuScene};
 use crate::frame::targets::{Targets, DEPTH_FORMAT, HDR_FORMAT};
 use crate::gpu::{
     vk, Access, Blend, Buffer, Clear, DepthState, DescriptorSet, DescriptorSetLayout, GpuContext, GpuResult,
-    GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc, RenderTarget, Sampler,
+    GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc, RenderTarget, Sampler, Spec, Specs,
 };
 use crate::graph::{Bindings, BoundSet, Frame, FrameGraph, ImageId};
 use crate::scene::{Material, Scene};
@@ -143,7 +143,7 @@ impl RefractorLayers {
                 ctx,
                 &GraphicsPipelineDesc {
                     cull: kind.cull(),
-                    specialization: &[kind.mode(), has_d_n],
+                    specialization: &[("MODE", Spec::U32(kind.mode())), ("HAS_DN", Spec::U32(has_d_n))],
                     ..GraphicsPipelineDesc::mesh(
                         &label,
                         "refraction/layers.vert",
@@ -211,8 +211,8 @@ pub struct ShadeDesc<'a> {
     pub inputs: &'a [(u32, &'a Image, ImageId)],
     /// Set-1 storage buffers read by the fragment shader: (binding, buffer).
     pub buffers: &'a [(u32, &'a Buffer)],
-    /// Specialisation constants 1, 2, ... (constant 0 is the debug flag).
-    pub specialization: &'a [u32],
+    /// Specialisation constants besides `DEBUG` (the debug flag).
+    pub specialization: Specs<'a>,
     pub debug: bool,
 }
 
@@ -249,7 +249,7 @@ impl ShadePass {
             set = set.storage(b, buffer);
         }
         let set = set.build(ctx, name)?;
-        let mut specialization = vec![u32::from(desc.debug)];
+        let mut specialization = vec![("DEBUG", Spec::U32(u32::from(desc.debug)))];
         specialization.extend_from_slice(desc.specialization);
         let blend = vec![Blend::Off; 1 + debug.len()];
         let pipeline = GraphicsPipeline::new(
