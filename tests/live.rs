@@ -149,6 +149,9 @@ fn a_resize_makes_new_targets_and_keeps_the_scene() {
         for made in ["gbuffer", "deferred_shading", "tonemap"] {
             assert!(u.recreated.contains(&made), "{scene}: {made} not re-created by a resize: {u:?}");
         }
+        // Around the new targets with the pipelines they had: no pipeline depends on the
+        // image's size (its viewport and scissor are dynamic state).
+        assert!(u.pipelines.made == 0 && u.pipelines.reused > 0, "{scene}: pipelines made by a resize: {u:?}");
     }
 }
 

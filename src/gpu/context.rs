@@ -111,6 +111,9 @@ pub struct GpuContext {
     >,
     pub(crate) samplers:
         Mutex<std::collections::HashMap<super::SamplerDesc, std::sync::Weak<super::image::SharedSampler>>>,
+    /// Live pipelines by description (src/gpu/pipeline.rs), and how often each was reused.
+    pub(crate) pipelines: Mutex<super::pipeline::PipelineCache>,
+    pub(crate) pipeline_counts: Mutex<super::PipelineCounts>,
 }
 
 impl GpuContext {
@@ -132,6 +135,11 @@ impl GpuContext {
     /// The shaders loaded since the last call.
     pub fn take_shader_log(&self) -> Vec<String> {
         std::mem::take(&mut *self.shader_log.lock().unwrap_or_else(|e| e.into_inner()))
+    }
+
+    /// The pipelines made, and those found live in the cache, since the last call.
+    pub fn take_pipeline_counts(&self) -> super::PipelineCounts {
+        std::mem::take(&mut *self.pipeline_counts.lock().unwrap_or_else(|e| e.into_inner()))
     }
 
     /// Where long work on this device (the eikonal light simulation) reports its progress:
@@ -353,6 +361,8 @@ impl GpuContext {
             progress: Mutex::default(),
             render_passes: Mutex::default(),
             samplers: Mutex::default(),
+            pipelines: Mutex::default(),
+            pipeline_counts: Mutex::default(),
         }))
     }
 

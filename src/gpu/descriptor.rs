@@ -11,6 +11,8 @@ pub struct DescriptorSetLayout {
     ctx: Arc<GpuContext>,
     pub(crate) raw: vk::DescriptorSetLayout,
     pool: vk::DescriptorPool,
+    /// What it was made from: a pipeline's cache key (src/gpu/pipeline.rs).
+    pub(super) bindings: Vec<Binding>,
 }
 
 /// One binding: (binding, type, stages). Arrays are not needed: lavapipe has no descriptor
@@ -46,7 +48,7 @@ impl DescriptorSetLayout {
         // SAFETY: valid create info.
         let pool = unsafe { device.create_descriptor_pool(&pool_info, None) }.vk("vkCreateDescriptorPool")?;
         ctx.set_name(pool, name);
-        Ok(DescriptorSetLayout { ctx: ctx.clone(), raw, pool })
+        Ok(DescriptorSetLayout { ctx: ctx.clone(), raw, pool, bindings: bindings.to_vec() })
     }
 
     /// Allocate a set and fill it with `writes`.

@@ -34,7 +34,8 @@ pub use error::{GpuError, GpuResult};
 pub use image::{Image, ImageDesc, ImageViewKind, Sampler, SamplerDesc};
 pub use overlay::Overlay;
 pub use pipeline::{
-    Blend, ComputePipeline, DepthState, GraphicsPipeline, GraphicsPipelineDesc, Spec, Specs, VertexLayout,
+    Blend, ComputePipeline, DepthState, GraphicsPipeline, GraphicsPipelineDesc, PipelineCounts, Spec, Specs,
+    VertexLayout,
 };
 pub use render_pass::{Framebuffer, RenderPass, RenderTarget};
 pub use swapchain::{Acquired, Presented, Semaphore, Swapchain, SwapchainImage};

@@ -1,5 +1,13 @@
 //! Pipeline layouts, graphics pipelines (for explicit render passes) and compute pipelines.
-use std::sync::Arc;
+//!
+//! Pipelines are cached by description, as render passes are: the context holds each live
+//! pipeline weakly under the hash of everything it is made from (its shaders' SPIR-V, its
+//! specialisation, its set layouts' bindings, its push-constant size, its fixed-function
+//! state and its render pass's description). A technique re-created around new targets (a
+//! resize) gets the pipelines of the one it replaces, which is still alive while the new one
+//! is built; an edited shader has new SPIR-V, so the hot reload makes a new pipeline.
+use std::hash::{Hash, Hasher};
+use std::sync::{Arc, Weak};
 
 use ash::vk;
 
@@ -74,6 +82,77 @@ fn specialize(
     Ok((specs.iter().map(|(_, v)| v.bits()).collect(), entries))
 }
 
+/// A pipeline and its layout, shared by every pipeline object of one description.
+pub(crate) struct SharedPipeline {
+    ctx: Arc<GpuContext>,
+    raw: vk::Pipeline,
+    // Destroyed after the pipeline (fields drop after `Drop::drop`).
+    layout: PipelineLayout,
+}
+
+impl Drop for SharedPipeline {
+    fn drop(&mut self) {
+        // SAFETY: dropped with the renderer after the device is idle.
+        unsafe { self.ctx.raw().destroy_pipeline(self.raw, None) };
+    }
+}
+
+/// The context's pipelines by the hash of their description ([`pipeline_key`]).
+pub(crate) type PipelineCache = std::collections::HashMap<u64, Weak<SharedPipeline>>;
+
+/// How many pipelines were made and how many were found live in the cache.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PipelineCounts {
+    pub made: usize,
+    pub reused: usize,
+}
+
+/// The hash of what a pipeline is made from, besides its fixed-function state `state`.
+fn pipeline_key(
+    name: &str,
+    stages: &[(&str, &ShaderCode)],
+    specialization: &(Vec<u32>, Vec<Vec<vk::SpecializationMapEntry>>),
+    sets: &[&DescriptorSetLayout],
+    push_bytes: u32,
+    state: impl Hash,
+) -> u64 {
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    name.hash(&mut h);
+    for (path, code) in stages {
+        (path, &code.words).hash(&mut h);
+    }
+    let (data, entries) = specialization;
+    data.hash(&mut h);
+    for e in entries.iter().flatten() {
+        (e.constant_id, e.offset, e.size).hash(&mut h);
+    }
+    for set in sets {
+        set.bindings.hash(&mut h);
+    }
+    (push_bytes, state).hash(&mut h);
+    h.finish()
+}
+
+/// The live pipeline of `key`, or the one `make` creates (with its layout).
+fn cached(
+    ctx: &Arc<GpuContext>,
+    key: u64,
+    make: impl FnOnce() -> GpuResult<(vk::Pipeline, PipelineLayout)>,
+) -> GpuResult<Arc<SharedPipeline>> {
+    let mut cache = ctx.pipelines.lock().unwrap_or_else(|e| e.into_inner());
+    let mut counts = ctx.pipeline_counts.lock().unwrap_or_else(|e| e.into_inner());
+    if let Some(shared) = cache.get(&key).and_then(Weak::upgrade) {
+        counts.reused += 1;
+        return Ok(shared);
+    }
+    let (raw, layout) = make()?;
+    counts.made += 1;
+    let shared = Arc::new(SharedPipeline { ctx: ctx.clone(), raw, layout });
+    cache.retain(|_, p| p.strong_count() > 0);
+    cache.insert(key, Arc::downgrade(&shared));
+    Ok(shared)
+}
+
 struct PipelineLayout {
     ctx: Arc<GpuContext>,
     pub(crate) raw: vk::PipelineLayout,
@@ -103,7 +182,7 @@ impl Drop for PipelineLayout {
 }
 
 /// Vertex input of a graphics pipeline.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum VertexLayout {
     /// No vertex buffers (full-screen triangle, points generated from gl_VertexIndex).
     None,
@@ -111,13 +190,13 @@ pub enum VertexLayout {
     Mesh,
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Blend {
     Off,
     Additive,
 }
 
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, Hash)]
 pub struct DepthState {
     pub test: bool,
     pub write: bool,
@@ -176,11 +255,9 @@ impl<'a> GraphicsPipelineDesc<'a> {
 }
 
 pub struct GraphicsPipeline {
-    ctx: Arc<GpuContext>,
     pub(crate) raw: vk::Pipeline,
     pub(crate) layout: vk::PipelineLayout,
-    /// The pipeline's own layout (its fields drop after `Drop::drop` destroyed the pipeline).
-    _layout: PipelineLayout,
+    _shared: Arc<SharedPipeline>,
 }
 
 fn shader_module(ctx: &GpuContext, path: &str, code: &ShaderCode) -> GpuResult<vk::ShaderModule> {
@@ -201,128 +278,125 @@ impl GraphicsPipeline {
         push_bytes: u32,
         pass: &RenderPass,
     ) -> GpuResult<Self> {
-        let layout = PipelineLayout::new(ctx, desc.name, sets, push_bytes)?;
         let (vs_code, fs_code) = (ctx.shader(desc.vertex_shader)?, ctx.shader(desc.fragment_shader)?);
-        let (data, entries) =
-            specialize(&[(desc.vertex_shader, &vs_code), (desc.fragment_shader, &fs_code)], desc.specialization)?;
-        let vs = shader_module(ctx, desc.vertex_shader, &vs_code)?;
-        let fs = shader_module(ctx, desc.fragment_shader, &fs_code)?;
-        let spec: Vec<_> = entries
-            .iter()
-            .map(|e| vk::SpecializationInfo::default().map_entries(e).data(bytemuck::cast_slice(&data)))
-            .collect();
-        let stages = [
-            vk::PipelineShaderStageCreateInfo::default()
-                .stage(vk::ShaderStageFlags::VERTEX)
-                .module(vs)
-                .name(c"main")
-                .specialization_info(&spec[0]),
-            vk::PipelineShaderStageCreateInfo::default()
-                .stage(vk::ShaderStageFlags::FRAGMENT)
-                .module(fs)
-                .name(c"main")
-                .specialization_info(&spec[1]),
-        ];
-        let bindings =
-            [vk::VertexInputBindingDescription { binding: 0, stride: 32, input_rate: vk::VertexInputRate::VERTEX }];
-        let attributes = [
-            vk::VertexInputAttributeDescription {
-                location: 0,
-                binding: 0,
-                format: vk::Format::R32G32B32_SFLOAT,
-                offset: 0,
-            },
-            vk::VertexInputAttributeDescription {
-                location: 1,
-                binding: 0,
-                format: vk::Format::R32G32B32_SFLOAT,
-                offset: 12,
-            },
-            vk::VertexInputAttributeDescription {
-                location: 2,
-                binding: 0,
-                format: vk::Format::R32G32_SFLOAT,
-                offset: 24,
-            },
-        ];
-        let vertex_input = match desc.vertex {
-            VertexLayout::None => vk::PipelineVertexInputStateCreateInfo::default(),
-            VertexLayout::Mesh => vk::PipelineVertexInputStateCreateInfo::default()
-                .vertex_binding_descriptions(&bindings)
-                .vertex_attribute_descriptions(&attributes),
-        };
-        let input_assembly = vk::PipelineInputAssemblyStateCreateInfo::default().topology(desc.topology);
-        let viewport = vk::PipelineViewportStateCreateInfo::default().viewport_count(1).scissor_count(1);
-        let raster = vk::PipelineRasterizationStateCreateInfo::default()
-            .polygon_mode(vk::PolygonMode::FILL)
-            .cull_mode(desc.cull)
-            .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
-            .line_width(1.0);
-        let multisample =
-            vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::TYPE_1);
-        let depth = vk::PipelineDepthStencilStateCreateInfo::default()
-            .depth_test_enable(desc.depth.test)
-            .depth_write_enable(desc.depth.write)
-            .depth_compare_op(desc.depth.compare);
-        let blends: Vec<_> = desc
-            .blend
-            .iter()
-            .map(|b| match b {
-                Blend::Off => {
-                    vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA)
-                }
-                Blend::Additive => vk::PipelineColorBlendAttachmentState::default()
-                    .blend_enable(true)
-                    .src_color_blend_factor(vk::BlendFactor::ONE)
-                    .dst_color_blend_factor(vk::BlendFactor::ONE)
-                    .color_blend_op(vk::BlendOp::ADD)
-                    .src_alpha_blend_factor(vk::BlendFactor::ONE)
-                    .dst_alpha_blend_factor(vk::BlendFactor::ONE)
-                    .alpha_blend_op(vk::BlendOp::ADD)
-                    .color_write_mask(vk::ColorComponentFlags::RGBA),
-            })
-            .collect();
-        let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blends);
-        let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
-        let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
-        let info = vk::GraphicsPipelineCreateInfo::default()
-            .stages(&stages)
-            .vertex_input_state(&vertex_input)
-            .input_assembly_state(&input_assembly)
-            .viewport_state(&viewport)
-            .rasterization_state(&raster)
-            .multisample_state(&multisample)
-            .depth_stencil_state(&depth)
-            .color_blend_state(&blend)
-            .dynamic_state(&dynamic)
-            .layout(layout.raw)
-            .render_pass(pass.raw)
-            .subpass(0);
-        // SAFETY: every referenced state struct lives until the call returns.
-        let result = unsafe { ctx.raw().create_graphics_pipelines(vk::PipelineCache::null(), &[info], None) };
-        // SAFETY: modules are no longer needed once the pipeline exists (or failed).
-        unsafe {
-            ctx.raw().destroy_shader_module(vs, None);
-            ctx.raw().destroy_shader_module(fs, None);
-        }
-        let raw = result.map_err(|(_, e)| e).vk("vkCreateGraphicsPipelines")?[0];
-        ctx.set_name(raw, desc.name);
-        Ok(GraphicsPipeline { ctx: ctx.clone(), raw, layout: layout.raw, _layout: layout })
-    }
-}
-
-impl Drop for GraphicsPipeline {
-    fn drop(&mut self) {
-        // SAFETY: dropped with the renderer after the device is idle.
-        unsafe { self.ctx.raw().destroy_pipeline(self.raw, None) };
+        let shaders = [(desc.vertex_shader, &vs_code), (desc.fragment_shader, &fs_code)];
+        let specialization = specialize(&shaders, desc.specialization)?;
+        let state = (desc.vertex, desc.topology, desc.cull, desc.depth, desc.blend, &pass.desc);
+        let key = pipeline_key(desc.name, &shaders, &specialization, sets, push_bytes, state);
+        let shared = cached(ctx, key, || {
+            let (data, entries) = &specialization;
+            let layout = PipelineLayout::new(ctx, desc.name, sets, push_bytes)?;
+            let vs = shader_module(ctx, desc.vertex_shader, &vs_code)?;
+            let fs = shader_module(ctx, desc.fragment_shader, &fs_code)?;
+            let spec: Vec<_> = entries
+                .iter()
+                .map(|e| vk::SpecializationInfo::default().map_entries(e).data(bytemuck::cast_slice(&data)))
+                .collect();
+            let stages = [
+                vk::PipelineShaderStageCreateInfo::default()
+                    .stage(vk::ShaderStageFlags::VERTEX)
+                    .module(vs)
+                    .name(c"main")
+                    .specialization_info(&spec[0]),
+                vk::PipelineShaderStageCreateInfo::default()
+                    .stage(vk::ShaderStageFlags::FRAGMENT)
+                    .module(fs)
+                    .name(c"main")
+                    .specialization_info(&spec[1]),
+            ];
+            let bindings =
+                [vk::VertexInputBindingDescription { binding: 0, stride: 32, input_rate: vk::VertexInputRate::VERTEX }];
+            let attributes = [
+                vk::VertexInputAttributeDescription {
+                    location: 0,
+                    binding: 0,
+                    format: vk::Format::R32G32B32_SFLOAT,
+                    offset: 0,
+                },
+                vk::VertexInputAttributeDescription {
+                    location: 1,
+                    binding: 0,
+                    format: vk::Format::R32G32B32_SFLOAT,
+                    offset: 12,
+                },
+                vk::VertexInputAttributeDescription {
+                    location: 2,
+                    binding: 0,
+                    format: vk::Format::R32G32_SFLOAT,
+                    offset: 24,
+                },
+            ];
+            let vertex_input = match desc.vertex {
+                VertexLayout::None => vk::PipelineVertexInputStateCreateInfo::default(),
+                VertexLayout::Mesh => vk::PipelineVertexInputStateCreateInfo::default()
+                    .vertex_binding_descriptions(&bindings)
+                    .vertex_attribute_descriptions(&attributes),
+            };
+            let input_assembly = vk::PipelineInputAssemblyStateCreateInfo::default().topology(desc.topology);
+            let viewport = vk::PipelineViewportStateCreateInfo::default().viewport_count(1).scissor_count(1);
+            let raster = vk::PipelineRasterizationStateCreateInfo::default()
+                .polygon_mode(vk::PolygonMode::FILL)
+                .cull_mode(desc.cull)
+                .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
+                .line_width(1.0);
+            let multisample =
+                vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::TYPE_1);
+            let depth = vk::PipelineDepthStencilStateCreateInfo::default()
+                .depth_test_enable(desc.depth.test)
+                .depth_write_enable(desc.depth.write)
+                .depth_compare_op(desc.depth.compare);
+            let blends: Vec<_> =
+                desc.blend
+                    .iter()
+                    .map(|b| match b {
+                        Blend::Off => vk::PipelineColorBlendAttachmentState::default()
+                            .color_write_mask(vk::ColorComponentFlags::RGBA),
+                        Blend::Additive => vk::PipelineColorBlendAttachmentState::default()
+                            .blend_enable(true)
+                            .src_color_blend_factor(vk::BlendFactor::ONE)
+                            .dst_color_blend_factor(vk::BlendFactor::ONE)
+                            .color_blend_op(vk::BlendOp::ADD)
+                            .src_alpha_blend_factor(vk::BlendFactor::ONE)
+                            .dst_alpha_blend_factor(vk::BlendFactor::ONE)
+                            .alpha_blend_op(vk::BlendOp::ADD)
+                            .color_write_mask(vk::ColorComponentFlags::RGBA),
+                    })
+                    .collect();
+            let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blends);
+            let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+            let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
+            let info = vk::GraphicsPipelineCreateInfo::default()
+                .stages(&stages)
+                .vertex_input_state(&vertex_input)
+                .input_assembly_state(&input_assembly)
+                .viewport_state(&viewport)
+                .rasterization_state(&raster)
+                .multisample_state(&multisample)
+                .depth_stencil_state(&depth)
+                .color_blend_state(&blend)
+                .dynamic_state(&dynamic)
+                .layout(layout.raw)
+                .render_pass(pass.raw)
+                .subpass(0);
+            // SAFETY: every referenced state struct lives until the call returns.
+            let result = unsafe { ctx.raw().create_graphics_pipelines(vk::PipelineCache::null(), &[info], None) };
+            // SAFETY: modules are no longer needed once the pipeline exists (or failed).
+            unsafe {
+                ctx.raw().destroy_shader_module(vs, None);
+                ctx.raw().destroy_shader_module(fs, None);
+            }
+            let raw = result.map_err(|(_, e)| e).vk("vkCreateGraphicsPipelines")?[0];
+            ctx.set_name(raw, desc.name);
+            Ok((raw, layout))
+        })?;
+        Ok(GraphicsPipeline { raw: shared.raw, layout: shared.layout.raw, _shared: shared })
     }
 }
 
 pub struct ComputePipeline {
-    ctx: Arc<GpuContext>,
     pub(crate) raw: vk::Pipeline,
     pub(crate) layout: vk::PipelineLayout,
-    _layout: PipelineLayout,
+    _shared: Arc<SharedPipeline>,
 }
 
 impl ComputePipeline {
@@ -335,31 +409,29 @@ impl ComputePipeline {
         push_bytes: u32,
         specialization: Specs<'_>,
     ) -> GpuResult<Self> {
-        let layout = PipelineLayout::new(ctx, name, sets, push_bytes)?;
         let code = ctx.shader(shader)?;
-        let (data, entries) = specialize(&[(shader, &code)], specialization)?;
-        let module = shader_module(ctx, shader, &code)?;
-        let spec = vk::SpecializationInfo::default().map_entries(&entries[0]).data(bytemuck::cast_slice(&data));
-        let stage = vk::PipelineShaderStageCreateInfo::default()
-            .stage(vk::ShaderStageFlags::COMPUTE)
-            .module(module)
-            .name(c"main")
-            .specialization_info(&spec);
-        let info = vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout.raw);
-        // SAFETY: valid create info.
-        let result = unsafe { ctx.raw().create_compute_pipelines(vk::PipelineCache::null(), &[info], None) };
-        // SAFETY: module no longer needed.
-        unsafe { ctx.raw().destroy_shader_module(module, None) };
-        let raw = result.map_err(|(_, e)| e).vk("vkCreateComputePipelines")?[0];
-        ctx.set_name(raw, name);
-        Ok(ComputePipeline { ctx: ctx.clone(), raw, layout: layout.raw, _layout: layout })
-    }
-}
-
-impl Drop for ComputePipeline {
-    fn drop(&mut self) {
-        // SAFETY: dropped with the renderer after the device is idle.
-        unsafe { self.ctx.raw().destroy_pipeline(self.raw, None) };
+        let specialization = specialize(&[(shader, &code)], specialization)?;
+        let key = pipeline_key(name, &[(shader, &code)], &specialization, sets, push_bytes, "compute");
+        let shared = cached(ctx, key, || {
+            let (data, entries) = &specialization;
+            let layout = PipelineLayout::new(ctx, name, sets, push_bytes)?;
+            let module = shader_module(ctx, shader, &code)?;
+            let spec = vk::SpecializationInfo::default().map_entries(&entries[0]).data(bytemuck::cast_slice(&data));
+            let stage = vk::PipelineShaderStageCreateInfo::default()
+                .stage(vk::ShaderStageFlags::COMPUTE)
+                .module(module)
+                .name(c"main")
+                .specialization_info(&spec);
+            let info = vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout.raw);
+            // SAFETY: valid create info.
+            let result = unsafe { ctx.raw().create_compute_pipelines(vk::PipelineCache::null(), &[info], None) };
+            // SAFETY: module no longer needed.
+            unsafe { ctx.raw().destroy_shader_module(module, None) };
+            let raw = result.map_err(|(_, e)| e).vk("vkCreateComputePipelines")?[0];
+            ctx.set_name(raw, name);
+            Ok((raw, layout))
+        })?;
+        Ok(ComputePipeline { raw: shared.raw, layout: shared.layout.raw, _shared: shared })
     }
 }
 

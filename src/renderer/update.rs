@@ -56,6 +56,9 @@ pub struct Update {
     /// The image size changed: new image-sized targets, and the techniques with passes at
     /// the image's size re-created on them.
     pub resized: bool,
+    /// The re-created techniques' pipelines: made anew, or kept because the same one was
+    /// still live (src/gpu/pipeline.rs).
+    pub pipelines: crate::gpu::PipelineCounts,
     /// Wall-clock time of the update, in ms.
     pub ms: u64,
 }
@@ -85,6 +88,10 @@ impl Update {
         }
         if parts.is_empty() {
             parts.push("updated the uniforms only".to_string());
+        }
+        let crate::gpu::PipelineCounts { made, reused } = self.pipelines;
+        if made + reused > 0 {
+            parts.push(format!("pipelines: {reused} kept, {made} made"));
         }
         parts.join("; ")
     }
@@ -272,6 +279,7 @@ impl Renderer {
             cache: &mut self.cache,
         };
         setup.cache.begin();
+        setup.ctx.take_pipeline_counts();
         let mut created = Vec::new();
         for i in (0..TECHNIQUES.len()).filter(|&i| changed(i)) {
             self.ctx.take_shader_log();
@@ -286,6 +294,7 @@ impl Renderer {
                 }
             }
         }
+        update.pipelines = self.ctx.take_pipeline_counts();
         // More passes than the timestamp pools were sized for: larger pools.
         if new_recipe.passes.len() > self.recipe.passes.len() {
             let pairs = new_recipe.passes.len() + super::EXTRA_TIMED_PASSES;

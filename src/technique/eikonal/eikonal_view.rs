@@ -229,7 +229,7 @@ pub struct VolumeTextures {
 /// The `eikonal_view` pass and the volume it renders.
 pub struct EikonalPass {
     // Bound by the view pass.
-    _volume: VolumeTextures,
+    _volume: std::rc::Rc<VolumeTextures>,
     view: FullscreenPass,
     // The nearby geometry of exit rays
     // (src/technique/eikonal/eikonal_nearby.rs): impostors (a 1x1 stand-in without rectangles)
@@ -267,7 +267,11 @@ impl EikonalPass {
         volume: &Volume,
         lights: &[crate::scene::Light],
     ) -> GpuResult<Self> {
-        let textures = prepare_volume(s.ctx, params, volume, s.graph)?;
+        // The sampled, smoothed and differentiated volume depends on the volume and sigma
+        // only: a resize or a change of another setting re-creates the pass around it.
+        let (ctx, graph) = (s.ctx, &mut *s.graph);
+        let key = crate::technique::cache_key(&(params.sigma, volume));
+        let textures = s.cache.get_or_try_insert(key, || prepare_volume(ctx, params, volume, graph))?;
         // Section 5.2's light simulation before the view pass is built.
         // Every light of the scene: their runs add into one pair of volumes.
         let light = match lights {
