@@ -290,7 +290,7 @@ impl GraphicsPipeline {
             let fs = shader_module(ctx, desc.fragment_shader, &fs_code)?;
             let spec: Vec<_> = entries
                 .iter()
-                .map(|e| vk::SpecializationInfo::default().map_entries(e).data(bytemuck::cast_slice(&data)))
+                .map(|e| vk::SpecializationInfo::default().map_entries(e).data(bytemuck::cast_slice(data)))
                 .collect();
             let stages = [
                 vk::PipelineShaderStageCreateInfo::default()
@@ -416,7 +416,7 @@ impl ComputePipeline {
             let (data, entries) = &specialization;
             let layout = PipelineLayout::new(ctx, name, sets, push_bytes)?;
             let module = shader_module(ctx, shader, &code)?;
-            let spec = vk::SpecializationInfo::default().map_entries(&entries[0]).data(bytemuck::cast_slice(&data));
+            let spec = vk::SpecializationInfo::default().map_entries(&entries[0]).data(bytemuck::cast_slice(data));
             let stage = vk::PipelineShaderStageCreateInfo::default()
                 .stage(vk::ShaderStageFlags::COMPUTE)
                 .module(module)
