@@ -249,23 +249,18 @@ impl GpuScene {
         let vertices = Buffer::with_data(
             ctx,
             "scene_vertices",
-            bytemuck::cast_slice(&vertices),
+            &vertices,
             vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER,
         )?;
         let indices = Buffer::with_data(
             ctx,
             "scene_indices",
-            bytemuck::cast_slice(&indices),
+            &indices,
             vk::BufferUsageFlags::INDEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER,
         )?;
         let mats: Vec<GpuMaterial> = scene.materials.iter().map(gpu_material).collect();
         let mats = if mats.is_empty() { vec![GpuMaterial::default()] } else { mats };
-        let materials = Buffer::with_data(
-            ctx,
-            "scene_materials",
-            bytemuck::cast_slice(&mats),
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-        )?;
+        let materials = Buffer::storage(ctx, "scene_materials", &mats)?;
 
         // Environment: always a texture (a constant is a 1x1 map) so one lookup serves all.
         let (w, h, texels) = match &scene.environment {

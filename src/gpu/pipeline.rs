@@ -95,12 +95,11 @@ impl PipelineLayout {
     }
 }
 
-impl Drop for PipelineLayout {
-    fn drop(&mut self) {
-        // SAFETY: dropped with the renderer after the device is idle.
-        unsafe { self.ctx.raw().destroy_pipeline_layout(self.raw, None) };
-    }
-}
+destroy_on_drop!(
+    PipelineLayout => destroy_pipeline_layout,
+    GraphicsPipeline => destroy_pipeline,
+    ComputePipeline => destroy_pipeline,
+);
 
 /// Vertex input of a graphics pipeline.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -311,13 +310,6 @@ impl GraphicsPipeline {
     }
 }
 
-impl Drop for GraphicsPipeline {
-    fn drop(&mut self) {
-        // SAFETY: dropped with the renderer after the device is idle.
-        unsafe { self.ctx.raw().destroy_pipeline(self.raw, None) };
-    }
-}
-
 pub struct ComputePipeline {
     ctx: Arc<GpuContext>,
     pub(crate) raw: vk::Pipeline,
@@ -353,13 +345,6 @@ impl ComputePipeline {
         let raw = result.map_err(|(_, e)| e).vk("vkCreateComputePipelines")?[0];
         ctx.set_name(raw, name);
         Ok(ComputePipeline { ctx: ctx.clone(), raw, layout: layout.raw, _layout: layout })
-    }
-}
-
-impl Drop for ComputePipeline {
-    fn drop(&mut self) {
-        // SAFETY: dropped with the renderer after the device is idle.
-        unsafe { self.ctx.raw().destroy_pipeline(self.raw, None) };
     }
 }
 

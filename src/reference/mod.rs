@@ -292,15 +292,13 @@ impl TraceGeometry {
         let objects: Vec<u32> = scene.objects.iter().map(|o| o.material as u32).collect();
         let (voxels, volume_dispersive) = volume_voxels(scene.volume.as_ref());
         let dispersion = volume_dispersive || dispersive_dielectric(scene);
-        let storage =
-            |name: &str, data: &[u8]| Buffer::with_data(ctx, name, data, vk::BufferUsageFlags::STORAGE_BUFFER);
         Ok(TraceGeometry {
             buffers: [
-                (REF_BINDING_TRIANGLES, storage("reference_triangles", bytemuck::cast_slice(&ordered))?),
-                (REF_BINDING_NODES, storage("reference_bvh", bytemuck::cast_slice(&bvh.nodes))?),
-                (REF_BINDING_SPHERES, storage("reference_spheres", bytemuck::cast_slice(&spheres))?),
-                (REF_BINDING_OBJECTS, storage("reference_objects", bytemuck::cast_slice(&objects))?),
-                (REF_BINDING_VOLUME, storage("reference_volume_voxels", bytemuck::cast_slice(&voxels))?),
+                (REF_BINDING_TRIANGLES, Buffer::storage(ctx, "reference_triangles", &ordered)?),
+                (REF_BINDING_NODES, Buffer::storage(ctx, "reference_bvh", &bvh.nodes)?),
+                (REF_BINDING_SPHERES, Buffer::storage(ctx, "reference_spheres", &spheres)?),
+                (REF_BINDING_OBJECTS, Buffer::storage(ctx, "reference_objects", &objects)?),
+                (REF_BINDING_VOLUME, Buffer::storage(ctx, "reference_volume_voxels", &voxels)?),
             ],
             triangles: ordered.len() as u32,
             nodes: bvh.nodes.len() as u32,
@@ -459,7 +457,7 @@ impl Reference {
         }
 
         use vk::BufferUsageFlags as U;
-        let ubo = Buffer::with_data(ctx, "reference_uniforms", bytemuck::bytes_of(&uniforms), U::STORAGE_BUFFER)?;
+        let ubo = Buffer::storage(ctx, "reference_uniforms", std::slice::from_ref(&uniforms))?;
         let pixels_n = (width * height) as usize;
         let accum =
             Buffer::new(ctx, "reference_accum", (pixels_n * 16) as u64, U::STORAGE_BUFFER, MemoryLocation::CpuToGpu)?;

@@ -322,12 +322,7 @@ impl CausticsMapPass {
             RefractorLayers::new(s, CAUSTICS_MAP_REFRACTORS, grid, specular_bounds(scene), occlusion)?;
 
         // 3. The splat pass.
-        let faces_buffer = Buffer::with_data(
-            ctx,
-            "caustic_faces",
-            bytemuck::cast_slice(&faces),
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-        )?;
+        let faces_buffer = Buffer::storage(ctx, "caustic_faces", &faces)?;
         // Linear filtering of the receivers' distances makes f(d) (Eq. 3) piecewise linear
         // instead of piecewise constant, so that the finite difference of Eq. 5 is not zero.
         let linear = Sampler::new(ctx, "caustic_linear", SamplerDesc::LINEAR_CLAMP)?;

@@ -210,8 +210,7 @@ impl PhotonCaustics {
         )?;
         let stand_in = [GpuPhotonRect::zeroed()];
         let data: &[GpuPhotonRect] = if rect_data.is_empty() { &stand_in } else { &rect_data };
-        let rects =
-            Buffer::with_data(ctx, "photon_rects", bytemuck::cast_slice(data), vk::BufferUsageFlags::STORAGE_BUFFER)?;
+        let rects = Buffer::storage(ctx, "photon_rects", data)?;
         let id = graph.register_image(&textures);
         // Defined contents ("no caustic") and the layout the shaders expect.
         ctx.one_shot(|cmd| {
@@ -276,8 +275,7 @@ impl PhotonBufferPass {
         let (refractors, faces, _) = RefractorLayers::new(s, PHOTON_BUFFER_REFRACTORS, size, bounds, false)?;
         let graph = &mut *s.graph;
         let n_faces = faces.len() as u32;
-        let faces_buffer =
-            Buffer::with_data(ctx, "photon_faces", bytemuck::cast_slice(&faces), vk::BufferUsageFlags::STORAGE_BUFFER)?;
+        let faces_buffer = Buffer::storage(ctx, "photon_faces", &faces)?;
         let sampler = Sampler::new(ctx, "photon_nearest", SamplerDesc::NEAREST_CLAMP)?;
         let usage = U::COLOR_ATTACHMENT | U::SAMPLED | U::TRANSFER_SRC;
         let mut image = |name: &str, width: u32, layers: u32| {

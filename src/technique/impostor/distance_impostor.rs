@@ -465,12 +465,7 @@ impl ImpostorMap {
         if data.is_empty() {
             return Ok(data);
         }
-        let buffer = Buffer::with_data(
-            ctx,
-            "impostor_probe_records",
-            bytemuck::cast_slice(&data),
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-        )?;
+        let buffer = Buffer::storage(ctx, "impostor_probe_records", &data)?;
         let sampler = Sampler::new(ctx, "impostor_probe_linear", SamplerDesc::LINEAR_CLAMP)?;
         let (image, image_id, channel) = self.distance_view();
         let set = Bindings::new(vk::ShaderStageFlags::COMPUTE)
