@@ -592,42 +592,36 @@ impl Reference {
                 let push = RefPush { iteration: it, seed, mode: 0, count: 0 };
                 frame
                     .pass("reference_camera")
-                    .write_buffer(accum, Access::ComputeWrite)
-                    .write_buffer(pixels, Access::ComputeWrite)
+                    .write(accum, Access::ComputeWrite)
+                    .write(pixels, Access::ComputeWrite)
                     .record(move |cmd| {
-                        cmd.bind_compute(camera, &[set]);
-                        cmd.push_compute(camera, &push);
-                        cmd.dispatch(pixel_groups, 1, 1);
+                        cmd.compute(camera, &[set], &push, [pixel_groups, 1, 1]);
                     });
                 if has_photons {
                     frame
                         .pass("reference_clear_grid")
-                        .write_buffer(grid, Access::TransferWrite)
-                        .write_buffer(counters, Access::TransferWrite)
+                        .write(grid, Access::TransferWrite)
+                        .write(counters, Access::TransferWrite)
                         .record(|cmd| {
                             cmd.fill_buffer(grid_buf, u32::MAX);
                             cmd.fill_buffer(counter_buf, 0);
                         });
                     frame
                         .pass("reference_photons")
-                        .write_buffer(photons, Access::ComputeWrite)
-                        .write_buffer(grid, Access::ComputeWrite)
-                        .write_buffer(counters, Access::ComputeWrite)
-                        .write_buffer(debug, Access::ComputeWrite)
+                        .write(photons, Access::ComputeWrite)
+                        .write(grid, Access::ComputeWrite)
+                        .write(counters, Access::ComputeWrite)
+                        .write(debug, Access::ComputeWrite)
                         .record(move |cmd| {
-                            cmd.bind_compute(photon_pipe, &[set]);
-                            cmd.push_compute(photon_pipe, &push);
-                            cmd.dispatch(photon_groups, 1, 1);
+                            cmd.compute(photon_pipe, &[set], &push, [photon_groups, 1, 1]);
                         });
                     frame
                         .pass("reference_gather")
-                        .read_buffer(photons, Access::ComputeRead)
-                        .read_buffer(grid, Access::ComputeRead)
-                        .write_buffer(pixels, Access::ComputeWrite)
+                        .read(photons, Access::ComputeRead)
+                        .read(grid, Access::ComputeRead)
+                        .write(pixels, Access::ComputeWrite)
                         .record(move |cmd| {
-                            cmd.bind_compute(gather, &[set]);
-                            cmd.push_compute(gather, &push);
-                            cmd.dispatch(pixel_groups, 1, 1);
+                            cmd.compute(gather, &[set], &push, [pixel_groups, 1, 1]);
                         });
                 }
             }
@@ -729,10 +723,8 @@ impl Reference {
             let push = RefPush { iteration: 0, seed: 0, mode: mode as u32, count: chunk.len() as u32 };
             self.ctx.one_shot(|cmd| {
                 let mut frame = graph.frame();
-                frame.pass("reference_probe").write_buffer(debug, Access::ComputeWrite).record(move |cmd| {
-                    cmd.bind_compute(probe, &[set]);
-                    cmd.push_compute(probe, &push);
-                    cmd.dispatch((chunk.len() as u32).div_ceil(REF_WORKGROUP), 1, 1);
+                frame.pass("reference_probe").write(debug, Access::ComputeWrite).record(move |cmd| {
+                    cmd.compute(probe, &[set], &push, [(chunk.len() as u32).div_ceil(REF_WORKGROUP), 1, 1]);
                 });
                 frame.execute(cmd, None);
                 graph.access_now(cmd, &[], &[(debug, Access::HostRead)]);

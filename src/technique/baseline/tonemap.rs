@@ -246,22 +246,18 @@ impl TonemapPass {
         frame
             .pass(TONEMAP_LOG_AVERAGE)
             .read(targets.hdr_id, Access::ComputeSampled)
-            .write_buffer(a.partials_id, Access::ComputeWrite)
+            .write(a.partials_id, Access::ComputeWrite)
             .record(move |cmd| {
-                cmd.bind_compute(pipeline, &[set]);
-                cmd.push_compute(pipeline, &push);
-                cmd.dispatch(groups[0], groups[1], 1);
+                cmd.compute(pipeline, &[set], &push, [groups[0], groups[1], 1]);
             });
         let pipeline = &a.adapt;
         frame
             .pass(TONEMAP_ADAPT)
-            .read_buffer(a.partials_id, Access::ComputeRead)
+            .read(a.partials_id, Access::ComputeRead)
             .write(a.state_id, Access::ComputeWrite)
-            .write_buffer(a.stats_id, Access::ComputeWrite)
+            .write(a.stats_id, Access::ComputeWrite)
             .record(move |cmd| {
-                cmd.bind_compute(pipeline, &[set]);
-                cmd.push_compute(pipeline, &push);
-                cmd.dispatch(1, 1, 1);
+                cmd.compute(pipeline, &[set], &push, [1, 1, 1]);
             });
         self.pass.record(frame, frame_set, &[]);
     }

@@ -619,7 +619,7 @@ impl RefractorLayers {
             pass = pass.write(*id, if i < 4 { Access::ColorAttachment } else { Access::DepthAttachment });
         }
         if self.queries.is_some() {
-            pass = pass.write_buffer(self.visible_id, Access::TransferWrite);
+            pass = pass.write(self.visible_id, Access::TransferWrite);
         }
         pass.record(move |cmd| {
             if let Some(q) = &self.queries {

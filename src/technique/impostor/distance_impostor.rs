@@ -488,10 +488,8 @@ impl ImpostorMap {
         let groups = (data.len() as u32).div_ceil(WORKGROUP_2D * WORKGROUP_2D);
         ctx.one_shot(|cmd| {
             let mut frame = graph.frame();
-            frame.pass("impostor_probe").uses(&set).write_buffer(buffer_id, Access::ComputeWrite).record(|cmd| {
-                cmd.bind_compute(&pipeline, &[set.set()]);
-                cmd.push_compute(&pipeline, &push);
-                cmd.dispatch(groups, 1, 1);
+            frame.pass("impostor_probe").uses(&set).write(buffer_id, Access::ComputeWrite).record(|cmd| {
+                cmd.compute(&pipeline, &[set.set()], &push, [groups, 1, 1]);
             });
             frame.execute(cmd, None);
             graph.access_now(cmd, &[], &[(buffer_id, Access::HostRead)]);
