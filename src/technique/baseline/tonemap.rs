@@ -40,7 +40,7 @@ use crate::graph::{Bindings, BoundSet, BufferId, Frame, ImageId};
 use crate::scene::techniques::TonemapAdaptiveParams;
 use crate::scene::Scene;
 use crate::technique::{
-    params, tables, FrameInputs, Inputs, PlannedPass, Registration, RenderError, Setup, Stage, Technique,
+    in_stage, params, tables, FrameInputs, Inputs, PlannedPass, Registration, RenderError, Setup, Stage, Technique,
 };
 use crate::{
     BINDING_HDR, BINDING_TONEMAP_STATE, TONEMAP_BINDING_HDR, TONEMAP_BINDING_PARTIALS, TONEMAP_BINDING_STATE,
@@ -84,7 +84,7 @@ fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
     } else {
         vec![PlannedPass::new(TONEMAP, "linear radiance -> sRGB PNG output")]
     };
-    passes.into_iter().map(|p| (Stage::Tonemap, p)).collect()
+    in_stage(Stage::Tonemap, passes)
 }
 
 fn create(s: &mut Setup<'_>) -> Result<Box<dyn Technique>, RenderError> {

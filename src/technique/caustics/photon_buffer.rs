@@ -53,8 +53,8 @@ use crate::scene::Scene;
 use crate::technique::caustics::caustics_map::{is_specular, refractor_bindings, RefractorLayers};
 use crate::technique::refraction::nearby_impostors::{nearby_objects, rect_for};
 use crate::technique::{
-    caustic_objects, list, params, registration, FrameInputs, PlannedPass, Registration, RenderError, Setup, Stage,
-    Technique,
+    caustic_objects, in_stage, list, params, registration, FrameInputs, PlannedPass, Registration, RenderError, Setup,
+    Stage, Technique,
 };
 use crate::{CAUSTIC_BINDING_FACES, CAUSTIC_BINDING_MATERIALS, PHOTON_BINDING_RECTS, PHOTON_PAPER, PHOTON_PHYSICAL};
 
@@ -75,25 +75,28 @@ fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
     let Some((diffuse, specular)) = caustic_objects(scene, "photon_buffer") else {
         return Vec::new();
     };
-    [
-        PlannedPass::new(
-            PHOTON_BUFFER_REFRACTORS,
-            format!("positions and normals of the specular {} seen from the light(s)", list(&specular)),
-        ),
-        PlannedPass::new(
-            PHOTON_BUFFER,
-            format!(
-                "photons through {} onto the rectangles of the receivers {} (render.caustics = \"photon_buffer\")",
-                list(&specular),
-                list(&diffuse)
+    in_stage(
+        Stage::Caustics,
+        [
+            PlannedPass::new(
+                PHOTON_BUFFER_REFRACTORS,
+                format!("positions and normals of the specular {} seen from the light(s)", list(&specular)),
             ),
-        ),
-        PlannedPass::new(PHOTON_BUFFER_SCATTER, format!("photon counts in the caustic textures of {}", list(&diffuse))),
-        PlannedPass::new(PHOTON_BUFFER_FILTER, "filter of Hu & Qin 2007 §3.2"),
-    ]
-    .into_iter()
-    .map(|p| (Stage::Caustics, p))
-    .collect()
+            PlannedPass::new(
+                PHOTON_BUFFER,
+                format!(
+                    "photons through {} onto the rectangles of the receivers {} (render.caustics = \"photon_buffer\")",
+                    list(&specular),
+                    list(&diffuse)
+                ),
+            ),
+            PlannedPass::new(
+                PHOTON_BUFFER_SCATTER,
+                format!("photon counts in the caustic textures of {}", list(&diffuse)),
+            ),
+            PlannedPass::new(PHOTON_BUFFER_FILTER, "filter of Hu & Qin 2007 §3.2"),
+        ],
+    )
 }
 
 impl Technique for PhotonBufferPass {

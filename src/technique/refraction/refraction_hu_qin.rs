@@ -23,8 +23,8 @@ use crate::graph::Frame;
 use crate::scene::techniques::{HuQinParams, RecursiveExit};
 use crate::scene::{Material, Scene};
 use crate::technique::{
-    dielectric_names, list, params, registration, FrameInputs, PlannedPass, Registration, RenderError, Setup, Stage,
-    Technique,
+    in_stage, list, params, refracting_objects, registration, FrameInputs, PlannedPass, Registration, RenderError,
+    Setup, Stage, Technique,
 };
 use crate::{
     BINDING_GBUF_ALBEDO, BINDING_GBUF_DEPTH, BINDING_GBUF_NORMAL, BINDING_NEARBY_RECTS, BINDING_NEARBY_TEXTURE,
@@ -46,10 +46,9 @@ pub const REFRACTION_HU_QIN_NEARBY: &str = "refraction_hu_qin_nearby";
 pub const TECHNIQUE: Registration = registration!("refraction = \"hu_qin\"", plan, HuQinPass, ["hu_qin"]);
 
 fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
-    let dielectric = dielectric_names(scene);
-    if dielectric.is_empty() || scene.render.refraction != "hu_qin" {
+    let Some(dielectric) = refracting_objects(scene, "hu_qin") else {
         return Vec::new();
-    }
+    };
     let mut passes = nearby_plan(scene);
     passes.push(PlannedPass::new(
         REFRACTION_HU_QIN_LAYERS,
@@ -62,7 +61,7 @@ fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
         REFRACTION_HU_QIN,
         format!("two-interface refraction of {} (binary search and iterative d_T, Hu & Qin 2007)", list(&dielectric)),
     ));
-    passes.into_iter().map(|p| (Stage::Refraction, p)).collect()
+    in_stage(Stage::Refraction, passes)
 }
 
 /// §2.2: the impostor textures, when `render.hu_qin.nearby` is on and a dielectric has other
