@@ -77,6 +77,7 @@ fn nearby_plan(scene: &Scene) -> Vec<PlannedPass> {
         return Vec::new();
     }
     let name = |i: usize| scene.objects[i].name.clone();
+    let names = |objects: &[usize]| list(&objects.iter().map(|&i| name(i)).collect::<Vec<_>>());
     let sets: Vec<String> = layout
         .sets
         .iter()
@@ -85,10 +86,9 @@ fn nearby_plan(scene: &Scene) -> Vec<PlannedPass> {
                 layout.rects[s.first as usize..(s.first + s.count) as usize].iter().map(|r| name(r.object)).collect();
             let mut t = format!("{} sees {}", name(s.object), list(&kept));
             if !s.dropped.is_empty() {
-                let dropped: Vec<String> = s.dropped.iter().map(|&i| name(i)).collect();
                 t += &format!(
                     " ({} left to the environment map: at most {} rectangles, the nearest are kept)",
-                    list(&dropped),
+                    names(&s.dropped),
                     crate::MAX_NEARBY_RECTS
                 );
             }
@@ -100,10 +100,9 @@ fn nearby_plan(scene: &Scene) -> Vec<PlannedPass> {
         sets.join("; ")
     );
     if !layout.without_set.is_empty() {
-        let names: Vec<String> = layout.without_set.iter().map(|&i| name(i)).collect();
         reason += &format!(
             "; {} without a rectangle set of its own (at most {} sets): environment only",
-            list(&names),
+            names(&layout.without_set),
             crate::MAX_NEARBY_SETS
         );
     }
