@@ -27,7 +27,7 @@ fn two_writes(skip_barrier: bool) -> Option<u64> {
     ctx.one_shot(|cmd| {
         let mut frame = graph.frame();
         for (name, value) in [("first_write", 1), ("second_write", 2)] {
-            frame.pass(name).write_buffer(id, Access::TransferWrite).record(move |cmd| cmd.fill_buffer(buffer, value));
+            frame.pass(name).write(id, Access::TransferWrite).record(move |cmd| cmd.fill_buffer(buffer, value));
         }
         frame.execute(cmd, None);
     })

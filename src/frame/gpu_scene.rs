@@ -246,26 +246,13 @@ impl GpuScene {
         let (vertices, indices, draws, bounds_center, bounds_radius) = geometry(scene);
         // Host-visible buffers: written once here, read by the GPU after the submission that
         // follows (host writes are visible to every later queue submission).
-        let vertices = Buffer::with_data(
-            ctx,
-            "scene_vertices",
-            bytemuck::cast_slice(&vertices),
-            vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER,
-        )?;
-        let indices = Buffer::with_data(
-            ctx,
-            "scene_indices",
-            bytemuck::cast_slice(&indices),
-            vk::BufferUsageFlags::INDEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER,
-        )?;
+        // Also storage buffers: the heightfield animation writes the vertices, ray tracers read both.
+        let usage = |u: vk::BufferUsageFlags| u | vk::BufferUsageFlags::STORAGE_BUFFER;
+        let vertices = Buffer::with_data(ctx, "scene_vertices", &vertices, usage(vk::BufferUsageFlags::VERTEX_BUFFER))?;
+        let indices = Buffer::with_data(ctx, "scene_indices", &indices, usage(vk::BufferUsageFlags::INDEX_BUFFER))?;
         let mats: Vec<GpuMaterial> = scene.materials.iter().map(gpu_material).collect();
         let mats = if mats.is_empty() { vec![GpuMaterial::default()] } else { mats };
-        let materials = Buffer::with_data(
-            ctx,
-            "scene_materials",
-            bytemuck::cast_slice(&mats),
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-        )?;
+        let materials = Buffer::storage(ctx, "scene_materials", &mats)?;
 
         // Environment: always a texture (a constant is a 1x1 map) so one lookup serves all.
         let (w, h, texels) = match &scene.environment {

@@ -74,8 +74,8 @@ impl HeightfieldAnimation {
         }
         waves.push([0.0; 4]);
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
-        let field_buffer = Buffer::with_data(ctx, "heightfield_fields", bytemuck::cast_slice(&fields), storage)?;
-        let wave_buffer = Buffer::with_data(ctx, "heightfield_waves", bytemuck::cast_slice(&waves), storage)?;
+        let field_buffer = Buffer::with_data(ctx, "heightfield_fields", &fields, storage)?;
+        let wave_buffer = Buffer::with_data(ctx, "heightfield_waves", &waves, storage)?;
         // The vertices are not tracked by the frame graph: the pass orders itself (`record`).
         let set = Bindings::new(vk::ShaderStageFlags::COMPUTE)
             .storage(HEIGHTFIELD_BINDING_FIELDS, &field_buffer)

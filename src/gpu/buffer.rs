@@ -2,11 +2,11 @@
 use std::sync::Arc;
 
 use ash::vk;
-use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
+use gpu_allocator::vulkan::Allocation;
 use gpu_allocator::MemoryLocation;
 
 use super::context::{Garbage, GpuContext};
-use super::error::{GpuError, GpuResult, VkContext};
+use super::error::{GpuResult, VkContext};
 
 pub struct Buffer {
     ctx: Arc<GpuContext>,
@@ -31,24 +31,10 @@ impl Buffer {
         let raw = unsafe { device.create_buffer(&info, None) }.vk("vkCreateBuffer")?;
         // SAFETY: raw is a fresh buffer.
         let requirements = unsafe { device.get_buffer_memory_requirements(raw) };
-        let allocation =
-            ctx.allocator.lock().unwrap().as_mut().expect("allocator alive while the context is").allocate(
-                &AllocationCreateDesc {
-                    name,
-                    requirements,
-                    location,
-                    linear: true,
-                    allocation_scheme: AllocationScheme::GpuAllocatorManaged,
-                },
-            );
-        let allocation = match allocation {
-            Ok(a) => a,
-            Err(source) => {
-                // SAFETY: unbound, unused buffer.
-                unsafe { device.destroy_buffer(raw, None) };
-                return Err(GpuError::Alloc { name: name.into(), source });
-            }
-        };
+        let allocation = ctx.allocate(name, requirements, location, true).inspect_err(|_| {
+            // SAFETY: unbound, unused buffer.
+            unsafe { device.destroy_buffer(raw, None) }
+        })?;
         // SAFETY: memory comes from a compatible type with the required size/alignment.
         unsafe { device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) }.vk("vkBindBufferMemory")?;
         ctx.set_name(raw, name);
@@ -56,10 +42,21 @@ impl Buffer {
     }
 
     /// A host-visible buffer filled with `data`.
-    pub fn with_data(ctx: &Arc<GpuContext>, name: &str, data: &[u8], usage: vk::BufferUsageFlags) -> GpuResult<Buffer> {
-        let mut b = Buffer::new(ctx, name, data.len() as u64, usage, MemoryLocation::CpuToGpu)?;
-        b.write(0, data);
+    pub fn with_data<T: bytemuck::Pod>(
+        ctx: &Arc<GpuContext>,
+        name: &str,
+        data: &[T],
+        usage: vk::BufferUsageFlags,
+    ) -> GpuResult<Buffer> {
+        let bytes: &[u8] = bytemuck::cast_slice(data);
+        let mut b = Buffer::new(ctx, name, bytes.len() as u64, usage, MemoryLocation::CpuToGpu)?;
+        b.write(0, bytes);
         Ok(b)
+    }
+
+    /// A host-visible storage buffer filled with `data`.
+    pub fn storage<T: bytemuck::Pod>(ctx: &Arc<GpuContext>, name: &str, data: &[T]) -> GpuResult<Buffer> {
+        Buffer::with_data(ctx, name, data, vk::BufferUsageFlags::STORAGE_BUFFER)
     }
 
     /// Copy `data` into a host-visible buffer at byte `offset`.

@@ -282,6 +282,29 @@ impl<'a> Cmd<'a> {
         unsafe { self.dev().cmd_dispatch_indirect(self.raw, buffer.raw, offset) };
     }
 
+    /// Bind `p` and `sets`, push `push` and dispatch `groups` workgroups: the commands of
+    /// most compute passes.
+    pub fn compute<T: bytemuck::Pod>(&self, p: &ComputePipeline, sets: &[DescriptorSet], push: &T, groups: [u32; 3]) {
+        self.bind_compute(p, sets);
+        self.push_compute(p, push);
+        self.dispatch(groups[0], groups[1], groups[2]);
+    }
+
+    /// As [`Cmd::compute`], with the group counts read from `buffer` at byte `offset`
+    /// ([`Cmd::dispatch_indirect`]).
+    pub fn compute_indirect<T: bytemuck::Pod>(
+        &self,
+        p: &ComputePipeline,
+        sets: &[DescriptorSet],
+        push: &T,
+        buffer: &Buffer,
+        offset: u64,
+    ) {
+        self.bind_compute(p, sets);
+        self.push_compute(p, push);
+        self.dispatch_indirect(buffer, offset);
+    }
+
     pub fn write_timestamp(&self, pool: &TimestampPool, query: u32, stage: vk::PipelineStageFlags) {
         // SAFETY: query < pool size; the pool was reset this frame.
         unsafe { self.dev().cmd_write_timestamp(self.raw, stage, pool.raw, query) };

@@ -4,7 +4,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 
 use ash::vk;
-use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
+use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme, Allocator, AllocatorCreateDesc};
 
 use super::debug::{self, DebugState};
 use super::error::{GpuError, GpuResult, VkContext};
@@ -507,6 +507,22 @@ impl GpuContext {
         waited?;
         self.mark_completed(serial?);
         Ok(result)
+    }
+
+    /// Memory for a buffer (`linear`) or an optimally tiled image named `name`.
+    pub(crate) fn allocate(
+        &self,
+        name: &str,
+        requirements: vk::MemoryRequirements,
+        location: gpu_allocator::MemoryLocation,
+        linear: bool,
+    ) -> GpuResult<Allocation> {
+        let mut allocator = self.allocator.lock().unwrap();
+        let allocator = allocator.as_mut().expect("allocator alive while the context is");
+        let scheme = AllocationScheme::GpuAllocatorManaged;
+        allocator
+            .allocate(&AllocationCreateDesc { name, requirements, location, linear, allocation_scheme: scheme })
+            .map_err(|source| GpuError::Alloc { name: name.into(), source })
     }
 
     /// Give a Vulkan object a debug name (shown by the validation layer and RenderDoc).

@@ -2,11 +2,11 @@
 use std::sync::Arc;
 
 use ash::vk;
-use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
+use gpu_allocator::vulkan::Allocation;
 use gpu_allocator::MemoryLocation;
 
 use super::context::{Garbage, GpuContext};
-use super::error::{GpuError, GpuResult, VkContext};
+use super::error::{GpuResult, VkContext};
 
 /// How the default view of an image is typed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -107,24 +107,10 @@ impl Image {
         let raw = unsafe { device.create_image(&info, None) }.vk("vkCreateImage")?;
         // SAFETY: fresh image.
         let requirements = unsafe { device.get_image_memory_requirements(raw) };
-        let allocation =
-            ctx.allocator.lock().unwrap().as_mut().expect("allocator alive while the context is").allocate(
-                &AllocationCreateDesc {
-                    name: &desc.name,
-                    requirements,
-                    location: MemoryLocation::GpuOnly,
-                    linear: false,
-                    allocation_scheme: AllocationScheme::GpuAllocatorManaged,
-                },
-            );
-        let allocation = match allocation {
-            Ok(a) => a,
-            Err(source) => {
-                // SAFETY: unbound, unused image.
-                unsafe { device.destroy_image(raw, None) };
-                return Err(GpuError::Alloc { name: desc.name.clone(), source });
-            }
-        };
+        let allocation = ctx.allocate(&desc.name, requirements, MemoryLocation::GpuOnly, false).inspect_err(|_| {
+            // SAFETY: unbound, unused image.
+            unsafe { device.destroy_image(raw, None) }
+        })?;
         // SAFETY: compatible memory.
         unsafe { device.bind_image_memory(raw, allocation.memory(), allocation.offset()) }.vk("vkBindImageMemory")?;
         ctx.set_name(raw, &desc.name);
@@ -253,13 +239,7 @@ pub(crate) struct SharedSampler {
     raw: vk::Sampler,
 }
 
-impl Drop for SharedSampler {
-    fn drop(&mut self) {
-        // Samplers are only dropped with their owners, after wait_idle.
-        // SAFETY: no pending command buffer references the sampler.
-        unsafe { self.ctx.raw().destroy_sampler(self.raw, None) };
-    }
-}
+destroy_on_drop!(SharedSampler => destroy_sampler);
 
 pub struct Sampler {
     _shared: Arc<SharedSampler>,

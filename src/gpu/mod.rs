@@ -6,6 +6,21 @@
 //! [`Cmd`] records commands; [`Access`] names how a pass touches a resource so that the
 //! frame graph can derive barriers.
 
+/// `Drop` for wrappers that own one device object in `raw` and hold the context in `ctx`:
+/// `destroy_on_drop!(Wrapper => destroy_fn, ...)` destroys `raw` with `destroy_fn`.
+macro_rules! destroy_on_drop {
+    ($($wrapper:ty => $destroy:ident),+ $(,)?) => {$(
+        impl Drop for $wrapper {
+            fn drop(&mut self) {
+                // SAFETY: every owner of these wrappers (the renderer, the caches, the
+                // swapchain) drops them only after the device is idle, so no pending command
+                // buffer references the object.
+                unsafe { self.ctx.raw().$destroy(self.raw, None) };
+            }
+        }
+    )+};
+}
+
 mod bindings;
 mod buffer;
 mod command;

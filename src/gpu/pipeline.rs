@@ -90,13 +90,6 @@ pub(crate) struct SharedPipeline {
     layout: PipelineLayout,
 }
 
-impl Drop for SharedPipeline {
-    fn drop(&mut self) {
-        // SAFETY: dropped with the renderer after the device is idle.
-        unsafe { self.ctx.raw().destroy_pipeline(self.raw, None) };
-    }
-}
-
 /// The context's pipelines by the hash of their description ([`pipeline_key`]).
 pub(crate) type PipelineCache = std::collections::HashMap<u64, Weak<SharedPipeline>>;
 
@@ -174,12 +167,10 @@ impl PipelineLayout {
     }
 }
 
-impl Drop for PipelineLayout {
-    fn drop(&mut self) {
-        // SAFETY: dropped with the renderer after the device is idle.
-        unsafe { self.ctx.raw().destroy_pipeline_layout(self.raw, None) };
-    }
-}
+destroy_on_drop!(
+    PipelineLayout => destroy_pipeline_layout,
+    SharedPipeline => destroy_pipeline,
+);
 
 /// Vertex input of a graphics pipeline.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

@@ -32,12 +32,7 @@ pub(crate) struct SharedRenderPass {
     raw: vk::RenderPass,
 }
 
-impl Drop for SharedRenderPass {
-    fn drop(&mut self) {
-        // SAFETY: render passes are dropped with their owners after the device is idle.
-        unsafe { self.ctx.raw().destroy_render_pass(self.raw, None) };
-    }
-}
+destroy_on_drop!(SharedRenderPass => destroy_render_pass, Framebuffer => destroy_framebuffer);
 
 pub struct RenderPass {
     _shared: Arc<SharedRenderPass>,
@@ -142,13 +137,6 @@ impl Framebuffer {
         let raw = unsafe { ctx.raw().create_framebuffer(&info, None) }.vk("vkCreateFramebuffer")?;
         ctx.set_name(raw, name);
         Ok(Framebuffer { ctx: ctx.clone(), raw, extent })
-    }
-}
-
-impl Drop for Framebuffer {
-    fn drop(&mut self) {
-        // SAFETY: dropped with its owner after the device is idle.
-        unsafe { self.ctx.raw().destroy_framebuffer(self.raw, None) };
     }
 }
 

@@ -33,12 +33,7 @@ impl Semaphore {
     }
 }
 
-impl Drop for Semaphore {
-    fn drop(&mut self) {
-        // SAFETY: the owner (the swapchain) waits for the device to be idle before dropping.
-        unsafe { self.ctx.raw().destroy_semaphore(self.raw, None) };
-    }
-}
+destroy_on_drop!(Semaphore => destroy_semaphore);
 
 /// One image of the swapchain and its view.
 #[derive(Clone, Copy, Debug)]

@@ -73,12 +73,7 @@ impl TimestampPool {
     }
 }
 
-impl Drop for TimestampPool {
-    fn drop(&mut self) {
-        // SAFETY: dropped with the renderer after the device is idle.
-        unsafe { self.ctx.raw().destroy_query_pool(self.raw, None) };
-    }
-}
+destroy_on_drop!(TimestampPool => destroy_query_pool, OcclusionQueryPool => destroy_query_pool);
 
 /// Occlusion queries (samples that pass the depth test), for the visible area V of Shah et
 /// al. 2007 Eq. 6. Results are never read on the host: [`Cmd::copy_occlusion_results`]
@@ -115,12 +110,5 @@ impl OcclusionQueryPool {
     /// Whether the counts are exact (occlusionQueryPrecise).
     pub fn precise(&self) -> bool {
         self.flags.contains(vk::QueryControlFlags::PRECISE)
-    }
-}
-
-impl Drop for OcclusionQueryPool {
-    fn drop(&mut self) {
-        // SAFETY: dropped with the renderer after the device is idle.
-        unsafe { self.ctx.raw().destroy_query_pool(self.raw, None) };
     }
 }

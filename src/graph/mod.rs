@@ -413,20 +413,17 @@ impl<'g, 'a> Frame<'g, 'a> {
 }
 
 impl<'f, 'g, 'a> PassBuilder<'f, 'g, 'a> {
-    pub fn read(mut self, id: ImageId, access: Access) -> Self {
-        self.uses.push((Res::Image(id.0), access));
-        self
+    /// The pass reads the image or buffer `id` as `access`.
+    pub fn read(self, id: impl Into<Res>, access: Access) -> Self {
+        self.access(id.into(), access)
     }
-    pub fn write(mut self, id: ImageId, access: Access) -> Self {
-        self.uses.push((Res::Image(id.0), access));
-        self
+    /// The pass writes the image or buffer `id` as `access`.
+    pub fn write(self, id: impl Into<Res>, access: Access) -> Self {
+        self.access(id.into(), access)
     }
-    pub fn read_buffer(mut self, id: BufferId, access: Access) -> Self {
-        self.uses.push((Res::Buffer(id.0), access));
-        self
-    }
-    pub fn write_buffer(mut self, id: BufferId, access: Access) -> Self {
-        self.uses.push((Res::Buffer(id.0), access));
+    // Reads and writes differ only in name: the access says what the barriers wait for.
+    fn access(mut self, res: Res, access: Access) -> Self {
+        self.uses.push((res, access));
         self
     }
     /// Every access of the resources `set` binds.

@@ -61,29 +61,36 @@ pub struct Hit {
     pub triangle: u32,
 }
 
-/// Möller-Trumbore ray/triangle intersection, the same arithmetic as the shader's
-/// `intersect_triangle`: any hit with t > 0 (callers pick the winner with [`better`]).
-pub fn intersect_triangle(o: Vec3, d: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Option<f32> {
-    let e1 = b - a;
-    let e2 = c - a;
+/// Möller & Trumbore 1997 for the ray `o + t d` and the triangle (a, a + e1, a + e2): the
+/// barycentrics (u, v) and t of the ray's meeting with the triangle's plane, or `None` where
+/// `parallel(det)` says the ray runs (nearly) in that plane. Each caller decides which (u,
+/// v, t) hit, as the shader it mirrors does.
+pub fn moller_trumbore(
+    o: Vec3,
+    d: Vec3,
+    a: Vec3,
+    e1: Vec3,
+    e2: Vec3,
+    parallel: impl Fn(f32) -> bool,
+) -> Option<(f32, f32, f32)> {
     let p = d.cross(e2);
     let det = e1.dot(p);
-    if det.abs() < 1e-30 {
+    if parallel(det) {
         return None;
     }
     let inv = 1.0 / det;
     let s = o - a;
     let u = s.dot(p) * inv;
-    if !(0.0..=1.0).contains(&u) {
-        return None;
-    }
     let q = s.cross(e1);
-    let v = d.dot(q) * inv;
-    if v < 0.0 || u + v > 1.0 {
-        return None;
-    }
-    let t = e2.dot(q) * inv;
-    (t > 0.0).then_some(t)
+    Some((u, d.dot(q) * inv, e2.dot(q) * inv))
+}
+
+/// Möller-Trumbore ray/triangle intersection, the same arithmetic as the shader's
+/// `intersect_triangle`: any hit with t > 0 (callers pick the winner with [`better`]).
+pub fn intersect_triangle(o: Vec3, d: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Option<f32> {
+    let (u, v, t) = moller_trumbore(o, d, a, b - a, c - a, |det| det.abs() < 1e-30)?;
+    let inside = (0.0..=1.0).contains(&u) && !(v < 0.0 || u + v > 1.0);
+    (inside && t > 0.0).then_some(t)
 }
 
 /// The hit rule shared with the shader: closer, or equally close with a lower triangle index,

@@ -292,15 +292,13 @@ impl TraceGeometry {
         let objects: Vec<u32> = scene.objects.iter().map(|o| o.material as u32).collect();
         let (voxels, volume_dispersive) = volume_voxels(scene.volume.as_ref());
         let dispersion = volume_dispersive || dispersive_dielectric(scene);
-        let storage =
-            |name: &str, data: &[u8]| Buffer::with_data(ctx, name, data, vk::BufferUsageFlags::STORAGE_BUFFER);
         Ok(TraceGeometry {
             buffers: [
-                (REF_BINDING_TRIANGLES, storage("reference_triangles", bytemuck::cast_slice(&ordered))?),
-                (REF_BINDING_NODES, storage("reference_bvh", bytemuck::cast_slice(&bvh.nodes))?),
-                (REF_BINDING_SPHERES, storage("reference_spheres", bytemuck::cast_slice(&spheres))?),
-                (REF_BINDING_OBJECTS, storage("reference_objects", bytemuck::cast_slice(&objects))?),
-                (REF_BINDING_VOLUME, storage("reference_volume_voxels", bytemuck::cast_slice(&voxels))?),
+                (REF_BINDING_TRIANGLES, Buffer::storage(ctx, "reference_triangles", &ordered)?),
+                (REF_BINDING_NODES, Buffer::storage(ctx, "reference_bvh", &bvh.nodes)?),
+                (REF_BINDING_SPHERES, Buffer::storage(ctx, "reference_spheres", &spheres)?),
+                (REF_BINDING_OBJECTS, Buffer::storage(ctx, "reference_objects", &objects)?),
+                (REF_BINDING_VOLUME, Buffer::storage(ctx, "reference_volume_voxels", &voxels)?),
             ],
             triangles: ordered.len() as u32,
             nodes: bvh.nodes.len() as u32,
@@ -459,7 +457,7 @@ impl Reference {
         }
 
         use vk::BufferUsageFlags as U;
-        let ubo = Buffer::with_data(ctx, "reference_uniforms", bytemuck::bytes_of(&uniforms), U::STORAGE_BUFFER)?;
+        let ubo = Buffer::storage(ctx, "reference_uniforms", std::slice::from_ref(&uniforms))?;
         let pixels_n = (width * height) as usize;
         let accum =
             Buffer::new(ctx, "reference_accum", (pixels_n * 16) as u64, U::STORAGE_BUFFER, MemoryLocation::CpuToGpu)?;
@@ -594,42 +592,36 @@ impl Reference {
                 let push = RefPush { iteration: it, seed, mode: 0, count: 0 };
                 frame
                     .pass("reference_camera")
-                    .write_buffer(accum, Access::ComputeWrite)
-                    .write_buffer(pixels, Access::ComputeWrite)
+                    .write(accum, Access::ComputeWrite)
+                    .write(pixels, Access::ComputeWrite)
                     .record(move |cmd| {
-                        cmd.bind_compute(camera, &[set]);
-                        cmd.push_compute(camera, &push);
-                        cmd.dispatch(pixel_groups, 1, 1);
+                        cmd.compute(camera, &[set], &push, [pixel_groups, 1, 1]);
                     });
                 if has_photons {
                     frame
                         .pass("reference_clear_grid")
-                        .write_buffer(grid, Access::TransferWrite)
-                        .write_buffer(counters, Access::TransferWrite)
+                        .write(grid, Access::TransferWrite)
+                        .write(counters, Access::TransferWrite)
                         .record(|cmd| {
                             cmd.fill_buffer(grid_buf, u32::MAX);
                             cmd.fill_buffer(counter_buf, 0);
                         });
                     frame
                         .pass("reference_photons")
-                        .write_buffer(photons, Access::ComputeWrite)
-                        .write_buffer(grid, Access::ComputeWrite)
-                        .write_buffer(counters, Access::ComputeWrite)
-                        .write_buffer(debug, Access::ComputeWrite)
+                        .write(photons, Access::ComputeWrite)
+                        .write(grid, Access::ComputeWrite)
+                        .write(counters, Access::ComputeWrite)
+                        .write(debug, Access::ComputeWrite)
                         .record(move |cmd| {
-                            cmd.bind_compute(photon_pipe, &[set]);
-                            cmd.push_compute(photon_pipe, &push);
-                            cmd.dispatch(photon_groups, 1, 1);
+                            cmd.compute(photon_pipe, &[set], &push, [photon_groups, 1, 1]);
                         });
                     frame
                         .pass("reference_gather")
-                        .read_buffer(photons, Access::ComputeRead)
-                        .read_buffer(grid, Access::ComputeRead)
-                        .write_buffer(pixels, Access::ComputeWrite)
+                        .read(photons, Access::ComputeRead)
+                        .read(grid, Access::ComputeRead)
+                        .write(pixels, Access::ComputeWrite)
                         .record(move |cmd| {
-                            cmd.bind_compute(gather, &[set]);
-                            cmd.push_compute(gather, &push);
-                            cmd.dispatch(pixel_groups, 1, 1);
+                            cmd.compute(gather, &[set], &push, [pixel_groups, 1, 1]);
                         });
                 }
             }
@@ -731,10 +723,8 @@ impl Reference {
             let push = RefPush { iteration: 0, seed: 0, mode: mode as u32, count: chunk.len() as u32 };
             self.ctx.one_shot(|cmd| {
                 let mut frame = graph.frame();
-                frame.pass("reference_probe").write_buffer(debug, Access::ComputeWrite).record(move |cmd| {
-                    cmd.bind_compute(probe, &[set]);
-                    cmd.push_compute(probe, &push);
-                    cmd.dispatch((chunk.len() as u32).div_ceil(REF_WORKGROUP), 1, 1);
+                frame.pass("reference_probe").write(debug, Access::ComputeWrite).record(move |cmd| {
+                    cmd.compute(probe, &[set], &push, [(chunk.len() as u32).div_ceil(REF_WORKGROUP), 1, 1]);
                 });
                 frame.execute(cmd, None);
                 graph.access_now(cmd, &[], &[(debug, Access::HostRead)]);

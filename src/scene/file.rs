@@ -369,7 +369,8 @@ pub(crate) fn parse_override(raw: &str) -> Result<Override, SceneError> {
 pub(crate) fn apply_override(doc: &mut toml_edit::DocumentMut, ov: &Override) -> Result<(), SceneError> {
     let create = ov.path[0] == "render";
     let segs: Vec<&str> = ov.path.iter().map(String::as_str).collect();
-    set_table_like(doc.as_table_mut(), &segs, 0, ov.value.clone(), create)
+    SetPath { segs: &segs, create }
+        .table(doc.as_table_mut(), 0, ov.value.clone())
         .map_err(|(message, hint)| SceneError::Override { set: ov.raw.clone(), message, hint })
 }
 
@@ -399,96 +400,86 @@ fn missing(segs: &[&str], depth: usize) -> SetError {
     )
 }
 
-fn set_table_like(
-    t: &mut dyn toml_edit::TableLike,
-    segs: &[&str],
-    depth: usize,
-    value: toml_edit::Value,
+/// The dotted path of an override, and whether missing tables on it may be created.
+struct SetPath<'a> {
+    segs: &'a [&'a str],
     create: bool,
-) -> Result<(), SetError> {
-    let seg = segs[depth];
-    let last = depth + 1 == segs.len();
-    if last {
-        match t.get_mut(seg) {
-            Some(item) => replace_item(item, value, segs, depth),
-            // A key of an existing table may be added: it may be a real key left at its
-            // default. A misspelt one is then rejected by the schema (deny_unknown_fields),
-            // with an error that names this override.
-            None => {
-                t.insert(seg, toml_edit::Item::Value(value));
-                Ok(())
-            }
-        }
-    } else {
-        if t.get(seg).is_none() {
-            if !create {
-                return Err(missing(segs, depth));
-            }
-            t.insert(seg, toml_edit::Item::Table(toml_edit::Table::new()));
-        }
-        match t.get_mut(seg) {
-            Some(item) => set_item(item, segs, depth + 1, value, create),
-            None => Err(missing(segs, depth)),
-        }
-    }
 }
 
-fn set_item(
-    item: &mut toml_edit::Item,
-    segs: &[&str],
-    depth: usize,
-    value: toml_edit::Value,
-    create: bool,
-) -> Result<(), SetError> {
-    match item {
-        toml_edit::Item::Table(t) => set_table_like(t, segs, depth, value, create),
-        toml_edit::Item::ArrayOfTables(aot) => {
-            let len = aot.len();
-            let idx = index(segs, depth, len)?;
-            match aot.get_mut(idx) {
-                Some(_) if depth + 1 == segs.len() => Err((
-                    format!("`{}` is a whole table", segs[..=depth].join(".")),
-                    "set its keys one at a time, e.g. `objects.0.radius=0.5`".to_string(),
-                )),
-                Some(t) => set_table_like(t, segs, depth + 1, value, create),
-                None => Err(missing(segs, depth)),
+impl SetPath<'_> {
+    fn table(&self, t: &mut dyn toml_edit::TableLike, depth: usize, value: toml_edit::Value) -> Result<(), SetError> {
+        let seg = self.segs[depth];
+        let last = depth + 1 == self.segs.len();
+        if last {
+            match t.get_mut(seg) {
+                Some(item) => replace_item(item, value, self.segs, depth),
+                // A key of an existing table may be added: it may be a real key left at its
+                // default. A misspelt one is then rejected by the schema (deny_unknown_fields),
+                // with an error that names this override.
+                None => {
+                    t.insert(seg, toml_edit::Item::Value(value));
+                    Ok(())
+                }
+            }
+        } else {
+            if t.get(seg).is_none() {
+                if !self.create {
+                    return Err(missing(self.segs, depth));
+                }
+                t.insert(seg, toml_edit::Item::Table(toml_edit::Table::new()));
+            }
+            match t.get_mut(seg) {
+                Some(item) => self.item(item, depth + 1, value),
+                None => Err(missing(self.segs, depth)),
             }
         }
-        toml_edit::Item::Value(v) => set_value(v, segs, depth, value, create),
-        toml_edit::Item::None => Err(missing(segs, depth)),
     }
-}
 
-fn set_value(
-    v: &mut toml_edit::Value,
-    segs: &[&str],
-    depth: usize,
-    value: toml_edit::Value,
-    create: bool,
-) -> Result<(), SetError> {
-    match v {
-        toml_edit::Value::InlineTable(t) => set_table_like(t, segs, depth, value, create),
-        toml_edit::Value::Array(a) => {
-            let idx = index(segs, depth, a.len())?;
-            if depth + 1 == segs.len() {
-                let decor = a.get(idx).map(|old| old.decor().clone());
-                let mut value = value;
-                if let Some(decor) = decor {
-                    *value.decor_mut() = decor;
-                }
-                a.replace(idx, value);
-                Ok(())
-            } else {
-                match a.get_mut(idx) {
-                    Some(inner) => set_value(inner, segs, depth + 1, value, create),
-                    None => Err(missing(segs, depth)),
+    fn item(&self, item: &mut toml_edit::Item, depth: usize, value: toml_edit::Value) -> Result<(), SetError> {
+        match item {
+            toml_edit::Item::Table(t) => self.table(t, depth, value),
+            toml_edit::Item::ArrayOfTables(aot) => {
+                let len = aot.len();
+                let idx = index(self.segs, depth, len)?;
+                match aot.get_mut(idx) {
+                    Some(_) if depth + 1 == self.segs.len() => Err((
+                        format!("`{}` is a whole table", self.segs[..=depth].join(".")),
+                        "set its keys one at a time, e.g. `objects.0.radius=0.5`".to_string(),
+                    )),
+                    Some(t) => self.table(t, depth + 1, value),
+                    None => Err(missing(self.segs, depth)),
                 }
             }
+            toml_edit::Item::Value(v) => self.value(v, depth, value),
+            toml_edit::Item::None => Err(missing(self.segs, depth)),
         }
-        _ => Err((
-            format!("`{}` is a {}, not a table or array", segs[..depth].join("."), v.type_name()),
-            "remove the extra segments after the key".to_string(),
-        )),
+    }
+
+    fn value(&self, v: &mut toml_edit::Value, depth: usize, value: toml_edit::Value) -> Result<(), SetError> {
+        match v {
+            toml_edit::Value::InlineTable(t) => self.table(t, depth, value),
+            toml_edit::Value::Array(a) => {
+                let idx = index(self.segs, depth, a.len())?;
+                if depth + 1 == self.segs.len() {
+                    let decor = a.get(idx).map(|old| old.decor().clone());
+                    let mut value = value;
+                    if let Some(decor) = decor {
+                        *value.decor_mut() = decor;
+                    }
+                    a.replace(idx, value);
+                    Ok(())
+                } else {
+                    match a.get_mut(idx) {
+                        Some(inner) => self.value(inner, depth + 1, value),
+                        None => Err(missing(self.segs, depth)),
+                    }
+                }
+            }
+            _ => Err((
+                format!("`{}` is a {}, not a table or array", self.segs[..depth].join("."), v.type_name()),
+                "remove the extra segments after the key".to_string(),
+            )),
+        }
     }
 }
 
@@ -531,25 +522,17 @@ fn replace_item(
 pub(crate) struct Source {
     pub file: PathBuf,
     pub text: String,
-    /// Dotted path -> byte range of the value (tables: their header or braces).
-    values: HashMap<String, Range<usize>>,
-    /// Dotted path -> byte range of the key.
-    keys: HashMap<String, Range<usize>>,
+    spans: Spans,
     pub overrides: Vec<Override>,
 }
 
 impl Source {
     fn new(file: &Path, text: String, overrides: Vec<Override>) -> Self {
-        let mut src =
-            Source { file: file.to_path_buf(), text, values: HashMap::new(), keys: HashMap::new(), overrides };
-        if let Ok(doc) = toml_edit::ImDocument::parse(src.text.clone()) {
-            let mut values = HashMap::new();
-            let mut keys = HashMap::new();
-            walk_table(doc.as_table(), "", &mut values, &mut keys);
-            src.values = values;
-            src.keys = keys;
+        let mut spans = Spans::default();
+        if let Ok(doc) = toml_edit::ImDocument::parse(text.as_str()) {
+            spans.table(doc.as_table(), "");
         }
-        src
+        Source { file: file.to_path_buf(), text, spans, overrides }
     }
 
     /// The override whose path is `path` or a parent of it.
@@ -566,7 +549,7 @@ impl Source {
         let within = |r: &Range<usize>| r.start <= offset && offset < r.end.max(r.start + 1);
         self.overrides.iter().rev().find(|o| {
             let d = o.dotted();
-            self.values.get(&d).is_some_and(within) || self.keys.get(&d).is_some_and(within)
+            self.spans.values.get(&d).is_some_and(within) || self.spans.keys.get(&d).is_some_and(within)
         })
     }
 
@@ -574,7 +557,7 @@ impl Source {
         // A missing key is reported at the nearest enclosing table that exists.
         let mut p = path;
         loop {
-            if let Some(r) = map.get(p).or_else(|| self.values.get(p)) {
+            if let Some(r) = map.get(p).or_else(|| self.spans.values.get(p)) {
                 return Some(r.clone());
             }
             p = &p[..p.rfind('.')?];
@@ -583,7 +566,7 @@ impl Source {
 
     /// Where the value at dotted `path` (or its nearest existing parent) is.
     pub fn location(&self, path: &str) -> Location {
-        self.location_of(self.span(&self.values, path).map(|r| r.start))
+        self.location_of(self.span(&self.spans.values, path).map(|r| r.start))
     }
 
     pub fn location_of(&self, offset: Option<usize>) -> Location {
@@ -595,13 +578,13 @@ impl Source {
 
     /// An error about the value at dotted `path`.
     pub fn error(&self, kind: ErrorKind, path: &str, message: String, hint: String) -> SceneError {
-        let at = self.location_of(self.span(&self.values, path).map(|r| r.start));
+        let at = self.location_of(self.span(&self.spans.values, path).map(|r| r.start));
         SceneError::Invalid { kind, at, set: self.override_for(path).map(|o| o.raw.clone()), message, hint }
     }
 
     /// An error about the key at dotted `path` (e.g. a key the variant does not take).
     pub fn key_error(&self, kind: ErrorKind, path: &str, message: String, hint: String) -> SceneError {
-        let at = self.location_of(self.span(&self.keys, path).map(|r| r.start));
+        let at = self.location_of(self.span(&self.spans.keys, path).map(|r| r.start));
         SceneError::Invalid { kind, at, set: self.override_for(path).map(|o| o.raw.clone()), message, hint }
     }
 
@@ -634,63 +617,59 @@ fn join(prefix: &str, key: &str) -> String {
     }
 }
 
-fn walk_table(
-    t: &dyn toml_edit::TableLike,
-    prefix: &str,
-    values: &mut HashMap<String, Range<usize>>,
-    keys: &mut HashMap<String, Range<usize>>,
-) {
-    for (k, item) in t.iter() {
-        let path = join(prefix, k);
-        if let Some(r) = t.key(k).and_then(|key| key.span()) {
-            keys.insert(path.clone(), r);
-        }
-        walk_item(item, &path, values, keys);
-    }
+/// Byte ranges of the values and keys of a TOML document, by dotted path.
+#[derive(Default)]
+struct Spans {
+    /// Dotted path -> byte range of the value (tables: their header or braces).
+    values: HashMap<String, Range<usize>>,
+    /// Dotted path -> byte range of the key.
+    keys: HashMap<String, Range<usize>>,
 }
 
-fn walk_item(
-    item: &toml_edit::Item,
-    path: &str,
-    values: &mut HashMap<String, Range<usize>>,
-    keys: &mut HashMap<String, Range<usize>>,
-) {
-    if let Some(r) = item.span() {
-        values.insert(path.to_string(), r);
+impl Spans {
+    fn table(&mut self, t: &dyn toml_edit::TableLike, prefix: &str) {
+        for (k, item) in t.iter() {
+            let path = join(prefix, k);
+            if let Some(r) = t.key(k).and_then(|key| key.span()) {
+                self.keys.insert(path.clone(), r);
+            }
+            self.item(item, &path);
+        }
     }
-    match item {
-        toml_edit::Item::Table(t) => walk_table(t, path, values, keys),
-        toml_edit::Item::ArrayOfTables(aot) => {
-            for (i, t) in aot.iter().enumerate() {
-                let p = format!("{path}.{i}");
-                if let Some(r) = t.span() {
-                    values.insert(p.clone(), r);
+
+    fn value_at(&mut self, path: &str, span: Option<Range<usize>>) {
+        if let Some(r) = span {
+            self.values.insert(path.to_string(), r);
+        }
+    }
+
+    fn item(&mut self, item: &toml_edit::Item, path: &str) {
+        self.value_at(path, item.span());
+        match item {
+            toml_edit::Item::Table(t) => self.table(t, path),
+            toml_edit::Item::ArrayOfTables(aot) => {
+                for (i, t) in aot.iter().enumerate() {
+                    let p = format!("{path}.{i}");
+                    self.value_at(&p, t.span());
+                    self.table(t, &p);
                 }
-                walk_table(t, &p, values, keys);
             }
+            toml_edit::Item::Value(v) => self.value(v, path),
+            toml_edit::Item::None => {}
         }
-        toml_edit::Item::Value(v) => walk_value(v, path, values, keys),
-        toml_edit::Item::None => {}
     }
-}
 
-fn walk_value(
-    v: &toml_edit::Value,
-    path: &str,
-    values: &mut HashMap<String, Range<usize>>,
-    keys: &mut HashMap<String, Range<usize>>,
-) {
-    if let Some(r) = v.span() {
-        values.insert(path.to_string(), r);
-    }
-    match v {
-        toml_edit::Value::InlineTable(t) => walk_table(t, path, values, keys),
-        toml_edit::Value::Array(a) => {
-            for (i, e) in a.iter().enumerate() {
-                walk_value(e, &format!("{path}.{i}"), values, keys);
+    fn value(&mut self, v: &toml_edit::Value, path: &str) {
+        self.value_at(path, v.span());
+        match v {
+            toml_edit::Value::InlineTable(t) => self.table(t, path),
+            toml_edit::Value::Array(a) => {
+                for (i, e) in a.iter().enumerate() {
+                    self.value(e, &format!("{path}.{i}"));
+                }
             }
+            _ => {}
         }
-        _ => {}
     }
 }
 

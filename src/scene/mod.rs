@@ -345,9 +345,9 @@ fn value_err(src: &Source, path: &str, message: String, hint: &str) -> SceneErro
     src.error(ErrorKind::Value, path, message, hint.to_string())
 }
 
-fn vec3(src: &Source, path: &str, v: [f32; 3]) -> Result<Vec3, SceneError> {
-    let v = Vec3::from(v);
-    if !v.is_finite() {
+/// `v` if `finite`, else the error naming `path`.
+fn checked_finite<T: std::fmt::Display>(src: &Source, path: &str, v: T, finite: bool) -> Result<T, SceneError> {
+    if !finite {
         return Err(value_err(
             src,
             path,
@@ -356,6 +356,11 @@ fn vec3(src: &Source, path: &str, v: [f32; 3]) -> Result<Vec3, SceneError> {
         ));
     }
     Ok(v)
+}
+
+fn vec3(src: &Source, path: &str, v: [f32; 3]) -> Result<Vec3, SceneError> {
+    let v = Vec3::from(v);
+    checked_finite(src, path, v, v.is_finite())
 }
 
 fn unit(src: &Source, path: &str, v: [f32; 3]) -> Result<Vec3, SceneError> {
@@ -370,15 +375,7 @@ fn unit(src: &Source, path: &str, v: [f32; 3]) -> Result<Vec3, SceneError> {
 }
 
 fn finite(src: &Source, path: &str, v: f32) -> Result<f32, SceneError> {
-    if !v.is_finite() {
-        return Err(value_err(
-            src,
-            path,
-            format!("`{}` must be finite, not {v}", leaf(path)),
-            "replace nan/inf with a number",
-        ));
-    }
-    Ok(v)
+    checked_finite(src, path, v, v.is_finite())
 }
 
 // `!(v > 0.0)` rather than `v <= 0.0`: it also rejects NaN.
@@ -409,6 +406,20 @@ fn rgb(src: &Source, path: &str, c: Rgb, strict: bool) -> Result<Vec3, SceneErro
         ));
     }
     Ok(v)
+}
+
+/// The `transform` of the object or region at `path`: scale, then rotation (degrees about X,
+/// then Y, then Z), then translation, applied to the shape's own coordinates (centre
+/// included). Returns the matrix, its rotation and its scale.
+fn transform(src: &Source, path: &str, t: Option<&file::FileTransform>) -> Result<(Mat4, Quat, f32), SceneError> {
+    let p = |k: &str| format!("{path}.transform.{k}");
+    let translation = vec3(src, &p("translation"), t.and_then(|t| t.translation).unwrap_or_default())?;
+    let rot_deg = vec3(src, &p("rotation"), t.and_then(|t| t.rotation).unwrap_or_default())?;
+    let scale = positive(src, &p("scale"), t.and_then(|t| t.scale).unwrap_or(1.0))?;
+    let rotation = Quat::from_rotation_z(rot_deg.z.to_radians())
+        * Quat::from_rotation_y(rot_deg.y.to_radians())
+        * Quat::from_rotation_x(rot_deg.x.to_radians());
+    Ok((Mat4::from_scale_rotation_translation(Vec3::splat(scale), rotation, translation), rotation, scale))
 }
 
 fn leaf(path: &str) -> &str {
@@ -768,16 +779,7 @@ fn object(
     let (allowed, required) = shape_keys(shape).unwrap_or((&[], &[]));
     check_keys(src, &path, &format!("shape `{shape}`"), &o.present(), allowed, required)?;
 
-    // The transform: scale, then rotation (degrees about X, then Y, then Z), then
-    // translation, applied to the shape's own coordinates (centre included).
-    let t = o.transform.as_ref();
-    let translation = vec3(src, &p("transform.translation"), t.and_then(|t| t.translation).unwrap_or_default())?;
-    let rot_deg = vec3(src, &p("transform.rotation"), t.and_then(|t| t.rotation).unwrap_or_default())?;
-    let scale = positive(src, &p("transform.scale"), t.and_then(|t| t.scale).unwrap_or(1.0))?;
-    let rotation = Quat::from_rotation_z(rot_deg.z.to_radians())
-        * Quat::from_rotation_y(rot_deg.y.to_radians())
-        * Quat::from_rotation_x(rot_deg.x.to_radians());
-    let matrix = Mat4::from_scale_rotation_translation(Vec3::splat(scale), rotation, translation);
+    let (matrix, rotation, scale) = transform(src, &path, o.transform.as_ref())?;
 
     let center = vec3(src, &p("center"), o.center.unwrap_or_default())?;
     let segments = o.segments.unwrap_or(render.sphere_segments);

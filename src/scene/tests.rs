@@ -47,6 +47,11 @@ fn base_err(text: &str, overrides: &[&str]) -> SceneError {
     }
 }
 
+/// The error of BASE with `from` replaced by `to`.
+fn replaced_err(from: &str, to: &str) -> SceneError {
+    base_err(&BASE.replace(from, to), &[])
+}
+
 fn at(e: &SceneError) -> (Option<usize>, Option<usize>) {
     let loc = e.location().unwrap_or_else(|| panic!("no location: {e}"));
     (loc.line, loc.column)
@@ -425,42 +430,36 @@ fn error_missing_scene_file() {
 
 #[test]
 fn error_malformed_toml() {
-    let text = BASE.replace("shape = \"sphere\"", "shape = sphere");
-    let e = base_err(&text, &[]);
+    let e = replaced_err("shape = \"sphere\"", "shape = sphere");
     assert_eq!(e.kind(), Some(ErrorKind::Syntax));
     assert_eq!(at(&e).0, Some(15));
-    let text = BASE.replace("target = [0, 0, 0]", "target = [0, 0, 0] oops");
-    let e = base_err(&text, &[]);
+    let e = replaced_err("target = [0, 0, 0]", "target = [0, 0, 0] oops");
     assert_eq!(at(&e), (Some(3), Some(20)));
     assert!(e.to_string().starts_with("test.toml:3:20: malformed TOML"), "{e}");
 }
 
 #[test]
 fn error_unknown_key() {
-    let text = BASE.replace("radius = 1", "radius = 1\nradiuss = 2");
-    let e = base_err(&text, &[]);
+    let e = replaced_err("radius = 1", "radius = 1\nradiuss = 2");
     assert_eq!(e.kind(), Some(ErrorKind::Schema));
     assert_eq!(at(&e), (Some(17), Some(1)));
     assert!(e.to_string().contains("unknown field `radiuss`"), "{e}");
     // A key of another shape.
-    let text = BASE.replace("radius = 1", "radius = 1\nsize = [1, 1]");
-    let e = base_err(&text, &[]);
+    let e = replaced_err("radius = 1", "radius = 1\nsize = [1, 1]");
     assert_eq!(at(&e), (Some(17), Some(1)));
     assert!(e.to_string().contains("not used by shape `sphere`"), "{e}");
     // Inside an inline table, with the column of the key.
-    let text = BASE.replace("radius = 1", "radius = 1\ntransform = { scale = 2, spin = 3 }");
-    let e = base_err(&text, &[]);
+    let e = replaced_err("radius = 1", "radius = 1\ntransform = { scale = 2, spin = 3 }");
     assert_eq!(at(&e), (Some(17), Some(26)));
     // A missing required key points at its table.
-    let e = base_err(&BASE.replace("radius = 1", ""), &[]);
+    let e = replaced_err("radius = 1", "");
     assert_eq!(at(&e).0, Some(13));
     assert!(e.to_string().contains("needs `radius`"), "{e}");
 }
 
 #[test]
 fn error_unknown_material() {
-    let text = BASE.replace("material = \"glass\"", "material = \"glas\"");
-    let e = base_err(&text, &[]);
+    let e = replaced_err("material = \"glass\"", "material = \"glas\"");
     assert_eq!(e.kind(), Some(ErrorKind::Reference));
     assert_eq!(at(&e), (Some(14), Some(12)));
     let text = e.to_string();

@@ -31,7 +31,7 @@
 //! not hidden inside a later region, or a box face where the index is not 1), 0 elsewhere.
 use std::sync::Arc;
 
-use glam::{DVec2, DVec3, Mat4, Quat, Vec2, Vec3};
+use glam::{DVec2, DVec3, Mat4, Vec2, Vec3};
 
 use super::file::{check_keys, FileObject, FileRegion, Rgb};
 use super::mesh::Mesh;
@@ -598,15 +598,7 @@ fn region(r: &FileRegion, i: usize, src: &Source) -> Result<Region, SceneError> 
         reflectance: reflectance(src, &p("reflectance"), r.reflectance)?,
     };
 
-    // The transform, as the objects': scale, rotation (degrees about X, Y, Z), translation.
-    let t = r.transform.as_ref();
-    let translation = vec3(src, &p("transform.translation"), t.and_then(|t| t.translation).unwrap_or_default())?;
-    let rot_deg = vec3(src, &p("transform.rotation"), t.and_then(|t| t.rotation).unwrap_or_default())?;
-    let scale = positive(src, &p("transform.scale"), t.and_then(|t| t.scale).unwrap_or(1.0))?;
-    let rotation = Quat::from_rotation_z(rot_deg.z.to_radians())
-        * Quat::from_rotation_y(rot_deg.y.to_radians())
-        * Quat::from_rotation_x(rot_deg.x.to_radians());
-    let matrix = Mat4::from_scale_rotation_translation(Vec3::splat(scale), rotation, translation);
+    let (matrix, rotation, scale) = super::transform(src, &path, r.transform.as_ref())?;
     let center = vec3(src, &p("center"), r.center.unwrap_or_default())?;
     let size = |src: &Source| -> Result<Vec3, SceneError> {
         let s = vec3(src, &p("size"), r.size.unwrap_or_default())?;

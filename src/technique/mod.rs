@@ -423,6 +423,25 @@ pub fn caustic_objects(scene: &Scene, key: &str) -> Option<(Vec<String>, Vec<Str
     (!diffuse.is_empty() && !specular.is_empty()).then_some((diffuse, specular))
 }
 
+/// The dielectrics' names, when the scene has one and the refraction technique `key` is
+/// selected.
+pub fn refracting_objects(scene: &Scene, key: &str) -> Option<Vec<String>> {
+    let names = dielectric_names(scene);
+    (scene.render.refraction == key && !names.is_empty()).then_some(names)
+}
+
+/// The mirrors' and conductors' names, when the scene has one and the reflection technique
+/// `key` is selected.
+pub fn reflecting_objects(scene: &Scene, key: &str) -> Option<Vec<String>> {
+    let names = metal_names(scene);
+    (scene.render.reflection == key && !names.is_empty()).then_some(names)
+}
+
+/// `passes`, all of one stage: a plan.
+pub fn in_stage(stage: Stage, passes: impl IntoIterator<Item = PlannedPass>) -> Vec<(Stage, PlannedPass)> {
+    passes.into_iter().map(|p| (stage, p)).collect()
+}
+
 pub fn list(v: &[String]) -> String {
     v.join(", ")
 }

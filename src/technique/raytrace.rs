@@ -32,7 +32,7 @@
 //! uniforms and the pass.
 use std::rc::Rc;
 
-use crate::gpu::{vk, Buffer, Spec};
+use crate::gpu::{Buffer, Spec};
 use crate::graph::Frame;
 use crate::reference::TraceGeometry;
 use crate::scene::techniques::RaytraceParams;
@@ -123,12 +123,7 @@ fn create(s: &mut Setup<'_>, mode: Mode) -> Result<Box<dyn Technique>, RenderErr
         Mode::Reflection => (REFLECTION_RAYTRACE, SPECULAR_MODE_REFLECTION),
     };
     let uniforms = geometry.uniforms(scene, s.gpu, p.max_depth).with_cutoff(p.cutoff);
-    let uniforms = Buffer::with_data(
-        ctx,
-        &format!("{name}_uniforms"),
-        bytemuck::bytes_of(&uniforms),
-        vk::BufferUsageFlags::STORAGE_BUFFER,
-    )?;
+    let uniforms = Buffer::storage(ctx, &format!("{name}_uniforms"), std::slice::from_ref(&uniforms))?;
     // Host-written once at creation (the graph tracks images only): visible at submission.
     let targets = s.targets;
     let mut set = fragment_set()

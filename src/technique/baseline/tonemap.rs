@@ -40,7 +40,7 @@ use crate::graph::{Bindings, BoundSet, BufferId, Frame, ImageId};
 use crate::scene::techniques::TonemapAdaptiveParams;
 use crate::scene::Scene;
 use crate::technique::{
-    params, tables, FrameInputs, Inputs, PlannedPass, Registration, RenderError, Setup, Stage, Technique,
+    in_stage, params, tables, FrameInputs, Inputs, PlannedPass, Registration, RenderError, Setup, Stage, Technique,
 };
 use crate::{
     BINDING_HDR, BINDING_TONEMAP_STATE, TONEMAP_BINDING_HDR, TONEMAP_BINDING_PARTIALS, TONEMAP_BINDING_STATE,
@@ -84,7 +84,7 @@ fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
     } else {
         vec![PlannedPass::new(TONEMAP, "linear radiance -> sRGB PNG output")]
     };
-    passes.into_iter().map(|p| (Stage::Tonemap, p)).collect()
+    in_stage(Stage::Tonemap, passes)
 }
 
 fn create(s: &mut Setup<'_>) -> Result<Box<dyn Technique>, RenderError> {
@@ -246,22 +246,18 @@ impl TonemapPass {
         frame
             .pass(TONEMAP_LOG_AVERAGE)
             .read(targets.hdr_id, Access::ComputeSampled)
-            .write_buffer(a.partials_id, Access::ComputeWrite)
+            .write(a.partials_id, Access::ComputeWrite)
             .record(move |cmd| {
-                cmd.bind_compute(pipeline, &[set]);
-                cmd.push_compute(pipeline, &push);
-                cmd.dispatch(groups[0], groups[1], 1);
+                cmd.compute(pipeline, &[set], &push, [groups[0], groups[1], 1]);
             });
         let pipeline = &a.adapt;
         frame
             .pass(TONEMAP_ADAPT)
-            .read_buffer(a.partials_id, Access::ComputeRead)
+            .read(a.partials_id, Access::ComputeRead)
             .write(a.state_id, Access::ComputeWrite)
-            .write_buffer(a.stats_id, Access::ComputeWrite)
+            .write(a.stats_id, Access::ComputeWrite)
             .record(move |cmd| {
-                cmd.bind_compute(pipeline, &[set]);
-                cmd.push_compute(pipeline, &push);
-                cmd.dispatch(1, 1, 1);
+                cmd.compute(pipeline, &[set], &push, [1, 1, 1]);
             });
         self.pass.record(frame, frame_set, &[]);
     }

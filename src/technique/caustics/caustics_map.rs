@@ -41,8 +41,8 @@ use crate::scene::techniques::{CausticsMapParams, Flux, Newton};
 use crate::scene::{Light, Material, Scene};
 use crate::technique::baseline::shadow_map::FAR_DISTANCE;
 use crate::technique::{
-    caustic_objects, list, params, registration, FrameInputs, PlannedPass, Registration, RenderError, Setup, Stage,
-    Technique,
+    caustic_objects, in_stage, list, params, registration, FrameInputs, PlannedPass, Registration, RenderError, Setup,
+    Stage, Technique,
 };
 use crate::{
     CAUSTIC_BINDING_BACK_NORMAL, CAUSTIC_BINDING_BACK_POSITION, CAUSTIC_BINDING_FACES, CAUSTIC_BINDING_FRONT_NORMAL,
@@ -65,26 +65,26 @@ fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
         return Vec::new();
     };
     let lights = scene.lights.len();
-    [
-        PlannedPass::new(
-            CAUSTICS_MAP_RECEIVERS,
-            format!("positions of the diffuse receivers {} seen from {lights} light(s)", list(&diffuse)),
-        ),
-        PlannedPass::new(
-            CAUSTICS_MAP_REFRACTORS,
-            format!("positions and normals of the specular {} seen from the light(s)", list(&specular)),
-        ),
-        PlannedPass::new(
-            CAUSTICS_MAP,
-            format!(
-                "vertex grid splatted onto the receivers through {} (render.caustics = \"caustics_map\")",
-                list(&specular)
+    in_stage(
+        Stage::Caustics,
+        [
+            PlannedPass::new(
+                CAUSTICS_MAP_RECEIVERS,
+                format!("positions of the diffuse receivers {} seen from {lights} light(s)", list(&diffuse)),
             ),
-        ),
-    ]
-    .into_iter()
-    .map(|p| (Stage::Caustics, p))
-    .collect()
+            PlannedPass::new(
+                CAUSTICS_MAP_REFRACTORS,
+                format!("positions and normals of the specular {} seen from the light(s)", list(&specular)),
+            ),
+            PlannedPass::new(
+                CAUSTICS_MAP,
+                format!(
+                    "vertex grid splatted onto the receivers through {} (render.caustics = \"caustics_map\")",
+                    list(&specular)
+                ),
+            ),
+        ],
+    )
 }
 
 impl Technique for CausticsMapPass {
@@ -322,12 +322,7 @@ impl CausticsMapPass {
             RefractorLayers::new(s, CAUSTICS_MAP_REFRACTORS, grid, specular_bounds(scene), occlusion)?;
 
         // 3. The splat pass.
-        let faces_buffer = Buffer::with_data(
-            ctx,
-            "caustic_faces",
-            bytemuck::cast_slice(&faces),
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-        )?;
+        let faces_buffer = Buffer::storage(ctx, "caustic_faces", &faces)?;
         // Linear filtering of the receivers' distances makes f(d) (Eq. 3) piecewise linear
         // instead of piecewise constant, so that the finite difference of Eq. 5 is not zero.
         let linear = Sampler::new(ctx, "caustic_linear", SamplerDesc::LINEAR_CLAMP)?;
@@ -624,7 +619,7 @@ impl RefractorLayers {
             pass = pass.write(*id, if i < 4 { Access::ColorAttachment } else { Access::DepthAttachment });
         }
         if self.queries.is_some() {
-            pass = pass.write_buffer(self.visible_id, Access::TransferWrite);
+            pass = pass.write(self.visible_id, Access::TransferWrite);
         }
         pass.record(move |cmd| {
             if let Some(q) = &self.queries {

@@ -53,8 +53,8 @@ use crate::scene::Scene;
 use crate::technique::caustics::caustics_map::{is_specular, refractor_bindings, RefractorLayers};
 use crate::technique::refraction::nearby_impostors::{nearby_objects, rect_for};
 use crate::technique::{
-    caustic_objects, list, params, registration, FrameInputs, PlannedPass, Registration, RenderError, Setup, Stage,
-    Technique,
+    caustic_objects, in_stage, list, params, registration, FrameInputs, PlannedPass, Registration, RenderError, Setup,
+    Stage, Technique,
 };
 use crate::{CAUSTIC_BINDING_FACES, CAUSTIC_BINDING_MATERIALS, PHOTON_BINDING_RECTS, PHOTON_PAPER, PHOTON_PHYSICAL};
 
@@ -75,25 +75,28 @@ fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
     let Some((diffuse, specular)) = caustic_objects(scene, "photon_buffer") else {
         return Vec::new();
     };
-    [
-        PlannedPass::new(
-            PHOTON_BUFFER_REFRACTORS,
-            format!("positions and normals of the specular {} seen from the light(s)", list(&specular)),
-        ),
-        PlannedPass::new(
-            PHOTON_BUFFER,
-            format!(
-                "photons through {} onto the rectangles of the receivers {} (render.caustics = \"photon_buffer\")",
-                list(&specular),
-                list(&diffuse)
+    in_stage(
+        Stage::Caustics,
+        [
+            PlannedPass::new(
+                PHOTON_BUFFER_REFRACTORS,
+                format!("positions and normals of the specular {} seen from the light(s)", list(&specular)),
             ),
-        ),
-        PlannedPass::new(PHOTON_BUFFER_SCATTER, format!("photon counts in the caustic textures of {}", list(&diffuse))),
-        PlannedPass::new(PHOTON_BUFFER_FILTER, "filter of Hu & Qin 2007 §3.2"),
-    ]
-    .into_iter()
-    .map(|p| (Stage::Caustics, p))
-    .collect()
+            PlannedPass::new(
+                PHOTON_BUFFER,
+                format!(
+                    "photons through {} onto the rectangles of the receivers {} (render.caustics = \"photon_buffer\")",
+                    list(&specular),
+                    list(&diffuse)
+                ),
+            ),
+            PlannedPass::new(
+                PHOTON_BUFFER_SCATTER,
+                format!("photon counts in the caustic textures of {}", list(&diffuse)),
+            ),
+            PlannedPass::new(PHOTON_BUFFER_FILTER, "filter of Hu & Qin 2007 §3.2"),
+        ],
+    )
 }
 
 impl Technique for PhotonBufferPass {
@@ -210,8 +213,7 @@ impl PhotonCaustics {
         )?;
         let stand_in = [GpuPhotonRect::zeroed()];
         let data: &[GpuPhotonRect] = if rect_data.is_empty() { &stand_in } else { &rect_data };
-        let rects =
-            Buffer::with_data(ctx, "photon_rects", bytemuck::cast_slice(data), vk::BufferUsageFlags::STORAGE_BUFFER)?;
+        let rects = Buffer::storage(ctx, "photon_rects", data)?;
         let id = graph.register_image(&textures);
         // Defined contents ("no caustic") and the layout the shaders expect.
         ctx.one_shot(|cmd| {
@@ -276,8 +278,7 @@ impl PhotonBufferPass {
         let (refractors, faces, _) = RefractorLayers::new(s, PHOTON_BUFFER_REFRACTORS, size, bounds, false)?;
         let graph = &mut *s.graph;
         let n_faces = faces.len() as u32;
-        let faces_buffer =
-            Buffer::with_data(ctx, "photon_faces", bytemuck::cast_slice(&faces), vk::BufferUsageFlags::STORAGE_BUFFER)?;
+        let faces_buffer = Buffer::storage(ctx, "photon_faces", &faces)?;
         let sampler = Sampler::new(ctx, "photon_nearest", SamplerDesc::NEAREST_CLAMP)?;
         let usage = U::COLOR_ATTACHMENT | U::SAMPLED | U::TRANSFER_SRC;
         let mut image = |name: &str, width: u32, layers: u32| {

@@ -563,34 +563,30 @@ impl LightSim {
         let push = self.push();
         frame
             .pass("eikonal_light_step")
-            .read_buffer(hp.state_id, Access::IndirectArgs)
-            .read_buffer(hp.state_id, Access::ComputeRead)
+            .read(hp.state_id, Access::IndirectArgs)
+            .read(hp.state_id, Access::ComputeRead)
             .read(self.field_id, Access::ComputeSampled)
             .read(self.extinction_id, Access::ComputeSampled)
             .read(self.irradiance_id, Access::ComputeRead)
-            .write_buffer(src, Access::ComputeWrite)
-            .write_buffer(hp.classes_id, Access::ComputeWrite)
+            .write(src, Access::ComputeWrite)
+            .write(hp.classes_id, Access::ComputeWrite)
             .write(self.accum_id, Access::ComputeWrite)
             .record(move |cmd| {
-                cmd.bind_compute(step, &[set0, set1]);
-                cmd.push_compute(step, &push);
-                cmd.dispatch_indirect(state, 0);
+                cmd.compute_indirect(step, &[set0, set1], &push, state, 0);
             });
         hp.record(frame);
         frame
             .pass("eikonal_light_expand")
-            .read_buffer(hp.state_id, Access::IndirectArgs)
-            .write_buffer(hp.state_id, Access::ComputeWrite)
-            .read_buffer(hp.pairs_id, Access::ComputeRead)
-            .read_buffer(hp.classes_id, Access::ComputeRead)
-            .read_buffer(src, Access::ComputeRead)
+            .read(hp.state_id, Access::IndirectArgs)
+            .write(hp.state_id, Access::ComputeWrite)
+            .read(hp.pairs_id, Access::ComputeRead)
+            .read(hp.classes_id, Access::ComputeRead)
+            .read(src, Access::ComputeRead)
             .read(self.field_id, Access::ComputeSampled)
             .read(self.irradiance_id, Access::ComputeRead)
-            .write_buffer(dst, Access::ComputeWrite)
+            .write(dst, Access::ComputeWrite)
             .record(move |cmd| {
-                cmd.bind_compute(expand, &[set0, set1]);
-                cmd.push_compute(expand, &push);
-                cmd.dispatch_indirect(state, 0);
+                cmd.compute_indirect(expand, &[set0, set1], &push, state, 0);
             });
     }
 
@@ -631,9 +627,7 @@ impl LightSim {
                 .write(self.irradiance_id, Access::ComputeWrite)
                 .write(self.direction_id, Access::ComputeWrite)
                 .record(move |cmd| {
-                    cmd.bind_compute(resolve, &[set0, set1]);
-                    cmd.push_compute(resolve, &push);
-                    cmd.dispatch(groups[0], groups[1], groups[2]);
+                    cmd.compute(resolve, &[set0, set1], &push, groups);
                 });
             frame.execute(cmd, None);
         })

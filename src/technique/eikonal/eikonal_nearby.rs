@@ -24,6 +24,7 @@
 //! `eikonal_light` receiver pass does for the camera (glsl/eikonal/receiver.glsl).
 use glam::{Vec2, Vec3};
 
+use crate::reference::bvh::moller_trumbore;
 use crate::scene::techniques::EikonalNearby;
 use crate::scene::{Material, Scene};
 pub use crate::MAX_EIKONAL_TRIANGLES;
@@ -156,25 +157,11 @@ pub fn triangle_buffer_bytes(tris: &[GpuTriangle]) -> Vec<u8> {
 /// division by ~0. glsl/eikonal/nearby_exit.glsl's `eik_triangle_hit` is the same
 /// computation (two-sided).
 pub fn ray_triangle(o: Vec3, d: Vec3, p0: Vec3, e1: Vec3, e2: Vec3, t_min: f32) -> Option<(f32, f32, f32)> {
-    let p = d.cross(e2);
-    let det = e1.dot(p);
     let scale = e1.length() * e2.length() * d.length();
-    if det.is_nan() || det.abs() <= 1e-12 * scale.max(1e-30) {
-        return None;
-    }
-    let inv = 1.0 / det;
-    let s = o - p0;
-    let b1 = s.dot(p) * inv;
-    if !(0.0..=1.0).contains(&b1) {
-        return None;
-    }
-    let q = s.cross(e1);
-    let b2 = d.dot(q) * inv;
-    if !(b2 >= 0.0 && b1 + b2 <= 1.0) {
-        return None;
-    }
-    let t = e2.dot(q) * inv;
-    (t.is_finite() && t > t_min).then_some((t, b1, b2))
+    let parallel = |det: f32| det.is_nan() || det.abs() <= 1e-12 * scale.max(1e-30);
+    let (b1, b2, t) = moller_trumbore(o, d, p0, e1, e2, parallel)?;
+    let inside = (0.0..=1.0).contains(&b1) && b2 >= 0.0 && b1 + b2 <= 1.0;
+    (inside && t.is_finite() && t > t_min).then_some((t, b1, b2))
 }
 
 #[cfg(test)]

@@ -223,21 +223,19 @@ impl HistoPyramid {
             let pipeline = &self.reduce;
             frame
                 .pass("histopyramid_reduce")
-                .read_buffer(self.state_id, Access::ComputeRead)
-                .read_buffer(self.classes_id, Access::ComputeRead)
-                .write_buffer(self.levels_id, Access::ComputeWrite)
+                .read(self.state_id, Access::ComputeRead)
+                .read(self.classes_id, Access::ComputeRead)
+                .write(self.levels_id, Access::ComputeWrite)
                 .record(move |cmd| {
-                    cmd.bind_compute(pipeline, &[set]);
-                    cmd.push_compute(pipeline, &level);
-                    cmd.dispatch(len.div_ceil(LIGHT_GROUP), 1, 1);
+                    cmd.compute(pipeline, &[set], &level, [len.div_ceil(LIGHT_GROUP), 1, 1]);
                 });
         }
         let total = &self.total;
         frame
             .pass("histopyramid_total")
-            .read_buffer(self.levels_id, Access::ComputeRead)
-            .write_buffer(self.state_id, Access::ComputeWrite)
-            .write_buffer(self.history_id, Access::ComputeWrite)
+            .read(self.levels_id, Access::ComputeRead)
+            .write(self.state_id, Access::ComputeWrite)
+            .write(self.history_id, Access::ComputeWrite)
             .record(move |cmd| {
                 cmd.bind_compute(total, &[set]);
                 cmd.dispatch(1, 1, 1);
@@ -245,11 +243,11 @@ impl HistoPyramid {
         let (traverse, state) = (&self.traverse, &self.state);
         frame
             .pass("histopyramid_traverse")
-            .read_buffer(self.state_id, Access::IndirectArgs)
-            .read_buffer(self.state_id, Access::ComputeRead)
-            .read_buffer(self.classes_id, Access::ComputeRead)
-            .read_buffer(self.levels_id, Access::ComputeRead)
-            .write_buffer(self.pairs_id, Access::ComputeWrite)
+            .read(self.state_id, Access::IndirectArgs)
+            .read(self.state_id, Access::ComputeRead)
+            .read(self.classes_id, Access::ComputeRead)
+            .read(self.levels_id, Access::ComputeRead)
+            .write(self.pairs_id, Access::ComputeWrite)
             .record(move |cmd| {
                 cmd.bind_compute(traverse, &[set]);
                 cmd.dispatch_indirect(state, 0);

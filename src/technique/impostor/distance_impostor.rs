@@ -44,8 +44,8 @@ use crate::graph::{Bindings, BoundSet, Frame, FrameGraph, ImageId, PassBuilder};
 use crate::scene::techniques::{ImpostorFresnel, ImpostorMaps, ImpostorParams, ImpostorUpdate};
 use crate::scene::{Analytic, Material, Scene};
 use crate::technique::{
-    dielectric_names, list, metal_names, params, registration, FrameInputs, PlannedPass, Registration, RenderError,
-    Setup, Stage, Technique,
+    in_stage, list, params, reflecting_objects, refracting_objects, registration, FrameInputs, PlannedPass,
+    Registration, RenderError, Setup, Stage, Technique,
 };
 use crate::{
     BINDING_IMPOSTOR_DISTANCE, BINDING_IMPOSTOR_PROBE, BINDING_IMPOSTOR_RADIANCE, BINDING_IMPOSTOR_REFRACTOR,
@@ -71,52 +71,50 @@ fn impostor_params(s: &Setup<'_>) -> Result<ImpostorParams, RenderError> {
 }
 
 fn plan_refraction(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
-    let dielectric = dielectric_names(scene);
-    if dielectric.is_empty() || scene.render.refraction != "impostor" {
+    let Some(dielectric) = refracting_objects(scene, "impostor") else {
         return Vec::new();
-    }
+    };
     let list = list(&dielectric);
-    [
-        PlannedPass::new(
-            REFRACTION_IMPOSTOR_MAP,
-            format!("distance impostor around dielectric {list} (render.refraction = \"impostor\")"),
-        ),
-        PlannedPass::new(
-            REFRACTION_IMPOSTOR_REFRACTOR_MAP,
-            format!("refractor map (distance + normal cube) of {list}"),
-        ),
-        PlannedPass::new(
-            REFRACTION_IMPOSTOR,
-            format!("double refraction of {list} through the refractor map (Szirmay-Kalos et al. 2005, §4)"),
-        ),
-    ]
-    .into_iter()
-    .map(|p| (Stage::Refraction, p))
-    .collect()
+    in_stage(
+        Stage::Refraction,
+        [
+            PlannedPass::new(
+                REFRACTION_IMPOSTOR_MAP,
+                format!("distance impostor around dielectric {list} (render.refraction = \"impostor\")"),
+            ),
+            PlannedPass::new(
+                REFRACTION_IMPOSTOR_REFRACTOR_MAP,
+                format!("refractor map (distance + normal cube) of {list}"),
+            ),
+            PlannedPass::new(
+                REFRACTION_IMPOSTOR,
+                format!("double refraction of {list} through the refractor map (Szirmay-Kalos et al. 2005, §4)"),
+            ),
+        ],
+    )
 }
 
 fn plan_reflection(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
-    let metal = metal_names(scene);
-    if metal.is_empty() || scene.render.reflection != "impostor" {
+    let Some(metal) = reflecting_objects(scene, "impostor") else {
         return Vec::new();
-    }
+    };
     let list = list(&metal);
-    [
-        PlannedPass::new(
-            REFLECTION_IMPOSTOR_MAP,
-            format!(
-                "distance impostor (radiance + distance cube) around mirror/conductor {list} \
-                     (render.reflection = \"impostor\")"
+    in_stage(
+        Stage::Reflection,
+        [
+            PlannedPass::new(
+                REFLECTION_IMPOSTOR_MAP,
+                format!(
+                    "distance impostor (radiance + distance cube) around mirror/conductor {list} \
+                         (render.reflection = \"impostor\")"
+                ),
             ),
-        ),
-        PlannedPass::new(
-            REFLECTION_IMPOSTOR,
-            format!("localized reflection of {list} (Hit(), Szirmay-Kalos et al. 2005)"),
-        ),
-    ]
-    .into_iter()
-    .map(|p| (Stage::Reflection, p))
-    .collect()
+            PlannedPass::new(
+                REFLECTION_IMPOSTOR,
+                format!("localized reflection of {list} (Hit(), Szirmay-Kalos et al. 2005)"),
+            ),
+        ],
+    )
 }
 
 /// The reflection and the refraction technique record and react alike: their maps follow
@@ -465,12 +463,7 @@ impl ImpostorMap {
         if data.is_empty() {
             return Ok(data);
         }
-        let buffer = Buffer::with_data(
-            ctx,
-            "impostor_probe_records",
-            bytemuck::cast_slice(&data),
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-        )?;
+        let buffer = Buffer::storage(ctx, "impostor_probe_records", &data)?;
         let sampler = Sampler::new(ctx, "impostor_probe_linear", SamplerDesc::LINEAR_CLAMP)?;
         let (image, image_id, channel) = self.distance_view();
         let set = Bindings::new(vk::ShaderStageFlags::COMPUTE)
@@ -493,10 +486,8 @@ impl ImpostorMap {
         let groups = (data.len() as u32).div_ceil(WORKGROUP_2D * WORKGROUP_2D);
         ctx.one_shot(|cmd| {
             let mut frame = graph.frame();
-            frame.pass("impostor_probe").uses(&set).write_buffer(buffer_id, Access::ComputeWrite).record(|cmd| {
-                cmd.bind_compute(&pipeline, &[set.set()]);
-                cmd.push_compute(&pipeline, &push);
-                cmd.dispatch(groups, 1, 1);
+            frame.pass("impostor_probe").uses(&set).write(buffer_id, Access::ComputeWrite).record(|cmd| {
+                cmd.compute(&pipeline, &[set.set()], &push, [groups, 1, 1]);
             });
             frame.execute(cmd, None);
             graph.access_now(cmd, &[], &[(buffer_id, Access::HostRead)]);

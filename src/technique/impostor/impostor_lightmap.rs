@@ -53,8 +53,8 @@ use crate::scene::techniques::{ImpostorLightmapParams, ImpostorParams};
 use crate::scene::{Light, Material, Scene};
 use crate::technique::impostor::distance_impostor::{object_bounds, record_maps, ImpostorMap, MapContent, MapDesc};
 use crate::technique::{
-    dielectric_names, list, params, registration, specular_names, FrameInputs, PlannedPass, Registration, RenderError,
-    Setup, Stage, Technique,
+    dielectric_names, in_stage, list, params, registration, specular_names, FrameInputs, PlannedPass, Registration,
+    RenderError, Setup, Stage, Technique,
 };
 use crate::{
     BINDING_GBUF_ALBEDO, BINDING_GBUF_DEPTH, BINDING_GBUF_NORMAL, BINDING_LIGHTMAPS, LIGHTMAP_BINDING_PHOTON_HIT,
@@ -116,7 +116,7 @@ fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
     ]);
     let apply =
         PlannedPass::new(IMPOSTOR_LIGHTMAP_APPLY, format!("caustic irradiance of the light maps on {receivers}"));
-    let mut out: Vec<_> = passes.into_iter().map(|p| (Stage::Caustics, p)).collect();
+    let mut out: Vec<_> = in_stage(Stage::Caustics, passes);
     out.push((Stage::Lighting, apply));
     out
 }

@@ -23,8 +23,8 @@ use crate::graph::Frame;
 use crate::scene::techniques::{HuQinParams, RecursiveExit};
 use crate::scene::{Material, Scene};
 use crate::technique::{
-    dielectric_names, list, params, registration, FrameInputs, PlannedPass, Registration, RenderError, Setup, Stage,
-    Technique,
+    in_stage, list, params, refracting_objects, registration, FrameInputs, PlannedPass, Registration, RenderError,
+    Setup, Stage, Technique,
 };
 use crate::{
     BINDING_GBUF_ALBEDO, BINDING_GBUF_DEPTH, BINDING_GBUF_NORMAL, BINDING_NEARBY_RECTS, BINDING_NEARBY_TEXTURE,
@@ -46,10 +46,9 @@ pub const REFRACTION_HU_QIN_NEARBY: &str = "refraction_hu_qin_nearby";
 pub const TECHNIQUE: Registration = registration!("refraction = \"hu_qin\"", plan, HuQinPass, ["hu_qin"]);
 
 fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
-    let dielectric = dielectric_names(scene);
-    if dielectric.is_empty() || scene.render.refraction != "hu_qin" {
+    let Some(dielectric) = refracting_objects(scene, "hu_qin") else {
         return Vec::new();
-    }
+    };
     let mut passes = nearby_plan(scene);
     passes.push(PlannedPass::new(
         REFRACTION_HU_QIN_LAYERS,
@@ -62,7 +61,7 @@ fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
         REFRACTION_HU_QIN,
         format!("two-interface refraction of {} (binary search and iterative d_T, Hu & Qin 2007)", list(&dielectric)),
     ));
-    passes.into_iter().map(|p| (Stage::Refraction, p)).collect()
+    in_stage(Stage::Refraction, passes)
 }
 
 /// §2.2: the impostor textures, when `render.hu_qin.nearby` is on and a dielectric has other
@@ -78,6 +77,7 @@ fn nearby_plan(scene: &Scene) -> Vec<PlannedPass> {
         return Vec::new();
     }
     let name = |i: usize| scene.objects[i].name.clone();
+    let names = |objects: &[usize]| list(&objects.iter().map(|&i| name(i)).collect::<Vec<_>>());
     let sets: Vec<String> = layout
         .sets
         .iter()
@@ -86,10 +86,9 @@ fn nearby_plan(scene: &Scene) -> Vec<PlannedPass> {
                 layout.rects[s.first as usize..(s.first + s.count) as usize].iter().map(|r| name(r.object)).collect();
             let mut t = format!("{} sees {}", name(s.object), list(&kept));
             if !s.dropped.is_empty() {
-                let dropped: Vec<String> = s.dropped.iter().map(|&i| name(i)).collect();
                 t += &format!(
                     " ({} left to the environment map: at most {} rectangles, the nearest are kept)",
-                    list(&dropped),
+                    names(&s.dropped),
                     crate::MAX_NEARBY_RECTS
                 );
             }
@@ -101,10 +100,9 @@ fn nearby_plan(scene: &Scene) -> Vec<PlannedPass> {
         sets.join("; ")
     );
     if !layout.without_set.is_empty() {
-        let names: Vec<String> = layout.without_set.iter().map(|&i| name(i)).collect();
         reason += &format!(
             "; {} without a rectangle set of its own (at most {} sets): environment only",
-            list(&names),
+            names(&layout.without_set),
             crate::MAX_NEARBY_SETS
         );
     }

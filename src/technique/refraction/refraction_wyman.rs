@@ -16,8 +16,8 @@ use crate::graph::Frame;
 use crate::scene::techniques::{BackSurface, WymanParams};
 use crate::scene::{Material, Scene};
 use crate::technique::{
-    dielectric_names, list, params, registration, FrameInputs, PlannedPass, Registration, RenderError, Setup, Stage,
-    Technique,
+    in_stage, list, params, refracting_objects, registration, FrameInputs, PlannedPass, Registration, RenderError,
+    Setup, Stage, Technique,
 };
 use crate::{
     BINDING_GBUF_DEPTH, BINDING_GBUF_NORMAL, BINDING_REFR_BACK_DEPTH, BINDING_REFR_BACK_NORMAL,
@@ -34,10 +34,9 @@ pub const REFRACTION_WYMAN: &str = "refraction_wyman";
 pub const TECHNIQUE: Registration = registration!("refraction = \"wyman\"", plan, WymanPass, ["wyman"]);
 
 fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
-    let dielectric = dielectric_names(scene);
-    if dielectric.is_empty() || scene.render.refraction != "wyman" {
+    let Some(dielectric) = refracting_objects(scene, "wyman") else {
         return Vec::new();
-    }
+    };
     let list = list(&dielectric);
     let layers = PlannedPass::new(
         REFRACTION_WYMAN_LAYERS,
@@ -49,7 +48,7 @@ fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
         REFRACTION_WYMAN,
         format!("two-interface refraction of {list} (d_V/d_N interpolation, Wyman 2005)"),
     );
-    vec![(Stage::Refraction, layers), (Stage::Refraction, shade)]
+    in_stage(Stage::Refraction, [layers, shade])
 }
 
 impl Technique for WymanPass {

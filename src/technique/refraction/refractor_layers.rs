@@ -111,12 +111,7 @@ impl RefractorLayers {
         let graph = &mut *s.graph;
         // A one-float stand-in where the technique has no d_N (the shader never reads it).
         let data: Vec<f32> = d_n.map(|d| d.to_vec()).filter(|d| !d.is_empty()).unwrap_or_else(|| vec![0.0]);
-        let d_n_buffer = Buffer::with_data(
-            ctx,
-            &format!("{name}_d_n"),
-            bytemuck::cast_slice(&data),
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-        )?;
+        let d_n_buffer = Buffer::storage(ctx, &format!("{name}_d_n"), &data)?;
         let reads_gbuffer_depth = kinds.contains(&LayerKind::Second);
         let set = Bindings::new(vk::ShaderStageFlags::VERTEX)
             .storage(BINDING_REFR_DN, &d_n_buffer)

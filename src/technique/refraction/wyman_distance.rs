@@ -15,6 +15,7 @@ use std::sync::{Arc, Mutex, OnceLock};
 
 use glam::Vec3;
 
+use crate::reference::bvh::moller_trumbore;
 use crate::scene::Mesh;
 
 /// Leaves hold at most this many triangles.
@@ -133,25 +134,9 @@ const EDGE_SLACK: f32 = 1e-5;
 
 /// Möller–Trumbore, two-sided, with [`EDGE_SLACK`].
 fn ray_triangle(o: Vec3, d: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Option<f32> {
-    let e1 = b - a;
-    let e2 = c - a;
-    let p = d.cross(e2);
-    let det = e1.dot(p);
-    if det.abs() < 1e-20 {
-        return None;
-    }
-    let inv = 1.0 / det;
-    let s = o - a;
-    let u = s.dot(p) * inv;
-    if !(-EDGE_SLACK..=1.0 + EDGE_SLACK).contains(&u) {
-        return None;
-    }
-    let q = s.cross(e1);
-    let v = d.dot(q) * inv;
-    if v < -EDGE_SLACK || u + v > 1.0 + EDGE_SLACK {
-        return None;
-    }
-    Some(e2.dot(q) * inv)
+    let (u, v, t) = moller_trumbore(o, d, a, b - a, c - a, |det| det.abs() < 1e-20)?;
+    let inside = (-EDGE_SLACK..=1.0 + EDGE_SLACK).contains(&u) && !(v < -EDGE_SLACK || u + v > 1.0 + EDGE_SLACK);
+    inside.then_some(t)
 }
 
 /// d_N of every vertex of `mesh`: the distance along -normal to the nearest surface beyond
