@@ -1,7 +1,10 @@
 //! Instance, device, queue, allocator and deferred deletion.
+use std::any::{Any, TypeId};
+use std::collections::HashMap;
 use std::ffi::{c_char, CStr, CString};
+use std::hash::Hash;
 use std::sync::atomic::{AtomicU64, Ordering};
-use std::sync::{Arc, Mutex};
+use std::sync::{Arc, Mutex, Weak};
 
 use ash::vk;
 use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme, Allocator, AllocatorCreateDesc};
@@ -102,18 +105,17 @@ pub struct GpuContext {
     shader_log: Mutex<Vec<String>>,
     /// Where long work reports its progress ([`GpuContext::set_progress`]).
     progress: Mutex<Option<ProgressSink>>,
-    /// Live render passes and samplers by description (src/gpu/render_pass.rs, image.rs).
-    pub(crate) render_passes: Mutex<
-        std::collections::HashMap<
-            super::render_pass::RenderPassDesc,
-            std::sync::Weak<super::render_pass::SharedRenderPass>,
-        >,
-    >,
-    pub(crate) samplers:
-        Mutex<std::collections::HashMap<super::SamplerDesc, std::sync::Weak<super::image::SharedSampler>>>,
-    /// Live pipelines by description (src/gpu/pipeline.rs), and how often each was reused.
-    pub(crate) pipelines: Mutex<super::pipeline::PipelineCache>,
-    pub(crate) pipeline_counts: Mutex<super::PipelineCounts>,
+    /// Objects shared by description ([`GpuContext::shared`]), one map per kind.
+    shared: Mutex<HashMap<TypeId, Box<dyn Any + Send>>>,
+    /// Pipelines made and reused since the last [`GpuContext::take_pipeline_counts`].
+    pipeline_counts: Mutex<PipelineCounts>,
+}
+
+/// How many pipelines were made and how many were found live ([`GpuContext::shared`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PipelineCounts {
+    pub made: usize,
+    pub reused: usize,
 }
 
 impl GpuContext {
@@ -138,8 +140,40 @@ impl GpuContext {
     }
 
     /// The pipelines made, and those found live in the cache, since the last call.
-    pub fn take_pipeline_counts(&self) -> super::PipelineCounts {
+    pub fn take_pipeline_counts(&self) -> PipelineCounts {
         std::mem::take(&mut *self.pipeline_counts.lock().unwrap_or_else(|e| e.into_inner()))
+    }
+
+    pub(crate) fn count_pipeline(&self, reused: bool) {
+        let mut counts = self.pipeline_counts.lock().unwrap_or_else(|e| e.into_inner());
+        match reused {
+            true => counts.reused += 1,
+            false => counts.made += 1,
+        }
+    }
+
+    /// The live object of kind `V` made from description `key`, or the one `make` makes,
+    /// and whether it was live: render passes, samplers and pipelines are shared by
+    /// description this way. The context holds each weakly, so it is destroyed with its
+    /// last user.
+    pub(crate) fn shared<K, V>(&self, key: K, make: impl FnOnce() -> GpuResult<V>) -> GpuResult<(Arc<V>, bool)>
+    where
+        K: Hash + Eq + Send + 'static,
+        V: Send + Sync + 'static,
+    {
+        let mut maps = self.shared.lock().unwrap_or_else(|e| e.into_inner());
+        let map = maps
+            .entry(TypeId::of::<(K, V)>())
+            .or_insert_with(|| Box::new(HashMap::<K, Weak<V>>::new()))
+            .downcast_mut::<HashMap<K, Weak<V>>>()
+            .expect("the map of a TypeId holds that kind");
+        if let Some(live) = map.get(&key).and_then(Weak::upgrade) {
+            return Ok((live, true));
+        }
+        let made = Arc::new(make()?);
+        map.retain(|_, v| v.strong_count() > 0);
+        map.insert(key, Arc::downgrade(&made));
+        Ok((made, false))
     }
 
     /// Where long work on this device (the eikonal light simulation) reports its progress:
@@ -359,9 +393,7 @@ impl GpuContext {
             shader_overrides: Mutex::default(),
             shader_log: Mutex::default(),
             progress: Mutex::default(),
-            render_passes: Mutex::default(),
-            samplers: Mutex::default(),
-            pipelines: Mutex::default(),
+            shared: Mutex::default(),
             pipeline_counts: Mutex::default(),
         }))
     }

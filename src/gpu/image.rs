@@ -250,24 +250,20 @@ impl Sampler {
     /// The sampler of `desc`: the cached one if a live sampler has the same description,
     /// else a new one named `name`.
     pub fn new(ctx: &Arc<GpuContext>, name: &str, desc: SamplerDesc) -> GpuResult<Sampler> {
-        let mut cache = ctx.samplers.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some(shared) = cache.get(&desc).and_then(std::sync::Weak::upgrade) {
-            return Ok(Sampler { raw: shared.raw, _shared: shared });
-        }
-        let info = vk::SamplerCreateInfo::default()
-            .mag_filter(desc.filter)
-            .min_filter(desc.filter)
-            .mipmap_mode(vk::SamplerMipmapMode::NEAREST)
-            .address_mode_u(desc.address_u)
-            .address_mode_v(desc.address_v)
-            .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE)
-            .max_lod(0.0);
-        // SAFETY: valid create info.
-        let raw = unsafe { ctx.raw().create_sampler(&info, None) }.vk("vkCreateSampler")?;
-        ctx.set_name(raw, name);
-        let shared = Arc::new(SharedSampler { ctx: ctx.clone(), raw });
-        cache.retain(|_, s| s.strong_count() > 0);
-        cache.insert(desc, Arc::downgrade(&shared));
-        Ok(Sampler { _shared: shared, raw })
+        let (shared, _) = ctx.shared(desc, || {
+            let info = vk::SamplerCreateInfo::default()
+                .mag_filter(desc.filter)
+                .min_filter(desc.filter)
+                .mipmap_mode(vk::SamplerMipmapMode::NEAREST)
+                .address_mode_u(desc.address_u)
+                .address_mode_v(desc.address_v)
+                .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+                .max_lod(0.0);
+            // SAFETY: valid create info.
+            let raw = unsafe { ctx.raw().create_sampler(&info, None) }.vk("vkCreateSampler")?;
+            ctx.set_name(raw, name);
+            Ok(SharedSampler { ctx: ctx.clone(), raw })
+        })?;
+        Ok(Sampler { raw: shared.raw, _shared: shared })
     }
 }

@@ -42,15 +42,14 @@ pub use ash::vk;
 pub use bindings::{Bindings, BoundSet};
 pub use buffer::Buffer;
 pub use command::{Clear, Cmd, CommandPool, SubmitSync};
-pub use context::{ContextDesc, DeviceInfo, GpuContext, Progress, ProgressSink};
+pub use context::{ContextDesc, DeviceInfo, GpuContext, PipelineCounts, Progress, ProgressSink};
 use descriptor::DescriptorWrite;
 pub use descriptor::{DescriptorSet, DescriptorSetLayout};
 pub use error::{GpuError, GpuResult};
 pub use image::{Image, ImageDesc, ImageViewKind, Sampler, SamplerDesc};
 pub use overlay::Overlay;
 pub use pipeline::{
-    Blend, ComputePipeline, DepthState, GraphicsPipeline, GraphicsPipelineDesc, PipelineCounts, Spec, Specs,
-    VertexLayout,
+    Blend, ComputePipeline, DepthState, GraphicsPipeline, GraphicsPipelineDesc, Spec, Specs, VertexLayout,
 };
 pub use render_pass::{Framebuffer, RenderPass, RenderTarget};
 pub use swapchain::{Acquired, Presented, Semaphore, Swapchain, SwapchainImage};

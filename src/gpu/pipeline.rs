@@ -7,7 +7,7 @@
 //! resize) gets the pipelines of the one it replaces, which is still alive while the new one
 //! is built; an edited shader has new SPIR-V, so the hot reload makes a new pipeline.
 use std::hash::{Hash, Hasher};
-use std::sync::{Arc, Weak};
+use std::sync::Arc;
 
 use ash::vk;
 
@@ -90,16 +90,6 @@ pub(crate) struct SharedPipeline {
     layout: PipelineLayout,
 }
 
-/// The context's pipelines by the hash of their description ([`pipeline_key`]).
-pub(crate) type PipelineCache = std::collections::HashMap<u64, Weak<SharedPipeline>>;
-
-/// How many pipelines were made and how many were found live in the cache.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct PipelineCounts {
-    pub made: usize,
-    pub reused: usize,
-}
-
 /// The hash of what a pipeline is made from, besides its fixed-function state `state`.
 fn pipeline_key(
     name: &str,
@@ -126,23 +116,18 @@ fn pipeline_key(
     h.finish()
 }
 
-/// The live pipeline of `key`, or the one `make` creates (with its layout).
+/// The live pipeline of description hash `key`, or the one `make` creates (with its
+/// layout), counted for [`GpuContext::take_pipeline_counts`].
 fn cached(
     ctx: &Arc<GpuContext>,
     key: u64,
     make: impl FnOnce() -> GpuResult<(vk::Pipeline, PipelineLayout)>,
 ) -> GpuResult<Arc<SharedPipeline>> {
-    let mut cache = ctx.pipelines.lock().unwrap_or_else(|e| e.into_inner());
-    let mut counts = ctx.pipeline_counts.lock().unwrap_or_else(|e| e.into_inner());
-    if let Some(shared) = cache.get(&key).and_then(Weak::upgrade) {
-        counts.reused += 1;
-        return Ok(shared);
-    }
-    let (raw, layout) = make()?;
-    counts.made += 1;
-    let shared = Arc::new(SharedPipeline { ctx: ctx.clone(), raw, layout });
-    cache.retain(|_, p| p.strong_count() > 0);
-    cache.insert(key, Arc::downgrade(&shared));
+    let (shared, reused) = ctx.shared(key, || {
+        let (raw, layout) = make()?;
+        Ok(SharedPipeline { ctx: ctx.clone(), raw, layout })
+    })?;
+    ctx.count_pipeline(reused);
     Ok(shared)
 }
 

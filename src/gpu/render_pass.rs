@@ -44,71 +44,67 @@ impl RenderPass {
     /// The render pass of `desc`: the cached one if a live pass has the same description,
     /// else a new one named `name` (the debug name of the first creator).
     pub(super) fn new(ctx: &Arc<GpuContext>, name: &str, desc: &RenderPassDesc) -> GpuResult<RenderPass> {
-        let mut cache = ctx.render_passes.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some(shared) = cache.get(desc).and_then(std::sync::Weak::upgrade) {
-            return Ok(RenderPass { raw: shared.raw, _shared: shared, desc: desc.clone() });
-        }
-        let load = |a: &Attachment| {
-            if a.clear {
-                vk::AttachmentLoadOp::CLEAR
-            } else {
-                vk::AttachmentLoadOp::LOAD
+        let (shared, _) = ctx.shared(desc.clone(), || {
+            let load = |a: &Attachment| {
+                if a.clear {
+                    vk::AttachmentLoadOp::CLEAR
+                } else {
+                    vk::AttachmentLoadOp::LOAD
+                }
+            };
+            let mut attachments = Vec::new();
+            let mut color_refs = Vec::new();
+            for (i, c) in desc.colors.iter().enumerate() {
+                attachments.push(
+                    vk::AttachmentDescription::default()
+                        .format(c.format)
+                        .samples(vk::SampleCountFlags::TYPE_1)
+                        .load_op(load(c))
+                        .store_op(vk::AttachmentStoreOp::STORE)
+                        .stencil_load_op(vk::AttachmentLoadOp::DONT_CARE)
+                        .stencil_store_op(vk::AttachmentStoreOp::DONT_CARE)
+                        .initial_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+                        .final_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL),
+                );
+                color_refs.push(vk::AttachmentReference {
+                    attachment: i as u32,
+                    layout: vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+                });
             }
-        };
-        let mut attachments = Vec::new();
-        let mut color_refs = Vec::new();
-        for (i, c) in desc.colors.iter().enumerate() {
-            attachments.push(
-                vk::AttachmentDescription::default()
-                    .format(c.format)
-                    .samples(vk::SampleCountFlags::TYPE_1)
-                    .load_op(load(c))
-                    .store_op(vk::AttachmentStoreOp::STORE)
-                    .stencil_load_op(vk::AttachmentLoadOp::DONT_CARE)
-                    .stencil_store_op(vk::AttachmentStoreOp::DONT_CARE)
-                    .initial_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-                    .final_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL),
-            );
-            color_refs.push(vk::AttachmentReference {
-                attachment: i as u32,
-                layout: vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+            let depth_layout = if desc.depth_read_only {
+                vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL
+            } else {
+                vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL
+            };
+            let depth_ref = desc.depth.map(|d| {
+                let has_stencil = aspect_of(d.format).contains(vk::ImageAspectFlags::STENCIL);
+                attachments.push(
+                    vk::AttachmentDescription::default()
+                        .format(d.format)
+                        .samples(vk::SampleCountFlags::TYPE_1)
+                        .load_op(load(&d))
+                        .store_op(vk::AttachmentStoreOp::STORE)
+                        .stencil_load_op(if has_stencil { load(&d) } else { vk::AttachmentLoadOp::DONT_CARE })
+                        .stencil_store_op(vk::AttachmentStoreOp::DONT_CARE)
+                        .initial_layout(depth_layout)
+                        .final_layout(depth_layout),
+                );
+                vk::AttachmentReference { attachment: desc.colors.len() as u32, layout: depth_layout }
             });
-        }
-        let depth_layout = if desc.depth_read_only {
-            vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL
-        } else {
-            vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL
-        };
-        let depth_ref = desc.depth.map(|d| {
-            let has_stencil = aspect_of(d.format).contains(vk::ImageAspectFlags::STENCIL);
-            attachments.push(
-                vk::AttachmentDescription::default()
-                    .format(d.format)
-                    .samples(vk::SampleCountFlags::TYPE_1)
-                    .load_op(load(&d))
-                    .store_op(vk::AttachmentStoreOp::STORE)
-                    .stencil_load_op(if has_stencil { load(&d) } else { vk::AttachmentLoadOp::DONT_CARE })
-                    .stencil_store_op(vk::AttachmentStoreOp::DONT_CARE)
-                    .initial_layout(depth_layout)
-                    .final_layout(depth_layout),
-            );
-            vk::AttachmentReference { attachment: desc.colors.len() as u32, layout: depth_layout }
-        });
-        let mut subpass = vk::SubpassDescription::default()
-            .pipeline_bind_point(vk::PipelineBindPoint::GRAPHICS)
-            .color_attachments(&color_refs);
-        if let Some(d) = depth_ref.as_ref() {
-            subpass = subpass.depth_stencil_attachment(d);
-        }
-        let subpasses = [subpass];
-        let info = vk::RenderPassCreateInfo::default().attachments(&attachments).subpasses(&subpasses);
-        // SAFETY: valid create info; referenced arrays live for the call.
-        let raw = unsafe { ctx.raw().create_render_pass(&info, None) }.vk("vkCreateRenderPass")?;
-        ctx.set_name(raw, name);
-        let shared = Arc::new(SharedRenderPass { ctx: ctx.clone(), raw });
-        cache.retain(|_, p| p.strong_count() > 0);
-        cache.insert(desc.clone(), Arc::downgrade(&shared));
-        Ok(RenderPass { _shared: shared, raw, desc: desc.clone() })
+            let mut subpass = vk::SubpassDescription::default()
+                .pipeline_bind_point(vk::PipelineBindPoint::GRAPHICS)
+                .color_attachments(&color_refs);
+            if let Some(d) = depth_ref.as_ref() {
+                subpass = subpass.depth_stencil_attachment(d);
+            }
+            let subpasses = [subpass];
+            let info = vk::RenderPassCreateInfo::default().attachments(&attachments).subpasses(&subpasses);
+            // SAFETY: valid create info; referenced arrays live for the call.
+            let raw = unsafe { ctx.raw().create_render_pass(&info, None) }.vk("vkCreateRenderPass")?;
+            ctx.set_name(raw, name);
+            Ok(SharedRenderPass { ctx: ctx.clone(), raw })
+        })?;
+        Ok(RenderPass { raw: shared.raw, _shared: shared, desc: desc.clone() })
     }
 }
 
