@@ -138,14 +138,8 @@ fn create(s: &mut Setup<'_>, mode: Mode) -> Result<Box<dyn Technique>, RenderErr
     }
     let pass = FullscreenPass::new(
         ctx,
-        &FullscreenDesc {
-            name,
-            fragment_shader: "raytrace/raytrace.frag",
-            target: (&targets.hdr, targets.hdr_id),
-            // Keeps the image and overwrites only the pixels of its objects.
-            clear: false,
-            specialization: &[("MODE", Spec::U32(spec))],
-        },
+        // Overwrites only the pixels of its objects.
+        &FullscreenDesc::over_hdr(name, "raytrace/raytrace.frag", targets, &[("MODE", Spec::U32(spec))]),
         set,
         s.frame_layout,
     )?;

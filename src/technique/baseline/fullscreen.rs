@@ -3,6 +3,7 @@
 //! specular baseline and the tone map are each this plus their own reads.
 use std::sync::Arc;
 
+use crate::frame::targets::Targets;
 use crate::gpu::{
     vk, Access, Clear, DescriptorSet, DescriptorSetLayout, GpuContext, GpuResult, GraphicsPipeline,
     GraphicsPipelineDesc, Image, RenderTarget, Specs,
@@ -28,6 +29,19 @@ pub struct FullscreenDesc<'a> {
     pub clear: bool,
     /// Specialisation constants of the fragment shader, by name.
     pub specialization: Specs<'a>,
+}
+
+impl<'a> FullscreenDesc<'a> {
+    /// A pass composited into the HDR image: it keeps what earlier passes wrote there and
+    /// overwrites the pixels its shader writes (a specular object, a volume, a receiver).
+    pub fn over_hdr(
+        name: &'static str,
+        fragment_shader: &'a str,
+        targets: &'a Targets,
+        specialization: Specs<'a>,
+    ) -> Self {
+        FullscreenDesc { name, fragment_shader, target: (&targets.hdr, targets.hdr_id), clear: false, specialization }
+    }
 }
 
 /// Set 1 of a full-screen pass: fragment-stage resources.

@@ -90,14 +90,8 @@ impl SpecularSinglePass {
         };
         let pass = FullscreenPass::new(
             ctx,
-            &FullscreenDesc {
-                name,
-                fragment_shader: "specular/single.frag",
-                target: (&targets.hdr, targets.hdr_id),
-                // Keeps the deferred result and overwrites only the pixels of its materials.
-                clear: false,
-                specialization: &[("MODE", Spec::U32(spec))],
-            },
+            // Overwrites only the pixels of its materials.
+            &FullscreenDesc::over_hdr(name, "specular/single.frag", targets, &[("MODE", Spec::U32(spec))]),
             targets.gbuffer(fragment_set(), nearest, false),
             frame_layout,
         )?;

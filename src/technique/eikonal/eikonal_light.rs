@@ -873,14 +873,13 @@ impl EikonalLight {
             .read(sim.direction_id);
         let receiver = FullscreenPass::new(
             ctx,
-            &FullscreenDesc {
-                name: super::eikonal_view::EIKONAL_LIGHT,
-                fragment_shader: "eikonal/light_receiver.frag",
-                target: (&targets.hdr, targets.hdr_id),
-                // Overwrites deferred shading's receivers inside the irradiance volume only.
-                clear: false,
-                specialization: &box_specs(LIGHT_BOX, lo, hi),
-            },
+            // Overwrites deferred shading's receivers inside the irradiance volume only.
+            &FullscreenDesc::over_hdr(
+                super::eikonal_view::EIKONAL_LIGHT,
+                "eikonal/light_receiver.frag",
+                targets,
+                &box_specs(LIGHT_BOX, lo, hi),
+            ),
             set,
             s.frame_layout,
         )?;

@@ -23,9 +23,7 @@ use std::sync::Arc;
 
 use glam::DVec3;
 
-use crate::frame::gpu_scene::GpuScene;
-use crate::frame::targets::Targets;
-use crate::gpu::{vk, Access, ComputePipeline, DescriptorSet, GpuContext, GpuResult, Image, ImageDesc, Spec, Specs};
+use crate::gpu::{vk, Access, ComputePipeline, GpuContext, GpuResult, Image, ImageDesc, Spec, Specs};
 use crate::graph::{Bindings, Frame, FrameGraph, ImageId};
 use crate::scene::techniques::{EikonalParams, Integrator};
 use crate::scene::{IndexProfile, Scene, Volume};
@@ -88,12 +86,26 @@ fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
 }
 
 impl Technique for EikonalPass {
+    /// Lighting: the simulated light on the receivers (eikonal_light, after deferred
+    /// shading; nothing without a simulation). Volume: `eikonal_nearby` (when the scene has
+    /// impostor rectangles), then `eikonal_view`.
     fn record<'a>(&'a self, stage: Stage, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>) {
         if stage == Stage::Lighting {
-            self.record_light(frame, inputs.scene, inputs.targets, inputs.frame_set);
-        } else {
-            self.record(frame, inputs.scene, inputs.frame_set, inputs.shadow_atlas);
+            if let Some(l) = &self.light {
+                l.record(frame, inputs.scene, inputs.targets, inputs.frame_set);
+            }
+            return;
         }
+        if !self.nearby.is_empty() {
+            self.nearby.record(frame, inputs);
+        }
+        let mut reads = vec![inputs.scene.environment_id];
+        if let Some(l) = &self.light {
+            reads.extend(l.image_ids());
+        }
+        // The exit rays' shading reads the shadow maps (and the impostor textures, in set 1).
+        reads.extend(inputs.shadow_atlas);
+        self.view.record(frame, inputs.frame_set, &reads);
     }
 }
 
@@ -388,14 +400,8 @@ impl EikonalPass {
             .storage(crate::BINDING_EIKONAL_TRIANGLES, &triangles);
         let view = FullscreenPass::new(
             ctx,
-            &FullscreenDesc {
-                name: EIKONAL_VIEW,
-                fragment_shader: "eikonal/view.frag",
-                target: (&targets.hdr, targets.hdr_id),
-                // Keeps the deferred result and overwrites the pixels whose ray enters the box.
-                clear: false,
-                specialization: &spec,
-            },
+            // Overwrites the pixels whose ray enters the box.
+            &FullscreenDesc::over_hdr(EIKONAL_VIEW, "eikonal/view.frag", targets, &spec),
             set,
             frame_layout,
         )?;
@@ -405,40 +411,6 @@ impl EikonalPass {
     /// The light simulation's statistics (None without a simulation).
     pub fn light_stats(&self) -> Option<&super::eikonal_light::LightStats> {
         self.light.as_ref().map(|l| &l.stats)
-    }
-
-    /// `eikonal_light`: the diffuse receivers inside the irradiance volume (after deferred
-    /// shading). Records nothing without a light simulation.
-    pub fn record_light<'a>(
-        &'a self,
-        frame: &mut Frame<'_, 'a>,
-        scene: &GpuScene,
-        targets: &Targets,
-        set: DescriptorSet,
-    ) {
-        if let Some(l) = &self.light {
-            l.record(frame, scene, targets, set);
-        }
-    }
-
-    /// `eikonal_nearby` (when the scene has impostor rectangles), then `eikonal_view`.
-    pub fn record<'a>(
-        &'a self,
-        frame: &mut Frame<'_, 'a>,
-        scene: &'a GpuScene,
-        frame_set: DescriptorSet,
-        shadow_atlas: Option<ImageId>,
-    ) {
-        if !self.nearby.is_empty() {
-            self.nearby.record(frame, scene, frame_set, shadow_atlas);
-        }
-        let mut reads = vec![scene.environment_id];
-        if let Some(l) = &self.light {
-            reads.extend(l.image_ids());
-        }
-        // The exit rays' shading reads the shadow maps (and the impostor textures, in set 1).
-        reads.extend(shadow_atlas);
-        self.view.record(frame, frame_set, &reads);
     }
 }
 

@@ -49,6 +49,7 @@
 //!
 //! The photon-buffer caustics (Hu & Qin §3) use [`NearbyRect`], [`nearby_objects`] and
 //! [`rect_for`] with their own O_R: keep those stable.
+use crate::technique::FrameInputs;
 use std::sync::Arc;
 
 use bytemuck::{Pod, Zeroable};
@@ -57,7 +58,7 @@ use glam::{Mat4, Vec3};
 use crate::frame::gpu_scene::GpuScene;
 use crate::frame::targets::DEPTH_FORMAT;
 use crate::gpu::{
-    vk, Access, Buffer, Clear, DepthState, DescriptorSet, DescriptorSetLayout, GpuContext, GpuResult, GraphicsPipeline,
+    vk, Access, Buffer, Clear, DepthState, DescriptorSetLayout, GpuContext, GpuResult, GraphicsPipeline,
     GraphicsPipelineDesc, Image, ImageDesc, ImageViewKind, RenderTarget, Sampler, SamplerDesc, Spec, Specs,
 };
 use crate::graph::{Bindings, BoundSet, Frame, FrameGraph, ImageId};
@@ -791,13 +792,8 @@ impl NearbyImpostors {
     /// Levels ping-pong between two arrays so that the last one lands in `texture`. Diffuse
     /// layers are the same at every level: level 0 renders them, [`COPY_PASS`] copies them into
     /// the other array, and the levels >= 1 render the specular layers only.
-    pub fn record<'a>(
-        &'a self,
-        frame: &mut Frame<'_, 'a>,
-        scene: &'a GpuScene,
-        frame_set: DescriptorSet,
-        shadow_atlas: Option<ImageId>,
-    ) {
+    pub fn record<'a>(&'a self, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>) {
+        let (scene, frame_set, shadow_atlas) = (inputs.scene, inputs.frame_set, inputs.shadow_atlas);
         // Each rectangle's O_R: that of the set it belongs to.
         let mut origins = vec![[0.0; 4]; self.layout.rects.len()];
         for set in &self.layout.sets {

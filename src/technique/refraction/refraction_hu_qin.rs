@@ -153,7 +153,7 @@ impl Technique for HuQinPass {
     fn record<'a>(&'a self, _: Stage, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>) {
         let (scene, frame_set) = (inputs.scene, inputs.frame_set);
         if !self.nearby.is_empty() {
-            self.nearby.record(frame, scene, frame_set, inputs.shadow_atlas);
+            self.nearby.record(frame, inputs);
         }
         self.layers.record(frame, scene, frame_set);
         self.shade.record(frame, scene.environment_id, frame_set);
