@@ -6,7 +6,7 @@ mod common;
 use glam::DVec3;
 use prism::scene::techniques::Integrator;
 use prism::scene::{self, IndexProfile};
-use prism::technique::eikonal::eikonal_view::{euler_step, rk4_step, sphere_crossing, trace, RayState};
+use prism::technique::eikonal::volume::{euler_step, rk4_step, sphere_crossing, trace, RayState};
 
 const LENS: IndexProfile = IndexProfile::Luneburg { center: glam::Vec3::ZERO, radius: 1.0 };
 

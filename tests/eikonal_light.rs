@@ -8,8 +8,8 @@ use glam::{DVec3, Vec3};
 use prism::scene::techniques::EikonalParams;
 use prism::scene::{IndexProfile, Light};
 use prism::technique::eikonal::eikonal_light::{light_rk4_step, optical_path, Patch, StandaloneLight};
-use prism::technique::eikonal::eikonal_view::{rk4_step, RayState};
 use prism::technique::eikonal::histopyramid::{cpu_expand, gpu_expand};
+use prism::technique::eikonal::volume::{rk4_step, RayState};
 
 /// xorshift64*: reproducible random classes without a dependency.
 struct Rng(u64);

@@ -111,7 +111,7 @@ pub struct GpuContext {
     pipeline_counts: Mutex<PipelineCounts>,
 }
 
-/// How many pipelines were made and how many were found live ([`GpuContext::shared`]).
+/// How many pipelines were made and how many were found live (shared by description).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct PipelineCounts {
     pub made: usize,

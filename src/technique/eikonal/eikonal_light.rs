@@ -56,9 +56,13 @@ use crate::{
     LIGHT_BINDING_FIELD, LIGHT_BINDING_IRRADIANCE, LIGHT_BINDING_SRC,
 };
 
-use super::eikonal_view::{box_specs, RayState, LIGHT_BOX};
 use super::histopyramid::{HistoPyramid, HpState};
+use super::volume::{box_specs, prepare_volume, IndexField, RayState, VolumeTextures, LIGHT_BOX};
 use crate::technique::baseline::fullscreen::{fragment_set, FullscreenDesc, FullscreenPass};
+
+/// §5.2's light simulation (run when the technique is created) and the diffuse receivers
+/// inside its irradiance volume: the pass name.
+pub const EIKONAL_LIGHT: &str = "eikonal_light";
 
 /// Simulation steps recorded per command buffer between two patch-count readbacks.
 pub const LIGHT_BATCH: u32 = 16;
@@ -378,7 +382,7 @@ impl LightSim {
     pub fn new(
         ctx: &Arc<GpuContext>,
         lit: LitVolume<'_>,
-        textures: &super::eikonal_view::VolumeTextures,
+        textures: &VolumeTextures,
         sampler: &Sampler,
         graph: &mut FrameGraph,
     ) -> GpuResult<Self> {
@@ -759,7 +763,7 @@ impl LightSim {
 pub struct StandaloneLight {
     pub sim: LightSim,
     pub graph: FrameGraph,
-    _volume: super::eikonal_view::VolumeTextures,
+    _volume: VolumeTextures,
     _sampler: Sampler,
 }
 
@@ -776,7 +780,7 @@ impl StandaloneLight {
         lights: &[Light],
     ) -> GpuResult<Self> {
         let mut graph = FrameGraph::new();
-        let textures = super::eikonal_view::prepare_volume(ctx, *params, volume, &mut graph)?;
+        let textures = prepare_volume(ctx, *params, volume, &mut graph)?;
         let sampler = Sampler::new(ctx, "eikonal_light_field", crate::gpu::SamplerDesc::NEAREST_CLAMP)?;
         let sim = LightSim::new(ctx, LitVolume { params, volume, lights }, &textures, &sampler, &mut graph)?;
         Ok(StandaloneLight { sim, graph, _volume: textures, _sampler: sampler })
@@ -816,7 +820,7 @@ impl StandaloneLight {
 
 /// One equal-time step of Eqs. 14-15 (dx/dt = v / n^2, dv/dt = grad n / n) by classical
 /// RK4 in f64 on an analytic field: the CPU version of light_step.comp's particle update.
-pub fn light_rk4_step(field: &impl super::eikonal_view::IndexField, s: RayState, h: f64) -> RayState {
+pub fn light_rk4_step(field: &impl IndexField, s: RayState, h: f64) -> RayState {
     let rhs = |x: DVec3, v: DVec3| {
         let n = field.n(x);
         (v / (n * n), field.gradient(x) / n)
@@ -833,7 +837,7 @@ pub fn light_rk4_step(field: &impl super::eikonal_view::IndexField, s: RayState,
 
 /// The optical path (integral of n ds, trapezoid rule) along a polyline: with Eqs. 14-15
 /// every particle of one wavefront has covered the same S = t (Appendix, Eqs. 23-24).
-pub fn optical_path(field: &impl super::eikonal_view::IndexField, path: &[DVec3]) -> f64 {
+pub fn optical_path(field: &impl IndexField, path: &[DVec3]) -> f64 {
     path.windows(2).map(|w| 0.5 * (field.n(w[0]) + field.n(w[1])) * w[0].distance(w[1])).sum()
 }
 
@@ -849,11 +853,7 @@ pub struct EikonalLight {
 }
 
 impl EikonalLight {
-    pub fn new(
-        s: &mut crate::technique::Setup<'_>,
-        lit: LitVolume<'_>,
-        textures: &super::eikonal_view::VolumeTextures,
-    ) -> GpuResult<Self> {
+    pub fn new(s: &mut crate::technique::Setup<'_>, lit: LitVolume<'_>, textures: &VolumeTextures) -> GpuResult<Self> {
         let (ctx, targets, nearest) = (s.ctx, s.targets, s.nearest);
         // Dropped patches are reported by the caller from `stats.dropped_patches`.
         let key = crate::technique::cache_key(&(lit.params, lit.volume, lit.lights));
@@ -875,7 +875,7 @@ impl EikonalLight {
             ctx,
             // Overwrites deferred shading's receivers inside the irradiance volume only.
             &FullscreenDesc::over_hdr(
-                super::eikonal_view::EIKONAL_LIGHT,
+                EIKONAL_LIGHT,
                 "eikonal/light_receiver.frag",
                 targets,
                 &box_specs(LIGHT_BOX, lo, hi),

@@ -5,3 +5,4 @@ pub mod eikonal_light;
 pub mod eikonal_nearby;
 pub mod eikonal_view;
 pub mod histopyramid;
+pub mod volume;

@@ -1,0 +1,330 @@
+//! The volume of eikonal rendering (Ihrke et al. 2007, ../shared/papers/ihrke2007-eikonal-rendering.md)
+//! as both of its passes read it: the view renderer of sections 4.1 and 5.3
+//! (eikonal_view.rs) and the light simulation of section 5.2 (eikonal_light.rs).
+//!
+//! - Section 5.1 on the GPU ([`prepare_volume`]): the sampled index (n - 1) uploaded, smoothed
+//!   by a separable Gaussian (`render.eikonal.sigma` voxels; glsl/eikonal/smooth.comp) and
+//!   differentiated by central differences into a (grad n, n - 1) texture
+//!   (glsl/eikonal/gradient.comp), and the material volumes ([`VolumeTextures`]).
+//! - The ray equation, Eqs. 9-10, on the CPU in f64 ([`euler_step`] for Eqs. 11-12,
+//!   [`rk4_step`], [`trace`]): the tests check the Luneburg focus and RK4's order with them,
+//!   and they document what the shaders do.
+use std::sync::Arc;
+
+use glam::DVec3;
+
+use crate::gpu::{vk, Access, ComputePipeline, GpuContext, GpuResult, Image, ImageDesc, Spec, Specs};
+use crate::graph::{Bindings, FrameGraph, ImageId};
+use crate::scene::techniques::{EikonalParams, Integrator};
+use crate::scene::{IndexProfile, Volume};
+use crate::{EIKONAL_BINDING_DST, EIKONAL_BINDING_SRC, EIKONAL_GROUP};
+
+/// A refractive-index field with its gradient, for the CPU integrators.
+pub trait IndexField {
+    fn n(&self, x: DVec3) -> f64;
+    fn gradient(&self, x: DVec3) -> DVec3;
+}
+
+impl IndexField for IndexProfile {
+    fn n(&self, x: DVec3) -> f64 {
+        IndexProfile::n(self, x)
+    }
+    fn gradient(&self, x: DVec3) -> DVec3 {
+        IndexProfile::gradient(self, x)
+    }
+}
+
+/// A point of a ray: position and optical direction v (|v| = n, Eq. 9: dx/ds = v / n).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RayState {
+    pub x: DVec3,
+    pub v: DVec3,
+}
+
+impl RayState {
+    /// A ray at `x` heading along the unit direction `d`: v = n(x) d.
+    pub fn new(field: &impl IndexField, x: DVec3, d: DVec3) -> Self {
+        RayState { x, v: d.normalize() * field.n(x) }
+    }
+}
+
+/// (dx/ds, dv/ds) = (v / n, grad n): Eqs. 9-10.
+fn rhs(field: &impl IndexField, s: RayState) -> (DVec3, DVec3) {
+    (s.v / field.n(s.x), field.gradient(s.x))
+}
+
+/// One forward-Euler step of arc length `h`: Eqs. 11-12.
+pub fn euler_step(field: &impl IndexField, s: RayState, h: f64) -> RayState {
+    let (dx, dv) = rhs(field, s);
+    RayState { x: s.x + h * dx, v: s.v + h * dv }
+}
+
+/// One classical fourth-order Runge-Kutta step of arc length `h` of Eqs. 9-10.
+pub fn rk4_step(field: &impl IndexField, s: RayState, h: f64) -> RayState {
+    let at = |k: (DVec3, DVec3), f: f64| RayState { x: s.x + f * k.0, v: s.v + f * k.1 };
+    let k1 = rhs(field, s);
+    let k2 = rhs(field, at(k1, 0.5 * h));
+    let k3 = rhs(field, at(k2, 0.5 * h));
+    let k4 = rhs(field, at(k3, h));
+    RayState {
+        x: s.x + h / 6.0 * (k1.0 + 2.0 * k2.0 + 2.0 * k3.0 + k4.0),
+        v: s.v + h / 6.0 * (k1.1 + 2.0 * k2.1 + 2.0 * k3.1 + k4.1),
+    }
+}
+
+/// One step with `integrator`.
+pub fn step(field: &impl IndexField, integrator: Integrator, s: RayState, h: f64) -> RayState {
+    match integrator {
+        Integrator::Euler => euler_step(field, s, h),
+        Integrator::Rk4 => rk4_step(field, s, h),
+    }
+}
+
+/// March from `start` with steps of `h` while `inside(x)` holds (at most `max_steps`);
+/// returns every state, the first being `start` and the last the first one outside (or the
+/// last one taken).
+pub fn trace(
+    field: &impl IndexField,
+    integrator: Integrator,
+    start: RayState,
+    h: f64,
+    max_steps: usize,
+    inside: impl Fn(DVec3) -> bool,
+) -> Vec<RayState> {
+    let mut path = vec![start];
+    let mut s = start;
+    for _ in 0..max_steps {
+        s = step(field, integrator, s, h);
+        path.push(s);
+        if !inside(s.x) {
+            break;
+        }
+    }
+    path
+}
+
+/// Where the segment from `a` (inside) to `b` (outside) crosses the sphere (`center`,
+/// `radius`): the linear interpolation of the distance to the surface.
+pub fn sphere_crossing(a: DVec3, b: DVec3, center: DVec3, radius: f64) -> DVec3 {
+    let (da, db) = (a.distance(center) - radius, b.distance(center) - radius);
+    let t = if db != da { (da / (da - db)).clamp(0.0, 1.0) } else { 0.0 };
+    a.lerp(b, t)
+}
+
+/// The volume's GPU textures: the sampled index (n - 1, one slab of `nz` slices per channel,
+/// stacked along z: 1 slab, or 3 with dispersion), a scratch texture of the separable blur,
+/// (grad n, n - 1) per slab after smoothing and differentiation, and the three material
+/// volumes of src/scene/volume_sources.rs.
+///
+/// Bytes per voxel: 24 per index slab (R32F raw + R32F scratch + RGBA32F field), so 24 or
+/// 72, plus 24 for the materials (3 x RGBA16F: extinction + g, albedo + reflectance,
+/// emission + boundary band), or a 1x1x1 stand-in of each when the volume has no material
+/// (no extinction, emission or index jump anywhere).
+pub struct VolumeTextures {
+    _raw: Image,
+    _scratch: Image,
+    pub(crate) field: Image,
+    pub(crate) field_id: ImageId,
+    /// (sigma_a + sigma_s RGB per metre, Henyey-Greenstein g).
+    pub extinction: Image,
+    pub extinction_id: ImageId,
+    /// (sigma_s / extinction RGB, surface reflectance factor).
+    pub albedo: Image,
+    pub albedo_id: ImageId,
+    /// (emission RGB per metre, boundary band 0/1).
+    pub emission: Image,
+    pub emission_id: ImageId,
+    /// Index slabs in `field` (3: a per-channel index, dispersion).
+    pub channels: u32,
+    /// Whether the material volumes are real (not stand-ins).
+    pub materials: bool,
+}
+
+/// The names of the irradiance volume's box in glsl/eikonal (`LIGHT_{MIN,MAX}_{X,Y,Z}`).
+pub(super) const LIGHT_BOX: [&str; 6] =
+    ["LIGHT_MIN_X", "LIGHT_MIN_Y", "LIGHT_MIN_Z", "LIGHT_MAX_X", "LIGHT_MAX_Y", "LIGHT_MAX_Z"];
+
+/// Specialisation constants `names` (min x, y, z, max x, y, z) of the box `min`..`max`.
+pub(super) fn box_specs(names: [&'static str; 6], min: glam::Vec3, max: glam::Vec3) -> [(&'static str, Spec); 6] {
+    let v = [min.x, min.y, min.z, max.x, max.y, max.z];
+    std::array::from_fn(|i| (names[i], Spec::F32(v[i])))
+}
+
+/// IEEE half precision of `x` (round to nearest even; overflow to infinity, which the scene
+/// checks rule out: coefficients are at most 10^4).
+pub fn f16_bits(x: f32) -> u16 {
+    let b = x.to_bits();
+    let sign = ((b >> 16) & 0x8000) as u16;
+    let exp = ((b >> 23) & 0xff) as i32;
+    let man = b & 0x7f_ffff;
+    if exp == 0xff {
+        return sign | 0x7c00 | if man != 0 { 0x200 } else { 0 };
+    }
+    let e = exp - 127 + 15;
+    if e >= 31 {
+        return sign | 0x7c00;
+    }
+    if e <= 0 {
+        if e < -10 {
+            return sign;
+        }
+        // Subnormal: shift the mantissa with its implicit bit, rounding to nearest even.
+        let m = man | 0x80_0000;
+        let shift = (14 - e) as u32;
+        let half = 1u32 << (shift - 1);
+        let rest = m & ((1u32 << shift) - 1);
+        let mut h = m >> shift;
+        if rest > half || (rest == half && h & 1 == 1) {
+            h += 1;
+        }
+        return sign | h as u16;
+    }
+    let mut h = ((e as u32) << 10) | (man >> 13);
+    let rest = man & 0x1fff;
+    if rest > 0x1000 || (rest == 0x1000 && h & 1 == 1) {
+        h += 1; // may carry into the exponent, which is still correct rounding
+    }
+    sign | h as u16
+}
+
+/// Section 5.1 on the GPU: upload n - 1 (per channel slab), blur along x, y, z,
+/// differentiate; upload the material volumes.
+pub(crate) fn prepare_volume(
+    ctx: &Arc<GpuContext>,
+    params: EikonalParams,
+    volume: &Volume,
+    graph: &mut FrameGraph,
+) -> GpuResult<VolumeTextures> {
+    let fields = volume.fields();
+    let channels: u32 = if fields.dispersive { 3 } else { 1 };
+    let [nx, ny, nz] = volume.resolution;
+    let extent = [nx, ny, nz * channels];
+    let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_DST;
+    let raw = Image::new(ctx, &ImageDesc::d3("eikonal_index", vk::Format::R32_SFLOAT, extent, usage))?;
+    let scratch = Image::new(ctx, &ImageDesc::d3("eikonal_smoothed", vk::Format::R32_SFLOAT, extent, usage))?;
+    let field = Image::new(
+        ctx,
+        &ImageDesc::d3(
+            "eikonal_field",
+            vk::Format::R32G32B32A32_SFLOAT,
+            extent,
+            vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED,
+        ),
+    )?;
+    let (raw_id, scratch_id, field_id) =
+        (graph.register_image(&raw), graph.register_image(&scratch), graph.register_image(&field));
+
+    // The material volumes: real when anything in them is non-zero.
+    // The boundary indicator widened to the band in which the smoothed index still changes
+    // (3 sigma of the Gaussian plus the one-voxel coverage ramp), see view.frag.
+    let (band, band_reflectance) = fields.boundary_band((3.0 * params.sigma).ceil() as u32 + 1);
+    let materials = band.iter().any(|&b| b > 0.0)
+        || fields.extinction.iter().any(|e| e[0] > 0.0 || e[1] > 0.0 || e[2] > 0.0)
+        || fields.emission.iter().any(|e| e[0] > 0.0 || e[1] > 0.0 || e[2] > 0.0);
+    let material_extent = if materials { volume.resolution } else { [1, 1, 1] };
+    let material_usage = vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST;
+    let half = |name: &str| {
+        Image::new(ctx, &ImageDesc::d3(name, vk::Format::R16G16B16A16_SFLOAT, material_extent, material_usage))
+    };
+    let (extinction, albedo, emission) =
+        (half("eikonal_extinction")?, half("eikonal_albedo")?, half("eikonal_emission")?);
+    let (extinction_id, albedo_id, emission_id) =
+        (graph.register_image(&extinction), graph.register_image(&albedo), graph.register_image(&emission));
+    let pack = |texels: &mut dyn Iterator<Item = [f32; 4]>| -> Vec<u16> {
+        if materials {
+            texels.flat_map(|t| t.map(f16_bits)).collect()
+        } else {
+            vec![0; 4]
+        }
+    };
+    let ext_data = pack(&mut fields.extinction.iter().copied());
+    let alb_data = pack(&mut fields.albedo.iter().zip(&band_reflectance).map(|(a, &r)| [a[0], a[1], a[2], r]));
+    let emi_data = pack(&mut fields.emission.iter().zip(&band).map(|(e, &b)| [e[0], e[1], e[2], b]));
+
+    // The blur ping-pongs raw -> scratch -> raw -> scratch; the gradient reads scratch.
+    let passes = [(&raw, &scratch), (&scratch, &raw), (&raw, &scratch), (&scratch, &field)];
+    let sets = passes.iter().map(|&(src, dst)| {
+        Bindings::new(vk::ShaderStageFlags::COMPUTE)
+            .storage_image(EIKONAL_BINDING_SRC, src)
+            .storage_image(EIKONAL_BINDING_DST, dst)
+    });
+    let sets = Bindings::build_each(ctx, "eikonal_volume", sets.collect())?;
+    let pipeline =
+        |name: &str, shader: &str, spec: Specs<'_>| ComputePipeline::new(ctx, name, shader, &[sets.layout()], 0, spec);
+    let smooth: Vec<ComputePipeline> = (0..3u32)
+        .map(|axis| {
+            pipeline(
+                &format!("eikonal_smooth_{axis}"),
+                "eikonal/smooth.comp",
+                &[("AXIS", Spec::U32(axis)), ("SIGMA", Spec::F32(params.sigma)), ("SLAB", Spec::I32(nz as i32))],
+            )
+        })
+        .collect::<GpuResult<_>>()?;
+    let voxel = volume.voxel_size();
+    let gradient = pipeline(
+        "eikonal_gradient",
+        "eikonal/gradient.comp",
+        &[
+            ("VOXEL_X", Spec::F32(voxel.x)),
+            ("VOXEL_Y", Spec::F32(voxel.y)),
+            ("VOXEL_Z", Spec::F32(voxel.z)),
+            ("SLAB", Spec::I32(nz as i32)),
+        ],
+    )?;
+
+    let mut samples: Vec<f32> = Vec::with_capacity(fields.voxels() * channels as usize);
+    for c in 0..channels as usize {
+        samples.extend_from_slice(&fields.index[c]);
+    }
+    let upload =
+        |name: &str, bytes: &[u8]| crate::gpu::Buffer::with_data(ctx, name, bytes, vk::BufferUsageFlags::TRANSFER_SRC);
+    let staging = upload("eikonal_index_upload", bytemuck::cast_slice(&samples))?;
+    let staging_materials = [
+        upload("eikonal_extinction_upload", bytemuck::cast_slice(&ext_data))?,
+        upload("eikonal_albedo_upload", bytemuck::cast_slice(&alb_data))?,
+        upload("eikonal_emission_upload", bytemuck::cast_slice(&emi_data))?,
+    ];
+    let groups = extent.map(|n| n.div_ceil(EIKONAL_GROUP));
+    let ids = [(raw_id, scratch_id), (scratch_id, raw_id), (raw_id, scratch_id), (scratch_id, field_id)];
+    let names = ["eikonal_smooth_x", "eikonal_smooth_y", "eikonal_smooth_z", "eikonal_gradient"];
+    ctx.one_shot(|cmd| {
+        graph.access_now(
+            cmd,
+            &[
+                (raw_id, Access::TransferWrite),
+                (extinction_id, Access::TransferWrite),
+                (albedo_id, Access::TransferWrite),
+                (emission_id, Access::TransferWrite),
+            ],
+            &[],
+        );
+        cmd.copy_buffer_to_image(&staging, &raw);
+        for (buffer, image) in staging_materials.iter().zip([&extinction, &albedo, &emission]) {
+            cmd.copy_buffer_to_image(buffer, image);
+        }
+        let mut frame = graph.frame();
+        for (i, &(src, dst)) in ids.iter().enumerate() {
+            let pipeline = if i < 3 { &smooth[i] } else { &gradient };
+            let set = sets.sets()[i];
+            frame.pass(names[i]).read(src, Access::ComputeRead).write(dst, Access::ComputeWrite).record(move |cmd| {
+                cmd.bind_compute(pipeline, &[set]);
+                cmd.dispatch(groups[0], groups[1], groups[2]);
+            });
+        }
+        frame.execute(cmd, None);
+    })?;
+    Ok(VolumeTextures {
+        _raw: raw,
+        _scratch: scratch,
+        field,
+        field_id,
+        extinction,
+        extinction_id,
+        albedo,
+        albedo_id,
+        emission,
+        emission_id,
+        channels,
+        materials,
+    })
+}
