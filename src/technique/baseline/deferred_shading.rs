@@ -2,9 +2,8 @@
 //! irradiance) and the environment background: glsl/shading/deferred.frag.
 use std::sync::Arc;
 
-use crate::frame::gpu_scene::GpuScene;
 use crate::frame::targets::Targets;
-use crate::gpu::{DescriptorSet, DescriptorSetLayout, GpuContext, GpuResult, Sampler, Spec};
+use crate::gpu::{DescriptorSetLayout, GpuContext, GpuResult, Sampler, Spec};
 use crate::graph::{Frame, ImageId};
 use crate::scene::techniques::CausticsMapParams;
 use crate::technique::{
@@ -68,7 +67,18 @@ fn create(s: &mut Setup<'_>) -> Result<Box<dyn Technique>, RenderError> {
 
 impl Technique for DeferredShadingPass {
     fn record<'a>(&'a self, _: Stage, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>) {
-        self.record(frame, inputs.scene, inputs.targets, inputs.frame_set);
+        let (scene, targets, frame_set) = (inputs.scene, inputs.targets, inputs.frame_set);
+        let mut reads = vec![scene.environment_id];
+        if self.shadowed {
+            reads.push(targets.shadow_atlas_id);
+        }
+        if self.caustics {
+            reads.push(targets.caustic_atlas_id);
+        }
+        if let Some(id) = self.photon {
+            reads.push(id);
+        }
+        self.pass.record(frame, frame_set, &reads);
     }
 }
 
@@ -112,25 +122,5 @@ impl DeferredShadingPass {
             frame_layout,
         )?;
         Ok(DeferredShadingPass { pass, shadowed, caustics: caustic_filter.is_some(), photon: photon.map(|p| p.2) })
-    }
-
-    pub fn record<'a>(
-        &'a self,
-        frame: &mut Frame<'_, 'a>,
-        scene: &GpuScene,
-        targets: &Targets,
-        frame_set: DescriptorSet,
-    ) {
-        let mut reads = vec![scene.environment_id];
-        if self.shadowed {
-            reads.push(targets.shadow_atlas_id);
-        }
-        if self.caustics {
-            reads.push(targets.caustic_atlas_id);
-        }
-        if let Some(id) = self.photon {
-            reads.push(id);
-        }
-        self.pass.record(frame, frame_set, &reads);
     }
 }

@@ -2,10 +2,9 @@
 //! for what each channel encodes) plus reversed-Z depth.
 use std::sync::Arc;
 
-use crate::frame::gpu_scene::GpuScene;
 use crate::frame::targets::Targets;
 use crate::gpu::{
-    Access, Blend, Clear, DepthState, DescriptorSet, DescriptorSetLayout, GpuContext, GpuResult, GraphicsPipeline,
+    Access, Blend, Clear, DepthState, DescriptorSetLayout, GpuContext, GpuResult, GraphicsPipeline,
     GraphicsPipelineDesc, RenderTarget,
 };
 use crate::graph::Frame;
@@ -31,7 +30,29 @@ fn create(s: &mut Setup<'_>) -> Result<Box<dyn Technique>, RenderError> {
 
 impl Technique for GBufferPass {
     fn record<'a>(&'a self, _: Stage, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>) {
-        self.record(frame, inputs.scene, inputs.targets, inputs.frame_set);
+        let (scene, targets, frame_set) = (inputs.scene, inputs.targets, inputs.frame_set);
+        frame
+            .pass(GBUFFER)
+            .write(targets.gbuf_normal_id, Access::ColorAttachment)
+            .write(targets.gbuf_albedo_id, Access::ColorAttachment)
+            .write(targets.depth_id, Access::DepthAttachment)
+            .record(move |cmd| {
+                // Reversed Z: clear to 0 (infinitely far).
+                cmd.in_target(
+                    &self.target,
+                    0,
+                    &[Clear::Color([0.0; 4]), Clear::Color([0.0; 4]), Clear::Depth(0.0)],
+                    |cmd| {
+                        cmd.bind_graphics(&self.pipeline, &[frame_set]);
+                        cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
+                        // `draws[i]` is object i.
+                        for (object, d) in scene.draws.iter().enumerate() {
+                            cmd.push_graphics(&self.pipeline, &[d.material, object as u32]);
+                            cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
+                        }
+                    },
+                );
+            });
     }
 }
 
@@ -61,36 +82,5 @@ impl GBufferPass {
             &target.pass,
         )?;
         Ok(GBufferPass { target, pipeline })
-    }
-
-    pub fn record<'a>(
-        &'a self,
-        frame: &mut Frame<'_, 'a>,
-        scene: &'a GpuScene,
-        targets: &Targets,
-        frame_set: DescriptorSet,
-    ) {
-        frame
-            .pass(GBUFFER)
-            .write(targets.gbuf_normal_id, Access::ColorAttachment)
-            .write(targets.gbuf_albedo_id, Access::ColorAttachment)
-            .write(targets.depth_id, Access::DepthAttachment)
-            .record(move |cmd| {
-                // Reversed Z: clear to 0 (infinitely far).
-                cmd.in_target(
-                    &self.target,
-                    0,
-                    &[Clear::Color([0.0; 4]), Clear::Color([0.0; 4]), Clear::Depth(0.0)],
-                    |cmd| {
-                        cmd.bind_graphics(&self.pipeline, &[frame_set]);
-                        cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
-                        // `draws[i]` is object i.
-                        for (object, d) in scene.draws.iter().enumerate() {
-                            cmd.push_graphics(&self.pipeline, &[d.material, object as u32]);
-                            cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
-                        }
-                    },
-                );
-            });
     }
 }

@@ -36,31 +36,7 @@ fn create(s: &mut Setup<'_>) -> Result<Box<dyn Technique>, RenderError> {
 
 impl Technique for ShadowMapPass {
     fn record<'a>(&'a self, _: Stage, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>) {
-        self.record(frame, inputs.scene, inputs.targets);
-    }
-}
-
-/// Cleared distance: "no occluder in this direction".
-pub const FAR_DISTANCE: f32 = 3.0e38;
-
-pub struct ShadowMapPass {
-    /// One framebuffer per atlas layer.
-    target: RenderTarget,
-    pipeline: GraphicsPipeline,
-    faces: Vec<ShadowFace>,
-}
-
-impl ShadowMapPass {
-    pub fn new(ctx: &Arc<GpuContext>, scene: &GpuScene, targets: &Targets) -> GpuResult<Self> {
-        let (atlas, depth) = (&targets.shadow_atlas, &targets.shadow_depth);
-        let target = RenderTarget::layered(ctx, SHADOW_MAP, &[atlas], Some(depth), true, atlas.layers())?;
-        // Both sides cast: open shapes (quads, the ring) have no back to rely on.
-        let desc = GraphicsPipelineDesc::mesh(SHADOW_MAP, "shadow/shadow.vert", "shadow/shadow.frag", DepthState::LESS);
-        let pipeline = GraphicsPipeline::new(ctx, &desc, &[], std::mem::size_of::<ShadowPush>() as u32, &target.pass)?;
-        Ok(ShadowMapPass { target, pipeline, faces: scene.shadow_faces.clone() })
-    }
-
-    pub fn record<'a>(&'a self, frame: &mut Frame<'_, 'a>, scene: &'a GpuScene, targets: &Targets) {
+        let (scene, targets) = (inputs.scene, inputs.targets);
         frame
             .pass(SHADOW_MAP)
             .write(targets.shadow_atlas_id, Access::ColorAttachment)
@@ -89,5 +65,26 @@ impl ShadowMapPass {
                     );
                 }
             });
+    }
+}
+
+/// Cleared distance: "no occluder in this direction".
+pub const FAR_DISTANCE: f32 = 3.0e38;
+
+pub struct ShadowMapPass {
+    /// One framebuffer per atlas layer.
+    target: RenderTarget,
+    pipeline: GraphicsPipeline,
+    faces: Vec<ShadowFace>,
+}
+
+impl ShadowMapPass {
+    pub fn new(ctx: &Arc<GpuContext>, scene: &GpuScene, targets: &Targets) -> GpuResult<Self> {
+        let (atlas, depth) = (&targets.shadow_atlas, &targets.shadow_depth);
+        let target = RenderTarget::layered(ctx, SHADOW_MAP, &[atlas], Some(depth), true, atlas.layers())?;
+        // Both sides cast: open shapes (quads, the ring) have no back to rely on.
+        let desc = GraphicsPipelineDesc::mesh(SHADOW_MAP, "shadow/shadow.vert", "shadow/shadow.frag", DepthState::LESS);
+        let pipeline = GraphicsPipeline::new(ctx, &desc, &[], std::mem::size_of::<ShadowPush>() as u32, &target.pass)?;
+        Ok(ShadowMapPass { target, pipeline, faces: scene.shadow_faces.clone() })
     }
 }

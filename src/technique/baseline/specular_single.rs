@@ -6,9 +6,8 @@
 //! refraction technique's cost is compared.
 use std::sync::Arc;
 
-use crate::frame::gpu_scene::GpuScene;
 use crate::frame::targets::Targets;
-use crate::gpu::{DescriptorSet, DescriptorSetLayout, GpuContext, GpuResult, Sampler, Spec};
+use crate::gpu::{DescriptorSetLayout, GpuContext, GpuResult, Sampler, Spec};
 use crate::graph::Frame;
 use crate::scene::Scene;
 use crate::technique::{
@@ -62,7 +61,8 @@ fn plan(scene: &Scene, mode: Mode) -> Vec<(Stage, PlannedPass)> {
 
 impl Technique for SpecularSinglePass {
     fn record<'a>(&'a self, _: Stage, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>) {
-        self.record(frame, inputs.scene, inputs.frame_set);
+        let (scene, frame_set) = (inputs.scene, inputs.frame_set);
+        self.pass.record(frame, frame_set, &[scene.environment_id]);
     }
 }
 
@@ -96,9 +96,5 @@ impl SpecularSinglePass {
             frame_layout,
         )?;
         Ok(SpecularSinglePass { pass })
-    }
-
-    pub fn record<'a>(&'a self, frame: &mut Frame<'_, 'a>, scene: &GpuScene, frame_set: DescriptorSet) {
-        self.pass.record(frame, frame_set, &[scene.environment_id]);
     }
 }

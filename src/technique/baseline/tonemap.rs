@@ -34,8 +34,7 @@
 //! mesopic vision, and the loss of visual acuity. [`crate::app::output::tonemap_adaptive`] is
 //! the same operator on the CPU (compare, report, reference PNGs).
 
-use crate::frame::targets::Targets;
-use crate::gpu::{vk, Access, Buffer, ComputePipeline, DescriptorSet, GpuResult, Image, ImageDesc, MemoryLocation};
+use crate::gpu::{vk, Access, Buffer, ComputePipeline, GpuResult, Image, ImageDesc, MemoryLocation};
 use crate::graph::{Bindings, BoundSet, BufferId, Frame, ImageId};
 use crate::scene::techniques::TonemapAdaptiveParams;
 use crate::scene::Scene;
@@ -98,8 +97,39 @@ fn create(s: &mut Setup<'_>) -> Result<Box<dyn Technique>, RenderError> {
 }
 
 impl Technique for TonemapPass {
+    /// Record the tone map (and with the adaptive one its reduction) into `frame`. `slot`:
+    /// the frame-in-flight slot (the statistics entry); `dt`: seconds since the last frame
+    /// for temporal adaptation, `None` for the converged state (headless renders).
     fn record<'a>(&'a self, _: Stage, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>) {
-        self.record(frame, inputs.targets, inputs.frame_set, inputs.slot, inputs.dt);
+        let (targets, frame_set, slot, dt) = (inputs.targets, inputs.frame_set, inputs.slot, inputs.dt);
+        let Some(a) = &self.adaptive else {
+            self.pass.record(frame, frame_set, &[]);
+            return;
+        };
+        let p = &a.params;
+        let push = AdaptPush {
+            size: [targets.width, targets.height, a.groups[0] * a.groups[1], slot as u32],
+            params: [dt.map_or(-1.0, |t| t.max(0.0)), p.delta, p.key.unwrap_or(0.0), p.white.unwrap_or(0.0)],
+            params2: [p.tau_rod, p.tau_cone, p.luminance_scale, a.exposure],
+        };
+        let (set, pipeline, groups) = (a.set.set(), &a.log_average, a.groups);
+        frame
+            .pass(TONEMAP_LOG_AVERAGE)
+            .read(targets.hdr_id, Access::ComputeSampled)
+            .write(a.partials_id, Access::ComputeWrite)
+            .record(move |cmd| {
+                cmd.compute(pipeline, &[set], &push, [groups[0], groups[1], 1]);
+            });
+        let pipeline = &a.adapt;
+        frame
+            .pass(TONEMAP_ADAPT)
+            .read(a.partials_id, Access::ComputeRead)
+            .write(a.state_id, Access::ComputeWrite)
+            .write(a.stats_id, Access::ComputeWrite)
+            .record(move |cmd| {
+                cmd.compute(pipeline, &[set], &push, [1, 1, 1]);
+            });
+        self.pass.record(frame, frame_set, &[]);
     }
 }
 
@@ -219,47 +249,6 @@ impl TonemapPass {
                 _state: state,
             }),
         })
-    }
-
-    /// Record the tone map (and with the adaptive one its reduction) into `frame`. `slot`:
-    /// the frame-in-flight slot (the statistics entry); `dt`: seconds since the last frame
-    /// for temporal adaptation, `None` for the converged state (headless renders).
-    pub fn record<'a>(
-        &'a self,
-        frame: &mut Frame<'_, 'a>,
-        targets: &Targets,
-        frame_set: DescriptorSet,
-        slot: usize,
-        dt: Option<f32>,
-    ) {
-        let Some(a) = &self.adaptive else {
-            self.pass.record(frame, frame_set, &[]);
-            return;
-        };
-        let p = &a.params;
-        let push = AdaptPush {
-            size: [targets.width, targets.height, a.groups[0] * a.groups[1], slot as u32],
-            params: [dt.map_or(-1.0, |t| t.max(0.0)), p.delta, p.key.unwrap_or(0.0), p.white.unwrap_or(0.0)],
-            params2: [p.tau_rod, p.tau_cone, p.luminance_scale, a.exposure],
-        };
-        let (set, pipeline, groups) = (a.set.set(), &a.log_average, a.groups);
-        frame
-            .pass(TONEMAP_LOG_AVERAGE)
-            .read(targets.hdr_id, Access::ComputeSampled)
-            .write(a.partials_id, Access::ComputeWrite)
-            .record(move |cmd| {
-                cmd.compute(pipeline, &[set], &push, [groups[0], groups[1], 1]);
-            });
-        let pipeline = &a.adapt;
-        frame
-            .pass(TONEMAP_ADAPT)
-            .read(a.partials_id, Access::ComputeRead)
-            .write(a.state_id, Access::ComputeWrite)
-            .write(a.stats_id, Access::ComputeWrite)
-            .record(move |cmd| {
-                cmd.compute(pipeline, &[set], &push, [1, 1, 1]);
-            });
-        self.pass.record(frame, frame_set, &[]);
     }
 
     /// The statistics frame slot `slot` wrote (call after the slot's fence); `None` with the

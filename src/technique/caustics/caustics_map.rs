@@ -31,7 +31,7 @@ use glam::{Mat4, Vec3};
 
 use crate::frame::gpu_scene::{cube_face_views, Draw, GpuScene};
 use crate::frame::gpu_types::ShadowPush;
-use crate::frame::targets::{Targets, DEPTH_FORMAT, SHADOW_FORMAT};
+use crate::frame::targets::{DEPTH_FORMAT, SHADOW_FORMAT};
 use crate::gpu::{
     vk, Access, Blend, Buffer, Clear, DepthState, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc,
     ImageViewKind, MemoryLocation, OcclusionQueryPool, RenderTarget, Sampler, SamplerDesc, Spec,
@@ -89,7 +89,42 @@ fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
 
 impl Technique for CausticsMapPass {
     fn record<'a>(&'a self, _: Stage, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>) {
-        self.record(frame, inputs.scene, inputs.targets);
+        let (scene, targets) = (inputs.scene, inputs.targets);
+        frame
+            .pass(CAUSTICS_MAP_RECEIVERS)
+            .write(self.receiver_atlas_id, Access::ColorAttachment)
+            .write(self.receiver_depth_id, Access::DepthAttachment)
+            .record(move |cmd| {
+                for face in &self.receiver_faces {
+                    cmd.in_target(
+                        &self.receiver_target,
+                        face.layer as usize,
+                        &[Clear::Color([FAR_DISTANCE; 4]), Clear::Depth(1.0)],
+                        |cmd| {
+                            cmd.bind_graphics(&self.receiver_pipeline, &[]);
+                            cmd.push_graphics(&self.receiver_pipeline, &face.push);
+                            cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
+                            for d in &self.receiver_draws {
+                                cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
+                            }
+                        },
+                    );
+                }
+            });
+
+        self.refractors.record(frame, scene);
+
+        let pass = frame.pass(CAUSTICS_MAP).uses(&self.set);
+        let grid = self.params.grid;
+        pass.write(targets.caustic_atlas_id, Access::ColorAttachment).record(move |cmd| {
+            for d in &self.destinations {
+                cmd.in_target(&self.splat_target, d.layer as usize, &[Clear::Color([0.0; 4])], |cmd| {
+                    cmd.bind_graphics(&self.splat_pipeline, &[self.set.set()]);
+                    cmd.push_graphics(&self.splat_pipeline, &d.push);
+                    cmd.draw(d.push.face[1] * grid * grid, self.channels);
+                });
+            }
+        });
     }
 }
 
@@ -428,44 +463,6 @@ impl CausticsMapPass {
     /// The refractor layers seen from the light(s) and Eq. 6's V.
     pub fn refractors(&self) -> &RefractorLayers {
         &self.refractors
-    }
-
-    pub fn record<'a>(&'a self, frame: &mut Frame<'_, 'a>, scene: &'a GpuScene, targets: &Targets) {
-        frame
-            .pass(CAUSTICS_MAP_RECEIVERS)
-            .write(self.receiver_atlas_id, Access::ColorAttachment)
-            .write(self.receiver_depth_id, Access::DepthAttachment)
-            .record(move |cmd| {
-                for face in &self.receiver_faces {
-                    cmd.in_target(
-                        &self.receiver_target,
-                        face.layer as usize,
-                        &[Clear::Color([FAR_DISTANCE; 4]), Clear::Depth(1.0)],
-                        |cmd| {
-                            cmd.bind_graphics(&self.receiver_pipeline, &[]);
-                            cmd.push_graphics(&self.receiver_pipeline, &face.push);
-                            cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
-                            for d in &self.receiver_draws {
-                                cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
-                            }
-                        },
-                    );
-                }
-            });
-
-        self.refractors.record(frame, scene);
-
-        let pass = frame.pass(CAUSTICS_MAP).uses(&self.set);
-        let grid = self.params.grid;
-        pass.write(targets.caustic_atlas_id, Access::ColorAttachment).record(move |cmd| {
-            for d in &self.destinations {
-                cmd.in_target(&self.splat_target, d.layer as usize, &[Clear::Color([0.0; 4])], |cmd| {
-                    cmd.bind_graphics(&self.splat_pipeline, &[self.set.set()]);
-                    cmd.push_graphics(&self.splat_pipeline, &d.push);
-                    cmd.draw(d.push.face[1] * grid * grid, self.channels);
-                });
-            }
-        });
     }
 }
 

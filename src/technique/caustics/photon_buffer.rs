@@ -42,7 +42,6 @@ use std::sync::Arc;
 
 use bytemuck::{Pod, Zeroable};
 
-use crate::frame::gpu_scene::GpuScene;
 use crate::gpu::{
     vk, Access, Blend, Buffer, Clear, GpuContext, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc,
     ImageViewKind, RenderTarget, Sampler, SamplerDesc,
@@ -101,7 +100,49 @@ fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
 
 impl Technique for PhotonBufferPass {
     fn record<'a>(&'a self, _: Stage, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>) {
-        self.record(frame, inputs.scene, inputs.photon_caustics);
+        let (scene, caustics) = (inputs.scene, inputs.photon_caustics);
+        self.refractors.record(frame, scene);
+
+        let (size, rects) = (self.params.size, caustics.count);
+        frame
+            .pass(PHOTON_BUFFER)
+            .uses(&self.photon_set)
+            .write(self.photons.1, Access::ColorAttachment)
+            .write(self.flux.1, Access::ColorAttachment)
+            .record(move |cmd| {
+                for s in 0..self.faces {
+                    let clears = [Clear::Color([0.0; 4]), Clear::Color([0.0; 4])];
+                    cmd.in_target(&self.photon_target, s as usize, &clears, |cmd| {
+                        cmd.bind_graphics(&self.photon_pipeline, &[self.photon_set.set()]);
+                        cmd.push_graphics(&self.photon_pipeline, &[s, size, rects, 0]);
+                        cmd.draw(3, 1);
+                    });
+                }
+            });
+
+        frame.pass(PHOTON_BUFFER_SCATTER).uses(&self.scatter_set).write(self.counts.1, Access::ColorAttachment).record(
+            move |cmd| {
+                for i in 0..rects {
+                    cmd.in_target(&self.scatter_target, i as usize, &[Clear::Color([0.0; 4])], |cmd| {
+                        cmd.bind_graphics(&self.scatter_pipeline, &[self.scatter_set.set()]);
+                        cmd.push_graphics(&self.scatter_pipeline, &[size, self.faces, i + 1, 0]);
+                        cmd.draw(size * size * self.faces, 1);
+                    });
+                }
+            },
+        );
+
+        frame.pass(PHOTON_BUFFER_FILTER).uses(&self.filter_set).write(caustics.id, Access::ColorAttachment).record(
+            move |cmd| {
+                for (i, push) in self.filter_pushes.iter().enumerate() {
+                    cmd.in_target(&self.filter_target, i, &[Clear::Color([0.0; 4])], |cmd| {
+                        cmd.bind_graphics(&self.filter_pipeline, &[self.filter_set.set()]);
+                        cmd.push_graphics(&self.filter_pipeline, push);
+                        cmd.draw(3, 1);
+                    });
+                }
+            },
+        );
     }
 }
 
@@ -383,50 +424,5 @@ impl PhotonBufferPass {
 
     pub fn params(&self) -> &PhotonBufferParams {
         &self.params
-    }
-
-    pub fn record<'a>(&'a self, frame: &mut Frame<'_, 'a>, scene: &'a GpuScene, caustics: &'a PhotonCaustics) {
-        self.refractors.record(frame, scene);
-
-        let (size, rects) = (self.params.size, caustics.count);
-        frame
-            .pass(PHOTON_BUFFER)
-            .uses(&self.photon_set)
-            .write(self.photons.1, Access::ColorAttachment)
-            .write(self.flux.1, Access::ColorAttachment)
-            .record(move |cmd| {
-                for s in 0..self.faces {
-                    let clears = [Clear::Color([0.0; 4]), Clear::Color([0.0; 4])];
-                    cmd.in_target(&self.photon_target, s as usize, &clears, |cmd| {
-                        cmd.bind_graphics(&self.photon_pipeline, &[self.photon_set.set()]);
-                        cmd.push_graphics(&self.photon_pipeline, &[s, size, rects, 0]);
-                        cmd.draw(3, 1);
-                    });
-                }
-            });
-
-        frame.pass(PHOTON_BUFFER_SCATTER).uses(&self.scatter_set).write(self.counts.1, Access::ColorAttachment).record(
-            move |cmd| {
-                for i in 0..rects {
-                    cmd.in_target(&self.scatter_target, i as usize, &[Clear::Color([0.0; 4])], |cmd| {
-                        cmd.bind_graphics(&self.scatter_pipeline, &[self.scatter_set.set()]);
-                        cmd.push_graphics(&self.scatter_pipeline, &[size, self.faces, i + 1, 0]);
-                        cmd.draw(size * size * self.faces, 1);
-                    });
-                }
-            },
-        );
-
-        frame.pass(PHOTON_BUFFER_FILTER).uses(&self.filter_set).write(caustics.id, Access::ColorAttachment).record(
-            move |cmd| {
-                for (i, push) in self.filter_pushes.iter().enumerate() {
-                    cmd.in_target(&self.filter_target, i, &[Clear::Color([0.0; 4])], |cmd| {
-                        cmd.bind_graphics(&self.filter_pipeline, &[self.filter_set.set()]);
-                        cmd.push_graphics(&self.filter_pipeline, push);
-                        cmd.draw(3, 1);
-                    });
-                }
-            },
-        );
     }
 }
