@@ -98,6 +98,12 @@ shared_structs! {
         time: float,
     }
 
+    /// Push constants of the G-buffer pass (glsl/gbuffer/gbuffer.frag).
+    push struct GbufferPush {
+        material: uint,
+        object: uint,
+    }
+
     // ---- Tone map (src/technique/baseline/tonemap.rs) ------------------------------------
 
     /// Push constants of glsl/tonemap/log_average.comp and adapt.comp.
@@ -400,6 +406,14 @@ shared_structs! {
         vp_normal: vec4,
         /// camera path throughput times the diffuse BRDF, beta * albedo / pi
         vp_weight: vec4,
+    }
+
+    /// An exactly intersected sphere (glsl/reference/trace.glsl).
+    buffer struct GpuSphere {
+        /// xyz: centre, w: radius
+        center_radius: vec4,
+        /// x: object index
+        info: uvec4,
     }
 
     /// A node of the triangles' bounding volume hierarchy.

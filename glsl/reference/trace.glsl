@@ -21,12 +21,11 @@ layout(set = REF_SET, binding = REF_BINDING_UNIFORMS, std430) readonly buffer Re
 const uint REF_FLAG_DISPERSION = 1u;   // some dielectric has an RGB ior: trace one channel per path
 const uint REF_FLAG_JITTER = 2u;       // supersample the pixel area (default: pixel centres)
 
-struct Sphere { vec4 center_radius; uvec4 info; };  // info.x: object
 
 layout(set = REF_SET, binding = REF_BINDING_VERTICES, std430) readonly buffer Vertices { Vertex vertices[]; };
 layout(set = REF_SET, binding = REF_BINDING_TRIANGLES, std430) readonly buffer Triangles { uvec4 triangles[]; };  // i0, i1, i2, object
 layout(set = REF_SET, binding = REF_BINDING_NODES, std430) readonly buffer Nodes { BvhNode nodes[]; };
-layout(set = REF_SET, binding = REF_BINDING_SPHERES, std430) readonly buffer Spheres { Sphere spheres[]; };
+layout(set = REF_SET, binding = REF_BINDING_SPHERES, std430) readonly buffer Spheres { GpuSphere spheres[]; };
 layout(set = REF_SET, binding = REF_BINDING_OBJECTS, std430) readonly buffer Objects { uint object_material[]; };
 
 // ---------------------------------------------------------------------------------------
@@ -186,7 +185,7 @@ struct Surface {
 Surface surface_at(vec3 o, vec3 d, Hit h) {
     Surface s;
     if (h.kind == 2u) {
-        Sphere sp = spheres[h.prim];
+        GpuSphere sp = spheres[h.prim];
         s.p = o + h.t * d;
         s.ng = normalize(s.p - sp.center_radius.xyz);
         s.ns = s.ng;

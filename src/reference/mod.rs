@@ -42,7 +42,7 @@ use crate::scene::{Analytic, Light, Material, Scene};
 use crate::*;
 
 pub use crate::shader_structs::RefUniforms;
-use crate::shader_structs::{PixelState, RefLight, RefPush};
+use crate::shader_structs::{GpuSphere, PixelState, RefLight, RefPush};
 use bvh::Bvh;
 
 /// How the reference is computed. The defaults give a converged image of the benchmark
@@ -227,13 +227,15 @@ impl TraceGeometry {
         // Triangles of every object that is not an exact sphere, with global vertex indices.
         let mut tris: Vec<[u32; 4]> = Vec::new();
         let mut corners: Vec<[Vec3; 3]> = Vec::new();
-        let mut spheres: Vec<[f32; 8]> = Vec::new();
+        let mut spheres: Vec<GpuSphere> = Vec::new();
         let mut vertex_base = 0u32;
         for (oi, o) in scene.objects.iter().enumerate() {
             match o.analytic {
                 Some(Analytic::Sphere { center, radius }) => {
-                    let info = f32::from_bits(oi as u32);
-                    spheres.push([center.x, center.y, center.z, radius, info, 0.0, 0.0, 0.0]);
+                    spheres.push(GpuSphere {
+                        center_radius: center.extend(radius).to_array(),
+                        info: [oi as u32, 0, 0, 0],
+                    });
                 }
                 None => {
                     for t in o.mesh.indices.chunks_exact(3) {
