@@ -10,7 +10,7 @@
 #define PRISM_LIGHT_PATH_GLSL
 
 // The 2D texel of `f` that x projects to, or (-1, -1) outside the face.
-ivec2 source_texel(Face f, vec3 x, int grid) {
+ivec2 source_texel(GpuCausticFace f, vec3 x, int grid) {
     vec4 clip = f.view_proj * vec4(x, 1.0);
     if (!(clip.w > 0.0)) return ivec2(-1);
     vec2 t = (clip.xy / clip.w * 0.5 + 0.5) * float(grid);
@@ -20,7 +20,7 @@ ivec2 source_texel(Face f, vec3 x, int grid) {
 
 // Whether x is still inside the object: in front of the back face the light sees at x's
 // texel of source face f (distances from the light, or along a directional light).
-bool inside(Face f, vec3 x, int grid, int layer) {
+bool inside(GpuCausticFace f, vec3 x, int grid, int layer) {
     ivec2 t = source_texel(f, x, grid);
     if (t.x < 0) return false;
     vec4 b = texelFetch(back_position, ivec3(t, layer), 0);
@@ -37,7 +37,7 @@ bool inside(Face f, vec3 x, int grid, int layer) {
 // of the flux through the visible area of the object, here measured directly, so the total
 // does not depend on the grid resolution. For the photon buffer it is each photon's power:
 // the paper counts photons, which is this with every photon carrying the same power.
-float texel_measure(Face f, ivec2 ij, int grid) {
+float texel_measure(GpuCausticFace f, ivec2 ij, int grid) {
     vec2 ndc = (vec2(ij) + 0.5) / float(grid) * 2.0 - 1.0;
     if (uint(f.measure.x + 0.5) == CAUSTIC_FACE_PERSPECTIVE) {
         float t = f.measure.y;
@@ -49,7 +49,7 @@ float texel_measure(Face f, ivec2 ij, int grid) {
 
 // The mean of texel_measure over the face: its solid angle over G^2 (a square pyramid of
 // half-angle tangent t subtends 4 asin(t^2 / (1 + t^2))), or its area over G^2.
-float mean_texel_measure(Face f, int grid) {
+float mean_texel_measure(GpuCausticFace f, int grid) {
     float t = f.measure.y;
     if (uint(f.measure.x + 0.5) == CAUSTIC_FACE_PERSPECTIVE) {
         return 4.0 * asin(t * t / (1.0 + t * t)) / float(grid * grid);
@@ -63,7 +63,7 @@ float mean_texel_measure(Face f, int grid) {
 // coefficient still to apply over the distance to the receiver (single-surface refraction).
 // cos_in: N . L at the entry point (Shah et al.'s Eq. 6). Returns false where no specular
 // surface is seen or the light stays inside the object.
-bool light_path(Face f, int layer, ivec2 ij, int grid, int c, uint channels, out vec3 origin, out vec3 dir,
+bool light_path(GpuCausticFace f, int layer, ivec2 ij, int grid, int c, uint channels, out vec3 origin, out vec3 dir,
                 out vec3 weight, out vec3 absorb_to_receiver, out float cos_in) {
     cos_in = 0.0;
     origin = vec3(0.0);
@@ -78,7 +78,7 @@ bool light_path(Face f, int layer, ivec2 ij, int grid, int c, uint channels, out
     bool point_light = uint(f.light.w + 0.5) == LIGHT_POINT;
     vec3 l = point_light ? normalize(p1 - f.light.xyz) : f.light.xyz;
 
-    Material m = materials[uint(fn.w + 0.5)];
+    GpuMaterial m = materials[uint(fn.w + 0.5)];
     uint kind = kind_of(m);
     float cos1 = clamp(dot(-l, n1), 0.0, 1.0);
     cos_in = cos1;

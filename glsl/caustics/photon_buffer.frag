@@ -15,21 +15,13 @@
 #include "fresnel.glsl"
 #include "photon_rect.glsl"
 
-struct Face {
-    mat4 view_proj;
-    mat4 receiver_view_proj;
-    vec4 light;
-    vec4 intensity;
-    vec4 measure;
-    vec4 origin;
-};
-layout(set = 0, binding = CAUSTIC_BINDING_FACES, std430) readonly buffer Faces { Face faces[]; };
-layout(set = 0, binding = CAUSTIC_BINDING_MATERIALS, std430) readonly buffer Materials { Material materials[]; };
+layout(set = 0, binding = CAUSTIC_BINDING_FACES, std430) readonly buffer Faces { GpuCausticFace faces[]; };
+layout(set = 0, binding = CAUSTIC_BINDING_MATERIALS, std430) readonly buffer Materials { GpuMaterial materials[]; };
 layout(set = 0, binding = CAUSTIC_BINDING_FRONT_POSITION) uniform sampler2DArray front_position;
 layout(set = 0, binding = CAUSTIC_BINDING_FRONT_NORMAL) uniform sampler2DArray front_normal;
 layout(set = 0, binding = CAUSTIC_BINDING_BACK_POSITION) uniform sampler2DArray back_position;
 layout(set = 0, binding = CAUSTIC_BINDING_BACK_NORMAL) uniform sampler2DArray back_normal;
-layout(set = 0, binding = PHOTON_BINDING_RECTS, std430) readonly buffer Rects { PhotonRect rects[]; };
+layout(set = 0, binding = PHOTON_BINDING_RECTS, std430) readonly buffer Rects { GpuPhotonRect rects[]; };
 #include "light_path.glsl"
 
 layout(push_constant) uniform Push {
@@ -45,7 +37,7 @@ void main() {
     int layer = int(pc.info.x);
     int grid = int(pc.info.y);
     ivec2 ij = ivec2(gl_FragCoord.xy);
-    Face f = faces[layer];
+    GpuCausticFace f = faces[layer];
     vec3 origin, dir, weight, absorb;
     float cos_in;
     // Dispersion is not modelled by the photon buffer: the paper's photons carry no
@@ -56,7 +48,7 @@ void main() {
     int k = 0;
     vec2 uv = vec2(0.0);
     for (uint i = 0u; i < pc.info.z; ++i) {
-        PhotonRect r = rects[i];
+        GpuPhotonRect r = rects[i];
         float denom = dot(dir, r.axis.xyz);
         if (abs(denom) < 1e-8) continue;   // parallel to the rectangle
         float t = dot(r.centre.xyz - origin, r.axis.xyz) / denom;

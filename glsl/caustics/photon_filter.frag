@@ -9,10 +9,7 @@
 // Texels outside the texture contribute nothing.
 #include "prism_shared.glsl"
 layout(set = 0, binding = 0) uniform sampler2DArray counts;
-layout(push_constant) uniform Push {
-    ivec4 info;     // x: layer, y: k, z: PHOTON_PHYSICAL or PHOTON_PAPER
-    vec4 params;    // x: s, y: texel area on the rectangle (m^2)
-} pc;
+layout(push_constant) uniform PhotonFilterPushBlock { PhotonFilterPush pc; };
 layout(location = 0) in vec2 in_uv;
 layout(location = 0) out vec4 out_caustic;
 

@@ -10,11 +10,7 @@
 // convention of the light's projections is assumed.
 #include "prism_shared.glsl"
 layout(constant_id = 0) const uint MODE = CAUSTIC_LAYER_FRONT;
-layout(push_constant) uniform Push {
-    mat4 view_proj;
-    vec4 light;
-    uvec4 info;
-} pc;
+layout(push_constant) uniform RefractorPushBlock { RefractorPush pc; };
 layout(location = 0) in vec3 in_position;
 layout(location = 1) in vec3 in_normal;
 layout(location = 0) out vec4 out_position;

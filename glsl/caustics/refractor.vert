@@ -2,11 +2,7 @@
 // Caustics mapping (Shah et al. 2007, §III.B step 2): the specular objects seen from the
 // light, one source face of the vertex grid at a time.
 #include "prism_shared.glsl"
-layout(push_constant) uniform Push {
-    mat4 view_proj;   // world -> source face clip space
-    vec4 light;       // xyz: position (point) or unit direction (directional); w: kind
-    uvec4 info;       // x: material index of the draw
-} pc;
+layout(push_constant) uniform RefractorPushBlock { RefractorPush pc; };
 layout(location = 0) in vec3 in_position;
 layout(location = 1) in vec3 in_normal;
 layout(location = 2) in vec2 in_checker_uv;

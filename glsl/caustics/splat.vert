@@ -9,17 +9,8 @@
 #include "common.glsl"
 #include "fresnel.glsl"
 
-struct Face {
-    mat4 view_proj;            // world -> source face clip space (the refractor textures)
-    mat4 receiver_view_proj;   // directional: world -> the light's orthographic map
-    vec4 light;                // xyz: position (point) or unit direction (directional); w: kind
-    vec4 intensity;            // rgb: I in W/sr (point) or E in W/m^2 (directional); w: first atlas layer
-    vec4 measure;              // x: face kind, y: tan(half angle) or half extent (m), z: grid size,
-                               // w: largest chord of the specular objects (m)
-    vec4 origin;               // directional: origin of the receivers' distance plane
-};
-layout(set = 0, binding = CAUSTIC_BINDING_FACES, std430) readonly buffer Faces { Face faces[]; };
-layout(set = 0, binding = CAUSTIC_BINDING_MATERIALS, std430) readonly buffer Materials { Material materials[]; };
+layout(set = 0, binding = CAUSTIC_BINDING_FACES, std430) readonly buffer Faces { GpuCausticFace faces[]; };
+layout(set = 0, binding = CAUSTIC_BINDING_MATERIALS, std430) readonly buffer Materials { GpuMaterial materials[]; };
 layout(set = 0, binding = CAUSTIC_BINDING_RECEIVER_CUBE) uniform samplerCubeArray receiver_cubes;
 layout(set = 0, binding = CAUSTIC_BINDING_RECEIVER_2D) uniform sampler2DArray receiver_layers;
 layout(set = 0, binding = CAUSTIC_BINDING_FRONT_POSITION) uniform sampler2DArray front_position;
@@ -31,11 +22,7 @@ layout(set = 0, binding = CAUSTIC_BINDING_VISIBLE, std430) readonly buffer Visib
 layout(constant_id = 0) const uint FLUX = FLUX_SOLID_ANGLE;
 #include "light_path.glsl"
 
-layout(push_constant) uniform Push {
-    mat4 dest_view_proj;   // world -> destination caustic-map face clip space
-    uvec4 face;            // x: first source face, y: source faces, z: destination cube face (6: 2D map), w: channels
-    vec4 params;           // x: splat sigma (texels), y: iterations, z: NEWTON_*, w: map size (texels)
-} pc;
+layout(push_constant) uniform CausticSplatPushBlock { CausticSplatPush pc; };
 
 layout(location = 0) flat out vec3 out_flux;
 layout(location = 1) flat out vec3 out_splat;
@@ -56,7 +43,7 @@ void drop_vertex() {
 // seen. g = stored distance - x's own distance: zero exactly on the receiver (Theorem 1),
 // positive in front of it, negative behind; the signed form gives true Newton-Raphson a
 // derivative that does not vanish at the root and bisection a bracket.
-bool receiver(Face f, vec3 x, out vec3 r, out float g) {
+bool receiver(GpuCausticFace f, vec3 x, out vec3 r, out float g) {
     float layer = f.intensity.w;
     if (uint(f.light.w + 0.5) == LIGHT_POINT) {
         vec3 v = x - f.light.xyz;
@@ -82,7 +69,7 @@ bool receiver(Face f, vec3 x, out vec3 r, out float g) {
 // Where the ray o + d * dir meets the receivers (§III.C-D). The initial guess is the
 // receiver seen from the light through o: the paper's d = 1 (Eq. 2) is in the units of its
 // scene, while prism's scenes range from 1e-3 to 1e4 m.
-bool intersect(Face f, vec3 o, vec3 dir, out vec3 hit) {
+bool intersect(GpuCausticFace f, vec3 o, vec3 dir, out vec3 hit) {
     vec3 r;
     float g;
     if (!receiver(f, o, r, g)) return false;
@@ -137,13 +124,13 @@ uint cube_face(vec3 v) {
 }
 
 void main() {
-    Face f0 = faces[pc.face.x];
+    GpuCausticFace f0 = faces[pc.face.x];
     int grid = int(f0.measure.z + 0.5);
     int per_face = grid * grid;
     uint s = pc.face.x + uint(gl_VertexIndex / per_face);
     int texel = gl_VertexIndex % per_face;
     ivec2 ij = ivec2(texel % grid, texel / grid);
-    Face f = faces[s];
+    GpuCausticFace f = faces[s];
     int layer = int(s);
     uint channels = pc.face.w;
     int c = gl_InstanceIndex;

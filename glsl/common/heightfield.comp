@@ -7,24 +7,16 @@
 #include "prism_shared.glsl"
 layout(local_size_x = WORKGROUP_2D, local_size_y = WORKGROUP_2D) in;
 
-struct Field {
-    mat4 transform;
-    // The inverse transpose of the transform's upper 3x3, for the normals.
-    mat4 normal_matrix;
-    vec4 center;      // xyz; w unused
-    vec4 size_cells;  // size x, size z, cells nx, cells nz
-    uvec4 ranges;     // first vertex, first wave, wave count, unused
-};
 
-layout(set = 0, binding = HEIGHTFIELD_BINDING_FIELDS, std430) readonly buffer Fields { Field fields[]; };
+layout(set = 0, binding = HEIGHTFIELD_BINDING_FIELDS, std430) readonly buffer Fields { GpuHeightfield fields[]; };
 // Per wave: (amplitude, kx, kz, omega), (phase, 0, 0, 0).
 layout(set = 0, binding = HEIGHTFIELD_BINDING_WAVES, std430) readonly buffer Waves { vec4 waves[]; };
 // The scene's vertices: position xyz, normal xyz, checker uv.
 layout(set = 0, binding = HEIGHTFIELD_BINDING_VERTICES, std430) writeonly buffer Vertices { float vertices[]; };
-layout(push_constant) uniform Push { uint field; float time; } push;
+layout(push_constant) uniform HeightfieldPushBlock { HeightfieldPush push; };
 
 void main() {
-    Field f = fields[push.field];
+    GpuHeightfield f = fields[push.field];
     uint nx = uint(f.size_cells.z), nz = uint(f.size_cells.w);
     uint j = gl_GlobalInvocationID.x, i = gl_GlobalInvocationID.y;
     if (j > nx || i > nz) {

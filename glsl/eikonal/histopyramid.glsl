@@ -15,18 +15,7 @@ layout(constant_id = 0) const uint CAPACITY = 4u;
 // Entries of the per-step history of output counts.
 layout(constant_id = 1) const uint HISTORY_LEN = 1u;
 
-layout(std430, set = 0, binding = LIGHT_BINDING_STATE) buffer State {
-    uvec4 args;      // vkCmdDispatchIndirect groups over `next` (x, 1, 1, unused)
-    uint count;      // entries of level 0 that are valid (the input list's length; set to
-                     // `next` by histopyramid_total.comp for the next step)
-    uint next;       // outputs of this step (min(total, CAPACITY))
-    uint dropped;    // outputs lost to the clamp, summed over the steps
-    uint step;       // steps taken (index into history)
-    uint peak;       // the largest `next` so far
-    uint requested;  // the last unclamped total
-    uint pad0;
-    uint pad1;
-} state;
+layout(std430, set = 0, binding = LIGHT_BINDING_STATE) buffer State { HpState state; };
 layout(std430, set = 0, binding = LIGHT_BINDING_CLASSES) buffer Classes { uint classes[]; };
 layout(std430, set = 0, binding = LIGHT_BINDING_LEVELS) buffer Levels { uint levels[]; };
 // Output slot j -> (input entry, index among that entry's outputs).

@@ -3,15 +3,6 @@
 // irradiance and direction volumes. Set 0 is the HistoPyramid (histopyramid.glsl).
 #include "histopyramid.glsl"
 
-// Section 5.2: "patches ... hold the four corners' positions, their propagation directions
-// and a RGB energy value". Corners 0..3 go around the patch so that
-// cross(x2 - x0, x3 - x1) points along the propagation direction at birth. `flux` is the
-// patch's energy dE * A of Eq. 17 (W), constant unless absorbed (Eq. 18).
-struct Patch {
-    vec4 x[4];   // corner positions (w unused)
-    vec4 v[4];   // corner optical directions v = n dx/ds, |v| = n (w unused)
-    vec4 flux;   // rgb: flux (W), w unused
-};
 
 layout(std430, set = 1, binding = LIGHT_BINDING_SRC) buffer Src { Patch src[]; };
 layout(std430, set = 1, binding = LIGHT_BINDING_DST) buffer Dst { Patch dst[]; };
@@ -36,12 +27,7 @@ layout(set = 1, binding = LIGHT_BINDING_DIRECTION, rgba32f) uniform image3D dire
 
 // Per run of the simulator (one light, one index channel, one tile of the initial
 // wavefront; src/technique/eikonal/eikonal_light.rs `LightRun`).
-layout(push_constant) uniform RunPush {
-    uint slab;        // index slab of `field` the wavefront travels through (dispersion)
-    float sign;       // +1: deposit; -1: take a run's deposits back (an overflowing tile)
-    float min_flux;   // energy threshold in W (section 5.2.3, patch termination)
-    uint pad;
-} run;
+layout(push_constant) uniform RunPushBlock { RunPush run; };
 
 layout(constant_id = 2) const float DT = 0.01;             // time step of Eqs. 14-15
 layout(constant_id = 3) const float VOL_MIN_X = -1.0;      // the index field's box

@@ -17,16 +17,9 @@
 
 #include "nearby.glsl"
 
-struct EikTriangle {
-    vec4 p0;    // xyz: p0
-    vec4 e1;    // xyz: p1 - p0
-    vec4 e2;    // xyz: p2 - p0
-    vec4 uv01;  // checker uv of p0 (xy) and p1 (zw)
-    vec4 uv2;   // checker uv of p2 (xy); z: material index
-};
 layout(set = 1, binding = BINDING_EIKONAL_TRIANGLES, std430) readonly buffer EikTriangles {
     uvec4 eik_triangle_info;  // x: triangle count
-    EikTriangle eik_triangles[];
+    GpuTriangle eik_triangles[];
 };
 
 // The nearest hit t in (t_min, t_max) of o + t d with the triangles: triangle k, barycentrics
@@ -71,7 +64,7 @@ vec3 eik_surface_radiance(vec3 p, vec3 n, vec3 albedo) {
 
 // The radiance leaving triangle k's hit o + t d towards o (two-sided, flat: the face normal).
 vec3 eik_triangle_radiance(uint k, vec3 o, vec3 d, float t, vec2 b) {
-    EikTriangle tri = eik_triangles[k];
+    GpuTriangle tri = eik_triangles[k];
     vec3 p = o + max(t, 0.0) * d;
     vec3 n = cross(tri.e1.xyz, tri.e2.xyz);
     n = dot(n, n) > 1e-30 ? normalize(n) : -d;
@@ -86,7 +79,7 @@ vec3 eik_triangle_radiance(uint k, vec3 o, vec3 d, float t, vec2 b) {
 // environment.
 bool eik_impostor_hit(vec3 P, vec3 Ray, out vec3 color, out float dist) {
     // The one rectangle set around the volume (NearbyImpostors::around); none: no impostors.
-    nearby_set = nearby_info.y == 0u ? NEARBY_NO_SET : 0u;
+    nearby_set = nearby_header.info.y == 0u ? NEARBY_NO_SET : 0u;
     return nearby_hit(P, Ray, color, dist);
 }
 

@@ -26,7 +26,7 @@ vec3 eikonal_receiver(vec3 p, vec3 n, vec3 albedo, vec3 lo, vec3 hi) {
     vec3 direct = vec3(0.0);
     vec3 direct_visible = vec3(0.0);
     for (uint i = 0u; i < frame.info.x; ++i) {
-        Light l = frame.lights[i];
+        GpuLight l = frame.lights[i];
         vec3 wi, e;
         if (uint(l.position.w + 0.5) == LIGHT_POINT) {
             vec3 d = l.position.xyz - p;

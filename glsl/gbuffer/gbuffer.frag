@@ -1,7 +1,7 @@
 #version 450
 // G-buffer: every visible surface's normal, material and diffuse albedo (MRT).
 #include "frame.glsl"
-layout(push_constant) uniform Push { uint material; uint object; } pc;
+layout(push_constant) uniform GbufferPushBlock { GbufferPush pc; };
 layout(location = 0) in vec3 in_position;
 layout(location = 1) in vec3 in_normal;
 layout(location = 2) in vec2 in_checker_uv;

@@ -9,11 +9,7 @@ layout(set = 1, binding = BINDING_GBUF_NORMAL) uniform sampler2D gbuf_normal;
 layout(set = 1, binding = BINDING_GBUF_ALBEDO) uniform sampler2D gbuf_albedo;
 layout(set = 1, binding = BINDING_GBUF_DEPTH) uniform sampler2D gbuf_depth;
 layout(set = 1, binding = BINDING_LIGHTMAPS) uniform sampler2DArray lightmaps;
-layout(push_constant) uniform Push {
-    vec4 origin;   // xyz: the chart's (u, v) = (0, 0) corner; w: light-map slot
-    vec4 edge_u;   // xyz: edge to u = 1, w: object index
-    vec4 edge_v;   // xyz: edge to v = 1
-} pc;
+layout(push_constant) uniform LightmapApplyPushBlock { LightmapApplyPush pc; };
 layout(location = 0) in vec2 in_uv;
 layout(location = 0) out vec4 out_radiance;
 void main() {

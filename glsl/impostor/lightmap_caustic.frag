@@ -32,7 +32,7 @@ void no_hit() {
 }
 
 void main() {
-    Material m = materials[uint(pc.intensity.w + 0.5)];
+    GpuMaterial m = materials[uint(pc.intensity.w + 0.5)];
     uint kind = kind_of(m);
     vec3 p = in_position;
     bool point_light = uint(pc.light.w + 0.5) == LIGHT_POINT;

@@ -1,11 +1,9 @@
 #version 450
+#include "prism_shared.glsl"
 // Gaussian filter weight of a photon splat (Szirmay-Kalos et al. 2005, §5: "The filter
 // texture corresponds to Gaussian filtering in texture space"), additively blended into the
 // light map: irradiance in W/m^2 (the BRDF is applied when the light map is read).
-layout(push_constant) uniform Push {
-    vec4 params;   // x: filter radius (light-map texels)
-    uvec4 info;
-} pc;
+layout(push_constant) uniform LightmapSplatPushBlock { LightmapSplatPush pc; };
 layout(location = 0) flat in vec3 in_irradiance;
 layout(location = 1) flat in vec2 in_center;
 layout(location = 0) out vec4 out_irradiance;

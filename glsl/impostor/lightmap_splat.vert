@@ -10,10 +10,7 @@
 #include "common.glsl"
 layout(set = 0, binding = LIGHTMAP_BINDING_PHOTON_HIT) uniform sampler2D photon_hit;
 layout(set = 0, binding = LIGHTMAP_BINDING_PHOTON_POWER) uniform sampler2D photon_power;
-layout(push_constant) uniform Push {
-    vec4 params;   // x: filter radius (light-map texels), y: light-map size, z: 1 / texel area (m^-2)
-    uvec4 info;    // x: this light map's slot, y: caustic map size
-} pc;
+layout(push_constant) uniform LightmapSplatPushBlock { LightmapSplatPush pc; };
 layout(location = 0) flat out vec3 out_irradiance;   // power / texel area / weight sum
 layout(location = 1) flat out vec2 out_center;       // splat centre in light-map pixels
 

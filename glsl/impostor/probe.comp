@@ -14,10 +14,7 @@ layout(constant_id = 1) const uint DISTANCE_CHANNEL = 3;
 layout(local_size_x = WORKGROUP_2D * WORKGROUP_2D) in;
 layout(set = 0, binding = BINDING_IMPOSTOR_PROBE, std430) buffer Records { vec4 records[]; };
 layout(set = 0, binding = BINDING_IMPOSTOR_DISTANCE) uniform samplerCube dist_map;
-layout(push_constant) uniform Push {
-    vec4 reference;   // xyz: the map's reference point
-    uvec4 info;       // x: record count, y: mode
-} pc;
+layout(push_constant) uniform ImpostorProbePushBlock { ImpostorProbePush pc; };
 
 void main() {
     uint i = gl_GlobalInvocationID.x;

@@ -21,7 +21,7 @@ void main() {
     uint mat = uint(nm.w + 0.5);
     if (material_kind(mat) != MATERIAL_DIELECTRIC) discard;
     if (!impostor_owns(px)) discard;
-    Material m = materials[mat];
+    GpuMaterial m = materials[mat];
     vec3 V = camera_ray(in_uv);
     vec3 N = normalize(nm.xyz);
     // The camera inside the refractor sees its back faces: one interface, leaving it.

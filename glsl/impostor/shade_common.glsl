@@ -17,11 +17,7 @@ layout(set = 1, binding = BINDING_GBUF_ALBEDO) uniform sampler2D gbuf_albedo;
 layout(set = 1, binding = BINDING_IMPOSTOR_RADIANCE) uniform samplerCube impostor_radiance;
 // The radiance cube itself unless the distance is separate (DISTANCE_CHANNEL picks).
 layout(set = 1, binding = BINDING_IMPOSTOR_DISTANCE) uniform samplerCube impostor_dist;
-layout(push_constant) uniform Push {
-    vec4 env_reference;     // xyz: reference point o of the environment impostor
-    vec4 refractor_center;  // xyz: centre of the refractor map (refraction only)
-    uvec4 object;           // x: the object whose map this draw uses, or ALL_OBJECTS (shared map)
-} pc;
+layout(push_constant) uniform ShadePushBlock { ShadePush pc; };
 
 const uint ALL_OBJECTS = 0xffffffffu;
 
@@ -43,7 +39,7 @@ vec3 localized_radiance(vec3 p, vec3 R) {
 }
 
 // Reflectance of a mirror or conductor for cos_i = N.R.
-vec3 metal_reflectance(Material m, uint kind, float cos_i) {
+vec3 metal_reflectance(GpuMaterial m, uint kind, float cos_i) {
     if (kind == MATERIAL_MIRROR) return m.spec_a.rgb;
     return FRESNEL_EXACT != 0u ? fresnel_conductor(cos_i, m.spec_a.rgb, m.spec_b.rgb)
                                : fresnel_conductor_approx(cos_i, m.spec_a.rgb, m.spec_b.rgb);

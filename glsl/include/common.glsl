@@ -5,19 +5,12 @@
 
 const float PI = 3.14159265358979323846;
 
-// Mirrors renderer::gpu_types::GpuMaterial.
-struct Material {
-    vec4 albedo_a;   // diffuse: rgb albedo (or checker colour a); w: kind
-    vec4 albedo_b;   // checker colour b; w: checker size in metres (0: constant albedo)
-    vec4 spec_a;     // dielectric: rgb ior | mirror: rgb reflectance | conductor: rgb eta
-    vec4 spec_b;     // dielectric: rgb absorption per metre | conductor: rgb k
-};
 
-uint kind_of(Material m) { return uint(m.albedo_a.w + 0.5); }
+uint kind_of(GpuMaterial m) { return uint(m.albedo_a.w + 0.5); }
 
 // Diffuse albedo at checker coordinates st (SCENES.md: colour a where
 // floor(s/size) + floor(t/size) is even).
-vec3 albedo_at(Material m, vec2 st) {
+vec3 albedo_at(GpuMaterial m, vec2 st) {
     if (m.albedo_b.w <= 0.0) return m.albedo_a.rgb;
     vec2 c = floor(st / m.albedo_b.w);
     return (mod(c.x + c.y, 2.0) == 0.0) ? m.albedo_a.rgb : m.albedo_b.rgb;

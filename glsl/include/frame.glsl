@@ -1,33 +1,13 @@
 // Set 0, shared by every pass: frame uniforms, materials, environment, shadow maps.
-// Layouts mirror src/frame/gpu_types.rs (std140 / std430, vec4 members only).
 #ifndef PRISM_FRAME_GLSL
 #define PRISM_FRAME_GLSL
 #include "common.glsl"
 
-struct Light {
-    vec4 position;    // xyz: position (point) or unit direction light -> scene (directional); w: kind
-    vec4 intensity;   // rgb: intensity W/sr (point) or irradiance W/m^2 (directional); w: first shadow layer
-    vec4 shadow;      // x: near, y: far, z: normal-offset bias per metre of distance, w: 1/resolution
-    vec4 origin;      // directional: origin of the distance plane
-    mat4 view_proj;   // directional: world -> orthographic light clip space
-};
-
-layout(set = 0, binding = BINDING_FRAME, std140) uniform Frame {
-    mat4 view;
-    mat4 proj;
-    mat4 view_proj;
-    mat4 inv_view_proj;
-    mat4 inv_view;
-    vec4 camera_position;  // w: exposure
-    vec4 clip;             // x: near plane distance of the reversed-Z infinite projection
-    vec4 viewport;         // w, h, 1/w, 1/h
-    vec4 env_sh[9];        // irradiance SH (Ramamoorthi & Hanrahan 2001), rgb
-    uvec4 info;            // x: light count, y: frame index
-    Light lights[MAX_LIGHTS];
-} frame;
+// FrameUniforms and GpuLight: src/shader_structs.rs (std140).
+layout(set = 0, binding = BINDING_FRAME, std140) uniform FrameBlock { FrameUniforms frame; };
 
 layout(set = 0, binding = BINDING_MATERIALS, std430) readonly buffer Materials {
-    Material materials[];
+    GpuMaterial materials[];
 };
 
 layout(set = 0, binding = BINDING_ENVIRONMENT) uniform sampler2D environment_map;
@@ -41,7 +21,7 @@ layout(set = 0, binding = BINDING_CAUSTIC_2D) uniform sampler2DArray caustic_lay
 // per receiver rectangle, and the rectangles.
 #include "photon_rect.glsl"
 layout(set = 0, binding = BINDING_PHOTON_CAUSTICS) uniform sampler2DArray photon_caustics;
-layout(set = 0, binding = BINDING_PHOTON_RECTS, std430) readonly buffer PhotonRects { PhotonRect photon_rects[]; };
+layout(set = 0, binding = BINDING_PHOTON_RECTS, std430) readonly buffer PhotonRects { GpuPhotonRect photon_rects[]; };
 
 uint material_kind(uint m) { return kind_of(materials[m]); }
 

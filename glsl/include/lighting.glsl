@@ -12,7 +12,7 @@
 // 1 if p is lit by light i, 0 if in shadow. The lookup point is pushed along the normal by
 // a bias proportional to the distance (one shadow texel subtends distance/resolution).
 float visibility(uint i, vec3 p, vec3 n) {
-    Light l = frame.lights[i];
+    GpuLight l = frame.lights[i];
     float layer = l.intensity.w;
     if (uint(l.position.w + 0.5) == LIGHT_POINT) {
         vec3 d = p - l.position.xyz;
@@ -36,7 +36,7 @@ float visibility(uint i, vec3 p, vec3 n) {
 vec3 diffuse_radiance(vec3 p, vec3 n, vec3 albedo) {
     vec3 irradiance = environment_irradiance(n);
     for (uint i = 0u; i < frame.info.x; ++i) {
-        Light l = frame.lights[i];
+        GpuLight l = frame.lights[i];
         vec3 wi;
         vec3 e;
         if (uint(l.position.w + 0.5) == LIGHT_POINT) {

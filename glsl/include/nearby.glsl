@@ -11,19 +11,10 @@
 #include "frame.glsl"
 #include "environment.glsl"
 
-struct NearbyRect {
-    mat4 view_proj;  // world -> clip of glOrtho(-d_i, d_i, -d_i, d_i, near, far) from O_R to O_i
-    vec4 center;     // xyz: O_i; w: d_i (half the square's side)
-    vec4 axis;       // xyz: unit O_R -> O_i (rectangle normal, projection direction); w: near
-    vec4 axis_u;     // xyz: world direction of growing u; w: far (TEX_DEPTH of empty texels)
-    vec4 axis_v;     // xyz: world direction of growing v (the shared up vector); w: layer
-};
 
 layout(set = 1, binding = BINDING_NEARBY_RECTS, std430) readonly buffer NearbyRects {
-    uvec4 nearby_info;                       // x: rectangles over all sets, y: sets (0: environment only)
-    uvec4 nearby_sets[MAX_NEARBY_SETS];      // x: first rectangle, y: count, z: OBJ_R's object index
-    vec4 nearby_origins[MAX_NEARBY_SETS];    // xyz: O_R of the set
-    NearbyRect nearby_rects[];
+    GpuNearbyHeader nearby_header;
+    GpuNearbyRect nearby_rects[];
 };
 // TEX_i (rgb: radiance) and TEX_DEPTH_i (a: axial distance dot(p - O_R, n_i)), layer i.
 layout(set = 1, binding = BINDING_NEARBY_TEXTURE) uniform sampler2DArray nearby_tex;
@@ -35,15 +26,15 @@ const uint NEARBY_NO_SET = 0xffffffffu;
 uint nearby_set = NEARBY_NO_SET;
 
 bool nearby_has_set() {
-    return nearby_set < min(nearby_info.y, MAX_NEARBY_SETS);
+    return nearby_set < min(nearby_header.info.y, MAX_NEARBY_SETS);
 }
 
 // Select the set whose OBJ_R is `object` (the G-buffer's albedo.a); false (environment
 // only) when the object has none.
 bool nearby_select_object(uint object) {
     nearby_set = NEARBY_NO_SET;
-    for (uint s = 0u; s < min(nearby_info.y, MAX_NEARBY_SETS); ++s) {
-        if (nearby_sets[s].z == object) {
+    for (uint s = 0u; s < min(nearby_header.info.y, MAX_NEARBY_SETS); ++s) {
+        if (nearby_header.sets[s].z == object) {
             nearby_set = s;
             return true;
         }
@@ -55,7 +46,7 @@ bool nearby_select_object(uint object) {
 // Rays parallel to the plane (|cos| <= 1e-6) miss: no division by ~0. Mirrors
 // NearbyRect::intersect (CPU, unit-tested).
 bool nearby_rect_hit(uint k, vec3 P, vec3 Ray, out float t, out vec2 uv) {
-    NearbyRect r = nearby_rects[k];
+    GpuNearbyRect r = nearby_rects[k];
     t = 0.0;
     uv = vec2(0.0);
     float c = dot(Ray, r.axis.xyz);
@@ -71,7 +62,7 @@ bool nearby_rect_hit(uint k, vec3 P, vec3 Ray, out float t, out vec2 uv) {
 // point's own depth z (axial distance from O_R, the same quantity the texture stores).
 vec3 nearby_project(uint k, vec3 p) {
     vec4 clip = nearby_rects[k].view_proj * vec4(p, 1.0);
-    return vec3(clip.xy * 0.5 + 0.5, dot(p - nearby_origins[nearby_set].xyz, nearby_rects[k].axis.xyz));
+    return vec3(clip.xy * 0.5 + 0.5, dot(p - nearby_header.origins[nearby_set].xyz, nearby_rects[k].axis.xyz));
 }
 
 bool nearby_inside(vec2 uv) {
@@ -92,7 +83,7 @@ bool nearby_covered(uint k, vec4 texel) {
 // The colour of RECT_k along the ray, found by Figs. 16-17 from the rectangle hit t_rect =
 // d_far. False where the texel finally looked up is empty (the ray passes beside OBJ_k).
 bool nearby_lookup(uint k, vec3 P, vec3 Ray, float t_rect, vec2 uv_rect, out vec3 color, out float dist) {
-    NearbyRect r = nearby_rects[k];
+    GpuNearbyRect r = nearby_rects[k];
     float d_i = r.center.w;
     vec2 uv = uv_rect;
     dist = t_rect;
@@ -148,8 +139,8 @@ bool nearby_hit(vec3 P, vec3 Ray, out vec3 color, out float dist) {
     color = vec3(0.0);
     dist = 1e30;
     if (!nearby_has_set()) return false;
-    uint first = nearby_sets[nearby_set].x;
-    uint n = min(nearby_sets[nearby_set].y, MAX_NEARBY_RECTS);
+    uint first = nearby_header.sets[nearby_set].x;
+    uint n = min(nearby_header.sets[nearby_set].y, MAX_NEARBY_RECTS);
     uint end = first + n;
     float last = -1.0;
     for (uint pass = 0u; pass < n; ++pass) {

@@ -124,7 +124,7 @@ bool exit_on_layers(vec3 P1, vec3 T1, out float d, out vec3 N2) {
 // centre and half-size: T1 leaves where it leaves that sphere, with the sphere's normal. The
 // sphere is exact for a ball (up to its tessellation); for other shapes its exit lies further
 // out than the true one.
-vec3 dielectric_texel(vec3 P1, vec3 N1, Material m) {
+vec3 dielectric_texel(vec3 P1, vec3 N1, GpuMaterial m) {
     vec3 V = pc.axis.xyz;
     vec3 ior = max(m.spec_a.rgb, vec3(1e-6));
     float cos_i = clamp(-dot(V, N1), 0.0, 1.0);
@@ -184,7 +184,7 @@ void main() {
         // The parallel projection's eye ray is +axis everywhere.
         vec3 R = reflect(pc.axis.xyz, n);
         float cos_i = clamp(-dot(pc.axis.xyz, n), 0.0, 1.0);
-        Material m = materials[mat];
+        GpuMaterial m = materials[mat];
         vec3 F = kind == MATERIAL_MIRROR ? m.spec_a.rgb : fresnel_conductor(cos_i, m.spec_a.rgb, m.spec_b.rgb);
         radiance = F * seen_from(in_position, R);
     } else if (kind == MATERIAL_DIELECTRIC) {

@@ -45,7 +45,7 @@ void main() {
             break;
         }
         Surface s = surface_at(o, d, h);
-        Material m = materials[s.material];
+        GpuMaterial m = materials[s.material];
         if (kind_of(m) != MATERIAL_DIFFUSE) {
             if (!specular_step(s, o, d, beta, h.t, channel, rand(rng), true)) break;
             continue;

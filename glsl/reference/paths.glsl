@@ -31,7 +31,7 @@ vec3 environment_through_specular(vec3 o, vec3 d, int channel, inout uint rng) {
 // (2) environment light arriving through any specular chain (one cosine-weighted sample).
 // Returns the shading normal facing the side the path arrived from.
 vec3 gather_diffuse(Surface s, vec3 d, vec3 beta, int channel, inout uint rng, inout vec3 L) {
-    Material m = materials[s.material];
+    GpuMaterial m = materials[s.material];
     vec3 n = dot(d, s.ns) < 0.0 ? s.ns : -s.ns;
     vec3 ng = dot(d, s.ng) < 0.0 ? s.ng : -s.ng;
     vec3 albedo = albedo_at(m, s.st);

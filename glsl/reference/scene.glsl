@@ -6,14 +6,9 @@
 
 layout(local_size_x = REF_WORKGROUP) in;
 
-layout(push_constant) uniform RefPush {
-    uint iteration;
-    uint seed;
-    uint mode;      // test kernels: what to do
-    uint count;     // test kernels: number of inputs
-} push;
+layout(push_constant) uniform RefPushBlock { RefPush push; };
 
-layout(set = 0, binding = REF_BINDING_MATERIALS, std430) readonly buffer Materials { Material materials[]; };
+layout(set = 0, binding = REF_BINDING_MATERIALS, std430) readonly buffer Materials { GpuMaterial materials[]; };
 layout(set = 0, binding = REF_BINDING_ENVIRONMENT) uniform sampler2D environment_map;
 
 vec3 environment(vec3 d) { return environment_lookup(environment_map, d); }

@@ -5,12 +5,6 @@
 #define PRISM_REFERENCE_SPPM_GLSL
 #include "scene.glsl"
 
-struct PixelState {
-    vec4 tau_n;      // accumulated flux tau (rgb) and photon count N
-    vec4 vp_pos;     // this iteration's visible point; w: gathering radius R
-    vec4 vp_normal;  // its normal, facing the camera path; w: 1 if there is one
-    vec4 vp_weight;  // camera path throughput times the diffuse BRDF, beta * albedo / pi
-};
 
 struct Photon {
     vec4 pos;        // w: next photon in the same grid bucket (uint bits; 0xffffffff ends)

@@ -13,38 +13,19 @@
 #define REF_SET 0
 #endif
 
-struct RefLight {
-    vec4 position;   // xyz: position (point) or unit direction light -> scene (directional); w: kind
-    vec4 intensity;  // rgb: W/sr (point) or W/m^2 (directional)
-};
 
-// A storage block (std430, the same layout as std140 for these vec4 members): the fragment
-// pass binds it with its other storage buffers.
-layout(set = REF_SET, binding = REF_BINDING_UNIFORMS, std430) readonly buffer RefUniforms {
-    mat4 inv_view;        // camera to world
-    vec4 camera_pos;
-    vec4 proj;            // x: tan(fov_x / 2), y: tan(fov_y / 2), z: ray epsilon, w: scene radius
-    uvec4 dims;           // x: width, y: height, z: light count, w: sphere count
-    uvec4 counts;         // x: triangles, y: BVH nodes, z: photon targets, w: max specular bounces
-    uvec4 photon;         // x: photons per iteration, y: photon capacity, z: grid table size, w: flags
-    vec4 grid;            // x: cell size, y: initial radius, z: SPPM alpha; w: raytrace cutoff
-    RefLight lights[MAX_LIGHTS];
-    vec4 targets[REF_MAX_TARGETS];   // specular objects' bounding spheres (centre, radius)
-    vec4 volume[6];                  // the [volume], see volume.glsl (volume[0].w = 0: none)
-} ref;
+// A storage block: the fragment pass binds it with its other storage buffers.
+layout(set = REF_SET, binding = REF_BINDING_UNIFORMS, std430) readonly buffer RefUniformsBlock { RefUniforms ref; };
 
 // photon.w flags
 const uint REF_FLAG_DISPERSION = 1u;   // some dielectric has an RGB ior: trace one channel per path
 const uint REF_FLAG_JITTER = 2u;       // supersample the pixel area (default: pixel centres)
 
-struct Vertex { float px, py, pz, nx, ny, nz, u, v; };
-struct Node { vec4 lo_index; vec4 hi_count; };   // index/count as float bits
-struct Sphere { vec4 center_radius; uvec4 info; };  // info.x: object
 
 layout(set = REF_SET, binding = REF_BINDING_VERTICES, std430) readonly buffer Vertices { Vertex vertices[]; };
 layout(set = REF_SET, binding = REF_BINDING_TRIANGLES, std430) readonly buffer Triangles { uvec4 triangles[]; };  // i0, i1, i2, object
-layout(set = REF_SET, binding = REF_BINDING_NODES, std430) readonly buffer Nodes { Node nodes[]; };
-layout(set = REF_SET, binding = REF_BINDING_SPHERES, std430) readonly buffer Spheres { Sphere spheres[]; };
+layout(set = REF_SET, binding = REF_BINDING_NODES, std430) readonly buffer Nodes { BvhNode nodes[]; };
+layout(set = REF_SET, binding = REF_BINDING_SPHERES, std430) readonly buffer Spheres { GpuSphere spheres[]; };
 layout(set = REF_SET, binding = REF_BINDING_OBJECTS, std430) readonly buffer Objects { uint object_material[]; };
 
 // ---------------------------------------------------------------------------------------
@@ -65,9 +46,9 @@ float rand(inout uint state) {
 
 // ---------------------------------------------------------------------------------------
 // Intersection. Möller-Trumbore, the same arithmetic as bvh::intersect_triangle on the CPU.
-vec3 vertex_position(uint i) { Vertex v = vertices[i]; return vec3(v.px, v.py, v.pz); }
-vec3 vertex_normal(uint i) { Vertex v = vertices[i]; return vec3(v.nx, v.ny, v.nz); }
-vec2 vertex_uv(uint i) { Vertex v = vertices[i]; return vec2(v.u, v.v); }
+vec3 vertex_position(uint i) { Vertex v = vertices[i]; return vec3(v.position[0], v.position[1], v.position[2]); }
+vec3 vertex_normal(uint i) { Vertex v = vertices[i]; return vec3(v.normal[0], v.normal[1], v.normal[2]); }
+vec2 vertex_uv(uint i) { Vertex v = vertices[i]; return vec2(v.checker_uv[0], v.checker_uv[1]); }
 
 // Any hit with t > 0; callers decide which hit wins.
 bool intersect_triangle(vec3 o, vec3 d, vec3 a, vec3 b, vec3 c, out float t, out vec2 uv) {
@@ -140,10 +121,10 @@ Hit trace_triangles(vec3 o, vec3 d, float t_max) {
     stack[sp++] = 0u;
     while (sp > 0) {
         uint i = stack[--sp];
-        Node n = nodes[i];
-        if (!slab(o, inv_d, n.lo_index.xyz, n.hi_count.xyz, h.t)) continue;
-        uint count = floatBitsToUint(n.hi_count.w);
-        uint index = floatBitsToUint(n.lo_index.w);
+        BvhNode n = nodes[i];
+        if (!slab(o, inv_d, n.lo, n.hi, h.t)) continue;
+        uint count = n.count;
+        uint index = n.index;
         if (count > 0u) {
             for (uint k = index; k < index + count; ++k) {
                 uvec4 tri = triangles[k];
@@ -204,7 +185,7 @@ struct Surface {
 Surface surface_at(vec3 o, vec3 d, Hit h) {
     Surface s;
     if (h.kind == 2u) {
-        Sphere sp = spheres[h.prim];
+        GpuSphere sp = spheres[h.prim];
         s.p = o + h.t * d;
         s.ng = normalize(s.p - sp.center_radius.xyz);
         s.ns = s.ng;
@@ -254,7 +235,7 @@ struct Interaction {
 // `radiance_scale`: camera and gathering paths carry radiance, scaled by (n_i/n_t)^2 on
 // transmission; photons carry flux and pass false. Returns false at a diffuse surface.
 bool interaction_at(Surface s, vec3 d, float t_segment, int channel, bool radiance_scale, out Interaction x) {
-    Material m = materials[s.material];
+    GpuMaterial m = materials[s.material];
     uint kind = kind_of(m);
     bool exiting = dot(d, s.ng) > 0.0;
     vec3 n = exiting ? -s.ns : s.ns;              // shading normal facing the incoming ray

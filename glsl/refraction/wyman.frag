@@ -31,7 +31,7 @@ void main() {
     vec4 nm = texelFetch(gbuf_normal, px, 0);
     uint mat = uint(nm.w + 0.5);
     if (material_kind(mat) != MATERIAL_DIELECTRIC) discard;
-    Material m = materials[mat];
+    GpuMaterial m = materials[mat];
     vec3 ior = max(m.spec_a.rgb, vec3(1e-6));
     vec3 V = camera_ray(in_uv);
     vec3 N1 = normalize(nm.xyz);

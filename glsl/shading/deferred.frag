@@ -25,7 +25,7 @@ layout(location = 0) out vec4 out_radiance;
 // texel of solid angle dOmega at distance r, (texel size)^2 / |cos| for the orthographic
 // map, cos between the receiver normal and the light direction.
 vec3 caustic_irradiance(uint i, vec3 p, vec3 n) {
-    Light l = frame.lights[i];
+    GpuLight l = frame.lights[i];
     float layer = l.intensity.w;
     float size = float(textureSize(caustic_layers, 0).x);
     int k = int(CAUSTIC_FILTER);
@@ -74,7 +74,7 @@ vec3 caustic_irradiance(uint i, vec3 p, vec3 n) {
 // caller).
 vec3 photon_caustic(vec3 p, vec3 n, uint object) {
     for (uint i = 0u; i < PHOTON_RECTS; ++i) {
-        PhotonRect r = photon_rects[i];
+        GpuPhotonRect r = photon_rects[i];
         if (r.object.x != object) continue;
         vec2 uv = rect_uv(r, p);
         if (any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0)))) return vec3(0.0);

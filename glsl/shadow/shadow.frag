@@ -3,11 +3,7 @@
 // (directional). Comparing distances instead of projected depth lets one lookup rule serve
 // the six faces of a cube and the orthographic map alike.
 #include "prism_shared.glsl"
-layout(push_constant) uniform Push {
-    mat4 view_proj;
-    vec4 light;
-    vec4 origin;
-} pc;
+layout(push_constant) uniform ShadowPushBlock { ShadowPush pc; };
 layout(location = 0) in vec3 in_position;
 layout(location = 0) out float out_distance;
 void main() {

@@ -1,10 +1,7 @@
 #version 450
+#include "prism_shared.glsl"
 // Light-space vertex transform for one shadow-map face.
-layout(push_constant) uniform Push {
-    mat4 view_proj;   // world -> face clip space
-    vec4 light;       // xyz: position (point) or direction (directional); w: kind
-    vec4 origin;      // directional: origin of the distance plane
-} pc;
+layout(push_constant) uniform ShadowPushBlock { ShadowPush pc; };
 layout(location = 0) in vec3 in_position;
 layout(location = 1) in vec3 in_normal;
 layout(location = 2) in vec2 in_checker_uv;

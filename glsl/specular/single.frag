@@ -23,7 +23,7 @@ void main() {
     bool metal = kind == MATERIAL_MIRROR || kind == MATERIAL_CONDUCTOR;
     if ((MODE == SPECULAR_MODE_REFRACTION && !dielectric) || (MODE == SPECULAR_MODE_REFLECTION && !metal)) discard;
 
-    Material m = materials[mat];
+    GpuMaterial m = materials[mat];
     vec3 I = camera_ray(in_uv);
     vec3 n = normalize(nm.xyz);
     bool inside = dot(I, n) > 0.0;     // the camera sees a back face: it is inside the object

@@ -6,12 +6,6 @@
 #define PRISM_TONEMAP_ADAPTIVE_GLSL
 #include "prism_shared.glsl"
 
-// Push constants of log_average.comp and adapt.comp (src/technique/baseline/tonemap.rs, `AdaptPush`).
-struct AdaptPush {
-    uvec4 size;        // width, height, workgroups of log_average, frame slot (stats entry)
-    vec4 params;       // dt in s (< 0: converged, no temporal state), delta, key (<= 0: auto), white (<= 0: auto)
-    vec4 params2;      // tau_rod, tau_cone, luminance_scale (cd/m^2 per unit), exposure
-};
 
 // Radiance beyond this is read as this, so that no luminance sum or product can overflow
 // a float (the brightest real scene luminance, the sun's disc, is about 1.6e9 cd/m^2).

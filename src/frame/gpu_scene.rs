@@ -13,8 +13,8 @@ use crate::{
 };
 use crate::{MAX_LIGHTS, SHADOW_LAYERS_PER_LIGHT};
 
-use super::gpu_types::{GpuLight, GpuMaterial, Vertex};
 use super::RenderError;
+use crate::shader_structs::{GpuLight, GpuMaterial, Vertex};
 
 /// One indexed draw of one object.
 #[derive(Clone, Copy, Debug)]

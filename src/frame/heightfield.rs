@@ -8,7 +8,6 @@
 //! up to date with a full update when the animation stops.
 use std::sync::Arc;
 
-use bytemuck::{Pod, Zeroable};
 use glam::{Mat3, Mat4};
 
 use crate::gpu::{vk, Access, Buffer, ComputePipeline, GpuContext};
@@ -18,27 +17,9 @@ use crate::{HEIGHTFIELD_BINDING_FIELDS, HEIGHTFIELD_BINDING_VERTICES, HEIGHTFIEL
 
 use super::gpu_scene::GpuScene;
 use super::RenderError;
+use crate::shader_structs::{GpuHeightfield, HeightfieldPush};
 
 pub const WATER_ANIMATION: &str = "water_animation";
-
-/// `Field` of heightfield.comp.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-struct GpuField {
-    transform: [f32; 16],
-    normal_matrix: [f32; 16],
-    center: [f32; 4],
-    size_cells: [f32; 4],
-    ranges: [u32; 4],
-}
-const _: () = assert!(std::mem::size_of::<GpuField>() == 176);
-
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
-struct Push {
-    field: u32,
-    time: f32,
-}
 
 pub struct HeightfieldAnimation {
     /// Per heightfield: its grid's cells (nx, nz).
@@ -56,9 +37,9 @@ impl HeightfieldAnimation {
         for (o, draw) in scene.objects.iter().zip(&gpu.draws) {
             let Some(h) = &o.heightfield else { continue };
             let [nx, nz] = h.cells();
-            fields.push(GpuField {
-                transform: h.transform.to_cols_array(),
-                normal_matrix: Mat4::from_mat3(Mat3::from_mat4(h.transform).inverse().transpose()).to_cols_array(),
+            fields.push(GpuHeightfield {
+                transform: h.transform.to_cols_array_2d(),
+                normal_matrix: Mat4::from_mat3(Mat3::from_mat4(h.transform).inverse().transpose()).to_cols_array_2d(),
                 center: h.center.extend(0.0).to_array(),
                 size_cells: [h.size.x, h.size.y, nx as f32, nz as f32],
                 ranges: [draw.vertex_offset as u32, (waves.len() / 2) as u32, h.waves.len() as u32, 0],
@@ -82,7 +63,7 @@ impl HeightfieldAnimation {
             .storage(HEIGHTFIELD_BINDING_WAVES, &wave_buffer)
             .storage(HEIGHTFIELD_BINDING_VERTICES, &gpu.vertices)
             .build(ctx, WATER_ANIMATION)?;
-        let push = std::mem::size_of::<Push>() as u32;
+        let push = std::mem::size_of::<HeightfieldPush>() as u32;
         let pipeline =
             ComputePipeline::new(ctx, WATER_ANIMATION, "common/heightfield.comp", &[set.layout()], push, &[])?;
         Ok(Some(HeightfieldAnimation { cells, _fields: field_buffer, _waves: wave_buffer, set, pipeline }))
@@ -96,7 +77,7 @@ impl HeightfieldAnimation {
             cmd.buffer_barrier(vertices, Access::VertexData, Access::ComputeWrite);
             cmd.bind_compute(&self.pipeline, &[self.set.set()]);
             for (field, [nx, nz]) in self.cells.iter().enumerate() {
-                cmd.push_compute(&self.pipeline, &Push { field: field as u32, time });
+                cmd.push_compute(&self.pipeline, &HeightfieldPush { field: field as u32, time });
                 cmd.dispatch((nx + 1).div_ceil(WORKGROUP_2D), (nz + 1).div_ceil(WORKGROUP_2D), 1);
             }
             cmd.buffer_barrier(vertices, Access::ComputeWrite, Access::VertexData);

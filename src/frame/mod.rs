@@ -1,8 +1,6 @@
 //! What every technique of a frame shares: the scene's GPU data ([`gpu_scene`]), the
-//! frame's render targets ([`targets`]), the host structs the shaders read ([`gpu_types`]),
-//! and the error creating any of them returns.
+//! frame's render targets ([`targets`]) and the error creating any of them returns.
 pub mod gpu_scene;
-pub mod gpu_types;
 pub mod heightfield;
 pub mod targets;
 

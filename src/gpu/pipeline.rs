@@ -162,7 +162,7 @@ destroy_on_drop!(
 pub enum VertexLayout {
     /// No vertex buffers (full-screen triangle, points generated from gl_VertexIndex).
     None,
-    /// `crate::renderer::Vertex`: position vec3, normal vec3, checker uv vec2 (32 bytes).
+    /// `crate::shader_structs::Vertex`: position vec3, normal vec3, checker uv vec2 (32 bytes).
     Mesh,
 }
 

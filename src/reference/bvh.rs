@@ -5,7 +5,7 @@
 //! Layout (mirrored by the shader): nodes in depth-first order, 32 bytes each. An interior
 //! node's left child is the next node and `index` is its right child; a leaf has `count > 0`
 //! triangles starting at `index` in the BVH-ordered triangle list.
-use bytemuck::{Pod, Zeroable};
+pub use crate::shader_structs::BvhNode;
 use glam::Vec3;
 
 /// Number of SAH bins per axis and the largest leaf.
@@ -13,18 +13,6 @@ const BINS: usize = 16;
 const MAX_LEAF: usize = 4;
 /// Relative cost of a ray-box test against a ray-triangle test in the SAH.
 const TRAVERSAL_COST: f32 = 1.0;
-
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
-pub struct BvhNode {
-    pub lo: [f32; 3],
-    /// Leaf: first triangle. Interior: right child.
-    pub index: u32,
-    pub hi: [f32; 3],
-    /// Triangle count; 0 for an interior node.
-    pub count: u32,
-}
-const _: () = assert!(std::mem::size_of::<BvhNode>() == 32);
 
 #[derive(Clone, Copy, Debug)]
 struct Aabb {

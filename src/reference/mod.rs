@@ -31,7 +31,7 @@ pub mod bvh;
 
 use std::sync::Arc;
 
-use bytemuck::{Pod, Zeroable};
+use bytemuck::Zeroable;
 use glam::{Mat4, Vec3};
 
 use crate::frame::gpu_scene::GpuScene;
@@ -41,6 +41,8 @@ use crate::graph::{Bindings, BoundSet, BufferId, FrameGraph};
 use crate::scene::{Analytic, Light, Material, Scene};
 use crate::*;
 
+pub use crate::shader_structs::RefUniforms;
+use crate::shader_structs::{GpuSphere, PixelState, RefLight, RefPush};
 use bvh::Bvh;
 
 /// How the reference is computed. The defaults give a converged image of the benchmark
@@ -109,31 +111,6 @@ impl ReferenceSettings {
     }
 }
 
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-struct RefLight {
-    position: [f32; 4],
-    intensity: [f32; 4],
-}
-// Two vec4s (glsl/reference/scene.glsl, std430).
-const _: () = assert!(std::mem::size_of::<RefLight>() == 32);
-
-/// The tracer's uniform block (glsl/reference/trace.glsl, `ref`).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-pub struct RefUniforms {
-    inv_view: [[f32; 4]; 4],
-    camera_pos: [f32; 4],
-    proj: [f32; 4],
-    dims: [u32; 4],
-    counts: [u32; 4],
-    photon: [u32; 4],
-    grid: [f32; 4],
-    lights: [RefLight; MAX_LIGHTS as usize],
-    targets: [[f32; 4]; REF_MAX_TARGETS as usize],
-    /// The scene's `[volume]` for glsl/reference/volume.glsl (zero: none).
-    volume: [[f32; 4]; 6],
-}
 impl RefUniforms {
     /// The raytrace technique's branch cutoff (glsl/raytrace/raytrace.frag; the reference
     /// leaves it 0).
@@ -213,26 +190,6 @@ fn volume_uniforms(volume: &crate::scene::Volume) -> [[f32; 4]; 6] {
     ]
 }
 
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-struct RefPush {
-    iteration: u32,
-    seed: u32,
-    mode: u32,
-    count: u32,
-}
-
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-struct PixelState {
-    tau_n: [f32; 4],
-    vp_pos: [f32; 4],
-    vp_normal: [f32; 4],
-    vp_weight: [f32; 4],
-}
-// Four vec4s (glsl/reference/sppm.glsl, std430).
-const _: () = assert!(std::mem::size_of::<PixelState>() == 64);
-
 const FLAG_DISPERSION: u32 = 1;
 const FLAG_JITTER: u32 = 2;
 
@@ -270,13 +227,15 @@ impl TraceGeometry {
         // Triangles of every object that is not an exact sphere, with global vertex indices.
         let mut tris: Vec<[u32; 4]> = Vec::new();
         let mut corners: Vec<[Vec3; 3]> = Vec::new();
-        let mut spheres: Vec<[f32; 8]> = Vec::new();
+        let mut spheres: Vec<GpuSphere> = Vec::new();
         let mut vertex_base = 0u32;
         for (oi, o) in scene.objects.iter().enumerate() {
             match o.analytic {
                 Some(Analytic::Sphere { center, radius }) => {
-                    let info = f32::from_bits(oi as u32);
-                    spheres.push([center.x, center.y, center.z, radius, info, 0.0, 0.0, 0.0]);
+                    spheres.push(GpuSphere {
+                        center_radius: center.extend(radius).to_array(),
+                        info: [oi as u32, 0, 0, 0],
+                    });
                 }
                 None => {
                     for t in o.mesh.indices.chunks_exact(3) {

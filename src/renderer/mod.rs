@@ -37,10 +37,10 @@ use crate::{
 };
 
 use crate::frame::gpu_scene::GpuScene;
-use crate::frame::gpu_types::{self, FrameUniforms};
 use crate::frame::heightfield::HeightfieldAnimation;
 use crate::frame::targets::Targets;
 pub use crate::frame::RenderError;
+use crate::shader_structs::{FrameUniforms, Vertex};
 use plan::PlannedPass;
 
 /// Frames the CPU may record ahead of the GPU; each has its own command buffer, fence,
@@ -751,10 +751,9 @@ impl Renderer {
         self.finish()?;
         let o = &mut self.objects[index];
         let offset = center - o.bounds.0;
-        let stride = std::mem::size_of::<gpu_types::Vertex>();
+        let stride = std::mem::size_of::<Vertex>();
         let range = o.first_vertex * stride..(o.first_vertex + o.vertex_count) * stride;
-        let mut vertices: Vec<gpu_types::Vertex> =
-            bytemuck::pod_collect_to_vec(&self.scene.vertices.read()[range.clone()]);
+        let mut vertices: Vec<Vertex> = bytemuck::pod_collect_to_vec(&self.scene.vertices.read()[range.clone()]);
         for v in &mut vertices {
             v.position = (Vec3::from(v.position) + offset).to_array();
         }

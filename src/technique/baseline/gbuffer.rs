@@ -8,6 +8,7 @@ use crate::gpu::{
     GraphicsPipelineDesc, RenderTarget,
 };
 use crate::graph::Frame;
+use crate::shader_structs::GbufferPush;
 use crate::technique::{no_inputs, FrameInputs, PlannedPass, Registration, RenderError, Setup, Stage, Technique};
 
 pub const GBUFFER: &str = "gbuffer";
@@ -47,7 +48,10 @@ impl Technique for GBufferPass {
                         cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
                         // `draws[i]` is object i.
                         for (object, d) in scene.draws.iter().enumerate() {
-                            cmd.push_graphics(&self.pipeline, &[d.material, object as u32]);
+                            cmd.push_graphics(
+                                &self.pipeline,
+                                &GbufferPush { material: d.material, object: object as u32 },
+                            );
                             cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
                         }
                     },

@@ -4,12 +4,12 @@
 use std::sync::Arc;
 
 use crate::frame::gpu_scene::{GpuScene, ShadowFace};
-use crate::frame::gpu_types::ShadowPush;
 use crate::frame::targets::Targets;
 use crate::gpu::{
     Access, Clear, DepthState, GpuContext, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, RenderTarget,
 };
 use crate::graph::Frame;
+use crate::shader_structs::ShadowPush;
 use crate::technique::{
     describe_lights, diffuse_names, list, placement, FrameInputs, PlannedPass, Registration, RenderError, Setup, Stage,
     Technique,

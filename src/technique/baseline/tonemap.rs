@@ -47,6 +47,7 @@ use crate::{
 };
 
 use super::fullscreen::{fragment_set, FullscreenDesc, FullscreenPass};
+use crate::shader_structs::AdaptPush;
 
 pub const TONEMAP: &str = "tonemap";
 /// The adaptive tone map (`render.tonemap = "adaptive"`): the log-average luminance by a
@@ -132,19 +133,6 @@ impl Technique for TonemapPass {
         self.pass.record(frame, frame_set, &[]);
     }
 }
-
-/// Push constants of glsl/tonemap/log_average.comp and adapt.comp (`AdaptPush`, std430).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
-struct AdaptPush {
-    /// width, height, workgroups of log_average, frame slot.
-    size: [u32; 4],
-    /// dt in s (< 0: converged), delta, key (<= 0: auto), white (<= 0: auto).
-    params: [f32; 4],
-    /// tau_rod, tau_cone, luminance_scale, exposure.
-    params2: [f32; 4],
-}
-const _: () = assert!(std::mem::size_of::<AdaptPush>() == 48);
 
 /// What the adaptive tone map derived for one frame (read back for display and tests).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

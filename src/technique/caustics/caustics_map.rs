@@ -26,11 +26,9 @@
 //! texel covers (glsl/shading/deferred.frag, `caustic_irradiance`), giving irradiance in
 //! W/m^2 comparable with the reference's photon-mapped caustics.
 
-use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
 
 use crate::frame::gpu_scene::{cube_face_views, Draw, GpuScene};
-use crate::frame::gpu_types::ShadowPush;
 use crate::frame::targets::{DEPTH_FORMAT, SHADOW_FORMAT};
 use crate::gpu::{
     vk, Access, Blend, Buffer, Clear, DepthState, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc,
@@ -39,6 +37,8 @@ use crate::gpu::{
 use crate::graph::{Bindings, BoundSet, BufferId, Frame, ImageId};
 use crate::scene::techniques::{CausticsMapParams, Flux, Newton};
 use crate::scene::{Light, Material, Scene};
+pub use crate::shader_structs::GpuCausticFace;
+use crate::shader_structs::{CausticSplatPush, RefractorPush, ShadowPush};
 use crate::technique::baseline::shadow_map::FAR_DISTANCE;
 use crate::technique::{
     caustic_objects, in_stage, list, params, registration, FrameInputs, PlannedPass, Registration, RenderError, Setup,
@@ -136,44 +136,11 @@ const LAYER_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 /// radius (or inside it) sees them over too wide an angle for one frustum: six cube faces.
 const FITTED_FRUSTUM_LIMIT: f32 = 0.9;
 
-/// One source face of the vertex grid (mirrors `Face` in glsl/caustics/splat.vert, std430).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-pub struct GpuCausticFace {
-    pub view_proj: [[f32; 4]; 4],
-    pub receiver_view_proj: [[f32; 4]; 4],
-    pub light: [f32; 4],
-    pub intensity: [f32; 4],
-    pub measure: [f32; 4],
-    pub origin: [f32; 4],
-}
-const _: () = assert!(std::mem::size_of::<GpuCausticFace>() == 192);
-
-/// Push constants of glsl/caustics/refractor.{vert,frag}.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-struct RefractorPush {
-    view_proj: [[f32; 4]; 4],
-    light: [f32; 4],
-    info: [u32; 4],
-}
-const _: () = assert!(std::mem::size_of::<RefractorPush>() <= 128);
-
-/// Push constants of glsl/caustics/splat.vert.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-struct SplatPush {
-    dest_view_proj: [[f32; 4]; 4],
-    face: [u32; 4],
-    params: [f32; 4],
-}
-const _: () = assert!(std::mem::size_of::<SplatPush>() <= 128);
-
 /// One layer of the caustic atlas to splat into, with the source faces of its light.
 /// A layer of the caustic atlas and what is splatted into it.
 struct Destination {
     layer: u32,
-    push: SplatPush,
+    push: CausticSplatPush,
 }
 
 /// A face of the receivers' distance atlas.
@@ -395,7 +362,7 @@ impl CausticsMapPass {
                 ..GraphicsPipelineDesc::fullscreen(CAUSTICS_MAP, "caustics/splat.frag")
             },
             &[set.layout()],
-            std::mem::size_of::<SplatPush>() as u32,
+            std::mem::size_of::<CausticSplatPush>() as u32,
             &splat_target.pass,
         )?;
         let dispersive = scene.materials.iter().any(|m| match m {
@@ -426,7 +393,7 @@ impl CausticsMapPass {
             for (layer, view_proj, cube_face) in dest {
                 destinations.push(Destination {
                     layer,
-                    push: SplatPush {
+                    push: CausticSplatPush {
                         dest_view_proj: view_proj.to_cols_array_2d(),
                         face: [first, count, cube_face, channels],
                         params: splat_params,

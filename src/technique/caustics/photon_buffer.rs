@@ -40,7 +40,7 @@
 //! rectangles (src/technique/refraction/nearby_impostors.rs, `rect_for`), see `receiver_rectangles`.
 use std::sync::Arc;
 
-use bytemuck::{Pod, Zeroable};
+use bytemuck::Zeroable;
 
 use crate::gpu::{
     vk, Access, Blend, Buffer, Clear, GpuContext, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc,
@@ -49,6 +49,8 @@ use crate::gpu::{
 use crate::graph::{Bindings, BoundSet, Frame, FrameGraph, ImageId};
 use crate::scene::techniques::{PhotonBufferParams, PhotonNormalization};
 use crate::scene::Scene;
+pub use crate::shader_structs::GpuPhotonRect;
+use crate::shader_structs::PhotonFilterPush;
 use crate::technique::caustics::caustics_map::{is_specular, refractor_bindings, RefractorLayers};
 use crate::technique::refraction::nearby_impostors::{nearby_objects, rect_for};
 use crate::technique::{
@@ -145,23 +147,6 @@ impl Technique for PhotonBufferPass {
         );
     }
 }
-
-/// One receiver rectangle RECT_i (mirrors `PhotonRect` in glsl/include/photon_rect.glsl,
-/// std430).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-pub struct GpuPhotonRect {
-    /// World -> RECT_i's parallel projection (clip xy in [-1, 1] on the rectangle).
-    pub view_proj: [[f32; 4]; 4],
-    /// xyz: unit O_R -> O_i, the rectangle's normal and the projection's direction; w: d_i.
-    pub axis: [f32; 4],
-    /// xyz: O_i; w: the receiver object's radius around O_i.
-    pub centre: [f32; 4],
-    /// x: the receiver's object index (deferred shading picks the rectangle of the object
-    /// the G-buffer names at each pixel); yzw unused.
-    pub object: [u32; 4],
-}
-const _: () = assert!(std::mem::size_of::<GpuPhotonRect>() == 112);
 
 /// Hu & Qin 2007 §2.2.1 (Fig. 12): RECT_i for the diffuse objects OBJ_i seen from O_R, as
 /// the nearby-geometry impostors build them (src/technique/refraction/nearby_impostors.rs: same O_i, d_i,
@@ -274,14 +259,6 @@ impl PhotonCaustics {
     }
 }
 
-/// Push constants of glsl/caustics/photon_filter.frag.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-struct FilterPush {
-    info: [i32; 4],
-    params: [f32; 4],
-}
-
 pub struct PhotonBufferPass {
     params: PhotonBufferParams,
     refractors: RefractorLayers,
@@ -304,7 +281,7 @@ pub struct PhotonBufferPass {
     filter_target: RenderTarget,
     filter_set: BoundSet,
     filter_pipeline: GraphicsPipeline,
-    filter_pushes: Vec<FilterPush>,
+    filter_pushes: Vec<PhotonFilterPush>,
     _faces: Buffer,
     _sampler: Sampler,
 }
@@ -383,7 +360,7 @@ impl PhotonBufferPass {
             ctx,
             &GraphicsPipelineDesc::fullscreen(PHOTON_BUFFER_FILTER, "caustics/photon_filter.frag"),
             &[filter_set.layout()],
-            std::mem::size_of::<FilterPush>() as u32,
+            std::mem::size_of::<PhotonFilterPush>() as u32,
             &filter_target.pass,
         )?;
         let filter_pushes = caustics
@@ -393,7 +370,7 @@ impl PhotonBufferPass {
             .map(|(i, r)| {
                 // A texel of TEX_CAUSTICS_i covers (2 d_i / T)^2 of the rectangle.
                 let texel = 2.0 * r.axis[3] / t as f32;
-                FilterPush {
+                PhotonFilterPush {
                     info: [i as i32, params.filter_k as i32, caustics.mode as i32, 0],
                     params: [params.filter_s, texel * texel, 0.0, 0.0],
                 }

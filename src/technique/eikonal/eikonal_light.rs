@@ -58,6 +58,8 @@ use crate::{
 
 use super::histopyramid::{HistoPyramid, HpState};
 use super::volume::{box_specs, prepare_volume, IndexField, RayState, VolumeTextures, LIGHT_BOX};
+pub use crate::shader_structs::Patch;
+use crate::shader_structs::RunPush;
 use crate::technique::baseline::fullscreen::{fragment_set, FullscreenDesc, FullscreenPass};
 
 /// §5.2's light simulation (run when the technique is created) and the diffuse receivers
@@ -75,20 +77,6 @@ pub const MAX_INITIAL_PATCHES: u32 = 900_000;
 
 /// Most steps of one simulation (a wavefront trapped by total internal reflection stops here).
 pub const MAX_LIGHT_STEPS: u32 = 1 << 16;
-
-/// One wavefront patch (glsl/eikonal/light_common.glsl `Patch`, std430).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct Patch {
-    /// Corner positions (w unused), in the order that makes
-    /// cross(x2 - x0, x3 - x1) point along the propagation.
-    pub x: [[f32; 4]; 4],
-    /// Corner optical directions v = n dx/ds (w unused).
-    pub v: [[f32; 4]; 4],
-    /// RGB flux dE * A in W (w unused).
-    pub flux: [f32; 4],
-}
-const _: () = assert!(std::mem::size_of::<Patch>() == 144);
 
 impl Patch {
     pub fn corner(&self, c: usize) -> Vec3 {
@@ -121,17 +109,6 @@ pub struct LightRun {
     pub end: usize,
     pub sign: f32,
 }
-
-/// glsl/eikonal/light_common.glsl `RunPush`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
-struct RunPush {
-    slab: u32,
-    sign: f32,
-    min_flux: f32,
-    pad: u32,
-}
-const _: () = assert!(std::mem::size_of::<RunPush>() == 16);
 
 /// What one run did.
 #[derive(Clone, Debug, Default, serde::Serialize)]

@@ -27,26 +27,8 @@ use glam::{Vec2, Vec3};
 use crate::reference::bvh::moller_trumbore;
 use crate::scene::techniques::EikonalNearby;
 use crate::scene::{Material, Scene};
+pub use crate::shader_structs::GpuTriangle;
 pub use crate::MAX_EIKONAL_TRIANGLES;
-
-/// One triangle of an exactly intersected receiver (glsl/eikonal/nearby_exit.glsl
-/// `EikTriangle`, std430): p0, the edges p1 - p0 and p2 - p0, the checker uv of the three
-/// corners and the material index.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct GpuTriangle {
-    /// xyz p0, w unused.
-    pub p0: [f32; 4],
-    /// xyz p1 - p0.
-    pub e1: [f32; 4],
-    /// xyz p2 - p0.
-    pub e2: [f32; 4],
-    /// uv0 (xy), uv1 (zw).
-    pub uv01: [f32; 4],
-    /// uv2 (xy), z: material index (as a float, exact below 2^24).
-    pub uv2: [f32; 4],
-}
-const _: () = assert!(std::mem::size_of::<GpuTriangle>() == 80);
 
 impl GpuTriangle {
     pub fn corners(&self) -> [Vec3; 3] {

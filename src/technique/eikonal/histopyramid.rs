@@ -18,32 +18,11 @@ use crate::gpu::{
     Spec,
 };
 use crate::graph::{Bindings, BoundSet, BufferId, Frame, FrameGraph};
+pub use crate::shader_structs::HpState;
 use crate::{
     LIGHT_BINDING_CLASSES, LIGHT_BINDING_HISTORY, LIGHT_BINDING_LEVELS, LIGHT_BINDING_PAIRS, LIGHT_BINDING_STATE,
     LIGHT_GROUP,
 };
-
-/// The device-side bookkeeping of glsl/eikonal/histopyramid.glsl (`State`, std430).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct HpState {
-    /// vkCmdDispatchIndirect groups over `next` (x, 1, 1) and one unused word.
-    pub args: [u32; 4],
-    /// Valid entries of level 0 (the input list's length).
-    pub count: u32,
-    /// Outputs of the last build (min(total, capacity)).
-    pub next: u32,
-    /// Outputs lost to the capacity clamp, summed over all builds.
-    pub dropped: u32,
-    /// Builds so far (the history index).
-    pub step: u32,
-    /// The largest `next` so far.
-    pub peak: u32,
-    /// The last unclamped total.
-    pub requested: u32,
-    pub pad: [u32; 2],
-}
-const _: () = assert!(std::mem::size_of::<HpState>() == 48);
 
 /// Lengths of levels 0 (the classes), 1, ..., top (length 1) for `capacity` entries.
 pub fn level_lengths(capacity: u32) -> Vec<u32> {

@@ -31,7 +31,6 @@
 //! index (glsl/gbuffer/gbuffer.frag).
 use std::sync::Arc;
 
-use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
 
 use crate::frame::gpu_scene::{cube_face_views, GpuScene};
@@ -43,6 +42,7 @@ use crate::gpu::{
 use crate::graph::{Bindings, BoundSet, Frame, FrameGraph, ImageId, PassBuilder};
 use crate::scene::techniques::{ImpostorFresnel, ImpostorMaps, ImpostorParams, ImpostorUpdate};
 use crate::scene::{Analytic, Material, Scene};
+use crate::shader_structs::{ImpostorProbePush, MapPush, ShadePush};
 use crate::technique::{
     in_stage, list, params, reflecting_objects, refracting_objects, registration, FrameInputs, PlannedPass,
     Registration, RenderError, Setup, Stage, Technique,
@@ -145,40 +145,8 @@ pub const NO_SURFACE: f32 = crate::IMPOSTOR_NO_SURFACE;
 pub const CUBE_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 pub const DISTANCE_FORMAT: vk::Format = vk::Format::R32_SFLOAT;
 
-/// Push constants of glsl/impostor/map.vert and the map fragment shaders.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-struct MapPush {
-    view_proj: [[f32; 4]; 4],
-    reference: [f32; 4],
-    material: [u32; 4],
-    chart_u: [f32; 4],
-    chart_v: [f32; 4],
-}
-// 128 bytes: Vulkan's guaranteed minimum maxPushConstantsSize.
-const _: () = assert!(std::mem::size_of::<MapPush>() == 128);
-
-/// Push constants of the shading passes (glsl/impostor/shade_common.glsl).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-struct ShadePush {
-    env_reference: [f32; 4],
-    refractor_center: [f32; 4],
-    /// x: the object whose pixels this draw shades, or [`ALL_OBJECTS`].
-    object: [u32; 4],
-}
-const _: () = assert!(std::mem::size_of::<ShadePush>() == 48);
-
 /// `ShadePush::object` of a shared map: every pixel of the pass's materials.
 const ALL_OBJECTS: u32 = u32::MAX;
-
-/// Push constants of glsl/impostor/probe.comp.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-struct ProbePush {
-    reference: [f32; 4],
-    info: [u32; 4],
-}
 
 /// Centre and bounding radius of an object: the exact sphere's, or its mesh's bounding box.
 pub fn object_bounds(scene: &Scene, object: usize) -> (Vec3, f32) {
@@ -476,13 +444,15 @@ impl ImpostorMap {
             "impostor_probe",
             "impostor/probe.comp",
             &[set.layout()],
-            std::mem::size_of::<ProbePush>() as u32,
+            std::mem::size_of::<ImpostorProbePush>() as u32,
             &[("ITERATIONS", Spec::U32(iterations)), ("DISTANCE_CHANNEL", Spec::U32(channel))],
         )?;
         let buffer_id = graph.register_buffer(&buffer);
         let mode = if fresnel { IMPOSTOR_PROBE_FRESNEL } else { IMPOSTOR_PROBE_HIT };
-        let push =
-            ProbePush { reference: self.reference.extend(0.0).to_array(), info: [data.len() as u32, mode, 0, 0] };
+        let push = ImpostorProbePush {
+            reference: self.reference.extend(0.0).to_array(),
+            info: [data.len() as u32, mode, 0, 0],
+        };
         let groups = (data.len() as u32).div_ceil(WORKGROUP_2D * WORKGROUP_2D);
         ctx.one_shot(|cmd| {
             let mut frame = graph.frame();

@@ -39,7 +39,6 @@
 //! radius sees them through a 120-degree frustum only (photons outside it are lost).
 use std::sync::Arc;
 
-use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
 
 use crate::frame::gpu_scene::GpuScene;
@@ -51,6 +50,7 @@ use crate::gpu::{
 use crate::graph::{Bindings, BoundSet, Frame, FrameGraph, ImageId};
 use crate::scene::techniques::{ImpostorLightmapParams, ImpostorParams};
 use crate::scene::{Light, Material, Scene};
+use crate::shader_structs::{CausticPush, LightmapApplyPush, LightmapSplatPush};
 use crate::technique::impostor::distance_impostor::{object_bounds, record_maps, ImpostorMap, MapContent, MapDesc};
 use crate::technique::{
     dielectric_names, in_stage, list, params, registration, specular_names, FrameInputs, PlannedPass, Registration,
@@ -144,35 +144,6 @@ const MAP_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 /// Half-angle tangent for a point light inside (or nearly inside) the specular objects'
 /// bounding sphere: a 120-degree frustum towards their centre.
 const INSIDE_TAN_HALF: f32 = 1.732_050_8;
-
-/// Push constants of glsl/impostor/lightmap_caustic.{vert,frag} (lightmap_push.glsl).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-struct CausticPush {
-    view_proj: [[f32; 4]; 4],
-    light: [f32; 4],
-    intensity: [f32; 4],
-    reference: [f32; 4],
-    refractor: [f32; 4],
-}
-const _: () = assert!(std::mem::size_of::<CausticPush>() == 128);
-
-/// Push constants of glsl/impostor/lightmap_splat.{vert,frag}.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-struct SplatPush {
-    params: [f32; 4],
-    info: [u32; 4],
-}
-
-/// Push constants of glsl/impostor/lightmap_apply.frag.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-struct ApplyPush {
-    origin: [f32; 4],
-    edge_u: [f32; 4],
-    edge_v: [f32; 4],
-}
 
 /// The Gaussian weights of a splat centred at `center` (light-map pixels; pixel (i, j) has its
 /// centre at (i + 0.5, j + 0.5)) with support `radius`: sigma = radius / 2, every pixel whose
@@ -410,7 +381,7 @@ impl ImpostorLightmap {
                 ..GraphicsPipelineDesc::fullscreen(IMPOSTOR_LIGHTMAP_SPLAT, "impostor/lightmap_splat.frag")
             },
             &[splat_sets.layout()],
-            std::mem::size_of::<SplatPush>() as u32,
+            std::mem::size_of::<LightmapSplatPush>() as u32,
             &splat_target.pass,
         )?;
 
@@ -433,7 +404,7 @@ impl ImpostorLightmap {
                 ..GraphicsPipelineDesc::fullscreen(IMPOSTOR_LIGHTMAP_APPLY, "impostor/lightmap_apply.frag")
             },
             &[frame_layout, apply_set.layout()],
-            std::mem::size_of::<ApplyPush>() as u32,
+            std::mem::size_of::<LightmapApplyPush>() as u32,
             &apply_target.pass,
         )?;
         let bounds = (0..scene.objects.len()).map(|i| object_bounds(scene, i)).collect();
@@ -583,7 +554,7 @@ impl ImpostorLightmap {
             for (slot, chart) in self.charts.iter().enumerate() {
                 cmd.in_target(&self.splat_target, slot, &[Clear::Color([0.0; 4])], |cmd| {
                     let texel_area = chart.area() / (n as f32 * n as f32);
-                    let push = SplatPush {
+                    let push = LightmapSplatPush {
                         params: [self.params.filter_radius, n as f32, 1.0 / texel_area.max(1e-30), 0.0],
                         info: [slot as u32, self.params.caustic_map_size, 0, 0],
                     };
@@ -607,7 +578,7 @@ impl ImpostorLightmap {
                 cmd.in_target(&self.apply_target, 0, &[Clear::None], |cmd| {
                     cmd.bind_graphics(&self.apply_pipeline, &[frame_set, self.apply_set.set()]);
                     for (slot, c) in self.charts.iter().enumerate() {
-                        let push = ApplyPush {
+                        let push = LightmapApplyPush {
                             origin: c.origin.extend(slot as f32).to_array(),
                             edge_u: c.edge_u.extend(c.object as f32).to_array(),
                             edge_v: c.edge_v.extend(0.0).to_array(),

@@ -52,7 +52,7 @@
 use crate::technique::FrameInputs;
 use std::sync::Arc;
 
-use bytemuck::{Pod, Zeroable};
+use bytemuck::Zeroable;
 use glam::{Mat4, Vec3};
 
 use crate::frame::gpu_scene::GpuScene;
@@ -64,6 +64,8 @@ use crate::gpu::{
 use crate::graph::{Bindings, BoundSet, Frame, FrameGraph, ImageId};
 use crate::scene::techniques::RecursiveExit;
 use crate::scene::{Material, Scene};
+pub use crate::shader_structs::GpuNearbyRect;
+use crate::shader_structs::{GpuNearbyHeader, NearbyImpostorPush};
 use crate::{BINDING_NEARBY_BACK, BINDING_NEARBY_FRONT, BINDING_NEARBY_RECTS, BINDING_NEARBY_TEXTURE};
 pub use crate::{MAX_NEARBY_RECTS, MAX_NEARBY_SETS};
 
@@ -304,36 +306,6 @@ pub fn nearby_layout(scene: &Scene, recursion_depth: u32) -> NearbyLayout {
     layout
 }
 
-/// std430 record of one rectangle (glsl/include/nearby.glsl, `NearbyRect`).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-pub struct GpuNearbyRect {
-    pub view_proj: [[f32; 4]; 4],
-    /// xyz O_i, w d_i.
-    pub center: [f32; 4],
-    /// xyz n_i (O_R -> O_i), w near.
-    pub axis: [f32; 4],
-    /// xyz axis_u, w far (the cleared TEX_DEPTH value).
-    pub axis_u: [f32; 4],
-    /// xyz axis_v, w layer.
-    pub axis_v: [f32; 4],
-}
-const _: () = assert!(std::mem::size_of::<GpuNearbyRect>() == 128);
-
-/// Header of the rectangle buffer (glsl/include/nearby.glsl, `NearbyRects`): the counts, then
-/// each set's rectangle range and OBJ_R, then each set's O_R.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-struct GpuNearbyHeader {
-    /// x rectangles over all sets, y sets.
-    info: [u32; 4],
-    /// x first rectangle, y count, z OBJ_R's object index (the G-buffer's albedo.a).
-    sets: [[u32; 4]; MAX_NEARBY_SETS as usize],
-    /// xyz O_R.
-    origins: [[f32; 4]; MAX_NEARBY_SETS as usize],
-}
-const _: () = assert!(std::mem::size_of::<GpuNearbyHeader>() == 16 + 32 * MAX_NEARBY_SETS as usize);
-
 impl From<&NearbyRect> for GpuNearbyRect {
     fn from(r: &NearbyRect) -> Self {
         let v4 = |v: Vec3, w: f32| [v.x, v.y, v.z, w];
@@ -361,23 +333,6 @@ pub fn rect_buffer_bytes(layout: &NearbyLayout) -> Vec<u8> {
     }
     bytes
 }
-
-/// Push constants of glsl/nearby/impostor.vert and impostor_body.glsl.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-struct ImpostorPush {
-    view_proj: [[f32; 4]; 4],
-    /// xyz O_R (of the set the rectangle belongs to).
-    origin: [f32; 4],
-    /// xyz n_i.
-    axis: [f32; 4],
-    /// x material index, y the rectangle's layer, z OBJ_k's own set (the recursive levels
-    /// look it up; u32::MAX: none, the environment).
-    material: [u32; 4],
-    /// xyz O_k, w d_k: OBJ_k's bounding sphere (a dielectric's second interface).
-    sphere: [f32; 4],
-}
-const _: () = assert!(std::mem::size_of::<ImpostorPush>() == 128);
 
 /// How the impostor textures are made beyond [`NearbyImpostors::new`]'s defaults.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -673,7 +628,7 @@ impl NearbyImpostors {
             RenderTarget::layered(ctx, label, &[image], Some(&depth), true, image.layers())
         };
         let target = layered(name, &texture)?;
-        let push_size = std::mem::size_of::<ImpostorPush>() as u32;
+        let push_size = std::mem::size_of::<NearbyImpostorPush>() as u32;
         let pipeline_desc = |fragment_shader, specialization, cull| GraphicsPipelineDesc {
             cull,
             specialization,
@@ -819,7 +774,7 @@ impl NearbyImpostors {
                         cmd.bind_graphics(pipeline, &[frame_set]);
                         cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
                         let d = &scene.draws[self.draws[*i]];
-                        let push = ImpostorPush {
+                        let push = NearbyImpostorPush {
                             view_proj: r.view_proj.to_cols_array_2d(),
                             origin: origins[*i],
                             axis: r.axis.extend(0.0).to_array(),
@@ -882,7 +837,7 @@ impl NearbyImpostors {
                         };
                         cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
                         let d = &scene.draws[self.draws[i]];
-                        let push = ImpostorPush {
+                        let push = NearbyImpostorPush {
                             view_proj: r.view_proj.to_cols_array_2d(),
                             origin: origins[i],
                             axis: r.axis.extend(0.0).to_array(),
