@@ -12,7 +12,7 @@ use prism::graph::FrameGraph;
 fn two_writes(skip_barrier: bool) -> Option<u64> {
     let ctx = common::context(true);
     if !ctx.info.sync_validation {
-        assert!(!std::env::var("CI").is_ok_and(|v| v == "true"), "CI needs the validation layer");
+        assert!(!common::under_ci(), "CI needs the validation layer");
         eprintln!("synchronization validation unavailable: skipping");
         return None;
     }
@@ -47,6 +47,24 @@ fn missing_barrier_in_a_test_pass_is_reported_by_sync_validation() {
 fn the_same_passes_with_the_graph_barriers_are_clean() {
     if let Some(errors) = two_writes(false) {
         assert_eq!(errors, 0);
+    }
+}
+
+/// Under CI, whatever `CI` is set to, a missing validation layer fails the GPU tests (here
+/// the test above, run again with the layer search path pointing nowhere).
+#[test]
+fn a_missing_validation_layer_fails_under_ci() {
+    for ci in ["1", "true", "woodpecker"] {
+        let out = std::process::Command::new(std::env::current_exe().unwrap())
+            .args(["--exact", "the_same_passes_with_the_graph_barriers_are_clean", "--test-threads", "1"])
+            .env("CI", ci)
+            .env("VK_LAYER_PATH", "/nonexistent")
+            .env_remove("VK_ADD_LAYER_PATH")
+            .output()
+            .unwrap();
+        let text = String::from_utf8_lossy(&out.stdout).to_string() + &String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "CI={ci}: passed without the validation layer:\n{text}");
+        assert!(text.contains("VK_LAYER_KHRONOS_validation is not installed"), "CI={ci}:\n{text}");
     }
 }
 

@@ -13,14 +13,20 @@ use prism::scene::{self, Scene};
 /// Test renders are small (CI has 2 cores and lavapipe): 96^2 unless a test says otherwise.
 pub const SIZE: u32 = 96;
 
+/// Whether the tests run under CI: `CI` set to anything non-empty (GitHub sets "true",
+/// other services "1" or their name).
+pub fn under_ci() -> bool {
+    std::env::var_os("CI").is_some_and(|v| !v.is_empty())
+}
+
 /// A context with the validation layer on (and synchronization validation if `sync`).
-/// Under CI=true a missing validation layer is a failure: without it "zero validation
-/// errors" would be vacuous.
+/// Under CI a missing validation layer is a failure: without it "zero validation errors"
+/// would be vacuous.
 pub fn context(sync: bool) -> Arc<GpuContext> {
     let ctx = GpuContext::new(&ContextDesc { validation: true, sync_validation: sync, device: None })
         .expect("cannot create a Vulkan context (is mesa-vulkan-drivers installed?)");
-    if std::env::var("CI").is_ok_and(|v| v == "true") {
-        assert!(ctx.info.validation, "CI=true but VK_LAYER_KHRONOS_validation is not installed");
+    if under_ci() {
+        assert!(ctx.info.validation, "CI is set but VK_LAYER_KHRONOS_validation is not installed");
     }
     ctx
 }
@@ -111,8 +117,8 @@ pub fn assert_golden(name: &str, r: &Rendered) {
     let update = std::env::var("PRISM_UPDATE_GOLDEN").is_ok_and(|v| v == "1");
     if update || !path.exists() {
         assert!(
-            update || !std::env::var("CI").is_ok_and(|v| v == "true"),
-            "golden image {} is missing (CI=true): run the tests locally with PRISM_UPDATE_GOLDEN=1 and commit it",
+            update || !under_ci(),
+            "golden image {} is missing (CI is set): run the tests locally with PRISM_UPDATE_GOLDEN=1 and commit it",
             path.display()
         );
         save(&path, &r.ldr);
