@@ -340,3 +340,105 @@ fn absurd_tone_map_settings() {
         assert!(e.contains(key), "{set}: {e}");
     }
 }
+
+/// Run prism with `args` in `dir`: its exit code and stderr, after checking that it did not
+/// panic.
+fn prism(dir: &Path, args: &[&str]) -> (Option<i32>, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_prism")).args(args).current_dir(dir).output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr).to_string();
+    assert!(!stderr.contains("panicked"), "panic:\n{stderr}");
+    (out.status.code(), stderr)
+}
+
+fn is_fifo(p: &Path) -> bool {
+    use std::os::unix::fs::FileTypeExt;
+    std::fs::symlink_metadata(p).unwrap().file_type().is_fifo()
+}
+
+#[test]
+fn outputs_that_are_not_regular_files_or_named_twice_are_refused() {
+    let c = Case::new("outputs");
+    c.file("scene.toml", GOOD);
+    // A FIFO would be replaced by the PNG (renamed over it), as would a device node.
+    assert!(Command::new("mkfifo").arg(c.dir.join("pipe.png")).status().unwrap().success());
+    let (code, e) = prism(&c.dir, &["render", "scene.toml", "-o", "pipe.png"]);
+    assert_eq!(code, Some(1), "{e}");
+    assert!(e.contains("pipe.png: cannot write output: it exists and is a FIFO (named pipe)"), "{e}");
+    assert!(is_fifo(&c.dir.join("pipe.png")));
+    // A character device of our own (/dev/null as in /dev), where this user may create one.
+    let made_device = Command::new("mknod").arg(c.dir.join("null")).args(["c", "1", "3"]).status();
+    if made_device.is_ok_and(|s| s.success()) {
+        let (code, e) = prism(&c.dir, &["render", "scene.toml", "-o", "null", "--exr", "out.exr"]);
+        assert_eq!(code, Some(1), "{e}");
+        assert!(e.contains("null: cannot write output: it exists and is a character device"), "{e}");
+        std::fs::remove_file(c.dir.join("null")).unwrap();
+    }
+    // The same file twice: as given, and spelt differently.
+    for exr in ["x.png", "./x.png"] {
+        let (code, e) = prism(&c.dir, &["render", "scene.toml", "-o", "x.png", "--exr", exr]);
+        assert_eq!(code, Some(1), "{e}");
+        assert!(e.contains(&format!("{exr}: named twice as an output of this command (also as x.png)")), "{e}");
+    }
+    // compare's heat map and image pair colliding.
+    let args =
+        ["compare", "scene.toml", "--heatmap", "p-technique.png", "--images", "p", "--spp", "1", "--frames", "1"];
+    let (code, e) = prism(&c.dir, &args);
+    assert_eq!(code, Some(1), "{e}");
+    assert!(e.contains("p-technique.png: named twice as an output"), "{e}");
+    assert_eq!(c.listing(), ["pipe.png", "scene.toml"]);
+}
+
+/// A full filesystem: an 8 KiB tmpfs whose two pages a 6 KiB file fills, mounted in a mount
+/// namespace of this test's own (`unshare -rm`: as root, or as a user mapped to root where
+/// user namespaces are allowed). The PNG and the EXR cannot be written: exit 1 and no file,
+/// not even the PNG that went to a directory with room (the outputs commit together).
+#[test]
+fn a_full_filesystem_fails_and_leaves_no_file() {
+    let c = Case::new("full");
+    c.file("scene.toml", GOOD);
+    std::fs::create_dir(c.dir.join("full")).unwrap();
+    let script = r#"mount -t tmpfs -o size=8k tmpfs full || exit 0
+        echo mounted
+        head -c 6144 /dev/zero > full/fill
+        "$0" render scene.toml -o full/out.png; echo "exit $?"
+        "$0" render scene.toml -o full/out.png --exr out.exr; echo "exit $?"
+        "$0" render scene.toml -o out.png --exr full/out.exr; echo "exit $?"
+        ls -A . full"#;
+    let out = Command::new("unshare")
+        .args(["-rm", "sh", "-c", script, env!("CARGO_BIN_EXE_prism")])
+        .current_dir(&c.dir)
+        .output()
+        .unwrap();
+    let (stdout, stderr) = (String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    if !stdout.contains("mounted") {
+        // The unit tests of src/app/output.rs cover the error path with /dev/full and a
+        // failing writer.
+        eprintln!("skipping: cannot mount a tmpfs here (unshare -rm):\n{stderr}");
+        return;
+    }
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    let exits: Vec<&str> = stdout.lines().filter(|l| l.starts_with("exit ")).collect();
+    assert_eq!(exits, ["exit 1"; 3], "{stdout}\n{stderr}");
+    assert!(stderr.contains("full/out.png: cannot write output (disk full?)"), "{stderr}");
+    assert!(stderr.contains("full/out.exr: cannot write output (disk full?)"), "{stderr}");
+    // `ls -A . full`: only the scene, the mount point and the filler remain.
+    let listed: Vec<&str> = stdout.lines().skip_while(|l| !l.starts_with(".:")).collect();
+    assert_eq!(listed, [".:", "full", "scene.toml", "", "full:", "fill"], "{stdout}");
+}
+
+#[test]
+fn absurd_frame_counts_are_refused() {
+    let c = Case::new("frames");
+    c.file("scene.toml", GOOD);
+    for command in ["bench", "compare"] {
+        let args = [command, "scene.toml", "--warmup", "4294967295", "--frames", "2", "--spp", "1"];
+        let args = if command == "bench" { &args[..6] } else { &args[..] };
+        let (code, e) = prism(&c.dir, args);
+        assert_eq!(code, Some(2), "{command}: {e}");
+        assert!(e.contains("--warmup") && e.contains("4294967295 is not in 0..=1000000"), "{command}: {e}");
+        let (code, e) = prism(&c.dir, &[command, "scene.toml", "--frames", "1000001"]);
+        assert_eq!(code, Some(2), "{command}: {e}");
+        assert!(e.contains("--frames") && e.contains("1000000"), "{command}: {e}");
+    }
+    assert_eq!(c.listing(), ["scene.toml"]);
+}

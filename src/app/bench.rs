@@ -11,18 +11,23 @@ use crate::gpu::DeviceInfo;
 use crate::metrics::timing::Stats;
 use crate::renderer::{FrameTiming, Renderer};
 
-use super::output::OutputFile;
+use super::output::{self, Outputs};
 use super::{check_validation, GpuArgs, SceneArgs};
+
+/// The most frames `--frames` or `--warmup` may ask for (bench, compare, sweep, report):
+/// every frame's pass timings (some 1 KiB with their names) stay in memory until the end, and
+/// a million frames is already hours on lavapipe.
+pub const MAX_FRAMES: i64 = 1_000_000;
 
 #[derive(Args, Debug)]
 pub struct BenchArgs {
     #[command(flatten)]
     pub scene: SceneArgs,
-    /// Frames to measure.
-    #[arg(long, default_value_t = 100)]
+    /// Frames to measure (at most 1000000).
+    #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u32).range(..=MAX_FRAMES))]
     pub frames: u32,
-    /// Frames rendered first and not measured (pipeline caches, clocks).
-    #[arg(long, default_value_t = 10)]
+    /// Frames rendered first and not measured (pipeline caches, clocks; at most 1000000).
+    #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u32).range(..=MAX_FRAMES))]
     pub warmup: u32,
     /// Write the results as JSON (device, driver, resolution, git revision, settings, stats).
     #[arg(long, value_name = "FILE")]
@@ -142,13 +147,14 @@ pub fn run(args: BenchArgs) -> Result<()> {
         anyhow::bail!("--frames must be at least 1");
     }
     let scene = args.scene.load()?;
-    let json_out = args.json.as_deref().map(OutputFile::prepare).transpose()?;
-    let trace_out = args.trace.as_deref().map(OutputFile::prepare).transpose()?;
+    let mut outputs = Outputs::default();
+    let json_out = outputs.prepare_opt(args.json.as_deref())?;
+    let trace_out = outputs.prepare_opt(args.trace.as_deref())?;
     let ctx = args.gpu.context()?;
     let mut renderer = Renderer::new(&ctx, &scene).context("cannot set up the renderer")?;
 
-    let total = args.warmup + args.frames;
-    let bar = ProgressBar::new(total as u64).with_style(
+    let total = u64::from(args.warmup) + u64::from(args.frames);
+    let bar = ProgressBar::new(total).with_style(
         ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} frames, eta {eta}")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
@@ -161,7 +167,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
     bar.finish_and_clear();
     check_validation(&ctx)?;
     let frames: Vec<FrameTiming> =
-        renderer.take_timings().into_iter().filter(|f| f.frame >= args.warmup as u64).collect();
+        renderer.take_timings().into_iter().filter(|f| f.frame >= u64::from(args.warmup)).collect();
     let (passes, frame) = summarize(&frames);
 
     println!(
@@ -193,6 +199,8 @@ pub fn run(args: BenchArgs) -> Result<()> {
         );
     }
 
+    // Both files are on disk before either is moved into place.
+    let mut written = Vec::new();
     if let Some(out) = json_out {
         let report = BenchReport {
             scene: scene.name.clone(),
@@ -210,11 +218,11 @@ pub fn run(args: BenchArgs) -> Result<()> {
             light_simulation: renderer.light_stats().cloned(),
             note: "GPU timestamps; on a CPU device (lavapipe) these are CPU times: compare ratios, not absolute values",
         };
-        out.commit_bytes(serde_json::to_string_pretty(&report)?.as_bytes())?;
+        written.push(out.write(serde_json::to_string_pretty(&report)?.as_bytes())?);
     }
     if let Some(out) = trace_out {
         let trace = chrome_trace(&frames, &ctx.info, &scene.name);
-        out.commit_bytes(serde_json::to_string(&trace)?.as_bytes())?;
+        written.push(out.write(serde_json::to_string(&trace)?.as_bytes())?);
     }
-    Ok(())
+    output::commit_all(written)
 }

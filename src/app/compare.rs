@@ -15,18 +15,18 @@ use crate::renderer::{FrameTiming, Renderer};
 use crate::scene::techniques::TonemapAdaptiveParams;
 use crate::scene::{Environment, Scene};
 
-use super::bench::{summarize, PassStats};
-use super::output::{self, OutputFile};
+use super::bench::{summarize, PassStats, MAX_FRAMES};
+use super::output::{self, OutputFile, Outputs};
 use super::reference::{render_reference, ReferenceArgs};
 use super::{check_validation, GpuArgs, SceneArgs};
 
 #[derive(Args, Debug, Clone)]
 pub struct MeasureArgs {
-    /// Frames timed per setting.
-    #[arg(long, default_value_t = 20)]
+    /// Frames timed per setting (at most 1000000).
+    #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(..=MAX_FRAMES))]
     pub frames: u32,
-    /// Frames rendered before timing.
-    #[arg(long, default_value_t = 5)]
+    /// Frames rendered before timing (at most 1000000).
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(..=MAX_FRAMES))]
     pub warmup: u32,
     #[command(flatten)]
     pub reference: ReferenceArgs,
@@ -147,7 +147,7 @@ pub fn cached_reference(
     // A cache that cannot be written is not an error: the result is still correct.
     if std::fs::create_dir_all(&dir).is_ok() {
         if let Ok(out) = OutputFile::prepare(&path) {
-            let _ = output::write_exr(out, scene.camera.width, scene.camera.height, &image);
+            let _ = output::write_exr(out, scene.camera.width, scene.camera.height, &image).and_then(|f| f.commit());
         }
     }
     Ok((image, path, false))
@@ -171,12 +171,12 @@ pub struct Measurement {
 /// and compare the last image with `reference`.
 pub fn measure(ctx: &Arc<GpuContext>, scene: &Scene, args: &MeasureArgs, reference: &[f32]) -> Result<Measurement> {
     let mut renderer = Renderer::new(ctx, scene).context("cannot set up the renderer")?;
-    for _ in 0..args.warmup + args.frames.max(1) {
+    for _ in 0..u64::from(args.warmup) + u64::from(args.frames.max(1)) {
         renderer.render_frame()?;
     }
     renderer.finish()?;
     let frames: Vec<FrameTiming> =
-        renderer.take_timings().into_iter().filter(|f| f.frame >= args.warmup as u64).collect();
+        renderer.take_timings().into_iter().filter(|f| f.frame >= u64::from(args.warmup)).collect();
     let (passes, frame) = summarize(&frames);
     let hdr = renderer.read_hdr()?;
     let ref_ldr = output::tonemap_scene(reference, &scene.render);
@@ -231,12 +231,13 @@ pub fn run(args: CompareArgs) -> Result<()> {
     let settings = args.measure.reference.settings();
     settings.validate()?;
     let heat_path = args.heatmap.clone().unwrap_or_else(|| PathBuf::from(format!("{}-error.png", scene.name)));
-    let heat_out = OutputFile::prepare(&heat_path)?;
-    let json_out = args.json.as_deref().map(OutputFile::prepare).transpose()?;
+    let mut outputs = Outputs::default();
+    let heat_out = outputs.prepare(&heat_path)?;
+    let json_out = outputs.prepare_opt(args.json.as_deref())?;
     let image_outs = match &args.images {
         Some(prefix) => Some((
-            OutputFile::prepare(Path::new(&format!("{prefix}-technique.png")))?,
-            OutputFile::prepare(Path::new(&format!("{prefix}-reference.png")))?,
+            outputs.prepare(Path::new(&format!("{prefix}-technique.png")))?,
+            outputs.prepare(Path::new(&format!("{prefix}-reference.png")))?,
         )),
         None => None,
     };
@@ -260,11 +261,11 @@ pub fn run(args: CompareArgs) -> Result<()> {
     if ctx.info.device_type == "CPU" {
         println!("note: a CPU device (lavapipe): times are CPU time; compare ratios within one run.");
     }
-    output::write_png(heat_out, w, h, &m.heatmap)?;
-    eprintln!("wrote FLIP heat map {}", heat_path.display());
+    // Every output is on disk before any is moved into place.
+    let mut written = vec![output::write_png(heat_out, w, h, &m.heatmap)?];
     if let Some((t, r)) = image_outs {
-        output::write_png(t, w, h, &m.ldr)?;
-        output::write_png(r, w, h, &output::tonemap_scene(&reference, &scene.render))?;
+        written.push(output::write_png(t, w, h, &m.ldr)?);
+        written.push(output::write_png(r, w, h, &output::tonemap_scene(&reference, &scene.render))?);
     }
     if let Some(out) = json_out {
         let techniques = serde_json::json!({
@@ -286,7 +287,9 @@ pub fn run(args: CompareArgs) -> Result<()> {
             frames: args.measure.frames,
             measurement: &m,
         };
-        out.commit_bytes(serde_json::to_string_pretty(&report)?.as_bytes())?;
+        written.push(out.write(serde_json::to_string_pretty(&report)?.as_bytes())?);
     }
+    output::commit_all(written)?;
+    eprintln!("wrote FLIP heat map {}", heat_path.display());
     Ok(())
 }

@@ -29,7 +29,7 @@ use crate::graph::ImageId;
 use crate::renderer::{OverlayDraw, RenderError, Renderer, WindowTarget, FRAMES_IN_FLIGHT};
 use crate::scene::{self, Scene};
 
-use super::output::{self, OutputFile};
+use super::output::{self, OutputFile, Outputs};
 use super::{check_validation, resolve_scene_path, GpuArgs, SceneArgs};
 use camera::{CameraController, Drag};
 
@@ -144,8 +144,9 @@ pub fn run(mut args: DemoArgs) -> Result<()> {
         args.scene.set.insert(0, "render.tonemap=adaptive".into());
         scene = args.scene.load()?;
     }
-    let screenshot = args.screenshot.as_deref().map(OutputFile::prepare).transpose()?;
-    let screenshot_exr = args.screenshot_exr.as_deref().map(OutputFile::prepare).transpose()?;
+    let mut outputs = Outputs::default();
+    let screenshot = outputs.prepare_opt(args.screenshot.as_deref())?;
+    let screenshot_exr = outputs.prepare_opt(args.screenshot_exr.as_deref())?;
     if (screenshot.is_some() || screenshot_exr.is_some()) && args.frames.is_none() {
         bail!("--screenshot needs --frames N (interactively, F12 writes screenshots)");
     }
@@ -711,8 +712,9 @@ impl Running {
         self.screenshots += 1;
         let stem = format!("prism-{}-{}", self.scene.name, self.screenshots);
         let result = (|| -> Result<()> {
-            let png = OutputFile::prepare(Path::new(&format!("{stem}.png")))?;
-            let exr = OutputFile::prepare(Path::new(&format!("{stem}.exr")))?;
+            let mut outputs = Outputs::default();
+            let png = outputs.prepare(Path::new(&format!("{stem}.png")))?;
+            let exr = outputs.prepare(Path::new(&format!("{stem}.exr")))?;
             self.write_screenshot(Some(png), Some(exr))
         })();
         match result {
@@ -723,17 +725,13 @@ impl Running {
 
     fn write_screenshot(&mut self, png: Option<OutputFile>, exr: Option<OutputFile>) -> Result<()> {
         let (w, h) = (self.renderer.width(), self.renderer.height());
-        if let Some(png) = png {
-            let ldr = self.renderer.read_ldr()?;
-            let path = png.path().to_path_buf();
-            output::write_png(png, w, h, &ldr)?;
-            eprintln!("demo: wrote {} ({w}x{h})", path.display());
-        }
-        if let Some(exr) = exr {
-            let hdr = self.renderer.read_hdr()?;
-            let path = exr.path().to_path_buf();
-            output::write_exr(exr, w, h, &hdr)?;
-            eprintln!("demo: wrote {} ({w}x{h})", path.display());
+        let png = png.map(|png| output::write_png(png, w, h, &self.renderer.read_ldr()?)).transpose()?;
+        let exr = exr.map(|exr| output::write_exr(exr, w, h, &self.renderer.read_hdr()?)).transpose()?;
+        let written: Vec<_> = png.into_iter().chain(exr).collect();
+        let paths: Vec<_> = written.iter().map(|f| f.path().display().to_string()).collect();
+        output::commit_all(written)?;
+        for path in paths {
+            eprintln!("demo: wrote {path} ({w}x{h})");
         }
         Ok(())
     }

@@ -18,7 +18,7 @@ use crate::gpu::{ContextDesc, GpuContext};
 use crate::renderer::Renderer;
 use crate::scene::{self, Scene};
 
-use output::OutputFile;
+use output::Outputs;
 
 #[derive(Parser, Debug)]
 #[command(
@@ -98,6 +98,8 @@ pub struct RenderArgs {
     #[command(flatten)]
     pub scene: SceneArgs,
     /// Output PNG (tone-mapped sRGB: render.tonemap = "clamp" (default) or "adaptive").
+    /// Output paths must be new or regular files (a symlink to one is followed), each named
+    /// once; every output of a command is written in full before any is moved into place.
     #[arg(short, long, default_value = "prism.png")]
     pub output: PathBuf,
     /// Also write linear radiance to this OpenEXR file.
@@ -193,8 +195,9 @@ pub fn run(cli: Cli) -> Result<()> {
 fn render(args: RenderArgs) -> Result<()> {
     let scene = args.scene.load()?;
     // Check the output paths before any work so that a bad path fails fast and leaves nothing.
-    let png = OutputFile::prepare(&args.output)?;
-    let exr = args.exr.as_deref().map(OutputFile::prepare).transpose()?;
+    let mut outputs = Outputs::default();
+    let png = outputs.prepare(&args.output)?;
+    let exr = outputs.prepare_opt(args.exr.as_deref())?;
     let ctx = args.gpu.context()?;
     let mut renderer = Renderer::new(&ctx, &scene).context("cannot set up the renderer")?;
     renderer.render_frame()?;
@@ -203,10 +206,12 @@ fn render(args: RenderArgs) -> Result<()> {
     let ldr = renderer.read_ldr()?;
     let timing = renderer.take_timings();
     check_validation(&ctx)?;
-    output::write_png(png, w, h, &ldr)?;
-    if let Some(exr) = exr {
-        let path = exr.path().to_path_buf();
-        output::write_exr(exr, w, h, &hdr)?;
+    // Both files are on disk before either is moved into place.
+    let png = output::write_png(png, w, h, &ldr)?;
+    let exr = exr.map(|exr| output::write_exr(exr, w, h, &hdr)).transpose()?;
+    let exr_path = exr.as_ref().map(|e| e.path().to_path_buf());
+    output::commit_all(std::iter::once(png).chain(exr))?;
+    if let Some(path) = exr_path {
         eprintln!("wrote {}", path.display());
     }
     if let Some(l) = renderer.light_stats() {

@@ -1,73 +1,189 @@
-//! Output files that appear whole or not at all. The path is checked (by creating a
-//! temporary file beside it) before any rendering starts, so an unwritable path fails fast;
-//! data goes to the temporary file, which is renamed over the target only when complete.
+//! Output files that appear whole or not at all. A command claims all its outputs in one
+//! [`Outputs`] before any rendering starts, so that a path that cannot be an output fails
+//! fast: a missing directory, a directory, a device node or FIFO (renaming over it would
+//! replace the node), or the same file named twice (one output would silently replace the
+//! other). An empty temporary file created beside each target proves its directory
+//! writable. Encoders write into memory; the bytes go to the temporary file, which is synced
+//! to disk and checked at every step (a full disk is an error, not an empty file), and only
+//! then renamed over the target. A command with several outputs writes every one before it
+//! renames any ([`commit_all`]), so a failure leaves none of them. A symlink to a regular
+//! file is followed: the file it names is replaced and the link kept.
+use std::fs::{File, OpenOptions};
+use std::io::{self, Write};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
 
-use anyhow::{Context, Result};
+use anyhow::{bail, Context, Result};
 
 use crate::scene::techniques::TonemapAdaptiveParams;
 use crate::scene::RenderSettings;
 use crate::technique::baseline::tonemap::AdaptiveStats;
 
+/// The outputs one command has claimed, to refuse a file named twice.
+#[derive(Default)]
+pub struct Outputs {
+    /// (the file that will be replaced, the path as the user gave it)
+    claimed: Vec<(PathBuf, PathBuf)>,
+}
+
+impl Outputs {
+    /// Check `target` as an output of this command and reserve it (see the module doc).
+    pub fn prepare(&mut self, target: &Path) -> Result<OutputFile> {
+        let out = OutputFile::prepare(target)?;
+        if let Some((_, first)) = self.claimed.iter().find(|(file, _)| *file == out.target) {
+            bail!(
+                "{}: named twice as an output of this command (also as {}): one would replace the other\n  \
+                 hint: give each output its own file name",
+                target.display(),
+                first.display()
+            );
+        }
+        self.claimed.push((out.target.clone(), target.to_path_buf()));
+        Ok(out)
+    }
+
+    /// [`Outputs::prepare`] for an optional output.
+    pub fn prepare_opt(&mut self, target: Option<&Path>) -> Result<Option<OutputFile>> {
+        target.map(|t| self.prepare(t)).transpose()
+    }
+}
+
+/// An output claimed but not yet written. Dropping it removes its temporary file.
 pub struct OutputFile {
+    /// The path as given, for messages.
+    given: PathBuf,
+    /// The file that will be replaced: symlinks resolved, its directory canonical.
     target: PathBuf,
     temp: PathBuf,
     committed: bool,
 }
 
+/// An output whose bytes are on disk in its temporary file, waiting for [`commit_all`].
+pub struct Written(OutputFile);
+
 impl OutputFile {
+    /// Check `target` and create its temporary file, outside any [`Outputs`]: for a file
+    /// that is not a command's output (a cache).
     pub fn prepare(target: &Path) -> Result<OutputFile> {
-        let name = target.file_name().with_context(|| format!("{}: output path has no file name", target.display()))?;
-        if target.is_dir() {
-            anyhow::bail!(
-                "{}: cannot write output: it is a directory\n  hint: give a file name, e.g. {}",
-                target.display(),
+        let shown = target.display();
+        let name = target.file_name().with_context(|| format!("{shown}: output path has no file name"))?;
+        let resolved = match std::fs::symlink_metadata(target) {
+            Ok(m) if m.file_type().is_symlink() => std::fs::canonicalize(target).with_context(|| {
+                format!("{shown}: cannot write output: it is a symlink to nothing\n  hint: remove the link or choose another path")
+            })?,
+            _ => target.to_path_buf(),
+        };
+        match std::fs::metadata(&resolved) {
+            Ok(m) if m.is_dir() => bail!(
+                "{shown}: cannot write output: it is a directory\n  hint: give a file name, e.g. {}",
                 target.join("out.png").display()
-            );
+            ),
+            Ok(m) if !m.is_file() => bail!(
+                "{shown}: cannot write output: it exists and is {}, not a regular file\n  \
+                 hint: prism replaces its output files whole; give the path of a regular file or a new one",
+                file_kind(&m.file_type())
+            ),
+            Ok(_) => {}
+            Err(e) if e.kind() == io::ErrorKind::NotFound => {}
+            Err(e) => return Err(e).with_context(|| format!("{shown}: cannot write output")),
         }
-        let dir = match target.parent() {
+        let dir = match resolved.parent() {
             Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
             _ => PathBuf::from("."),
         };
         if !dir.is_dir() {
-            anyhow::bail!(
-                "{}: cannot write output: directory {} does not exist\n  hint: create it first or choose another path",
-                target.display(),
+            bail!(
+                "{shown}: cannot write output: directory {} does not exist\n  hint: create it first or choose another path",
                 dir.display()
             );
         }
-        // Hidden, unique, and ending in the target's own extension (encoders look at it).
-        let temp = dir.join(format!(".prism-tmp-{}-{}", std::process::id(), name.to_string_lossy()));
-        std::fs::write(&temp, b"").with_context(|| {
-            format!(
-                "{}: cannot write output (directory not writable?)\n  hint: choose a writable path",
-                target.display()
-            )
+        let dir = std::fs::canonicalize(&dir).with_context(|| format!("{shown}: cannot write output"))?;
+        let name = resolved.file_name().unwrap_or(name);
+        // Hidden, unique within the process too, and ending in the target's own name.
+        static COUNTER: AtomicU64 = AtomicU64::new(0);
+        let n = COUNTER.fetch_add(1, Ordering::Relaxed);
+        let temp = dir.join(format!(".prism-tmp-{}-{n}-{}", std::process::id(), name.to_string_lossy()));
+        OpenOptions::new().write(true).create_new(true).open(&temp).with_context(|| {
+            format!("{shown}: cannot write output (directory not writable?)\n  hint: choose a writable path")
         })?;
-        Ok(OutputFile { target: target.to_path_buf(), temp, committed: false })
+        Ok(OutputFile { given: target.to_path_buf(), target: dir.join(name), temp, committed: false })
     }
 
+    /// The path as given.
     pub fn path(&self) -> &Path {
-        &self.target
+        &self.given
     }
 
-    /// The temporary path to write to before [`OutputFile::commit`].
-    pub fn temp_path(&self) -> &Path {
-        &self.temp
+    /// Put `bytes` on disk in the temporary file; [`commit_all`] moves it into place.
+    pub fn write(self, bytes: &[u8]) -> Result<Written> {
+        self.write_with(|file| write_durably(file, bytes))
     }
 
-    /// Write `bytes` and move them into place.
+    /// Write and move into place: for a command's only output.
     pub fn commit_bytes(self, bytes: &[u8]) -> Result<()> {
-        std::fs::write(&self.temp, bytes).with_context(|| format!("{}: cannot write output", self.target.display()))?;
-        self.commit()
+        self.write(bytes)?.commit()
     }
 
-    /// Move the finished temporary file into place.
-    pub fn commit(mut self) -> Result<()> {
-        std::fs::rename(&self.temp, &self.target)
-            .with_context(|| format!("{}: cannot move the finished output into place", self.target.display()))?;
-        self.committed = true;
-        Ok(())
+    /// The temporary file opened for `write`; on an error it is removed (by drop).
+    fn write_with(self, write: impl FnOnce(&mut File) -> io::Result<()>) -> Result<Written> {
+        let written = OpenOptions::new().write(true).truncate(true).open(&self.temp).and_then(|mut f| write(&mut f));
+        written.with_context(|| format!("{}: cannot write output (disk full?)", self.given.display()))?;
+        Ok(Written(self))
+    }
+}
+
+impl Written {
+    pub fn path(&self) -> &Path {
+        self.0.path()
+    }
+
+    pub fn commit(self) -> Result<()> {
+        commit_all([self])
+    }
+}
+
+/// Every byte, then `sync_all`, so that a full disk or an I/O error is seen here and not
+/// lost in a buffer or at close.
+fn write_durably(file: &mut File, bytes: &[u8]) -> io::Result<()> {
+    file.write_all(bytes)?;
+    file.flush()?;
+    file.sync_all()
+}
+
+/// Move written outputs into place together: only called once every one of them is on
+/// disk, so that a failed write leaves no output at all. The directories are synced so
+/// that the renames are durable too.
+pub fn commit_all(files: impl IntoIterator<Item = Written>) -> Result<()> {
+    let mut files: Vec<Written> = files.into_iter().collect();
+    let mut dirs: Vec<PathBuf> = Vec::new();
+    for Written(f) in &mut files {
+        std::fs::rename(&f.temp, &f.target)
+            .with_context(|| format!("{}: cannot move the finished output into place", f.given.display()))?;
+        f.committed = true;
+        if let Some(dir) = f.target.parent().filter(|d| !dirs.iter().any(|x| x == d)) {
+            dirs.push(dir.to_path_buf());
+        }
+    }
+    for dir in dirs {
+        File::open(&dir)
+            .and_then(|d| d.sync_all())
+            .with_context(|| format!("{}: cannot sync the directory of the outputs", dir.display()))?;
+    }
+    Ok(())
+}
+
+fn file_kind(t: &std::fs::FileType) -> &'static str {
+    use std::os::unix::fs::FileTypeExt;
+    if t.is_char_device() {
+        "a character device"
+    } else if t.is_block_device() {
+        "a block device"
+    } else if t.is_fifo() {
+        "a FIFO (named pipe)"
+    } else if t.is_socket() {
+        "a socket"
+    } else {
+        "not a file"
     }
 }
 
@@ -79,22 +195,30 @@ impl Drop for OutputFile {
     }
 }
 
-/// Encode RGBA8 pixels as PNG into `out`.
-pub fn write_png(out: OutputFile, width: u32, height: u32, rgba: &[u8]) -> Result<()> {
+/// Encode RGBA8 pixels as PNG. The encoder writes into memory, where finishing (the final
+/// chunk, written when it is dropped) cannot fail.
+fn encode_png(width: u32, height: u32, rgba: &[u8]) -> Result<Vec<u8>> {
     let img = image::RgbaImage::from_raw(width, height, rgba.to_vec()).context("image buffer has the wrong size")?;
-    img.save_with_format(out.temp_path(), image::ImageFormat::Png)
-        .with_context(|| format!("{}: cannot encode PNG", out.path().display()))?;
-    out.commit()
+    encode(image::DynamicImage::ImageRgba8(img), image::ImageFormat::Png)
+}
+
+/// Encode an image into memory (see [`encode_png`]).
+pub fn encode(img: image::DynamicImage, format: image::ImageFormat) -> Result<Vec<u8>> {
+    let mut bytes = io::Cursor::new(Vec::new());
+    img.write_to(&mut bytes, format).with_context(|| format!("cannot encode {format:?}"))?;
+    Ok(bytes.into_inner())
+}
+
+/// Encode RGBA8 pixels as PNG into `out`.
+pub fn write_png(out: OutputFile, width: u32, height: u32, rgba: &[u8]) -> Result<Written> {
+    out.write(&encode_png(width, height, rgba)?)
 }
 
 /// Encode linear RGBA f32 radiance as an RGB f32 OpenEXR file (unscaled, per SCENES.md).
-pub fn write_exr(out: OutputFile, width: u32, height: u32, rgba: &[f32]) -> Result<()> {
+pub fn write_exr(out: OutputFile, width: u32, height: u32, rgba: &[f32]) -> Result<Written> {
     let rgb: Vec<f32> = rgba.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect();
     let img = image::Rgb32FImage::from_raw(width, height, rgb).context("image buffer has the wrong size")?;
-    image::DynamicImage::ImageRgb32F(img)
-        .save_with_format(out.temp_path(), image::ImageFormat::OpenExr)
-        .with_context(|| format!("{}: cannot encode EXR", out.path().display()))?;
-    out.commit()
+    out.write(&encode(image::DynamicImage::ImageRgb32F(img), image::ImageFormat::OpenExr)?)
 }
 
 /// The PNG rule of SCENES.md on the CPU, identical to glsl/tonemap/tonemap.frag:
@@ -183,4 +307,89 @@ pub fn tonemap_adaptive_with(rgba: &[f32], p: &TonemapAdaptiveParams, exposure: 
             [srgb8(c[0] * ratio), srgb8(c[1] * ratio), srgb8(c[2] * ratio), 255]
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A fresh directory for one test.
+    fn scratch(name: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("prism-output-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    fn listing(dir: &Path) -> Vec<String> {
+        let mut v: Vec<_> =
+            std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+        v.sort();
+        v
+    }
+
+    #[test]
+    fn a_full_device_is_an_error() {
+        let mut full = OpenOptions::new().write(true).open("/dev/full").unwrap();
+        let e = write_durably(&mut full, &[0u8; 100_000]).unwrap_err();
+        assert_eq!(e.kind(), io::ErrorKind::StorageFull, "{e}");
+    }
+
+    #[test]
+    fn a_failed_write_leaves_neither_target_nor_temp() {
+        let dir = scratch("failed");
+        let mut outputs = Outputs::default();
+        let png = outputs.prepare(&dir.join("a.png")).unwrap();
+        let exr = outputs.prepare(&dir.join("a.exr")).unwrap();
+        assert_eq!(listing(&dir).len(), 2, "the temporary files exist while the outputs are pending");
+        let png = png.write(b"png").unwrap();
+        let e = exr.write_with(|_| Err(io::Error::from(io::ErrorKind::StorageFull))).err().unwrap();
+        assert!(format!("{e:#}").contains("a.exr: cannot write output"), "{e:#}");
+        drop(png);
+        assert!(listing(&dir).is_empty(), "{:?}", listing(&dir));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn outputs_commit_together() {
+        let dir = scratch("together");
+        let mut outputs = Outputs::default();
+        let a = outputs.prepare(&dir.join("a.csv")).unwrap().write(b"a").unwrap();
+        let b = outputs.prepare(&dir.join("b.svg")).unwrap().write(b"b").unwrap();
+        assert_eq!(listing(&dir).iter().filter(|n| !n.starts_with(".prism-tmp-")).count(), 0);
+        commit_all([a, b]).unwrap();
+        assert_eq!(listing(&dir), ["a.csv", "b.svg"]);
+        assert_eq!(std::fs::read(dir.join("b.svg")).unwrap(), b"b");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn non_regular_files_and_names_given_twice_are_refused() {
+        let dir = scratch("refused");
+        for dev in ["/dev/null", "/dev/full"] {
+            let e = OutputFile::prepare(Path::new(dev)).err().unwrap().to_string();
+            assert!(e.starts_with(dev) && e.contains("a character device, not a regular file"), "{e}");
+        }
+        let fifo = dir.join("fifo");
+        assert!(std::process::Command::new("mkfifo").arg(&fifo).status().unwrap().success());
+        let e = OutputFile::prepare(&fifo).err().unwrap().to_string();
+        assert!(e.contains("a FIFO (named pipe), not a regular file"), "{e}");
+        std::fs::create_dir(dir.join("sub")).unwrap();
+        assert!(OutputFile::prepare(&dir.join("sub")).err().unwrap().to_string().contains("is a directory"));
+        // The same file under two names: spelt differently, and through a symlink.
+        std::fs::write(dir.join("x.png"), b"old").unwrap();
+        std::os::unix::fs::symlink(dir.join("x.png"), dir.join("link.png")).unwrap();
+        for other in [dir.join("sub/../x.png"), dir.join("link.png")] {
+            let mut outputs = Outputs::default();
+            let _first = outputs.prepare(&dir.join("x.png")).unwrap();
+            let e = outputs.prepare(&other).err().unwrap().to_string();
+            assert!(e.contains("named twice as an output") && e.contains("x.png"), "{e}");
+        }
+        // A symlink to a regular file is followed: the file is replaced, the link kept.
+        OutputFile::prepare(&dir.join("link.png")).unwrap().commit_bytes(b"new").unwrap();
+        assert!(std::fs::symlink_metadata(dir.join("link.png")).unwrap().file_type().is_symlink());
+        assert_eq!(std::fs::read(dir.join("x.png")).unwrap(), b"new");
+        assert_eq!(listing(&dir), ["fifo", "link.png", "sub", "x.png"]);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }

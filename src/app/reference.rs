@@ -8,7 +8,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::reference::{Reference, ReferenceSettings};
 
-use super::output::{self, OutputFile};
+use super::output::{self, Outputs};
 use super::{check_validation, GpuArgs, SceneArgs};
 
 /// Settings of the reference renderer, shared by `reference`, `compare` and `sweep`.
@@ -94,22 +94,22 @@ pub fn run(args: ReferenceCmd) -> Result<()> {
     let scene = args.scene.load()?;
     let settings = args.reference.settings();
     settings.validate()?;
-    let out = OutputFile::prepare(&args.output)?;
-    let png = args.png.as_deref().map(OutputFile::prepare).transpose()?;
+    let mut outputs = Outputs::default();
+    let out = outputs.prepare(&args.output)?;
+    let png = outputs.prepare_opt(args.png.as_deref())?;
     let ctx = args.gpu.context()?;
     let t = std::time::Instant::now();
     let image = render_reference(&ctx, &scene, &settings)?;
     check_validation(&ctx)?;
     let (w, h) = (scene.camera.width, scene.camera.height);
     let is_png = args.output.extension().is_some_and(|e| e.eq_ignore_ascii_case("png"));
-    if is_png {
-        output::write_png(out, w, h, &output::tonemap_scene(&image, &scene.render))?;
+    let out = if is_png {
+        output::write_png(out, w, h, &output::tonemap_scene(&image, &scene.render))?
     } else {
-        output::write_exr(out, w, h, &image)?;
-    }
-    if let Some(png) = png {
-        output::write_png(png, w, h, &output::tonemap_scene(&image, &scene.render))?;
-    }
+        output::write_exr(out, w, h, &image)?
+    };
+    let png = png.map(|png| output::write_png(png, w, h, &output::tonemap_scene(&image, &scene.render))).transpose()?;
+    output::commit_all(std::iter::once(out).chain(png))?;
     eprintln!(
         "wrote {} ({w}x{h}, scene {}, {} spp, {} photons, {:.1} s on {})",
         args.output.display(),

@@ -9,8 +9,8 @@ use anyhow::{Context, Result};
 use clap::Args;
 
 use super::compare::{cached_reference, measure, MeasureArgs};
-use super::output::{self, OutputFile};
-use super::sweep::{cartesian, metric_of, parse_params, plot, short_label};
+use super::output::{self, Outputs};
+use super::sweep::{cartesian, metric_of, parse_params, plot_svg, short_label};
 use super::{check_validation, GpuArgs, SceneArgs};
 
 #[derive(Args, Debug)]
@@ -59,7 +59,11 @@ pub fn run(args: ReportArgs) -> Result<()> {
     // With --only, the sections of the entries not measured now are kept from the file as it is.
     let previous = if args.only.is_empty() { None } else { std::fs::read_to_string(&args.out).ok() };
     let previous = previous.as_deref().map(Previous::parse);
-    let out = OutputFile::prepare(&args.out)?;
+    let mut outputs = Outputs::default();
+    let out = outputs.prepare(&args.out)?;
+    // The plots and image strips, written as the entries are measured and moved into place
+    // with the report itself.
+    let mut written = Vec::new();
     let base = args.out.parent().map(|p| p.to_path_buf()).unwrap_or_default();
     let assets = base.join("accuracy");
     std::fs::create_dir_all(&assets).with_context(|| format!("cannot create {}", assets.display()))?;
@@ -160,15 +164,9 @@ pub fn run(args: ReportArgs) -> Result<()> {
                 rows.iter().map(|r| Ok((r.2.frame.median_ms, metric_of(&r.2, "flip_mean")?))).collect::<Result<_>>()?;
             let labels: Vec<String> = rows.iter().map(|r| short_label(&r.0)).collect();
             let name = format!("{stem}-sweep");
-            plot(
-                &assets.join(format!("{name}.svg")),
-                // The report links the SVG; a PNG copy would only add weight to the repository.
-                None,
-                &format!("{}: FLIP against GPU time", e.scene),
-                "FLIP mean",
-                &points,
-                &labels,
-            )?;
+            // The report links the SVG; a PNG copy would only add weight to the repository.
+            let svg = plot_svg(&format!("{}: FLIP against GPU time", e.scene), "FLIP mean", &points, &labels)?;
+            written.push(outputs.prepare(&assets.join(format!("{name}.svg")))?.write(svg.as_bytes())?);
             writeln!(md, "![{name}](accuracy/{name}.svg)\n")?;
         }
         // Images of the last (usually most accurate) setting: technique | reference | FLIP.
@@ -184,7 +182,7 @@ pub fn run(args: ReportArgs) -> Result<()> {
             }
         }
         let name = format!("{stem}-images.png");
-        output::write_png(OutputFile::prepare(&assets.join(&name))?, 3 * w, h, &strip)?;
+        written.push(output::write_png(outputs.prepare(&assets.join(&name))?, 3 * w, h, &strip)?);
         writeln!(
             md,
             "![{}](accuracy/{name})\n\n*Left to right: the technique, the reference, the FLIP error map.*\n",
@@ -192,7 +190,8 @@ pub fn run(args: ReportArgs) -> Result<()> {
         )?;
         writeln!(md, "{provenance}")?;
     }
-    out.commit_bytes(md.as_bytes())?;
+    written.push(out.write(md.as_bytes())?);
+    output::commit_all(written)?;
     eprintln!("wrote {}", args.out.display());
     Ok(())
 }

@@ -8,7 +8,7 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 
 use super::compare::{cached_reference, measure, print_measurement, MeasureArgs, Measurement};
-use super::output::OutputFile;
+use super::output::{self, Outputs};
 use super::{check_validation, GpuArgs, SceneArgs};
 
 #[derive(Args, Debug)]
@@ -106,22 +106,27 @@ pub fn metric_of(m: &Measurement, name: &str) -> Result<f64> {
     })
 }
 
-/// A scatter plot of (time, error) with labels and the Pareto front, to SVG (and PNG if asked).
-pub fn plot(
-    path_svg: &Path,
-    path_png: Option<&Path>,
-    title: &str,
-    y_label: &str,
-    points: &[(f64, f64)],
-    labels: &[String],
-) -> Result<()> {
-    use plotters::prelude::*;
+/// The size of a plot in pixels.
+const PLOT_SIZE: (u32, u32) = (900, 600);
+
+/// A scatter plot of (time, error) with labels and the Pareto front, as SVG text.
+pub fn plot_svg(title: &str, y_label: &str, points: &[(f64, f64)], labels: &[String]) -> Result<String> {
+    use plotters::prelude::{IntoDrawingArea, SVGBackend};
     register_font()?;
-    draw_plot(SVGBackend::new(path_svg, (900, 600)).into_drawing_area(), title, y_label, points, labels)?;
-    if let Some(path_png) = path_png {
-        draw_plot(BitMapBackend::new(path_png, (900, 600)).into_drawing_area(), title, y_label, points, labels)?;
-    }
-    Ok(())
+    let mut svg = String::new();
+    draw_plot(SVGBackend::with_string(&mut svg, PLOT_SIZE).into_drawing_area(), title, y_label, points, labels)?;
+    Ok(svg)
+}
+
+/// [`plot_svg`]'s plot as PNG bytes.
+pub fn plot_png(title: &str, y_label: &str, points: &[(f64, f64)], labels: &[String]) -> Result<Vec<u8>> {
+    use plotters::prelude::{BitMapBackend, IntoDrawingArea};
+    register_font()?;
+    let (w, h) = PLOT_SIZE;
+    let mut rgb = vec![0u8; (w * h * 3) as usize];
+    draw_plot(BitMapBackend::with_buffer(&mut rgb, PLOT_SIZE).into_drawing_area(), title, y_label, points, labels)?;
+    let img = image::RgbImage::from_raw(w, h, rgb).context("plot buffer has the wrong size")?;
+    output::encode(image::DynamicImage::ImageRgb8(img), image::ImageFormat::Png)
 }
 
 fn draw_plot<DB: plotters::prelude::DrawingBackend>(
@@ -282,9 +287,10 @@ pub fn run(args: SweepArgs) -> Result<()> {
         PathBuf::from(format!("{}.svg", args.out)),
         PathBuf::from(format!("{}.png", args.out)),
     );
-    let csv_out = OutputFile::prepare(&csv_path)?;
-    let svg_out = OutputFile::prepare(&svg_path)?;
-    let png_out = OutputFile::prepare(&png_path)?;
+    let mut outputs = Outputs::default();
+    let csv_out = outputs.prepare(&csv_path)?;
+    let svg_out = outputs.prepare(&svg_path)?;
+    let png_out = outputs.prepare(&png_path)?;
     let ctx = args.gpu.context()?;
     let mut rows = Vec::new();
     for (o, scene) in rows_overrides.iter().zip(&scenes) {
@@ -303,11 +309,12 @@ pub fn run(args: SweepArgs) -> Result<()> {
         .collect::<Result<_>>()?;
     let labels: Vec<String> = rows.iter().map(|r| short_label(&r.setting)).collect();
     let title = format!("{}: {} against GPU time ({})", scenes[0].name, args.metric, ctx.info.name);
-    plot(svg_out.temp_path(), Some(png_out.temp_path()), &title, &args.metric, &points, &labels)?;
     // All outputs appear together, only once everything has succeeded.
-    csv_out.commit_bytes(table.as_bytes())?;
-    svg_out.commit()?;
-    png_out.commit()?;
+    output::commit_all([
+        csv_out.write(table.as_bytes())?,
+        svg_out.write(plot_svg(&title, &args.metric, &points, &labels)?.as_bytes())?,
+        png_out.write(&plot_png(&title, &args.metric, &points, &labels)?)?,
+    ])?;
     eprintln!("wrote {}, {}, {}", csv_path.display(), svg_path.display(), png_path.display());
     Ok(())
 }
