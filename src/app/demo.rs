@@ -493,7 +493,7 @@ impl Running {
                     self.register_swapchain();
                 }
                 if let Some(change) = self.change.take() {
-                    eprintln!("demo: frame {}: {change}: {} ({} ms)", self.frames, update.describe(), update.ms);
+                    eprintln!("demo: frame {}: {change}: {} {}", self.frames, update.describe(), update.cost());
                     self.ui.status = Some(format!("{change}: {}", update.describe()));
                 }
                 let camera_moved = scene.camera.position != self.scene.camera.position
@@ -553,7 +553,7 @@ impl Running {
                     self.register_swapchain();
                 }
                 let names = compiled.iter().map(|r| format!("glsl/{r}")).collect::<Vec<_>>().join(", ");
-                eprintln!("demo: frame {}: {names} recompiled: {} ({} ms)", self.frames, update.describe(), update.ms);
+                eprintln!("demo: frame {}: {names} recompiled: {} {}", self.frames, update.describe(), update.cost());
                 self.ui.status = Some(format!("{names} recompiled"));
                 if errors.is_empty() {
                     self.ui.error = None;

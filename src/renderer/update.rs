@@ -89,11 +89,17 @@ impl Update {
         if parts.is_empty() {
             parts.push("updated the uniforms only".to_string());
         }
-        let crate::gpu::PipelineCounts { made, reused } = self.pipelines;
-        if made + reused > 0 {
-            parts.push(format!("pipelines: {reused} kept, {made} made"));
-        }
         parts.join("; ")
+    }
+
+    /// Its time for a log, and the pipelines its re-created techniques kept and made:
+    /// `(3 ms; pipelines: 7 kept, 0 made)`.
+    pub fn cost(&self) -> String {
+        let crate::gpu::PipelineCounts { made, reused } = self.pipelines;
+        match made + reused {
+            0 => format!("({} ms)", self.ms),
+            _ => format!("({} ms; pipelines: {reused} kept, {made} made)", self.ms),
+        }
     }
 }
 
