@@ -1,5 +1,6 @@
 //! The pass list is derived from the scene (model only what the scene requires), and
-//! `prism passes` prints it with reasons.
+//! `prism passes` prints it with reasons; `prism scenes` and `prism --help` list the
+//! scenes there are.
 mod common;
 
 use prism::renderer::plan::plan;
@@ -272,6 +273,74 @@ fn prism_passes_prints_the_passes_and_why() {
     let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let names: Vec<_> = json.as_array().unwrap().iter().map(|p| p["name"].as_str().unwrap().to_string()).collect();
     assert_eq!(names, ["gbuffer", "deferred_shading", "refraction_single", "tonemap"]);
+}
+
+/// The scene files in assets/scenes/, listed here independently of the library.
+fn scene_files() -> Vec<String> {
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/scenes");
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .filter_map(|e| e.unwrap().file_name().to_str()?.strip_suffix(".toml").map(str::to_string))
+        .collect();
+    names.sort();
+    names
+}
+
+#[test]
+fn prism_scenes_lists_every_bundled_scene_with_its_description_and_techniques() {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_prism")).arg("scenes").output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8_lossy(&out.stdout);
+    // Each scene is a line "  NAME  refraction R, reflection R, caustics C", then its description.
+    let lines: Vec<&str> = text.lines().skip(1).collect();
+    let listed: Vec<&str> = lines.iter().step_by(2).map(|l| l.split_whitespace().next().unwrap()).collect();
+    assert_eq!(listed, scene_files(), "{text}");
+    for pair in lines.chunks(2) {
+        let s = common::scene(pair[0].split_whitespace().next().unwrap(), 64, &[]);
+        let techniques = format!(
+            "refraction {}, reflection {}, caustics {}",
+            s.render.refraction, s.render.reflection, s.render.caustics
+        );
+        assert!(pair[0].ends_with(&techniques), "{}", pair[0]);
+        assert_eq!(pair[1].trim(), s.description.unwrap(), "{text}");
+    }
+}
+
+#[test]
+fn prism_help_names_every_bundled_scene() {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_prism")).arg("--help").output().unwrap();
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains(&scene_files().join(", ")), "{text}");
+    assert!(!text.contains("(later)"), "{text}");
+}
+
+/// The README's `cargo run --release -- ARGS` commands, run as `prism ARGS` in a scratch
+/// directory with the validation layer on, so that what the README shows keeps working.
+/// `demo` needs a window: tests/demo.rs runs it under Xvfb.
+#[test]
+fn readme_commands_run() {
+    let readme = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/README.md")).unwrap();
+    let dir = std::env::temp_dir().join(format!("prism-readme-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut ran = 0;
+    for line in readme.lines() {
+        let Some(command) = line.strip_prefix("cargo run --release -- ") else { continue };
+        let args: Vec<&str> = command.split('#').next().unwrap().split_whitespace().collect();
+        if args[0] == "demo" {
+            continue;
+        }
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_prism"))
+            .args(&args)
+            .current_dir(&dir)
+            .env("PRISM_VALIDATION", "1")
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "prism {command}:\n{}", String::from_utf8_lossy(&out.stderr));
+        ran += 1;
+    }
+    assert!(ran >= 6, "the README's commands were not found");
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// Eikonal rendering (Ihrke et al. 2007): its view pass runs only when the scene has a

@@ -1,4 +1,4 @@
-//! The command line: `prism render`, `prism bench`, `prism passes`. The CLI parses,
+//! The command line: `prism render`, `prism bench`, `prism passes`, `prism scenes`, ... The CLI parses,
 //! loads, and hands work to the renderer; it never records commands itself.
 pub mod bench;
 pub mod compare;
@@ -6,6 +6,7 @@ pub mod demo;
 pub mod output;
 pub mod reference;
 pub mod report;
+pub mod scenes;
 pub mod sweep;
 
 use std::path::{Path, PathBuf};
@@ -25,20 +26,28 @@ use output::Outputs;
     name = "prism",
     version,
     about = "A Vulkan renderer for refraction, reflection and caustics that measures each technique's GPU time against its error.",
-    long_about = "prism renders the scenes of five classic papers on interactive refraction, reflection and caustics \
-                  side by side, times every pass with GPU timestamps and (later) compares each technique against an \
-                  exact reference. It runs headless on any Vulkan 1.2 device, including Mesa's lavapipe on the CPU.\n\n\
-                  SCENE is a path to a .toml scene file or the name of a benchmark scene in assets/scenes/ \
-                  (sphere_env, bunny_env, bubble_env, sphere_nearby, caustic_sphere, caustic_bunny, metal_ring, \
-                  water_pool, room_mirror, room_glass). Without SCENE, the default scene (sphere_nearby) is used. \
-                  Every scene key is documented in docs/scene-format.md.\n\n\
-                  Environment: PRISM_DEVICE picks a device like --device; PRISM_VALIDATION=1 (or sync) enables the \
-                  Vulkan validation layer (and synchronization validation); VK_DRIVER_FILES selects a driver, e.g. \
-                  /usr/share/vulkan/icd.d/lvp_icd.x86_64.json for lavapipe."
+    long_about = long_about()
 )]
 pub struct Cli {
     #[command(subcommand)]
     pub command: Command,
+}
+
+/// `--help`'s description, with the bundled scenes as assets/scenes/ holds them.
+fn long_about() -> String {
+    let scenes = scene::bundled_scenes().map(|n| n.join(", ")).unwrap_or_else(|e| format!("cannot list them: {e}"));
+    format!(
+        "prism renders the scenes of five classic papers on interactive refraction, reflection and caustics \
+         side by side, times every pass with GPU timestamps and compares each technique against an exact \
+         reference (`prism compare`, `prism report`). It runs headless on any Vulkan 1.2 device, including \
+         Mesa's lavapipe on the CPU.\n\n\
+         SCENE is a path to a .toml scene file or the name of a scene in assets/scenes/ ({scenes}; \
+         `prism scenes` describes them). Without SCENE, the default scene (sphere_nearby) is used. \
+         Every scene key is documented in docs/scene-format.md.\n\n\
+         Environment: PRISM_DEVICE picks a device like --device; PRISM_VALIDATION=1 (or sync) enables the \
+         Vulkan validation layer (and synchronization validation); VK_DRIVER_FILES selects a driver, e.g. \
+         /usr/share/vulkan/icd.d/lvp_icd.x86_64.json for lavapipe."
+    )
 }
 
 #[derive(Subcommand, Debug)]
@@ -49,6 +58,8 @@ pub enum Command {
     Bench(bench::BenchArgs),
     /// Print the passes a scene needs and which object, light or setting requires each.
     Passes(PassesArgs),
+    /// List the bundled scenes (assets/scenes/) with their descriptions and techniques.
+    Scenes,
     /// Show a scene in a window: orbit/fly camera, live pass timings and parameters (X11;
     /// headless under xvfb-run). Keys and mouse: see README.md, "Interactive demo".
     Demo(demo::DemoArgs),
@@ -184,6 +195,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Render(args) => render(args),
         Command::Bench(args) => bench::run(args),
         Command::Passes(args) => passes(args),
+        Command::Scenes => scenes::run(),
         Command::Demo(args) => demo::run(args),
         Command::Reference(args) => reference::run(args),
         Command::Compare(args) => compare::run(args),

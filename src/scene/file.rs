@@ -87,6 +87,8 @@ macro_rules! flat_table {
 #[serde(deny_unknown_fields)]
 pub(crate) struct FileScene {
     pub name: Option<String>,
+    /// One line saying what the scene shows (`prism scenes` lists it).
+    pub description: Option<String>,
     pub camera: FileCamera,
     pub environment: Option<FileEnvironment>,
     #[serde(default)]

@@ -69,6 +69,21 @@ pub fn benchmark_scene_path(name: &str) -> PathBuf {
     assets_dir().join("scenes").join(format!("{name}.toml"))
 }
 
+/// The names of the scenes bundled in assets/scenes/ (every `.toml` file there), sorted.
+pub fn bundled_scenes() -> std::io::Result<Vec<String>> {
+    let mut names = Vec::new();
+    for entry in std::fs::read_dir(assets_dir().join("scenes"))? {
+        let path = entry?.path();
+        if path.extension().is_some_and(|e| e == "toml") {
+            if let Some(stem) = path.file_stem() {
+                names.push(stem.to_string_lossy().into_owned());
+            }
+        }
+    }
+    names.sort();
+    Ok(names)
+}
+
 /// The benchmark scenes of SCENES.md, in its order.
 pub const BENCHMARK_SCENES: &[&str] = &[
     "sphere_env",
@@ -87,6 +102,8 @@ pub const BENCHMARK_SCENES: &[&str] = &[
 pub struct Scene {
     /// The file's `name`, or its file stem.
     pub name: String,
+    /// The file's `description`: one line saying what the scene shows.
+    pub description: Option<String>,
     /// The scene file (or the `origin` given to [`load_str`]).
     pub source: PathBuf,
     pub camera: Camera,
@@ -324,8 +341,17 @@ fn build(f: FileScene, src: &Source) -> Result<Scene, SceneError> {
     let name = f.name.clone().unwrap_or_else(|| {
         src.file.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "scene".to_string())
     });
+    if f.description.as_deref().is_some_and(|d| d.contains('\n')) {
+        return Err(value_err(
+            src,
+            "description",
+            "`description` spans several lines".into(),
+            "write one line: it is what `prism scenes` prints",
+        ));
+    }
     Ok(Scene {
         name,
+        description: f.description.clone(),
         source: src.file.clone(),
         camera,
         environment,

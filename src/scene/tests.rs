@@ -607,3 +607,25 @@ fn tone_map_setting_and_adaptive_parameters() {
         assert!(e.contains("--set"), "{bad}: {e}");
     }
 }
+
+#[test]
+fn every_bundled_scene_has_a_one_line_description() {
+    let names = bundled_scenes().unwrap();
+    for name in BENCHMARK_SCENES {
+        assert!(names.iter().any(|n| n == name), "{name} is not in assets/scenes/");
+    }
+    for name in &names {
+        let d = bench(name).description.unwrap_or_default();
+        assert!(!d.is_empty() && !d.contains('\n'), "{name}: {d:?}");
+    }
+}
+
+#[test]
+fn description_is_one_line() {
+    let s = load_str(&format!("description = \"a ball\"\n{BASE}"), Path::new("test.toml"), &[]).unwrap();
+    assert_eq!(s.description.as_deref(), Some("a ball"));
+    let e = load_str(&format!("description = \"\"\"a\nball\"\"\"\n{BASE}"), Path::new("test.toml"), &[]).unwrap_err();
+    assert!(e.to_string().contains("description"), "{e}");
+    let e = load_str(&format!("descripton = \"a ball\"\n{BASE}"), Path::new("test.toml"), &[]).unwrap_err();
+    assert!(e.to_string().contains("descripton"), "{e}");
+}
