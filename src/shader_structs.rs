@@ -239,6 +239,18 @@ shared_structs! {
         object: uvec4,
     }
 
+    /// Push constants of glsl/caustics/photon_buffer.frag.
+    push struct PhotonBufferPush {
+        /// x: source face, y: photon buffer size, z: rectangles
+        info: uvec4,
+    }
+
+    /// Push constants of glsl/caustics/photon_scatter.vert.
+    push struct PhotonScatterPush {
+        /// x: photon buffer size, y: source faces, z: this layer's k (rectangle index + 1)
+        info: uvec4,
+    }
+
     /// Push constants of glsl/caustics/photon_filter.frag.
     push struct PhotonFilterPush {
         /// x: layer, y: k, z: PHOTON_PHYSICAL or PHOTON_PAPER

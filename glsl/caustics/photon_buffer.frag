@@ -24,9 +24,7 @@ layout(set = 0, binding = CAUSTIC_BINDING_BACK_NORMAL) uniform sampler2DArray ba
 layout(set = 0, binding = PHOTON_BINDING_RECTS, std430) readonly buffer Rects { GpuPhotonRect rects[]; };
 #include "light_path.glsl"
 
-layout(push_constant) uniform Push {
-    uvec4 info;   // x: source face, y: photon buffer size, z: rectangles
-} pc;
+layout(push_constant) uniform PhotonBufferPushBlock { PhotonBufferPush pc; };
 
 layout(location = 0) out vec4 out_photon;
 layout(location = 1) out vec4 out_flux;

@@ -5,11 +5,10 @@
 // (vertex texture fetch) and places the point on texel (u, v) of TEX_CAUSTICS_k, and
 // additive blending counts the photons (alpha) and sums their power (rgb). One draw per
 // rectangle (array layer): a photon of another rectangle is dropped.
+#include "prism_shared.glsl"
 layout(set = 0, binding = 0) uniform sampler2DArray photons;
 layout(set = 0, binding = 1) uniform sampler2DArray photon_flux;
-layout(push_constant) uniform Push {
-    uvec4 info;   // x: photon buffer size, y: source faces, z: this layer's k (rectangle index + 1)
-} pc;
+layout(push_constant) uniform PhotonScatterPushBlock { PhotonScatterPush pc; };
 layout(location = 0) flat out vec4 out_photon;
 
 void main() {

@@ -50,7 +50,7 @@ use crate::graph::{Bindings, BoundSet, Frame, FrameGraph, ImageId};
 use crate::scene::techniques::{PhotonBufferParams, PhotonNormalization};
 use crate::scene::Scene;
 pub use crate::shader_structs::GpuPhotonRect;
-use crate::shader_structs::PhotonFilterPush;
+use crate::shader_structs::{PhotonBufferPush, PhotonFilterPush, PhotonScatterPush};
 use crate::technique::caustics::caustics_map::{is_specular, refractor_bindings, RefractorLayers};
 use crate::technique::refraction::nearby_impostors::{nearby_objects, rect_for};
 use crate::technique::{
@@ -116,7 +116,7 @@ impl Technique for PhotonBufferPass {
                     let clears = [Clear::Color([0.0; 4]), Clear::Color([0.0; 4])];
                     cmd.in_target(&self.photon_target, s as usize, &clears, |cmd| {
                         cmd.bind_graphics(&self.photon_pipeline, &[self.photon_set.set()]);
-                        cmd.push_graphics(&self.photon_pipeline, &[s, size, rects, 0]);
+                        cmd.push_graphics(&self.photon_pipeline, &PhotonBufferPush { info: [s, size, rects, 0] });
                         cmd.draw(3, 1);
                     });
                 }
@@ -127,7 +127,10 @@ impl Technique for PhotonBufferPass {
                 for i in 0..rects {
                     cmd.in_target(&self.scatter_target, i as usize, &[Clear::Color([0.0; 4])], |cmd| {
                         cmd.bind_graphics(&self.scatter_pipeline, &[self.scatter_set.set()]);
-                        cmd.push_graphics(&self.scatter_pipeline, &[size, self.faces, i + 1, 0]);
+                        cmd.push_graphics(
+                            &self.scatter_pipeline,
+                            &PhotonScatterPush { info: [size, self.faces, i + 1, 0] },
+                        );
                         cmd.draw(size * size * self.faces, 1);
                     });
                 }
@@ -321,7 +324,7 @@ impl PhotonBufferPass {
                 ..GraphicsPipelineDesc::fullscreen(PHOTON_BUFFER, "caustics/photon_buffer.frag")
             },
             &[photon_set.layout()],
-            16,
+            std::mem::size_of::<PhotonBufferPush>() as u32,
             &photon_target.pass,
         )?;
 
@@ -345,7 +348,7 @@ impl PhotonBufferPass {
                 ..GraphicsPipelineDesc::fullscreen(PHOTON_BUFFER_SCATTER, "caustics/photon_scatter.frag")
             },
             &[scatter_set.layout()],
-            16,
+            std::mem::size_of::<PhotonScatterPush>() as u32,
             &scatter_target.pass,
         )?;
 
