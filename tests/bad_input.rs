@@ -442,3 +442,30 @@ fn absurd_frame_counts_are_refused() {
     }
     assert_eq!(c.listing(), ["scene.toml"]);
 }
+
+#[test]
+fn input_files_that_are_not_regular_or_too_large_are_refused() {
+    let c = Case::new("inputs");
+    // The scene file itself: a device that never ends, and a directory.
+    for scene in [Path::new("/dev/zero"), c.dir.as_path()] {
+        let e = c.render_fails(scene, &[], &[]);
+        assert!(e.contains(&scene.display().to_string()) && e.contains("not a regular file"), "{e}");
+    }
+    // A mesh and an environment image the scene names.
+    let mesh = c.file(
+        "mesh.toml",
+        &GOOD.replace("shape = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1", "shape = \"mesh\"\nfile = \"/dev/zero\""),
+    );
+    let env = c.file(
+        "env.toml",
+        &GOOD.replace("type = \"constant\"\nradiance = 0.5", "type = \"image\"\nfile = \"/dev/zero\""),
+    );
+    for scene in [mesh, env] {
+        let e = c.render_fails(&scene, &[], &[]);
+        assert!(e.contains("/dev/zero") && e.contains("not a regular file"), "{e}");
+    }
+    // A scene file over the 16 MiB cap (a valid scene padded with a comment).
+    let big = c.file("big.toml", &format!("{GOOD}#{}\n", "x".repeat(16 << 20)));
+    let e = c.render_fails(&big, &[], &[]);
+    assert!(e.contains("big.toml") && e.contains("16 MiB"), "{e}");
+}

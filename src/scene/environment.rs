@@ -140,6 +140,7 @@ fn srgb_to_linear(c: f32) -> f32 {
 
 /// Reads an .exr, .hdr or .png as linear RGBA (PNG is decoded from sRGB).
 pub(crate) fn read_image(path: &Path) -> Result<(u32, u32, Vec<[f32; 4]>), String> {
+    super::read::regular_file(path).map_err(|e| e.to_string())?;
     let img =
         image::ImageReader::open(path).map_err(|e| e.to_string())?.with_guessed_format().map_err(|e| e.to_string())?;
     let is_png = img.format() == Some(image::ImageFormat::Png);

@@ -127,7 +127,7 @@ fn obj_err(kind: ErrorKind, line: Option<usize>, message: String, hint: &str) ->
 /// Reads and validates an OBJ file (triangulated, one index per vertex). Normals from
 /// the file are kept (normalized); missing ones are computed, area-weighted.
 pub(crate) fn load_obj(path: &Path) -> Result<Mesh, ObjError> {
-    let text = std::fs::read_to_string(path).map_err(|e| {
+    let text = super::read::read_text(path, super::read::MAX_MESH_BYTES).map_err(|e| {
         obj_err(
             ErrorKind::MissingFile,
             None,

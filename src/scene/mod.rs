@@ -10,6 +10,7 @@ mod environment;
 mod error;
 mod file;
 mod mesh;
+mod read;
 mod shapes;
 pub mod techniques;
 mod volume;
@@ -304,7 +305,8 @@ impl Default for RenderSettings {
 
 /// Loads the scene file at `path`, applying `overrides` ("dotted.key=value").
 pub fn load(path: &Path, overrides: &[String]) -> Result<Scene, SceneError> {
-    let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io { path: path.to_path_buf(), source })?;
+    let text = read::read_text(path, read::MAX_SCENE_BYTES)
+        .map_err(|source| SceneError::Io { path: path.to_path_buf(), source })?;
     load_str(&text, path, overrides)
 }
 
