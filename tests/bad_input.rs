@@ -469,3 +469,12 @@ fn input_files_that_are_not_regular_or_too_large_are_refused() {
     let e = c.render_fails(&big, &[], &[]);
     assert!(e.contains("big.toml") && e.contains("16 MiB"), "{e}");
 }
+
+#[test]
+fn a_very_deep_override_key_is_refused() {
+    let c = Case::new("deep");
+    let scene = c.file("scene.toml", GOOD);
+    let deep = format!("render.{}=1", vec!["a"; 50_000].join("."));
+    let e = c.render_fails(&scene, &["--set", &deep], &[]);
+    assert!(e.contains("more than 64 segments"), "{}", &e[e.len().saturating_sub(400)..]);
+}

@@ -339,6 +339,10 @@ impl Override {
     }
 }
 
+/// Most segments in a `--set` key: the deepest scene key has a handful, and applying an
+/// override recurses once per segment.
+pub(crate) const MAX_OVERRIDE_DEPTH: usize = 64;
+
 pub(crate) fn parse_override(raw: &str) -> Result<Override, SceneError> {
     let fail = |message: &str| SceneError::Override {
         set: raw.to_string(),
@@ -350,6 +354,9 @@ pub(crate) fn parse_override(raw: &str) -> Result<Override, SceneError> {
     let key = key.trim();
     if key.is_empty() {
         return Err(fail("empty key"));
+    }
+    if key.split('.').count() > MAX_OVERRIDE_DEPTH {
+        return Err(fail(&format!("the dotted key has more than {MAX_OVERRIDE_DEPTH} segments")));
     }
     let path: Vec<String> = key.split('.').map(|s| s.trim().to_string()).collect();
     if path.iter().any(|s| s.is_empty()) {
