@@ -478,3 +478,25 @@ fn a_very_deep_override_key_is_refused() {
     let e = c.render_fails(&scene, &["--set", &deep], &[]);
     assert!(e.contains("more than 64 segments"), "{}", &e[e.len().saturating_sub(400)..]);
 }
+
+#[test]
+fn huge_and_tiny_finite_values_are_refused_with_the_range() {
+    let c = Case::new("huge");
+    let nearby = Path::new("sphere_nearby");
+    for (set, key, range) in [
+        ("objects.0.size=[1e38,1e38]", "size", "1e-6 to 1e6"),
+        ("objects.3.radius=1e30", "radius", "1e-6 to 1e6"),
+        ("objects.3.radius=1e-30", "radius", "1e-6 to 1e6"),
+        ("objects.3.center=[0,0,1e30]", "center", "1e-6 to 1e6"),
+        ("camera.position=[0,1e-30,5]", "position", "1e-6 to 1e6"),
+        ("camera.vfov_deg=1e-30", "vfov_deg", "0.01 to 179"),
+        ("camera.vfov_deg=179.5", "vfov_deg", "0.01 to 179"),
+    ] {
+        let e = c.render_fails(nearby, &["--set", set], &[]);
+        assert!(e.contains(set) && e.contains(key) && e.contains(range), "{set}: {e}");
+    }
+    // A transform's scale (a mesh's as any other object's).
+    let scene = c.file("scene.toml", &GOOD.replace("radius = 1", "radius = 1\ntransform = { scale = 1e30 }"));
+    let e = c.render_fails(&scene, &[], &[]);
+    assert!(e.contains("scene.toml:24") && e.contains("scale") && e.contains("1e-6 to 1e6"), "{e}");
+}

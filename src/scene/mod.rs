@@ -406,6 +406,25 @@ fn finite(src: &Source, path: &str, v: f32) -> Result<f32, SceneError> {
     checked_finite(src, path, v, v.is_finite())
 }
 
+/// The magnitudes a length, size, scale or coordinate may have (where non-zero). Scenes
+/// are rendered correctly from 1e-3 to 1e4 metres (tests/stability.rs); this leaves room
+/// on both sides while refusing values whose squares or products leave f32's range.
+pub const SCALE_RANGE: (f32, f32) = (1e-6, 1e6);
+
+/// The open range of `camera.vfov_deg`, in degrees.
+pub const VFOV_RANGE: (f32, f32) = (0.01, 179.0);
+
+fn out_of_range(src: &Source, path: &str, what: &str, v: f32) -> SceneError {
+    let (lo, hi) = SCALE_RANGE;
+    value_err(
+        src,
+        path,
+        format!("`{}` {what} from {lo:e} to {hi:e}, not {v:e}", leaf(path)),
+        "scene lengths are in metres; scale the whole scene into range",
+    )
+}
+
+/// A length, size, scale or exposure: greater than 0 and within [`SCALE_RANGE`].
 // `!(v > 0.0)` rather than `v <= 0.0`: it also rejects NaN.
 #[allow(clippy::neg_cmp_op_on_partial_ord)]
 fn positive(src: &Source, path: &str, v: f32) -> Result<f32, SceneError> {
@@ -416,6 +435,19 @@ fn positive(src: &Source, path: &str, v: f32) -> Result<f32, SceneError> {
             format!("`{}` must be greater than 0, not {v}", leaf(path)),
             "use a positive number (lengths are in metres)",
         ));
+    }
+    if !(SCALE_RANGE.0..=SCALE_RANGE.1).contains(&v) {
+        return Err(out_of_range(src, path, "must be", v));
+    }
+    Ok(v)
+}
+
+/// A point or offset in metres: each coordinate 0 or within [`SCALE_RANGE`] in magnitude.
+fn point(src: &Source, path: &str, v: [f32; 3]) -> Result<Vec3, SceneError> {
+    let v = vec3(src, path, v)?;
+    let (lo, hi) = SCALE_RANGE;
+    if let Some(c) = v.to_array().into_iter().find(|c| *c != 0.0 && !(lo..=hi).contains(&c.abs())) {
+        return Err(out_of_range(src, path, "coordinates must be 0 or in magnitude", c));
     }
     Ok(v)
 }
@@ -441,7 +473,7 @@ fn rgb(src: &Source, path: &str, c: Rgb, strict: bool) -> Result<Vec3, SceneErro
 /// included). Returns the matrix, its rotation and its scale.
 fn transform(src: &Source, path: &str, t: Option<&file::FileTransform>) -> Result<(Mat4, Quat, f32), SceneError> {
     let p = |k: &str| format!("{path}.transform.{k}");
-    let translation = vec3(src, &p("translation"), t.and_then(|t| t.translation).unwrap_or_default())?;
+    let translation = point(src, &p("translation"), t.and_then(|t| t.translation).unwrap_or_default())?;
     let rot_deg = vec3(src, &p("rotation"), t.and_then(|t| t.rotation).unwrap_or_default())?;
     let scale = positive(src, &p("scale"), t.and_then(|t| t.scale).unwrap_or(1.0))?;
     let rotation = Quat::from_rotation_z(rot_deg.z.to_radians())
@@ -575,15 +607,15 @@ fn render_settings(t: Option<&toml::Table>, src: &Source) -> Result<RenderSettin
 }
 
 fn camera(c: &file::FileCamera, src: &Source) -> Result<Camera, SceneError> {
-    let position = vec3(src, "camera.position", c.position)?;
-    let target = vec3(src, "camera.target", c.target)?;
+    let position = point(src, "camera.position", c.position)?;
+    let target = point(src, "camera.target", c.target)?;
     let up = unit(src, "camera.up", c.up.unwrap_or([0.0, 1.0, 0.0]))?;
     let vfov_deg = finite(src, "camera.vfov_deg", c.vfov_deg.unwrap_or(40.0))?;
-    if !(vfov_deg > 0.0 && vfov_deg < 180.0) {
+    if !(vfov_deg >= VFOV_RANGE.0 && vfov_deg <= VFOV_RANGE.1) {
         return Err(value_err(
             src,
             "camera.vfov_deg",
-            format!("`vfov_deg` must be between 0 and 180 degrees, not {vfov_deg}"),
+            format!("`vfov_deg` must be from {} to {} degrees, not {vfov_deg}", VFOV_RANGE.0, VFOV_RANGE.1),
             "the vertical field of view is in degrees, e.g. 40",
         ));
     }
@@ -678,7 +710,7 @@ fn light(l: &file::FileLight, path: &str, src: &Source) -> Result<Light, SceneEr
             let keys = ["position", "intensity"];
             check_keys(src, path, &what, &l.present(), &keys, &keys)?;
             Ok(Light::Point {
-                position: vec3(src, &format!("{path}.position"), l.position.unwrap_or_default())?,
+                position: point(src, &format!("{path}.position"), l.position.unwrap_or_default())?,
                 intensity: rgb(src, &format!("{path}.intensity"), l.intensity.unwrap_or(Rgb([0.0; 3])), false)?,
             })
         }
@@ -809,7 +841,7 @@ fn object(
 
     let (matrix, rotation, scale) = transform(src, &path, o.transform.as_ref())?;
 
-    let center = vec3(src, &p("center"), o.center.unwrap_or_default())?;
+    let center = point(src, &p("center"), o.center.unwrap_or_default())?;
     let segments = o.segments.unwrap_or(render.sphere_segments);
     if o.segments.is_some() && !(3..=8192).contains(&segments) {
         return Err(value_err(
@@ -997,7 +1029,7 @@ fn mesh_object(o: &FileObject, path: &str, rotation: Quat, src: &Source) -> Resu
         }
     }
     let extent = positive(src, &format!("{path}.fit.extent"), fit.extent)?;
-    let center = vec3(src, &format!("{path}.fit.center"), fit.center.unwrap_or_default())?;
+    let center = point(src, &format!("{path}.fit.center"), fit.center.unwrap_or_default())?;
     mesh.transform(Mat4::from_quat(rotation));
     let (lo, hi) = mesh.bounds();
     let largest = (hi - lo).max_element();

@@ -6,7 +6,7 @@
 use glam::{DVec3, Vec3};
 
 use super::file::{check_keys, FileIndex, FileVolume};
-use super::{finite, positive, value_err, vec3, SceneError, Source};
+use super::{finite, point, positive, value_err, vec3, SceneError, Source};
 
 /// Largest voxel count along one axis (256^3 f32 voxels are 64 MiB per volume texture).
 pub const MAX_VOLUME_RESOLUTION: u32 = 256;
@@ -145,8 +145,8 @@ impl Volume {
 }
 
 pub(super) fn volume(v: &FileVolume, src: &Source) -> Result<Volume, SceneError> {
-    let min = vec3(src, "volume.bounds.min", v.bounds.min)?;
-    let max = vec3(src, "volume.bounds.max", v.bounds.max)?;
+    let min = point(src, "volume.bounds.min", v.bounds.min)?;
+    let max = point(src, "volume.bounds.max", v.bounds.max)?;
     if !min.cmplt(max).all() {
         return Err(value_err(
             src,
@@ -222,7 +222,7 @@ fn index(f: &FileIndex, origin: Vec3, src: &Source) -> Result<IndexProfile, Scen
             let n = finite(src, &p("n"), f.n.unwrap_or(1.0))?;
             let sphere = match (f.center, f.radius) {
                 (None, None) => None,
-                (Some(c), Some(r)) => Some((vec3(src, &p("center"), c)?, positive(src, &p("radius"), r)?)),
+                (Some(c), Some(r)) => Some((point(src, &p("center"), c)?, positive(src, &p("radius"), r)?)),
                 _ => {
                     return Err(value_err(
                         src,
@@ -238,7 +238,7 @@ fn index(f: &FileIndex, origin: Vec3, src: &Source) -> Result<IndexProfile, Scen
         "luneburg" => {
             check_keys(src, path, &what, &f.present(), &["center", "radius"], &["center", "radius"])?;
             Ok(IndexProfile::Luneburg {
-                center: vec3(src, &p("center"), f.center.unwrap_or_default())?,
+                center: point(src, &p("center"), f.center.unwrap_or_default())?,
                 radius: positive(src, &p("radius"), f.radius.unwrap_or_default())?,
             })
         }

@@ -35,7 +35,7 @@ use glam::{DVec2, DVec3, Mat4, Vec2, Vec3};
 
 use super::file::{check_keys, FileObject, FileRegion, Rgb};
 use super::mesh::Mesh;
-use super::{finite, positive, rgb, value_err, vec3, ErrorKind, SceneError, Source};
+use super::{finite, point, positive, rgb, value_err, vec3, ErrorKind, SceneError, Source};
 
 /// The largest refractive index a region may have (as the profiles).
 pub const MAX_REGION_INDEX: f32 = 10.0;
@@ -599,7 +599,7 @@ fn region(r: &FileRegion, i: usize, src: &Source) -> Result<Region, SceneError> 
     };
 
     let (matrix, rotation, scale) = super::transform(src, &path, r.transform.as_ref())?;
-    let center = vec3(src, &p("center"), r.center.unwrap_or_default())?;
+    let center = point(src, &p("center"), r.center.unwrap_or_default())?;
     let size = |src: &Source| -> Result<Vec3, SceneError> {
         let s = vec3(src, &p("size"), r.size.unwrap_or_default())?;
         for c in s.to_array() {
