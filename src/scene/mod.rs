@@ -333,6 +333,8 @@ fn build(f: FileScene, src: &Source) -> Result<Scene, SceneError> {
         materials.push(material(m, &format!("materials.{name}"), src)?);
         material_names.push(name.clone());
     }
+    check_count(src, "objects", f.objects.len(), MAX_OBJECTS)?;
+    check_tessellation(&f.objects, &render, src)?;
     let objects = f
         .objects
         .iter()
@@ -440,6 +442,55 @@ fn positive(src: &Source, path: &str, v: f32) -> Result<f32, SceneError> {
         return Err(out_of_range(src, path, "must be", v));
     }
     Ok(v)
+}
+
+/// Most `[[objects]]` in a scene.
+pub const MAX_OBJECTS: usize = 1024;
+/// Most points in a lathe profile (an object's or a volume region's).
+pub const MAX_PROFILE_POINTS: usize = 4096;
+/// Most triangles the tessellated shapes (spheres, tori, cylinders, lathes) of a scene have
+/// together: one sphere at the largest `sphere_segments`, 8192.
+pub const MAX_TESSELLATED_TRIANGLES: u64 = 1 << 26;
+
+/// Refuses the array at `path` when it has more than `max` entries, naming the first extra.
+fn check_count(src: &Source, path: &str, n: usize, max: usize) -> Result<(), SceneError> {
+    if n <= max {
+        return Ok(());
+    }
+    Err(value_err(
+        src,
+        &format!("{path}.{max}"),
+        format!("`{path}` has {n} entries; the limit is {max}"),
+        "split the scene or use fewer entries",
+    ))
+}
+
+/// Refuses a scene whose tessellated shapes would have more than
+/// [`MAX_TESSELLATED_TRIANGLES`] triangles, before any is built.
+fn check_tessellation(objects: &[FileObject], render: &RenderSettings, src: &Source) -> Result<(), SceneError> {
+    let mut total = 0u64;
+    for (i, o) in objects.iter().enumerate() {
+        let s = u64::from(o.segments.unwrap_or(render.sphere_segments));
+        total += match o.shape.as_str() {
+            "sphere" | "torus" => s * s,
+            "open_cylinder" => 2 * s,
+            "lathe" => 2 * s * o.profile.as_ref().map_or(0, |p| p.len() as u64),
+            _ => 0,
+        };
+        if total > MAX_TESSELLATED_TRIANGLES {
+            let key =
+                if o.segments.is_some() { format!("objects.{i}.segments") } else { "render.sphere_segments".into() };
+            return Err(value_err(
+                src,
+                &key,
+                format!(
+                    "the tessellated shapes up to objects.{i} have {total} triangles; the limit is {MAX_TESSELLATED_TRIANGLES}"
+                ),
+                "lower `sphere_segments` (or an object's `segments`) or use fewer curved objects",
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// A point or offset in metres: each coordinate 0 or within [`SCALE_RANGE`] in magnitude.
@@ -958,6 +1009,7 @@ fn object(
 
 fn profile(o: &FileObject, path: &str, src: &Source) -> Result<Vec<Vec2>, SceneError> {
     let pts = o.profile.clone().unwrap_or_default();
+    check_count(src, path, pts.len(), MAX_PROFILE_POINTS)?;
     if pts.len() < 2 {
         return Err(value_err(
             src,

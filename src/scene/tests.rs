@@ -629,3 +629,29 @@ fn description_is_one_line() {
     let e = load_str(&format!("descripton = \"a ball\"\n{BASE}"), Path::new("test.toml"), &[]).unwrap_err();
     assert!(e.to_string().contains("descripton"), "{e}");
 }
+
+#[test]
+fn counts_beyond_their_limits_are_refused() {
+    let sphere = "[[objects]]\nmaterial = \"glass\"\nshape = \"sphere\"\nradius = 1\nsegments = 8\n";
+    let many = format!("{BASE}{}", sphere.repeat(super::MAX_OBJECTS));
+    let e = base_err(&many, &[]);
+    assert!(e.to_string().contains("`objects` has 1025 entries; the limit is 1024"), "{e}");
+
+    // Spheres of 1024 segments have 1024^2 triangles each: the 65th passes 2^26.
+    let spheres = "[[objects]]\nmaterial = \"glass\"\nshape = \"sphere\"\nradius = 1\n".repeat(1000);
+    let e = base_err(&format!("{BASE}{spheres}"), &["render.sphere_segments=1024"]);
+    assert!(e.to_string().contains("sphere_segments") && e.to_string().contains("limit is 67108864"), "{e}");
+
+    let points: Vec<String> = (0..=super::MAX_PROFILE_POINTS).map(|k| format!("[1, {k}]")).collect();
+    let lathe = format!("[[objects]]\nmaterial = \"glass\"\nshape = \"lathe\"\nprofile = [{}]\n", points.join(", "));
+    let e = base_err(&format!("{BASE}{lathe}"), &[]);
+    assert!(e.to_string().contains("`objects.1.profile` has 4097 entries; the limit is 4096"), "{e}");
+
+    let volume = "[volume]\nbounds = { min = [-1, -1, -1], max = [1, 1, 1] }\nresolution = [4, 4, 4]\n";
+    let region = "[[volume.region]]\nshape = \"sphere\"\nradius = 0.5\n";
+    let e = base_err(&format!("{BASE}{volume}{}", region.repeat(super::volume_sources::MAX_REGIONS + 1)), &[]);
+    assert!(e.to_string().contains("`volume.region` has 257 entries; the limit is 256"), "{e}");
+    let lathe = format!("[[volume.region]]\nshape = \"lathe\"\nprofile = [{}]\n", points.join(", "));
+    let e = base_err(&format!("{BASE}{volume}{lathe}"), &[]);
+    assert!(e.to_string().contains("`volume.region.0.profile` has 4097 entries"), "{e}");
+}

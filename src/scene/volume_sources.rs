@@ -43,6 +43,8 @@ pub const MAX_REGION_INDEX: f32 = 10.0;
 pub const MAX_COEFFICIENT: f32 = 10_000.0;
 /// |g| of Henyey-Greenstein must stay below 1 (g = +-1 is a delta, not a phase function).
 pub const MAX_HG_G: f32 = 0.99;
+/// Most `[[volume.region]]`s: each is evaluated at every voxel.
+pub const MAX_REGIONS: usize = 256;
 
 /// The material of a region (or the profile's base material).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -540,6 +542,7 @@ fn reflectance(src: &Source, path: &str, r: Option<f32>) -> Result<f32, SceneErr
 }
 
 pub(super) fn sources(v: &super::file::FileVolume, src: &Source) -> Result<Sources, SceneError> {
+    super::check_count(src, "volume.region", v.region.len(), MAX_REGIONS)?;
     let regions = v.region.iter().enumerate().map(|(i, r)| region(r, i, src)).collect::<Result<Vec<_>, _>>()?;
     Ok(Sources {
         sigma_s: coefficient(src, "volume.sigma_s", v.sigma_s)?,
@@ -696,6 +699,7 @@ fn region(r: &FileRegion, i: usize, src: &Source) -> Result<Region, SceneError> 
 /// A lathe profile (at least two (r, y) points, r >= 0) closed by the axis into the polygon
 /// (0, y_first), profile..., (0, y_last); repeated points are dropped.
 fn lathe_polygon(profile: &[[f32; 2]], path: &str, src: &Source) -> Result<Vec<DVec2>, SceneError> {
+    super::check_count(src, path, profile.len(), super::MAX_PROFILE_POINTS)?;
     if profile.len() < 2 {
         return Err(value_err(
             src,
