@@ -23,17 +23,22 @@ fn two_writes(skip_barrier: bool) -> Option<u64> {
     if skip_barrier {
         graph.skip_buffer_barriers_for_tests(id);
     }
-    let buffer = &buffer;
+    let target = &buffer;
     ctx.one_shot(|cmd| {
         let mut frame = graph.frame();
         for (name, value) in [("first_write", 1), ("second_write", 2)] {
-            frame.pass(name).write(id, Access::TransferWrite).record(move |cmd| cmd.fill_buffer(buffer, value));
+            frame.pass(name).write(id, Access::TransferWrite).record(move |cmd| cmd.fill_buffer(target, value));
         }
         frame.execute(cmd, None);
     })
     .unwrap();
     ctx.wait_idle().unwrap();
-    Some(ctx.validation_errors())
+    let errors = ctx.validation_errors();
+    if !skip_barrier {
+        drop((graph, buffer));
+        common::assert_clean_teardown(ctx);
+    }
+    Some(errors)
 }
 
 #[test]
