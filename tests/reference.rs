@@ -111,6 +111,7 @@ fn ray_through_a_glass_sphere_matches_snell_twice() {
         assert!(p.distance(p2) < 1e-3, "ray {k}: exit point {p} vs {p2}");
         assert!(d.distance(t2) < 5e-4, "ray {k}: exit direction {d} vs {t2}");
     }
+    drop(r);
     common::assert_clean_teardown(ctx);
 }
 
@@ -136,6 +137,7 @@ fn total_internal_reflection_sets_in_at_the_critical_angle() {
     let d = Vec3::new(out[0][1][0], out[0][1][1], out[0][1][2]);
     let sin_t = d.cross(n).length();
     assert!((sin_t - 1.5 * (critical - 0.01).sin()).abs() < 1e-4, "{sin_t}");
+    drop(r);
     common::assert_clean_teardown(ctx);
 }
 
@@ -164,6 +166,7 @@ fn fresnel_matches_closed_forms() {
     // Conductor at normal incidence: ((n-1)^2 + k^2) / ((n+1)^2 + k^2).
     let f0 = ((gn - 1.0).powi(2) + gk * gk) / ((gn + 1.0).powi(2) + gk * gk);
     assert!((out[0][1][0] - f0).abs() < 1e-5, "gold at normal incidence {} vs {f0}", out[0][1][0]);
+    drop(r);
     common::assert_clean_teardown(ctx);
 }
 
@@ -205,6 +208,7 @@ fn beer_lambert_through_a_slab() {
             beta[c]
         );
     }
+    drop(r);
     common::assert_clean_teardown(ctx);
 }
 
@@ -235,6 +239,7 @@ fn ball_lens_focus_matches_the_paraxial_formula() {
         let distance = centre.y - y;
         assert!((distance - s_i).abs() / s_i < 0.01, "focus at {distance}, paraxial {s_i}");
     }
+    drop(r);
     common::assert_clean_teardown(ctx);
 }
 
@@ -274,6 +279,7 @@ fn photon_energy_is_conserved_through_a_clear_sphere() {
     let total = through;
     // Most of the light goes through the ball to the floor (Fresnel reflects about 8%).
     assert!(floor / total > 0.8 && floor / total < 0.97, "floor fraction {}", floor / total);
+    drop(r);
     common::assert_clean_teardown(ctx);
 }
 

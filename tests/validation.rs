@@ -89,3 +89,19 @@ fn skipped_transition_in_the_renderer_is_reported() {
     drop(r);
     assert!(ctx.validation_errors() > 0, "a missing layout transition must be reported");
 }
+
+/// An object still alive when the device is destroyed is reported then, after every other
+/// check: `assert_clean_teardown`'s log sees it once the context is gone.
+#[test]
+fn a_leaked_object_is_reported_at_teardown() {
+    let ctx = common::context(false);
+    if !ctx.info.validation {
+        return;
+    }
+    ctx.leak_a_fence_for_tests().unwrap();
+    common::assert_no_validation_errors(&ctx);
+    let log = ctx.validation_log();
+    drop(ctx);
+    assert!(log.errors() > 0, "a fence left alive at vkDestroyDevice must be reported");
+    assert!(log.messages().iter().any(|m| m.contains("VkFence")), "{:?}", log.messages());
+}

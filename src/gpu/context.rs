@@ -436,6 +436,16 @@ impl GpuContext {
         self.validation_log().messages()
     }
 
+    /// Test-only fault injection: create a fence that is never destroyed, which the
+    /// validation layer reports as a leak when the device is destroyed.
+    #[doc(hidden)]
+    pub fn leak_a_fence_for_tests(&self) -> GpuResult<()> {
+        // SAFETY: default fence create info; the fence is deliberately never destroyed.
+        let fence = unsafe { self.device.create_fence(&vk::FenceCreateInfo::default(), None) }.vk("vkCreateFence")?;
+        self.set_name(fence, "leaked_for_tests");
+        Ok(())
+    }
+
     pub fn limits(&self) -> &vk::PhysicalDeviceLimits {
         &self.properties.limits
     }
