@@ -219,6 +219,7 @@ fn luneburg_gpu_wavefront_focuses_on_the_far_surface() {
     eprintln!("Luneburg (GPU light simulator, 64^3): {hits} particles crossed the far surface, worst {worst:.4} m from the focus (voxel {voxel:.4})");
     assert!(hits > 50, "too few particles reached the far surface: {hits}");
     assert!(worst < voxel, "GPU wavefront misses the analytic focus by {worst} (voxel {voxel})");
+    drop(sim);
     common::assert_clean_teardown(ctx);
 }
 
@@ -279,6 +280,7 @@ fn energy_balance_of_the_wavefront() {
     // summed over up to 10^5 patch-steps; 1e-4 leaves two orders of margin.
     assert!(worst < 1e-4, "energy not conserved: worst relative imbalance {worst}");
     assert!(left > 0.5 * initial, "most light should leave the lens: {left} of {initial}");
+    drop(sim);
     common::assert_clean_teardown(ctx);
 }
 
