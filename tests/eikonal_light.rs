@@ -219,6 +219,8 @@ fn luneburg_gpu_wavefront_focuses_on_the_far_surface() {
     eprintln!("Luneburg (GPU light simulator, 64^3): {hits} particles crossed the far surface, worst {worst:.4} m from the focus (voxel {voxel:.4})");
     assert!(hits > 50, "too few particles reached the far surface: {hits}");
     assert!(worst < voxel, "GPU wavefront misses the analytic focus by {worst} (voxel {voxel})");
+    drop(sim);
+    common::assert_clean_teardown(ctx);
 }
 
 fn flux_sum(patches: &[Patch]) -> f64 {
@@ -278,6 +280,8 @@ fn energy_balance_of_the_wavefront() {
     // summed over up to 10^5 patch-steps; 1e-4 leaves two orders of margin.
     assert!(worst < 1e-4, "energy not conserved: worst relative imbalance {worst}");
     assert!(left > 0.5 * initial, "most light should leave the lens: {left} of {initial}");
+    drop(sim);
+    common::assert_clean_teardown(ctx);
 }
 
 fn finite(name: &str, v: &[f32]) {
@@ -820,6 +824,7 @@ fn dispersion_separates_the_caustic_colours() {
     eprintln!("plain slab: red centroid x {r1:.4} m, blue {b1:.4} m (runs {runs1:?})");
     assert_eq!(runs1, vec![None], "one run for all channels");
     assert!((r1 - b1).abs() < 1e-6, "non-dispersive colours separated: {r1} vs {b1}");
+    common::assert_clean_teardown(ctx);
 }
 
 /// Item 4: tiles of the initial wavefront are simulated one after the other into the same

@@ -31,7 +31,7 @@ fn live(scene: &str, before: &[&str], after: &[&str]) -> Update {
     assert_eq!(differing, 0, "{scene} {before:?} -> {after:?}: {differing} LDR pixels differ ({update:?})");
     assert_eq!(running.plan(), fresh.plan());
     drop((running, fresh));
-    common::assert_no_validation_errors(&ctx);
+    common::assert_clean_teardown(ctx);
     update
 }
 
@@ -182,7 +182,7 @@ fn the_eikonal_light_simulation_survives_a_resize_and_moves_elsewhere() {
     let worst = hdr.iter().zip(&expected).map(|(a, b)| (a - b).abs()).fold(0f32, f32::max);
     assert!(worst <= 1e-4, "largest difference {worst}");
     drop((running, fresh));
-    common::assert_no_validation_errors(&ctx);
+    common::assert_clean_teardown(ctx);
 }
 
 #[test]
@@ -210,7 +210,7 @@ fn the_water_animates_on_the_gpu() {
     assert!(u.moved && !running.animated(), "{u:?}");
     assert_eq!(frame(&mut running).1, expected);
     drop(running);
-    common::assert_no_validation_errors(&ctx);
+    common::assert_clean_teardown(ctx);
 }
 
 #[test]

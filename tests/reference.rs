@@ -53,7 +53,7 @@ fn gpu_bvh_traversal_agrees_exactly_with_brute_force_on_the_bunny() {
     }
     assert!(hits > 800, "only {hits} hits");
     drop(r);
-    common::assert_no_validation_errors(&ctx);
+    common::assert_clean_teardown(ctx);
 }
 
 /// Analytic path through a sphere of radius R at the origin: entry by Snell, exit by Snell.
@@ -111,6 +111,8 @@ fn ray_through_a_glass_sphere_matches_snell_twice() {
         assert!(p.distance(p2) < 1e-3, "ray {k}: exit point {p} vs {p2}");
         assert!(d.distance(t2) < 5e-4, "ray {k}: exit direction {d} vs {t2}");
     }
+    drop(r);
+    common::assert_clean_teardown(ctx);
 }
 
 #[test]
@@ -135,6 +137,8 @@ fn total_internal_reflection_sets_in_at_the_critical_angle() {
     let d = Vec3::new(out[0][1][0], out[0][1][1], out[0][1][2]);
     let sin_t = d.cross(n).length();
     assert!((sin_t - 1.5 * (critical - 0.01).sin()).abs() < 1e-4, "{sin_t}");
+    drop(r);
+    common::assert_clean_teardown(ctx);
 }
 
 #[test]
@@ -162,6 +166,8 @@ fn fresnel_matches_closed_forms() {
     // Conductor at normal incidence: ((n-1)^2 + k^2) / ((n+1)^2 + k^2).
     let f0 = ((gn - 1.0).powi(2) + gk * gk) / ((gn + 1.0).powi(2) + gk * gk);
     assert!((out[0][1][0] - f0).abs() < 1e-5, "gold at normal incidence {} vs {f0}", out[0][1][0]);
+    drop(r);
+    common::assert_clean_teardown(ctx);
 }
 
 const SLAB: &str = r#"
@@ -202,6 +208,8 @@ fn beer_lambert_through_a_slab() {
             beta[c]
         );
     }
+    drop(r);
+    common::assert_clean_teardown(ctx);
 }
 
 /// caustic_sphere: the ball lens focuses the point light at the paraxial image distance
@@ -231,6 +239,8 @@ fn ball_lens_focus_matches_the_paraxial_formula() {
         let distance = centre.y - y;
         assert!((distance - s_i).abs() / s_i < 0.01, "focus at {distance}, paraxial {s_i}");
     }
+    drop(r);
+    common::assert_clean_teardown(ctx);
 }
 
 /// A non-absorbing glass ball: every photon aimed at it ends on the floor or escapes, and the
@@ -269,6 +279,8 @@ fn photon_energy_is_conserved_through_a_clear_sphere() {
     let total = through;
     // Most of the light goes through the ball to the floor (Fresnel reflects about 8%).
     assert!(floor / total > 0.8 && floor / total < 0.97, "floor fraction {}", floor / total);
+    drop(r);
+    common::assert_clean_teardown(ctx);
 }
 
 /// Monte Carlo error falls as 1/sqrt(samples): against a 16x longer render, 4 spp has about
@@ -288,6 +300,7 @@ fn reference_converges_as_one_over_sqrt_samples() {
     let e16 = prism::metrics::image::rmse_rgba(&render(16, 3), &truth);
     let ratio = e4 / e16;
     assert!(ratio > 1.6 && ratio < 2.4, "RMSE 4 spp {e4}, 16 spp {e16}: ratio {ratio}");
+    common::assert_clean_teardown(ctx);
 }
 
 /// More photons converge: the caustic's error against a long render falls with the photon
@@ -310,6 +323,7 @@ fn caustics_converge_with_more_photons() {
     assert!(errors[0] > errors[1] && errors[1] > errors[2], "errors {errors:?}");
     // The caustic is there: bright pixels under the ball.
     assert!(truth.chunks(4).any(|p| p[0] > 1.0), "no caustic found");
+    common::assert_clean_teardown(ctx);
 }
 
 #[test]
@@ -326,6 +340,7 @@ fn same_seed_same_image() {
     // one grid cell are summed in the order the GPU inserted them.
     let max_rel = a.iter().zip(&b).map(|(x, y)| (x - y).abs() / x.abs().max(1e-3)).fold(0.0f32, f32::max);
     assert!(max_rel < 1e-4, "{max_rel}");
+    common::assert_clean_teardown(ctx);
 }
 
 /// The caustic at a floor point does not depend on the image's resolution. (A gather that
@@ -366,4 +381,5 @@ fn caustic_radiance_is_independent_of_resolution() {
     let (a, b) = (floor_point(64), floor_point(128));
     assert!((a - b).abs() / b < 0.15, "caustic at 64^2 {a} vs 128^2 {b}");
     assert!(b > 5.0 && b < 8.5, "caustic interior {b}, expected about 6.5");
+    common::assert_clean_teardown(ctx);
 }

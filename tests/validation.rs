@@ -23,17 +23,22 @@ fn two_writes(skip_barrier: bool) -> Option<u64> {
     if skip_barrier {
         graph.skip_buffer_barriers_for_tests(id);
     }
-    let buffer = &buffer;
+    let target = &buffer;
     ctx.one_shot(|cmd| {
         let mut frame = graph.frame();
         for (name, value) in [("first_write", 1), ("second_write", 2)] {
-            frame.pass(name).write(id, Access::TransferWrite).record(move |cmd| cmd.fill_buffer(buffer, value));
+            frame.pass(name).write(id, Access::TransferWrite).record(move |cmd| cmd.fill_buffer(target, value));
         }
         frame.execute(cmd, None);
     })
     .unwrap();
     ctx.wait_idle().unwrap();
-    Some(ctx.validation_errors())
+    let errors = ctx.validation_errors();
+    if !skip_barrier {
+        drop((graph, buffer));
+        common::assert_clean_teardown(ctx);
+    }
+    Some(errors)
 }
 
 #[test]
@@ -83,4 +88,20 @@ fn skipped_transition_in_the_renderer_is_reported() {
     r.finish().unwrap();
     drop(r);
     assert!(ctx.validation_errors() > 0, "a missing layout transition must be reported");
+}
+
+/// An object still alive when the device is destroyed is reported then, after every other
+/// check: `assert_clean_teardown`'s log sees it once the context is gone.
+#[test]
+fn a_leaked_object_is_reported_at_teardown() {
+    let ctx = common::context(false);
+    if !ctx.info.validation {
+        return;
+    }
+    ctx.leak_a_fence_for_tests().unwrap();
+    common::assert_no_validation_errors(&ctx);
+    let log = ctx.validation_log();
+    drop(ctx);
+    assert!(log.errors() > 0, "a fence left alive at vkDestroyDevice must be reported");
+    assert!(log.messages().iter().any(|m| m.contains("VkFence")), "{:?}", log.messages());
 }

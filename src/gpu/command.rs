@@ -4,7 +4,7 @@ use std::sync::Arc;
 
 use ash::vk;
 
-use super::context::GpuContext;
+use super::context::{timeout_nanos, GpuContext, FRAME_TIMEOUT};
 use super::error::{GpuResult, VkContext};
 use super::sync::{Access, BufferBarrier, ImageBarrier};
 use super::{
@@ -534,8 +534,7 @@ impl CommandPool {
     /// Wait for slot `i`'s previous submission (its results are then readable), without
     /// starting a new recording. Returns whether the slot had been submitted before.
     pub fn wait(&mut self, i: usize) -> GpuResult<bool> {
-        // SAFETY: fence belongs to this device.
-        unsafe { self.ctx.raw().wait_for_fences(&[self.fences[i]], true, u64::MAX) }.vk("vkWaitForFences")?;
+        self.ctx.wait_for_fence(self.fences[i], "a frame's command buffer", FRAME_TIMEOUT)?;
         let had = self.serials[i] != 0;
         if had {
             self.ctx.mark_completed(self.serials[i]);
@@ -581,7 +580,7 @@ impl Drop for CommandPool {
     fn drop(&mut self) {
         // SAFETY: wait for every slot, then destroy; nothing else references these objects.
         unsafe {
-            let _ = self.ctx.raw().wait_for_fences(&self.fences, true, u64::MAX);
+            let _ = self.ctx.raw().wait_for_fences(&self.fences, true, timeout_nanos(FRAME_TIMEOUT));
             for &f in &self.fences {
                 self.ctx.raw().destroy_fence(f, None);
             }

@@ -5,12 +5,24 @@ use std::ffi::{c_char, CStr, CString};
 use std::hash::Hash;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, Weak};
+use std::time::Duration;
 
 use ash::vk;
 use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme, Allocator, AllocatorCreateDesc};
 
-use super::debug::{self, DebugState};
+use super::debug::{self, DebugState, ValidationLog};
 use super::error::{GpuError, GpuResult, VkContext};
+
+/// Longest wait for one frame's commands; lavapipe renders a benchmark frame in well under 1 s.
+pub(crate) const FRAME_TIMEOUT: Duration = Duration::from_secs(60);
+/// Longest wait for a one-shot submission. These include setup work far larger than a frame
+/// (the light simulation's batches, impostor and photon bakes), hence the wider limit.
+pub(crate) const ONE_SHOT_TIMEOUT: Duration = Duration::from_secs(600);
+
+/// `timeout` as the nanoseconds Vulkan's waits take.
+pub(crate) fn timeout_nanos(timeout: Duration) -> u64 {
+    u64::try_from(timeout.as_nanos()).unwrap_or(u64::MAX)
+}
 
 const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
 
@@ -403,19 +415,35 @@ impl GpuContext {
         &self.device
     }
 
+    /// This instance's validation counters; they outlive the context, so a test can check
+    /// what the layer reports at teardown (leaked objects).
+    pub fn validation_log(&self) -> ValidationLog {
+        ValidationLog(self.debug_state.clone())
+    }
+
     /// Validation-layer errors reported so far on this instance.
     pub fn validation_errors(&self) -> u64 {
-        self.debug_state.errors.load(Ordering::Relaxed)
+        self.validation_log().errors()
     }
 
     /// Validation-layer warnings reported so far on this instance.
     pub fn validation_warnings(&self) -> u64 {
-        self.debug_state.warnings.load(Ordering::Relaxed)
+        self.validation_log().warnings()
     }
 
     /// The text of every validation error so far (for test failure messages).
     pub fn validation_messages(&self) -> Vec<String> {
-        self.debug_state.messages.lock().unwrap().clone()
+        self.validation_log().messages()
+    }
+
+    /// Test-only fault injection: create a fence that is never destroyed, which the
+    /// validation layer reports as a leak when the device is destroyed.
+    #[doc(hidden)]
+    pub fn leak_a_fence_for_tests(&self) -> GpuResult<()> {
+        // SAFETY: default fence create info; the fence is deliberately never destroyed.
+        let fence = unsafe { self.device.create_fence(&vk::FenceCreateInfo::default(), None) }.vk("vkCreateFence")?;
+        self.set_name(fence, "leaked_for_tests");
+        Ok(())
     }
 
     pub fn limits(&self) -> &vk::PhysicalDeviceLimits {
@@ -506,6 +534,17 @@ impl GpuContext {
         }
     }
 
+    /// Wait for `fence` at most `timeout`; past it, a `GpuError::Timeout` naming `what`
+    /// rather than a hang.
+    pub(crate) fn wait_for_fence(&self, fence: vk::Fence, what: &'static str, timeout: Duration) -> GpuResult<()> {
+        // SAFETY: the fence belongs to this device.
+        match unsafe { self.device.wait_for_fences(&[fence], true, timeout_nanos(timeout)) } {
+            Ok(()) => Ok(()),
+            Err(vk::Result::TIMEOUT) => Err(GpuError::Timeout { what, seconds: timeout.as_secs() }),
+            Err(result) => Err(GpuError::Vk { call: "vkWaitForFences", result }),
+        }
+    }
+
     /// Record commands with `record`, submit them and wait: for uploads and readbacks.
     pub fn one_shot<R>(&self, record: impl FnOnce(&super::Cmd) -> R) -> GpuResult<R> {
         let pool = self.oneshot_pool.lock().unwrap();
@@ -527,7 +566,7 @@ impl GpuContext {
         let serial = self.submit(raw, fence, &super::SubmitSync::default());
         // SAFETY: fence is valid; we wait for our own submission.
         let waited = match &serial {
-            Ok(_) => unsafe { self.device.wait_for_fences(&[fence], true, u64::MAX) }.vk("vkWaitForFences"),
+            Ok(_) => self.wait_for_fence(fence, "a one-shot submission (upload, readback or setup)", ONE_SHOT_TIMEOUT),
             Err(_) => Ok(()),
         };
         // SAFETY: the submission has completed (or failed), so the buffer and fence are idle.

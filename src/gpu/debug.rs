@@ -15,6 +15,28 @@ pub(crate) struct DebugState {
     pub messages: Mutex<Vec<String>>,
 }
 
+/// A context's validation counters, readable after the context is gone: the layer reports
+/// leaked objects while the device and instance are destroyed, after every other check.
+#[derive(Clone)]
+pub struct ValidationLog(pub(crate) Arc<DebugState>);
+
+impl ValidationLog {
+    /// Validation-layer errors reported so far on this instance.
+    pub fn errors(&self) -> u64 {
+        self.0.errors.load(Ordering::Relaxed)
+    }
+
+    /// Validation-layer warnings reported so far on this instance.
+    pub fn warnings(&self) -> u64 {
+        self.0.warnings.load(Ordering::Relaxed)
+    }
+
+    /// The text of every validation error so far (for test failure messages).
+    pub fn messages(&self) -> Vec<String> {
+        self.0.messages.lock().unwrap().clone()
+    }
+}
+
 pub(crate) struct Messenger {
     loader: ash::ext::debug_utils::Instance,
     handle: vk::DebugUtilsMessengerEXT,

@@ -35,6 +35,9 @@ pub enum GpuError {
     SurfaceLost,
     #[error("overlay (egui) renderer: {0}")]
     Overlay(String),
+    /// A fence wait ran past its limit: the GPU is hung or far slower than any supported one.
+    #[error("waiting for {what} timed out after {seconds} s (the GPU is hung or far too slow)")]
+    Timeout { what: &'static str, seconds: u64 },
 }
 
 pub type GpuResult<T> = Result<T, GpuError>;

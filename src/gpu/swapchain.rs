@@ -10,7 +10,7 @@ use std::sync::Arc;
 use ash::vk;
 use raw_window_handle::{HasDisplayHandle, HasWindowHandle};
 
-use super::context::GpuContext;
+use super::context::{timeout_nanos, GpuContext, FRAME_TIMEOUT};
 use super::error::{GpuError, GpuResult, VkContext};
 
 /// The swapchain's colour format. UNORM, not SRGB: the renderer's LDR image already holds
@@ -257,13 +257,18 @@ impl Swapchain {
         let wait = self.acquire[slot].raw;
         // SAFETY: raw is a live swapchain; the semaphore is unsignalled with no pending
         // operation (see above); no fence.
-        let result = unsafe { self.swapchain_fn.acquire_next_image(self.raw, u64::MAX, wait, vk::Fence::null()) };
+        let result = unsafe {
+            self.swapchain_fn.acquire_next_image(self.raw, timeout_nanos(FRAME_TIMEOUT), wait, vk::Fence::null())
+        };
         match result {
             Ok((index, suboptimal)) => {
                 let render_done = self.render_done[index as usize].raw;
                 Ok(Acquired::Image { index, wait, render_done, suboptimal })
             }
             Err(vk::Result::ERROR_OUT_OF_DATE_KHR) => Ok(Acquired::OutOfDate),
+            Err(vk::Result::TIMEOUT | vk::Result::NOT_READY) => {
+                Err(GpuError::Timeout { what: "the next swapchain image", seconds: FRAME_TIMEOUT.as_secs() })
+            }
             Err(e) => Err(surface_error("vkAcquireNextImageKHR")(e)),
         }
     }

@@ -36,6 +36,17 @@ pub fn assert_no_validation_errors(ctx: &GpuContext) {
     assert_eq!(n, 0, "validation errors:\n{}", ctx.validation_messages().join("\n"));
 }
 
+/// Fail on any validation error on `ctx`, then drop it (the caller's must be its last
+/// handle, or nothing would be destroyed) and fail on any error the layer reports while the
+/// device and instance are destroyed: leaked objects are reported only then.
+pub fn assert_clean_teardown(ctx: Arc<GpuContext>) {
+    assert_no_validation_errors(&ctx);
+    let log = ctx.validation_log();
+    assert_eq!(Arc::strong_count(&ctx), 1, "the context is still shared, so dropping it would not destroy it");
+    drop(ctx);
+    assert_eq!(log.errors(), 0, "validation errors at teardown:\n{}", log.messages().join("\n"));
+}
+
 /// A benchmark scene at `size`^2 with extra overrides.
 pub fn scene(name: &str, size: u32, overrides: &[&str]) -> Scene {
     let mut o: Vec<String> = vec![format!("camera.width={size}"), format!("camera.height={size}")];
