@@ -1,6 +1,8 @@
 //! `prism bench` prints per-pass timings, writes JSON with the run's metadata, and writes a
 //! Chrome trace whose structure Perfetto accepts. Structure only: lavapipe timings are CPU
 //! time and are never compared against magnitudes (../shared/DESIGN.md, rule 6).
+mod common;
+
 use std::process::Command;
 
 #[test]
@@ -9,19 +11,9 @@ fn bench_writes_table_json_and_a_valid_chrome_trace() {
     std::fs::create_dir_all(&dir).unwrap();
     let (json, trace) = (dir.join("bench.json"), dir.join("trace.json"));
     let out = Command::new(env!("CARGO_BIN_EXE_prism"))
-        .args([
-            "bench",
-            "sphere_nearby",
-            "--width",
-            "48",
-            "--height",
-            "48",
-            "--frames",
-            "5",
-            "--warmup",
-            "2",
-            "--validation",
-        ])
+        .args(["bench", "sphere_nearby"])
+        .args(common::baseline_args())
+        .args(["--width", "48", "--height", "48", "--frames", "5", "--warmup", "2", "--validation"])
         .arg("--json")
         .arg(&json)
         .arg("--trace")

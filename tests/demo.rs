@@ -3,6 +3,8 @@
 //! Uses $DISPLAY when set; otherwise starts its own Xvfb on a free display number and kills
 //! it at the end. Without Xvfb the tests skip with a message, except under CI=true, where a
 //! missing Xvfb is a failure (`./x` installs the `xvfb` package).
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
 use std::sync::Mutex;
@@ -73,6 +75,7 @@ fn display() -> Option<Display> {
 fn demo(display: &Display, args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_prism"))
         .arg("demo")
+        .args(common::baseline_args())
         .args(args)
         .env("DISPLAY", &display.name)
         .env_remove("WAYLAND_DISPLAY")
@@ -92,6 +95,7 @@ impl Running {
         use std::io::{BufRead, BufReader};
         let mut child = Command::new(env!("CARGO_BIN_EXE_prism"))
             .arg("demo")
+            .args(common::baseline_args())
             .args(args)
             .env("DISPLAY", &display.name)
             .env_remove("WAYLAND_DISPLAY")
@@ -207,7 +211,9 @@ fn demo_screenshot_is_the_frame_without_the_overlay() {
     let out = demo(&display, &args);
     assert!(out.status.success(), "prism demo failed:\n{}", String::from_utf8_lossy(&out.stderr));
     let out = Command::new(env!("CARGO_BIN_EXE_prism"))
-        .args(["render", "sphere_nearby", "-o", reference.to_str().unwrap()])
+        .arg("render")
+        .args(common::baseline_args())
+        .args(["sphere_nearby", "-o", reference.to_str().unwrap()])
         .args(size)
         .output()
         .unwrap();
@@ -280,7 +286,9 @@ fn demo_opens_volume_scenes_with_the_adaptive_tone_map() {
     let differing = |tonemap: &str| {
         let reference = dir.join(format!("{tonemap}.png"));
         let out = Command::new(env!("CARGO_BIN_EXE_prism"))
-            .args(["render", "eikonal_luneburg", "-o", reference.to_str().unwrap(), "--set"])
+            .arg("render")
+            .args(common::baseline_args())
+            .args(["eikonal_luneburg", "-o", reference.to_str().unwrap(), "--set"])
             .arg(format!("render.tonemap={tonemap}"))
             .args(size)
             .output()
@@ -419,7 +427,9 @@ fn demo_recompiles_an_edited_shader_and_shows_its_errors() {
     // 0.25 x exposure x L is exposure 0.25 x L exactly (a power of two): the same image as a
     // render with render.exposure = 0.25, up to the screenshot test's rare edge pixels.
     let out = Command::new(env!("CARGO_BIN_EXE_prism"))
-        .args(["render", "sphere_env", "--set", "render.exposure=0.25", "-o", reference.to_str().unwrap()])
+        .arg("render")
+        .args(common::baseline_args())
+        .args(["sphere_env", "--set", "render.exposure=0.25", "-o", reference.to_str().unwrap()])
         .args(size)
         .output()
         .unwrap();
@@ -475,4 +485,29 @@ fn demo_re_runs_the_light_simulation_with_its_progress_after_a_light_moves() {
     let progress = stderr.lines().take(change).filter(|l| l.starts_with("demo: light simulation ") && l.contains('%'));
     assert!(progress.count() >= 2, "{stderr}");
     assert!(!stderr.contains("whole renderer"), "{stderr}");
+}
+
+/// The README's demo commands (`cargo run --release -- demo ARGS`, alone or behind
+/// `xvfb-run`), run as `prism demo ARGS` on this test's display with the validation layer,
+/// for 3 frames each: as written they run until the window is closed.
+#[test]
+fn readme_demo_commands_run() {
+    let Some(display) = display() else { return };
+    let readme = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/README.md")).unwrap();
+    let mut ran = 0;
+    for line in readme.lines() {
+        let Some((_, command)) = line.split_once("cargo run --release -- demo ") else { continue };
+        let args: Vec<&str> = command.split('#').next().unwrap().split_whitespace().collect();
+        let out = Command::new(env!("CARGO_BIN_EXE_prism"))
+            .arg("demo")
+            .args(&args)
+            .args(["--frames", "3", "--validation"])
+            .env("DISPLAY", &display.name)
+            .env_remove("WAYLAND_DISPLAY")
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "prism demo {command}:\n{}", String::from_utf8_lossy(&out.stderr));
+        ran += 1;
+    }
+    assert!(ran >= 2, "the README's demo commands were not found");
 }

@@ -306,7 +306,7 @@ fn two_balls(size: u32, overrides: &[&str]) -> prism::scene::Scene {
     let path = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("impostor_two_balls_{call}.toml"));
     std::fs::write(&path, text).unwrap();
     let mut o = vec![format!("camera.width={size}"), format!("camera.height={size}")];
-    o.extend(overrides.iter().map(|s| s.to_string()));
+    o.extend(prism::scene::BASELINE.iter().chain(overrides).map(|s| s.to_string()));
     prism::scene::load(&path, &o).unwrap()
 }
 

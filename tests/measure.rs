@@ -51,6 +51,8 @@ fn compare_reports_errors_writes_a_heat_map_and_caches_the_reference() {
     let mut args = vec![
         "compare",
         "sphere_env",
+        "--set",
+        "render.refraction=single",
         "--frames",
         "2",
         "--warmup",
@@ -90,6 +92,8 @@ fn sweep_writes_csv_and_plots() {
     let mut args = vec![
         "sweep",
         "sphere_env",
+        "--set",
+        "render.refraction=single",
         "--param",
         "render.sphere_segments=16,64",
         "--param",

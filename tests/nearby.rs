@@ -180,8 +180,9 @@ fn mirror_bunny_scene(size: u32, overrides: &[&str]) -> prism::scene::Scene {
         format!("camera.height={size}"),
         "objects.2.material=\"chrome\"".into(),
         "objects.2.fit.center=[0, 0, -2]".into(),
-        "render.refraction=hu_qin".into(),
     ];
+    o.extend(prism::scene::BASELINE.iter().map(|s| s.to_string()));
+    o.push("render.refraction=hu_qin".into());
     o.extend(overrides.iter().map(|s| s.to_string()));
     prism::scene::load(&file, &o).unwrap()
 }

@@ -83,12 +83,12 @@ fn image_space_refraction_replaces_the_baseline() {
     // §2.2.1 recursion: one pass per level only where a rectangle stands for a specular object
     // (two_glass_balls: each ball is a rectangle of the other's set); none for one refractor
     // among diffuse objects, whatever the depth.
-    let n = names("two_glass_balls", &["render.hu_qin.recursion_depth=2"]);
+    let n = names("two_glass_balls", &["render.refraction=hu_qin", "render.hu_qin.recursion_depth=2"]);
     assert!(n.contains(&"refraction_hu_qin_nearby_r2") && !n.contains(&"refraction_hu_qin_nearby_r3"), "{n:?}");
     assert!(n.contains(&"refraction_hu_qin_nearby_back"), "{n:?}");
     // The diffuse textures are rendered once and copied for the levels >= 1; not without levels.
     assert!(n.contains(&"refraction_hu_qin_nearby_copy"), "{n:?}");
-    let n = names("two_glass_balls", &["render.hu_qin.recursion_depth=0"]);
+    let n = names("two_glass_balls", &["render.refraction=hu_qin", "render.hu_qin.recursion_depth=0"]);
     assert!(!n.contains(&"refraction_hu_qin_nearby_copy"), "{n:?}");
     let n = names("sphere_nearby", &["render.refraction=hu_qin", "render.hu_qin.recursion_depth=3"]);
     assert!(!n.iter().any(|p| p.starts_with("refraction_hu_qin_nearby_")), "{n:?}");
@@ -268,6 +268,7 @@ fn prism_passes_prints_the_passes_and_why() {
     assert!(text.contains("shadow_map") && text.contains("light 0 (point at (2, 5, 3))"), "{text}");
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_prism"))
         .args(["passes", "sphere_env", "--json"])
+        .args(common::baseline_args())
         .output()
         .unwrap();
     let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
@@ -287,16 +288,33 @@ fn scene_files() -> Vec<String> {
 }
 
 #[test]
-fn prism_scenes_lists_every_bundled_scene_with_its_description_and_techniques() {
+fn prism_scenes_lists_every_bundled_scene_with_its_description_techniques_and_render_time() {
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_prism")).arg("scenes").output().unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let text = String::from_utf8_lossy(&out.stdout);
-    // Each scene is a line "  NAME  refraction R, reflection R, caustics C", then its description.
+    // Each scene is a line "  NAME  refraction R, reflection R, caustics C", then its
+    // description, then its render time from assets/scene-times.toml; a last line names the
+    // machine those times are from.
     let lines: Vec<&str> = text.lines().skip(1).collect();
-    let listed: Vec<&str> = lines.iter().step_by(2).map(|l| l.split_whitespace().next().unwrap()).collect();
+    let (footer, lines) = lines.split_last().unwrap();
+    assert!(footer.starts_with("render times: ") && footer.contains("scripts/scene-times"), "{text}");
+    let listed: Vec<&str> = lines.iter().step_by(3).map(|l| l.split_whitespace().next().unwrap()).collect();
     assert_eq!(listed, scene_files(), "{text}");
-    for pair in lines.chunks(2) {
-        let s = common::scene(pair[0].split_whitespace().next().unwrap(), 64, &[]);
+    let times: toml::Value = toml::from_str(
+        &std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/assets/scene-times.toml")).unwrap(),
+    )
+    .unwrap();
+    for pair in lines.chunks(3) {
+        let name = pair[0].split_whitespace().next().unwrap();
+        // Every scene has an entry: its time, or why it was not measured.
+        let entry = times["scene"]
+            .get(name)
+            .unwrap_or_else(|| panic!("assets/scene-times.toml has no entry for {name}: run scripts/scene-times"));
+        match entry.get("seconds") {
+            Some(s) => assert!(pair[2].trim().starts_with(&format!("render {:.1} s", s.as_float().unwrap())), "{text}"),
+            None => assert!(pair[2].trim().starts_with("render time not measured ("), "{name}: {entry:?}\n{text}"),
+        }
+        let s = common::shipped(name, 64, &[]);
         let techniques = format!(
             "refraction {}, reflection {}, caustics {}",
             s.render.refraction, s.render.reflection, s.render.caustics
@@ -315,9 +333,10 @@ fn prism_help_names_every_bundled_scene() {
     assert!(!text.contains("(later)"), "{text}");
 }
 
-/// The README's `cargo run --release -- ARGS` commands, run as `prism ARGS` in a scratch
-/// directory with the validation layer on, so that what the README shows keeps working.
-/// `demo` needs a window: tests/demo.rs runs it under Xvfb.
+/// The README's `cargo run --release -- ARGS` commands (the gallery's and the sweep's too),
+/// run as `prism ARGS` in a scratch directory with the validation layer on, so that what the
+/// README shows keeps working. `demo` needs a window: tests/demo.rs runs those under Xvfb.
+/// `./x render` and `./x test` are what .ci/run runs.
 #[test]
 fn readme_commands_run() {
     let readme = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/README.md")).unwrap();
@@ -334,6 +353,7 @@ fn readme_commands_run() {
             .args(&args)
             .current_dir(&dir)
             .env("PRISM_VALIDATION", "1")
+            .env("PRISM_CACHE_DIR", dir.join("cache"))
             .output()
             .unwrap();
         assert!(out.status.success(), "prism {command}:\n{}", String::from_utf8_lossy(&out.stderr));

@@ -60,8 +60,11 @@ fn masked_rmse(a: &[f32], b: &[f32], mask: &[bool]) -> f64 {
     (sum / n.max(1) as f64).sqrt()
 }
 
+/// two_glass_balls with Hu & Qin's refraction (the technique its file selects), then `extra`.
 fn two_balls(size: u32, extra: &[&str]) -> prism::scene::Scene {
-    scene("two_glass_balls", size, extra)
+    let mut o = vec!["render.refraction=hu_qin"];
+    o.extend_from_slice(extra);
+    scene("two_glass_balls", size, &o)
 }
 
 /// The pass list: one recursion pass per level, and none where no rectangle stands for a

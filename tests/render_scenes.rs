@@ -19,6 +19,18 @@ fn every_benchmark_scene_renders_without_validation_errors_or_nan() {
     }
 }
 
+/// As above, with the techniques each scene file selects (`shipped`) instead of the baseline.
+#[test]
+fn every_benchmark_scene_renders_as_shipped_without_validation_errors_or_nan() {
+    let ctx = context(false);
+    for name in BENCHMARK_SCENES {
+        let r = render_on(&ctx, &shipped(name, 64, &[]));
+        let bad = prism::metrics::image::non_finite_count(&r.hdr);
+        assert_eq!(bad, 0, "{name}: {bad} non-finite values in the HDR image");
+        assert!(r.hdr.iter().any(|v| *v > 0.0), "{name}: image is black");
+    }
+}
+
 /// Synchronization validation is on for a scene that exercises every baseline pass
 /// (shadow cube, G-buffer, deferred shading, refraction, tone map) over several frames in
 /// flight, so that barriers between frames are checked too.

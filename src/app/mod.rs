@@ -42,11 +42,12 @@ fn long_about() -> String {
          reference (`prism compare`, `prism report`). It runs headless on any Vulkan 1.2 device, including \
          Mesa's lavapipe on the CPU.\n\n\
          SCENE is a path to a .toml scene file or the name of a scene in assets/scenes/ ({scenes}; \
-         `prism scenes` describes them). Without SCENE, the default scene (sphere_nearby) is used. \
+         `prism scenes` describes them). Without SCENE, the default scene ({}) is used. \
          Every scene key is documented in docs/scene-format.md.\n\n\
          Environment: PRISM_DEVICE picks a device like --device; PRISM_VALIDATION=1 (or sync) enables the \
          Vulkan validation layer (and synchronization validation); VK_DRIVER_FILES selects a driver, e.g. \
-         /usr/share/vulkan/icd.d/lvp_icd.x86_64.json for lavapipe."
+         /usr/share/vulkan/icd.d/lvp_icd.x86_64.json for lavapipe.",
+        scene::DEFAULT_SCENE
     )
 }
 
@@ -76,7 +77,7 @@ pub enum Command {
 /// Options shared by every command that loads a scene.
 #[derive(Args, Debug, Clone)]
 pub struct SceneArgs {
-    /// Scene file (.toml) or benchmark scene name; default: the sphere_nearby scene.
+    /// Scene file (.toml) or benchmark scene name; default: the caustic_sphere scene.
     pub scene: Option<PathBuf>,
     /// Override any scene key, e.g. --set render.refraction=single --set materials.glass.ior=1.33
     /// (repeatable; dotted path, array elements by index: objects.0.radius=0.5).

@@ -52,6 +52,12 @@ pub const TECHNIQUE_KEYS: &[(&str, &[&str])] = &[
     ("tonemap", TONEMAPS),
 ];
 
+/// The baseline selection of every effect, as `--set` overrides: single-interface refraction,
+/// classic environment-mapped reflection, no caustics (the defaults of `[render]`). Every
+/// technique is timed and measured against it; the bundled scenes select better techniques,
+/// so `prism report` and the tests start from this to measure what they name.
+pub const BASELINE: &[&str] = &["render.refraction=single", "render.reflection=single", "render.caustics=none"];
+
 /// Every `shape` an object may have.
 pub const SHAPES: &[&str] = &["sphere", "quad", "box", "torus", "open_cylinder", "lathe", "heightfield", "mesh"];
 
@@ -60,10 +66,14 @@ pub fn assets_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("assets")
 }
 
-/// The scene used when none is named: assets/scenes/sphere_nearby.toml.
+/// The scene used when none is named: assets/scenes/caustic_sphere.toml, whose techniques
+/// show a glass ball refracting the floor above its caustic.
 pub fn default_scene_path() -> PathBuf {
-    assets_dir().join("scenes").join("sphere_nearby.toml")
+    benchmark_scene_path(DEFAULT_SCENE)
 }
+
+/// The name of the scene used when none is named.
+pub const DEFAULT_SCENE: &str = "caustic_sphere";
 
 /// The path of benchmark scene `name` (e.g. "sphere_env") under assets/scenes/.
 pub fn benchmark_scene_path(name: &str) -> PathBuf {

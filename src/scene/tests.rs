@@ -579,6 +579,18 @@ fn default_paths() {
     assert!(load(&default_scene_path(), &[]).is_ok());
 }
 
+/// BASELINE selects the defaults of `[render]`: a scene without a `[render]` table.
+#[test]
+fn the_baseline_is_the_render_defaults() {
+    let without = load_str(BASE, Path::new("t.toml"), &[]).unwrap();
+    let baseline: Vec<String> = BASELINE.iter().map(|s| s.to_string()).collect();
+    let with = load(&benchmark_scene_path("caustic_sphere"), &baseline).unwrap();
+    for s in [&without, &with] {
+        let r = &s.render;
+        assert_eq!((r.refraction.as_str(), r.reflection.as_str(), r.caustics.as_str()), ("single", "single", "none"));
+    }
+}
+
 #[test]
 fn tone_map_setting_and_adaptive_parameters() {
     use crate::scene::techniques::TonemapAdaptiveParams;

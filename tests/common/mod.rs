@@ -47,11 +47,28 @@ pub fn assert_clean_teardown(ctx: Arc<GpuContext>) {
     assert_eq!(log.errors(), 0, "validation errors at teardown:\n{}", log.messages().join("\n"));
 }
 
-/// A benchmark scene at `size`^2 with extra overrides.
+/// A bundled scene at `size`^2 with the baseline techniques (`prism::scene::BASELINE`:
+/// refraction, reflection and caustics "single", "single", "none"), then `overrides`. The
+/// scene files select better techniques; starting from the baseline, a test measures what
+/// it names, and keeps measuring it when a scene's selection changes. `shipped` loads a
+/// scene with its own selection.
 pub fn scene(name: &str, size: u32, overrides: &[&str]) -> Scene {
+    let mut o: Vec<&str> = scene::BASELINE.to_vec();
+    o.extend_from_slice(overrides);
+    shipped(name, size, &o)
+}
+
+/// A bundled scene at `size`^2 as its file ships it (its own techniques), with extra overrides.
+pub fn shipped(name: &str, size: u32, overrides: &[&str]) -> Scene {
     let mut o: Vec<String> = vec![format!("camera.width={size}"), format!("camera.height={size}")];
     o.extend(overrides.iter().map(|s| s.to_string()));
     scene::load(&scene::benchmark_scene_path(name), &o).unwrap_or_else(|e| panic!("{name}: {e}"))
+}
+
+/// `prism::scene::BASELINE` as command-line arguments (`--set KEY=VALUE` each), for tests
+/// that run the `prism` binary on a bundled scene.
+pub fn baseline_args() -> Vec<&'static str> {
+    scene::BASELINE.iter().flat_map(|s| ["--set", s]).collect()
 }
 
 pub struct Rendered {
