@@ -64,20 +64,28 @@ fn time_line(times: Option<&SceneTimes>, name: &str) -> String {
 }
 
 pub fn run() -> Result<()> {
+    use std::fmt::Write as _;
     let names = scene::bundled_scenes().context("cannot list assets/scenes/")?;
     let times = read_times(&times_path())?;
-    println!("bundled scenes ({}; `prism render NAME` renders one):", scene::assets_dir().join("scenes").display());
+    let mut out = String::new();
+    let scenes_dir = scene::assets_dir().join("scenes");
+    writeln!(out, "bundled scenes ({}; `prism render NAME` renders one):", scenes_dir.display())?;
     let width = names.iter().map(|n| n.len()).max().unwrap_or(0);
     for name in &names {
         let s = scene::load(&scene::benchmark_scene_path(name), &[])?;
         let r = &s.render;
-        println!("  {name:width$}  refraction {}, reflection {}, caustics {}", r.refraction, r.reflection, r.caustics);
-        println!("  {:width$}  {}", "", s.description.as_deref().unwrap_or("(no description)"));
-        println!("  {:width$}  {}", "", time_line(times.as_ref(), name));
+        writeln!(
+            out,
+            "  {name:width$}  refraction {}, reflection {}, caustics {}",
+            r.refraction, r.reflection, r.caustics
+        )?;
+        writeln!(out, "  {:width$}  {}", "", s.description.as_deref().unwrap_or("(no description)"))?;
+        writeln!(out, "  {:width$}  {}", "", time_line(times.as_ref(), name))?;
     }
     match &times {
-        Some(t) => println!(
-            "render times: {} on {}, {} ({}), revision {}, {}{} (assets/scene-times.toml, by scripts/scene-times)",
+        Some(t) => writeln!(
+            out,
+            "render times: {}; {}, {}, {}; revision {}, {}{} (from assets/scene-times.toml, written by scripts/scene-times)",
             t.command,
             t.machine,
             t.device,
@@ -85,10 +93,14 @@ pub fn run() -> Result<()> {
             t.revision,
             t.date,
             t.note.as_deref().map(|n| format!("; {n}")).unwrap_or_default()
-        ),
-        None => println!("render times: not measured ({} is missing: run scripts/scene-times)", times_path().display()),
+        )?,
+        None => writeln!(out, "render times: not measured ({} is missing: run scripts/scene-times)", times_path().display())?,
     }
-    Ok(())
+    // Written at once: a reader that stops early (`| head`) is not an error.
+    match std::io::Write::write_all(&mut std::io::stdout().lock(), out.as_bytes()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(e).context("cannot write to stdout"),
+        _ => Ok(()),
+    }
 }
 
 #[cfg(test)]
