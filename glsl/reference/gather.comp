@@ -21,7 +21,9 @@ void main() {
     // of size R the ball can span 3 per axis, and photons beyond the 8 buckets visited were
     // lost, dimming caustics by an amount that depended on where a pixel's visible point fell
     // on the grid.) Buckets visited twice (hash collisions) are skipped so that no photon is
-    // counted twice.
+    // counted twice: each photon of the pass is visited at most once, which bounds the loop
+    // iterations of an invocation by the photons of a pass (MAX_PHOTONS_PER_PASS in
+    // src/reference/mod.rs says why that bound matters).
     ivec3 lo = grid_cell(p - vec3(R)), hi = grid_cell(p + vec3(R));
     uint visited[8];   // 2x2x2 cells at most (see above)
     uint n_visited = 0u;

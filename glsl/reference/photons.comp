@@ -37,7 +37,9 @@ void main() {
     uint total = ref.photon.x;
     if (idx >= total) return;
     uint lights = ref.dims.z, targets = ref.counts.z;
+    // Debug records (tests): (flux, outcome) at idx, where it was deposited at total + idx.
     debug_data[idx] = vec4(0.0, 0.0, 0.0, float(PHOTON_MISSED));
+    debug_data[total + idx] = vec4(0.0);
     if (lights == 0u || targets == 0u) return;
     uint rng = rng_init(idx, push.iteration, push.seed ^ 0x68bc21ebu);
 
@@ -91,6 +93,7 @@ void main() {
     flux = finite_or_zero(flux);
 
     uint outcome = PHOTON_LOST;
+    vec3 deposit = vec3(0.0);
     for (uint bounce = 0u; bounce <= ref.counts.w; ++bounce) {
         Hit h = trace(o, d, 3.4e38);
         // A refractive volume before the surface: the photon crosses it along the curved
@@ -113,6 +116,7 @@ void main() {
                 break;
             }
             outcome = PHOTON_DEPOSITED;
+            deposit = s.p;
             uint slot = atomicAdd(photon_count, 1u);
             if (slot < ref.photon.y) {
                 uint next = atomicExchange(heads[grid_bucket(grid_cell(s.p))], slot);
@@ -125,4 +129,5 @@ void main() {
         if (!specular_step(s, o, d, flux, h.t, channel, rand(rng), false)) break;
     }
     debug_data[idx] = vec4(flux, float(outcome));
+    debug_data[total + idx] = vec4(deposit, 0.0);
 }

@@ -51,7 +51,8 @@ use bvh::Bvh;
 pub struct ReferenceSettings {
     /// Camera samples per pixel (each also one photon-mapping iteration).
     pub spp: u32,
-    /// Photons traced in all (spread over the `spp` iterations); 0 disables caustics.
+    /// Photons traced in all (spread over the `spp` iterations, each in photon passes of at
+    /// most [`MAX_PHOTONS_PER_PASS`]); 0 disables caustics.
     pub photons: u64,
     /// Specular interactions followed per path.
     pub max_depth: u32,
@@ -101,7 +102,7 @@ impl ReferenceSettings {
         Ok(())
     }
 
-    /// Photons per iteration (the photon pass of each of the `spp` iterations).
+    /// Photons per iteration (the photon passes of each of the `spp` iterations).
     pub fn photons_per_iteration(&self) -> u32 {
         if self.photons == 0 {
             0
@@ -109,7 +110,27 @@ impl ReferenceSettings {
             (self.photons / self.spp as u64).clamp(1, u32::MAX as u64 / 4) as u32
         }
     }
+
+    /// Photon passes per iteration, each tracing at most [`MAX_PHOTONS_PER_PASS`] photons and
+    /// followed by its own gather (one progressive update, Hachisuka et al. 2008, Eqs. 6-8).
+    pub fn passes_per_iteration(&self) -> u32 {
+        self.photons_per_iteration().div_ceil(MAX_PHOTONS_PER_PASS).max(1)
+    }
+
+    /// Photons traced by each photon pass.
+    pub fn photons_per_pass(&self) -> u32 {
+        self.photons_per_iteration().div_ceil(self.passes_per_iteration())
+    }
 }
+
+/// The most photons one photon pass traces. lavapipe ends every loop of an invocation after
+/// 65535 loop iterations in all (LP_MAX_TGSI_LOOP_ITERATIONS, counted over all its loops and
+/// over the invocations it runs in lockstep); under a bright focus the gather's photon lists
+/// were cut short there and the cut-off invocations' sums came out zero, so 8-pixel runs of
+/// a caustic were black. A gather walks each of its at most 8 buckets once (gather.comp), and
+/// each list holds at most the pass's photons, so it runs at most 8 * 8000 + 36 < 65535 loop
+/// iterations, whichever buckets the invocations in lockstep walk.
+pub const MAX_PHOTONS_PER_PASS: u32 = 8000;
 
 impl RefUniforms {
     /// The raytrace technique's branch cutoff (glsl/raytrace/raytrace.frag; the reference
@@ -326,7 +347,10 @@ pub struct Reference {
     width: u32,
     height: u32,
     iterations_done: u32,
+    /// Photon passes done (each one progressive update of the caustics).
+    passes_done: u32,
     photons_per_iteration: u32,
+    passes_per_iteration: u32,
     set: BoundSet,
     camera: ComputePipeline,
     photons: ComputePipeline,
@@ -344,7 +368,6 @@ pub struct Reference {
     _trace: TraceGeometry,
     _sampler: Sampler,
     _scene: GpuScene,
-    has_photons: bool,
     ctx: Arc<GpuContext>,
 }
 
@@ -400,12 +423,14 @@ impl Reference {
         }
         let has_photons = settings.photons > 0 && !targets.is_empty() && !scene.lights.is_empty();
         let photons_per_iteration = if has_photons { settings.photons_per_iteration() } else { 0 };
+        let passes_per_iteration = if has_photons { settings.passes_per_iteration() } else { 0 };
+        let photons_per_pass = if has_photons { settings.photons_per_pass() } else { 0 };
         let radius = settings.radius.unwrap_or(0.01 * gpu_scene.bounds_radius.max(1e-20));
-        let table = (2 * photons_per_iteration.max(1)).next_power_of_two().max(1 << 12);
+        let table = (2 * photons_per_pass.max(1)).next_power_of_two().max(1 << 12);
         let mut uniforms = trace.uniforms(scene, &gpu_scene, settings.max_depth);
         uniforms.counts[2] = targets.len() as u32;
-        uniforms.photon[0] = photons_per_iteration;
-        uniforms.photon[1] = photons_per_iteration.max(1);
+        uniforms.photon[0] = photons_per_pass;
+        uniforms.photon[1] = photons_per_pass.max(1);
         uniforms.photon[2] = table;
         uniforms.photon[3] |= settings.jitter as u32 * FLAG_JITTER;
         // Cells twice the initial radius: a ball of radius R <= R0 then overlaps at most
@@ -429,7 +454,7 @@ impl Reference {
         let photon_buffer = Buffer::new(
             ctx,
             "reference_photons",
-            photons_per_iteration.max(1) as u64 * 48,
+            photons_per_pass.max(1) as u64 * 48,
             U::STORAGE_BUFFER,
             MemoryLocation::GpuOnly,
         )?;
@@ -445,7 +470,7 @@ impl Reference {
         let debug = Buffer::new(
             ctx,
             "reference_debug",
-            (photons_per_iteration.max(1) as u64).max(3 * 4096) * 16,
+            (2 * photons_per_pass.max(1) as u64).max(3 * 4096) * 16,
             U::STORAGE_BUFFER,
             MemoryLocation::CpuToGpu,
         )?;
@@ -485,7 +510,9 @@ impl Reference {
             width,
             height,
             iterations_done: 0,
+            passes_done: 0,
             photons_per_iteration,
+            passes_per_iteration,
             set,
             camera,
             photons,
@@ -503,7 +530,6 @@ impl Reference {
             _trace: trace,
             _sampler: sampler,
             _scene: gpu_scene,
-            has_photons,
             ctx: ctx.clone(),
         })
     }
@@ -520,12 +546,26 @@ impl Reference {
     pub fn photons_per_iteration(&self) -> u32 {
         self.photons_per_iteration
     }
+    /// Photons traced by each photon pass (0 without caustics).
+    pub fn photons_per_pass(&self) -> u32 {
+        if self.passes_per_iteration == 0 {
+            0
+        } else {
+            self.settings.photons_per_pass()
+        }
+    }
+    /// Photon passes done so far: each one progressive update of the caustics.
+    pub fn passes_done(&self) -> u32 {
+        self.passes_done
+    }
 
-    /// Run `count` more iterations (camera sample + photon pass + gather each) in one
-    /// submission.
+    /// Run `count` more iterations (camera sample, then photon pass + gather as many times
+    /// as [`ReferenceSettings::passes_per_iteration`]) in one submission.
     pub fn run(&mut self, count: u32) -> Result<(), RenderError> {
         let pixel_groups = (self.width * self.height).div_ceil(REF_WORKGROUP);
-        let photon_groups = self.photons_per_iteration.div_ceil(REF_WORKGROUP);
+        let photons_per_pass = self.photons_per_pass();
+        let photon_groups = photons_per_pass.div_ceil(REF_WORKGROUP);
+        let (passes, first_pass) = (self.passes_per_iteration, self.passes_done);
         let [accum, pixels, photons, grid, counters, debug] = self.ids;
         let start = self.iterations_done;
         let Reference {
@@ -537,14 +577,12 @@ impl Reference {
             grid: grid_buf,
             counters: counter_buf,
             settings,
-            has_photons,
             ..
         } = self;
         let (camera, photon_pipe, gather, grid_buf, counter_buf) =
             (&*camera, &*photon_pipe, &*gather, &*grid_buf, &*counter_buf);
         let set = set.set();
         let seed = settings.seed;
-        let has_photons = *has_photons;
         self.ctx.one_shot(|cmd| {
             let mut frame = graph.frame();
             for it in start..start + count {
@@ -556,7 +594,9 @@ impl Reference {
                     .record(move |cmd| {
                         cmd.compute(camera, &[set], &push, [pixel_groups, 1, 1]);
                     });
-                if has_photons {
+                for pass in 0..passes {
+                    // Each photon pass draws its own photons.
+                    let push = RefPush { iteration: first_pass + (it - start) * passes + pass, ..push };
                     frame
                         .pass("reference_clear_grid")
                         .write(grid, Access::TransferWrite)
@@ -592,6 +632,7 @@ impl Reference {
             );
         })?;
         self.iterations_done += count;
+        self.passes_done += count * self.passes_per_iteration;
         Ok(())
     }
 
@@ -617,13 +658,13 @@ impl Reference {
     pub fn image(&self) -> Vec<f32> {
         let accum: &[[f32; 4]] = bytemuck::cast_slice(self.accum.read());
         let pixels: &[PixelState] = bytemuck::cast_slice(self.pixels.read());
-        let k = self.iterations_done.max(1) as f32;
+        // Each photon pass is one progressive estimate: tau sums over all of them.
+        let k = self.passes_done.max(1) as f32;
         let mut out = Vec::with_capacity(accum.len() * 4);
         for (a, p) in accum.iter().zip(pixels) {
             let n = a[3].max(1.0);
             let r = p.vp_pos[3];
-            let caustic =
-                if self.iterations_done > 0 && r > 0.0 { 1.0 / (std::f32::consts::PI * r * r * k) } else { 0.0 };
+            let caustic = if self.passes_done > 0 && r > 0.0 { 1.0 / (std::f32::consts::PI * r * r * k) } else { 0.0 };
             for (sum, tau) in a[..3].iter().zip(&p.tau_n[..3]) {
                 let v = sum / n + tau * caustic;
                 out.push(if v.is_finite() { v } else { 0.0 });
@@ -636,13 +677,12 @@ impl Reference {
     /// The caustic part alone (for tests of convergence and energy).
     pub fn caustic_image(&self) -> Vec<f32> {
         let pixels: &[PixelState] = bytemuck::cast_slice(self.pixels.read());
-        let k = self.iterations_done.max(1) as f32;
+        let k = self.passes_done.max(1) as f32;
         pixels
             .iter()
             .flat_map(|p| {
                 let r = p.vp_pos[3];
-                let s =
-                    if r > 0.0 && self.iterations_done > 0 { 1.0 / (std::f32::consts::PI * r * r * k) } else { 0.0 };
+                let s = if r > 0.0 && self.passes_done > 0 { 1.0 / (std::f32::consts::PI * r * r * k) } else { 0.0 };
                 [p.tau_n[0] * s, p.tau_n[1] * s, p.tau_n[2] * s, 1.0]
             })
             .collect()
@@ -654,7 +694,8 @@ impl Reference {
         let f: &[f32] = bytemuck::cast_slice(self.accum.read());
         let p: &[f32] = bytemuck::cast_slice(self.pixels.read());
         let d: &[f32] = bytemuck::cast_slice(self.debug.read());
-        f.iter().chain(p).chain(&d[..4 * self.photons_per_iteration as usize]).filter(|v| !v.is_finite()).count()
+        let photons = self.photons_per_pass() as usize;
+        f.iter().chain(p).chain(&d[..8 * photons]).filter(|v| !v.is_finite()).count()
     }
 
     /// The photon-mapping state of pixel `index`: tau (rgb) and N, visible point and radius R,
@@ -665,10 +706,17 @@ impl Reference {
         [p.tau_n, p.vp_pos, p.vp_normal, p.vp_weight]
     }
 
-    /// (flux rgb, outcome) of every photon of the last iteration (PHOTON_* outcomes).
+    /// (flux rgb, outcome) of every photon of the last photon pass (PHOTON_* outcomes).
     pub fn photon_outcomes(&self) -> Vec<[f32; 4]> {
         let all: &[[f32; 4]] = bytemuck::cast_slice(self.debug.read());
-        all[..self.photons_per_iteration as usize].to_vec()
+        all[..self.photons_per_pass() as usize].to_vec()
+    }
+
+    /// Where each photon of the last photon pass was deposited (0 unless PHOTON_DEPOSITED).
+    pub fn photon_positions(&self) -> Vec<Vec3> {
+        let all: &[[f32; 4]] = bytemuck::cast_slice(self.debug.read());
+        let n = self.photons_per_pass() as usize;
+        all[n..2 * n].iter().map(|p| Vec3::new(p[0], p[1], p[2])).collect()
     }
 
     /// Run the probe kernel on records of 3 vec4s (see glsl/reference/probe.comp); tests.
