@@ -245,9 +245,11 @@ shared_bindings! {
     }
     // Set 1 of refraction_water, besides the tracer's REF_BINDINGS and BINDING_GBUF_ALBEDO /
     // _DEPTH: the environment's SH coefficients as seen from under the water
-    // (src/frame/gpu_scene.rs, environment_sh_below).
+    // (src/frame/gpu_scene.rs, environment_sh_below), and the G-buffer's normals, whose own
+    // binding is the tracer's uniforms' there.
     WATER_BINDINGS {
         BINDING_WATER_SKY = 15;
+        BINDING_WATER_GBUF_NORMAL = 16;
     }
     // The light simulation's irradiance and direction volumes, sampled by eikonal_view, its
     // receiver pass and the nearby impostors around the volume.

@@ -1,16 +1,17 @@
 #version 450
 // Single-interface refraction of nearby geometry through a water surface
-// (src/technique/refraction/refraction_water.rs). The ray through the pixel's centre meets the
-// surface (the tracer's exact triangles, glsl/reference/trace.glsl: the G-buffer only says which
-// pixels are the water's), splits there by exact Fresnel, and each branch goes on in a straight
-// line, in the water or in the air, until it meets a diffuse receiver or leaves to the
-// environment. A receiver is shaded like deferred shading (glsl/include/lighting.glsl: direct
-// light with the shadow maps, which hold the water, and the environment's irradiance) plus the
-// caustic that the selected caustic technique put on it (glsl/include/caustic_lookup.glsl):
-// under the water the sun's light arrives as that caustic only (Shah et al. 2007, Fig. 1 and
-// §III.E, single-surface refraction). The radiance leaving the water is scaled by
-// (n_i/n_t)^2 (SCENES.md, "Light transport measured") and attenuated by Beer-Lambert along the
-// path in the water.
+// (src/technique/refraction/refraction_water.rs). At each of the surface's pixels the G-buffer
+// gives the point the ray through the pixel's centre meets and its interpolated normal (both
+// follow the window's water animation); the ray splits there by exact Fresnel, and each branch
+// goes on in a straight line, in the water or in the air, through the exact tracer's BVH
+// (glsl/reference/trace.glsl) until it meets a diffuse receiver or leaves to the environment.
+// A receiver is shaded like deferred shading (glsl/include/lighting.glsl: direct light with
+// the shadow maps, which hold the water, and the environment's irradiance) plus the caustic
+// that the selected caustic technique put on it (glsl/include/caustic_lookup.glsl): under the
+// water the sun's light arrives as that caustic only (Shah et al. 2007, Fig. 1 and §III.E,
+// single-surface refraction). The radiance leaving the water is scaled by (n_i/n_t)^2
+// (SCENES.md, "Light transport measured") and attenuated by Beer-Lambert along the path in
+// the water.
 #include "frame.glsl"
 #include "environment.glsl"
 #include "lighting.glsl"
@@ -24,7 +25,9 @@ layout(constant_id = 2) const uint PHOTON_RECTS = 0;
 layout(constant_id = 3) const uint PHOTON_MODE = 0;
 #include "caustic_lookup.glsl"
 
-// RT1 of the G-buffer: a = object index. The depth says where something was drawn.
+// RT0 of the G-buffer: xyz = normal, w = material index; at BINDING_WATER_GBUF_NORMAL, since
+// BINDING_GBUF_NORMAL is the tracer's REF_BINDING_UNIFORMS here. RT1: a = object index.
+layout(set = 1, binding = BINDING_WATER_GBUF_NORMAL) uniform sampler2D gbuf_normal;
 layout(set = 1, binding = BINDING_GBUF_ALBEDO) uniform sampler2D gbuf_albedo;
 layout(set = 1, binding = BINDING_GBUF_DEPTH) uniform sampler2D gbuf_depth;
 // The environment's SH coefficients as seen from under the water surface at rest (Snell's
@@ -63,25 +66,21 @@ vec3 radiance_along(vec3 o, vec3 d, bool in_water, vec3 sigma) {
 
 void main() {
     ivec2 px = ivec2(gl_FragCoord.xy);
-    if (texelFetch(gbuf_depth, px, 0).r <= 0.0) discard;
-    uint object = uint(texelFetch(gbuf_albedo, px, 0).a + 0.5);
-    if (material_kind(object_material[object]) != MATERIAL_DIELECTRIC) discard;
-
-    vec3 o = frame.camera_position.xyz, d = camera_ray(in_uv);
-    Hit h = trace(o, d, 3.4e38);
-    // The rasterised surface covers a pixel whose centre ray misses the exact one: what the
-    // ray meets instead.
-    if (h.kind == 0u) {
-        out_radiance = vec4(finite_or_zero(environment(d)), 1.0);
-        return;
-    }
-    Surface s = surface_at(o, d, h);
+    float depth = texelFetch(gbuf_depth, px, 0).r;
+    if (depth <= 0.0) discard;
+    vec4 nm = texelFetch(gbuf_normal, px, 0);
+    Surface s;
+    s.material = uint(nm.w + 0.5);
     GpuMaterial m = materials[s.material];
+    if (kind_of(m) != MATERIAL_DIELECTRIC) discard;
+    s.p = world_from_depth(in_uv, depth);
+    s.ns = normalize(nm.xyz);
+    s.ng = s.ns;
+    s.st = vec2(0.0);
+
+    vec3 d = camera_ray(in_uv);
     Interaction x;
-    if (kind_of(m) != MATERIAL_DIELECTRIC || !interaction_at(s, d, h.t, -1, true, x)) {
-        out_radiance = vec4(finite_or_zero(radiance_along(o, d, false, vec3(0.0))), 1.0);
-        return;
-    }
+    interaction_at(s, d, distance(frame.camera_position.xyz, s.p), -1, true, x);
     // Entering the water the refracted branch travels in it; leaving it, in the air.
     bool entering = dot(d, s.ng) < 0.0;
     vec3 L = x.weight * x.F * radiance_along(offset_origin(s, x.reflected), x.reflected, !entering, m.spec_b.rgb);

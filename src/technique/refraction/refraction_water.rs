@@ -4,14 +4,16 @@
 //! refraction, where the light "is refracted only once" and travels in the water to the
 //! receiver). glsl/refraction/water.frag.
 //!
-//! `render.refraction = "water"`, pass `refraction_water`. Every pixel the G-buffer gives to a
-//! dielectric traces the ray through its centre to the surface, through the exact tracer's BVH
-//! (glsl/reference/trace.glsl: the same triangles as the reference, so the heightfield is the
-//! reference's), and splits there by exact Fresnel F:
+//! `render.refraction = "water"`, pass `refraction_water`. At every pixel the G-buffer gives to
+//! a dielectric, the ray through the pixel's centre meets the surface at the G-buffer's point
+//! and refracts at its interpolated normal (both follow the window's animation of the water's
+//! vertices), and splits there by exact Fresnel F:
 //!
 //! - the reflected branch, weight F, and the refracted one, weight (1 - F) (n_i/n_t)^2 (Snell;
 //!   SCENES.md's radiance scaling, which a single interface does not cancel), each go on in a
-//!   straight line to the first surface they meet;
+//!   straight line to the first surface they meet, found by the exact tracer's BVH
+//!   (glsl/reference/trace.glsl). Its bounds are those of the loaded time: an animated water
+//!   surface may be missed by them, which the branches leaving the surface never need;
 //! - a diffuse receiver there is shaded as deferred shading shades a visible one (direct light
 //!   with the shadow maps, the environment's irradiance) plus the caustic the selected caustic
 //!   technique put on it, so under the water the sun arrives as the caustic of
@@ -85,6 +87,8 @@ fn create(s: &mut Setup<'_>) -> Result<Box<dyn Technique>, RenderError> {
     let sky = Buffer::storage(ctx, "refraction_water_sky", &sky_below(scene))?;
     let targets = s.targets;
     let mut set = fragment_set()
+        .sampled(BINDING_WATER_GBUF_NORMAL, &targets.gbuf_normal, s.nearest)
+        .read(targets.gbuf_normal_id)
         .sampled(BINDING_GBUF_ALBEDO, &targets.gbuf_albedo, s.nearest)
         .read(targets.gbuf_albedo_id)
         .sampled(BINDING_GBUF_DEPTH, &targets.depth, s.nearest)
