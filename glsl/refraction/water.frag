@@ -26,9 +26,8 @@ layout(constant_id = 3) const uint PHOTON_MODE = 0;
 #include "caustic_lookup.glsl"
 
 // RT0 of the G-buffer: xyz = normal, w = material index; at BINDING_WATER_GBUF_NORMAL, since
-// BINDING_GBUF_NORMAL is the tracer's REF_BINDING_UNIFORMS here. RT1: a = object index.
+// BINDING_GBUF_NORMAL is the tracer's REF_BINDING_UNIFORMS here.
 layout(set = 1, binding = BINDING_WATER_GBUF_NORMAL) uniform sampler2D gbuf_normal;
-layout(set = 1, binding = BINDING_GBUF_ALBEDO) uniform sampler2D gbuf_albedo;
 layout(set = 1, binding = BINDING_GBUF_DEPTH) uniform sampler2D gbuf_depth;
 // The environment's SH coefficients as seen from under the water surface at rest (Snell's
 // window, Fresnel transmittance: src/frame/gpu_scene.rs, environment_sh_below): a receiver in

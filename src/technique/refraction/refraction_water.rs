@@ -49,8 +49,12 @@ pub const TECHNIQUE: Registration = Registration {
     key: "refraction = \"water\"",
     plan,
     create,
-    // The caustic textures it reads, and where things are (the tracer's triangles).
-    inputs: |scene| Inputs { settings: CausticReads::settings(scene), placement: true },
+    // The caustic textures it reads, the index its sky under the water is refracted with, and
+    // where things are (the tracer's triangles).
+    inputs: |scene| Inputs {
+        settings: format!("{} ior {}", CausticReads::settings(scene), water_ior(scene)),
+        placement: true,
+    },
 };
 
 fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
@@ -89,8 +93,6 @@ fn create(s: &mut Setup<'_>) -> Result<Box<dyn Technique>, RenderError> {
     let mut set = fragment_set()
         .sampled(BINDING_WATER_GBUF_NORMAL, &targets.gbuf_normal, s.nearest)
         .read(targets.gbuf_normal_id)
-        .sampled(BINDING_GBUF_ALBEDO, &targets.gbuf_albedo, s.nearest)
-        .read(targets.gbuf_albedo_id)
         .sampled(BINDING_GBUF_DEPTH, &targets.depth, s.nearest)
         .read(targets.depth_id)
         .storage(REF_BINDING_UNIFORMS, &uniforms)
@@ -109,18 +111,19 @@ fn create(s: &mut Setup<'_>) -> Result<Box<dyn Technique>, RenderError> {
     Ok(Box::new(Water { pass, caustics, shadowed, _uniforms: uniforms, _sky: sky, _geometry: geometry }))
 }
 
-/// The environment seen from under the water at rest (gpu_scene::environment_sh_below), for
-/// the first dielectric's index (green channel): the receivers under the surface are lit by the
-/// sky through it only.
+/// The index of the water: the first dielectric's (green channel).
+fn water_ior(scene: &Scene) -> f32 {
+    let ior = scene.materials.iter().find_map(|m| match m {
+        Material::Dielectric { ior, .. } => Some(ior.y),
+        _ => None,
+    });
+    ior.unwrap_or(1.0)
+}
+
+/// The environment seen from under the water at rest (gpu_scene::environment_sh_below): the
+/// receivers under the surface are lit by the sky through it only.
 fn sky_below(scene: &Scene) -> Vec<[f32; 4]> {
-    let ior = scene
-        .materials
-        .iter()
-        .find_map(|m| match m {
-            Material::Dielectric { ior, .. } => Some(ior.y),
-            _ => None,
-        })
-        .unwrap_or(1.0);
+    let ior = water_ior(scene);
     let (w, h, texels) = match &scene.environment {
         // Enough texels for the window's edge to be resolved.
         Environment::Constant(c) => (64, 32, vec![[c.x, c.y, c.z, 1.0]; 64 * 32]),
