@@ -243,6 +243,14 @@ shared_bindings! {
         BINDING_EIKONAL_EMISSION = 22;
         BINDING_EIKONAL_TRIANGLES = 25;
     }
+    // Set 1 of refraction_water, besides the tracer's REF_BINDINGS and BINDING_GBUF_ALBEDO /
+    // _DEPTH: the environment's SH coefficients as seen from under the water
+    // (src/frame/gpu_scene.rs, environment_sh_below), and the G-buffer's normals, whose own
+    // binding is the tracer's uniforms' there.
+    WATER_BINDINGS {
+        BINDING_WATER_SKY = 15;
+        BINDING_WATER_GBUF_NORMAL = 16;
+    }
     // The light simulation's irradiance and direction volumes, sampled by eikonal_view, its
     // receiver pass and the nearby impostors around the volume.
     EIKONAL_LIGHT_VOLUME_BINDINGS {

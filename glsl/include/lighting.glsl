@@ -31,10 +31,10 @@ float visibility(uint i, vec3 p, vec3 n) {
     }
 }
 
-// Outgoing radiance of a Lambertian surface at p with unit normal n (already turned towards
-// the viewer: surfaces are two-sided) and the given albedo: L = albedo / pi * E.
-vec3 diffuse_radiance(vec3 p, vec3 n, vec3 albedo) {
-    vec3 irradiance = environment_irradiance(n);
+// Irradiance at p (unit normal n, facing the viewer): `ambient` (the environment's) plus every
+// light's, with its shadow map.
+vec3 lit_irradiance(vec3 p, vec3 n, vec3 ambient) {
+    vec3 irradiance = ambient;
     for (uint i = 0u; i < frame.info.x; ++i) {
         GpuLight l = frame.lights[i];
         vec3 wi;
@@ -52,6 +52,12 @@ vec3 diffuse_radiance(vec3 p, vec3 n, vec3 albedo) {
         if (cosine <= 0.0) continue;
         irradiance += e * cosine * visibility(i, p, n);
     }
-    return finite_or_zero(albedo / PI * irradiance);
+    return irradiance;
+}
+
+// Outgoing radiance of a Lambertian surface at p with unit normal n (already turned towards
+// the viewer: surfaces are two-sided) and the given albedo: L = albedo / pi * E.
+vec3 diffuse_radiance(vec3 p, vec3 n, vec3 albedo) {
+    return finite_or_zero(albedo / PI * lit_irradiance(p, n, environment_irradiance(n)));
 }
 #endif

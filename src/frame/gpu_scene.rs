@@ -85,6 +85,51 @@ pub fn gpu_material(m: &Material) -> GpuMaterial {
 /// Irradiance spherical-harmonic coefficients L_lm of a lat-long map (Ramamoorthi & Hanrahan
 /// 2001, Eq. 10): sum of L(d) Y_lm(d) dOmega over texels, dOmega = (2pi/W)(pi/H) sin(theta).
 pub fn environment_sh(width: u32, height: u32, texels: &[[f32; 4]]) -> [[f32; 4]; 9] {
+    project_sh(width, height, texels, |d| Some((d, 1.0)))
+}
+
+/// The same coefficients for the environment as seen from under a flat interface y = const of
+/// index `ior` (a water surface at rest): the sky's radiance L(d_a), d_a.y > 0, reaches the
+/// water along the refracted direction d_w (Snell's window), scaled by the Fresnel
+/// transmittance T and by ior^2 (SCENES.md's radiance scaling); below the horizon nothing
+/// arrives through the surface (the directions under Snell's window see the pool by total
+/// internal reflection, a second diffuse vertex). Integrated over the air's texels:
+/// ior^2 dOmega_w = (cos_a / cos_w) dOmega_a, so the irradiance a receiver under the water gets
+/// is E(n) of these coefficients (glsl/include/environment.glsl, `sh_irradiance`).
+pub fn environment_sh_below(width: u32, height: u32, texels: &[[f32; 4]], ior: f32) -> [[f32; 4]; 9] {
+    let ior = f64::from(ior.max(1e-6));
+    project_sh(width, height, texels, |[x, y, z]| {
+        if y <= 0.0 {
+            return None;
+        }
+        let (wx, wz) = (x / ior, z / ior);
+        let cos_w = (1.0 - wx * wx - wz * wz).sqrt();
+        let t = 1.0 - fresnel_dielectric(y, 1.0 / ior);
+        Some(([wx, cos_w, wz], t * y / cos_w))
+    })
+}
+
+/// Exact unpolarised Fresnel reflectance for cos_i on the incident side, eta = n_i / n_t
+/// (glsl/include/fresnel.glsl's `fresnel_dielectric`).
+pub fn fresnel_dielectric(cos_i: f64, eta: f64) -> f64 {
+    let sin_t2 = eta * eta * (1.0 - cos_i * cos_i);
+    if sin_t2 >= 1.0 {
+        return 1.0;
+    }
+    let cos_t = (1.0 - sin_t2).sqrt();
+    let rs = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+    let rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+    0.5 * (rs * rs + rp * rp)
+}
+
+/// Sum over the lat-long texels of L(d) Y_lm(d') w dOmega, where `f` maps a texel's direction
+/// d to the direction d' its radiance is seen along and a weight w (None: not seen).
+fn project_sh(
+    width: u32,
+    height: u32,
+    texels: &[[f32; 4]],
+    f: impl Fn([f64; 3]) -> Option<([f64; 3], f64)>,
+) -> [[f32; 4]; 9] {
     let mut sh = [[0f64; 3]; 9];
     let (w, h) = (width as usize, height as usize);
     for j in 0..h {
@@ -94,7 +139,9 @@ pub fn environment_sh(width: u32, height: u32, texels: &[[f32; 4]]) -> [[f32; 4]
             let u = (i as f64 + 0.5) / w as f64;
             // Inverse of u = 0.5 + atan2(x, -z) / (2 pi), v = acos(y) / pi.
             let phi = (u - 0.5) * 2.0 * std::f64::consts::PI;
-            let (x, y, z) = (theta.sin() * phi.sin(), theta.cos(), -theta.sin() * phi.cos());
+            let Some(([x, y, z], weight)) = f([theta.sin() * phi.sin(), theta.cos(), -theta.sin() * phi.cos()]) else {
+                continue;
+            };
             let basis = [
                 0.282095,
                 0.488603 * y,
@@ -109,7 +156,7 @@ pub fn environment_sh(width: u32, height: u32, texels: &[[f32; 4]]) -> [[f32; 4]
             let t = texels[j * w + i];
             for (k, b) in basis.iter().enumerate() {
                 for c in 0..3 {
-                    sh[k][c] += t[c] as f64 * b * d_omega;
+                    sh[k][c] += t[c] as f64 * b * weight * d_omega;
                 }
             }
         }

@@ -34,7 +34,7 @@ use file::{check_keys, list, FileObject, FileScene, Rgb, Source};
 
 /// Accepted values of `render.refraction`; the first is the default. A technique
 /// joins the benchmark by adding its name here (and to docs/scene-format.md).
-pub const REFRACTION_TECHNIQUES: &[&str] = &["single", "wyman", "hu_qin", "impostor", "raytrace"];
+pub const REFRACTION_TECHNIQUES: &[&str] = &["single", "wyman", "hu_qin", "impostor", "raytrace", "water"];
 /// Accepted values of `render.reflection`; the first is the default.
 pub const REFLECTION_TECHNIQUES: &[&str] = &["single", "impostor", "raytrace"];
 /// Accepted values of `render.caustics`; the first is the default.

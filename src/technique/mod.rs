@@ -103,6 +103,7 @@ pub const TECHNIQUES: &[Registration] = &[
     baseline::specular_single::REFRACTION,
     refraction::refraction_wyman::TECHNIQUE,
     refraction::refraction_hu_qin::TECHNIQUE,
+    refraction::refraction_water::TECHNIQUE,
     impostor::distance_impostor::REFRACTION,
     raytrace::REFRACTION,
     baseline::specular_single::REFLECTION,

@@ -6,6 +6,7 @@ use crate::frame::targets::Targets;
 use crate::gpu::{DescriptorSetLayout, GpuContext, GpuResult, Sampler, Spec};
 use crate::graph::{Frame, ImageId};
 use crate::scene::techniques::CausticsMapParams;
+use crate::scene::Scene;
 use crate::technique::{
     diffuse_names, list, params, tables, FrameInputs, Inputs, PlannedPass, Registration, RenderError, Setup, Stage,
     Technique,
@@ -23,12 +24,9 @@ pub const TECHNIQUE: Registration = Registration {
     // Which caustic technique runs decides what it reads, with caustics mapping's filter and
     // the photon buffer's rectangles and normalisation.
     // The photon rectangles (their count) follow the receivers.
-    inputs: |scene| {
-        let filter = CausticsMapParams::from_settings(&scene.render).map(|p| p.filter).ok();
-        Inputs {
-            settings: format!("{} {filter:?} {}", scene.render.caustics, tables(scene, &["photon_buffer"])),
-            placement: scene.render.caustics == "photon_buffer",
-        }
+    inputs: |scene| Inputs {
+        settings: CausticReads::settings(scene),
+        placement: scene.render.caustics == "photon_buffer",
     },
 };
 
@@ -46,23 +44,56 @@ fn plan(scene: &crate::scene::Scene) -> Vec<(Stage, PlannedPass)> {
 
 /// Reads whatever the shadow and caustic techniques planned before it.
 fn create(s: &mut Setup<'_>) -> Result<Box<dyn Technique>, RenderError> {
-    let caustic_filter = if s.planned(crate::technique::caustics::caustics_map::CAUSTICS_MAP) {
-        Some(params("caustics_map", CausticsMapParams::from_settings(&s.scene.render))?.filter)
-    } else {
-        None
-    };
-    let c = s.photon_caustics;
-    let photon = s.planned(crate::technique::caustics::photon_buffer::PHOTON_BUFFER).then_some((c.count, c.mode, c.id));
+    let caustics = CausticReads::new(s)?;
     let shadowed = s.planned(super::shadow_map::SHADOW_MAP);
-    Ok(Box::new(DeferredShadingPass::new(
-        s.ctx,
-        s.frame_layout,
-        s.targets,
-        s.nearest,
-        shadowed,
-        caustic_filter,
-        photon,
-    )?))
+    Ok(Box::new(DeferredShadingPass::new(s.ctx, s.frame_layout, s.targets, s.nearest, shadowed, caustics)?))
+}
+
+/// The caustic textures a pass shading diffuse receivers reads (glsl/include/caustic_lookup.glsl),
+/// from whichever caustic technique planned its passes: caustics mapping's atlas with its
+/// low-pass filter radius, or the photon buffer's textures with their rectangle count and
+/// normalisation.
+#[derive(Clone, Copy, Debug)]
+pub struct CausticReads {
+    filter: Option<u32>,
+    photon: Option<(u32, u32, ImageId)>,
+}
+
+impl CausticReads {
+    pub fn new(s: &Setup<'_>) -> Result<Self, RenderError> {
+        let filter = if s.planned(crate::technique::caustics::caustics_map::CAUSTICS_MAP) {
+            Some(params("caustics_map", CausticsMapParams::from_settings(&s.scene.render))?.filter)
+        } else {
+            None
+        };
+        let c = s.photon_caustics;
+        let photon =
+            s.planned(crate::technique::caustics::photon_buffer::PHOTON_BUFFER).then_some((c.count, c.mode, c.id));
+        Ok(CausticReads { filter, photon })
+    }
+
+    /// What the choice depends on: the caustic technique, caustics mapping's filter and the
+    /// photon buffer's settings (its rectangles follow the receivers' placement).
+    pub fn settings(scene: &Scene) -> String {
+        let filter = CausticsMapParams::from_settings(&scene.render).map(|p| p.filter).ok();
+        format!("{} {filter:?} {}", scene.render.caustics, tables(scene, &["photon_buffer"]))
+    }
+
+    /// The specialisation constants of caustic_lookup.glsl.
+    pub fn specialization(&self) -> [(&'static str, Spec); 4] {
+        [
+            ("CAUSTICS", Spec::U32(u32::from(self.filter.is_some()))),
+            ("CAUSTIC_FILTER", Spec::U32(self.filter.unwrap_or(0))),
+            ("PHOTON_RECTS", Spec::U32(self.photon.map_or(0, |p| p.0))),
+            ("PHOTON_MODE", Spec::U32(self.photon.map_or(0, |p| p.1))),
+        ]
+    }
+
+    /// The images the lookups read this frame.
+    pub fn reads(&self, targets: &Targets) -> Vec<ImageId> {
+        let atlas = self.filter.map(|_| targets.caustic_atlas_id);
+        atlas.into_iter().chain(self.photon.map(|p| p.2)).collect()
+    }
 }
 
 impl Technique for DeferredShadingPass {
@@ -72,12 +103,7 @@ impl Technique for DeferredShadingPass {
         if self.shadowed {
             reads.push(targets.shadow_atlas_id);
         }
-        if self.caustics {
-            reads.push(targets.caustic_atlas_id);
-        }
-        if let Some(id) = self.photon {
-            reads.push(id);
-        }
+        reads.extend(self.caustics.reads(targets));
         self.pass.record(frame, frame_set, &reads);
     }
 }
@@ -86,10 +112,8 @@ pub struct DeferredShadingPass {
     pass: FullscreenPass,
     /// Whether a shadow_map pass writes the atlas this frame (then it is a declared read).
     shadowed: bool,
-    /// Whether a caustics_map pass writes the caustic atlas this frame.
-    caustics: bool,
-    /// The photon-buffer caustic textures, when a photon_buffer pass writes them.
-    photon: Option<ImageId>,
+    /// The caustic textures written this frame, read by the lookups.
+    caustics: CausticReads,
 }
 
 impl DeferredShadingPass {
@@ -99,8 +123,7 @@ impl DeferredShadingPass {
         targets: &Targets,
         nearest: &Sampler,
         shadowed: bool,
-        caustic_filter: Option<u32>,
-        photon: Option<(u32, u32, ImageId)>,
+        caustics: CausticReads,
     ) -> GpuResult<Self> {
         let pass = FullscreenPass::new(
             ctx,
@@ -109,18 +132,11 @@ impl DeferredShadingPass {
                 fragment_shader: "shading/deferred.frag",
                 target: (&targets.hdr, targets.hdr_id),
                 clear: true,
-                // Caustics mapping on/off and its low-pass filter radius; photon-buffer
-                // caustics' rectangle count (0: off) and normalisation (deferred.frag).
-                specialization: &[
-                    ("CAUSTICS", Spec::U32(u32::from(caustic_filter.is_some()))),
-                    ("CAUSTIC_FILTER", Spec::U32(caustic_filter.unwrap_or(0))),
-                    ("PHOTON_RECTS", Spec::U32(photon.map_or(0, |p| p.0))),
-                    ("PHOTON_MODE", Spec::U32(photon.map_or(0, |p| p.1))),
-                ],
+                specialization: &caustics.specialization(),
             },
             targets.gbuffer(fragment_set(), nearest, true),
             frame_layout,
         )?;
-        Ok(DeferredShadingPass { pass, shadowed, caustics: caustic_filter.is_some(), photon: photon.map(|p| p.2) })
+        Ok(DeferredShadingPass { pass, shadowed, caustics })
     }
 }
