@@ -119,6 +119,11 @@ shared_bindings! {
         // pass runs.
         BINDING_PHOTON_CAUSTICS = 7;
         BINDING_PHOTON_RECTS = 8;
+        // The caustic map's receivers (src/technique/caustics/caustics_map.rs): distance from
+        // the light to the nearest diffuse receiver per caustic-map texel, for the lookup's
+        // depth test; laid out like the caustic atlas.
+        BINDING_CAUSTIC_RECEIVERS_CUBE = 9;
+        BINDING_CAUSTIC_RECEIVERS_2D = 10;
     }
     // The G-buffer and HDR inputs of the full-screen passes' set 1.
     GBUFFER_BINDINGS {
@@ -301,4 +306,8 @@ shared_floats! {
     // A looked-up distance above this is (a texel filtered with) "no surface": the ray leaves
     // the map and the environment is seen. 1e-5 of IMPOSTOR_NO_SURFACE still exceeds any scene.
     IMPOSTOR_MISS: f32 = 1e10;
+    // The caustic lookup's depth test against the caustic map's receivers (deferred.frag):
+    // the point is pushed towards the light by this many texel footprints, the shadow maps'
+    // bias (src/frame/gpu_scene.rs), so that a lit receiver does not hide itself.
+    CAUSTIC_DEPTH_BIAS_TEXELS: f32 = 1.5;
 }

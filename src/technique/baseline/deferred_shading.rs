@@ -73,7 +73,7 @@ impl Technique for DeferredShadingPass {
             reads.push(targets.shadow_atlas_id);
         }
         if self.caustics {
-            reads.push(targets.caustic_atlas_id);
+            reads.extend([targets.caustic.flux_id, targets.caustic.receivers_id]);
         }
         if let Some(id) = self.photon {
             reads.push(id);
@@ -86,7 +86,7 @@ pub struct DeferredShadingPass {
     pass: FullscreenPass,
     /// Whether a shadow_map pass writes the atlas this frame (then it is a declared read).
     shadowed: bool,
-    /// Whether a caustics_map pass writes the caustic atlas this frame.
+    /// Whether a caustics_map pass writes the caustic atlas and its receivers this frame.
     caustics: bool,
     /// The photon-buffer caustic textures, when a photon_buffer pass writes them.
     photon: Option<ImageId>,
