@@ -310,4 +310,22 @@ shared_floats! {
     // the point is pushed towards the light by this many texel footprints, the shadow maps'
     // bias (src/frame/gpu_scene.rs), so that a lit receiver does not hide itself.
     CAUSTIC_DEPTH_BIAS_TEXELS: f32 = 1.5;
+    // The procedural `grid` environment (../shared/SCENES.md; src/scene/environment.rs
+    // `grid_radiance`, glsl/include/common.glsl): lines of radiance GRID_LINE_RADIANCE within
+    // GRID_LINE_HALF_WIDTH_DEG of every multiple of GRID_SPACING_DEG of longitude and latitude.
+    GRID_SPACING_DEG: f32 = 15.0;
+    GRID_LINE_HALF_WIDTH_DEG: f32 = 0.5;
+    GRID_LINE_RADIANCE: f32 = 2.0;
+    // The environment texture's alpha that stands for the grid: its 1x1 stand-in carries it
+    // (src/frame/gpu_scene.rs), and the lookup evaluates the formula instead of sampling. Every
+    // other environment texel has alpha 1.
+    ENVIRONMENT_GRID_ALPHA: f32 = -1.0;
+}
+
+// Colours, written into the GLSL header as vec3 literals.
+shared_rgb! {
+    // The grid's sky at the horizon and at the zenith (mixed by d.y), and its ground.
+    GRID_SKY_HORIZON = [0.8, 0.85, 0.9];
+    GRID_SKY_ZENITH = [0.25, 0.45, 0.9];
+    GRID_GROUND = [0.3, 0.25, 0.2];
 }
