@@ -272,7 +272,7 @@ fn caustics_reach_only_receivers_facing_and_seen_by_the_light() {
             let oc = o - ball;
             let b = oc.dot(d);
             let misses_ball = b * b - (oc.length_squared() - (radius + margin) * (radius + margin)) < 0.0;
-            if !(t_floor > 0.0) || on_shelf(t_shelf) || !misses_ball {
+            if !t_floor.is_finite() || t_floor <= 0.0 || on_shelf(t_shelf) || !misses_ball {
                 continue;
             }
             let p = o + d * t_floor;
