@@ -18,6 +18,12 @@ macro_rules! shared_floats {
         const SHARED_FLOATS: &[(&str, f64)] = &[$((stringify!($name), $value as f64)),*];
     };
 }
+/// build.rs side of `shared_rgb!`: `(name, [r, g, b])` triples written as GLSL vec3s.
+macro_rules! shared_rgb {
+    ($($name:ident = [$r:expr, $g:expr, $b:expr];)*) => {
+        const SHARED_RGB: &[(&str, [f32; 3])] = &[$((stringify!($name), [$r, $g, $b])),*];
+    };
+}
 /// build.rs side of `shared_bindings!`: `(name, value)` pairs of every group.
 macro_rules! shared_bindings {
     ($($group:ident { $($name:ident = $value:expr;)* })*) => {
@@ -100,6 +106,10 @@ fn main() {
     // float literal in GLSL).
     for (name, value) in SHARED_FLOATS {
         writeln!(header, "#define {name} {value:e}").unwrap();
+    }
+    for (name, [r, g, b]) in SHARED_RGB {
+        let (r, g, b) = (f64::from(*r), f64::from(*g), f64::from(*b));
+        writeln!(header, "#define {name} vec3({r:e}, {g:e}, {b:e})").unwrap();
     }
     for s in SHARED_STRUCTS {
         header.push('\n');

@@ -29,6 +29,12 @@ macro_rules! shared_floats {
         $(pub const $name: $ty = $value;)*
     };
 }
+/// Rust side of `shared_rgb!` (src/shader_shared.rs): a `pub const [f32; 3]` per colour.
+macro_rules! shared_rgb {
+    ($($name:ident = [$r:expr, $g:expr, $b:expr];)*) => {
+        $(pub const $name: [f32; 3] = [$r, $g, $b];)*
+    };
+}
 /// Rust side of `shared_bindings!` (src/shader_shared.rs): a `pub const` per binding and one
 /// list per group, checked for two bindings of one number.
 macro_rules! shared_bindings {

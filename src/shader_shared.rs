@@ -119,6 +119,11 @@ shared_bindings! {
         // pass runs.
         BINDING_PHOTON_CAUSTICS = 7;
         BINDING_PHOTON_RECTS = 8;
+        // The caustic map's receivers (src/technique/caustics/caustics_map.rs): distance from
+        // the light to the nearest diffuse receiver per caustic-map texel, for the lookup's
+        // depth test; laid out like the caustic atlas.
+        BINDING_CAUSTIC_RECEIVERS_CUBE = 9;
+        BINDING_CAUSTIC_RECEIVERS_2D = 10;
     }
     // The G-buffer and HDR inputs of the full-screen passes' set 1.
     GBUFFER_BINDINGS {
@@ -309,4 +314,26 @@ shared_floats! {
     // A looked-up distance above this is (a texel filtered with) "no surface": the ray leaves
     // the map and the environment is seen. 1e-5 of IMPOSTOR_NO_SURFACE still exceeds any scene.
     IMPOSTOR_MISS: f32 = 1e10;
+    // The caustic lookup's depth test against the caustic map's receivers (deferred.frag):
+    // the point is pushed towards the light by this many texel footprints, the shadow maps'
+    // bias (src/frame/gpu_scene.rs), so that a lit receiver does not hide itself.
+    CAUSTIC_DEPTH_BIAS_TEXELS: f32 = 1.5;
+    // The procedural `grid` environment (../shared/SCENES.md; src/scene/environment.rs
+    // `grid_radiance`, glsl/include/common.glsl): lines of radiance GRID_LINE_RADIANCE within
+    // GRID_LINE_HALF_WIDTH_DEG of every multiple of GRID_SPACING_DEG of longitude and latitude.
+    GRID_SPACING_DEG: f32 = 15.0;
+    GRID_LINE_HALF_WIDTH_DEG: f32 = 0.5;
+    GRID_LINE_RADIANCE: f32 = 2.0;
+    // The environment texture's alpha that stands for the grid: its 1x1 stand-in carries it
+    // (src/frame/gpu_scene.rs), and the lookup evaluates the formula instead of sampling. Every
+    // other environment texel has alpha 1.
+    ENVIRONMENT_GRID_ALPHA: f32 = -1.0;
+}
+
+// Colours, written into the GLSL header as vec3 literals.
+shared_rgb! {
+    // The grid's sky at the horizon and at the zenith (mixed by d.y), and its ground.
+    GRID_SKY_HORIZON = [0.8, 0.85, 0.9];
+    GRID_SKY_ZENITH = [0.25, 0.45, 0.9];
+    GRID_GROUND = [0.3, 0.25, 0.2];
 }

@@ -219,3 +219,91 @@ fn two_lights_add_their_caustics_with_every_technique() {
         assert!(rel < 0.02, "{technique}: two lights {} vs the sum of each {}", added[2], added[0] + added[1]);
     }
 }
+
+/// caustic_sphere with a small diffuse shelf between the ball and the floor, at `size`^2
+/// with extra overrides: the shelf catches the caustic, and the floor under it is hidden
+/// from the light.
+fn caustic_sphere_with_shelf(size: u32, overrides: &[&str]) -> prism::scene::Scene {
+    let path = prism::scene::benchmark_scene_path("caustic_sphere");
+    let text = std::fs::read_to_string(&path).expect("caustic_sphere.toml");
+    let text = format!(
+        "{text}\n[[objects]]\nname = \"shelf\"\nmaterial = \"floor\"\nshape = \"quad\"\n\
+         center = [0, {SHELF_HEIGHT}, 0]\nsize = [{SHELF_SIZE}, {SHELF_SIZE}]\nnormal = [0, 1, 0]\n"
+    );
+    let mut o = vec![format!("camera.width={size}"), format!("camera.height={size}")];
+    o.extend(overrides.iter().map(|s| s.to_string()));
+    prism::scene::load_str(&text, &path, &o).expect("caustic_sphere with a shelf")
+}
+
+/// Below the ball's lowest point (y = 0.2), inside the caustic's cone.
+const SHELF_HEIGHT: f32 = 0.1;
+const SHELF_SIZE: f32 = 0.6;
+
+/// Caustic light reaches only the receivers the light sees, on the side it arrives from
+/// (Shah et al. 2007 §III.B: the caustic map's flux fell on the receivers of the light's view).
+/// Where no light arrives the radiance is exactly 0: the environment is black, the direct
+/// light is shadowed (the floor under the shelf) or arrives from behind (the floor seen from
+/// below). The bound 1e-3 stands for that 0 with room for rounding; a leaking caustic there
+/// is of the order of the floor's caustic, 0.1 to 10.
+#[test]
+fn caustics_reach_only_receivers_facing_and_seen_by_the_light() {
+    let ctx = common::context(false);
+    const DARK: f32 = 1e-3;
+    // The floor under the shelf, seen past the shelf and the ball, at least `margin` inside
+    // the shelf's shadow (the shadow maps' 1.5-texel bias and the tessellated ball's edge).
+    let size = 128;
+    let s = caustic_sphere_with_shelf(size, &["render.caustics=caustics_map"]);
+    let light = glam::Vec3::new(0.0, 5.0, 0.0);
+    let (ball, radius) = (glam::Vec3::new(0.0, 1.2, 0.0), 1.0f32);
+    let half = SHELF_SIZE * 0.5;
+    let margin = 0.05;
+    let mut hidden = Vec::new();
+    for j in 0..size {
+        for i in 0..size {
+            let (o, d) = s.camera.primary_ray(i, j);
+            let t_floor = -o.y / d.y;
+            let t_shelf = (SHELF_HEIGHT - o.y) / d.y;
+            let on_shelf = |t: f32| {
+                let p = o + d * t;
+                t > 0.0 && p.x.abs() <= half && p.z.abs() <= half
+            };
+            let oc = o - ball;
+            let b = oc.dot(d);
+            let misses_ball = b * b - (oc.length_squared() - (radius + margin) * (radius + margin)) < 0.0;
+            if !t_floor.is_finite() || t_floor <= 0.0 || on_shelf(t_shelf) || !misses_ball {
+                continue;
+            }
+            let p = o + d * t_floor;
+            // Where the segment to the light crosses the shelf's plane.
+            let c = p + (light - p) * (SHELF_HEIGHT / light.y);
+            if c.x.abs() < half - margin && c.z.abs() < half - margin {
+                hidden.push((i, j));
+            }
+        }
+    }
+    assert!(hidden.len() >= 20, "only {} floor pixels hidden under the shelf", hidden.len());
+    let with = common::render_on(&ctx, &s);
+    let without = common::render_on(&ctx, &caustic_sphere_with_shelf(size, &[]));
+    // The caustic is there: on the shelf and around it.
+    let (a, b) = (common::total(&with.hdr), common::total(&without.hdr));
+    assert!(a > b * 1.01, "the caustic adds no light ({a} vs {b})");
+    let worst = hidden.iter().map(|&(i, j)| with.radiance(i, j)[1]).fold(0.0f32, f32::max);
+    eprintln!(
+        "{} floor pixels under the shelf: brightest {worst:.4}; radiance {a:.2} with caustics, {b:.2} without",
+        hidden.len()
+    );
+    assert!(worst < DARK, "the floor hidden from the light under the shelf gets caustic light: {worst}");
+
+    // The floor seen from below faces away from the light: every technique leaves it dark.
+    let below = ["camera.position=[0, -3, 5]", "camera.target=[0, 0, 0]"];
+    for technique in ["caustics_map", "photon_buffer", "impostor_lightmap"] {
+        let caustics = format!("render.caustics={technique}");
+        let mut o = below.to_vec();
+        o.push(&caustics);
+        let out = common::render_on(&ctx, &common::scene("caustic_sphere", 64, &o));
+        common::assert_finite(technique, &out.hdr);
+        let worst = out.hdr.chunks(4).map(|p| p[0].max(p[1]).max(p[2])).fold(0.0f32, f32::max);
+        eprintln!("{technique}: the floor seen from below, brightest {worst:.4}");
+        assert!(worst < DARK, "{technique}: the floor's side away from the light gets caustic light: {worst}");
+    }
+}

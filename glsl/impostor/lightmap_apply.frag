@@ -25,7 +25,19 @@ void main() {
     // unflipped, so opposite faces differ in sign.
     vec3 face_normal = cross(pc.edge_u.xyz, pc.edge_v.xyz);
     if (dot(nm.xyz, face_normal) < 0.7 * length(nm.xyz) * length(face_normal)) discard;
-    vec3 d = world_from_depth(in_uv, depth) - pc.origin.xyz;
+    vec3 p = world_from_depth(in_uv, depth);
+    // The photons arrive on the receiver's side that faces the light (through or off the
+    // specular objects between them): the side turned away from every light receives none,
+    // though the chart, and so the light map, is the same for both sides of a surface.
+    vec3 n = dot(nm.xyz, camera_ray(in_uv)) > 0.0 ? -nm.xyz : nm.xyz;
+    bool lit_side = false;
+    for (uint i = 0u; i < frame.info.x; ++i) {
+        GpuLight l = frame.lights[i];
+        vec3 wi = uint(l.position.w + 0.5) == LIGHT_POINT ? l.position.xyz - p : -l.position.xyz;
+        lit_side = lit_side || dot(n, wi) > 0.0;
+    }
+    if (!lit_side) discard;
+    vec3 d = p - pc.origin.xyz;
     vec2 uv = vec2(dot(d, pc.edge_u.xyz) / dot(pc.edge_u.xyz, pc.edge_u.xyz),
                    dot(d, pc.edge_v.xyz) / dot(pc.edge_v.xyz, pc.edge_v.xyz));
     if (any(lessThan(uv, vec2(-1e-3))) || any(greaterThan(uv, vec2(1.0 + 1e-3)))) discard;

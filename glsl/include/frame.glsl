@@ -17,6 +17,10 @@ layout(set = 0, binding = BINDING_SHADOW_2D) uniform sampler2DArray shadow_layer
 // laid out like the shadow atlas.
 layout(set = 0, binding = BINDING_CAUSTIC_CUBE) uniform samplerCubeArray caustic_cubes;
 layout(set = 0, binding = BINDING_CAUSTIC_2D) uniform sampler2DArray caustic_layers;
+// The caustic map's receivers: distance from the light to the nearest diffuse receiver per
+// caustic-map texel, stored like the shadow maps (glsl/shadow/shadow.frag).
+layout(set = 0, binding = BINDING_CAUSTIC_RECEIVERS_CUBE) uniform samplerCubeArray caustic_receiver_cubes;
+layout(set = 0, binding = BINDING_CAUSTIC_RECEIVERS_2D) uniform sampler2DArray caustic_receiver_layers;
 // Photon-buffer caustic textures (Hu & Qin 2007 §3; src/technique/caustics/photon_buffer.rs): one layer
 // per receiver rectangle, and the rectangles.
 #include "photon_rect.glsl"

@@ -8,10 +8,10 @@ use glam::{Mat4, Vec3};
 use crate::gpu::{vk, Buffer, GpuContext, Image, ImageDesc, MemoryLocation};
 use crate::graph::{FrameGraph, ImageId};
 use crate::scene::{Albedo, Environment, Light, Material, Scene};
+use crate::{ENVIRONMENT_GRID_ALPHA, MAX_LIGHTS, SHADOW_LAYERS_PER_LIGHT};
 use crate::{
     LIGHT_DIRECTIONAL, LIGHT_POINT, MATERIAL_CONDUCTOR, MATERIAL_DIELECTRIC, MATERIAL_DIFFUSE, MATERIAL_MIRROR,
 };
-use crate::{MAX_LIGHTS, SHADOW_LAYERS_PER_LIGHT};
 
 use super::RenderError;
 use crate::shader_structs::{GpuLight, GpuMaterial, Vertex};
@@ -81,6 +81,20 @@ pub fn gpu_material(m: &Material) -> GpuMaterial {
         },
     }
 }
+
+/// The grid's SH coefficients, by the midpoint rule of [`environment_sh`] over the grid's
+/// formula at GRID_SH_WIDTH x GRID_SH_WIDTH / 2 texel centres: 0.18 degree per texel, five
+/// samples across a line. Computed once per process.
+fn grid_sh() -> [[f32; 4]; 9] {
+    static SH: std::sync::OnceLock<[[f32; 4]; 9]> = std::sync::OnceLock::new();
+    *SH.get_or_init(|| {
+        let (w, h) = (GRID_SH_WIDTH, GRID_SH_WIDTH / 2);
+        environment_sh(w, h, &crate::scene::grid_texels(w, h))
+    })
+}
+
+/// Width of the lat-long sampling of the grid that its irradiance is integrated from.
+pub(crate) const GRID_SH_WIDTH: u32 = 2048;
 
 /// Irradiance spherical-harmonic coefficients L_lm of a lat-long map (Ramamoorthi & Hanrahan
 /// 2001, Eq. 10): sum of L(d) Y_lm(d) dOmega over texels, dOmega = (2pi/W)(pi/H) sin(theta).
@@ -301,12 +315,20 @@ impl GpuScene {
         let mats = if mats.is_empty() { vec![GpuMaterial::default()] } else { mats };
         let materials = Buffer::storage(ctx, "scene_materials", &mats)?;
 
-        // Environment: always a texture (a constant is a 1x1 map) so one lookup serves all.
-        let (w, h, texels) = match &scene.environment {
-            Environment::Constant(c) => (1, 1, vec![[c.x, c.y, c.z, 1.0]]),
-            Environment::Image { width, height, texels, .. } => (*width, *height, texels.clone()),
+        // Environment: always a texture (a constant is a 1x1 map, the grid a 1x1 map that
+        // names it) so one lookup serves all (glsl/include/common.glsl).
+        let (w, h, texels, env_sh) = match &scene.environment {
+            Environment::Constant(c) => {
+                let t = vec![[c.x, c.y, c.z, 1.0]];
+                (1, 1, t.clone(), environment_sh(1, 1, &t))
+            }
+            Environment::Grid => (1, 1, vec![[0.0, 0.0, 0.0, ENVIRONMENT_GRID_ALPHA]], grid_sh()),
+            Environment::Image { width, height, texels, .. } => {
+                // Alpha 1 everywhere: the grid's alpha must not be read from a file.
+                let t: Vec<[f32; 4]> = texels.iter().map(|&[r, g, b, _]| [r, g, b, 1.0]).collect();
+                (*width, *height, t, environment_sh(*width, *height, texels))
+            }
         };
-        let env_sh = environment_sh(w, h, &texels);
         let environment = Image::new(
             ctx,
             &ImageDesc::d2(

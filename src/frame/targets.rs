@@ -33,9 +33,8 @@ pub struct Targets {
     pub shadow_atlas: Arc<Image>,
     /// One depth layer per atlas layer, so faces never wait on each other's depth buffer.
     pub shadow_depth: Arc<Image>,
-    /// Caustic-map atlas, laid out like `shadow_atlas` (six cube-compatible layers per light);
-    /// a cleared 1x1 stand-in when no caustic pass writes it.
-    pub caustic_atlas: Arc<Image>,
+    /// Caustic-map atlas and its receivers' distances, laid out like `shadow_atlas`.
+    pub caustic: CausticAtlas,
     pub gbuf_normal_id: ImageId,
     pub gbuf_albedo_id: ImageId,
     pub depth_id: ImageId,
@@ -43,7 +42,21 @@ pub struct Targets {
     pub ldr_id: ImageId,
     pub shadow_atlas_id: ImageId,
     pub shadow_depth_id: ImageId,
-    pub caustic_atlas_id: ImageId,
+}
+
+/// The caustic map of Shah et al. 2007 (src/technique/caustics/caustics_map.rs) and the
+/// receivers it was splatted onto, both laid out like the shadow atlas (six cube-compatible
+/// layers per light); cleared 1x1 stand-ins when no caustics-mapping pass writes them.
+#[derive(Clone)]
+pub struct CausticAtlas {
+    /// Flux per texel in W, RGB.
+    pub flux: Arc<Image>,
+    pub flux_id: ImageId,
+    /// Distance from the light to the nearest diffuse receiver (the refractors left out), per
+    /// texel, as the shadow maps store it: the surface the texel's flux fell on. A receiver
+    /// further from the light behind it is hidden from the caustic.
+    pub receivers: Arc<Image>,
+    pub receivers_id: ImageId,
 }
 
 /// The light-space images of [`Targets`], which do not depend on the image size.
@@ -51,10 +64,9 @@ struct Atlases {
     shadow_lights: u32,
     shadow_atlas: Arc<Image>,
     shadow_depth: Arc<Image>,
-    caustic_atlas: Arc<Image>,
+    caustic: CausticAtlas,
     shadow_atlas_id: ImageId,
     shadow_depth_id: ImageId,
-    caustic_atlas_id: ImageId,
 }
 
 impl Targets {
@@ -99,15 +111,14 @@ impl Targets {
             ctx,
             &layered("shadow_depth", DEPTH_FORMAT, U::DEPTH_STENCIL_ATTACHMENT, ImageViewKind::D2Array),
         )?;
-        let caustic_atlas = Self::caustic_atlas(ctx, lights, caustic_size)?;
+        let caustic = Self::caustic_atlas(ctx, graph, lights, caustic_size)?;
         let atlases = Atlases {
             shadow_lights: lights,
             shadow_atlas_id: graph.register_image(&shadow_atlas),
             shadow_depth_id: graph.register_image(&shadow_depth),
-            caustic_atlas_id: graph.register_image(&caustic_atlas),
             shadow_atlas: Arc::new(shadow_atlas),
             shadow_depth: Arc::new(shadow_depth),
-            caustic_atlas: Arc::new(caustic_atlas),
+            caustic,
         };
         Self::with_atlases(ctx, graph, width, height, atlases)
     }
@@ -125,10 +136,9 @@ impl Targets {
             shadow_lights: self.shadow_lights,
             shadow_atlas: self.shadow_atlas.clone(),
             shadow_depth: self.shadow_depth.clone(),
-            caustic_atlas: self.caustic_atlas.clone(),
+            caustic: self.caustic.clone(),
             shadow_atlas_id: self.shadow_atlas_id,
             shadow_depth_id: self.shadow_depth_id,
-            caustic_atlas_id: self.caustic_atlas_id,
         };
         Self::with_atlases(ctx, graph, width, height, atlases)
     }
@@ -165,7 +175,6 @@ impl Targets {
             ldr_id: graph.register_image(&ldr),
             shadow_atlas_id: a.shadow_atlas_id,
             shadow_depth_id: a.shadow_depth_id,
-            caustic_atlas_id: a.caustic_atlas_id,
             gbuf_normal,
             gbuf_albedo,
             depth,
@@ -173,7 +182,7 @@ impl Targets {
             ldr,
             shadow_atlas: a.shadow_atlas,
             shadow_depth: a.shadow_depth,
-            caustic_atlas: a.caustic_atlas,
+            caustic: a.caustic,
         })
     }
 
@@ -183,16 +192,21 @@ impl Targets {
         [self.gbuf_normal_id, self.gbuf_albedo_id, self.depth_id, self.hdr_id, self.ldr_id]
     }
 
-    /// Put `atlas` (registered with the frame graph as `id`) in place of the caustic atlas,
-    /// and return the one it replaces (to swap back, or to drop once the GPU is done with it).
-    pub fn swap_caustic_atlas(&mut self, atlas: (Arc<Image>, ImageId)) -> (Arc<Image>, ImageId) {
-        let id = std::mem::replace(&mut self.caustic_atlas_id, atlas.1);
-        (std::mem::replace(&mut self.caustic_atlas, atlas.0), id)
+    /// Put `atlas` in place of the caustic atlas, and return the one it replaces (to swap
+    /// back, or to drop once the GPU is done with it).
+    pub fn swap_caustic_atlas(&mut self, atlas: CausticAtlas) -> CausticAtlas {
+        std::mem::replace(&mut self.caustic, atlas)
     }
 
-    /// The caustic-map atlas: six cube-compatible layers of `caustic_size` per light, or a 1x1
-    /// stand-in when no caustics-mapping pass writes it (it is bound all the same).
-    pub fn caustic_atlas(ctx: &Arc<GpuContext>, lights: u32, caustic_size: Option<u32>) -> Result<Image, RenderError> {
+    /// The caustic-map atlas and its receivers: six cube-compatible layers of `caustic_size`
+    /// per light, or 1x1 stand-ins when no caustics-mapping pass writes them (they are bound
+    /// all the same), registered with `graph`.
+    pub fn caustic_atlas(
+        ctx: &Arc<GpuContext>,
+        graph: &mut FrameGraph,
+        lights: u32,
+        caustic_size: Option<u32>,
+    ) -> Result<CausticAtlas, RenderError> {
         let (size, layers) = match caustic_size {
             Some(c) if lights > 0 => (c, lights * SHADOW_LAYERS_PER_LIGHT),
             _ => (1, SHADOW_LAYERS_PER_LIGHT),
@@ -204,18 +218,28 @@ impl Targets {
             )));
         }
         use vk::ImageUsageFlags as U;
-        Ok(Image::new(
-            ctx,
-            &ImageDesc {
-                name: "caustic_atlas".into(),
-                format: CAUSTIC_FORMAT,
-                width: size,
-                height: size,
-                layers,
-                usage: U::COLOR_ATTACHMENT | U::SAMPLED | U::TRANSFER_DST | U::TRANSFER_SRC,
-                view: ImageViewKind::CubeArray,
-            },
-        )?)
+        let image = |name: &str, format| {
+            Image::new(
+                ctx,
+                &ImageDesc {
+                    name: name.into(),
+                    format,
+                    width: size,
+                    height: size,
+                    layers,
+                    usage: U::COLOR_ATTACHMENT | U::SAMPLED | U::TRANSFER_DST | U::TRANSFER_SRC,
+                    view: ImageViewKind::CubeArray,
+                },
+            )
+        };
+        let flux = image("caustic_atlas", CAUSTIC_FORMAT)?;
+        let receivers = image("caustic_receivers", SHADOW_FORMAT)?;
+        Ok(CausticAtlas {
+            flux_id: graph.register_image(&flux),
+            receivers_id: graph.register_image(&receivers),
+            flux: Arc::new(flux),
+            receivers: Arc::new(receivers),
+        })
     }
 
     /// The G-buffer's normal and depth (and, with `albedo`, its albedo) at their shared

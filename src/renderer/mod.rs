@@ -32,13 +32,14 @@ use crate::technique::impostor::impostor_lightmap::ImpostorLightmap;
 use crate::technique::refraction::refractor_layers::DebugTarget;
 use crate::technique::{Cache, FrameInputs, Recipe, Setup, Technique, TECHNIQUES};
 use crate::{
-    BINDING_CAUSTIC_2D, BINDING_CAUSTIC_CUBE, BINDING_ENVIRONMENT, BINDING_FRAME, BINDING_MATERIALS,
-    BINDING_PHOTON_CAUSTICS, BINDING_PHOTON_RECTS, BINDING_SHADOW_2D, BINDING_SHADOW_CUBE,
+    BINDING_CAUSTIC_2D, BINDING_CAUSTIC_CUBE, BINDING_CAUSTIC_RECEIVERS_2D, BINDING_CAUSTIC_RECEIVERS_CUBE,
+    BINDING_ENVIRONMENT, BINDING_FRAME, BINDING_MATERIALS, BINDING_PHOTON_CAUSTICS, BINDING_PHOTON_RECTS,
+    BINDING_SHADOW_2D, BINDING_SHADOW_CUBE,
 };
 
 use crate::frame::gpu_scene::GpuScene;
 use crate::frame::heightfield::HeightfieldAnimation;
-use crate::frame::targets::Targets;
+use crate::frame::targets::{CausticAtlas, Targets};
 pub use crate::frame::RenderError;
 use crate::shader_structs::{FrameUniforms, Vertex};
 use plan::PlannedPass;
@@ -210,14 +211,14 @@ impl Renderer {
                 .storage(BINDING_MATERIALS, &gpu_scene.materials)
                 .sampled(BINDING_ENVIRONMENT, &gpu_scene.environment, &latlong);
             let set = bind_atlas(set, [BINDING_SHADOW_CUBE, BINDING_SHADOW_2D], &targets.shadow_atlas, &nearest);
-            let set = bind_atlas(set, [BINDING_CAUSTIC_CUBE, BINDING_CAUSTIC_2D], &targets.caustic_atlas, &nearest);
+            let set = bind_caustic_atlas(set, &targets.caustic, &nearest);
             bind_photon_caustics(set, &photon_caustics, &nearest)
         };
         let frame_sets = Bindings::build_each(ctx, "frame", frame_buffers.iter().map(frame_set).collect())?;
         // The atlases are bound even when no pass writes them: give them defined contents
         // ("nothing occludes", "no caustic light") and the layout the shaders expect.
         clear_atlas(ctx, &mut graph, &targets.shadow_atlas, targets.shadow_atlas_id, FAR_DISTANCE)?;
-        clear_atlas(ctx, &mut graph, &targets.caustic_atlas, targets.caustic_atlas_id, 0.0)?;
+        clear_caustic_atlas(ctx, &mut graph, &targets.caustic)?;
         let objects = (0..scene.objects.len())
             .map(|i| ObjectState {
                 name: scene.objects[i].name.clone(),
@@ -556,7 +557,7 @@ impl Renderer {
             return Ok(None);
         }
         self.finish()?;
-        let (atlas, id) = (&self.targets.caustic_atlas, self.targets.caustic_atlas_id);
+        let (atlas, id) = (&self.targets.caustic.flux, self.targets.caustic.flux_id);
         let bytes = self.graph.read_back(&self.ctx, atlas, id, 16, Access::FragmentSampled)?;
         let values: &[[f32; 4]] = bytemuck::cast_slice(&bytes);
         let mut sum = [0f64; 3];
@@ -689,6 +690,18 @@ const FRAME_STAGES: vk::ShaderStageFlags = vk::ShaderStageFlags::from_raw(
 /// `bindings[1]`.
 fn bind_atlas<'a>(set: Bindings<'a>, bindings: [u32; 2], atlas: &'a Image, sampler: &'a Sampler) -> Bindings<'a> {
     set.sampled(bindings[0], atlas, sampler).sampled_view(bindings[1], atlas, atlas.array_view(), sampler)
+}
+
+/// The caustic atlas and its receivers' distances in a frame set.
+fn bind_caustic_atlas<'a>(set: Bindings<'a>, c: &'a CausticAtlas, sampler: &'a Sampler) -> Bindings<'a> {
+    let set = bind_atlas(set, [BINDING_CAUSTIC_CUBE, BINDING_CAUSTIC_2D], &c.flux, sampler);
+    bind_atlas(set, [BINDING_CAUSTIC_RECEIVERS_CUBE, BINDING_CAUSTIC_RECEIVERS_2D], &c.receivers, sampler)
+}
+
+/// "No caustic light" and "no receiver in front" in a caustic atlas, ready to be sampled.
+fn clear_caustic_atlas(ctx: &GpuContext, graph: &mut FrameGraph, c: &CausticAtlas) -> Result<(), RenderError> {
+    clear_atlas(ctx, graph, &c.flux, c.flux_id, 0.0)?;
+    clear_atlas(ctx, graph, &c.receivers, c.receivers_id, FAR_DISTANCE)
 }
 
 /// Hu & Qin 2007 §3's caustic textures and rectangles in a frame set.

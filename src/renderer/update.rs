@@ -33,8 +33,8 @@ use crate::technique::caustics::photon_buffer::PhotonCaustics;
 use crate::technique::{params, recipe, Recipe, Setup, TECHNIQUES};
 
 use super::{
-    bind_atlas, bind_photon_caustics, clear_atlas, set_camera_uniforms, RenderError, Renderer, FRAMES_IN_FLIGHT,
-    FRAME_STAGES,
+    bind_caustic_atlas, bind_photon_caustics, clear_caustic_atlas, set_camera_uniforms, RenderError, Renderer,
+    FRAMES_IN_FLIGHT, FRAME_STAGES,
 };
 use crate::frame::gpu_scene::gpu_material;
 use crate::frame::heightfield::HeightfieldAnimation;
@@ -243,11 +243,7 @@ impl Renderer {
             false => None,
         };
         let atlas = match caustic_size != self.caustic_size {
-            true => {
-                let atlas = Targets::caustic_atlas(&self.ctx, self.targets.shadow_lights, caustic_size)?;
-                let id = self.graph.register_image(&atlas);
-                Some((std::sync::Arc::new(atlas), id))
-            }
+            true => Some(Targets::caustic_atlas(&self.ctx, &mut self.graph, self.targets.shadow_lights, caustic_size)?),
             false => None,
         };
         let photon_params = photon_params(scene, &new_recipe)?;
@@ -353,11 +349,9 @@ impl Renderer {
 
     /// "No caustic light" in a new caustic atlas, bound in every frame set.
     fn clear_and_bind_caustic_atlas(&mut self) -> Result<(), RenderError> {
-        let (atlas, id) = (&self.targets.caustic_atlas, self.targets.caustic_atlas_id);
-        clear_atlas(&self.ctx, &mut self.graph, atlas, id, 0.0)?;
-        let bindings = [crate::BINDING_CAUSTIC_CUBE, crate::BINDING_CAUSTIC_2D];
-        self.frame_sets
-            .rewrite(&self.ctx, bind_atlas(Bindings::new(FRAME_STAGES), bindings, atlas, &self._samplers[0]));
+        clear_caustic_atlas(&self.ctx, &mut self.graph, &self.targets.caustic)?;
+        let set = bind_caustic_atlas(Bindings::new(FRAME_STAGES), &self.targets.caustic, &self._samplers[0]);
+        self.frame_sets.rewrite(&self.ctx, set);
         Ok(())
     }
 

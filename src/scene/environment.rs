@@ -1,20 +1,23 @@
 //! Environment lighting: the lat-long mapping, the procedural `grid` environment and
-//! its one-time bake to EXR, and loading of environment images.
+//! loading of environment images.
 
 use std::f32::consts::{PI, TAU};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, Ordering};
-use std::sync::Mutex;
 
 use glam::{Vec2, Vec3};
 
-use super::error::SceneError;
+use crate::{
+    GRID_GROUND, GRID_LINE_HALF_WIDTH_DEG, GRID_LINE_RADIANCE, GRID_SKY_HORIZON, GRID_SKY_ZENITH, GRID_SPACING_DEG,
+};
 
 /// Radiance arriving from every direction not blocked by the scene.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Environment {
     Constant(Vec3),
-    /// A lat-long image (see [`dir_to_latlong`]); `grid` resolves to its baked image.
+    /// The procedural grid of [`grid_radiance`], evaluated exactly per lookup on the GPU
+    /// (glsl/include/common.glsl), as the reference and any other renderer see it.
+    Grid,
+    /// A lat-long image (see [`dir_to_latlong`]).
     Image {
         path: PathBuf,
         width: u32,
@@ -23,11 +26,6 @@ pub enum Environment {
         texels: Vec<[f32; 4]>,
     },
 }
-
-/// Size of the baked grid: 2048 x 1024 puts each 1-degree line about 5.7 texels wide,
-/// enough for bilinear lookups to keep it sharp.
-pub const GRID_WIDTH: u32 = 2048;
-pub const GRID_HEIGHT: u32 = 1024;
 
 /// Direction -> lat-long (u, v): u = 0.5 + atan2(x, -z) / 2pi, v = acos(y) / pi,
 /// (0, 0) the top-left corner. -Z maps to the image centre, +Y to the top row.
@@ -48,22 +46,23 @@ pub fn latlong_dir(u: f32, v: f32) -> Vec3 {
 /// at the horizon to (0.25, 0.45, 0.9) at the zenith, a ground of (0.3, 0.25, 0.2)
 /// below, and lines of radiance 2 within 0.5 degree of every multiple of 15 degrees
 /// of longitude atan2(x, -z) and latitude 90 - acos(y). The lines make refraction
-/// error visible.
+/// error visible. The one definition: glsl/include/common.glsl's `grid_radiance` evaluates
+/// the same angles with the same constants (src/shader_shared.rs).
 pub fn grid_radiance(d: Vec3) -> Vec3 {
     let d = d.normalize_or(Vec3::NEG_Z);
     let lon = d.x.atan2(-d.z).to_degrees();
     let lat = 90.0 - d.y.clamp(-1.0, 1.0).acos().to_degrees();
     let near_line = |a: f32| {
-        let m = a.rem_euclid(15.0);
-        m <= 0.5 || m >= 14.5
+        let m = a.rem_euclid(GRID_SPACING_DEG);
+        m <= GRID_LINE_HALF_WIDTH_DEG || m >= GRID_SPACING_DEG - GRID_LINE_HALF_WIDTH_DEG
     };
     if near_line(lon) || near_line(lat) {
-        return Vec3::splat(2.0);
+        return Vec3::splat(GRID_LINE_RADIANCE);
     }
     if d.y >= 0.0 {
-        Vec3::new(0.8, 0.85, 0.9).lerp(Vec3::new(0.25, 0.45, 0.9), d.y)
+        Vec3::from_array(GRID_SKY_HORIZON).lerp(Vec3::from_array(GRID_SKY_ZENITH), d.y)
     } else {
-        Vec3::new(0.3, 0.25, 0.2)
+        Vec3::from_array(GRID_GROUND)
     }
 }
 
@@ -78,56 +77,6 @@ pub fn grid_texels(width: u32, height: u32) -> Vec<[f32; 4]> {
         }
     }
     t
-}
-
-/// Where the baked grid lives.
-pub fn grid_path() -> PathBuf {
-    super::assets_dir().join("environments").join("grid.exr")
-}
-
-fn write_exr(path: &Path, width: u32, height: u32, texels: &[[f32; 4]]) -> Result<(), SceneError> {
-    let fail = |message: String| SceneError::Bake { path: path.to_path_buf(), message };
-    if let Some(dir) = path.parent() {
-        std::fs::create_dir_all(dir).map_err(|e| fail(e.to_string()))?;
-    }
-    let flat: Vec<f32> = texels.iter().flatten().copied().collect();
-    let img = image::Rgba32FImage::from_raw(width, height, flat)
-        .ok_or_else(|| fail("texel count does not match the size".to_string()))?;
-    // Write beside the target and rename: rename is atomic, so a concurrent reader
-    // (parallel tests, two prism processes) sees no file or a whole one.
-    static COUNTER: AtomicU64 = AtomicU64::new(0);
-    let tmp =
-        path.with_extension(format!("tmp-{}-{}.exr", std::process::id(), COUNTER.fetch_add(1, Ordering::Relaxed)));
-    let written = img
-        .save_with_format(&tmp, image::ImageFormat::OpenExr)
-        .map_err(|e| fail(e.to_string()))
-        .and_then(|()| std::fs::rename(&tmp, path).map_err(|e| fail(e.to_string())));
-    if written.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    written
-}
-
-/// The grid environment: baked to [`grid_path`] if missing, then loaded. Loaded
-/// texels are kept for the process, since every grid scene shares them.
-pub fn grid_environment() -> Result<Environment, SceneError> {
-    static CACHE: Mutex<Option<Vec<[f32; 4]>>> = Mutex::new(None);
-    let path = grid_path();
-    let mut cache = CACHE.lock().unwrap_or_else(|p| p.into_inner());
-    if cache.is_none() {
-        if !path.exists() {
-            write_exr(&path, GRID_WIDTH, GRID_HEIGHT, &grid_texels(GRID_WIDTH, GRID_HEIGHT))?;
-        }
-        let (w, h, texels) = read_image(&path).map_err(|message| SceneError::Bake { path: path.clone(), message })?;
-        if (w, h) != (GRID_WIDTH, GRID_HEIGHT) {
-            return Err(SceneError::Bake {
-                path,
-                message: format!("it is {w} x {h}, not {GRID_WIDTH} x {GRID_HEIGHT}"),
-            });
-        }
-        *cache = Some(texels);
-    }
-    Ok(Environment::Image { path, width: GRID_WIDTH, height: GRID_HEIGHT, texels: cache.clone().unwrap_or_default() })
 }
 
 fn srgb_to_linear(c: f32) -> f32 {

@@ -96,10 +96,6 @@ pub enum SceneError {
     /// names the override that put the offending value there, if one did.
     #[error("{at}: {}{message}\n  hint: {hint}", set.as_ref().map(|s| format!("--set {s}: ")).unwrap_or_default())]
     Invalid { kind: ErrorKind, at: Location, set: Option<String>, message: String, hint: String },
-
-    /// The procedural `grid` environment could not be written to its cache file.
-    #[error("{}: cannot bake the grid environment: {message}\n  hint: the assets/environments/ directory must be writable (or delete a corrupt grid.exr)", path.display())]
-    Bake { path: PathBuf, message: String },
 }
 
 impl SceneError {

@@ -21,10 +21,7 @@ use std::path::{Path, PathBuf};
 
 use glam::{Mat4, Quat, Vec2, Vec3};
 
-pub use environment::{
-    dir_to_latlong, grid_environment, grid_path, grid_radiance, grid_texels, latlong_dir, Environment, GRID_HEIGHT,
-    GRID_WIDTH,
-};
+pub use environment::{dir_to_latlong, grid_radiance, grid_texels, latlong_dir, Environment};
 pub use error::{line_col, ErrorKind, Location, SceneError};
 pub use mesh::Mesh;
 pub use shapes::{wave_height, wave_normal, Wave};
@@ -714,13 +711,13 @@ fn camera(c: &file::FileCamera, src: &Source) -> Result<Camera, SceneError> {
 
 fn environment(e: Option<&file::FileEnvironment>, src: &Source) -> Result<Environment, SceneError> {
     let Some(e) = e else {
-        return grid_environment();
+        return Ok(Environment::Grid);
     };
     let what = format!("environment type `{}`", e.kind);
     match e.kind.as_str() {
         "grid" => {
             check_keys(src, "environment", &what, &e.present(), &[], &[])?;
-            grid_environment()
+            Ok(Environment::Grid)
         }
         "constant" => {
             check_keys(src, "environment", &what, &e.present(), &["radiance"], &["radiance"])?;

@@ -91,8 +91,8 @@ impl CausticReads {
 
     /// The images the lookups read this frame.
     pub fn reads(&self, targets: &Targets) -> Vec<ImageId> {
-        let atlas = self.filter.map(|_| targets.caustic_atlas_id);
-        atlas.into_iter().chain(self.photon.map(|p| p.2)).collect()
+        let atlas = self.filter.map(|_| [targets.caustic.flux_id, targets.caustic.receivers_id]);
+        atlas.into_iter().flatten().chain(self.photon.map(|p| p.2)).collect()
     }
 }
 

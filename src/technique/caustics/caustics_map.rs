@@ -29,7 +29,7 @@
 use glam::{Mat4, Vec3};
 
 use crate::frame::gpu_scene::{cube_face_views, Draw, GpuScene};
-use crate::frame::targets::{DEPTH_FORMAT, SHADOW_FORMAT};
+use crate::frame::targets::DEPTH_FORMAT;
 use crate::gpu::{
     vk, Access, Blend, Buffer, Clear, DepthState, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc,
     ImageViewKind, MemoryLocation, OcclusionQueryPool, RenderTarget, Sampler, SamplerDesc, Spec,
@@ -92,7 +92,7 @@ impl Technique for CausticsMapPass {
         let (scene, targets) = (inputs.scene, inputs.targets);
         frame
             .pass(CAUSTICS_MAP_RECEIVERS)
-            .write(self.receiver_atlas_id, Access::ColorAttachment)
+            .write(targets.caustic.receivers_id, Access::ColorAttachment)
             .write(self.receiver_depth_id, Access::DepthAttachment)
             .record(move |cmd| {
                 for face in &self.receiver_faces {
@@ -116,7 +116,7 @@ impl Technique for CausticsMapPass {
 
         let pass = frame.pass(CAUSTICS_MAP).uses(&self.set);
         let grid = self.params.grid;
-        pass.write(targets.caustic_atlas_id, Access::ColorAttachment).record(move |cmd| {
+        pass.write(targets.caustic.flux_id, Access::ColorAttachment).record(move |cmd| {
             for d in &self.destinations {
                 cmd.in_target(&self.splat_target, d.layer as usize, &[Clear::Color([0.0; 4])], |cmd| {
                     cmd.bind_graphics(&self.splat_pipeline, &[self.set.set()]);
@@ -229,9 +229,7 @@ pub struct CausticsMapPass {
     // Receivers: a framebuffer per atlas layer.
     receiver_target: RenderTarget,
     receiver_pipeline: GraphicsPipeline,
-    _receiver_atlas: Image,
     _receiver_depth: Image,
-    receiver_atlas_id: ImageId,
     receiver_depth_id: ImageId,
     receiver_faces: Vec<ReceiverFace>,
     receiver_draws: Vec<Draw>,
@@ -259,18 +257,9 @@ impl CausticsMapPass {
         let lights = gpu.lights.len() as u32;
         let layers = lights * SHADOW_LAYERS_PER_LIGHT;
 
-        // 1. Receivers: the shadow pass's shaders, the diffuse draws only.
-        let (receiver_atlas, receiver_atlas_id) = s.graph.image(
-            ctx,
-            &ImageDesc::square(
-                "caustic_receivers",
-                SHADOW_FORMAT,
-                size,
-                layers,
-                ImageViewKind::CubeArray,
-                U::COLOR_ATTACHMENT | U::SAMPLED,
-            ),
-        )?;
+        // 1. Receivers: the shadow pass's shaders, the diffuse draws only, into the atlas
+        // that deferred shading also reads for the caustic lookup's depth test.
+        let (receiver_atlas, receiver_atlas_id) = (&*targets.caustic.receivers, targets.caustic.receivers_id);
         let (receiver_depth, receiver_depth_id) = s.graph.image(
             ctx,
             &ImageDesc::square(
@@ -282,14 +271,8 @@ impl CausticsMapPass {
                 U::DEPTH_STENCIL_ATTACHMENT,
             ),
         )?;
-        let receiver_target = RenderTarget::layered(
-            ctx,
-            CAUSTICS_MAP_RECEIVERS,
-            &[&receiver_atlas],
-            Some(&receiver_depth),
-            true,
-            layers,
-        )?;
+        let receiver_target =
+            RenderTarget::layered(ctx, CAUSTICS_MAP_RECEIVERS, &[receiver_atlas], Some(&receiver_depth), true, layers)?;
         let receiver_pipeline = GraphicsPipeline::new(
             ctx,
             &GraphicsPipelineDesc::mesh(
@@ -332,9 +315,9 @@ impl CausticsMapPass {
         let mut set = Bindings::new(vk::ShaderStageFlags::VERTEX)
             .storage(CAUSTIC_BINDING_FACES, &faces_buffer)
             .storage(CAUSTIC_BINDING_MATERIALS, &gpu.materials)
-            .sampled(CAUSTIC_BINDING_RECEIVER_CUBE, &receiver_atlas, &linear)
+            .sampled(CAUSTIC_BINDING_RECEIVER_CUBE, receiver_atlas, &linear)
             .read(receiver_atlas_id)
-            .sampled_view(CAUSTIC_BINDING_RECEIVER_2D, &receiver_atlas, receiver_atlas.array_view(), &linear);
+            .sampled_view(CAUSTIC_BINDING_RECEIVER_2D, receiver_atlas, receiver_atlas.array_view(), &linear);
         for (binding, (image, id)) in refractor_bindings().into_iter().zip(&refractors.layers) {
             set = set.sampled(binding, image, &nearest).read(*id);
         }
@@ -346,10 +329,10 @@ impl CausticsMapPass {
         let splat_target = RenderTarget::layered(
             ctx,
             CAUSTICS_MAP,
-            &[&targets.caustic_atlas],
+            &[&targets.caustic.flux],
             None,
             true,
-            targets.caustic_atlas.layers(),
+            targets.caustic.flux.layers(),
         )?;
         let splat_pipeline = GraphicsPipeline::new(
             ctx,
@@ -406,9 +389,7 @@ impl CausticsMapPass {
             params,
             receiver_target,
             receiver_pipeline,
-            receiver_atlas_id,
             receiver_depth_id,
-            _receiver_atlas: receiver_atlas,
             _receiver_depth: receiver_depth,
             receiver_faces,
             receiver_draws,

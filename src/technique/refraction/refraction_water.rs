@@ -30,7 +30,7 @@
 //! iterative depth correction (Fig. 16) would add its own displacement to the ripples'.
 use std::rc::Rc;
 
-use crate::frame::gpu_scene::environment_sh_below;
+use crate::frame::gpu_scene::{environment_sh_below, GRID_SH_WIDTH};
 use crate::gpu::Buffer;
 use crate::graph::Frame;
 use crate::reference::TraceGeometry;
@@ -128,6 +128,10 @@ fn sky_below(scene: &Scene) -> Vec<[f32; 4]> {
         // Enough texels for the window's edge to be resolved.
         Environment::Constant(c) => (64, 32, vec![[c.x, c.y, c.z, 1.0]; 64 * 32]),
         Environment::Image { width, height, texels, .. } => (*width, *height, texels.clone()),
+        Environment::Grid => {
+            let (w, h) = (GRID_SH_WIDTH, GRID_SH_WIDTH / 2);
+            (w, h, crate::scene::grid_texels(w, h))
+        }
     };
     environment_sh_below(w, h, &texels, ior).to_vec()
 }
