@@ -259,6 +259,17 @@ impl GpuScene {
             Environment::Constant(c) => (1, 1, vec![[c.x, c.y, c.z, 1.0]]),
             Environment::Image { width, height, texels, .. } => (*width, *height, texels.clone()),
         };
+        let max = ctx.limits().max_image_dimension2_d;
+        if w > max || h > max {
+            let file = match &scene.environment {
+                Environment::Image { path, .. } => path.display().to_string(),
+                Environment::Constant(_) => String::new(),
+            };
+            return Err(RenderError::Limit(format!(
+                "environment.file {file} is {w}x{h} texels; the device's maxImageDimension2D is {max}: \
+                 downscale the image to at most {max} texels on each side"
+            )));
+        }
         let env_sh = environment_sh(w, h, &texels);
         let environment = Image::new(
             ctx,
