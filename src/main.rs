@@ -2,7 +2,7 @@ use clap::Parser;
 
 fn main() -> std::process::ExitCode {
     let cli = prism::app::Cli::parse();
-    match prism::app::run(cli) {
+    match prism::app::output::remove_pending_on_interrupt().and_then(|()| prism::app::run(cli)) {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");

@@ -24,13 +24,18 @@ impl Case {
     /// Run `prism render SCENE -o DIR/out.png --exr DIR/out.exr ARGS` with `env`, expect
     /// failure, and return stderr. Checks: exit code 1, no panic, no output or temp file.
     fn render_fails(&self, scene: &Path, args: &[&str], env: &[(&str, &str)]) -> String {
-        let before: Vec<_> = self.listing();
         let mut cmd = Command::new(env!("CARGO_BIN_EXE_prism"));
         cmd.arg("render").arg(scene).arg("-o").arg(self.dir.join("out.png")).arg("--exr").arg(self.dir.join("out.exr"));
         cmd.args(args).current_dir(&self.dir);
         for (k, v) in env {
             cmd.env(k, v);
         }
+        self.fails(&mut cmd)
+    }
+
+    /// Run `cmd`, expect failure, and return stderr (the checks of `render_fails`).
+    fn fails(&self, cmd: &mut Command) -> String {
+        let before: Vec<_> = self.listing();
         let out = cmd.output().unwrap();
         let stderr = String::from_utf8_lossy(&out.stderr).to_string();
         assert_eq!(out.status.code(), Some(1), "expected exit 1:\n{stderr}");
@@ -499,4 +504,63 @@ fn huge_and_tiny_finite_values_are_refused_with_the_range() {
     let scene = c.file("scene.toml", &GOOD.replace("radius = 1", "radius = 1\ntransform = { scale = 1e30 }"));
     let e = c.render_fails(&scene, &[], &[]);
     assert!(e.contains("scene.toml:24") && e.contains("scale") && e.contains("1e-6 to 1e6"), "{e}");
+}
+
+#[test]
+fn interrupt_leaves_no_temporary_file() {
+    // Ctrl-C while rendering: the outputs' hidden temporary files, created before the
+    // render starts, are removed and the exit status is 130 (128 + SIGINT).
+    let c = Case::new("interrupt");
+    let scene = c.file("scene.toml", &GOOD.replace("width = 32\nheight = 32", "width = 256\nheight = 256"));
+    let mut child = Command::new(env!("CARGO_BIN_EXE_prism"))
+        .arg("render")
+        .arg(&scene)
+        .arg("-o")
+        .arg(c.dir.join("out.png"))
+        .arg("--exr")
+        .arg(c.dir.join("out.exr"))
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let temp = |c: &Case| c.listing().iter().any(|n| n.starts_with(".prism-tmp-"));
+    let start = std::time::Instant::now();
+    while !temp(&c) {
+        assert!(child.try_wait().unwrap().is_none(), "prism exited before its temporary files were seen");
+        assert!(start.elapsed() < std::time::Duration::from_secs(60), "no temporary file appeared");
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    let kill = Command::new("kill").arg("-INT").arg(child.id().to_string()).status().unwrap();
+    assert!(kill.success());
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    use std::os::unix::process::ExitStatusExt;
+    assert_eq!(out.status.code(), Some(130), "signal {:?}: {stderr}", out.status.signal());
+    assert_eq!(c.listing(), ["scene.toml"], "{stderr}");
+}
+
+#[test]
+fn environment_image_wider_than_the_device_allows() {
+    // lavapipe's maxImageDimension2D is 16384 (Mesa 22.3): one texel more is refused before
+    // the image is created, naming the key and the limit.
+    let c = Case::new("env-limit");
+    image::RgbaImage::new(16385, 1).save(c.dir.join("wide.png")).unwrap();
+    let scene = c.file(
+        "scene.toml",
+        &GOOD.replace("type = \"constant\"\nradiance = 0.5", "type = \"image\"\nfile = \"wide.png\""),
+    );
+    let e = c.render_fails(&scene, &["--validation"], &[]);
+    assert!(e.contains("environment.file") && e.contains("maxImageDimension2D is 16384"), "{e}");
+}
+
+#[test]
+fn reference_pixel_state_beyond_the_storage_buffer_range() {
+    // 64 bytes of per-pixel state at 2048^2 are 256 MiB; lavapipe's maxStorageBufferRange
+    // is 128 MiB (2^27), and the buffer is bound whole.
+    let c = Case::new("reference-limit");
+    let scene = c.file("scene.toml", GOOD);
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_prism"));
+    cmd.arg("reference").arg(&scene).args(["--width", "2048", "--height", "2048", "--validation", "-o"]);
+    cmd.arg(c.dir.join("ref.exr")).current_dir(&c.dir);
+    let e = c.fails(&mut cmd);
+    assert!(e.contains("--width/--height") && e.contains("maxStorageBufferRange is 128 MiB"), "{e}");
 }

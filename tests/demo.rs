@@ -1,8 +1,8 @@
 //! `prism demo` in a real window under Xvfb, on lavapipe with the validation layer.
 //!
 //! Uses $DISPLAY when set; otherwise starts its own Xvfb on a free display number and kills
-//! it at the end. Without Xvfb the tests skip with a message, except under CI=true, where a
-//! missing Xvfb is a failure (`./x` installs the `xvfb` package).
+//! it at the end. Without Xvfb the tests skip with a message, except under CI (`CI` set
+//! to anything non-empty), where a missing Xvfb is a failure (`./x` installs the `xvfb` package).
 mod common;
 
 use std::path::{Path, PathBuf};
@@ -38,8 +38,10 @@ fn display() -> Option<Display> {
         return Some(Display { name: d, xvfb: None });
     }
     if !in_path("Xvfb") {
-        let ci = std::env::var("CI").is_ok_and(|v| v == "true");
-        assert!(!ci, "Xvfb is not installed (apt-get install xvfb; ./x installs it) and DISPLAY is unset");
+        assert!(
+            !common::under_ci(),
+            "Xvfb is not installed (apt-get install xvfb; ./x installs it) and DISPLAY is unset"
+        );
         eprintln!("skipping: no DISPLAY and no Xvfb (apt-get install xvfb)");
         return None;
     }

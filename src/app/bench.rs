@@ -35,6 +35,9 @@ pub struct BenchArgs {
     /// Write a Chrome trace-event JSON of every measured frame (Perfetto opens it).
     #[arg(long, value_name = "FILE")]
     pub trace: Option<PathBuf>,
+    /// Every N frames, print resident memory and GPU allocator usage to stderr (scripts/soak).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
+    pub stats: Option<u64>,
     #[command(flatten)]
     pub gpu: GpuArgs,
 }
@@ -159,9 +162,12 @@ pub fn run(args: BenchArgs) -> Result<()> {
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     bar.set_message(format!("bench {}", scene.name));
-    for _ in 0..total {
+    for frame in 1..=total {
         renderer.render_frame()?;
         bar.inc(1);
+        if args.stats.is_some_and(|n| frame % n == 0) {
+            bar.suspend(|| super::print_stats(frame, &ctx));
+        }
     }
     renderer.finish()?;
     bar.finish_and_clear();

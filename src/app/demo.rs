@@ -63,8 +63,13 @@ pub struct DemoArgs {
     pub no_overlay: bool,
     /// Test hook: after FRAME presented frames, ask the window system to resize the window
     /// to WxH.
+    /// (Repeatable.)
     #[arg(long, hide = true, num_args = 2, value_names = ["FRAME", "WxH"])]
     pub resize_at: Vec<String>,
+    /// Every N presented frames, print resident memory and GPU allocator usage to stderr
+    /// (scripts/soak).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
+    pub stats: Option<u64>,
     /// The GLSL tree to watch and recompile when a shader changes (default: the source
     /// tree's glsl/ when it exists). Only the pipelines built from a changed shader are
     /// re-created; a compile error is shown with its file:line and the old shaders stay.
@@ -88,16 +93,20 @@ pub struct DemoArgs {
     pub lose_surface_at: Option<u64>,
 }
 
-/// `--resize-at FRAME WxH`.
-fn parse_resize(v: &[String]) -> Result<Option<(u64, u32, u32)>> {
-    let [frame, size] = v else { return Ok(None) };
-    let frame: u64 = frame.parse().with_context(|| format!("--resize-at: bad frame number {frame:?}"))?;
-    let (w, h) = size.split_once('x').with_context(|| format!("--resize-at: size {size:?} is not WxH"))?;
-    let (w, h): (u32, u32) = (w.parse()?, h.parse()?);
-    if w == 0 || h == 0 {
-        bail!("--resize-at: the size must be at least 1x1");
-    }
-    Ok(Some((frame, w, h)))
+/// `--resize-at FRAME WxH`, each time it is given (clap hands the pairs over in one list).
+fn parse_resize(v: &[String]) -> Result<Vec<(u64, u32, u32)>> {
+    v.chunks_exact(2)
+        .map(|pair| {
+            let (frame, size) = (&pair[0], &pair[1]);
+            let frame: u64 = frame.parse().with_context(|| format!("--resize-at: bad frame number {frame:?}"))?;
+            let (w, h) = size.split_once('x').with_context(|| format!("--resize-at: size {size:?} is not WxH"))?;
+            let (w, h): (u32, u32) = (w.parse()?, h.parse()?);
+            if w == 0 || h == 0 {
+                bail!("--resize-at: the size must be at least 1x1");
+            }
+            Ok((frame, w, h))
+        })
+        .collect()
 }
 
 /// The GLSL tree the window watches: `--shaders`, else the source tree's when it exists.
@@ -173,7 +182,7 @@ pub fn run(mut args: DemoArgs) -> Result<()> {
 struct App {
     args: DemoArgs,
     path: PathBuf,
-    resize_at: Option<(u64, u32, u32)>,
+    resize_at: Vec<(u64, u32, u32)>,
     /// Scripted changes (`--at`), by frame.
     at: Vec<(u64, String)>,
     screenshot: Option<OutputFile>,
@@ -276,11 +285,12 @@ impl ApplicationHandler for App {
                     r.change = Some(set.clone());
                     r.needs_rebuild = true;
                 }
-                if let Some((at, w, h)) = self.resize_at {
-                    if r.frames == at {
-                        eprintln!("demo: requesting a resize to {w}x{h}");
-                        let _ = r.window.request_inner_size(PhysicalSize::new(w, h));
-                    }
+                for &(_, w, h) in self.resize_at.iter().filter(|(f, ..)| *f == r.frames) {
+                    eprintln!("demo: requesting a resize to {w}x{h}");
+                    let _ = r.window.request_inner_size(PhysicalSize::new(w, h));
+                }
+                if self.args.stats.is_some_and(|n| r.frames % n == 0) {
+                    super::print_stats(r.frames, &r.ctx);
                 }
                 if self.args.frames.is_some_and(|n| r.frames >= n) || r.exit_at.is_some_and(|f| r.frames >= f) {
                     eprintln!("demo: {} frames, {} renderer updates", r.frames, r.updates);
@@ -950,8 +960,10 @@ mod tests {
 
     #[test]
     fn resize_hook_parses_frame_and_size() {
-        assert_eq!(parse_resize(&[]).unwrap(), None);
-        assert_eq!(parse_resize(&["3".into(), "200x100".into()]).unwrap(), Some((3, 200, 100)));
+        assert_eq!(parse_resize(&[]).unwrap(), []);
+        assert_eq!(parse_resize(&["3".into(), "200x100".into()]).unwrap(), [(3, 200, 100)]);
+        let two: Vec<String> = ["3", "200x100", "9", "64x48"].map(String::from).to_vec();
+        assert_eq!(parse_resize(&two).unwrap(), [(3, 200, 100), (9, 64, 48)]);
         assert!(parse_resize(&["x".into(), "200x100".into()]).is_err());
         assert!(parse_resize(&["3".into(), "200".into()]).is_err());
         assert!(parse_resize(&["3".into(), "0x5".into()]).is_err());

@@ -182,6 +182,28 @@ impl GpuArgs {
     }
 }
 
+/// `--stats N` (bench, demo): after every N frames one line on stderr with the process's
+/// resident memory and gpu-allocator's totals, which scripts/soak reads to check that
+/// neither grows over thousands of frames.
+pub fn print_stats(frame: u64, ctx: &GpuContext) {
+    let rss = resident_kib().map_or_else(|| "?".to_string(), |k| k.to_string());
+    let m = ctx.memory_usage();
+    eprintln!(
+        "stats: frame {frame} rss_kib {rss} gpu_allocated_bytes {} gpu_block_bytes {} gpu_allocations {} validation_errors {}",
+        m.allocated_bytes,
+        m.block_bytes,
+        m.allocations,
+        ctx.validation_errors()
+    );
+}
+
+/// VmRSS of /proc/self/status, in KiB (None where there is no /proc).
+fn resident_kib() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmRSS:"))?;
+    line.split_whitespace().nth(1)?.parse().ok()
+}
+
 /// Fail if validation was on and reported errors: they are bugs, never noise.
 pub fn check_validation(ctx: &GpuContext) -> Result<()> {
     let errors = ctx.validation_errors();

@@ -7,17 +7,51 @@
 //! to disk and checked at every step (a full disk is an error, not an empty file), and only
 //! then renamed over the target. A command with several outputs writes every one before it
 //! renames any ([`commit_all`]), so a failure leaves none of them. A symlink to a regular
-//! file is followed: the file it names is replaced and the link kept.
+//! file is followed: the file it names is replaced and the link kept. Ctrl-C (or SIGTERM,
+//! SIGHUP) while outputs are pending removes their temporary files
+//! ([`remove_pending_on_interrupt`]).
 use std::fs::{File, OpenOptions};
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Mutex, MutexGuard};
 
 use anyhow::{bail, Context, Result};
 
 use crate::scene::techniques::TonemapAdaptiveParams;
 use crate::scene::RenderSettings;
 use crate::technique::baseline::tonemap::AdaptiveStats;
+
+/// The temporary files that exist and are not yet renamed into place. Every creation,
+/// rename and removal of one happens with this lock held, so the interrupt handler, which
+/// keeps it until the process exits, sees each temporary file either listed or gone.
+static PENDING: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+fn pending() -> MutexGuard<'static, Vec<PathBuf>> {
+    PENDING.lock().unwrap_or_else(|p| p.into_inner())
+}
+
+/// Exit status after an interrupt: 128 + SIGINT, the shell's convention for Ctrl-C.
+pub const INTERRUPTED_EXIT: i32 = 130;
+
+/// Installs the handler that, on SIGINT, SIGTERM or SIGHUP, removes every pending temporary
+/// output file and exits with [`INTERRUPTED_EXIT`]. Without it the default action kills the
+/// process and leaves the hidden `.prism-tmp-*` files behind. The handler runs on a thread
+/// of the `ctrlc` crate, so it may lock and touch the file system.
+pub fn remove_pending_on_interrupt() -> Result<()> {
+    ctrlc::set_handler(|| {
+        // Held until exit: no temporary file is created or renamed after this point.
+        let mut temps = pending();
+        for temp in temps.drain(..) {
+            let _ = std::fs::remove_file(temp);
+        }
+        // _exit, not exit: exit runs the C++ static destructors of the loaded driver (LLVM)
+        // while the main thread may still be initializing or using it, which aborts.
+        // SAFETY: _exit ends the process at once; nothing of this process runs after it.
+        unsafe { libc::_exit(INTERRUPTED_EXIT) }
+    })
+    .context("cannot install the interrupt handler")
+}
 
 /// The outputs one command has claimed, to refuse a file named twice.
 #[derive(Default)]
@@ -103,9 +137,12 @@ impl OutputFile {
         static COUNTER: AtomicU64 = AtomicU64::new(0);
         let n = COUNTER.fetch_add(1, Ordering::Relaxed);
         let temp = dir.join(format!(".prism-tmp-{}-{n}-{}", std::process::id(), name.to_string_lossy()));
+        let mut temps = pending();
         OpenOptions::new().write(true).create_new(true).open(&temp).with_context(|| {
             format!("{shown}: cannot write output (directory not writable?)\n  hint: choose a writable path")
         })?;
+        temps.push(temp.clone());
+        drop(temps);
         Ok(OutputFile { given: target.to_path_buf(), target: dir.join(name), temp, committed: false })
     }
 
@@ -157,8 +194,10 @@ pub fn commit_all(files: impl IntoIterator<Item = Written>) -> Result<()> {
     let mut files: Vec<Written> = files.into_iter().collect();
     let mut dirs: Vec<PathBuf> = Vec::new();
     for Written(f) in &mut files {
+        let mut temps = pending();
         std::fs::rename(&f.temp, &f.target)
             .with_context(|| format!("{}: cannot move the finished output into place", f.given.display()))?;
+        temps.retain(|t| *t != f.temp);
         f.committed = true;
         if let Some(dir) = f.target.parent().filter(|d| !dirs.iter().any(|x| x == d)) {
             dirs.push(dir.to_path_buf());
@@ -190,7 +229,9 @@ fn file_kind(t: &std::fs::FileType) -> &'static str {
 impl Drop for OutputFile {
     fn drop(&mut self) {
         if !self.committed {
+            let mut temps = pending();
             let _ = std::fs::remove_file(&self.temp);
+            temps.retain(|t| *t != self.temp);
         }
     }
 }

@@ -329,6 +329,17 @@ impl GpuScene {
                 (*width, *height, t, environment_sh(*width, *height, texels))
             }
         };
+        let max = ctx.limits().max_image_dimension2_d;
+        if w > max || h > max {
+            let file = match &scene.environment {
+                Environment::Image { path, .. } => path.display().to_string(),
+                Environment::Constant(_) | Environment::Grid => String::new(),
+            };
+            return Err(RenderError::Limit(format!(
+                "environment.file {file} is {w}x{h} texels; the device's maxImageDimension2D is {max}: \
+                 downscale the image to at most {max} texels on each side"
+            )));
+        }
         let environment = Image::new(
             ctx,
             &ImageDesc::d2(

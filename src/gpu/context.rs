@@ -69,6 +69,16 @@ pub struct DeviceInfo {
     pub occlusion_query_precise: bool,
 }
 
+/// Device memory as gpu-allocator sees it ([`GpuContext::memory_usage`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct MemoryUsage {
+    /// Bytes in live allocations.
+    pub allocated_bytes: u64,
+    /// Bytes of the device memory blocks the allocations are carved from.
+    pub block_bytes: u64,
+    pub allocations: usize,
+}
+
 /// A resource waiting for the GPU to finish with it before it is destroyed.
 pub(crate) enum Garbage {
     Buffer(vk::Buffer, gpu_allocator::vulkan::Allocation),
@@ -445,6 +455,20 @@ impl GpuContext {
         let fence = unsafe { self.device.create_fence(&vk::FenceCreateInfo::default(), None) }.vk("vkCreateFence")?;
         self.set_name(fence, "leaked_for_tests");
         Ok(())
+    }
+
+    /// What gpu-allocator holds now (for `--stats` and scripts/soak). Builds a report of
+    /// every live allocation: cheap at a few hundred, not for every frame.
+    pub fn memory_usage(&self) -> MemoryUsage {
+        let alloc = self.allocator.lock().unwrap_or_else(|p| p.into_inner());
+        let Some(report) = alloc.as_ref().map(|a| a.generate_report()) else {
+            return MemoryUsage::default();
+        };
+        MemoryUsage {
+            allocated_bytes: report.total_allocated_bytes,
+            block_bytes: report.total_capacity_bytes,
+            allocations: report.allocations.len(),
+        }
     }
 
     pub fn limits(&self) -> &vk::PhysicalDeviceLimits {

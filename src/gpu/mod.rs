@@ -42,7 +42,7 @@ pub use ash::vk;
 pub use bindings::{Bindings, BoundSet};
 pub use buffer::Buffer;
 pub use command::{Clear, Cmd, CommandPool, SubmitSync};
-pub use context::{ContextDesc, DeviceInfo, GpuContext, PipelineCounts, Progress, ProgressSink};
+pub use context::{ContextDesc, DeviceInfo, GpuContext, MemoryUsage, PipelineCounts, Progress, ProgressSink};
 pub use debug::ValidationLog;
 use descriptor::DescriptorWrite;
 pub use descriptor::{DescriptorSet, DescriptorSetLayout};

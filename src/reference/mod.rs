@@ -390,6 +390,20 @@ impl Reference {
         if width == 0 || height == 0 {
             return Err(RenderError::Limit(format!("image size {width}x{height} must not be zero")));
         }
+        // The per-pixel state is one storage buffer bound whole (VK_WHOLE_SIZE), which may
+        // be at most maxStorageBufferRange bytes (lavapipe: 2^27, 1448^2 pixels).
+        let range = u64::from(ctx.limits().max_storage_buffer_range);
+        let pixel_state = std::mem::size_of::<PixelState>() as u64;
+        let state_bytes = u64::from(width) * u64::from(height) * pixel_state;
+        if state_bytes > range {
+            return Err(RenderError::Limit(format!(
+                "image size {width}x{height} (camera.width x camera.height, or --width/--height) needs {} MiB of \
+                 per-pixel state; the device's maxStorageBufferRange is {} MiB, at most {} pixels: lower the size",
+                state_bytes >> 20,
+                range >> 20,
+                range / pixel_state
+            )));
+        }
         let mut graph = FrameGraph::new();
         let gpu_scene = GpuScene::new(ctx, scene, &mut graph, 1)?;
 
@@ -445,8 +459,13 @@ impl Reference {
         let pixels_n = (width * height) as usize;
         let accum =
             Buffer::new(ctx, "reference_accum", (pixels_n * 16) as u64, U::STORAGE_BUFFER, MemoryLocation::CpuToGpu)?;
-        let mut pixels =
-            Buffer::new(ctx, "reference_pixels", (pixels_n * 64) as u64, U::STORAGE_BUFFER, MemoryLocation::CpuToGpu)?;
+        let mut pixels = Buffer::new(
+            ctx,
+            "reference_pixels",
+            pixels_n as u64 * pixel_state,
+            U::STORAGE_BUFFER,
+            MemoryLocation::CpuToGpu,
+        )?;
         let initial = PixelState { vp_pos: [0.0, 0.0, 0.0, radius], ..Default::default() };
         pixels.write(0, bytemuck::cast_slice(&vec![initial; pixels_n]));
         let mut accum = accum;

@@ -112,8 +112,9 @@ impl Mesh {
 }
 
 /// Why an OBJ file was rejected; `line` is 1-based.
+/// Why OBJ text was refused: the kind, the 1-based line when one is to blame, and a hint.
 #[derive(Debug)]
-pub(crate) struct ObjError {
+pub struct ObjError {
     pub kind: ErrorKind,
     pub line: Option<usize>,
     pub message: String,
@@ -138,9 +139,10 @@ pub(crate) fn load_obj(path: &Path) -> Result<Mesh, ObjError> {
     parse_obj(&text)
 }
 
-/// Parses OBJ text. Positions and face indices are checked line by line first, so
-/// that an error can name the offending line (tobj reports no lines).
-pub(crate) fn parse_obj(text: &str) -> Result<Mesh, ObjError> {
+/// Parses OBJ text, as [`load_obj`] does once it has read the file (the fuzz target in
+/// fuzz/ calls it with no file). Positions and face indices are checked line by line
+/// first, so that an error can name the offending line (tobj reports no lines).
+pub fn parse_obj(text: &str) -> Result<Mesh, ObjError> {
     prescan(text)?;
     let opts = tobj::LoadOptions { triangulate: true, single_index: true, ignore_points: true, ignore_lines: true };
     let mut reader = std::io::BufReader::new(text.as_bytes());
@@ -204,16 +206,20 @@ pub(crate) fn parse_obj(text: &str) -> Result<Mesh, ObjError> {
     Ok(mesh)
 }
 
-/// Checks `v` and `f` lines, returning an error that names the first bad line.
+/// Checks `v` and `f` lines, returning an error that names the first bad line. Every index
+/// of a face vertex is checked, texture and normal ones too: tobj resolves a negative one
+/// before checking it, so one out of range would reach it as a wrapped-around number.
 fn prescan(text: &str) -> Result<(), ObjError> {
-    let total = text.lines().filter(|l| l.split_whitespace().next() == Some("v")).count() as i64;
-    let mut seen: i64 = 0;
+    let count = |kind: &str| text.lines().filter(|l| l.split_whitespace().next() == Some(kind)).count() as i64;
+    // Positions, texture coordinates, normals: in the whole file, and defined so far.
+    let total = [count("v"), count("vt"), count("vn")];
+    let mut seen = [0i64; 3];
     for (i, line) in text.lines().enumerate() {
         let ln = Some(i + 1);
         let mut tok = line.split_whitespace();
         match tok.next() {
             Some("v") => {
-                seen += 1;
+                seen[0] += 1;
                 for axis in ["x", "y", "z"] {
                     let value = tok.next().and_then(|t| t.parse::<f32>().ok());
                     match value {
@@ -221,7 +227,7 @@ fn prescan(text: &str) -> Result<(), ObjError> {
                             return Err(obj_err(
                                 ErrorKind::Mesh,
                                 ln,
-                                format!("vertex {seen} has no valid {axis} coordinate"),
+                                format!("vertex {} has no valid {axis} coordinate", seen[0]),
                                 "a `v` line holds three numbers: v x y z",
                             ))
                         }
@@ -229,7 +235,7 @@ fn prescan(text: &str) -> Result<(), ObjError> {
                             return Err(obj_err(
                                 ErrorKind::Mesh,
                                 ln,
-                                format!("vertex {seen} has a non-finite {axis} coordinate ({v})"),
+                                format!("vertex {} has a non-finite {axis} coordinate ({v})", seen[0]),
                                 "remove NaN/inf coordinates from the file",
                             ))
                         }
@@ -237,29 +243,38 @@ fn prescan(text: &str) -> Result<(), ObjError> {
                     }
                 }
             }
+            Some("vt") => seen[1] += 1,
+            Some("vn") => seen[2] += 1,
             Some("f") => {
                 let mut count = 0;
                 for t in tok {
                     count += 1;
-                    let first = t.split('/').next().unwrap_or("");
-                    let idx: i64 = first.parse().map_err(|_| {
+                    let not_index = || {
                         obj_err(
                             ErrorKind::Mesh,
                             ln,
                             format!("face vertex `{t}` is not an index"),
                             "a face vertex is `v`, `v/vt`, `v//vn` or `v/vt/vn` with integer indices",
                         )
-                    })?;
-                    // Positive indices are 1-based over the whole file; negative ones
-                    // count back from the last vertex defined so far.
-                    let ok = if idx > 0 { idx <= total } else { idx < 0 && seen + idx >= 0 };
-                    if !ok {
-                        return Err(obj_err(
-                            ErrorKind::Mesh,
-                            ln,
-                            format!("face index {idx} is out of range (the file has {total} vertices)"),
-                            "OBJ indices are 1-based and must name an existing vertex",
-                        ));
+                    };
+                    for (k, part) in t.split('/').take(3).enumerate() {
+                        // Only the position index is required.
+                        if part.is_empty() && k > 0 {
+                            continue;
+                        }
+                        let idx: i64 = part.parse().map_err(|_| not_index())?;
+                        // Positive indices are 1-based over the whole file; negative ones
+                        // count back from the last one defined so far.
+                        let ok = if idx > 0 { idx <= total[k] } else { idx < 0 && seen[k] + idx >= 0 };
+                        if !ok {
+                            let what = ["vertices", "texture coordinates (vt)", "normals (vn)"][k];
+                            return Err(obj_err(
+                                ErrorKind::Mesh,
+                                ln,
+                                format!("face index {idx} is out of range (the file has {} {what})", total[k]),
+                                "OBJ indices are 1-based and must name an existing vertex",
+                            ));
+                        }
                     }
                 }
                 if count < 3 {
@@ -312,6 +327,25 @@ mod tests {
         assert!(e.message.contains("out of range"), "{}", e.message);
         let e = parse_obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf -1 -2 -4\n").unwrap_err();
         assert_eq!(e.line, Some(4));
+    }
+
+    #[test]
+    fn texture_and_normal_indices_out_of_range_name_the_line() {
+        // Found by fuzz/ (obj): a relative texture index before that many `vt` lines
+        // overflowed tobj's index arithmetic.
+        let text = "v 0 0 0\nv 1 0 0\nv 1 001   -1\nv 0 0 -1\nvn 0 1 0\nvt 0 0\nf -4/1/1 1/-3/1 -2/1/1 -1/1/1\n";
+        let e = parse_obj(text).unwrap_err();
+        assert_eq!(e.line, Some(7));
+        assert!(
+            e.message.contains("face index -3 is out of range (the file has 1 texture coordinates"),
+            "{}",
+            e.message
+        );
+        let e = parse_obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3//2\n").unwrap_err();
+        assert_eq!(e.line, Some(5));
+        assert!(e.message.contains("normals"), "{}", e.message);
+        // In range, with the texture index left out.
+        assert!(parse_obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//-1 3//1\n").is_ok());
     }
 
     #[test]

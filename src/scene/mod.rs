@@ -23,7 +23,7 @@ use glam::{Mat4, Quat, Vec2, Vec3};
 
 pub use environment::{dir_to_latlong, grid_radiance, grid_texels, latlong_dir, Environment};
 pub use error::{line_col, ErrorKind, Location, SceneError};
-pub use mesh::Mesh;
+pub use mesh::{parse_obj, Mesh, ObjError};
 pub use shapes::{wave_height, wave_normal, Wave};
 pub use volume::{IndexProfile, Volume, MAX_VOLUME_RESOLUTION};
 
@@ -455,9 +455,21 @@ fn positive(src: &Source, path: &str, v: f32) -> Result<f32, SceneError> {
 pub const MAX_OBJECTS: usize = 1024;
 /// Most points in a lathe profile (an object's or a volume region's).
 pub const MAX_PROFILE_POINTS: usize = 4096;
-/// Most triangles the tessellated shapes (spheres, tori, cylinders, lathes) of a scene have
-/// together: one sphere at the largest `sphere_segments`, 8192.
+/// Most triangles the tessellated shapes (spheres, tori, cylinders, lathes, heightfields) of
+/// a scene have together: one sphere at the largest `sphere_segments`, 8192.
+#[cfg(not(fuzzing))]
 pub const MAX_TESSELLATED_TRIANGLES: u64 = 1 << 26;
+/// Under the fuzzer (fuzz/) the same check with a budget that tessellates in milliseconds,
+/// so that a legitimately large scene is not reported as a hang.
+#[cfg(fuzzing)]
+pub const MAX_TESSELLATED_TRIANGLES: u64 = 1 << 16;
+/// Most `waves` of a heightfield: h(x, z) is a sum over them at every vertex, on load and
+/// on every animated frame (glsl/common/heightfield.comp); 64 sines already make a dense
+/// ocean spectrum (water_pool uses two).
+pub const MAX_WAVES: usize = 64;
+
+/// Cells (nx, nz) of a heightfield without `resolution`.
+const DEFAULT_HEIGHTFIELD_RESOLUTION: [u32; 2] = [128, 128];
 
 /// Refuses the array at `path` when it has more than `max` entries, naming the first extra.
 fn check_count(src: &Source, path: &str, n: usize, max: usize) -> Result<(), SceneError> {
@@ -478,22 +490,34 @@ fn check_tessellation(objects: &[FileObject], render: &RenderSettings, src: &Sou
     let mut total = 0u64;
     for (i, o) in objects.iter().enumerate() {
         let s = u64::from(o.segments.unwrap_or(render.sphere_segments));
-        total += match o.shape.as_str() {
+        let triangles = match o.shape.as_str() {
             "sphere" | "torus" => s * s,
             "open_cylinder" => 2 * s,
             "lathe" => 2 * s * o.profile.as_ref().map_or(0, |p| p.len() as u64),
+            // Two per cell; each axis is at most 2^32 - 1, so the product fits in a u64 and
+            // only the doubling can overflow.
+            "heightfield" => {
+                let [nx, nz] = o.resolution.unwrap_or(DEFAULT_HEIGHTFIELD_RESOLUTION).map(u64::from);
+                (nx * nz).saturating_mul(2)
+            }
             _ => 0,
         };
+        total = total.saturating_add(triangles);
         if total > MAX_TESSELLATED_TRIANGLES {
-            let key =
-                if o.segments.is_some() { format!("objects.{i}.segments") } else { "render.sphere_segments".into() };
+            let key = if o.shape == "heightfield" {
+                format!("objects.{i}.resolution")
+            } else if o.segments.is_some() {
+                format!("objects.{i}.segments")
+            } else {
+                "render.sphere_segments".into()
+            };
             return Err(value_err(
                 src,
                 &key,
                 format!(
                     "the tessellated shapes up to objects.{i} have {total} triangles; the limit is {MAX_TESSELLATED_TRIANGLES}"
                 ),
-                "lower `sphere_segments` (or an object's `segments`) or use fewer curved objects",
+                "lower `sphere_segments` (or an object's `segments`, or a heightfield's `resolution`) or use fewer curved objects",
             ));
         }
     }
@@ -955,7 +979,7 @@ fn object(
         "lathe" => shapes::lathe(center, &profile(o, &p("profile"), src)?, segments),
         "heightfield" => {
             let s = size(2)?;
-            let res = o.resolution.unwrap_or([128, 128]);
+            let res = o.resolution.unwrap_or(DEFAULT_HEIGHTFIELD_RESOLUTION);
             for (k, n) in res.iter().enumerate() {
                 if !(1..=8192).contains(n) {
                     return Err(value_err(
@@ -966,6 +990,7 @@ fn object(
                     ));
                 }
             }
+            check_count(src, &p("waves"), o.waves.as_ref().map_or(0, Vec::len), MAX_WAVES)?;
             let mut waves = Vec::new();
             for (k, w) in o.waves.iter().flatten().enumerate() {
                 let wp = format!("{}.{k}", p("waves"));

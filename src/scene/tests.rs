@@ -665,3 +665,22 @@ fn counts_beyond_their_limits_are_refused() {
     let e = base_err(&format!("{BASE}{volume}{lathe}"), &[]);
     assert!(e.to_string().contains("`volume.region.0.profile` has 4097 entries"), "{e}");
 }
+
+#[test]
+fn heightfields_count_towards_the_triangle_limit_and_waves_are_limited() {
+    let field = |res: &str, waves: usize| {
+        let wave = "{ amplitude = 0.01, kx = 1 }, ".repeat(waves);
+        format!(
+            "{BASE}[[objects]]\nmaterial = \"glass\"\nshape = \"heightfield\"\nsize = [1, 1]\n\
+             resolution = {res}\nwaves = [{wave}]\n"
+        )
+    };
+    // 8192 x 8192 cells are 2^27 triangles, twice the limit, though each axis is in range.
+    let e = base_err(&field("[8192, 8192]", 1), &[]);
+    assert!(e.to_string().contains("up to objects.1") && e.to_string().contains("limit is 67108864"), "{e}");
+    assert_eq!(at(&e), (Some(21), Some(14)), "the error points at `resolution`: {e}");
+    let e = base_err(&field("[8, 8]", MAX_WAVES + 1), &[]);
+    assert!(e.to_string().contains("`objects.1.waves` has 65 entries; the limit is 64"), "{e}");
+    let s = load_str(&field("[8, 8]", MAX_WAVES), Path::new("test.toml"), &[]).expect("64 waves are allowed");
+    assert_eq!(s.objects[1].heightfield.as_ref().map(|h| h.waves.len()), Some(MAX_WAVES));
+}

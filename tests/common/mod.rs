@@ -124,7 +124,7 @@ pub fn golden_dir() -> PathBuf {
 /// sphere_nearby's light by 0.3 m (0.5% of pixels, 36 dB), fail.
 ///
 /// `PRISM_UPDATE_GOLDEN=1` rewrites the reference. A missing reference is written and the
-/// test passes, except under CI=true, where it fails. On failure NAME-actual.png and
+/// test passes, except under CI (`under_ci`), where it fails. On failure NAME-actual.png and
 /// NAME-diff.png are written beside the reference.
 /// (fraction of pixels differing by more than 8/255, PSNR in dB) of `r` against the golden.
 pub fn golden_difference(name: &str, r: &Rendered) -> (f64, f64) {
@@ -139,8 +139,13 @@ pub fn assert_golden(name: &str, r: &Rendered) {
     let path = dir.join(format!("{name}.png"));
     let actual_path = dir.join(format!("{name}-actual.png"));
     let diff_path = dir.join(format!("{name}-diff.png"));
+    // Written beside the target and renamed over it: rename is atomic, so a test binary
+    // reading the golden while another rewrites it (tests/golden.rs) sees the old image or
+    // the new one, never a partial PNG.
     let save = |p: &PathBuf, data: &[u8]| {
-        image::RgbaImage::from_raw(r.width, r.height, data.to_vec()).unwrap().save(p).unwrap();
+        let tmp = p.with_extension(format!("tmp-{}.png", std::process::id()));
+        image::RgbaImage::from_raw(r.width, r.height, data.to_vec()).unwrap().save(&tmp).unwrap();
+        std::fs::rename(&tmp, p).unwrap();
     };
     let update = std::env::var("PRISM_UPDATE_GOLDEN").is_ok_and(|v| v == "1");
     if update || !path.exists() {
