@@ -568,13 +568,13 @@ fn caustic_sphere_caustic_conserves_the_photons_flux() {
 /// of the caustic disk on the floor is the fold where the landing position of the rays the
 /// ball refracts twice is largest on their own side of the axis, r_edge (traced here by
 /// Snell's law); only the marginal rays that crossed the axis land beyond it, thinly spread.
-/// A pixel (centre rays) gathers the photons within its radius, by default at most half its
-/// footprint on the floor, so the ring 1 to 2.5 footprints beyond r_edge gets none of the rim
+/// A pixel (centre rays) gathers the photons within its radius, here at most 0.71 of its
+/// footprint on the floor (the disk around its square), so the ring 1 to 2.5 footprints beyond r_edge gets none of the rim
 /// (which reaches 20 to 30 at pixel scale), only the thin light beyond the fold: the ring may
 /// hold at most 2% of the disk's interior radiance (6.5, see
 /// caustic_radiance_is_independent_of_resolution). Initial radii of 1% of the scene's radius
-/// (2.5 footprints at 256^2) spread the rim into it: 0.53 there, against 0.036 with the
-/// default and 0.013 in the ring 4 to 8 footprints out.
+/// (2.5 footprints at 256^2) spread the rim into it: 0.53 there, against 0.039 with 0.71
+/// and 0.013 in the ring 4 to 8 footprints out.
 #[test]
 fn caustic_sphere_edge_is_sharp_at_pixel_scale() {
     const SIZE: u32 = 256;
@@ -589,7 +589,8 @@ fn caustic_sphere_edge_is_sharp_at_pixel_scale() {
         .fold(0.0f32, f32::max);
     let ctx = common::context(false);
     let scene = common::scene("caustic_sphere", SIZE, &[]);
-    let st = settings(4, 1 << 20);
+    // The disk around the pixel's square.
+    let st = ReferenceSettings { footprint: std::f32::consts::FRAC_1_SQRT_2, ..settings(4, 1 << 20) };
     let mut r = reference(&ctx, &scene, &st);
     r.run_all(|_, _| {}).unwrap();
     let c = r.caustic_image();
