@@ -388,7 +388,8 @@ shared_structs! {
         counts: uvec4,
         /// x: photons per iteration, y: photon capacity, z: grid table size, w: flags
         photon: uvec4,
-        /// x: cell size, y: initial radius, z: SPPM alpha; w: raytrace cutoff
+        /// x: cell size, y: largest initial radius, z: SPPM alpha; w: initial radius in pixel
+        /// footprints (reference), branch cutoff (raytrace technique)
         grid: vec4,
         lights: [RefLight; MAX_LIGHTS],
         /// specular objects' bounding spheres (centre, radius)

@@ -32,6 +32,7 @@ void main() {
 
     vec3 L = vec3(0.0);
     bool visible_point = false;
+    float travelled = 0.0;   // along the surfaces' chain (curved paths in volumes not counted)
     for (uint bounce = 0u; bounce <= ref.counts.w; ++bounce) {
         Hit h = trace(o, d, 3.4e38);
         // A graded-index volume in front of the surface (or the environment): cross it.
@@ -46,6 +47,7 @@ void main() {
         }
         Surface s = surface_at(o, d, h);
         GpuMaterial m = materials[s.material];
+        travelled += h.t;
         if (kind_of(m) != MATERIAL_DIFFUSE) {
             if (!specular_step(s, o, d, beta, h.t, channel, rand(rng), true)) break;
             continue;
@@ -55,6 +57,17 @@ void main() {
         pixels[px].vp_pos.xyz = s.p;
         pixels[px].vp_normal = vec4(n, 1.0);
         pixels[px].vp_weight = vec4(beta * (albedo_at(m, s.st) / PI), 0.0);
+        // The initial radius: ref.grid.w pixel footprints, the spacing of neighbouring
+        // camera rays on the receiver (the pixel's angle times the distance travelled, over
+        // sqrt(cos) so that the disk has the footprint's area), at most ref.grid.y. A pixel
+        // that has collected no photon yet (N = 0, so tau = 0) takes the footprint of this
+        // iteration's visible point; from its first photon on its radius only shrinks
+        // (Hachisuka et al. 2008, Eq. 7).
+        if (ref.grid.w > 0.0 && pixels[px].tau_n.w == 0.0) {
+            float pixel_angle = 2.0 * ref.proj.y / float(H);
+            float cosine = max(abs(dot(d, n)), 0.05);
+            pixels[px].vp_pos.w = min(ref.grid.y, ref.grid.w * pixel_angle * travelled / sqrt(cosine));
+        }
         visible_point = true;
         break;
     }

@@ -29,6 +29,13 @@ pub struct ReferenceArgs {
     /// Initial photon gathering radius in metres (default: 1% of the scene's radius).
     #[arg(long)]
     pub radius: Option<f32>,
+    /// Initial radius of each pixel in pixel footprints on its receiver, at most --radius
+    /// (0: every pixel starts at --radius, the fixed rule).
+    #[arg(long, default_value_t = ReferenceSettings::default().footprint)]
+    pub footprint: f32,
+    /// SPPM radius reduction alpha (Hachisuka et al. 2008, Eq. 7), in (0, 1).
+    #[arg(long, default_value_t = ReferenceSettings::default().alpha)]
+    pub alpha: f32,
     /// Supersample each pixel's area (default: the ray through the pixel centre, as SCENES.md).
     #[arg(long)]
     pub jitter: bool,
@@ -42,8 +49,9 @@ impl ReferenceArgs {
             max_depth: self.max_depth,
             seed: self.seed,
             radius: self.radius,
+            footprint: self.footprint,
+            alpha: self.alpha,
             jitter: self.jitter,
-            ..ReferenceSettings::default()
         }
     }
 }

@@ -62,8 +62,8 @@ pub fn run(args: ReportArgs) -> Result<()> {
     let settings = args.measure.reference.settings();
     settings.validate()?;
     // With --only, the sections of the entries not measured now are kept from the file as it is.
-    let previous = if args.only.is_empty() { None } else { std::fs::read_to_string(&args.out).ok() };
-    let previous = previous.as_deref().map(Previous::parse);
+    let existing = std::fs::read_to_string(&args.out).ok();
+    let previous = existing.as_deref().filter(|_| !args.only.is_empty()).map(Previous::parse);
     let mut outputs = Outputs::default();
     let out = outputs.prepare(&args.out)?;
     // The plots and image strips, written as the entries are measured and moved into place
@@ -185,6 +185,9 @@ pub fn run(args: ReportArgs) -> Result<()> {
              and command that measured it.\n"
         )?;
     }
+    if let Some(block) = existing.as_deref().and_then(hand_written) {
+        writeln!(head, "{block}\n")?;
+    }
     written.push(out.write((head + &md).as_bytes())?);
     output::commit_all(written)?;
     eprintln!("wrote {}", args.out.display());
@@ -238,6 +241,17 @@ fn header(frames: u32, warmup: u32, sections: &str) -> String {
          radiance (RMSE, relMSE) and on the tone-mapped images (FLIP, mean and 95th percentile; \
          0 = identical, 1 = maximal).\n\n"
     )
+}
+
+/// The markers of the report's hand-written block (the reference's convergence study), which
+/// `prism report` keeps after its header: it measures the reference, not the techniques.
+const HAND_WRITTEN: [&str; 2] = ["<!-- hand-written:", "<!-- end of the hand-written block -->"];
+
+/// The hand-written block of an existing report, markers included.
+fn hand_written(text: &str) -> Option<&str> {
+    let start = text.find(HAND_WRITTEN[0])?;
+    let end = start + text[start..].find(HAND_WRITTEN[1])? + HAND_WRITTEN[1].len();
+    Some(&text[start..end])
 }
 
 /// A short stable name for an entry's files (FNV-1a of its scene, title and parameters).
@@ -319,6 +333,14 @@ mod tests {
         assert!(a.contains("*Measured at git revision abc123 with `prism report --size 128`.*"), "{a}");
         assert_eq!(p.section("## b: skipped"), None);
         assert_eq!(p.section("## c: absent"), None);
+    }
+
+    #[test]
+    fn the_hand_written_block_is_found_whole() {
+        let text = "# A\n\nheader\n\n<!-- hand-written: kept -->\n## Study\n\n| x |\n<!-- end of the hand-written block -->\n\n## b\n";
+        let block = super::hand_written(text).unwrap();
+        assert!(block.starts_with("<!-- hand-written:") && block.ends_with("block -->") && block.contains("| x |"));
+        assert_eq!(super::hand_written("# A\n\n## b\n"), None);
     }
 
     /// The header of docs/ACCURACY.md states the settings its sections were measured with.
