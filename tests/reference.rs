@@ -570,9 +570,10 @@ fn caustic_sphere_caustic_conserves_the_photons_flux() {
 /// Snell's law); only the marginal rays that crossed the axis land beyond it, thinly spread.
 /// A pixel (centre rays) gathers the photons within its radius, here at most 0.71 of its
 /// footprint on the floor (the disk around its square), so the ring 1 to 2.5 footprints beyond r_edge gets none of the rim
-/// (which reaches 20 to 30 at pixel scale), only the thin light beyond the fold: the ring may
-/// hold at most 2% of the disk's interior radiance (6.5, see
-/// caustic_radiance_is_independent_of_resolution). Initial radii of 1% of the scene's radius
+/// (which reaches 20 to 30 at pixel scale), only the thin light beyond the fold, which is
+/// 0.2% of the disk's interior radiance (6.5, see caustic_radiance_is_independent_of_resolution)
+/// in the ring 4 to 8 footprints out, where no kernel reaches the rim: the ring may hold ten
+/// times that, 2%. Initial radii of 1% of the scene's radius
 /// (2.5 footprints at 256^2) spread the rim into it: 0.53 there, against 0.039 with 0.71
 /// and 0.013 in the ring 4 to 8 footprints out.
 #[test]
