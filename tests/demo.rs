@@ -500,10 +500,14 @@ fn readme_demo_commands_run() {
     for line in readme.lines() {
         let Some((_, command)) = line.split_once("cargo run --release -- demo ") else { continue };
         let args: Vec<&str> = command.split('#').next().unwrap().split_whitespace().collect();
+        // A command that runs until the window is closed gets a frame count; one that scripts
+        // changes keeps its own.
+        let frames: &[&str] = if args.contains(&"--frames") { &[] } else { &["--frames", "3"] };
         let out = Command::new(env!("CARGO_BIN_EXE_prism"))
             .arg("demo")
             .args(&args)
-            .args(["--frames", "3", "--validation"])
+            .args(frames)
+            .arg("--validation")
             .env("DISPLAY", &display.name)
             .env_remove("WAYLAND_DISPLAY")
             .output()
