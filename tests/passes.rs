@@ -435,3 +435,83 @@ fn eikonal_nearby_only_for_objects_left_to_impostors() {
     let reason = &p.iter().find(|p| p.name == "eikonal_nearby").unwrap().reason;
     assert!(reason.contains("pebble") && !reason.contains("floor"), "{reason}");
 }
+
+/// The options of a `--help` text, `--help` itself left out: the long flag, and the short
+/// one where there is one (`-o` for `--output`).
+fn help_flags(args: &[&str]) -> Vec<(String, Option<String>)> {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_prism")).args(args).arg("--help").output().unwrap();
+    assert!(out.status.success());
+    let mut flags = Vec::new();
+    for line in String::from_utf8_lossy(&out.stdout).lines() {
+        // An option line: "  -o, --output <OUTPUT>  ..." or "      --set <KEY=VALUE>  ...".
+        let line = line.trim_start();
+        let (short, long) = match line.strip_prefix('-') {
+            Some(l) if !l.starts_with('-') => (line.get(..2).map(str::to_string), line.get(4..).unwrap_or("")),
+            Some(_) => (None, line),
+            None => continue,
+        };
+        if let Some(rest) = long.strip_prefix("--") {
+            let name: String = rest.chars().take_while(|c| c.is_ascii_alphanumeric() || *c == '-').collect();
+            if name != "help" {
+                flags.push((format!("--{name}"), short));
+            }
+        }
+    }
+    flags
+}
+
+/// The `--flag`s a Markdown text names: after a space, a backtick, a bracket or a line start,
+/// so that anchors such as `#hu--qin-2007` are not taken for flags.
+fn named_flags(text: &str) -> Vec<String> {
+    let mut flags = Vec::new();
+    for (i, _) in text.match_indices("--") {
+        let before = text[..i].chars().next_back();
+        if !matches!(before, None | Some(' ' | '`' | '[' | '(' | '\n')) {
+            continue;
+        }
+        let name: String = text[i + 2..].chars().take_while(|c| c.is_ascii_alphanumeric() || *c == '-').collect();
+        if !name.is_empty() {
+            flags.push(format!("--{name}"));
+        }
+    }
+    flags
+}
+
+/// Every flag of every subcommand is documented in the README or docs/, and every flag the
+/// README names is one prism's `--help` shows (or cargo's, for its `cargo run` and
+/// `cargo test` lines), so that neither side names a flag the other lacks.
+#[test]
+fn every_flag_is_documented_and_every_documented_flag_exists() {
+    let root = env!("CARGO_MANIFEST_DIR");
+    let readme = std::fs::read_to_string(format!("{root}/README.md")).unwrap();
+    let mut docs = readme.clone();
+    for e in std::fs::read_dir(format!("{root}/docs")).unwrap() {
+        let path = e.unwrap().path();
+        if path.extension().is_some_and(|x| x == "md") {
+            docs += &std::fs::read_to_string(&path).unwrap();
+        }
+    }
+    let documented = named_flags(&docs);
+    let subcommands = ["render", "bench", "passes", "scenes", "demo", "reference", "compare", "sweep", "report"];
+    let mut shown = vec!["--help".to_string()];
+    for sub in subcommands {
+        for (flag, short) in help_flags(&[sub]) {
+            // `-o out.png` documents `--output`.
+            let short_documented =
+                short.is_some_and(|s| docs.contains(&format!("[{s} ")) || docs.contains(&format!(" {s} ")));
+            assert!(
+                documented.contains(&flag) || short_documented,
+                "`prism {sub} {flag}` is in --help but not in README.md or docs/"
+            );
+            shown.push(flag);
+        }
+    }
+    // cargo's own flags in the README's `cargo run --release --` and `cargo test` lines.
+    let cargo = ["--release", "--test", "--nocapture", "--lib"];
+    for flag in named_flags(&readme) {
+        assert!(
+            shown.contains(&flag) || cargo.contains(&flag.as_str()),
+            "the README names {flag}, which no `prism SUBCOMMAND --help` shows"
+        );
+    }
+}

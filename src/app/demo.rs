@@ -61,10 +61,9 @@ pub struct DemoArgs {
     /// Start with the overlay hidden (F1 shows it).
     #[arg(long)]
     pub no_overlay: bool,
-    /// Test hook: after FRAME presented frames, ask the window system to resize the window
-    /// to WxH.
-    /// (Repeatable.)
-    #[arg(long, hide = true, num_args = 2, value_names = ["FRAME", "WxH"])]
+    /// Script a resize: after FRAME presented frames, ask the window system to resize the
+    /// window to WxH pixels (repeatable), as a user dragging its border would.
+    #[arg(long, num_args = 2, value_names = ["FRAME", "WxH"])]
     pub resize_at: Vec<String>,
     /// Every N presented frames, print resident memory and GPU allocator usage to stderr
     /// (scripts/soak).
