@@ -47,7 +47,7 @@ fn mean(a: &[f32], pixels: &[usize]) -> f64 {
 }
 
 /// eikonal_sphere (the glass ball over a white floor, black environment) against its
-/// reference: with the environment only (`nearby = "off"`, main before this branch) the ball
+/// reference: with the environment only (`nearby = "off"`, Ihrke et al. 2007 §5.3) the ball
 /// is black where the reference shows the refracted floor; with the exact floor quad (the
 /// default) and with an impostor rectangle the ball shows the floor, and its caustic and
 /// shadow (the floor seen through the ball is shaded with the light simulation's irradiance).
@@ -90,9 +90,9 @@ fn eikonal_sphere_ball_shows_the_floor() {
     //   impostor: RMSE image 0.9605 (clamped 0.1132), ball 0.0296, ball mean 0.1988
     //   reference ball mean 0.2027 (410 px inside 0.9 of the silhouette).
     // The unclamped image RMSE is dominated by the simulated caustic's peak on the floor seen
-    // directly (tests/eikonal_light.rs), which this branch does not change.
+    // directly (tests/eikonal_light.rs), which the exit rays' nearby geometry does not change.
     let (t_mean, off_mean) = (mean(&truth, &ball), mean(&off.hdr, &ball));
-    // Before: the ball shows the black environment.
+    // Environment only: the ball shows the black environment.
     assert!(off_mean < 0.1 * t_mean, "{report}");
     for (name, img) in [("exact", &exact), ("impostor", &impostor)] {
         // The ball's pixels are no longer environment-coloured: their mean is the

@@ -127,7 +127,7 @@ fn sweep_writes_csv_and_plots() {
     assert!(!d.0.join("bad.csv").exists());
 }
 
-/// The sanity check of the measurement itself: the single-interface baseline's error
+/// A sanity check of the measurement itself: the single-interface baseline's error
 /// on sphere_env is far above the reference's own noise floor (two references with
 /// different seeds).
 #[test]

@@ -405,7 +405,7 @@ fn dispersion_matches_snell() {
 }
 
 #[test]
-fn the_issue_7_scenes_render_without_nan() {
+fn the_volume_source_scenes_render_without_nan() {
     let ctx = common::context(true);
     for name in ["eikonal_wine_glass", "eikonal_amber_bunny", "eikonal_dispersion_cube"] {
         let s = common::scene(name, 48, &["volume.resolution=[48, 48, 48]"]);
