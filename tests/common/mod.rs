@@ -22,13 +22,57 @@ pub fn under_ci() -> bool {
 /// A context with the validation layer on (and synchronization validation if `sync`).
 /// Under CI a missing validation layer is a failure: without it "zero validation errors"
 /// would be vacuous.
-pub fn context(sync: bool) -> Arc<GpuContext> {
+///
+/// Every GPU test gets its context here, and the returned [`TestContext`] checks the
+/// validation log when it is dropped, teardown included, so no test can forget to.
+pub fn context(sync: bool) -> TestContext {
     let ctx = GpuContext::new(&ContextDesc { validation: true, sync_validation: sync, device: None })
         .expect("cannot create a Vulkan context (is mesa-vulkan-drivers installed?)");
     if under_ci() {
         assert!(ctx.info.validation, "CI is set but VK_LAYER_KHRONOS_validation is not installed");
     }
-    ctx
+    TestContext(Some(ctx))
+}
+
+/// A test's Vulkan context. Used as an `Arc<GpuContext>` (it derefs to one); dropping it
+/// fails the test on any validation error, then destroys the device and instance and fails
+/// on any error the layer reports while they are destroyed: objects still alive at
+/// `vkDestroyDevice` (leaks) are reported only then. Everything made from the context
+/// (renderers, buffers) must be dropped before it, which Rust's reverse declaration order
+/// does for locals declared after it.
+pub struct TestContext(Option<Arc<GpuContext>>);
+
+impl TestContext {
+    /// The context without the teardown check, for a test that expects errors.
+    pub fn unchecked(mut self) -> Arc<GpuContext> {
+        self.0.take().unwrap()
+    }
+}
+
+impl std::ops::Deref for TestContext {
+    type Target = Arc<GpuContext>;
+    fn deref(&self) -> &Arc<GpuContext> {
+        self.0.as_ref().unwrap()
+    }
+}
+
+impl Drop for TestContext {
+    fn drop(&mut self) {
+        let Some(ctx) = self.0.take() else { return };
+        // A test already failing would abort on a second panic, and its own message says more.
+        if std::thread::panicking() {
+            return;
+        }
+        assert_no_validation_errors(&ctx);
+        let log = ctx.validation_log();
+        assert_eq!(
+            Arc::strong_count(&ctx),
+            1,
+            "the context is still shared at the test's end (drop what holds it first), so its teardown is unchecked"
+        );
+        drop(ctx);
+        assert_eq!(log.errors(), 0, "validation errors at teardown:\n{}", log.messages().join("\n"));
+    }
 }
 
 pub fn assert_no_validation_errors(ctx: &GpuContext) {
@@ -36,15 +80,10 @@ pub fn assert_no_validation_errors(ctx: &GpuContext) {
     assert_eq!(n, 0, "validation errors:\n{}", ctx.validation_messages().join("\n"));
 }
 
-/// Fail on any validation error on `ctx`, then drop it (the caller's must be its last
-/// handle, or nothing would be destroyed) and fail on any error the layer reports while the
-/// device and instance are destroyed: leaked objects are reported only then.
-pub fn assert_clean_teardown(ctx: Arc<GpuContext>) {
-    assert_no_validation_errors(&ctx);
-    let log = ctx.validation_log();
-    assert_eq!(Arc::strong_count(&ctx), 1, "the context is still shared, so dropping it would not destroy it");
+/// Check `ctx` now, teardown included, rather than where it goes out of scope (see
+/// [`TestContext`]'s drop).
+pub fn assert_clean_teardown(ctx: TestContext) {
     drop(ctx);
-    assert_eq!(log.errors(), 0, "validation errors at teardown:\n{}", log.messages().join("\n"));
 }
 
 /// A bundled scene at `size`^2 with the baseline techniques (`prism::scene::BASELINE`:
