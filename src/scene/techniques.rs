@@ -768,8 +768,8 @@ params! {
         // Above 2 voxels a patch skips voxels between two depositions.
         light_dt: f32 = 0.5, 0.01..=2.0;
         /// How the light simulator integrates Eqs. 14-15 (section 5.2.1), independent of the
-        /// view rays' `integrator`. RK4 is what every bundled scene's light simulation ran
-        /// when both shared `integrator`; "euler" is the paper's.
+        /// view rays' `integrator`. RK4, the default, is the scheme of every light simulation
+        /// measured in docs/ACCURACY.md and docs/BENCHMARKS.md; "euler" is the paper's.
         light_integrator: LightIntegrator = LightIntegrator::Rk4;
         /// Capacity of the patch list (one storage-buffer binding). The initial wavefront is
         /// simulated in tiles (`tile_patches`); a tile whose tessellation outgrows the list is
