@@ -65,7 +65,8 @@ pub struct BenchReport {
     pub passes: Vec<PassStats>,
     pub frame: Stats,
     /// The eikonal light simulation (run once when the renderer is created): steps, patch
-    /// count per step, peak, wall-clock seconds. Absent without one.
+    /// count per step, patch-steps, peak, GPU ms per kernel, wall-clock seconds. Absent
+    /// without one.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub light_simulation: Option<crate::technique::eikonal::eikonal_light::LightStats>,
     pub note: &'static str,
@@ -198,6 +199,13 @@ pub fn run(args: BenchArgs) -> Result<()> {
             "eikonal light simulation (once, at setup): {:.3} s wall clock, {} steps, {} initial patches, peak {}, {} dropped",
             l.seconds, l.steps, l.initial_patches, l.peak_patches, l.dropped_patches
         );
+        println!(
+            "  {} patch-steps, GPU {:.1} ms ({:.1} ms in overflowing tiles and their take-backs); per kernel:",
+            l.patch_steps, l.gpu_ms, l.overflow_ms
+        );
+        for line in l.kernel_lines() {
+            println!("{line}");
+        }
     }
     if ctx.info.device_type == "CPU" {
         println!(

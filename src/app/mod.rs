@@ -254,6 +254,13 @@ fn render(args: RenderArgs) -> Result<()> {
             "eikonal light simulation: {} runs (lights x channels x tiles; {} tiles split), {} steps, {} initial patches, peak {}, {} dropped at max_patches, {:.2} s",
             l.runs.len(), l.split_tiles, l.steps, l.initial_patches, l.peak_patches, l.dropped_patches, l.seconds
         );
+        eprintln!(
+            "eikonal light simulation: {} patch-steps, GPU {:.1} ms, of which {:.1} ms in overflowing tiles and their take-backs; per kernel:",
+            l.patch_steps, l.gpu_ms, l.overflow_ms
+        );
+        for line in l.kernel_lines() {
+            eprintln!("{line}");
+        }
         if l.dropped_patches > 0 {
             eprintln!(
                 "warning: eikonal light simulation: {} patches dropped at the max_patches clamp by tiles of one patch \

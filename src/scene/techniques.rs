@@ -537,6 +537,18 @@ choice! {
 }
 
 choice! {
+    /// How the eikonal light simulator advances its particles along the equal-time ray
+    /// equation, Eqs. 14-15 (Ihrke et al. 2007, section 5.2.1).
+    LightIntegrator, hint "forward Euler of Eqs. 14-15 (Ihrke et al. 2007 §5.2.1) or fourth-order Runge-Kutta" {
+        /// Forward Euler of Eqs. 14-15, x += dt v / n^2, v += dt grad n / n (the paper's
+        /// scheme, Eqs. 11-12 in the equal-time parameter): one field fetch per particle.
+        Euler = "euler",
+        /// Classical fourth-order Runge-Kutta of Eqs. 14-15: four field fetches per particle.
+        Rk4 = "rk4",
+    }
+}
+
+choice! {
     /// What exit and reflected view rays of the eikonal volume meet besides the environment
     /// (src/technique/eikonal/eikonal_nearby.rs).
     EikonalNearby,
@@ -755,6 +767,10 @@ params! {
         /// (dS/dt = 1, Eq. 23).
         // Above 2 voxels a patch skips voxels between two depositions.
         light_dt: f32 = 0.5, 0.01..=2.0;
+        /// How the light simulator integrates Eqs. 14-15 (section 5.2.1), independent of the
+        /// view rays' `integrator`. RK4, the default, is the scheme of every light simulation
+        /// measured in docs/ACCURACY.md and docs/BENCHMARKS.md; "euler" is the paper's.
+        light_integrator: LightIntegrator = LightIntegrator::Rk4;
         /// Capacity of the patch list (one storage-buffer binding). The initial wavefront is
         /// simulated in tiles (`tile_patches`); a tile whose tessellation outgrows the list is
         /// taken back (rerun with negative deposits) and split into four, so nothing is dropped

@@ -46,17 +46,17 @@ use glam::{DVec3, Vec3};
 
 use crate::gpu::{
     vk, Access, Buffer, ComputePipeline, DescriptorSet, GpuContext, GpuResult, Image, ImageDesc, MemoryLocation,
-    Progress, Sampler, Spec,
+    Progress, Sampler, Spec, TimestampPool, TimestampQuery,
 };
 use crate::graph::{Bindings, BoundSet, BufferId, Frame, FrameGraph, ImageId};
-use crate::scene::techniques::{EikonalParams, Integrator};
+use crate::scene::techniques::{EikonalParams, LightIntegrator};
 use crate::scene::{IndexProfile, Light, Volume};
 use crate::{
     EIKONAL_EULER, EIKONAL_GROUP, EIKONAL_RK4, LIGHT_BINDING_ACCUM, LIGHT_BINDING_DIRECTION, LIGHT_BINDING_DST,
     LIGHT_BINDING_FIELD, LIGHT_BINDING_IRRADIANCE, LIGHT_BINDING_SRC,
 };
 
-use super::histopyramid::{HistoPyramid, HpState};
+use super::histopyramid::{level_lengths, HistoPyramid, HpState};
 use super::volume::{box_specs, prepare_volume, IndexField, RayState, VolumeTextures, LIGHT_BOX};
 pub use crate::shader_structs::Patch;
 use crate::shader_structs::RunPush;
@@ -122,8 +122,25 @@ pub struct RunStats {
     /// -1: the take-back of an overflowing tile.
     pub sign: f32,
     pub steps: u32,
+    /// Patches advanced, summed over the run's steps (each step's input list length).
+    pub patch_steps: u64,
     pub peak_patches: u32,
     pub dropped_patches: u32,
+    /// GPU time of the run's kernels (timestamps around every dispatch), ms.
+    pub gpu_ms: f64,
+}
+
+/// GPU time of one light-simulation kernel, summed over every dispatch of a simulation.
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct KernelTime {
+    /// The frame-graph pass name: `eikonal_light_step` (Eqs. 14-15 advance, Eq. 18
+    /// absorption, the §5.2.2 deposit and the §5.2.3 classification, one kernel),
+    /// `histopyramid_reduce` (one dispatch per pyramid level), `histopyramid_total`,
+    /// `histopyramid_traverse` (the compaction/expansion descent), `eikonal_light_expand`
+    /// (the output generator) and `eikonal_light_resolve` (accumulator to volumes, once).
+    pub name: String,
+    pub ms: f64,
+    pub dispatches: u64,
 }
 
 /// What a simulation did: steps, patch count after every step, peak, clamp losses, summed
@@ -146,6 +163,55 @@ pub struct LightStats {
     pub runs: Vec<RunStats>,
     /// Wall-clock seconds of the whole simulation, uploads and readbacks included.
     pub seconds: f64,
+    /// Patches advanced, summed over every step of every run: the work the step kernel
+    /// did (take-backs included).
+    pub patch_steps: u64,
+    /// GPU time per kernel over the whole simulation, in the order they first ran (empty
+    /// where the queue has no timestamps).
+    pub kernels: Vec<KernelTime>,
+    /// GPU time of all kernels, ms.
+    pub gpu_ms: f64,
+    /// GPU time thrown away by tile splitting, ms: the runs that overflowed and were split,
+    /// and their take-backs.
+    pub overflow_ms: f64,
+}
+
+impl LightStats {
+    /// One line per kernel for `prism render` and `prism bench`: time, share and dispatches.
+    pub fn kernel_lines(&self) -> Vec<String> {
+        let total = self.gpu_ms.max(f64::MIN_POSITIVE);
+        self.kernels
+            .iter()
+            .map(|k| {
+                format!(
+                    "  {:<24} {:>12.1} ms {:>5.1}% {:>9} dispatches",
+                    k.name,
+                    k.ms,
+                    100.0 * k.ms / total,
+                    k.dispatches
+                )
+            })
+            .collect()
+    }
+}
+
+/// Add the timestamped passes of one submission to `kernels` (by name); returns their sum.
+fn add_kernel_times(kernels: &mut Vec<KernelTime>, pool: &TimestampPool, queries: &[TimestampQuery]) -> GpuResult<f64> {
+    let last = queries.iter().map(|q| q.end + 1).max().unwrap_or(0);
+    let Some(ticks) = pool.read_ticks(last)? else { return Ok(0.0) };
+    let mut sum = 0.0;
+    for q in queries {
+        let ms = pool.ticks_to_ms(ticks[q.start as usize], ticks[q.end as usize]);
+        sum += ms;
+        match kernels.iter_mut().find(|k| k.name == q.name) {
+            Some(k) => {
+                k.ms += ms;
+                k.dispatches += 1;
+            }
+            None => kernels.push(KernelTime { name: q.name.clone(), ms, dispatches: 1 }),
+        }
+    }
+    Ok(sum)
 }
 
 /// The irradiance volume's box and resolution: the volume's box and voxels, extended
@@ -316,6 +382,11 @@ pub struct LightSim {
     /// patch flux of its light and channel).
     pub min_flux: f32,
     threshold: f32,
+    /// Timestamps around every pass of a batch (None where the queue has none).
+    timestamps: Option<TimestampPool>,
+    /// GPU time per kernel since the simulation began, and of the current run.
+    pub kernels: Vec<KernelTime>,
+    run_gpu_ms: f64,
 }
 
 /// The runs for `wavefronts` (one per light) through a field of `channels` index slabs, in
@@ -420,9 +491,9 @@ impl LightSim {
         };
         let sets = Bindings::build_each(ctx, "eikonal_light", vec![set(0), set(1)])?;
 
-        let integrator = match params.integrator {
-            Integrator::Euler => EIKONAL_EULER,
-            Integrator::Rk4 => EIKONAL_RK4,
+        let integrator = match params.light_integrator {
+            LightIntegrator::Euler => EIKONAL_EULER,
+            LightIntegrator::Rk4 => EIKONAL_RK4,
         };
         let volume_names = ["VOL_MIN_X", "VOL_MIN_Y", "VOL_MIN_Z", "VOL_MAX_X", "VOL_MAX_Y", "VOL_MAX_Z"];
         let spec: Vec<_> = [
@@ -439,6 +510,14 @@ impl LightSim {
         .chain(box_specs(volume_names, volume.min, volume.max))
         .chain(box_specs(LIGHT_BOX, light_min, light_max))
         .collect();
+        // Two timestamps per pass of a batch: each step is the step kernel, one reduction
+        // per pyramid level above the classes, the total, the traversal and the expansion.
+        let passes_per_step = level_lengths(capacity).len() as u32 - 1 + 4;
+        let timestamps = if ctx.info.timestamp_valid_bits > 0 {
+            Some(TimestampPool::new(ctx, "eikonal_light_timestamps", 2 * LIGHT_BATCH * passes_per_step)?)
+        } else {
+            None
+        };
         let layouts = [hp.set_layout(), sets.layout()];
         let push = std::mem::size_of::<RunPush>() as u32;
         let pipeline = |name: &str, shader: &str| ComputePipeline::new(ctx, name, shader, &layouts, push, &spec);
@@ -493,6 +572,9 @@ impl LightSim {
             resolution,
             min_flux: 0.0,
             threshold: params.energy_threshold,
+            timestamps,
+            kernels: Vec::new(),
+            run_gpu_ms: 0.0,
         };
         sim.begin(run);
         Ok(sim)
@@ -529,6 +611,7 @@ impl LightSim {
         self.steps_taken = 0;
         self.initial = patches;
         self.run = run;
+        self.run_gpu_ms = 0.0;
     }
 
     fn push(&self) -> RunPush {
@@ -575,19 +658,25 @@ impl LightSim {
     /// inside), then read back the bookkeeping. Returns the patch count after the last step.
     pub fn run_steps(&mut self, ctx: &Arc<GpuContext>, graph: &mut FrameGraph, steps: u32) -> GpuResult<u32> {
         let mut from = self.current;
-        ctx.one_shot(|cmd| {
+        let queries = ctx.one_shot(|cmd| {
             let mut frame = graph.frame();
             for _ in 0..steps {
                 self.record_step(&mut frame, from);
                 from = 1 - from;
             }
-            frame.execute(cmd, None);
+            // More steps than the pool was sized for (a caller's long batch) go untimed.
+            let pool = self.timestamps.as_ref().filter(|_| steps <= LIGHT_BATCH);
+            let queries = frame.execute(cmd, pool);
             let host: Vec<_> = [self.hp.state_id, self.hp.classes_id, self.list_ids[0], self.list_ids[1]]
                 .into_iter()
                 .map(|id| (id, Access::HostRead))
                 .collect();
             graph.access_now(cmd, &[], &host);
+            queries
         })?;
+        if let Some(pool) = self.timestamps.as_ref().filter(|_| steps <= LIGHT_BATCH) {
+            self.run_gpu_ms += add_kernel_times(&mut self.kernels, pool, &queries)?;
+        }
         self.current = from;
         self.steps_taken += steps;
         Ok(self.hp.read_state().count)
@@ -595,12 +684,13 @@ impl LightSim {
 
     /// Turn the accumulator into the irradiance and direction volumes (after the runs; again
     /// after more runs, it always reflects everything deposited so far).
-    pub fn resolve(&self, ctx: &Arc<GpuContext>, graph: &mut FrameGraph) -> GpuResult<()> {
+    pub fn resolve(&mut self, ctx: &Arc<GpuContext>, graph: &mut FrameGraph) -> GpuResult<()> {
         let (set0, set1) = (self.hp.set(), self.sets.set());
         let resolve = &self.resolve;
         let push = self.push();
         let groups = self.resolution.map(|r| r.div_ceil(EIKONAL_GROUP));
-        ctx.one_shot(|cmd| {
+        let pool = self.timestamps.as_ref();
+        let queries = ctx.one_shot(|cmd| {
             let mut frame = graph.frame();
             frame
                 .pass("eikonal_light_resolve")
@@ -610,8 +700,12 @@ impl LightSim {
                 .record(move |cmd| {
                     cmd.compute(resolve, &[set0, set1], &push, groups);
                 });
-            frame.execute(cmd, None);
-        })
+            frame.execute(cmd, pool)
+        })?;
+        if let Some(pool) = &self.timestamps {
+            add_kernel_times(&mut self.kernels, pool, &queries)?;
+        }
+        Ok(())
     }
 
     /// Run the current run to its end (no patch left, or [`LightSim::max_steps`]) in
@@ -635,6 +729,9 @@ impl LightSim {
             counts.truncate(last + 1);
         }
         let r = self.run;
+        // Step i advanced the list that step i - 1 left (the first, the initial patches).
+        let patch_steps =
+            self.initial.len() as u64 + counts[..counts.len().saturating_sub(1)].iter().map(|&c| c as u64).sum::<u64>();
         let stats = RunStats {
             light: r.light,
             channel: r.channel,
@@ -642,8 +739,10 @@ impl LightSim {
             end: r.end,
             sign: r.sign,
             steps: counts.len() as u32,
+            patch_steps: if counts.is_empty() { 0 } else { patch_steps },
             peak_patches: state.peak.max(self.initial.len() as u32),
             dropped_patches: state.dropped,
+            gpu_ms: self.run_gpu_ms,
         };
         Ok((stats, counts))
     }
@@ -682,10 +781,16 @@ impl LightSim {
             })?;
             done_runs += 1;
             stats.steps += run_stats.steps;
+            stats.patch_steps += run_stats.patch_steps;
+            stats.gpu_ms += run_stats.gpu_ms;
+            if r.sign < 0.0 {
+                stats.overflow_ms += run_stats.gpu_ms;
+            }
             stats.patch_counts.extend_from_slice(&counts);
             stats.peak_patches = stats.peak_patches.max(run_stats.peak_patches);
             let overflowed = run_stats.dropped_patches > 0;
             if overflowed && r.sign > 0.0 && r.end - r.start > 1 {
+                stats.overflow_ms += run_stats.gpu_ms;
                 // Take the run's deposits back (the same patches, the same drops: the
                 // simulation is deterministic up to the order of the float additions),
                 // then simulate its four quarters.
@@ -714,7 +819,10 @@ impl LightSim {
             }
         }
         report(total, total, "done", true);
+        let before = self.kernels.iter().map(|k| k.ms).sum::<f64>();
         self.resolve(ctx, graph)?;
+        stats.gpu_ms += self.kernels.iter().map(|k| k.ms).sum::<f64>() - before;
+        stats.kernels = self.kernels.clone();
         stats.seconds = start.elapsed().as_secs_f64();
         Ok(stats)
     }
@@ -792,6 +900,21 @@ impl StandaloneLight {
         let e = read(&mut self.graph, &self.sim.irradiance, self.sim.irradiance_id)?;
         let d = read(&mut self.graph, &self.sim.direction, self.sim.direction_id)?;
         Ok((e, d))
+    }
+}
+
+/// One equal-time step of Eqs. 14-15 by forward Euler in f64 on an analytic field (§5.2.1 as
+/// the paper has it): the CPU version of light_step.comp's `LightIntegrator::Euler`.
+pub fn light_euler_step(field: &impl IndexField, s: RayState, h: f64) -> RayState {
+    let n = field.n(s.x);
+    RayState { x: s.x + h * s.v / (n * n), v: s.v + h * field.gradient(s.x) / n }
+}
+
+/// One equal-time step of Eqs. 14-15 with `integrator`, as light_step.comp.
+pub fn light_step(field: &impl IndexField, integrator: LightIntegrator, s: RayState, h: f64) -> RayState {
+    match integrator {
+        LightIntegrator::Euler => light_euler_step(field, s, h),
+        LightIntegrator::Rk4 => light_rk4_step(field, s, h),
     }
 }
 
