@@ -7,7 +7,7 @@
 #include "sppm.glsl"
 
 void main() {
-    uint px = gl_GlobalInvocationID.x;
+    uint px = invocation_index();
     if (px >= ref.dims.x * ref.dims.y) return;
     PixelState st = pixels[px];
     if (st.vp_normal.w < 0.5) return;

@@ -33,7 +33,7 @@ float cone(vec3 x, vec4 target, vec3 d, out bool inside) {
 }
 
 void main() {
-    uint idx = gl_GlobalInvocationID.x;
+    uint idx = invocation_index();
     uint total = ref.photon.x;
     if (idx >= total) return;
     uint lights = ref.dims.z, targets = ref.counts.z;

@@ -9,7 +9,7 @@
 #include "sppm.glsl"
 
 void main() {
-    uint i = gl_GlobalInvocationID.x;
+    uint i = invocation_index();
     if (i >= push.count) return;
     vec4 a = debug_data[3u * i], b = debug_data[3u * i + 1u], c = debug_data[3u * i + 2u];
     if (push.mode == 0u) {

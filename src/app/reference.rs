@@ -29,8 +29,9 @@ pub struct ReferenceArgs {
     /// Initial photon gathering radius in metres (default: 1% of the scene's radius).
     #[arg(long)]
     pub radius: Option<f32>,
-    /// Initial radius of each pixel in pixel footprints on its receiver, at most --radius
-    /// (0: every pixel starts at --radius, the fixed rule).
+    /// Initial radius of each pixel in pixel footprints on its receiver, at most --radius;
+    /// the caustic is then averaged over the pixel's area (0: every pixel starts at --radius
+    /// with its centre ray's visible point, the fixed rule).
     #[arg(long, default_value_t = ReferenceSettings::default().footprint)]
     pub footprint: f32,
     /// SPPM radius reduction alpha (Hachisuka et al. 2008, Eq. 7), in (0, 1).

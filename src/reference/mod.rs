@@ -63,6 +63,9 @@ pub struct ReferenceSettings {
     /// Initial radius of each pixel in pixel footprints on its receiver: `footprint` times
     /// the spacing of neighbouring camera rays where its path meets the diffuse surface
     /// (glsl/reference/camera.comp), at most `radius`. 0 starts every pixel at `radius`.
+    /// With footprint radii the caustic's visible points sample the pixel's area (a second
+    /// camera path through a uniform point of the pixel): SPPM then converges to the
+    /// caustic averaged over the pixel rather than at its centre.
     pub footprint: f32,
     /// SPPM radius reduction alpha (Hachisuka et al. 2008 use 0.7; 2/3 is the usual choice).
     pub alpha: f32,
@@ -132,13 +135,13 @@ impl ReferenceSettings {
     }
 }
 
-/// The default initial radius in pixel footprints ([`ReferenceSettings::footprint`]): 0, every
-/// pixel starting at the fixed radius. Footprint radii resolve caustic_sphere's peak and rim
-/// (1% of the scene's radius is 2.5 pixels on its floor at 256^2, and the radius shrinks only
-/// as N^((alpha - 1) / 2)), but with centre rays room_glass's sharp focus then holds 3% less
-/// flux than its photons at 16 spp, 2^22 photons (`--footprint 0.71`, the disk around the
-/// pixel's square; 4.3% with 0.5), more than the flux check allows.
-pub const DEFAULT_FOOTPRINT: f32 = 0.0;
+/// The default initial radius in pixel footprints ([`ReferenceSettings::footprint`]): half
+/// the pixel's footprint on its receiver, the disk inscribed in its square. 1% of the scene's
+/// radius is 2.5 pixels on caustic_sphere's floor at 256^2 and shrinks only as
+/// N^((alpha - 1) / 2), which blurred the caustic's peak and rim. Footprint radii go with
+/// visible points spread over the pixel's area (glsl/reference/camera.comp), so that a focus
+/// narrower than a pixel keeps its flux (tests/reference.rs, the flux checks).
+pub const DEFAULT_FOOTPRINT: f32 = 0.5;
 
 /// The most photons one photon pass traces. lavapipe ends every loop of an invocation after
 /// 65535 loop iterations in all (LP_MAX_TGSI_LOOP_ITERATIONS, counted over all its loops and
@@ -148,6 +151,19 @@ pub const DEFAULT_FOOTPRINT: f32 = 0.0;
 /// each list holds at most the pass's photons, so it runs at most 8 * 8000 + 36 < 65535 loop
 /// iterations, whichever buckets the invocations in lockstep walk.
 pub const MAX_PHOTONS_PER_PASS: u32 = 8000;
+
+/// Workgroup counts that cover `items` invocations of the 1-D reference kernels
+/// (REF_WORKGROUP each, indexed by `invocation_index` in glsl/reference/scene.glsl) within the
+/// device's maxComputeWorkGroupCount `max`: rows of at most max[0] groups, as many rows as
+/// needed. A 1-D dispatch of 64 pixels per group stops at 64 max[0] pixels (2^22 with
+/// 65535, the least the Vulkan spec requires of a device), fewer than a 2^32-byte storage buffer
+/// holds. None when even max[0] x max[1] groups are too few.
+pub fn dispatch_size(items: u32, max: [u32; 3]) -> Option<[u32; 3]> {
+    let groups = items.div_ceil(REF_WORKGROUP).max(1);
+    let x = groups.min(max[0].max(1));
+    let y = groups.div_ceil(x);
+    (y <= max[1]).then_some([x, y, 1])
+}
 
 impl RefUniforms {
     /// The raytrace technique's branch cutoff (glsl/raytrace/raytrace.frag; the reference
@@ -368,6 +384,10 @@ pub struct Reference {
     passes_done: u32,
     photons_per_iteration: u32,
     passes_per_iteration: u32,
+    /// Workgroups of the per-pixel kernels ([`dispatch_size`]).
+    pixel_groups: [u32; 3],
+    /// The device's maxComputeWorkGroupCount.
+    max_groups: [u32; 3],
     set: BoundSet,
     camera: ComputePipeline,
     photons: ComputePipeline,
@@ -421,6 +441,13 @@ impl Reference {
                 range / pixel_state
             )));
         }
+        let max_groups = ctx.limits().max_compute_work_group_count;
+        let pixel_groups = dispatch_size(width * height, max_groups).ok_or_else(|| {
+            RenderError::Limit(format!(
+                "image size {width}x{height} needs more workgroups than the device's maxComputeWorkGroupCount \
+                 {max_groups:?} allows: lower the size"
+            ))
+        })?;
         let mut graph = FrameGraph::new();
         let gpu_scene = GpuScene::new(ctx, scene, &mut graph, 1)?;
 
@@ -551,6 +578,8 @@ impl Reference {
             passes_done: 0,
             photons_per_iteration,
             passes_per_iteration,
+            pixel_groups,
+            max_groups,
             set,
             camera,
             photons,
@@ -600,9 +629,10 @@ impl Reference {
     /// Run `count` more iterations (camera sample, then photon pass + gather as many times
     /// as [`ReferenceSettings::passes_per_iteration`]) in one submission.
     pub fn run(&mut self, count: u32) -> Result<(), RenderError> {
-        let pixel_groups = (self.width * self.height).div_ceil(REF_WORKGROUP);
+        let pixel_groups = self.pixel_groups;
         let photons_per_pass = self.photons_per_pass();
-        let photon_groups = photons_per_pass.div_ceil(REF_WORKGROUP);
+        // At most MAX_PHOTONS_PER_PASS photons: far below any device's limit.
+        let photon_groups = dispatch_size(photons_per_pass, self.max_groups).unwrap_or([1, 1, 1]);
         let (passes, first_pass) = (self.passes_per_iteration, self.passes_done);
         let [accum, pixels, photons, grid, counters, debug] = self.ids;
         let start = self.iterations_done;
@@ -630,7 +660,7 @@ impl Reference {
                     .write(accum, Access::ComputeWrite)
                     .write(pixels, Access::ComputeWrite)
                     .record(move |cmd| {
-                        cmd.compute(camera, &[set], &push, [pixel_groups, 1, 1]);
+                        cmd.compute(camera, &[set], &push, pixel_groups);
                     });
                 for pass in 0..passes {
                     // Each photon pass draws its own photons.
@@ -650,7 +680,7 @@ impl Reference {
                         .write(counters, Access::ComputeWrite)
                         .write(debug, Access::ComputeWrite)
                         .record(move |cmd| {
-                            cmd.compute(photon_pipe, &[set], &push, [photon_groups, 1, 1]);
+                            cmd.compute(photon_pipe, &[set], &push, photon_groups);
                         });
                     frame
                         .pass("reference_gather")
@@ -658,7 +688,7 @@ impl Reference {
                         .read(grid, Access::ComputeRead)
                         .write(pixels, Access::ComputeWrite)
                         .record(move |cmd| {
-                            cmd.compute(gather, &[set], &push, [pixel_groups, 1, 1]);
+                            cmd.compute(gather, &[set], &push, pixel_groups);
                         });
                 }
             }
@@ -766,10 +796,11 @@ impl Reference {
             let debug = self.ids[5];
             let (graph, probe, set) = (&mut self.graph, &self.probe, self.set.set());
             let push = RefPush { iteration: 0, seed: 0, mode: mode as u32, count: chunk.len() as u32 };
+            let groups = dispatch_size(chunk.len() as u32, self.max_groups).unwrap_or([1, 1, 1]);
             self.ctx.one_shot(|cmd| {
                 let mut frame = graph.frame();
                 frame.pass("reference_probe").write(debug, Access::ComputeWrite).record(move |cmd| {
-                    cmd.compute(probe, &[set], &push, [(chunk.len() as u32).div_ceil(REF_WORKGROUP), 1, 1]);
+                    cmd.compute(probe, &[set], &push, groups);
                 });
                 frame.execute(cmd, None);
                 graph.access_now(cmd, &[], &[(debug, Access::HostRead)]);
