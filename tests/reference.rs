@@ -500,8 +500,8 @@ fn camera_ray(s: &Scene, x: f32, y: f32) -> Vec3 {
     (forward + u * right + v * up).normalize()
 }
 
-/// The pixel (column, row) whose area the point p projects into; outside the image too.
-fn pixel_of(s: &Scene, p: Vec3) -> (i64, i64) {
+/// The image point (column, row in pixels, (0, 0) the top-left corner) that p projects to.
+fn image_point(s: &Scene, p: Vec3) -> (f32, f32) {
     let c = &s.camera;
     let forward = (c.target - c.position).normalize();
     let right = forward.cross(c.up).normalize();
@@ -511,7 +511,7 @@ fn pixel_of(s: &Scene, p: Vec3) -> (i64, i64) {
     let z = q.dot(forward);
     let x = (q.dot(right) / z / (tan_y * c.aspect()) + 1.0) * 0.5 * c.width as f32;
     let y = (1.0 - q.dot(up) / z / tan_y) * 0.5 * c.height as f32;
-    (x.floor() as i64, y.floor() as i64)
+    (x, y)
 }
 
 /// Whether the segment from `o` to `p` passes through the sphere (centre, radius).
@@ -522,43 +522,56 @@ fn segment_hits_sphere(o: Vec3, p: Vec3, centre: Vec3, radius: f32) -> bool {
 }
 
 /// The flux balance of the photon gather over the pixels that see the receiver directly
-/// (`CausticRender::footprint`): (photons' reflected flux, integrated caustic radiance,
-/// photons counted, the relative standard deviation of the photons' sum, the share of the
-/// photons' flux in the ring of pixels on either side of the selection's border, photons in
-/// selected pixels whose caustic is 0 although at least 50 photons of the sampled passes
-/// landed in them). Both sides in W/sr: a photon of flux Phi on albedo rho leaves
-/// Phi rho / pi (the radiance the pixels show, integrated over their footprint).
+/// (`CausticRender::footprint`): the photons' reflected flux and the integrated caustic
+/// radiance, both in W/sr (a photon of flux Phi on albedo rho leaves Phi rho / pi, the
+/// radiance the pixels show integrated over their footprint); the photons counted; the
+/// relative standard deviation of the photons' sum; the share of the photons' flux that a
+/// gathering disk can move across the selection's border; and the selected pixels whose
+/// caustic is 0 although at least 50 photons of the sampled passes landed in them.
 struct FluxBalance {
     photons: f64,
     integral: f64,
     n: usize,
     sigma: f64,
-    ring: f64,
+    border: f64,
     holes: Vec<(u32, u32, usize)>,
 }
 
-fn flux_balance(c: &CausticRender, rec_: &Receiver) -> FluxBalance {
+fn flux_balance(c: &CausticRender, rec_: &Receiver, footprints: f32) -> FluxBalance {
     let s = &c.scene;
     let (w, h) = (s.camera.width as i64, s.camera.height as i64);
     let selected =
         |i: i64, j: i64| (0..w).contains(&i) && (0..h).contains(&j) && c.footprint[(j * w + i) as usize].is_some();
-    let near_border = |i: i64, j: i64| {
-        let me = selected(i, j);
-        (-1..=1).any(|a| (-1..=1).any(|b| selected(i + a, j + b) != me))
-    };
     let inv_pi = std::f64::consts::FRAC_1_PI;
-    let (mut sum, mut sum2, mut ring, mut n) = (0.0f64, 0.0f64, 0.0f64, 0usize);
+    let (mut sum, mut sum2, mut border, mut n) = (0.0f64, 0.0f64, 0.0f64, 0usize);
     let mut count = vec![0usize; (w * h) as usize];
     for &(p, f) in &c.photons {
         if (p.y - rec_.y).abs() > 1e-4 {
             continue;
         }
         let e = f as f64 * rec_.albedo.eval(glam::Vec2::new(p.x, p.z)).x as f64 * inv_pi;
-        let (i, j) = pixel_of(s, p);
-        if near_border(i, j) {
-            ring += e;
+        let (x, y) = image_point(s, p);
+        let (i, j) = (x.floor() as i64, y.floor() as i64);
+        // A gathering disk starts at `footprints` times the pixel's footprint over
+        // sqrt(cos) (camera.comp) and only shrinks; seen from the camera it reaches at most
+        // footprints / sqrt(cos) pixels from the visible point, which lies in its pixel.
+        let cos = (s.camera.position - p).normalize().y.abs().max(0.05);
+        let reach = footprints / cos.sqrt();
+        let k = reach.ceil() as i64;
+        let me = selected(i, j);
+        let crosses = (-k..=k).any(|a| {
+            (-k..=k).any(|b| {
+                let (lo_x, hi_x) = ((i + a) as f32, (i + a + 1) as f32);
+                let (lo_y, hi_y) = ((j + b) as f32, (j + b + 1) as f32);
+                let ddx = (lo_x - x).max(x - hi_x).max(0.0);
+                let ddy = (lo_y - y).max(y - hi_y).max(0.0);
+                selected(i + a, j + b) != me && ddx * ddx + ddy * ddy < reach * reach
+            })
+        });
+        if crosses {
+            border += e;
         }
-        if selected(i, j) {
+        if me {
             sum += e;
             sum2 += e * e;
             n += 1;
@@ -576,14 +589,8 @@ fn flux_balance(c: &CausticRender, rec_: &Receiver) -> FluxBalance {
             holes.push(((idx as i64 % w) as u32, (idx as i64 / w) as u32, count[idx]));
         }
     }
-    FluxBalance {
-        photons: sum / k,
-        integral,
-        n,
-        sigma: sum2.sqrt() / sum.max(1e-30),
-        ring: ring / sum.max(1e-30),
-        holes,
-    }
+    let share = |x: f64| x / sum.max(1e-30);
+    FluxBalance { photons: sum / k, integral, n, sigma: sum2.sqrt() / sum.max(1e-30), border: share(border), holes }
 }
 
 /// The gather conserves the photons' flux: over the pixels that see the receiver directly,
@@ -595,9 +602,8 @@ fn flux_balance(c: &CausticRender, rec_: &Receiver) -> FluxBalance {
 /// pixel), so the sum over pixels is the integral over their footprints with no midpoint
 /// error. Tolerance: 3 standard deviations of the sampled photons' sum (the relative standard
 /// deviation of a sum of independent photons, sqrt(sum f^2) / sum f), plus the share of the
-/// photons' flux in the pixels on either side of the selection's border, where a gathering
-/// disk (at most half a footprint beyond its pixel, ReferenceSettings::footprint) can count
-/// photons the selection leaves out or miss ones it counts. The pixel side's own noise comes
+/// photons' flux within a gathering disk's reach of the selection's border (on either side:
+/// a disk there can count photons the selection leaves out or miss ones it counts). The pixel side's own noise comes
 /// from all photon passes, 1 / passes_per_iteration of which are sampled here: it is smaller.
 /// A 50-photon pixel is black by chance with probability below 0.8^50 = 1.4e-5 (its disk
 /// covers at least a fifth of its footprint until its first photon).
@@ -606,17 +612,17 @@ fn check_caustic(name: &str, size: u32, spp: u32, photons: u64, receiver_name: &
     let s = common::scene(name, size, &[]);
     let rec_ = receiver(&s, receiver_name);
     let c = caustic_render(name, size, &st, &rec_);
-    let b = flux_balance(&c, &rec_);
-    let tolerance = 3.0 * b.sigma + b.ring;
+    let b = flux_balance(&c, &rec_, st.footprint);
+    let tolerance = 3.0 * b.sigma + b.border;
     eprintln!(
-        "{name}: photons' flux {:.5}, integrated radiance {:.5} (ratio {:.4}), {} photons, sigma {:.4}, ring {:.4}, \
+        "{name}: photons' flux {:.5}, integrated radiance {:.5} (ratio {:.4}), {} photons, sigma {:.4}, border {:.4}, \
          tolerance {tolerance:.4}, {} pixels, {} holes ({st:?})",
         b.photons,
         b.integral,
         b.integral / b.photons,
         b.n,
         b.sigma,
-        b.ring,
+        b.border,
         c.footprint.iter().flatten().count(),
         b.holes.len()
     );
