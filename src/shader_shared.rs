@@ -203,6 +203,9 @@ shared_bindings! {
     // bindings (faces, materials, refractor layers).
     PHOTON_BINDINGS {
         PHOTON_BINDING_RECTS = 8;
+        // TEX_DEPTH_i of §2.2.2 per rectangle: each receiver's signed distance from its
+        // rectangle's plane along O_R O_i, for the photon's depth correction (Fig. 16).
+        PHOTON_BINDING_RECEIVER_DEPTH = 10;
     }
     // Light-map caustics with distance impostors (Szirmay-Kalos et al. 2005 §5;
     // src/technique/impostor/impostor_lightmap.rs). Set 1 of the caustic-map pass: the uv

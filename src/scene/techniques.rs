@@ -738,6 +738,15 @@ params! {
         filter_s: f32 = 0.01, 1e-12..=1e12;
         /// What the caustic textures hold (§3.2).
         normalization: PhotonNormalization = PhotonNormalization::Physical;
+        /// Iterations of §2.2.2's depth correction (Fig. 16) of each photon's (u, v): from the
+        /// ray's hit with RECT_k towards its hit with the receiver itself, against the
+        /// receiver's depth seen along O_R O_k (`photon_buffer_receivers`), so that the photon
+        /// is counted where deferred shading's parallel projection of the receiver looks it up
+        /// (§3.3); 0 = the rectangle hit of §3.1 alone, exact only for receivers lying in
+        /// their rectangle's plane.
+        // "two or three iteration steps" (§2.2.2), as render.hu_qin.correction_iterations;
+        // beyond 64 it only burns time.
+        correction_iterations: u32 = 3, 0..=64;
     }
 
     /// `[render.eikonal]`: eikonal rendering of a `[volume]` (Ihrke et al. 2007,
