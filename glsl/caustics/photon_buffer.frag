@@ -44,7 +44,10 @@ void main() {
     float cos_in;
     // Dispersion is not modelled by the photon buffer: the paper's photons carry no
     // wavelength; a dispersive (RGB) ior is taken at green (channel 1).
-    if (!light_path(f, layer, ij, grid, 1, 3u, origin, dir, weight, absorb, cos_in)) return;
+    // The exit point by the march: Hu & Qin build the photon buffer with their own refraction
+    // (§3: "using the method to implement reflection and refraction"), not Wyman's d_V/d_N,
+    // whose precomputed d_N §2.1 names as the limitation it removes.
+    if (!light_path(f, layer, ij, grid, 1, 3u, CAUSTIC_EXIT_MARCH, origin, dir, weight, absorb, cos_in)) return;
     // Fig. 13's ray tracing pass: the rectangle whose intersection is nearest to startP.
     float best = 1.0 / 0.0;
     int k = 0;
