@@ -12,8 +12,10 @@
 //!    O_R O_i (the shadow pass's shaders with the rectangle as a directional "light").
 //! 3. `photon_buffer` (§3.1, Fig. 19b): "we render the reflector/refractor from the light
 //!    position"; each pixel is one photon. glsl/caustics/photon_buffer.frag refracts through
-//!    both interfaces (the double-surface exit estimate shared with caustics mapping,
-//!    glsl/caustics/light_path.glsl) or reflects, intersects the ray with the receiver
+//!    both interfaces (caustics mapping's `exit = "march"`, glsl/caustics/light_path.glsl:
+//!    Hu & Qin build the photon buffer with their own refraction, §3 "using the method to
+//!    implement reflection and refraction", whose d_T search needs no precomputed d_N, so
+//!    Wyman's d_V/d_N, Shah et al.'s estimator, is not offered here) or reflects, intersects the ray with the receiver
 //!    rectangles RECT_i (§2.2.1, Fig. 13), moves the nearest hit onto the receiver itself
 //!    with §2.2.2's iterative depth correction (Fig. 16; `correction_iterations`), and writes
 //!    (u, v, k) there, k = i + 1, k = 0 for no photon, plus the photon's power (see below).
