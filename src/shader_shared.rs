@@ -70,6 +70,14 @@ shared_constants! {
     // oscillation).
     NEWTON_APPROXIMATE: u32 = 0;
     NEWTON_TRUE: u32 = 1;
+    // render.caustics_map.exit: where double-surface refraction leaves the object, by
+    // Wyman 2005's d_V/d_N interpolation (Shah et al. 2007 §IV) or a march with bisection.
+    CAUSTIC_EXIT_MARCH: u32 = 0;
+    CAUSTIC_EXIT_WYMAN: u32 = 1;
+    // render.caustics_map.splat: the paper's fixed Gaussian or one sized by the footprint
+    // of the neighbouring grid vertices' hits.
+    SPLAT_FIXED: u32 = 0;
+    SPLAT_FOOTPRINT: u32 = 1;
     // Refractor layer passes (specialisation constant MODE of caustics/refractor.frag).
     CAUSTIC_LAYER_FRONT: u32 = 0;
     CAUSTIC_LAYER_BACK: u32 = 1;
@@ -198,11 +206,16 @@ shared_bindings! {
         CAUSTIC_BINDING_BACK_POSITION = 6;
         CAUSTIC_BINDING_BACK_NORMAL = 7;
         CAUSTIC_BINDING_VISIBLE = 9;
+        // The refractor layers' own set: Wyman's d_N per scene vertex (f32).
+        CAUSTIC_BINDING_DN = 11;
     }
     // Photon buffer (Hu & Qin 2007 §3.1): the receiver rectangles, besides the caustic
     // bindings (faces, materials, refractor layers).
     PHOTON_BINDINGS {
         PHOTON_BINDING_RECTS = 8;
+        // TEX_DEPTH_i of §2.2.2 per rectangle: each receiver's signed distance from its
+        // rectangle's plane along O_R O_i, for the photon's depth correction (Fig. 16).
+        PHOTON_BINDING_RECEIVER_DEPTH = 10;
     }
     // Light-map caustics with distance impostors (Szirmay-Kalos et al. 2005 §5;
     // src/technique/impostor/impostor_lightmap.rs). Set 1 of the caustic-map pass: the uv

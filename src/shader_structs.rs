@@ -241,7 +241,8 @@ shared_structs! {
 
     /// Push constants of glsl/caustics/photon_buffer.frag.
     push struct PhotonBufferPush {
-        /// x: source face, y: photon buffer size, z: rectangles
+        /// x: source face, y: photon buffer size, z: rectangles, w: depth-correction
+        /// iterations (§2.2.2, Fig. 16)
         info: uvec4,
     }
 

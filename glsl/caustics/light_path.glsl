@@ -63,8 +63,9 @@ float mean_texel_measure(GpuCausticFace f, int grid) {
 // coefficient still to apply over the distance to the receiver (single-surface refraction).
 // cos_in: N . L at the entry point (Shah et al.'s Eq. 6). Returns false where no specular
 // surface is seen or the light stays inside the object.
-bool light_path(GpuCausticFace f, int layer, ivec2 ij, int grid, int c, uint channels, out vec3 origin, out vec3 dir,
-                out vec3 weight, out vec3 absorb_to_receiver, out float cos_in) {
+// exit: CAUSTIC_EXIT_WYMAN or CAUSTIC_EXIT_MARCH, how double-surface refraction finds P2.
+bool light_path(GpuCausticFace f, int layer, ivec2 ij, int grid, int c, uint channels, uint exit, out vec3 origin,
+                out vec3 dir, out vec3 weight, out vec3 absorb_to_receiver, out float cos_in) {
     cos_in = 0.0;
     origin = vec3(0.0);
     dir = vec3(0.0);
@@ -91,41 +92,70 @@ bool light_path(GpuCausticFace f, int layer, ivec2 ij, int grid, int c, uint cha
         weight = vec3(1.0 - fresnel_dielectric(cos1, 1.0 / ior));
         vec4 bp = texelFetch(back_position, ivec3(ij, layer), 0);
         if (bp.w > 0.0) {
-            // Double-surface refraction (§IV): the exit point P2 where P1 + d T1 leaves the
-            // object. The back faces seen from the light are a depth map, so the exit is the
-            // root of the same signed function as the receiver's (Eq. 3): the back face's
-            // distance from the light at the point's texel minus the point's own distance,
-            // positive inside. The paper's derivative-free iteration (Eq. 1-2) converges
-            // slowly near the silhouette, where T1 runs almost along the back surface, and
-            // a wrong exit normal there turns into spurious total internal reflection; so
-            // as Hu & Qin 2007 (§2.1) do for the exit, a linear search over the object's
-            // largest chord brackets the first exit and a binary search refines it.
-            float chord = f.measure.w;
-            float lo = 0.0, hi = chord;
-            const int MARCH = 16, BISECT = 10;
-            bool found = false;
-            for (int k = 1; k <= MARCH && !found; ++k) {
-                float d = chord * float(k) / float(MARCH);
-                if (!inside(f, p1 + d * dir, grid, layer)) {
-                    hi = d;
-                    found = true;
+            // Double-surface refraction (§IV): the exit point P2 = P1 + d T1 and its normal N2.
+            float d;
+            vec3 exit_p, n2;
+            if (exit == CAUSTIC_EXIT_WYMAN) {
+                // Shah et al.'s estimator, Wyman 2005 §3.1 from the light: d_V the distance
+                // from the front to the back surface along the light ray at this texel
+                // (Fig. 3c), d_N the per-vertex distance along -N1 (the front layer's w - 1),
+                //   d~ = (theta_t / theta_i) d_V + (1 - theta_t / theta_i) d_N,
+                // N2 from the back layer where P2~ projects (§3.2); outside the silhouette,
+                // perpendicular to the light's direction at P1, which stands in for the
+                // camera's look-at vector of §3.3 (N2 = T1 - (L . T1) L).
+                float d_v = distance(bp.xyz, p1);
+                float d_n = fp.w - 1.0;
+                if (!(d_n > 0.0)) d_n = d_v;   // open mesh or non-dielectric: no far side along -N
+                float theta_i = acos(cos1);
+                float theta_t = acos(clamp(-dot(n1, dir), -1.0, 1.0));
+                // theta_t / theta_i -> 1 / ior as theta_i -> 0 (Snell for small angles).
+                float ratio = theta_i > 1e-4 ? theta_t / theta_i : 1.0 / ior;
+                d = max(ratio * d_v + (1.0 - ratio) * d_n, 0.0);
+                exit_p = p1 + d * dir;
+                ivec2 exit_t = source_texel(f, exit_p, grid);
+                if (exit_t.x >= 0 && texelFetch(back_position, ivec3(exit_t, layer), 0).w > 0.0) {
+                    n2 = normalize(texelFetch(back_normal, ivec3(exit_t, layer), 0).xyz);
                 } else {
-                    lo = d;
+                    n2 = dir - dot(l, dir) * l;
+                    n2 = dot(n2, n2) > 1e-12 ? normalize(n2) : dir;
                 }
+            } else {
+                // prism's departure: the back faces seen from the light are a depth map, so
+                // the exit is the root of the same signed function as the receiver's (Eq. 3):
+                // the back face's distance from the light at the point's texel minus the
+                // point's own distance, positive inside. A linear search over the objects'
+                // largest chord brackets the first exit and a binary search refines it (the
+                // linear-then-binary search of relief mapping; Hu & Qin 2007 §2.1 search
+                // differently: a binary search for the silhouette pixel p_e to decide front
+                // or back, Fig. 7, then an iterative d_T, Fig. 8). Unlike one estimate of d,
+                // it needs no precomputed d_N and follows concave back surfaces.
+                float chord = f.measure.w;
+                float lo = 0.0, hi = chord;
+                const int MARCH = 16, BISECT = 10;
+                bool found = false;
+                for (int k = 1; k <= MARCH && !found; ++k) {
+                    float t = chord * float(k) / float(MARCH);
+                    if (!inside(f, p1 + t * dir, grid, layer)) {
+                        hi = t;
+                        found = true;
+                    } else {
+                        lo = t;
+                    }
+                }
+                for (int k = 0; k < BISECT; ++k) {
+                    float mid = 0.5 * (lo + hi);
+                    if (inside(f, p1 + mid * dir, grid, layer)) lo = mid; else hi = mid;
+                }
+                d = 0.5 * (lo + hi);
+                exit_p = p1 + d * dir;
+                ivec2 exit_t = source_texel(f, exit_p, grid);
+                if (exit_t.x < 0 || texelFetch(back_position, ivec3(exit_t, layer), 0).w <= 0.0) {
+                    // Left through the silhouette: the back face at the last texel inside.
+                    exit_t = source_texel(f, p1 + lo * dir, grid);
+                    if (exit_t.x < 0) exit_t = ij;
+                }
+                n2 = normalize(texelFetch(back_normal, ivec3(exit_t, layer), 0).xyz);
             }
-            for (int k = 0; k < BISECT; ++k) {
-                float mid = 0.5 * (lo + hi);
-                if (inside(f, p1 + mid * dir, grid, layer)) lo = mid; else hi = mid;
-            }
-            float d = 0.5 * (lo + hi);
-            vec3 exit_p = p1 + d * dir;
-            ivec2 exit_t = source_texel(f, exit_p, grid);
-            if (exit_t.x < 0 || texelFetch(back_position, ivec3(exit_t, layer), 0).w <= 0.0) {
-                // Left through the silhouette: the back face at the last texel inside.
-                exit_t = source_texel(f, p1 + lo * dir, grid);
-                if (exit_t.x < 0) exit_t = ij;
-            }
-            vec3 n2 = normalize(texelFetch(back_normal, ivec3(exit_t, layer), 0).xyz);
             vec3 t2 = refract(dir, -n2, ior);
             // Total internal reflection: the light stays inside the object.
             if (dot(t2, t2) == 0.0) return false;

@@ -1,6 +1,8 @@
 #version 450
 // The refractor textures of caustics mapping (Shah et al. 2007, §III.B step 2), as MRT:
-//   RT0 position: xyz world position, w = 1 where a specular surface is seen (0: cleared)
+//   RT0 position: xyz world position, w > 0 where a specular surface is seen (0: cleared):
+//                 front layer 1 + d_N (Wyman 2005 §3.1's distance along -N, interpolated from
+//                 the vertices; 0 off the dielectrics and on open meshes), back layer 1
 //   RT1 normal:   xyz unit normal,     w = material index
 // CAUSTIC_LAYER_FRONT keeps the surface nearest the light, its normal turned toward the
 // light (open shapes such as the ring and the water have no back to rely on).
@@ -13,6 +15,7 @@ layout(constant_id = 0) const uint MODE = CAUSTIC_LAYER_FRONT;
 layout(push_constant) uniform RefractorPushBlock { RefractorPush pc; };
 layout(location = 0) in vec3 in_position;
 layout(location = 1) in vec3 in_normal;
+layout(location = 2) in float in_d_n;
 layout(location = 0) out vec4 out_position;
 layout(location = 1) out vec4 out_normal;
 void main() {
@@ -25,6 +28,6 @@ void main() {
     } else if (facing <= 0.0) {
         discard;
     }
-    out_position = vec4(in_position, 1.0);
+    out_position = vec4(in_position, MODE == CAUSTIC_LAYER_FRONT ? 1.0 + max(in_d_n, 0.0) : 1.0);
     out_normal = vec4(n, float(pc.info.x));
 }

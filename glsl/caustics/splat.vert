@@ -20,6 +20,11 @@ layout(set = 0, binding = CAUSTIC_BINDING_BACK_NORMAL) uniform sampler2DArray ba
 // Eq. 6's V per source face: occlusion-query sample counts copied on the GPU.
 layout(set = 0, binding = CAUSTIC_BINDING_VISIBLE, std430) readonly buffer Visible { uint visible[]; };
 layout(constant_id = 0) const uint FLUX = FLUX_SOLID_ANGLE;
+// render.caustics_map.exit: CAUSTIC_EXIT_WYMAN (the paper's, §IV) or CAUSTIC_EXIT_MARCH.
+layout(constant_id = 1) const uint EXIT = CAUSTIC_EXIT_MARCH;
+// render.caustics_map.splat: SPLAT_FIXED (§III.F) or SPLAT_FOOTPRINT, with its largest sigma.
+layout(constant_id = 2) const uint SPLAT = SPLAT_FIXED;
+layout(constant_id = 3) const float MAX_SIGMA = 8.0;
 #include "light_path.glsl"
 
 layout(push_constant) uniform CausticSplatPushBlock { CausticSplatPush pc; };
@@ -123,6 +128,46 @@ uint cube_face(vec3 v) {
     return v.z >= 0.0 ? 4u : 5u;
 }
 
+// Where the light through grid texel ij of face f lands on the receivers (no flux): for the
+// footprint of a neighbouring vertex.
+bool landing(GpuCausticFace f, int layer, ivec2 ij, int grid, int c, uint channels, out vec3 hit) {
+    hit = vec3(0.0);
+    if (any(lessThan(ij, ivec2(0))) || any(greaterThanEqual(ij, ivec2(grid)))) return false;
+    vec3 origin, dir, weight, absorb;
+    float cos_in;
+    if (!light_path(f, layer, ij, grid, c, channels, EXIT, origin, dir, weight, absorb, cos_in)) return false;
+    return intersect(f, origin, dir, hit);
+}
+
+// The splat's sigma in caustic-map texels. SPLAT_FIXED: the paper's fixed Gaussian (§III.F).
+// SPLAT_FOOTPRINT (a departure): the beam around this vertex covers, on the receivers, about
+// the area between its hit and its grid neighbours' hits; where refraction spreads the beam
+// (a diverging lens such as the bunny's thin parts, or a grazing receiver) those hits are
+// several texels apart and fixed splats leave the caustic as separate dots (§III.F: "the
+// gaps between the point splats give a non-continuous appearance"). Half the larger spacing
+// to the +i and +j neighbours (or -i, -j where those drop out) makes neighbouring Gaussians
+// meet at 0.6 of their peak; clamped to [splat_sigma, max_splat_sigma] so that a neighbour
+// across a silhouette or a fold of the caustic does not smear the whole map.
+float splat_sigma(GpuCausticFace f, int layer, ivec2 ij, int grid, int c, uint channels, vec2 centre) {
+    float sigma = pc.params.x;
+    if (SPLAT != SPLAT_FOOTPRINT) return sigma;
+    float spacing = 0.0;
+    for (int axis = 0; axis < 2; ++axis) {
+        for (int side = 1; side >= -1; side -= 2) {
+            ivec2 nij = ij;
+            nij[axis] += side;
+            vec3 hit;
+            if (!landing(f, layer, nij, grid, c, channels, hit)) continue;
+            vec4 clip = pc.dest_view_proj * vec4(hit, 1.0);
+            if (!(clip.w > 0.0)) continue;
+            vec2 other = (clip.xy / clip.w * 0.5 + 0.5) * pc.params.w;
+            spacing = max(spacing, distance(other, centre));
+            break;   // one neighbour per axis: -1 only where +1 drops out
+        }
+    }
+    return clamp(0.5 * spacing, sigma, MAX_SIGMA);
+}
+
 void main() {
     GpuCausticFace f0 = faces[pc.face.x];
     int grid = int(f0.measure.z + 0.5);
@@ -136,7 +181,7 @@ void main() {
     int c = gl_InstanceIndex;
     vec3 origin, dir, weight, absorb_to_receiver;
     float cos_in;
-    if (!light_path(f, layer, ij, grid, c, channels, origin, dir, weight, absorb_to_receiver, cos_in)) {
+    if (!light_path(f, layer, ij, grid, c, channels, EXIT, origin, dir, weight, absorb_to_receiver, cos_in)) {
         drop_vertex();
         return;
     }
@@ -183,10 +228,10 @@ void main() {
     }
     // Gaussian splat normalised over the texels the point covers: texel centres k + 0.5
     // within half the point size of the centre, separably in x and y.
-    float sigma = pc.params.x;
-    float size = 2.0 * ceil(3.0 * sigma) + 1.0;
     float n_map = pc.params.w;
     vec2 centre = (clip.xy / clip.w * 0.5 + 0.5) * n_map;
+    float sigma = splat_sigma(f, layer, ij, grid, c, channels, centre);
+    float size = 2.0 * ceil(3.0 * sigma) + 1.0;
     float k2 = 1.0 / (2.0 * sigma * sigma);
     vec2 sum = vec2(0.0);
     for (float k = floor(centre.x - 0.5 * size) - 1.0; k <= centre.x + 0.5 * size; k += 1.0) {

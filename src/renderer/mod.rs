@@ -569,6 +569,19 @@ impl Renderer {
         Ok(Some(sum))
     }
 
+    /// The caustic map of `render.caustics = "caustics_map"`: flux per texel (W, RGBA f32),
+    /// every layer of the atlas (six cube faces per point light, the first of its six for a
+    /// directional one), and the texels per side; `None` without a caustics_map pass.
+    pub fn read_caustic_map(&mut self) -> Result<Option<(Vec<[f32; 4]>, u32)>, RenderError> {
+        if self.technique::<CausticsMapPass>().is_none() {
+            return Ok(None);
+        }
+        self.finish()?;
+        let (atlas, id) = (&self.targets.caustic.flux, self.targets.caustic.flux_id);
+        let bytes = self.graph.read_back(&self.ctx, atlas, id, 16, Access::FragmentSampled)?;
+        Ok(Some((bytemuck::pod_collect_to_vec(&bytes), atlas.desc.width)))
+    }
+
     /// The light maps of `render.caustics = "impostor_lightmap"` (irradiance in W/m^2, RGBA f32,
     /// one layer per receiver in the order of the charts) and each receiver's (object index,
     /// area in m^2); `None` without that technique.

@@ -492,6 +492,39 @@ choice! {
 }
 
 choice! {
+    /// Where caustics mapping's double-surface refraction leaves the object (Shah et al. 2007
+    /// §IV: "our algorithm effortlessly accommodates Wyman's image-space double-surface
+    /// refraction").
+    CausticExit,
+    hint "the exit point: Wyman 2005's d_V/d_N interpolation (Shah et al.'s), or prism's march \
+          with bisection against the back faces" {
+        /// The paper's: Wyman 2005 §3.1, d~ = (theta_t / theta_i) d_V + (1 - theta_t / theta_i)
+        /// d_N with d_V the front-to-back distance along the light ray at the texel and d_N
+        /// precomputed per vertex along -N; N2 from the back layer at P1 + d~ T1, or
+        /// perpendicular to the light's direction outside the silhouette (§3.3).
+        Wyman = "wyman",
+        /// prism's departure: 16 steps over the objects' bounding diameter bracket the first
+        /// point of T1 behind the back faces the light sees, 10 bisections refine it (a root
+        /// of the same signed depth function as the receiver estimate's, §III.C).
+        March = "march",
+    }
+}
+
+choice! {
+    /// How large each caustics-mapping splat is (Shah et al. 2007 §III.F).
+    SplatSize,
+    hint "the paper's fixed Gaussian (splat_sigma), or sized by the neighbouring grid vertices' hits" {
+        /// The paper's: every splat a Gaussian of `splat_sigma` texels (§III.F).
+        Fixed = "fixed",
+        /// prism's departure: sigma grows to half the distance, in caustic-map texels,
+        /// between the vertex's hit and its grid neighbours' (the beam's local footprint),
+        /// never below `splat_sigma` nor above `max_splat_sigma`, so that a diverging beam
+        /// stays continuous instead of breaking into dots.
+        Footprint = "footprint",
+    }
+}
+
+choice! {
     /// The flux each caustics-mapping vertex carries (Shah et al. 2007, §III.E).
     Flux,
     hint "each vertex's flux: its texel's solid angle, or Eq. 6's (N.L)/V with V counted by an \
@@ -696,8 +729,8 @@ params! {
         // 4096^2 vertices per face is already 16M splats per face on a CPU device.
         grid: u32 = 128, 2..=4096;
         /// Iterations of the receiver-intersection estimate (§III.D: "a single iteration is
-        /// sufficient", Fig. 6 uses 3); 0 = the receiver straight along the light ray. Also
-        /// bounds the exit-point iterations of double-surface refraction.
+        /// sufficient", Fig. 6 uses 3); 0 = the receiver straight along the light ray. The exit
+        /// point of double-surface refraction is estimated apart (`exit`).
         iterations: u32 = 3, 0..=64;
         /// The intersection estimate (§III.C-D).
         newton: Newton = Newton::Approximate;
@@ -713,6 +746,16 @@ params! {
         map_size: u32 = 512, 8..=4096;
         /// The flux each vertex carries (§III.E).
         flux: Flux = Flux::SolidAngle;
+        /// Where double-surface refraction leaves the object (§IV with Wyman 2005).
+        exit: CausticExit = CausticExit::March;
+        /// How large each splat is (§III.F).
+        splat: SplatSize = SplatSize::Fixed;
+        /// The largest sigma, in caustic-map texels, a footprint splat may take
+        /// (`splat = "footprint"`): a grid vertex whose neighbours' hits scatter further (at
+        /// a silhouette, or across a fold of the caustic) is clamped to it.
+        // The point is 2 ceil(3 sigma) + 1 texels wide: 16 keeps it at 97, within lavapipe's
+        // point-size range, and its fill cost bounded.
+        max_splat_sigma: f32 = 8.0, 0.5..=16.0;
     }
 
     /// `[render.photon_buffer]`: photon-buffer caustics (Hu & Qin 2007 §3,
@@ -738,6 +781,15 @@ params! {
         filter_s: f32 = 0.01, 1e-12..=1e12;
         /// What the caustic textures hold (§3.2).
         normalization: PhotonNormalization = PhotonNormalization::Physical;
+        /// Iterations of §2.2.2's depth correction (Fig. 16) of each photon's (u, v): from the
+        /// ray's hit with RECT_k towards its hit with the receiver itself, against the
+        /// receiver's depth seen along O_R O_k (`photon_buffer_receivers`), so that the photon
+        /// is counted where deferred shading's parallel projection of the receiver looks it up
+        /// (§3.3); 0 = the rectangle hit of §3.1 alone, exact only for receivers lying in
+        /// their rectangle's plane.
+        // "two or three iteration steps" (§2.2.2), as render.hu_qin.correction_iterations;
+        // beyond 64 it only burns time.
+        correction_iterations: u32 = 3, 0..=64;
     }
 
     /// `[render.eikonal]`: eikonal rendering of a `[volume]` (Ihrke et al. 2007,

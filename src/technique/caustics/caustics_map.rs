@@ -9,8 +9,8 @@
 //!    the receivers' positions. Refractors are left out, so the receivers under them are seen.
 //! 2. `caustics_map_refractors` (§III.B step 2): the specular objects from the light as MRT,
 //!    positions and normals, into textures of the grid's resolution: the surface nearest the
-//!    light, and the nearest surface facing away from it (the exit surface of double-surface
-//!    refraction, §III.E / §IV with Wyman 2005). One source face fitted to the specular
+//!    light (with Wyman 2005's d_N, §3.1), and the nearest surface facing away from it (the
+//!    exit surface of double-surface refraction, §III.E / §IV with Wyman 2005). One source face fitted to the specular
 //!    objects' bounding sphere (a perspective frustum for a point light outside it, an
 //!    orthographic box for a directional light), or six cube faces for a point light inside.
 //! 3. `caustics_map` (§III.C-E): the vertex grid drawn as points, G x G per source face. The
@@ -35,21 +35,23 @@ use crate::gpu::{
     ImageViewKind, MemoryLocation, OcclusionQueryPool, RenderTarget, Sampler, SamplerDesc, Spec,
 };
 use crate::graph::{Bindings, BoundSet, BufferId, Frame, ImageId};
-use crate::scene::techniques::{CausticsMapParams, Flux, Newton};
+use crate::scene::techniques::{CausticExit, CausticsMapParams, Flux, Newton, SplatSize};
 use crate::scene::{Light, Material, Scene};
 pub use crate::shader_structs::GpuCausticFace;
 use crate::shader_structs::{CausticSplatPush, RefractorPush, ShadowPush};
 use crate::technique::baseline::shadow_map::FAR_DISTANCE;
+use crate::technique::refraction::refraction_wyman::scene_distance_along_normals;
 use crate::technique::{
     caustic_objects, in_stage, list, params, registration, FrameInputs, PlannedPass, Registration, RenderError, Setup,
     Stage, Technique,
 };
 use crate::{
-    CAUSTIC_BINDING_BACK_NORMAL, CAUSTIC_BINDING_BACK_POSITION, CAUSTIC_BINDING_FACES, CAUSTIC_BINDING_FRONT_NORMAL,
-    CAUSTIC_BINDING_FRONT_POSITION, CAUSTIC_BINDING_MATERIALS, CAUSTIC_BINDING_RECEIVER_2D,
-    CAUSTIC_BINDING_RECEIVER_CUBE, CAUSTIC_BINDING_VISIBLE, CAUSTIC_FACE_ORTHOGRAPHIC, CAUSTIC_FACE_PERSPECTIVE,
-    CAUSTIC_LAYER_BACK, CAUSTIC_LAYER_FRONT, FLUX_OCCLUSION_QUERY, FLUX_SOLID_ANGLE, LIGHT_DIRECTIONAL, LIGHT_POINT,
-    NEWTON_APPROXIMATE, NEWTON_TRUE, SHADOW_LAYERS_PER_LIGHT,
+    CAUSTIC_BINDING_BACK_NORMAL, CAUSTIC_BINDING_BACK_POSITION, CAUSTIC_BINDING_DN, CAUSTIC_BINDING_FACES,
+    CAUSTIC_BINDING_FRONT_NORMAL, CAUSTIC_BINDING_FRONT_POSITION, CAUSTIC_BINDING_MATERIALS,
+    CAUSTIC_BINDING_RECEIVER_2D, CAUSTIC_BINDING_RECEIVER_CUBE, CAUSTIC_BINDING_VISIBLE, CAUSTIC_EXIT_MARCH,
+    CAUSTIC_EXIT_WYMAN, CAUSTIC_FACE_ORTHOGRAPHIC, CAUSTIC_FACE_PERSPECTIVE, CAUSTIC_LAYER_BACK, CAUSTIC_LAYER_FRONT,
+    FLUX_OCCLUSION_QUERY, FLUX_SOLID_ANGLE, LIGHT_DIRECTIONAL, LIGHT_POINT, NEWTON_APPROXIMATE, NEWTON_TRUE,
+    SHADOW_LAYERS_PER_LIGHT, SPLAT_FIXED, SPLAT_FOOTPRINT,
 };
 
 pub const CAUSTICS_MAP_RECEIVERS: &str = "caustics_map_receivers";
@@ -340,8 +342,26 @@ impl CausticsMapPass {
                 vertex_shader: "caustics/splat.vert",
                 topology: vk::PrimitiveTopology::POINT_LIST,
                 blend: &[Blend::Additive],
-                // Eq. 6's flux weight: FLUX_SOLID_ANGLE or FLUX_OCCLUSION_QUERY.
-                specialization: &[("FLUX", Spec::U32(if occlusion { FLUX_OCCLUSION_QUERY } else { FLUX_SOLID_ANGLE }))],
+                // Eq. 6's flux weight, the exit estimate of double-surface refraction, and the
+                // splats' size.
+                specialization: &[
+                    ("FLUX", Spec::U32(if occlusion { FLUX_OCCLUSION_QUERY } else { FLUX_SOLID_ANGLE })),
+                    (
+                        "EXIT",
+                        Spec::U32(match params.exit {
+                            CausticExit::Wyman => CAUSTIC_EXIT_WYMAN,
+                            CausticExit::March => CAUSTIC_EXIT_MARCH,
+                        }),
+                    ),
+                    (
+                        "SPLAT",
+                        Spec::U32(match params.splat {
+                            SplatSize::Fixed => SPLAT_FIXED,
+                            SplatSize::Footprint => SPLAT_FOOTPRINT,
+                        }),
+                    ),
+                    ("MAX_SIGMA", Spec::F32(params.max_splat_sigma.max(params.splat_sigma))),
+                ],
                 ..GraphicsPipelineDesc::fullscreen(CAUSTICS_MAP, "caustics/splat.frag")
             },
             &[set.layout()],
@@ -436,6 +456,10 @@ pub struct RefractorLayers {
     queries: Option<OcclusionQueryPool>,
     pub visible: Buffer,
     pub visible_id: BufferId,
+    /// Wyman 2005's d_N per scene vertex (0 off the dielectrics), written to the front
+    /// layer's position w.
+    dn_set: BoundSet,
+    _d_n: Buffer,
 }
 
 /// Where the caustic shaders (glsl/caustics/light_path.glsl) read the first four of
@@ -499,6 +523,14 @@ impl RefractorLayers {
             );
             layer_images.push(graph.image(ctx, &desc)?);
         }
+        // Wyman 2005 §3.1's d_N, "precomputed for every vertex" (on the CPU, cached per mesh),
+        // for the `exit = "wyman"` estimate; a one-float stand-in without vertices.
+        let d_n = scene_distance_along_normals(scene);
+        let d_n = if d_n.is_empty() { vec![0.0] } else { d_n };
+        let d_n_buffer = Buffer::storage(ctx, &format!("{name}_d_n"), &d_n)?;
+        let dn_set = Bindings::new(vk::ShaderStageFlags::VERTEX)
+            .storage(CAUSTIC_BINDING_DN, &d_n_buffer)
+            .build(ctx, &format!("{name}_d_n"))?;
         let l = |i: usize| &layer_images[i].0;
         let front = RenderTarget::layered(ctx, &format!("{name}_front"), &[l(0), l(1)], Some(l(4)), true, n_faces)?;
         let back = RenderTarget::layered(ctx, &format!("{name}_back"), &[l(2), l(3)], Some(l(5)), true, n_faces)?;
@@ -515,7 +547,7 @@ impl RefractorLayers {
                         DepthState::LESS,
                     )
                 },
-                &[],
+                &[dn_set.layout()],
                 std::mem::size_of::<RefractorPush>() as u32,
                 &front.pass,
             )
@@ -543,6 +575,8 @@ impl RefractorLayers {
         )?;
         let visible_id = graph.register_buffer(&visible);
         let layers = RefractorLayers {
+            dn_set,
+            _d_n: d_n_buffer,
             queries,
             visible,
             visible_id,
@@ -559,7 +593,7 @@ impl RefractorLayers {
     }
 
     pub fn record<'a>(&'a self, frame: &mut Frame<'_, 'a>, scene: &'a GpuScene) {
-        let mut pass = frame.pass(self.name);
+        let mut pass = frame.pass(self.name).uses(&self.dn_set);
         for (i, (_, id)) in self.layers.iter().enumerate() {
             pass = pass.write(*id, if i < 4 { Access::ColorAttachment } else { Access::DepthAttachment });
         }
@@ -583,7 +617,7 @@ impl RefractorLayers {
                             if let Some(q) = query {
                                 cmd.begin_occlusion_query(q, face as u32);
                             }
-                            cmd.bind_graphics(pipeline, &[]);
+                            cmd.bind_graphics(pipeline, &[self.dn_set.set()]);
                             cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
                             for d in &self.specular_draws {
                                 let push = RefractorPush {

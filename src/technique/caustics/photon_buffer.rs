@@ -2,23 +2,33 @@
 //! Reflections, Refractions, and Caustics", section 3
 //! (../shared/papers/hu-qin2007-reflections-refractions-caustics.md).
 //!
-//! Four graph passes, each timed under its own name:
+//! Five graph passes, each timed under its own name:
 //!
 //! 1. `photon_buffer_refractors`: the specular objects seen from each light, front and back
 //!    surfaces with positions and normals (the refractor layers caustics mapping renders too,
 //!    `caustics_map::RefractorLayers`), at the photon buffer's resolution.
-//! 2. `photon_buffer` (§3.1, Fig. 19b): "we render the reflector/refractor from the light
+//! 2. `photon_buffer_receivers` (§2.2.2, TEX_DEPTH_i): each receiver OBJ_i rendered with its
+//!    rectangle's parallel projection, storing its signed distance from RECT_i's plane along
+//!    O_R O_i (the shadow pass's shaders with the rectangle as a directional "light").
+//! 3. `photon_buffer` (§3.1, Fig. 19b): "we render the reflector/refractor from the light
 //!    position"; each pixel is one photon. glsl/caustics/photon_buffer.frag refracts through
-//!    both interfaces (the double-surface exit estimate shared with caustics mapping,
-//!    glsl/caustics/light_path.glsl) or reflects, intersects the ray with the receiver
-//!    rectangles RECT_i (§2.2.1, Fig. 13) and writes (u, v, k) of the nearest, k = i + 1,
-//!    k = 0 for no photon, plus the photon's power (see below).
-//! 3. `photon_buffer_scatter` (§3.2): the caustic textures TEX_CAUSTICS_i, one layer of a 2D
+//!    both interfaces (caustics mapping's `exit = "march"`, glsl/caustics/light_path.glsl:
+//!    Hu & Qin build the photon buffer with their own refraction, §3 "using the method to
+//!    implement reflection and refraction", whose d_T search needs no precomputed d_N, so
+//!    Wyman's d_V/d_N, Shah et al.'s estimator, is not offered here) or reflects, intersects the ray with the receiver
+//!    rectangles RECT_i (§2.2.1, Fig. 13), moves the nearest hit onto the receiver itself
+//!    with §2.2.2's iterative depth correction (Fig. 16; `correction_iterations`), and writes
+//!    (u, v, k) there, k = i + 1, k = 0 for no photon, plus the photon's power (see below).
+//!    §3.1 writes the rectangle's own (u, v); but §3.3 looks the caustic up by projecting the
+//!    receiver's position in parallel onto RECT_k, so a receiver off its rectangle's plane
+//!    (a wall, a box, anything tilted from O_R O_i) would show the photon displaced along its
+//!    ray. The correction is the paper's own tool for exactly that mismatch (§2.2.2).
+//! 4. `photon_buffer_scatter` (§3.2): the caustic textures TEX_CAUSTICS_i, one layer of a 2D
 //!    array per rectangle. The paper reads the photon buffer back (glReadPixels) and counts
 //!    on the CPU; here, all on the GPU as the paper suggests, one point is drawn per
 //!    photon-buffer pixel, its vertex shader fetches (u, v, k) (vertex texture fetch) and
 //!    additive blending counts the photons on texel (u, v) of layer k - 1.
-//! 4. `photon_buffer_filter` (§3.2): c(u, v) = s sum_{i,j=-k..k} p(u+i, v+j)
+//! 5. `photon_buffer_filter` (§3.2): c(u, v) = s sum_{i,j=-k..k} p(u+i, v+j)
 //!    sqrt(1 + 2k^2 - (i^2 + j^2)) per layer (glsl/caustics/photon_filter.frag).
 //!
 //! Deferred shading then looks the caustic up (§3.3, Fig. 23): the receiver's position is
@@ -33,7 +43,8 @@
 //! sum so that the filter conserves energy, and divides by a texel's area on the rectangle:
 //! irradiance in W/m^2, which `prism compare` can hold against the reference.
 //!
-//! The rectangles: the receivers (diffuse objects) as §2.2.1 builds them, a square of side
+//! The rectangles: the receivers (the diffuse objects only: a mirror or conductor shows no
+//! caustic) as §2.2.1 builds them, a square of side
 //! 2 d_i centred at the object's centre O_i (mean of its vertices), perpendicular to O_R O_i
 //! (O_R: the mean of the specular objects' vertices), with the parallel projection from O_R
 //! along O_R O_i of glOrtho(-d_i, d_i, -d_i, d_i, near, far): the nearby-geometry impostors'
@@ -42,28 +53,35 @@ use std::sync::Arc;
 
 use bytemuck::Zeroable;
 
+use crate::frame::gpu_scene::Draw;
+use crate::frame::targets::DEPTH_FORMAT;
 use crate::gpu::{
-    vk, Access, Blend, Buffer, Clear, GpuContext, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc,
-    ImageViewKind, RenderTarget, Sampler, SamplerDesc,
+    vk, Access, Blend, Buffer, Clear, DepthState, GpuContext, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Image,
+    ImageDesc, ImageViewKind, RenderTarget, Sampler, SamplerDesc,
 };
 use crate::graph::{Bindings, BoundSet, Frame, FrameGraph, ImageId};
 use crate::scene::techniques::{PhotonBufferParams, PhotonNormalization};
 use crate::scene::Scene;
 pub use crate::shader_structs::GpuPhotonRect;
-use crate::shader_structs::{PhotonBufferPush, PhotonFilterPush, PhotonScatterPush};
+use crate::shader_structs::{PhotonBufferPush, PhotonFilterPush, PhotonScatterPush, ShadowPush};
+use crate::technique::baseline::shadow_map::FAR_DISTANCE;
 use crate::technique::caustics::caustics_map::{is_specular, refractor_bindings, RefractorLayers};
-use crate::technique::refraction::nearby_impostors::{nearby_objects, rect_for};
+use crate::technique::refraction::nearby_impostors::{receiver_objects, rect_for};
 use crate::technique::{
     caustic_objects, in_stage, list, params, registration, FrameInputs, PlannedPass, Registration, RenderError, Setup,
     Stage, Technique,
 };
-use crate::{CAUSTIC_BINDING_FACES, CAUSTIC_BINDING_MATERIALS, PHOTON_BINDING_RECTS, PHOTON_PAPER, PHOTON_PHYSICAL};
+use crate::{
+    CAUSTIC_BINDING_FACES, CAUSTIC_BINDING_MATERIALS, LIGHT_DIRECTIONAL, PHOTON_BINDING_RECEIVER_DEPTH,
+    PHOTON_BINDING_RECTS, PHOTON_PAPER, PHOTON_PHYSICAL,
+};
 
 /// Photon buffer and caustic textures: 32-bit float, so that counts stay exact to 2^24
 /// photons per texel and (u, v) resolves far below a texel of the largest texture.
 pub const PHOTON_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 
 pub const PHOTON_BUFFER_REFRACTORS: &str = "photon_buffer_refractors";
+pub const PHOTON_BUFFER_RECEIVERS: &str = "photon_buffer_receivers";
 pub const PHOTON_BUFFER: &str = "photon_buffer";
 pub const PHOTON_BUFFER_SCATTER: &str = "photon_buffer_scatter";
 pub const PHOTON_BUFFER_FILTER: &str = "photon_buffer_filter";
@@ -82,6 +100,10 @@ fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
             PlannedPass::new(
                 PHOTON_BUFFER_REFRACTORS,
                 format!("positions and normals of the specular {} seen from the light(s)", list(&specular)),
+            ),
+            PlannedPass::new(
+                PHOTON_BUFFER_RECEIVERS,
+                format!("depth of the receivers {} along their rectangles' projections (§2.2.2)", list(&diffuse)),
             ),
             PlannedPass::new(
                 PHOTON_BUFFER,
@@ -107,6 +129,26 @@ impl Technique for PhotonBufferPass {
 
         let (size, rects) = (self.params.size, caustics.count);
         frame
+            .pass(PHOTON_BUFFER_RECEIVERS)
+            .write(self.receiver_depth.1, Access::ColorAttachment)
+            .write(self.receiver_zbuffer.1, Access::DepthAttachment)
+            .record(move |cmd| {
+                for (i, (push, draw)) in self.receiver_draws.iter().enumerate() {
+                    cmd.in_target(
+                        &self.receiver_target,
+                        i,
+                        &[Clear::Color([FAR_DISTANCE; 4]), Clear::Depth(1.0)],
+                        |cmd| {
+                            cmd.bind_graphics(&self.receiver_pipeline, &[]);
+                            cmd.push_graphics(&self.receiver_pipeline, push);
+                            cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
+                            cmd.draw_indexed(draw.index_count, draw.first_index, draw.vertex_offset);
+                        },
+                    );
+                }
+            });
+        let iterations = self.params.correction_iterations;
+        frame
             .pass(PHOTON_BUFFER)
             .uses(&self.photon_set)
             .write(self.photons.1, Access::ColorAttachment)
@@ -116,7 +158,10 @@ impl Technique for PhotonBufferPass {
                     let clears = [Clear::Color([0.0; 4]), Clear::Color([0.0; 4])];
                     cmd.in_target(&self.photon_target, s as usize, &clears, |cmd| {
                         cmd.bind_graphics(&self.photon_pipeline, &[self.photon_set.set()]);
-                        cmd.push_graphics(&self.photon_pipeline, &PhotonBufferPush { info: [s, size, rects, 0] });
+                        cmd.push_graphics(
+                            &self.photon_pipeline,
+                            &PhotonBufferPush { info: [s, size, rects, iterations] },
+                        );
                         cmd.draw(3, 1);
                     });
                 }
@@ -168,7 +213,7 @@ pub fn receiver_rectangles(scene: &Scene) -> Vec<GpuPhotonRect> {
     }
     // "The average value of object's vertices is used in our implementation" (Fig. 13).
     let o_r = (sum / n as f64).as_vec3();
-    let (kept, _) = nearby_objects(scene, o_r);
+    let (kept, _) = receiver_objects(scene, o_r);
     let mut rects = Vec::new();
     for i in kept {
         if let Some(r) = rect_for(scene, i, o_r, rects.len() as u32) {
@@ -265,6 +310,14 @@ impl PhotonCaustics {
 pub struct PhotonBufferPass {
     params: PhotonBufferParams,
     refractors: RefractorLayers,
+    // §2.2.2 TEX_DEPTH_i: one framebuffer per rectangle, and per rectangle its projection
+    // and its receiver's draw.
+    /// Signed distance of each receiver from its rectangle's plane (R32F), one layer each.
+    pub receiver_depth: (Image, ImageId),
+    receiver_zbuffer: (Image, ImageId),
+    receiver_target: RenderTarget,
+    receiver_pipeline: GraphicsPipeline,
+    receiver_draws: Vec<(ShadowPush, Draw)>,
     // §3.1 photon buffer: one framebuffer per source face.
     photon_target: RenderTarget,
     photon_set: BoundSet,
@@ -302,6 +355,68 @@ impl PhotonBufferPass {
         let faces_buffer = Buffer::storage(ctx, "photon_faces", &faces)?;
         let sampler = Sampler::new(ctx, "photon_nearest", SamplerDesc::NEAREST_CLAMP)?;
         let usage = U::COLOR_ATTACHMENT | U::SAMPLED | U::TRANSFER_SRC;
+
+        // 0. TEX_DEPTH_i (§2.2.2): OBJ_i through RECT_i's parallel projection, at the caustic
+        // textures' resolution, storing dot(x - O_i, O_R O_i) (shadow.frag's directional
+        // distance with the rectangle's centre as the plane's origin). Cleared to
+        // FAR_DISTANCE: no receiver along that line.
+        let t = caustics.textures.desc.width;
+        let n_rects = caustics.count;
+        let receiver_depth = graph.image(
+            ctx,
+            &ImageDesc::square(
+                "photon_receiver_depth",
+                vk::Format::R32_SFLOAT,
+                t,
+                n_rects.max(1),
+                ImageViewKind::D2Array,
+                usage,
+            ),
+        )?;
+        let receiver_zbuffer = graph.image(
+            ctx,
+            &ImageDesc::square(
+                "photon_receiver_zbuffer",
+                DEPTH_FORMAT,
+                t,
+                n_rects.max(1),
+                ImageViewKind::D2Array,
+                U::DEPTH_STENCIL_ATTACHMENT,
+            ),
+        )?;
+        let receiver_target = RenderTarget::layered(
+            ctx,
+            PHOTON_BUFFER_RECEIVERS,
+            &[&receiver_depth.0],
+            Some(&receiver_zbuffer.0),
+            true,
+            n_rects,
+        )?;
+        let receiver_pipeline = GraphicsPipeline::new(
+            ctx,
+            &GraphicsPipelineDesc::mesh(
+                PHOTON_BUFFER_RECEIVERS,
+                "shadow/shadow.vert",
+                "shadow/shadow.frag",
+                DepthState::LESS,
+            ),
+            &[],
+            std::mem::size_of::<ShadowPush>() as u32,
+            &receiver_target.pass,
+        )?;
+        let receiver_draws = caustics
+            .rectangles()
+            .iter()
+            .map(|r| {
+                let push = ShadowPush {
+                    view_proj: r.view_proj,
+                    light: [r.axis[0], r.axis[1], r.axis[2], LIGHT_DIRECTIONAL as f32],
+                    origin: [r.centre[0], r.centre[1], r.centre[2], 0.0],
+                };
+                (push, gpu.draws[r.object[0] as usize])
+            })
+            .collect();
+
         let mut image = |name: &str, width: u32, layers: u32| {
             graph.image(ctx, &ImageDesc::square(name, PHOTON_FORMAT, width, layers, ImageViewKind::D2Array, usage))
         };
@@ -316,7 +431,11 @@ impl PhotonBufferPass {
         for (binding, (image, id)) in refractor_bindings().into_iter().zip(&refractors.layers) {
             photon_set = photon_set.sampled(binding, image, &sampler).read(*id);
         }
-        let photon_set = photon_set.storage(PHOTON_BINDING_RECTS, &caustics.rects).build(ctx, PHOTON_BUFFER)?;
+        let photon_set = photon_set
+            .storage(PHOTON_BINDING_RECTS, &caustics.rects)
+            .sampled(PHOTON_BINDING_RECEIVER_DEPTH, &receiver_depth.0, &sampler)
+            .read(receiver_depth.1)
+            .build(ctx, PHOTON_BUFFER)?;
         let photon_pipeline = GraphicsPipeline::new(
             ctx,
             &GraphicsPipelineDesc {
@@ -329,8 +448,6 @@ impl PhotonBufferPass {
         )?;
 
         // 2. Counting: points into the caustic textures, additively.
-        let t = caustics.textures.desc.width;
-        let n_rects = caustics.count;
         let counts = image("photon_counts", t, n_rects.max(1))?;
         let scatter_target = RenderTarget::layered(ctx, PHOTON_BUFFER_SCATTER, &[&counts.0], None, true, n_rects)?;
         let scatter_set = Bindings::new(vk::ShaderStageFlags::VERTEX)
@@ -383,6 +500,11 @@ impl PhotonBufferPass {
         Ok(PhotonBufferPass {
             params,
             refractors,
+            receiver_depth,
+            receiver_zbuffer,
+            receiver_target,
+            receiver_pipeline,
+            receiver_draws,
             photon_target,
             photon_set,
             photon_pipeline,

@@ -47,7 +47,7 @@
 //! that recursion reaches; an object without a set sees the environment only (its refraction
 //! in the main pass, its TEX_k at every level). Recursion depth at most [`MAX_RECURSION`].
 //!
-//! The photon-buffer caustics (Hu & Qin §3) use [`NearbyRect`], [`nearby_objects`] and
+//! The photon-buffer caustics (Hu & Qin §3) use [`NearbyRect`], [`receiver_objects`] and
 //! [`rect_for`] with their own O_R: keep those stable.
 use crate::technique::FrameInputs;
 use std::sync::Arc;
@@ -183,12 +183,21 @@ fn is_specular(scene: &Scene, object: usize) -> bool {
     !scene.materials[scene.objects[object].material].is_diffuse()
 }
 
-/// The photon-buffer caustics' receivers (src/technique/caustics/photon_buffer.rs): every object but the
-/// dielectrics, nearest first (by the gap between O_R and their bounding sphere), at most
-/// [`MAX_NEARBY_RECTS`]; and those left out by that limit. The refraction's rectangle sets
-/// use [`set_objects`].
+/// The impostor rectangles around an eikonal volume (src/technique/eikonal/eikonal_nearby.rs):
+/// every object but the dielectrics, nearest first (by the gap between O_R and their bounding
+/// sphere), at most [`MAX_NEARBY_RECTS`]; and those left out by that limit. The refraction's
+/// rectangle sets use [`set_objects`], the photon buffer's receivers [`receiver_objects`].
 pub fn nearby_objects(scene: &Scene, origin_r: Vec3) -> (Vec<usize>, Vec<usize>) {
     nearest_first(scene, origin_r, |i| !is_dielectric(scene, i))
+}
+
+/// The photon-buffer caustics' receivers (Hu & Qin 2007 §3.2, "each rectangle that might
+/// possibly receive photons"; src/technique/caustics/photon_buffer.rs): the diffuse objects
+/// only, nearest first, at most [`MAX_NEARBY_RECTS`]; and those left out by that limit. A
+/// mirror or conductor shows no caustic (deferred shading lights only diffuse surfaces with
+/// it), so a rectangle for it would only cost its filter pass and steal photons.
+pub fn receiver_objects(scene: &Scene, origin_r: Vec3) -> (Vec<usize>, Vec<usize>) {
+    nearest_first(scene, origin_r, |i| scene.materials[scene.objects[i].material].is_diffuse())
 }
 
 /// The objects that get a rectangle in the set of OBJ_R = `viewer` (every object but OBJ_R
