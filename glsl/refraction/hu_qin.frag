@@ -97,7 +97,9 @@ void main() {
         vec3 T1 = refract(V, N1, eta);
         vec3 L_t = vec3(0.0);
         vec3 P2 = P1, T2 = vec3(0.0);
-        float kind = 0.0;     // debug: 0 no exit (TIR at P1), 1 back, 2 front, 3 outside the silhouette
+        // debug: 0 no exit (TIR at P1); 1 back-facing, 2 front-facing exit (§2.1.2); 3 and 4 the
+        // same decisions with P2 outside the chosen layer's coverage (N2 from §3.3 of Wyman 2005).
+        float kind = 0.0;
         float d_T = 0.0;
         if (dot(T1, T1) > 0.0) {
             // §2.1.2: which surface P2 lies on.
@@ -123,7 +125,7 @@ void main() {
             bool covered = front ? layer_covered(front_normal, uv2) : layer_covered(back_normal, uv2);
             vec3 N2 = !covered ? silhouette_normal(T1)
                                : (front ? layer_normal_at(front_normal, uv2) : layer_normal_at(back_normal, uv2));
-            kind = !covered ? 3.0 : (front ? 2.0 : 1.0);
+            kind = (front ? 2.0 : 1.0) + (covered ? 0.0 : 2.0);
             // Leaving the object: the normal facing T1 is -N2 and eta = n_refractor / n_outside;
             // TIR at P2 is clamped to the critical angle as in Wyman 2005 §3.3.
             T2 = refract_clamped(T1, -N2, ior[k]);

@@ -394,12 +394,13 @@ pub fn closest<'a>(name: &str, candidates: &[&'a str]) -> Option<&'a str> {
 
 choice! {
     /// Which surface Wyman 2005 (§3.2) refracts through the second time on a concave object.
-    BackSurface, hint "Wyman 2005 §3.2: the furthest surface, or the second by depth peeling" {
-        /// The surface furthest from the eye (yellow point of Fig. 2): shows the geometry users
-        /// expect on objects of high depth complexity.
+    BackSurface, hint "Wyman 2005 §3.2: the furthest surface, or the second (the first back-facing one)" {
+        /// The surface furthest from the eye (yellow point of Fig. 2), what the back-face pass
+        /// with the depth test reversed keeps (§3.1, §4): shows the geometry users expect on
+        /// objects of high depth complexity.
         Furthest = "furthest",
-        /// The second surface from the eye, behind the first, found by depth peeling against
-        /// the G-buffer (black point of Fig. 2): smoother, ignores more distant surfaces.
+        /// The second surface from the eye, "i.e., first backfacing surface" (§3.2, black point
+        /// of Fig. 2): the nearest back face; smoother, ignores more distant surfaces.
         Second = "second",
     }
 }
