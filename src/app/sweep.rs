@@ -238,19 +238,22 @@ fn draw_plot<DB: plotters::prelude::DrawingBackend>(
         .draw()
         .map_err(err)?;
     if let Some(e) = plot.exact {
+        // The line and its band follow the exact points no other beats in time and error:
+        // what the exact tracer reaches within a budget, and what the verdicts interpolate.
         let grey = RGBColor(120, 120, 120);
-        let mut sorted = e.points.clone();
-        sorted.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let xy: Vec<(f64, f64)> = e.points.iter().map(|p| (p.0, p.1)).collect();
+        let mut line: Vec<(f64, f64, f64)> = pareto_front(&xy).into_iter().map(|i| e.points[i]).collect();
+        line.sort_by(|a, b| a.0.total_cmp(&b.0));
         let band: Vec<(f64, f64)> =
-            sorted.iter().map(|p| (fx(p.0), fy(p.1))).chain(sorted.iter().rev().map(|p| (fx(p.0), fy(p.2)))).collect();
+            line.iter().map(|p| (fx(p.0), fy(p.1))).chain(line.iter().rev().map(|p| (fx(p.0), fy(p.2)))).collect();
         chart.draw_series(std::iter::once(Polygon::new(band, grey.mix(0.25).filled()))).map_err(err)?;
         chart
-            .draw_series(LineSeries::new(sorted.iter().map(|p| (fx(p.0), fy(p.1))), grey.stroke_width(2)))
+            .draw_series(LineSeries::new(line.iter().map(|p| (fx(p.0), fy(p.1))), grey.stroke_width(2)))
             .map_err(err)?
             .label(format!("exact: {} (band: reference noise)", e.name))
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], grey.stroke_width(2)));
         chart
-            .draw_series(sorted.iter().map(|p| Cross::new((fx(p.0), fy(p.1)), 4, grey.stroke_width(2))))
+            .draw_series(e.points.iter().map(|p| Cross::new((fx(p.0), fy(p.1)), 4, grey.stroke_width(2))))
             .map_err(err)?;
     }
     let mut f: Vec<(f64, f64)> = front.iter().map(|&i| (fx(pts[i].0), fy(pts[i].1))).collect();
@@ -278,10 +281,16 @@ fn draw_plot<DB: plotters::prelude::DrawingBackend>(
             .legend(move |(x, y)| Circle::new((x + 9, y), 4, colour.filled()));
     }
     // Only the front is labelled in full; the other points carry their row number.
+    let mut front_order = front.clone();
+    front_order.sort_by(|&a, &b| pts[a].0.total_cmp(&pts[b].0));
     chart
         .draw_series(plot.points.iter().enumerate().map(|(i, p)| {
-            let text = if front.contains(&i) { format!("{} {}", i + 1, p.label) } else { format!("{}", i + 1) };
-            EmptyElement::at((fx(p.time_ms), fy(p.error))) + Text::new(text, (6, -14), ("sans-serif", 12))
+            // Neighbours on the front alternate above and below their points, so that two
+            // close labels do not overprint.
+            let rank = front_order.iter().position(|&j| j == i);
+            let text = if rank.is_some() { format!("{} {}", i + 1, p.label) } else { format!("{}", i + 1) };
+            let dy = if rank.is_some_and(|r| r % 2 == 1) { 6 } else { -14 };
+            EmptyElement::at((fx(p.time_ms), fy(p.error))) + Text::new(text, (6, dy), ("sans-serif", 12))
         }))
         .map_err(err)?;
     chart
