@@ -62,6 +62,7 @@ fn compare_reports_errors_writes_a_heat_map_and_caches_the_reference() {
         "--heatmap",
         "heat.png",
         "--validation",
+        "--no-exact",
     ];
     args.extend_from_slice(SMALL);
     let (ok, out, err) = d.prism(&args);
@@ -80,10 +81,20 @@ fn compare_reports_errors_writes_a_heat_map_and_caches_the_reference() {
     let json2: serde_json::Value = serde_json::from_slice(&std::fs::read(d.0.join("c.json")).unwrap()).unwrap();
     assert_eq!(json["errors"]["rmse"], json2["errors"]["rmse"]);
     // A different ior is a different reference.
-    let mut args3 = args.clone();
-    args3.extend_from_slice(&["--set", "materials.glass.ior=1.33"]);
-    let (ok, out3, _) = d.prism(&args3);
-    assert!(ok && !out3.contains("from the cache"), "{out3}");
+    // With the exact curve (raytrace at two depths), compare prints the equal-time verdicts.
+    let mut args3: Vec<&str> = args.iter().copied().filter(|a| *a != "--no-exact").collect();
+    args3.extend_from_slice(&["--set", "materials.glass.ior=1.33", "--exact-depths", "1,2", "--exact-frames", "1"]);
+    let (ok, out3, err3) = d.prism(&args3);
+    assert!(ok && !out3.contains("from the cache"), "{out3}{err3}");
+    assert!(out3.contains("exact tracer: raytrace") && out3.contains("max_depth=2"), "{out3}");
+    for metric in ["rmse", "flip_mean"] {
+        let line =
+            out3.lines().find(|l| l.starts_with(&format!("equal time, {metric}:"))).unwrap_or_else(|| panic!("{out3}"));
+        assert!(
+            ["dominated", "beats exact", "within noise", "faster than exact"].iter().any(|v| line.ends_with(v)),
+            "{line}"
+        );
+    }
 }
 
 #[test]
@@ -104,20 +115,35 @@ fn sweep_writes_csv_and_plots() {
         "2",
         "--warmup",
         "1",
+        "--exact-depths",
+        "1,2",
+        "--exact-frames",
+        "1",
     ];
     args.extend_from_slice(SMALL);
     let (ok, _, err) = d.prism(&args);
     assert!(ok, "{err}");
     let csv = std::fs::read_to_string(d.0.join("s.csv")).unwrap();
     let lines: Vec<_> = csv.lines().collect();
-    assert_eq!(lines.len(), 5, "{csv}");
+    // Four settings, then the exact curve's two points.
+    assert_eq!(lines.len(), 1 + 4 + 2, "{csv}");
     assert!(
-        lines[0].starts_with("setting,render.sphere_segments,materials.glass.ior,")
-            && lines[0].ends_with("flip_mean,flip_p95,pareto")
+        lines[0].starts_with("n,kind,setting,render.sphere_segments,materials.glass.ior,")
+            && lines[0].ends_with("flip_mean,flip_p95,pareto,technique,flip_mean_low,exact_flip_mean,verdict"),
+        "{}",
+        lines[0]
     );
-    assert!(lines.iter().skip(1).any(|l| l.ends_with(",true")), "some setting is on the Pareto front");
+    let verdicts = ["dominated", "beats exact", "within noise", "faster than exact"];
+    for (i, l) in lines[1..5].iter().enumerate() {
+        assert!(l.starts_with(&format!("{},technique,", i + 1)), "{l}");
+        assert!(verdicts.iter().any(|v| l.ends_with(v)), "{l}");
+    }
+    assert!(lines[1..5].iter().any(|l| l.contains(",true,")), "some setting is on the Pareto front");
+    assert!(
+        lines[5].starts_with(",exact,raytrace max_depth=1,") && lines[6].starts_with(",exact,raytrace max_depth=2,")
+    );
     let svg = std::fs::read_to_string(d.0.join("s.svg")).unwrap();
-    assert!(svg.contains("<svg") && svg.contains("Pareto front"));
+    assert!(svg.contains("<svg") && svg.contains("Pareto front") && svg.contains("exact: raytrace"));
     assert_eq!(image::open(d.0.join("s.png")).unwrap().width(), 900);
     // Bad parameters fail before any work, leaving nothing behind.
     let (ok, _, err) = d.prism(&["sweep", "sphere_env", "--param", "render.sphere_segments", "-o", "bad"]);
@@ -125,6 +151,57 @@ fn sweep_writes_csv_and_plots() {
     let (ok, _, err) = d.prism(&["sweep", "sphere_env", "--param", "render.nonsense=1,2", "-o", "bad"]);
     assert!(!ok && err.contains("nonsense"), "{err}");
     assert!(!d.0.join("bad.csv").exists());
+}
+
+/// `prism report` on a one-entry spec: the summary table opens the report with the entry's
+/// best technique, the exact tracer's FLIP at its time and a verdict; the section's table has
+/// the equal-time columns and its plot the exact curve.
+#[test]
+fn report_on_a_tiny_spec_writes_the_summary_and_equal_time_columns() {
+    let d = Dir::new("report");
+    std::fs::write(
+        d.0.join("spec.toml"),
+        "set = [\"render.reflection=single\", \"render.caustics=none\"]\n\
+         [[entry]]\nscene = \"sphere_env\"\ntitle = \"tiny\"\nparams = [\"render.refraction=single,hu_qin\"]\n",
+    )
+    .unwrap();
+    std::fs::create_dir_all(d.0.join("docs")).unwrap();
+    let mut args = vec![
+        "report",
+        "--spec",
+        "spec.toml",
+        "-o",
+        "docs/ACCURACY.md",
+        "--size",
+        "32",
+        "--frames",
+        "1",
+        "--warmup",
+        "1",
+        "--exact-depths",
+        "1,2",
+        "--exact-frames",
+        "1",
+    ];
+    args.extend_from_slice(&SMALL[4..]);
+    let (ok, _, err) = d.prism(&args);
+    assert!(ok, "{err}");
+    let md = std::fs::read_to_string(d.0.join("docs/ACCURACY.md")).unwrap();
+    let summary = md.find("## Summary: the best approximation against exact ray tracing").expect(&md);
+    assert!(summary < md.find("## sphere_env: tiny").unwrap(), "the summary comes first");
+    let row = md.lines().find(|l| l.starts_with("| sphere_env | refraction | `")).expect(&md);
+    assert!(
+        ["dominated |", "beats exact |", "within noise |", "faster than exact |"].iter().any(|v| row.ends_with(v)),
+        "{row}"
+    );
+    assert!(md.contains("| # | setting | frame ms |") && md.contains("exact FLIP at equal time | verdict |"), "{md}");
+    assert!(md.contains("Exact tracer: raytrace"), "{md}");
+    let svg = std::fs::read_dir(d.0.join("docs/accuracy"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .find(|p| p.extension().is_some_and(|x| x == "svg"))
+        .unwrap();
+    assert!(std::fs::read_to_string(svg).unwrap().contains("exact: raytrace"));
 }
 
 /// A sanity check of the measurement itself: the single-interface baseline's error

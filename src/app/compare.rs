@@ -52,6 +52,8 @@ pub struct CompareArgs {
     #[arg(long, value_name = "FILE")]
     pub json: Option<PathBuf>,
     #[command(flatten)]
+    pub exact: super::equaltime::ExactArgs,
+    #[command(flatten)]
     pub gpu: GpuArgs,
 }
 
@@ -210,6 +212,32 @@ struct CompareReport<'a> {
     frames: u32,
     #[serde(flatten)]
     measurement: &'a Measurement,
+    exact: Option<&'a super::equaltime::ExactCurve>,
+    reference_noise: Option<&'a super::equaltime::Noise>,
+}
+
+/// The exact tracer's curve and, per metric, the setting's error with the reference's noise,
+/// the exact tracer's at the same time and the verdict.
+pub fn print_equal_time(x: &super::equaltime::Exact, m: &Measurement) -> Result<()> {
+    println!("exact tracer: {}", x.curve.source.describe());
+    for p in &x.curve.points {
+        println!(
+            "  {:>12}  {:>10.3} ms  RMSE {:.5}  FLIP mean {:.4}",
+            p.label, p.time_ms, p.errors.rmse, p.errors.flip_mean
+        );
+    }
+    for metric in ["rmse", "flip_mean"] {
+        let value = super::equaltime::metric_value(&m.errors, metric)?;
+        let (lo, _) = x.noise.interval(metric, value);
+        let eq = x.equal_time(metric, m)?;
+        let at = eq.exact.map(|a| format!("{:.4}{}", a.error, if a.beyond { " (its slowest point)" } else { "" }));
+        println!(
+            "equal time, {metric}: this {value:.4} (reference noise: [{lo:.4}, {value:.4}]), exact {}: {}",
+            at.unwrap_or_else(|| "none as fast".into()),
+            eq.verdict.as_str()
+        );
+    }
+    Ok(())
 }
 
 pub fn print_measurement(m: &Measurement) {
@@ -244,6 +272,14 @@ pub fn run(args: CompareArgs) -> Result<()> {
     let ctx = args.gpu.context()?;
     let (reference, cache, cached) = cached_reference(&ctx, &scene, &settings, !args.measure.no_cache)?;
     let m = measure(&ctx, &scene, &args.measure, &reference)?;
+    let exact = if args.exact.no_exact {
+        None
+    } else {
+        use super::equaltime::{measure_curve, reference_noise, Exact};
+        let noise = reference_noise(&ctx, &scene, &settings, &reference, !args.measure.no_cache)?;
+        let curve = measure_curve(&ctx, &args.scene, &args.measure, &args.exact, &reference)?;
+        Some(Exact { curve, noise })
+    };
     check_validation(&ctx)?;
     let (w, h) = (scene.camera.width, scene.camera.height);
     println!(
@@ -258,6 +294,9 @@ pub fn run(args: CompareArgs) -> Result<()> {
         cache.display()
     );
     print_measurement(&m);
+    if let Some(x) = &exact {
+        print_equal_time(x, &m)?;
+    }
     if ctx.info.device_type == "CPU" {
         println!("note: a CPU device (lavapipe): times are CPU time; compare ratios within one run.");
     }
@@ -286,6 +325,8 @@ pub fn run(args: CompareArgs) -> Result<()> {
             reference_cache: cache.display().to_string(),
             frames: args.measure.frames,
             measurement: &m,
+            exact: exact.as_ref().map(|x| &x.curve),
+            reference_noise: exact.as_ref().map(|x| &x.noise),
         };
         written.push(out.write(serde_json::to_string_pretty(&report)?.as_bytes())?);
     }

@@ -3,6 +3,7 @@
 pub mod bench;
 pub mod compare;
 pub mod demo;
+pub mod equaltime;
 pub mod output;
 pub mod reference;
 pub mod report;

@@ -9,8 +9,11 @@ use anyhow::{Context, Result};
 use clap::Args;
 
 use super::compare::{cached_reference, measure, MeasureArgs};
+use super::equaltime::{measure_curve, reference_noise, Exact, ExactArgs};
 use super::output::{self, Outputs};
-use super::sweep::{cartesian, metric_of, parse_params, plot_svg, short_label};
+use super::sweep::{
+    cartesian, metric_of, parse_params, plot_exact, plot_svg, short_label, technique_names, Plot, PlotPoint,
+};
 use super::{check_validation, GpuArgs, SceneArgs};
 
 #[derive(Args, Debug)]
@@ -31,6 +34,8 @@ pub struct ReportArgs {
     pub only: Vec<String>,
     #[command(flatten)]
     pub measure: MeasureArgs,
+    #[command(flatten)]
+    pub exact: ExactArgs,
     #[command(flatten)]
     pub gpu: GpuArgs,
 }
@@ -75,6 +80,7 @@ pub fn run(args: ReportArgs) -> Result<()> {
     let ctx = args.gpu.context()?;
 
     let mut md = String::new();
+    let mut summaries: Vec<SummaryRow> = Vec::new();
     let command = format!("prism report --size {} --spp {} --photons {}", args.size, settings.spp, settings.photons);
     let provenance = format!("*Measured at git revision {} with `{command}`.*\n", super::bench::git_revision());
 
@@ -106,39 +112,53 @@ pub fn run(args: ReportArgs) -> Result<()> {
             let m = measure(&ctx, &scene, &args.measure, &reference)?;
             rows.push((setting, scene, m, reference));
         }
+        let sa0 = SceneArgs {
+            scene: Some(e.scene.clone().into()),
+            set: spec.set.iter().chain(&rows[0].0).cloned().collect(),
+            width: Some(args.size),
+            height: Some(args.size),
+        };
+        let exact = if args.exact.no_exact {
+            None
+        } else {
+            let (scene, reference) = (&rows[0].1, &rows[0].3);
+            let noise = reference_noise(&ctx, scene, &settings, reference, !args.measure.no_cache)?;
+            let curve = measure_curve(&ctx, &sa0, &args.measure, &args.exact, reference)?;
+            Some(Exact { curve, noise })
+        };
         check_validation(&ctx)?;
         writeln!(md, "{heading}\n")?;
+        let techniques = technique_names(&rows.iter().map(|r| &r.1).collect::<Vec<_>>());
         let (s0, ..) = (&rows[0].1, ());
         writeln!(
             md,
             "Techniques: refraction `{}`, reflection `{}`, caustics `{}`.\n",
             s0.render.refraction, s0.render.reflection, s0.render.caustics
         )?;
-        writeln!(md, "| setting | frame ms | technique passes | RMSE | relMSE | FLIP mean | FLIP p95 |")?;
-        writeln!(md, "|---|---:|---|---:|---:|---:|---:|")?;
-        for (setting, _, m, _) in &rows {
-            let passes: Vec<String> = m.passes.iter().map(|p| format!("{} {:.2}", p.name, p.stats.median_ms)).collect();
-            writeln!(
-                md,
-                "| {} | {:.2} | {} | {:.4} | {:.4} | {:.4} | {:.4} |",
-                if setting.is_empty() { "default".into() } else { format!("`{}`", setting.join(" ")) },
-                m.frame.median_ms,
-                passes.join(", "),
-                m.errors.rmse,
-                m.errors.rel_mse,
-                m.errors.flip_mean,
-                m.errors.flip_p95
-            )?;
+        let measured: Vec<_> = rows.iter().map(|(setting, _, m, _)| (setting.as_slice(), m)).collect();
+        section_table(&mut md, &measured, exact.as_ref())?;
+        if let Some(summary) = summary_row(e, &measured, &techniques, exact.as_ref())? {
+            summaries.push(summary);
         }
-        writeln!(md)?;
-        if rows.len() > 1 {
-            let points: Vec<(f64, f64)> =
-                rows.iter().map(|r| Ok((r.2.frame.median_ms, metric_of(&r.2, "flip_mean")?))).collect::<Result<_>>()?;
-            let labels: Vec<String> = rows.iter().map(|r| short_label(&r.0)).collect();
+        let points: Vec<PlotPoint> = rows
+            .iter()
+            .zip(&techniques)
+            .map(|(r, t)| {
+                Ok(PlotPoint {
+                    time_ms: r.2.frame.median_ms,
+                    error: metric_of(&r.2, "flip_mean")?,
+                    label: short_label(&r.0),
+                    technique: t.clone(),
+                })
+            })
+            .collect::<Result<_>>()?;
+        if rows.len() > 1 || exact.is_some() {
             let name = format!("{stem}-sweep");
+            let plot_exact = exact.as_ref().map(|x| plot_exact(x, "flip_mean")).transpose()?;
+            let title = format!("{}: FLIP against GPU time", e.scene);
+            let plot = Plot { title: &title, y_label: "FLIP mean", points: &points, exact: plot_exact.as_ref() };
             // The report links the SVG; a PNG copy would only add weight to the repository.
-            let svg = plot_svg(&format!("{}: FLIP against GPU time", e.scene), "FLIP mean", &points, &labels)?;
-            written.push(outputs.prepare(&assets.join(format!("{name}.svg")))?.write(svg.as_bytes())?);
+            written.push(outputs.prepare(&assets.join(format!("{name}.svg")))?.write(plot_svg(&plot)?.as_bytes())?);
             writeln!(md, "![{name}](accuracy/{name}.svg)\n")?;
         }
         // Images of the last (usually most accurate) setting: technique | reference | FLIP.
@@ -185,6 +205,18 @@ pub fn run(args: ReportArgs) -> Result<()> {
              and command that measured it.\n"
         )?;
     }
+    // Rows of entries not measured now are kept from the existing summary.
+    if let Some(p) = &previous {
+        for e in &spec.entry {
+            if summaries.iter().any(|s| s.scene == e.scene && Some(s.effect.as_str()) == entry_effect(e)) {
+                continue;
+            }
+            if let Some(line) = entry_effect(e).and_then(|effect| p.summary_line(&e.scene, effect)) {
+                summaries.push(SummaryRow { scene: e.scene.clone(), effect: entry_effect(e).unwrap().into(), line });
+            }
+        }
+    }
+    head.push_str(&summary_table(&summaries));
     if let Some(block) = existing.as_deref().and_then(hand_written) {
         writeln!(head, "{block}\n")?;
     }
@@ -192,6 +224,172 @@ pub fn run(args: ReportArgs) -> Result<()> {
     output::commit_all(written)?;
     eprintln!("wrote {}", args.out.display());
     Ok(())
+}
+
+/// A section's table: one numbered row per setting (the numbers of the plot), each error with
+/// the interval the reference's noise leaves it, the exact tracer's FLIP at the same time and
+/// the verdict; then the exact tracer's own points.
+fn section_table(
+    md: &mut String,
+    rows: &[(&[String], &crate::app::compare::Measurement)],
+    exact: Option<&Exact>,
+) -> Result<()> {
+    let with_noise = |metric: &str, v: f64| match exact {
+        Some(x) => {
+            let (lo, _) = x.noise.interval(metric, v);
+            format!("{v:.4} ({lo:.4}–{v:.4})")
+        }
+        None => format!("{v:.4}"),
+    };
+    write!(md, "| # | setting | frame ms | technique passes | RMSE | relMSE | FLIP mean | FLIP p95 |")?;
+    if exact.is_some() {
+        writeln!(md, " exact FLIP at equal time | verdict |")?;
+        writeln!(md, "|---:|---|---:|---|---:|---:|---:|---:|---:|---|")?;
+    } else {
+        writeln!(md)?;
+        writeln!(md, "|---:|---|---:|---|---:|---:|---:|---:|")?;
+    }
+    for (i, (setting, m)) in rows.iter().enumerate() {
+        let passes: Vec<String> = m.passes.iter().map(|p| format!("{} {:.2}", p.name, p.stats.median_ms)).collect();
+        write!(
+            md,
+            "| {} | {} | {:.2} | {} | {} | {:.4} | {} | {:.4} |",
+            i + 1,
+            if setting.is_empty() { "default".into() } else { format!("`{}`", setting.join(" ")) },
+            m.frame.median_ms,
+            passes.join(", "),
+            with_noise("rmse", m.errors.rmse),
+            m.errors.rel_mse,
+            with_noise("flip_mean", m.errors.flip_mean),
+            m.errors.flip_p95
+        )?;
+        match exact {
+            Some(x) => {
+                let eq = x.equal_time("flip_mean", m)?;
+                let at = eq.exact.map(|a| format!("{:.4}", a.error)).unwrap_or_else(|| "–".into());
+                writeln!(md, " {at} | {} |", eq.verdict.as_str())?;
+            }
+            None => writeln!(md)?,
+        }
+    }
+    writeln!(md)?;
+    if let Some(x) = exact {
+        let floor = |metric| x.noise.floor(metric);
+        writeln!(
+            md,
+            "Reference noise (a second reference, next seed): RMSE {:.4}, FLIP mean {:.4}; an error \
+             in parentheses is the range of the true error it allows, and two errors whose ranges \
+             overlap are within noise, not ranked. Exact tracer: {}:",
+            floor("rmse"),
+            floor("flip_mean"),
+            x.curve.source.describe()
+        )?;
+        let pts: Vec<String> = x
+            .curve
+            .points
+            .iter()
+            .map(|p| {
+                format!("{} {:.2} ms FLIP {:.4} RMSE {:.4}", p.label, p.time_ms, p.errors.flip_mean, p.errors.rmse)
+            })
+            .collect();
+        writeln!(md, "{}.\n", pts.join("; "))?;
+    }
+    Ok(())
+}
+
+/// The effect an entry compares techniques for at their defaults: an entry whose only
+/// parameter is `render.refraction`, `render.reflection` or `render.caustics`.
+fn entry_effect(e: &Entry) -> Option<&str> {
+    match e.params.as_slice() {
+        [p] => {
+            let key = p.split_once('=')?.0.trim();
+            ["render.refraction", "render.reflection", "render.caustics"]
+                .contains(&key)
+                .then(|| &key["render.".len()..])
+        }
+        _ => None,
+    }
+}
+
+/// One row of the summary table: a scene, an effect, and its Markdown line.
+struct SummaryRow {
+    scene: String,
+    effect: String,
+    line: String,
+}
+
+/// The summary row of an entry that compares techniques at their defaults: the best of them
+/// by FLIP mean (with those within the reference's noise of it), its time and error, the
+/// exact tracer's error at that time, the verdict.
+fn summary_row(
+    e: &Entry,
+    rows: &[(&[String], &crate::app::compare::Measurement)],
+    techniques: &[String],
+    exact: Option<&Exact>,
+) -> Result<Option<SummaryRow>> {
+    let Some(effect) = entry_effect(e) else { return Ok(None) };
+    let Some(best) = (0..rows.len()).min_by(|&a, &b| rows[a].1.errors.flip_mean.total_cmp(&rows[b].1.errors.flip_mean))
+    else {
+        return Ok(None);
+    };
+    let name = |i: usize| {
+        rows[i]
+            .0
+            .first()
+            .and_then(|s| s.split_once('='))
+            .map(|s| s.1.to_string())
+            .unwrap_or_else(|| techniques[i].clone())
+    };
+    let m = rows[best].1;
+    let interval = |v: f64| exact.map(|x| x.noise.interval("flip_mean", v)).unwrap_or((v, v));
+    let (lo, hi) = interval(m.errors.flip_mean);
+    let ties: Vec<String> = (0..rows.len())
+        .filter(|&i| i != best && interval(rows[i].1.errors.flip_mean).0 <= hi && lo <= rows[i].1.errors.flip_mean)
+        .map(name)
+        .collect();
+    let mut technique = format!("`{}`", name(best));
+    if !ties.is_empty() {
+        technique.push_str(&format!(
+            " (within noise: {})",
+            ties.iter().map(|t| format!("`{t}`")).collect::<Vec<_>>().join(", ")
+        ));
+    }
+    let (at, verdict) = match exact {
+        Some(x) => {
+            let eq = x.equal_time("flip_mean", m)?;
+            (eq.exact.map(|a| format!("{:.4}", a.error)).unwrap_or_else(|| "–".into()), eq.verdict.as_str().to_string())
+        }
+        None => ("not measured".into(), "–".into()),
+    };
+    let line = format!(
+        "| {} | {effect} | {technique} | {:.2} | {:.4} ({lo:.4}–{hi:.4}) | {at} | {verdict} |",
+        e.scene, m.frame.median_ms, m.errors.flip_mean
+    );
+    Ok(Some(SummaryRow { scene: e.scene.clone(), effect: effect.into(), line }))
+}
+
+/// The heading of the summary table; `Previous` reads its rows back for `--only`.
+const SUMMARY_HEADING: &str = "## Summary: the best approximation against exact ray tracing at equal time";
+
+fn summary_table(rows: &[SummaryRow]) -> String {
+    let mut t = format!(
+        "{SUMMARY_HEADING}\n\n\
+         One row per scene and effect, from the sections below that compare techniques at their \
+         defaults: the best by FLIP mean (others within the reference's noise of it named), its \
+         frame time and FLIP with the range the reference's noise allows, the exact tracer's FLIP \
+         at the same GPU time (interpolated on its curve, measured in the same run; each \
+         section names the tracer), and the verdict: *dominated* (exact ray tracing is better \
+         in the same time), *beats exact*, *within noise*, or *faster than exact* (no exact \
+         image is as fast).\n\n\
+         | scene | effect | best approximation | frame ms | FLIP mean | exact FLIP at equal time | verdict |\n\
+         |---|---|---|---:|---:|---:|---|\n"
+    );
+    for r in rows {
+        t.push_str(&r.line);
+        t.push('\n');
+    }
+    t.push('\n');
+    t
 }
 
 /// The report's title and first paragraph, which states the image size, samples per pixel
@@ -295,6 +493,13 @@ impl Previous {
         Previous { sections, revision, command }
     }
 
+    /// The summary table's row for `scene` and `effect`.
+    fn summary_line(&self, scene: &str, effect: &str) -> Option<String> {
+        let (_, body) = self.sections.iter().find(|(h, _)| h == SUMMARY_HEADING)?;
+        let prefix = format!("| {scene} | {effect} |");
+        body.lines().find(|l| l.starts_with(&prefix)).map(str::to_string)
+    }
+
     /// The section under `heading`, with a provenance line added if it has none; `None` for a
     /// section that was never measured (its placeholder is written afresh, without a
     /// provenance line that would claim a measurement).
@@ -319,6 +524,70 @@ impl Previous {
 #[cfg(test)]
 mod tests {
     use super::Previous;
+    use crate::app::compare::Measurement;
+    use crate::app::equaltime::{Exact, ExactCurve, ExactPoint, ExactSource, Noise};
+    use crate::metrics::image::ErrorMetrics;
+    use crate::metrics::timing::Stats;
+
+    fn measurement(time_ms: f64, flip: f64) -> Measurement {
+        Measurement {
+            passes: Vec::new(),
+            frame: Stats { median_ms: time_ms, ..Default::default() },
+            errors: ErrorMetrics { flip_mean: flip, ..Default::default() },
+            hdr: Vec::new(),
+            ldr: Vec::new(),
+            heatmap: Vec::new(),
+        }
+    }
+
+    fn exact(noise_flip: f64) -> Exact {
+        let point = |t: f64, flip: f64| ExactPoint {
+            label: format!("{t}"),
+            time_ms: t,
+            errors: ErrorMetrics { flip_mean: flip, ..Default::default() },
+        };
+        Exact {
+            curve: ExactCurve { source: ExactSource::Raytrace, points: vec![point(10.0, 0.2), point(100.0, 0.02)] },
+            noise: Noise {
+                between_references: ErrorMetrics {
+                    flip_mean: noise_flip * std::f64::consts::SQRT_2,
+                    ..Default::default()
+                },
+            },
+        }
+    }
+
+    /// The summary names the best technique of an entry comparing techniques at defaults,
+    /// those within noise of it, the exact tracer's FLIP at its time (log-log interpolated:
+    /// 0.2 at 10 ms, 0.02 at 100 ms give 0.2 * 10^(-log10(5)) = 0.04 at 50 ms) and the verdict;
+    /// the summary table keeps rows of entries not measured now from the existing file.
+    #[test]
+    fn summary_row_on_synthetic_data_and_kept_by_only() {
+        let e = super::Entry {
+            scene: "sphere_env".into(),
+            title: "t".into(),
+            params: vec!["render.refraction=single,wyman,hu_qin".into()],
+        };
+        let settings: Vec<Vec<String>> =
+            ["single", "wyman", "hu_qin"].iter().map(|t| vec![format!("render.refraction={t}")]).collect();
+        let ms = [measurement(20.0, 0.3), measurement(50.0, 0.101), measurement(50.0, 0.1)];
+        let rows: Vec<_> = settings.iter().map(|s| s.as_slice()).zip(ms.iter()).collect();
+        let techniques: Vec<String> = vec!["a".into(), "b".into(), "c".into()];
+        let x = exact(0.005);
+        let r = super::summary_row(&e, &rows, &techniques, Some(&x)).unwrap().unwrap();
+        assert_eq!(
+            r.line,
+            "| sphere_env | refraction | `hu_qin` (within noise: `wyman`) | 50.00 | 0.1000 (0.0950–0.1000) | 0.0400 | dominated |"
+        );
+        // An entry that sweeps a parameter has no summary row.
+        let sweep = super::Entry { params: vec!["render.hu_qin.search_steps=2,4".into()], ..e };
+        assert!(super::summary_row(&sweep, &rows, &techniques, Some(&x)).unwrap().is_none());
+        // `--only` keeps the rows of entries it does not measure.
+        let text = format!("# A\n\n{}## sphere_env: t\n\nbody\n", super::summary_table(&[r]));
+        let p = Previous::parse(&text);
+        assert!(p.summary_line("sphere_env", "refraction").unwrap().ends_with("| dominated |"));
+        assert_eq!(p.summary_line("sphere_env", "caustics"), None);
+    }
 
     /// A kept section gains the file's provenance line; a placeholder never does (it was not
     /// measured), so the next report writes it afresh.

@@ -8,8 +8,10 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 
 use super::compare::{cached_reference, measure, print_measurement, MeasureArgs, Measurement};
+use super::equaltime::{measure_curve, metric_value, reference_noise, Exact, ExactArgs, ExactSource};
 use super::output::{self, Outputs};
 use super::{check_validation, GpuArgs, SceneArgs};
+use crate::scene::Scene;
 
 #[derive(Args, Debug)]
 pub struct SweepArgs {
@@ -27,6 +29,8 @@ pub struct SweepArgs {
     pub metric: String,
     #[command(flatten)]
     pub measure: MeasureArgs,
+    #[command(flatten)]
+    pub exact: ExactArgs,
     #[command(flatten)]
     pub gpu: GpuArgs,
 }
@@ -97,75 +101,205 @@ pub fn pareto_front(points: &[(f64, f64)]) -> Vec<usize> {
 }
 
 pub fn metric_of(m: &Measurement, name: &str) -> Result<f64> {
-    Ok(match name {
-        "flip_mean" => m.errors.flip_mean,
-        "flip_p95" => m.errors.flip_p95,
-        "rmse" => m.errors.rmse,
-        "rel_mse" => m.errors.rel_mse,
-        other => bail!("--metric {other}: expected flip_mean, flip_p95, rmse or rel_mse"),
-    })
+    metric_value(&m.errors, name)
 }
 
 /// The size of a plot in pixels.
 const PLOT_SIZE: (u32, u32) = (900, 600);
 
-/// A scatter plot of (time, error) with labels and the Pareto front, as SVG text.
-pub fn plot_svg(title: &str, y_label: &str, points: &[(f64, f64)], labels: &[String]) -> Result<String> {
+/// One technique setting on a plot.
+pub struct PlotPoint {
+    pub time_ms: f64,
+    pub error: f64,
+    /// Its short label, printed only if it is on the Pareto front; every point is numbered
+    /// (1-based, its row in the table beside the plot).
+    pub label: String,
+    /// The technique it renders with: points are coloured by it.
+    pub technique: String,
+}
+
+/// The exact tracer's curve on a plot: (time, measured error, lowest error the reference's
+/// noise allows) per point, drawn as a line with that band.
+pub struct PlotExact {
+    pub name: String,
+    pub points: Vec<(f64, f64, f64)>,
+}
+
+/// The settings, the Pareto front and the exact curve: everything a plot shows.
+pub struct Plot<'a> {
+    pub title: &'a str,
+    pub y_label: &'a str,
+    pub points: &'a [PlotPoint],
+    pub exact: Option<&'a PlotExact>,
+}
+
+/// An axis spanning more than a decade of positive values is drawn in log10.
+fn wants_log(values: impl Iterator<Item = f64>) -> bool {
+    let (lo, hi) = values.fold((f64::INFINITY, 0.0f64), |a, v| (a.0.min(v), a.1.max(v)));
+    lo > 0.0 && hi / lo > 10.0
+}
+
+/// Point colours, one per technique: Tableau's ten categorical colours (grey, used by the
+/// exact curve, left out), distinct on white and to most colour-blind readers.
+const TECHNIQUE_COLOURS: [plotters::style::RGBColor; 9] = {
+    use plotters::style::RGBColor as C;
+    [
+        C(31, 119, 180),
+        C(255, 127, 14),
+        C(44, 160, 44),
+        C(214, 39, 40),
+        C(148, 103, 189),
+        C(140, 86, 75),
+        C(227, 119, 194),
+        C(188, 189, 34),
+        C(23, 190, 207),
+    ]
+};
+
+/// A tick label with three significant digits (25.1, 0.0631, 1200).
+fn significant(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let decimals = (2 - v.abs().log10().floor() as i32).max(0) as usize;
+    format!("{v:.decimals$}")
+}
+
+/// A scatter plot of (time, error) as SVG text.
+pub fn plot_svg(plot: &Plot) -> Result<String> {
     use plotters::prelude::{IntoDrawingArea, SVGBackend};
     register_font()?;
     let mut svg = String::new();
-    draw_plot(SVGBackend::with_string(&mut svg, PLOT_SIZE).into_drawing_area(), title, y_label, points, labels)?;
+    draw_plot(SVGBackend::with_string(&mut svg, PLOT_SIZE).into_drawing_area(), plot)?;
     Ok(svg)
 }
 
 /// [`plot_svg`]'s plot as PNG bytes.
-pub fn plot_png(title: &str, y_label: &str, points: &[(f64, f64)], labels: &[String]) -> Result<Vec<u8>> {
+pub fn plot_png(plot: &Plot) -> Result<Vec<u8>> {
     use plotters::prelude::{BitMapBackend, IntoDrawingArea};
     register_font()?;
     let (w, h) = PLOT_SIZE;
     let mut rgb = vec![0u8; (w * h * 3) as usize];
-    draw_plot(BitMapBackend::with_buffer(&mut rgb, PLOT_SIZE).into_drawing_area(), title, y_label, points, labels)?;
+    draw_plot(BitMapBackend::with_buffer(&mut rgb, PLOT_SIZE).into_drawing_area(), plot)?;
     let img = image::RgbImage::from_raw(w, h, rgb).context("plot buffer has the wrong size")?;
     output::encode(image::DynamicImage::ImageRgb8(img), image::ImageFormat::Png)
 }
 
 fn draw_plot<DB: plotters::prelude::DrawingBackend>(
     root: plotters::prelude::DrawingArea<DB, plotters::coord::Shift>,
-    title: &str,
-    y_label: &str,
-    points: &[(f64, f64)],
-    labels: &[String],
+    plot: &Plot,
 ) -> Result<()> {
     use plotters::prelude::*;
     let err = |e: DrawingAreaErrorKind<DB::ErrorType>| anyhow::anyhow!("plot: {e:?}");
-    let front = pareto_front(points);
+    let pts: Vec<(f64, f64)> = plot.points.iter().map(|p| (p.time_ms, p.error)).collect();
+    let front = pareto_front(&pts);
+    let exact: &[(f64, f64, f64)] = plot.exact.map(|e| e.points.as_slice()).unwrap_or(&[]);
+    let xs = || pts.iter().map(|p| p.0).chain(exact.iter().map(|p| p.0));
+    let ys = || pts.iter().map(|p| p.1).chain(exact.iter().map(|p| p.1));
+    // Log axes are drawn by plotting log10 of the values on a linear axis and labelling the
+    // ticks with the values themselves.
+    let (log_x, log_y) = (wants_log(xs()), wants_log(ys()));
+    let (min_y_pos, _) =
+        ys().fold((f64::INFINITY, 0.0), |a: (f64, f64), v| (if v > 0.0 { a.0.min(v) } else { a.0 }, a.1));
+    let fx = move |v: f64| if log_x { v.log10() } else { v };
+    // A band reaching 0 is cut at a tenth of the smallest error on a log axis.
+    let fy = move |v: f64| if log_y { v.max(min_y_pos * 0.1).log10() } else { v };
+    let range = |it: &mut dyn Iterator<Item = f64>, log: bool| {
+        let (lo, hi) = it.fold((f64::INFINITY, f64::NEG_INFINITY), |a, v| (a.0.min(v), a.1.max(v)));
+        if !lo.is_finite() {
+            return 0.0..1.0;
+        }
+        // Room on the right for the labels beside the points.
+        if log {
+            let span = (hi - lo).max(0.1);
+            lo - span * 0.08..hi + span * 0.25
+        } else {
+            0.0..hi * 1.25 + 1e-9
+        }
+    };
+    let x_range = range(&mut xs().map(fx), log_x);
+    let y_range = range(&mut ys().chain(exact.iter().map(|p| p.2)).map(fy), log_y);
     root.fill(&WHITE).map_err(err)?;
-    let (x_max, y_max) = points.iter().fold((0.0f64, 0.0f64), |a, p| (a.0.max(p.0), a.1.max(p.1)));
     let mut chart = ChartBuilder::on(&root)
-        .caption(title, ("sans-serif", 18))
+        .caption(plot.title, ("sans-serif", 18))
         .margin(12)
         .x_label_area_size(40)
-        .y_label_area_size(60)
-        .build_cartesian_2d(0.0..x_max * 1.15 + 1e-9, 0.0..y_max * 1.15 + 1e-9)
+        .y_label_area_size(70)
+        .build_cartesian_2d(x_range, y_range)
         .map_err(err)?;
-    chart.configure_mesh().x_desc("GPU frame time, median (ms)").y_desc(y_label).draw().map_err(err)?;
-    let mut f: Vec<(f64, f64)> = front.iter().map(|&i| points[i]).collect();
+    let tick = |log: bool| move |v: &f64| significant(if log { 10f64.powf(*v) } else { *v });
+    let scale = |log: bool| if log { " (log scale)" } else { "" };
+    chart
+        .configure_mesh()
+        .x_desc(format!("GPU frame time, median (ms){}", scale(log_x)))
+        .y_desc(format!("{}{}", plot.y_label, scale(log_y)))
+        .x_label_formatter(&tick(log_x))
+        .y_label_formatter(&tick(log_y))
+        .draw()
+        .map_err(err)?;
+    if let Some(e) = plot.exact {
+        // The line and its band follow the exact points no other beats in time and error:
+        // what the exact tracer reaches within a budget, and what the verdicts interpolate.
+        let grey = RGBColor(120, 120, 120);
+        let xy: Vec<(f64, f64)> = e.points.iter().map(|p| (p.0, p.1)).collect();
+        let mut line: Vec<(f64, f64, f64)> = pareto_front(&xy).into_iter().map(|i| e.points[i]).collect();
+        line.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let band: Vec<(f64, f64)> =
+            line.iter().map(|p| (fx(p.0), fy(p.1))).chain(line.iter().rev().map(|p| (fx(p.0), fy(p.2)))).collect();
+        chart.draw_series(std::iter::once(Polygon::new(band, grey.mix(0.25).filled()))).map_err(err)?;
+        chart
+            .draw_series(LineSeries::new(line.iter().map(|p| (fx(p.0), fy(p.1))), grey.stroke_width(2)))
+            .map_err(err)?
+            .label(format!("exact: {} (band: reference noise)", e.name))
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], grey.stroke_width(2)));
+        chart
+            .draw_series(e.points.iter().map(|p| Cross::new((fx(p.0), fy(p.1)), 4, grey.stroke_width(2))))
+            .map_err(err)?;
+    }
+    let mut f: Vec<(f64, f64)> = front.iter().map(|&i| (fx(pts[i].0), fy(pts[i].1))).collect();
     f.sort_by(|a, b| a.0.total_cmp(&b.0));
     chart
-        .draw_series(LineSeries::new(f, RED.stroke_width(2)))
+        .draw_series(LineSeries::new(f, BLACK.mix(0.6).stroke_width(1)))
         .map_err(err)?
         .label("Pareto front")
-        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], RED.stroke_width(2)));
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], BLACK.mix(0.6).stroke_width(1)));
+    let mut techniques: Vec<&str> = Vec::new();
+    for p in plot.points {
+        if !techniques.contains(&p.technique.as_str()) {
+            techniques.push(&p.technique);
+        }
+    }
+    for (k, t) in techniques.iter().enumerate() {
+        let colour = TECHNIQUE_COLOURS[k % TECHNIQUE_COLOURS.len()];
+        chart
+            .draw_series(plot.points.iter().enumerate().filter(|(_, p)| p.technique == *t).map(|(i, p)| {
+                let r = if front.contains(&i) { 6 } else { 4 };
+                Circle::new((fx(p.time_ms), fy(p.error)), r, colour.filled())
+            }))
+            .map_err(err)?
+            .label(t.to_string())
+            .legend(move |(x, y)| Circle::new((x + 9, y), 4, colour.filled()));
+    }
+    // Only the front is labelled in full; the other points carry their row number.
+    let mut front_order = front.clone();
+    front_order.sort_by(|&a, &b| pts[a].0.total_cmp(&pts[b].0));
     chart
-        .draw_series(points.iter().enumerate().map(|(i, &p)| {
-            let on_front = front.contains(&i);
-            Circle::new(p, if on_front { 5 } else { 4 }, if on_front { RED.filled() } else { BLUE.filled() })
+        .draw_series(plot.points.iter().enumerate().map(|(i, p)| {
+            // Neighbours on the front alternate above and below their points, so that two
+            // close labels do not overprint.
+            let rank = front_order.iter().position(|&j| j == i);
+            let text = if rank.is_some() { format!("{} {}", i + 1, p.label) } else { format!("{}", i + 1) };
+            let dy = if rank.is_some_and(|r| r % 2 == 1) { 6 } else { -14 };
+            EmptyElement::at((fx(p.time_ms), fy(p.error))) + Text::new(text, (6, dy), ("sans-serif", 12))
         }))
         .map_err(err)?;
     chart
-        .draw_series(points.iter().zip(labels).map(|(&p, l)| Text::new(l.clone(), p, ("sans-serif", 11))))
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperRight)
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .draw()
         .map_err(err)?;
-    chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).draw().map_err(err)?;
     root.present().map_err(err)?;
     Ok(())
 }
@@ -211,10 +345,63 @@ pub fn short_label(setting: &[String]) -> String {
 pub struct SweepRow {
     pub setting: Vec<String>,
     pub measurement: Measurement,
+    /// The technique it renders with (see [`technique_names`]).
+    pub technique: String,
 }
 
-/// The CSV: setting, each parameter's value, each pass's median ms, frame ms, errors, pareto.
-pub fn csv(params: &[(String, Vec<String>)], rows: &[SweepRow], metric: &str) -> Result<String> {
+/// Each scene's technique, named by the effects whose technique differs between the scenes
+/// ("refraction=wyman"); the refraction technique when none differs.
+pub fn technique_names(scenes: &[&Scene]) -> Vec<String> {
+    let effects: [(&str, fn(&Scene) -> &str); 3] = [
+        ("refraction", |s| s.render.refraction.as_str()),
+        ("reflection", |s| s.render.reflection.as_str()),
+        ("caustics", |s| s.render.caustics.as_str()),
+    ];
+    let varying: Vec<_> = effects.iter().filter(|(_, get)| scenes.iter().any(|s| get(s) != get(scenes[0]))).collect();
+    scenes
+        .iter()
+        .map(|s| {
+            if varying.is_empty() {
+                format!("refraction={}", s.render.refraction)
+            } else {
+                varying.iter().map(|(name, get)| format!("{name}={}", get(s))).collect::<Vec<_>>().join(" ")
+            }
+        })
+        .collect()
+}
+
+/// The exact curve as a plot draws it, in `metric` with the reference's noise band.
+pub fn plot_exact(exact: &Exact, metric: &str) -> Result<PlotExact> {
+    let name = match exact.curve.source {
+        ExactSource::Raytrace => "raytrace",
+        ExactSource::Reference => "reference",
+    };
+    let points = exact
+        .curve
+        .points
+        .iter()
+        .map(|p| {
+            let v = metric_value(&p.errors, metric)?;
+            Ok((p.time_ms, v, exact.noise.interval(metric, v).0))
+        })
+        .collect::<Result<_>>()?;
+    Ok(PlotExact { name: name.into(), points })
+}
+
+fn quote(s: &str) -> String {
+    if s.contains(',') || s.contains('"') {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
+    }
+}
+
+/// The CSV: one row per setting (kind `technique`, numbered as on the plot) and, with an
+/// exact curve, one per exact point (kind `exact`): each parameter's value, each pass's median
+/// ms, frame ms, errors, whether on the Pareto front, the technique, the lowest value of
+/// `metric` the reference's noise allows, the exact tracer's `metric` at the same time and the
+/// equal-time verdict.
+pub fn csv(params: &[(String, Vec<String>)], rows: &[SweepRow], metric: &str, exact: Option<&Exact>) -> Result<String> {
     let mut passes: Vec<String> = Vec::new();
     for r in rows {
         for p in &r.measurement.passes {
@@ -228,14 +415,7 @@ pub fn csv(params: &[(String, Vec<String>)], rows: &[SweepRow], metric: &str) ->
         .map(|r| Ok((r.measurement.frame.median_ms, metric_of(&r.measurement, metric)?)))
         .collect::<Result<_>>()?;
     let front = pareto_front(&points);
-    let quote = |s: &str| {
-        if s.contains(',') || s.contains('"') {
-            format!("\"{}\"", s.replace('"', "\"\""))
-        } else {
-            s.to_string()
-        }
-    };
-    let mut csv = String::from("setting");
+    let mut csv = String::from("n,kind,setting");
     for (k, _) in params {
         csv.push(',');
         csv.push_str(&quote(k));
@@ -243,9 +423,14 @@ pub fn csv(params: &[(String, Vec<String>)], rows: &[SweepRow], metric: &str) ->
     for p in &passes {
         csv.push_str(&format!(",{p}_ms"));
     }
-    csv.push_str(",frame_ms,rmse,psnr_db,rel_mse,flip_mean,flip_p95,pareto\n");
+    csv.push_str(&format!(
+        ",frame_ms,rmse,psnr_db,rel_mse,flip_mean,flip_p95,pareto,technique,{metric}_low,exact_{metric},verdict\n"
+    ));
+    let errors = |e: &crate::metrics::image::ErrorMetrics| {
+        format!(",{:.6},{:.3},{:.6},{:.5},{:.5}", e.rmse, e.psnr_db, e.rel_mse, e.flip_mean, e.flip_p95)
+    };
     for (i, r) in rows.iter().enumerate() {
-        csv.push_str(&quote(&r.setting.join(" ")));
+        csv.push_str(&format!("{},technique,{}", i + 1, quote(&r.setting.join(" "))));
         for s in &r.setting {
             csv.push(',');
             csv.push_str(&quote(s.split_once('=').map(|x| x.1).unwrap_or("")));
@@ -255,17 +440,32 @@ pub fn csv(params: &[(String, Vec<String>)], rows: &[SweepRow], metric: &str) ->
             csv.push(',');
             csv.push_str(&v.unwrap_or_default());
         }
-        let e = &r.measurement.errors;
-        csv.push_str(&format!(
-            ",{:.4},{:.6},{:.3},{:.6},{:.5},{:.5},{}\n",
-            r.measurement.frame.median_ms,
-            e.rmse,
-            e.psnr_db,
-            e.rel_mse,
-            e.flip_mean,
-            e.flip_p95,
-            front.contains(&i)
-        ));
+        csv.push_str(&format!(",{:.4}", r.measurement.frame.median_ms));
+        csv.push_str(&errors(&r.measurement.errors));
+        csv.push_str(&format!(",{},{}", front.contains(&i), quote(&r.technique)));
+        match exact {
+            Some(x) => {
+                let value = metric_of(&r.measurement, metric)?;
+                let eq = x.equal_time(metric, &r.measurement)?;
+                let at = eq.exact.map(|a| format!("{:.6}", a.error)).unwrap_or_default();
+                csv.push_str(&format!(",{:.6},{at},{}\n", x.noise.interval(metric, value).0, eq.verdict.as_str()));
+            }
+            None => csv.push_str(",,,\n"),
+        }
+    }
+    if let Some(x) = exact {
+        let name = match x.curve.source {
+            ExactSource::Raytrace => "raytrace",
+            ExactSource::Reference => "reference",
+        };
+        for p in &x.curve.points {
+            csv.push_str(&format!(",exact,{}", quote(&format!("{name} {}", p.label))));
+            csv.push_str(&",".repeat(params.len() + passes.len()));
+            csv.push_str(&format!(",{:.4}", p.time_ms));
+            csv.push_str(&errors(&p.errors));
+            let value = metric_value(&p.errors, metric)?;
+            csv.push_str(&format!(",,{name},{:.6},,\n", x.noise.interval(metric, value).0));
+        }
     }
     Ok(csv)
 }
@@ -274,6 +474,7 @@ pub fn run(args: SweepArgs) -> Result<()> {
     let params = parse_params(&args.params)?;
     let settings = args.measure.reference.settings();
     settings.validate()?;
+    metric_value(&Default::default(), &args.metric)?;
     // Check the metric name and every combination's scene before any GPU work.
     let rows_overrides = cartesian(&params);
     let mut scenes = Vec::new();
@@ -292,28 +493,62 @@ pub fn run(args: SweepArgs) -> Result<()> {
     let svg_out = outputs.prepare(&svg_path)?;
     let png_out = outputs.prepare(&png_path)?;
     let ctx = args.gpu.context()?;
+    let techniques = technique_names(&scenes.iter().collect::<Vec<_>>());
     let mut rows = Vec::new();
-    for (o, scene) in rows_overrides.iter().zip(&scenes) {
+    for ((o, scene), technique) in rows_overrides.iter().zip(&scenes).zip(techniques) {
         let (reference, _, _) = cached_reference(&ctx, scene, &settings, !args.measure.no_cache)?;
         let m = measure(&ctx, scene, &args.measure, &reference)?;
         println!("== {}", o.join(" "));
         print_measurement(&m);
-        metric_of(&m, &args.metric)?;
-        rows.push(SweepRow { setting: o.clone(), measurement: m });
+        rows.push(SweepRow { setting: o.clone(), measurement: m, technique });
     }
+    // The exact tracer on the first setting's scene: the settings a sweep compares usually
+    // share it (a swept scene parameter changes the truth, and the curve is that of the first).
+    let exact = if args.exact.no_exact {
+        None
+    } else {
+        let mut sa = args.scene.clone();
+        sa.set.extend(rows_overrides[0].iter().cloned());
+        let (reference, _, _) = cached_reference(&ctx, &scenes[0], &settings, !args.measure.no_cache)?;
+        let noise = reference_noise(&ctx, &scenes[0], &settings, &reference, !args.measure.no_cache)?;
+        let curve = measure_curve(&ctx, &sa, &args.measure, &args.exact, &reference)?;
+        Some(Exact { curve, noise })
+    };
     check_validation(&ctx)?;
-    let table = csv(&params, &rows, &args.metric)?;
-    let points: Vec<(f64, f64)> = rows
+    if let Some(x) = &exact {
+        println!("exact tracer: {}", x.curve.source.describe());
+        for (i, r) in rows.iter().enumerate() {
+            let eq = x.equal_time(&args.metric, &r.measurement)?;
+            let at = eq.exact.map(|a| format!("{:.4}", a.error)).unwrap_or_else(|| "-".into());
+            println!(
+                "#{} {}: exact {} at equal time {at}: {}",
+                i + 1,
+                r.setting.join(" "),
+                args.metric,
+                eq.verdict.as_str()
+            );
+        }
+    }
+    let table = csv(&params, &rows, &args.metric, exact.as_ref())?;
+    let points: Vec<PlotPoint> = rows
         .iter()
-        .map(|r| Ok((r.measurement.frame.median_ms, metric_of(&r.measurement, &args.metric)?)))
+        .map(|r| {
+            Ok(PlotPoint {
+                time_ms: r.measurement.frame.median_ms,
+                error: metric_of(&r.measurement, &args.metric)?,
+                label: short_label(&r.setting),
+                technique: r.technique.clone(),
+            })
+        })
         .collect::<Result<_>>()?;
-    let labels: Vec<String> = rows.iter().map(|r| short_label(&r.setting)).collect();
+    let plot_exact = exact.as_ref().map(|x| plot_exact(x, &args.metric)).transpose()?;
     let title = format!("{}: {} against GPU time ({})", scenes[0].name, args.metric, ctx.info.name);
+    let plot = Plot { title: &title, y_label: &args.metric, points: &points, exact: plot_exact.as_ref() };
     // All outputs appear together, only once everything has succeeded.
     output::commit_all([
         csv_out.write(table.as_bytes())?,
-        svg_out.write(plot_svg(&title, &args.metric, &points, &labels)?.as_bytes())?,
-        png_out.write(&plot_png(&title, &args.metric, &points, &labels)?)?,
+        svg_out.write(plot_svg(&plot)?.as_bytes())?,
+        png_out.write(&plot_png(&plot)?)?,
     ])?;
     eprintln!("wrote {}, {}, {}", csv_path.display(), svg_path.display(), png_path.display());
     Ok(())
@@ -340,5 +575,89 @@ mod tests {
         let pts = [(1.0, 5.0), (2.0, 3.0), (3.0, 4.0), (4.0, 1.0), (2.0, 3.0)];
         // (3,4) is beaten by (2,3); the two equal points do not dominate each other.
         assert_eq!(pareto_front(&pts), [0, 1, 3, 4]);
+    }
+
+    fn row(setting: &str, time_ms: f64, flip: f64, technique: &str) -> SweepRow {
+        SweepRow {
+            setting: vec![setting.to_string()],
+            measurement: Measurement {
+                passes: Vec::new(),
+                frame: crate::metrics::timing::Stats { median_ms: time_ms, ..Default::default() },
+                errors: crate::metrics::image::ErrorMetrics { flip_mean: flip, ..Default::default() },
+                hdr: Vec::new(),
+                ldr: Vec::new(),
+                heatmap: Vec::new(),
+            },
+            technique: technique.to_string(),
+        }
+    }
+
+    /// The CSV numbers the settings, adds the exact curve's rows and each setting's verdict;
+    /// the plot labels only the Pareto front in full, numbers the rest, colours by technique,
+    /// draws the exact curve with its band, and turns to log axes over more than a decade.
+    #[test]
+    fn csv_and_plot_structure_with_an_exact_curve() {
+        use crate::app::equaltime::{ExactCurve, ExactPoint, Noise};
+        use crate::metrics::image::ErrorMetrics;
+        let params = parse_params(&["render.refraction=single,wyman,hu_qin".into()]).unwrap();
+        let rows = [
+            row("render.refraction=single", 10.0, 0.30, "refraction=single"),
+            row("render.refraction=wyman", 40.0, 0.35, "refraction=wyman"),
+            row("render.refraction=hu_qin", 400.0, 0.02, "refraction=hu_qin"),
+        ];
+        let point = |label: &str, t: f64, flip: f64| ExactPoint {
+            label: label.into(),
+            time_ms: t,
+            errors: ErrorMetrics { flip_mean: flip, ..Default::default() },
+        };
+        let exact = Exact {
+            curve: ExactCurve {
+                source: ExactSource::Raytrace,
+                points: vec![point("max_depth=1", 20.0, 0.25), point("max_depth=16", 200.0, 0.05)],
+            },
+            noise: Noise::default(),
+        };
+        let text = csv(&params, &rows, "flip_mean", Some(&exact)).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        assert_eq!(lines.len(), 1 + 3 + 2, "{text}");
+        assert_eq!(
+            lines[0],
+            "n,kind,setting,render.refraction,frame_ms,rmse,psnr_db,rel_mse,flip_mean,flip_p95,pareto,technique,\
+             flip_mean_low,exact_flip_mean,verdict"
+        );
+        let columns = lines[0].split(',').count();
+        assert!(lines.iter().all(|l| l.split(',').count() == columns), "{text}");
+        assert!(
+            lines[1].starts_with("1,technique,render.refraction=single,single,")
+                && lines[1].ends_with(",,faster than exact")
+        );
+        // wyman at 40 ms: exact reaches 0.25 * 0.2^(log 2 / log 10) = 0.1540 < 0.35.
+        assert!(lines[2].ends_with(",false,refraction=wyman,0.350000,0.154003,dominated"), "{}", lines[2]);
+        assert!(lines[3].ends_with(",true,refraction=hu_qin,0.020000,0.050000,beats exact"), "{}", lines[3]);
+        assert!(lines[4].starts_with(",exact,raytrace max_depth=1,,20.0000,"), "{}", lines[4]);
+        let points: Vec<PlotPoint> = rows
+            .iter()
+            .map(|r| PlotPoint {
+                time_ms: r.measurement.frame.median_ms,
+                error: r.measurement.errors.flip_mean,
+                label: short_label(&r.setting),
+                technique: r.technique.clone(),
+            })
+            .collect();
+        let pe = plot_exact(&exact, "flip_mean").unwrap();
+        let svg = plot_svg(&Plot { title: "t", y_label: "FLIP mean", points: &points, exact: Some(&pe) }).unwrap();
+        let texts: Vec<&str> =
+            svg.split("</text>").filter_map(|t| t.rsplit_once('>').map(|(_, text)| text.trim())).collect();
+        // Full labels on the front (1 and 3), a bare number for the dominated setting 2.
+        assert!(texts.contains(&"1 refraction=single") && texts.contains(&"3 refraction=hu_qin"), "{texts:?}");
+        assert!(texts.contains(&"2") && !texts.contains(&"2 refraction=wyman"), "{texts:?}");
+        assert!(texts.iter().any(|t| t.starts_with("exact: raytrace")) && texts.contains(&"Pareto front"));
+        assert!(svg.contains("<polygon"), "the exact curve's band");
+        // Times 10 to 400 ms and errors 0.02 to 0.35 span more than a decade: log axes.
+        assert!(texts.contains(&"GPU frame time, median (ms) (log scale)") && texts.contains(&"FLIP mean (log scale)"));
+        // Three techniques, three fill colours for the points.
+        let fills: std::collections::HashSet<&str> =
+            svg.split("<circle").skip(1).filter_map(|c| c.split("fill=\"").nth(1)?.split('"').next()).collect();
+        assert!(fills.len() >= 3, "{fills:?}");
     }
 }
