@@ -204,7 +204,7 @@ pub mod shader_layout;
 /// The structs GLSL reads, declared once in src/shader_structs.rs (their GLSL mirrors are in
 /// the generated header `prism_shared.glsl`).
 pub mod shader_structs {
-    use crate::{MAX_LIGHTS, MAX_NEARBY_SETS, REF_MAX_TARGETS};
+    use crate::{HP_MAX_LEVELS, MAX_LIGHTS, MAX_NEARBY_SETS, REF_MAX_TARGETS};
     include!("shader_structs.rs");
 }
 

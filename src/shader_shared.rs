@@ -101,6 +101,8 @@ shared_constants! {
     MAX_NEARBY_SETS: u32 = 8;
     // Invocations per workgroup of the 1D light/HistoPyramid kernels.
     LIGHT_GROUP: u32 = 64;
+    // Levels above the classes that a HistoPyramid may have: a list of up to 4^16 entries.
+    HP_MAX_LEVELS: u32 = 16;
     // The exactly intersected flat receivers of eikonal_view, at most.
     MAX_EIKONAL_TRIANGLES: u32 = 64;
 }

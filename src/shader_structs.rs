@@ -365,6 +365,10 @@ shared_structs! {
         /// the last unclamped total
         requested: uint,
         pad: [uint; 2],
+        /// vkCmdDispatchIndirect groups of the reduction of level k + 1 over the entries that
+        /// `count` makes live on it (ceil(count / 4^(k+1))), so that the build costs what
+        /// the live list costs, not the capacity
+        level_args: [uvec4; HP_MAX_LEVELS],
     }
 
     // ---- The reference path tracer (src/reference, glsl/reference) -----------------------

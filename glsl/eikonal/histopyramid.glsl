@@ -48,9 +48,31 @@ uint hp_top() {
     return k;
 }
 
-// Entry i of level k; 0 beyond the level's length and, on level 0, beyond `count` (entries
-// past the current list are stale from an earlier, longer list).
+// Entries of level k that an input list of `count` entries makes live: ceil(count / 4^k).
+// Only these are built (histopyramid_reduce.comp is dispatched over them, indirectly), so
+// a step's pyramid costs O(count) rather than O(CAPACITY) (Ziegler et al. 2006 build the
+// whole texture because a fragment pass cannot be sized on the device; a compute dispatch
+// can).
+uint hp_live_len(uint k, uint count) {
+    uint n = count;
+    for (uint i = 0u; i < k; ++i) n = (n + 3u) / 4u;
+    return n;
+}
+
+// The indirect arguments of every reduction level for an input list of `count` entries
+// (level k + 1 in level_args[k]); written where `count` is set, so that the build that
+// follows needs no CPU.
+void hp_write_level_args(uint count) {
+    uint n = count;
+    for (uint k = 0u; k < HP_MAX_LEVELS; ++k) {
+        n = (n + 3u) / 4u;
+        state.level_args[k] = uvec4((n + LIGHT_GROUP - 1u) / LIGHT_GROUP, 1u, 1u, 0u);
+    }
+}
+
+// Entry i of level k during the build over `state.count` inputs; 0 beyond the live length
+// (entries past it are stale from an earlier, longer list).
 uint hp_value(uint k, uint i) {
     if (k == 0u) return i < state.count ? classes[i] : 0u;
-    return i < hp_level_len(k) ? levels[hp_level_offset(k) + i] : 0u;
+    return i < hp_live_len(k, state.count) ? levels[hp_level_offset(k) + i] : 0u;
 }

@@ -7,7 +7,8 @@
 layout(local_size_x = 1) in;
 
 void main() {
-    uint total = levels[hp_level_offset(hp_top())];
+    // An empty list built nothing: the top entry is stale then.
+    uint total = hp_value(hp_top(), 0u);
     uint next = min(total, CAPACITY);
     state.requested = total;
     state.dropped += total - next;
@@ -15,6 +16,7 @@ void main() {
     // The output list is the next step's input. The traversal below does not need the old
     // count: it only descends into children whose partial sums it has counted.
     state.count = next;
+    hp_write_level_args(next);
     state.args = uvec4((next + LIGHT_GROUP - 1u) / LIGHT_GROUP, 1u, 1u, 0u);
     state.peak = max(state.peak, next);
     if (state.step < HISTORY_LEN) history[state.step] = next;

@@ -19,7 +19,9 @@ void main() {
             // children come first, so the descent stops before any stale entry (rest is
             // below the sum of the valid ones).
             uint i = 4u * node + c;
-            uint v = k == 1u ? (i < CAPACITY ? classes[i] : 0u) : hp_value(k - 1u, i);
+            // The levels above likewise: a live node's children that are live come first,
+            // and `rest` is below their sum, so stale entries past them are never reached.
+            uint v = k == 1u ? (i < CAPACITY ? classes[i] : 0u) : (i < hp_level_len(k - 1u) ? levels[hp_level_offset(k - 1u) + i] : 0u);
             child = i;
             if (rest < v) break;
             rest -= v;

@@ -56,7 +56,7 @@ use crate::{
     LIGHT_BINDING_FIELD, LIGHT_BINDING_IRRADIANCE, LIGHT_BINDING_SRC,
 };
 
-use super::histopyramid::{level_lengths, HistoPyramid, HpState};
+use super::histopyramid::{initial_state, level_lengths, HistoPyramid};
 use super::volume::{box_specs, prepare_volume, IndexField, RayState, VolumeTextures, LIGHT_BOX};
 pub use crate::shader_structs::Patch;
 use crate::shader_structs::RunPush;
@@ -601,12 +601,7 @@ impl LightSim {
         self.min_flux = self.threshold * largest;
         let count = patches.len() as u32;
         self.lists[0].write(0, bytemuck::cast_slice(&patches));
-        self.hp.reset(count);
-        let groups = count.div_ceil(crate::LIGHT_GROUP);
-        self.hp.state.write(
-            0,
-            bytemuck::bytes_of(&HpState { args: [groups, 1, 1, 0], count, next: count, ..HpState::default() }),
-        );
+        self.hp.state.write(0, bytemuck::bytes_of(&initial_state(count)));
         self.current = 0;
         self.steps_taken = 0;
         self.initial = patches;

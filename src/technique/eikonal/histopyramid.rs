@@ -34,6 +34,28 @@ pub fn level_lengths(capacity: u32) -> Vec<u32> {
     lens
 }
 
+/// The indirect arguments of the reductions (level k + 1 in entry k) over the entries that an
+/// input list of `count` makes live, as glsl/eikonal/histopyramid.glsl `hp_write_level_args`.
+pub fn level_args(count: u32) -> [[u32; 4]; crate::HP_MAX_LEVELS as usize] {
+    let mut n = count;
+    std::array::from_fn(|_| {
+        n = n.div_ceil(4);
+        [n.div_ceil(LIGHT_GROUP), 1, 1, 0]
+    })
+}
+
+/// The bookkeeping of a fresh build over an input list of `count` entries whose first step
+/// is dispatched over `count` too.
+pub fn initial_state(count: u32) -> HpState {
+    HpState {
+        args: [count.div_ceil(LIGHT_GROUP), 1, 1, 0],
+        count,
+        next: count,
+        level_args: level_args(count),
+        ..HpState::default()
+    }
+}
+
 /// The pyramid on the CPU: level 0 is `classes[..count]` padded with zeros to `capacity`.
 pub fn cpu_levels(classes: &[u32], count: usize, capacity: u32) -> Vec<Vec<u32>> {
     let lens = level_lengths(capacity);
@@ -111,6 +133,7 @@ impl HistoPyramid {
         let history_len = history_len.max(1);
         let lens = level_lengths(capacity);
         let top = (lens.len() - 1) as u32;
+        assert!(top <= crate::HP_MAX_LEVELS, "a HistoPyramid of {capacity} entries has more than HP_MAX_LEVELS levels");
         let level_words: u64 = lens[1..].iter().map(|&n| n as u64).sum();
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
         let host = MemoryLocation::GpuToCpu;
@@ -178,7 +201,7 @@ impl HistoPyramid {
     /// Reset the bookkeeping for an input list of `count` entries (host write; call while
     /// the device is idle).
     pub fn reset(&mut self, count: u32) {
-        let s = HpState { count, ..HpState::default() };
+        let s = HpState { count, level_args: level_args(count), ..HpState::default() };
         self.state.write(0, bytemuck::bytes_of(&s));
     }
 
@@ -197,16 +220,19 @@ impl HistoPyramid {
     /// classes must be written by an earlier pass of the frame.
     pub fn record<'a>(&'a self, frame: &mut Frame<'_, 'a>) {
         let set = self.set.set();
+        let state = &self.state;
         for level in 1..=self.top {
-            let len = level_lengths(self.capacity)[level as usize];
             let pipeline = &self.reduce;
+            // Over the live entries only: the groups were written with the count.
+            let offset = (std::mem::offset_of!(HpState, level_args) + 16 * (level as usize - 1)) as u64;
             frame
                 .pass("histopyramid_reduce")
+                .read(self.state_id, Access::IndirectArgs)
                 .read(self.state_id, Access::ComputeRead)
                 .read(self.classes_id, Access::ComputeRead)
                 .write(self.levels_id, Access::ComputeWrite)
                 .record(move |cmd| {
-                    cmd.compute(pipeline, &[set], &level, [len.div_ceil(LIGHT_GROUP), 1, 1]);
+                    cmd.compute_indirect(pipeline, &[set], &level, state, offset);
                 });
         }
         let total = &self.total;
@@ -219,7 +245,7 @@ impl HistoPyramid {
                 cmd.bind_compute(total, &[set]);
                 cmd.dispatch(1, 1, 1);
             });
-        let (traverse, state) = (&self.traverse, &self.state);
+        let traverse = &self.traverse;
         frame
             .pass("histopyramid_traverse")
             .read(self.state_id, Access::IndirectArgs)
