@@ -98,6 +98,14 @@ shared_structs! {
         time: float,
     }
 
+    /// Push constants of glsl/common/cover.vert: the proxy sphere drawn over an object's
+    /// pixels (src/technique/baseline/fullscreen.rs, `Cover`).
+    push struct CoverPush {
+        /// xyz: the object's bounding-sphere centre; w: the proxy's scale (the bounding
+        /// radius times the factor that makes the polyhedron circumscribe the sphere).
+        sphere: vec4,
+    }
+
     /// Push constants of the G-buffer pass (glsl/gbuffer/gbuffer.frag).
     push struct GbufferPush {
         material: uint,
