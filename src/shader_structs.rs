@@ -101,9 +101,11 @@ shared_structs! {
     /// Push constants of glsl/common/cover.vert: the proxy sphere drawn over an object's
     /// pixels (src/technique/baseline/fullscreen.rs, `Cover`).
     push struct CoverPush {
-        /// xyz: the object's bounding-sphere centre; w: the proxy's scale (the bounding
-        /// radius times the factor that makes the polyhedron circumscribe the sphere).
-        sphere: vec4,
+        /// The octagon's centre (xyz), and its two half-axes u and v in its plane: corner k
+        /// is centre + cos(k pi / 4) u + sin(k pi / 4) v.
+        centre: vec4,
+        u: vec4,
+        v: vec4,
     }
 
     /// Push constants of the G-buffer pass (glsl/gbuffer/gbuffer.frag).

@@ -11,7 +11,7 @@ use crate::gpu::{
     GraphicsPipelineDesc, Image, RenderPass, RenderTarget, Specs, VertexLayout,
 };
 use crate::graph::{Bindings, BoundSet, Frame, ImageId};
-use crate::shader_structs::{CoverPush, Vertex};
+use crate::shader_structs::CoverPush;
 use crate::technique::FrameInputs;
 
 pub struct FullscreenPass {
@@ -27,24 +27,31 @@ pub struct FullscreenPass {
 
 /// Shading limited to some objects' pixels. A pass that shades only the pixels of certain
 /// materials (a refraction pass: the dielectrics') need not run its fragment shader over the
-/// whole image: it draws, for each of those objects, a convex polyhedron around the object's
-/// bounding sphere (glsl/common/cover.vert) instead of one full-screen triangle, so that only
-/// the pixels inside the object's outline (and a thin margin) are shaded, with the same
+/// whole image: for each of those objects it draws an octagon around the outline of the
+/// object's bounding sphere (glsl/common/cover.vert) instead of one full-screen triangle, so
+/// that only the pixels inside that outline, and a thin margin, are shaded, with the same
 /// fragment shader and the same `in_uv`. The fragment shader still discards what the
 /// G-buffer says is not its material, so the image is the full-screen pass's.
 ///
-/// A proxy rather than the object's own mesh: on a CPU device rasterizing the mesh again
-/// (16k triangles for sphere_env's ball) costs as much as the G-buffer pass, while the
-/// proxy's 320 triangles cost nothing. Its back faces are culled, so that every pixel inside
-/// it is shaded once. When a proxy reaches behind the camera's plane its vertices cannot be
-/// divided by w (cover.vert), and the pass falls back to the full-screen triangle for that
-/// frame.
+/// Seen from the eye at distance d from the centre of a sphere of radius r, the sphere's
+/// outline is the circle of radius r sqrt(d^2 - r^2) / d around the point
+/// eye + (centre - eye) (1 - r^2 / d^2), in the plane normal to the line of sight; the
+/// octagon circumscribes that circle (corners 1 / cos(pi / 8) = 1.082 times its radius away),
+/// so its image circumscribes the outline, at most 5.5% more area (8 tan(pi / 8) / pi).
+/// A flat proxy rather than the object's mesh: on a CPU device rasterizing the mesh again
+/// (16k triangles for sphere_env's ball) costs as much as the G-buffer pass, and a CPU
+/// rasterizer shades whole 4x4 blocks of every triangle, so few large triangles waste least.
+/// When the eye is inside a bounding sphere, or a corner is behind the camera's plane (its
+/// clip position cannot be divided by w), the pass falls back to the full-screen triangle
+/// for that frame.
 pub struct Cover {
     pipeline: GraphicsPipeline,
-    proxy: Buffer,
-    proxy_vertices: u32,
     objects: Vec<usize>,
 }
+
+/// How far the octagon's corners are from its centre, in radii of the circle it
+/// circumscribes: 1 / cos(pi / 8).
+pub const PROXY_SCALE: f32 = 1.082_392_2;
 
 impl Cover {
     /// The cover of `objects` (indices into the scene's objects) for a pass with
@@ -63,19 +70,10 @@ impl Cover {
         if objects.is_empty() {
             return Ok(None);
         }
-        let vertices: Vec<Vertex> = proxy_sphere()
-            .into_iter()
-            .map(|p| Vertex { position: p.to_array(), normal: p.to_array(), checker_uv: [0.0; 2] })
-            .collect();
-        let proxy = Buffer::with_data(ctx, &format!("{name}_cover"), &vertices, vk::BufferUsageFlags::VERTEX_BUFFER)?;
         let pipeline = GraphicsPipeline::new(
             ctx,
             &GraphicsPipelineDesc {
                 vertex_shader: "common/cover.vert",
-                vertex: VertexLayout::Mesh,
-                // The proxy is convex with its faces wound alike: either side covers its
-                // outline once.
-                cull: vk::CullModeFlags::BACK,
                 blend,
                 specialization,
                 ..GraphicsPipelineDesc::fullscreen(name, fragment_shader)
@@ -84,100 +82,53 @@ impl Cover {
             std::mem::size_of::<CoverPush>() as u32,
             render_pass,
         )?;
-        Ok(Some(Cover { pipeline, proxy, proxy_vertices: vertices.len() as u32, objects }))
+        Ok(Some(Cover { pipeline, objects }))
     }
 
-    /// Whether the proxies can be drawn this frame: each lies wholly in front of the
-    /// camera's plane (then every vertex has w > 0).
-    pub fn usable(&self, inputs: &FrameInputs<'_>) -> bool {
-        self.objects.iter().all(|&i| {
-            inputs.object_bounds.get(i).is_some_and(|&(centre, radius)| {
-                // A relative margin for the rounding of w on the GPU.
-                (centre - inputs.eye).dot(inputs.forward) > radius * PROXY_SCALE * (1.0 + 1e-3) + 1e-6
-            })
-        })
+    /// Each object's octagon this frame, or `None` if one cannot be drawn (the eye inside
+    /// its bounding sphere, or a corner not in front of the camera).
+    pub fn octagons(&self, inputs: &FrameInputs<'_>) -> Option<Vec<CoverPush>> {
+        self.objects.iter().map(|&i| octagon(*inputs.object_bounds.get(i)?, inputs.eye, inputs.forward)).collect()
     }
 
-    /// Draw each object's proxy with `sets` bound (inside the pass's render pass).
-    pub fn draw(&self, cmd: &Cmd, sets: &[DescriptorSet], inputs_bounds: &[(Vec3, f32)]) {
+    /// Draw `octagons` with `sets` bound (inside the pass's render pass).
+    pub fn draw(&self, cmd: &Cmd, sets: &[DescriptorSet], octagons: &[CoverPush]) {
         cmd.bind_graphics(&self.pipeline, sets);
-        cmd.bind_vertex_buffer(&self.proxy);
-        for &i in &self.objects {
-            let (c, r) = inputs_bounds[i];
-            cmd.push_graphics(&self.pipeline, &CoverPush { sphere: [c.x, c.y, c.z, r * PROXY_SCALE] });
-            cmd.draw(self.proxy_vertices, 1);
+        for o in octagons {
+            cmd.push_graphics(&self.pipeline, o);
+            cmd.draw(18, 1);
         }
     }
 }
 
-/// How much larger than the sphere it bounds [`proxy_sphere`]'s polyhedron is drawn: the
-/// reciprocal of the smallest distance from the centre to a face plane of the unit-vertex
-/// polyhedron (0.9822 for the icosahedron subdivided twice), so that every face lies
-/// outside the sphere. Checked by `proxy_circumscribes_the_unit_sphere`.
-pub const PROXY_SCALE: f32 = 1.0 / 0.98;
-
-/// A closed convex polyhedron with vertices on the unit sphere, as a triangle list wound
-/// alike (counter-clockwise seen from outside): the icosahedron with each face split in
-/// four twice, 320 triangles.
-pub fn proxy_sphere() -> Vec<Vec3> {
-    let t = (1.0 + 5f32.sqrt()) / 2.0;
-    let v = [
-        Vec3::new(-1.0, t, 0.0),
-        Vec3::new(1.0, t, 0.0),
-        Vec3::new(-1.0, -t, 0.0),
-        Vec3::new(1.0, -t, 0.0),
-        Vec3::new(0.0, -1.0, t),
-        Vec3::new(0.0, 1.0, t),
-        Vec3::new(0.0, -1.0, -t),
-        Vec3::new(0.0, 1.0, -t),
-        Vec3::new(t, 0.0, -1.0),
-        Vec3::new(t, 0.0, 1.0),
-        Vec3::new(-t, 0.0, -1.0),
-        Vec3::new(-t, 0.0, 1.0),
-    ]
-    .map(Vec3::normalize);
-    let faces = [
-        [0, 11, 5],
-        [0, 5, 1],
-        [0, 1, 7],
-        [0, 7, 10],
-        [0, 10, 11],
-        [1, 5, 9],
-        [5, 11, 4],
-        [11, 10, 2],
-        [10, 7, 6],
-        [7, 1, 8],
-        [3, 9, 4],
-        [3, 4, 2],
-        [3, 2, 6],
-        [3, 6, 8],
-        [3, 8, 9],
-        [4, 9, 5],
-        [2, 4, 11],
-        [6, 2, 10],
-        [8, 6, 7],
-        [9, 8, 1],
-    ];
-    let mut tris: Vec<[Vec3; 3]> = faces.iter().map(|f| [v[f[0]], v[f[1]], v[f[2]]]).collect();
-    for _ in 0..2 {
-        tris = tris
-            .iter()
-            .flat_map(|&[a, b, c]| {
-                let (ab, bc, ca) = ((a + b).normalize(), (b + c).normalize(), (c + a).normalize());
-                [[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]
-            })
-            .collect();
+/// The octagon around the outline of the sphere `(centre, radius)` seen from `eye` (see
+/// [`Cover`]); `None` when the eye is inside the sphere or a corner is not in front of the
+/// camera.
+pub fn octagon((centre, radius): (Vec3, f32), eye: Vec3, forward: Vec3) -> Option<CoverPush> {
+    let to = centre - eye;
+    let d = to.length();
+    // A relative margin for rounding: a sphere grazing the eye is drawn full-screen.
+    if !(d > radius * (1.0 + 1e-3)) {
+        return None;
     }
-    tris.into_iter()
-        .flat_map(|[a, b, c]| {
-            // Wind every face counter-clockwise seen from outside.
-            if (b - a).cross(c - a).dot(a + b + c) < 0.0 {
-                [a, c, b]
-            } else {
-                [a, b, c]
-            }
-        })
-        .collect()
+    let w = to / d;
+    let k = 1.0 - (radius / d) * (radius / d);
+    let middle = eye + to * k;
+    let circle = radius * k.sqrt();
+    let u = w.any_orthonormal_vector();
+    let v = w.cross(u);
+    let (u, v) = (u * circle * PROXY_SCALE, v * circle * PROXY_SCALE);
+    let corners = (0..8).map(|c| {
+        let a = c as f32 * std::f32::consts::FRAC_PI_4;
+        middle + a.cos() * u + a.sin() * v
+    });
+    // In front of the camera, with a margin for the rounding of w on the GPU.
+    let nearest = corners.map(|p| (p - eye).dot(forward)).fold(f32::INFINITY, f32::min);
+    (nearest > 1e-4 * d).then(|| CoverPush {
+        centre: middle.extend(1.0).to_array(),
+        u: u.extend(0.0).to_array(),
+        v: v.extend(0.0).to_array(),
+    })
 }
 
 pub struct FullscreenDesc<'a> {
@@ -268,8 +219,8 @@ impl FullscreenPass {
     /// [`FullscreenPass::record`], drawing the covered objects' meshes instead of the
     /// full-screen triangle where they can be ([`Cover::usable`]).
     pub fn record_covering<'a>(&'a self, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>, reads: &[ImageId]) {
-        let cover = self.cover.as_ref().filter(|c| c.usable(inputs));
-        self.record_with(frame, inputs.frame_set, reads, cover.map(|c| (c, inputs.object_bounds)));
+        let cover = self.cover.as_ref().and_then(|c| Some((c, c.octagons(inputs)?)));
+        self.record_with(frame, inputs.frame_set, reads, cover);
     }
 
     /// Add the pass to `frame`: its set's reads, and `reads` of the frame set (set 0) in
@@ -283,7 +234,7 @@ impl FullscreenPass {
         frame: &mut Frame<'_, 'a>,
         frame_set: DescriptorSet,
         reads: &[ImageId],
-        cover: Option<(&'a Cover, &'a [(Vec3, f32)])>,
+        cover: Option<(&'a Cover, Vec<CoverPush>)>,
     ) {
         let mut pass = frame.pass(self.name).uses(&self.set);
         for &id in reads {
@@ -292,7 +243,7 @@ impl FullscreenPass {
         pass.write(self.target_id, Access::ColorAttachment).record(move |cmd| {
             let clear = if self.clear { Clear::Color([0.0; 4]) } else { Clear::None };
             cmd.in_target(&self.target, 0, &[clear], |cmd| match cover {
-                Some((cover, bounds)) => cover.draw(cmd, &[frame_set, self.set.set()], bounds),
+                Some((cover, octagons)) => cover.draw(cmd, &[frame_set, self.set.set()], &octagons),
                 None => {
                     cmd.bind_graphics(&self.pipeline, &[frame_set, self.set.set()]);
                     cmd.draw(3, 1);
@@ -306,18 +257,27 @@ impl FullscreenPass {
 mod tests {
     use super::*;
 
-    /// Every face plane of the scaled proxy lies outside the unit sphere (so its outline
-    /// contains the sphere's), by less than 3% (so it shades few pixels outside).
+    /// The octagon lies in the plane of the sphere's outline circle and every edge touches
+    /// or clears that circle: each line from the eye through an edge's midpoint misses the
+    /// sphere or grazes it.
     #[test]
-    fn proxy_circumscribes_the_unit_sphere() {
-        let p = proxy_sphere();
-        assert_eq!(p.len(), 320 * 3);
-        let mut nearest = f32::INFINITY;
-        for t in p.chunks_exact(3) {
-            let n = (t[1] - t[0]).cross(t[2] - t[0]).normalize();
-            assert!(n.dot(t[0] + t[1] + t[2]) > 0.0, "wound counter-clockwise seen from outside");
-            nearest = nearest.min(n.dot(t[0]) * PROXY_SCALE);
+    fn the_octagon_circumscribes_the_spheres_outline() {
+        let (centre, radius, eye) = (Vec3::new(0.3, -0.2, 0.1), 0.7, Vec3::new(1.0, 2.0, 4.0));
+        let forward = (centre - eye).normalize();
+        let o = octagon((centre, radius), eye, forward).unwrap();
+        let (m, u, v) = (Vec3::from_slice(&o.centre[..3]), Vec3::from_slice(&o.u[..3]), Vec3::from_slice(&o.v[..3]));
+        for c in 0..8 {
+            let corner = |k: i32| {
+                let a = k as f32 * std::f32::consts::FRAC_PI_4;
+                m + a.cos() * u + a.sin() * v
+            };
+            let mid = 0.5 * (corner(c) + corner(c + 1));
+            let ray = (mid - eye).normalize();
+            let closest = (centre - eye).dot(ray);
+            let miss = ((centre - eye).length_squared() - closest * closest).sqrt();
+            assert!((miss / radius - 1.0).abs() < 1e-4, "edge {c} passes {miss} from the centre");
         }
-        assert!((1.0..1.03).contains(&nearest), "{nearest}");
+        assert!(octagon((centre, radius), centre + Vec3::X * 0.5 * radius, forward).is_none(), "eye inside");
+        assert!(octagon((centre, radius), eye, -forward).is_none(), "behind the camera");
     }
 }

@@ -266,7 +266,7 @@ impl ShadePass {
             &target.pass,
         )?;
         // The fragment shader discards every pixel whose G-buffer material is not a
-        // dielectric: the dielectrics' meshes cover every pixel it writes.
+        // dielectric: octagons around the dielectrics cover every pixel it writes.
         let scene = desc.scene;
         let dielectrics = (0..scene.objects.len())
             .filter(|&i| matches!(scene.material_of(&scene.objects[i]), Material::Dielectric { .. }));
@@ -285,8 +285,8 @@ impl ShadePass {
 
     /// Add the pass to `frame`; `environment` is sampled through the frame set.
     pub fn record<'a>(&'a self, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>) {
-        let (environment, frame_set, bounds) = (inputs.scene.environment_id, inputs.frame_set, inputs.object_bounds);
-        let cover = self.cover.as_ref().filter(|c| c.usable(inputs));
+        let (environment, frame_set) = (inputs.scene.environment_id, inputs.frame_set);
+        let cover = self.cover.as_ref().and_then(|c| Some((c, c.octagons(inputs)?)));
         let mut pass = frame.pass(self.name).read(environment, Access::FragmentSampled).uses(&self.set);
         pass = pass.write(self.hdr, Access::ColorAttachment);
         for d in &self.debug {
@@ -296,7 +296,7 @@ impl ShadePass {
             let mut clears = vec![Clear::None];
             clears.extend(self.debug.iter().map(|_| Clear::Color([0.0; 4])));
             cmd.in_target(&self.target, 0, &clears, |cmd| match cover {
-                Some(cover) => cover.draw(cmd, &[frame_set, self.set.set()], bounds),
+                Some((cover, octagons)) => cover.draw(cmd, &[frame_set, self.set.set()], &octagons),
                 None => {
                     cmd.bind_graphics(&self.pipeline, &[frame_set, self.set.set()]);
                     cmd.draw(3, 1);
