@@ -7,8 +7,8 @@ use glam::Vec3;
 
 use crate::frame::targets::Targets;
 use crate::gpu::{
-    vk, Access, Blend, Buffer, Clear, Cmd, DescriptorSet, DescriptorSetLayout, GpuContext, GpuResult, GraphicsPipeline,
-    GraphicsPipelineDesc, Image, RenderPass, RenderTarget, Specs, VertexLayout,
+    vk, Access, Blend, Clear, Cmd, DescriptorSet, DescriptorSetLayout, GpuContext, GpuResult, GraphicsPipeline,
+    GraphicsPipelineDesc, Image, RenderPass, RenderTarget, Specs,
 };
 use crate::graph::{Bindings, BoundSet, Frame, ImageId};
 use crate::shader_structs::CoverPush;
