@@ -98,6 +98,16 @@ shared_structs! {
         time: float,
     }
 
+    /// Push constants of glsl/common/cover.vert: the proxy sphere drawn over an object's
+    /// pixels (src/technique/baseline/fullscreen.rs, `Cover`).
+    push struct CoverPush {
+        /// The octagon's centre (xyz), and its two half-axes u and v in its plane: corner k
+        /// is centre + cos(k pi / 4) u + sin(k pi / 4) v.
+        centre: vec4,
+        u: vec4,
+        v: vec4,
+    }
+
     /// Push constants of the G-buffer pass (glsl/gbuffer/gbuffer.frag).
     push struct GbufferPush {
         material: uint,

@@ -16,6 +16,12 @@ layout(constant_id = 1) const uint CAUSTIC_FILTER = 0;
 // and PHOTON_PHYSICAL or PHOTON_PAPER.
 layout(constant_id = 2) const uint PHOTON_RECTS = 0;
 layout(constant_id = 3) const uint PHOTON_MODE = 0;
+// 0 when the scene has no diffuse object: the pass then only draws the environment behind
+// the specular objects. A specialisation constant rather than the material test alone: a
+// CPU device (lavapipe) runs both sides of a branch with lanes masked, so every background
+// pixel paid for the whole diffuse path (irradiance, every light's shadow taps, caustic
+// lookups): 18 ms against 2 ms for the tone map on sphere_env at 512^2 (docs/BENCHMARKS.md).
+layout(constant_id = 4) const uint DIFFUSE = 1;
 layout(location = 0) in vec2 in_uv;
 layout(location = 0) out vec4 out_radiance;
 
@@ -32,7 +38,7 @@ void main() {
     }
     vec4 nm = texelFetch(gbuf_normal, px, 0);
     uint mat = uint(nm.w + 0.5);
-    if (material_kind(mat) != MATERIAL_DIFFUSE) {
+    if (DIFFUSE == 0u || material_kind(mat) != MATERIAL_DIFFUSE) {
         out_radiance = vec4(0.0, 0.0, 0.0, 1.0);
         return;
     }

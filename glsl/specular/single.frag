@@ -7,6 +7,11 @@
 #include "environment.glsl"
 #include "fresnel.glsl"
 layout(constant_id = 0) const uint MODE = SPECULAR_MODE_REFRACTION;
+// 1 when some dielectric of the scene has a different ior per channel (dispersion), the
+// only case that needs a refracted lookup per channel. A specialisation constant, not only a
+// test of the material: a CPU device (lavapipe) runs both sides of a branch with lanes
+// masked, so the code for three lookups must not be in the shader when one suffices.
+layout(constant_id = 1) const uint DISPERSION = 1;
 layout(set = 1, binding = BINDING_GBUF_NORMAL) uniform sampler2D gbuf_normal;
 layout(set = 1, binding = BINDING_GBUF_DEPTH) uniform sampler2D gbuf_depth;
 layout(location = 0) in vec2 in_uv;
@@ -21,6 +26,7 @@ void main() {
     uint kind = material_kind(mat);
     bool dielectric = kind == MATERIAL_DIELECTRIC;
     bool metal = kind == MATERIAL_MIRROR || kind == MATERIAL_CONDUCTOR;
+    // After this, every pixel left is of the mode's materials.
     if ((MODE == SPECULAR_MODE_REFRACTION && !dielectric) || (MODE == SPECULAR_MODE_REFLECTION && !metal)) discard;
 
     GpuMaterial m = materials[mat];
@@ -32,21 +38,30 @@ void main() {
     vec3 R = reflect(I, n);
     vec3 L_reflected = environment(R);
     vec3 L;
-    if (metal) {
+    if (MODE == SPECULAR_MODE_REFLECTION) {
         vec3 F = kind == MATERIAL_MIRROR ? m.spec_a.rgb : fresnel_conductor(cos_i, m.spec_a.rgb, m.spec_b.rgb);
         L = F * L_reflected;
     } else {
-        // eta = n_i / n_t per channel; equal channels need only one refracted lookup.
+        // eta = n_i / n_t per channel.
         vec3 ior = max(m.spec_a.rgb, vec3(1e-6));
         vec3 eta = inside ? ior : 1.0 / ior;
-        int channels = (ior.r == ior.g && ior.g == ior.b) ? 1 : 3;
-        for (int c = 0; c < 3; ++c) {
-            int k = channels == 1 ? 0 : c;
-            float F = fresnel_dielectric(cos_i, eta[k]);
-            vec3 T = refract(I, n, eta[k]);
+        if (DISPERSION == 0u || (ior.r == ior.g && ior.g == ior.b)) {
+            // A scalar ior: one Fresnel term, one refract() and one environment lookup for
+            // all three channels, the one lookup of the papers' 1-sided baseline (Wyman 2005,
+            // Table 1). Anything more would inflate the cost every technique is divided by.
+            float F = fresnel_dielectric(cos_i, eta.x);
+            vec3 T = refract(I, n, eta.x);
             // refract() returns 0 under total internal reflection, where F = 1.
             vec3 L_t = dot(T, T) > 0.0 ? environment(T) : vec3(0.0);
-            L[c] = F * L_reflected[c] + (1.0 - F) * L_t[c];
+            L = F * L_reflected + (1.0 - F) * L_t;
+        } else {
+            // Dispersion: each channel refracts by its own ior and needs its own lookup.
+            for (int c = 0; c < 3; ++c) {
+                float F = fresnel_dielectric(cos_i, eta[c]);
+                vec3 T = refract(I, n, eta[c]);
+                vec3 L_t = dot(T, T) > 0.0 ? environment(T) : vec3(0.0);
+                L[c] = F * L_reflected[c] + (1.0 - F) * L_t[c];
+            }
         }
     }
     out_radiance = vec4(finite_or_zero(L), 1.0);

@@ -8,8 +8,9 @@ use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 
 use crate::gpu::DeviceInfo;
+use crate::gpu::PassCounts;
 use crate::metrics::timing::Stats;
-use crate::renderer::{FrameTiming, Renderer};
+use crate::renderer::{FrameTiming, Renderer, TechniqueMemory};
 
 use super::output::{self, Outputs};
 use super::{check_validation, GpuArgs, SceneArgs};
@@ -38,6 +39,20 @@ pub struct BenchArgs {
     /// Every N frames, print resident memory and GPU allocator usage to stderr (scripts/soak).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
     pub stats: Option<u64>,
+    /// Time this setting against the other `--versus` settings in one process, interleaved
+    /// frame by frame (repeat, two or more; each ratio is against the first). KEY=VALUE as
+    /// for --set, applied after every --set.
+    #[arg(long, value_name = "KEY=VALUE")]
+    pub versus: Vec<String>,
+    /// Compare two `prism bench --json` files pass by pass, with their spread, and say which
+    /// differences exceed the noise (renders nothing).
+    #[arg(long, num_args = 2, value_names = ["A_JSON", "B_JSON"], conflicts_with = "versus")]
+    pub diff: Option<Vec<PathBuf>>,
+    /// Count each pass's pipeline statistics (vertex, geometry, fragment and compute
+    /// invocations, primitives, clipping) with Vulkan queries, beside its time, in the table,
+    /// the JSON and the trace.
+    #[arg(long)]
+    pub pipeline_stats: bool,
     #[command(flatten)]
     pub gpu: GpuArgs,
 }
@@ -47,6 +62,74 @@ pub struct PassStats {
     pub name: String,
     #[serde(flatten)]
     pub stats: Stats,
+    /// Sample standard deviation (n - 1 in the denominator), ms; bench only.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stddev_ms: Option<f64>,
+    /// Every measured frame's time, in frame order, ms; bench only (`--diff` reads them).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub samples_ms: Vec<f64>,
+    /// Median over the frames of each pipeline-statistics counter (`--pipeline-stats`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pipeline_statistics: Option<PassCounts>,
+}
+
+impl PassStats {
+    /// Statistics of `samples` with the samples and their standard deviation kept.
+    pub fn detailed(name: impl Into<String>, samples: Vec<f64>) -> PassStats {
+        PassStats {
+            name: name.into(),
+            stats: Stats::of(&samples),
+            stddev_ms: Some(stddev(&samples)),
+            samples_ms: samples,
+            pipeline_statistics: None,
+        }
+    }
+}
+
+/// Sample standard deviation (Bessel's n - 1); 0 for fewer than two samples.
+pub fn stddev(v: &[f64]) -> f64 {
+    if v.len() < 2 {
+        return 0.0;
+    }
+    let mean = v.iter().sum::<f64>() / v.len() as f64;
+    (v.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (v.len() - 1) as f64).sqrt()
+}
+
+/// What the host reports about its own state around a run. Vulkan exposes no clock or
+/// power state; on lavapipe the "GPU" is these CPUs, whose load and frequency governor are
+/// what moves its timings.
+#[derive(Serialize, Debug, Clone, Default)]
+pub struct HostState {
+    /// /proc/loadavg's 1-, 5- and 15-minute load averages before and after the run.
+    pub loadavg_before: Option<[f64; 3]>,
+    pub loadavg_after: Option<[f64; 3]>,
+    /// cpu0's cpufreq scaling governor, where the kernel exposes it.
+    pub cpu_governor: Option<String>,
+    pub cpus: usize,
+}
+
+impl HostState {
+    pub fn before() -> HostState {
+        let governor = std::fs::read_to_string("/sys/devices/system/cpu/cpu0/cpufreq/scaling_governor")
+            .ok()
+            .map(|s| s.trim().to_string());
+        HostState {
+            loadavg_before: loadavg(),
+            loadavg_after: None,
+            cpu_governor: governor,
+            cpus: std::thread::available_parallelism().map_or(0, |n| n.get()),
+        }
+    }
+    pub fn after(mut self) -> HostState {
+        self.loadavg_after = loadavg();
+        self
+    }
+}
+
+fn loadavg() -> Option<[f64; 3]> {
+    let s = std::fs::read_to_string("/proc/loadavg").ok()?;
+    let v: Vec<f64> = s.split_whitespace().take(3).filter_map(|x| x.parse().ok()).collect();
+    (v.len() == 3).then(|| [v[0], v[1], v[2]])
 }
 
 #[derive(Serialize, Debug)]
@@ -63,7 +146,10 @@ pub struct BenchReport {
     /// The effective scene (after overrides), as TOML.
     pub scene_toml: String,
     pub passes: Vec<PassStats>,
-    pub frame: Stats,
+    pub frame: PassStats,
+    /// Device memory each technique created, and the shared resources' ("frame").
+    pub memory: Vec<TechniqueMemory>,
+    pub host: HostState,
     /// The eikonal light simulation (run once when the renderer is created): steps, patch
     /// count per step, patch-steps, peak, GPU ms per kernel, wall-clock seconds. Absent
     /// without one.
@@ -114,48 +200,184 @@ pub fn summarize(frames: &[FrameTiming]) -> (Vec<PassStats>, Stats) {
                 .iter()
                 .flat_map(|f| f.passes.iter().filter(|p| p.name == name).map(|p| p.duration_ms()))
                 .collect();
-            PassStats { stats: Stats::of(&v), name }
+            PassStats { stats: Stats::of(&v), name, stddev_ms: None, samples_ms: Vec::new(), pipeline_statistics: None }
         })
         .collect();
     let totals: Vec<f64> = frames.iter().map(|f| f.total_ms()).collect();
     (passes, Stats::of(&totals))
 }
 
+/// [`summarize`] keeping every frame's sample and the standard deviation. A pass that runs
+/// more than once in a frame contributes the sum of its runs to that frame's sample.
+pub fn summarize_detailed(frames: &[FrameTiming]) -> (Vec<PassStats>, PassStats) {
+    let passes = pass_names(frames)
+        .into_iter()
+        .map(|name| {
+            let v = frames.iter().map(|f| pass_sum(f, &[name.as_str()])).collect();
+            let counts: Vec<PassCounts> = frames
+                .iter()
+                .flat_map(|f| f.passes.iter().filter(|p| p.name == name).filter_map(|p| p.counts))
+                .collect();
+            let mut s = PassStats::detailed(name, v);
+            s.pipeline_statistics = median_counts(&counts);
+            s
+        })
+        .collect();
+    (passes, PassStats::detailed("frame", frames.iter().map(|f| f.total_ms()).collect()))
+}
+
+/// Each counter's median (the upper one of an even count); `None` without counts. The
+/// counts of a static scene are the same every frame; a median ignores a frame that differs.
+fn median_counts(counts: &[PassCounts]) -> Option<PassCounts> {
+    if counts.is_empty() {
+        return None;
+    }
+    let m = |f: fn(&PassCounts) -> u64| {
+        let mut v: Vec<u64> = counts.iter().map(f).collect();
+        v.sort_unstable();
+        v[v.len() / 2]
+    };
+    Some(PassCounts {
+        input_vertices: m(|c| c.input_vertices),
+        input_primitives: m(|c| c.input_primitives),
+        vertex_invocations: m(|c| c.vertex_invocations),
+        geometry_invocations: m(|c| c.geometry_invocations),
+        geometry_primitives: m(|c| c.geometry_primitives),
+        clipping_invocations: m(|c| c.clipping_invocations),
+        clipping_primitives: m(|c| c.clipping_primitives),
+        fragment_invocations: m(|c| c.fragment_invocations),
+        compute_invocations: counts[0].compute_invocations.map(|_| m(|c| c.compute_invocations.unwrap_or(0))),
+    })
+}
+
+/// The pipeline-statistics table (`--pipeline-stats`): each pass's median counters.
+pub fn print_counts_table(passes: &[PassStats]) {
+    if passes.iter().all(|p| p.pipeline_statistics.is_none()) {
+        return;
+    }
+    let width = passes.iter().map(|p| p.name.len()).max().unwrap_or(5).max(5);
+    println!(
+        "{:width$}  {:>10}  {:>10}  {:>10}  {:>10}  {:>10}  {:>10}  {:>10}  {:>12}  {:>10}",
+        "pass", "vertices", "primitives", "vs inv", "gs inv", "gs prims", "clip inv", "clip prims", "fs inv", "cs inv"
+    );
+    for p in passes {
+        let Some(c) = p.pipeline_statistics else { continue };
+        println!(
+            "{:width$}  {:>10}  {:>10}  {:>10}  {:>10}  {:>10}  {:>10}  {:>10}  {:>12}  {:>10}",
+            p.name,
+            c.input_vertices,
+            c.input_primitives,
+            c.vertex_invocations,
+            c.geometry_invocations,
+            c.geometry_primitives,
+            c.clipping_invocations,
+            c.clipping_primitives,
+            c.fragment_invocations,
+            c.compute_invocations.map_or_else(|| "-".to_string(), |n| n.to_string())
+        );
+    }
+}
+
+/// Device memory per technique, in MiB.
+pub fn print_memory_table(memory: &[TechniqueMemory]) {
+    let width = memory.iter().map(|m| m.technique.len()).max().unwrap_or(9).max(9);
+    let mib = |b: u64| b as f64 / (1024.0 * 1024.0);
+    println!(
+        "{:width$}  {:>11}  {:>11}  {:>11}  {:>11}",
+        "technique", "buffers MiB", "images MiB", "volumes MiB", "total MiB"
+    );
+    for m in memory {
+        let b = &m.bytes;
+        println!(
+            "{:width$}  {:>11.2}  {:>11.2}  {:>11.2}  {:>11.2}",
+            m.technique,
+            mib(b.buffer_bytes),
+            mib(b.image_bytes),
+            mib(b.volume_bytes),
+            mib(b.total())
+        );
+    }
+}
+
+/// Every pass name of `frames`, in the order they first ran.
+fn pass_names(frames: &[FrameTiming]) -> Vec<String> {
+    let mut names: Vec<String> = Vec::new();
+    for f in frames {
+        for p in &f.passes {
+            if !names.contains(&p.name) {
+                names.push(p.name.clone());
+            }
+        }
+    }
+    names
+}
+
+/// The time of the passes named `names` in frame `f`, summed, ms.
+fn pass_sum(f: &FrameTiming, names: &[&str]) -> f64 {
+    f.passes.iter().filter(|p| names.contains(&p.name.as_str())).map(|p| p.duration_ms()).sum()
+}
+
 /// Chrome trace-event JSON: one complete ("X") event per frame on thread 1 and per pass on
 /// thread 2, in microseconds. Frames are laid out at their GPU start times.
 pub fn chrome_trace(frames: &[FrameTiming], device: &DeviceInfo, scene: &str) -> serde_json::Value {
-    let mut events = vec![
-        serde_json::json!({"name": "process_name", "ph": "M", "pid": 1, "args": {"name": format!("prism GPU ({})", device.name)}}),
-        serde_json::json!({"name": "thread_name", "ph": "M", "pid": 1, "tid": 1, "args": {"name": "frames"}}),
-        serde_json::json!({"name": "thread_name", "ph": "M", "pid": 1, "tid": 2, "args": {"name": "passes"}}),
-    ];
-    let t0 = frames.first().map(|f| f.gpu_start_ms).unwrap_or(0.0);
-    for f in frames {
-        let base = (f.gpu_start_ms - t0) * 1000.0;
-        events.push(serde_json::json!({
-            "name": format!("frame {}", f.frame), "cat": "frame", "ph": "X", "pid": 1, "tid": 1,
-            "ts": base, "dur": f.total_ms() * 1000.0, "args": {"scene": scene}
-        }));
-        for p in &f.passes {
+    chrome_trace_of(&[(format!("prism GPU ({})", device.name), frames)], scene)
+}
+
+/// [`chrome_trace`] of several runs, one process each (`--versus`: one per setting), laid
+/// out on one clock from the earliest frame.
+pub fn chrome_trace_of(runs: &[(String, &[FrameTiming])], scene: &str) -> serde_json::Value {
+    let mut events = Vec::new();
+    let t0 = runs.iter().flat_map(|(_, f)| f.first()).map(|f| f.gpu_start_ms).fold(f64::INFINITY, f64::min);
+    for (i, (label, frames)) in runs.iter().enumerate() {
+        let pid = i + 1;
+        events.push(serde_json::json!({"name": "process_name", "ph": "M", "pid": pid, "args": {"name": label}}));
+        events.push(
+            serde_json::json!({"name": "thread_name", "ph": "M", "pid": pid, "tid": 1, "args": {"name": "frames"}}),
+        );
+        events.push(
+            serde_json::json!({"name": "thread_name", "ph": "M", "pid": pid, "tid": 2, "args": {"name": "passes"}}),
+        );
+        for f in frames.iter() {
+            let base = (f.gpu_start_ms - t0) * 1000.0;
             events.push(serde_json::json!({
-                "name": p.name, "cat": "pass", "ph": "X", "pid": 1, "tid": 2,
-                "ts": base + p.start_ms * 1000.0, "dur": p.duration_ms() * 1000.0, "args": {"frame": f.frame}
+                "name": format!("frame {}", f.frame), "cat": "frame", "ph": "X", "pid": pid, "tid": 1,
+                "ts": base, "dur": f.total_ms() * 1000.0, "args": {"scene": scene}
             }));
+            for p in &f.passes {
+                let mut args = serde_json::json!({"frame": f.frame});
+                if let Some(c) = &p.counts {
+                    args["pipeline_statistics"] = serde_json::to_value(c).unwrap_or_default();
+                }
+                events.push(serde_json::json!({
+                    "name": p.name, "cat": "pass", "ph": "X", "pid": pid, "tid": 2,
+                    "ts": base + p.start_ms * 1000.0, "dur": p.duration_ms() * 1000.0, "args": args
+                }));
+            }
         }
     }
     serde_json::json!({ "traceEvents": events, "displayTimeUnit": "ms" })
 }
 
 pub fn run(args: BenchArgs) -> Result<()> {
+    if let Some(files) = &args.diff {
+        return super::bench_diff::run(&files[0], &files[1]);
+    }
     if args.frames == 0 {
         anyhow::bail!("--frames must be at least 1");
     }
+    if !args.versus.is_empty() {
+        return super::bench_versus::run(args);
+    }
+    let host = HostState::before();
     let scene = args.scene.load()?;
     let mut outputs = Outputs::default();
     let json_out = outputs.prepare_opt(args.json.as_deref())?;
     let trace_out = outputs.prepare_opt(args.trace.as_deref())?;
     let ctx = args.gpu.context()?;
     let mut renderer = Renderer::new(&ctx, &scene).context("cannot set up the renderer")?;
+    if args.pipeline_stats {
+        enable_pipeline_stats(&mut renderer)?;
+    }
 
     let total = u64::from(args.warmup) + u64::from(args.frames);
     let bar = ProgressBar::new(total).with_style(
@@ -175,7 +397,8 @@ pub fn run(args: BenchArgs) -> Result<()> {
     check_validation(&ctx)?;
     let frames: Vec<FrameTiming> =
         renderer.take_timings().into_iter().filter(|f| f.frame >= u64::from(args.warmup)).collect();
-    let (passes, frame) = summarize(&frames);
+    let host = host.after();
+    let (passes, frame) = summarize_detailed(&frames);
 
     println!(
         "prism bench: {} at {}x{}, {} frames after {} warm-up, on {} ({} {})",
@@ -188,12 +411,13 @@ pub fn run(args: BenchArgs) -> Result<()> {
         ctx.info.driver_name,
         ctx.info.driver_info
     );
-    let width = passes.iter().map(|p| p.name.len()).max().unwrap_or(5).max(5);
-    println!("{:width$}  {:>10}  {:>10}  {:>10}", "pass", "median ms", "min ms", "max ms");
-    for p in &passes {
-        println!("{:width$}  {:>10.3}  {:>10.3}  {:>10.3}", p.name, p.stats.median_ms, p.stats.min_ms, p.stats.max_ms);
+    print_pass_table(&passes, &frame);
+    if args.pipeline_stats {
+        println!();
+        print_counts_table(&passes);
+        println!();
+        print_memory_table(renderer.technique_memory());
     }
-    println!("{:width$}  {:>10.3}  {:>10.3}  {:>10.3}", "frame", frame.median_ms, frame.min_ms, frame.max_ms);
     if let Some(l) = renderer.light_stats() {
         println!(
             "eikonal light simulation (once, at setup): {:.3} s wall clock, {} steps, {} initial patches, peak {}, {} dropped",
@@ -229,6 +453,8 @@ pub fn run(args: BenchArgs) -> Result<()> {
             scene_toml: scene.canonical.clone(),
             passes,
             frame,
+            memory: renderer.technique_memory().to_vec(),
+            host,
             light_simulation: renderer.light_stats().cloned(),
             note: "GPU timestamps; on a CPU device (lavapipe) these are CPU times: compare ratios, not absolute values",
         };
@@ -239,4 +465,28 @@ pub fn run(args: BenchArgs) -> Result<()> {
         written.push(out.write(serde_json::to_string(&trace)?.as_bytes())?);
     }
     output::commit_all(written)
+}
+
+/// Turn on the pipeline-statistics queries, or say why they cannot be.
+pub fn enable_pipeline_stats(renderer: &mut Renderer) -> Result<()> {
+    if !renderer.count_pipeline_stats()? {
+        anyhow::bail!("--pipeline-stats: the device lacks pipelineStatisticsQuery");
+    }
+    Ok(())
+}
+
+/// The per-pass table: median, min, max and standard deviation of each pass and the frame.
+pub fn print_pass_table(passes: &[PassStats], frame: &PassStats) {
+    let width = passes.iter().map(|p| p.name.len()).max().unwrap_or(5).max(5);
+    println!("{:width$}  {:>10}  {:>10}  {:>10}  {:>10}", "pass", "median ms", "min ms", "max ms", "stddev ms");
+    for p in passes.iter().chain(std::iter::once(frame)) {
+        println!(
+            "{:width$}  {:>10.3}  {:>10.3}  {:>10.3}  {:>10.3}",
+            p.name,
+            p.stats.median_ms,
+            p.stats.min_ms,
+            p.stats.max_ms,
+            p.stddev_ms.unwrap_or(0.0)
+        );
+    }
 }

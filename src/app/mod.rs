@@ -1,6 +1,8 @@
 //! The command line: `prism render`, `prism bench`, `prism passes`, `prism scenes`, ... The CLI parses,
 //! loads, and hands work to the renderer; it never records commands itself.
 pub mod bench;
+mod bench_diff;
+mod bench_versus;
 pub mod compare;
 pub mod demo;
 pub mod equaltime;

@@ -5,7 +5,7 @@ use ash::vk;
 use gpu_allocator::vulkan::Allocation;
 use gpu_allocator::MemoryLocation;
 
-use super::context::{Garbage, GpuContext};
+use super::context::{Garbage, GpuContext, MemoryKind};
 use super::error::{GpuResult, VkContext};
 
 pub struct Buffer {
@@ -38,6 +38,7 @@ impl Buffer {
         // SAFETY: memory comes from a compatible type with the required size/alignment.
         unsafe { device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) }.vk("vkBindBufferMemory")?;
         ctx.set_name(raw, name);
+        ctx.track(MemoryKind::Buffer, allocation.size(), true);
         Ok(Buffer { ctx: ctx.clone(), raw, allocation: Some(allocation), size, name: name.into() })
     }
 
@@ -86,6 +87,7 @@ impl Buffer {
 impl Drop for Buffer {
     fn drop(&mut self) {
         if let Some(a) = self.allocation.take() {
+            self.ctx.track(MemoryKind::Buffer, a.size(), false);
             self.ctx.defer_destroy(Garbage::Buffer(self.raw, a));
         }
     }

@@ -8,8 +8,8 @@ use super::context::{timeout_nanos, GpuContext, FRAME_TIMEOUT};
 use super::error::{GpuResult, VkContext};
 use super::sync::{Access, BufferBarrier, ImageBarrier};
 use super::{
-    Buffer, ComputePipeline, DescriptorSet, Framebuffer, GraphicsPipeline, Image, OcclusionQueryPool, RenderPass,
-    RenderTarget, TimestampPool,
+    Buffer, ComputePipeline, DescriptorSet, Framebuffer, GraphicsPipeline, Image, OcclusionQueryPool,
+    PipelineStatsPool, RenderPass, RenderTarget, TimestampPool,
 };
 
 /// A tightly packed copy of every layer of `image` to or from a buffer.
@@ -258,6 +258,12 @@ impl<'a> Cmd<'a> {
         }
     }
 
+    /// Bind `vertices` alone, for non-indexed draws.
+    pub fn bind_vertex_buffer(&self, vertices: &Buffer) {
+        // SAFETY: recording; the buffer was created with VERTEX usage.
+        unsafe { self.dev().cmd_bind_vertex_buffers(self.raw, 0, &[vertices.raw], &[0]) };
+    }
+
     pub fn draw(&self, vertices: u32, instances: u32) {
         // SAFETY: recording inside a render pass with a bound graphics pipeline.
         unsafe { self.dev().cmd_draw(self.raw, vertices, instances, 0, 0) };
@@ -313,6 +319,26 @@ impl<'a> Cmd<'a> {
     pub fn reset_queries(&self, pool: &TimestampPool) {
         // SAFETY: recording outside a render pass.
         unsafe { self.dev().cmd_reset_query_pool(self.raw, pool.raw, 0, pool.capacity) };
+    }
+
+    /// Reset every query of a pipeline-statistics pool (outside a render pass).
+    pub fn reset_pipeline_stats(&self, pool: &PipelineStatsPool) {
+        // SAFETY: recording outside a render pass.
+        unsafe { self.dev().cmd_reset_query_pool(self.raw, pool.raw, 0, pool.capacity) };
+    }
+
+    /// Start counting pass `query`'s pipeline statistics. Begun and ended outside any render
+    /// pass (the frame graph wraps whole passes), so a pass's render passes lie inside it.
+    pub fn begin_pipeline_stats(&self, pool: &PipelineStatsPool, query: u32) {
+        assert!(query < pool.capacity, "pipeline-statistics query {query} of {}", pool.capacity);
+        // SAFETY: query < capacity, reset earlier in this command buffer; no other query of
+        // this type is active (the graph ends each pass's query before the next begins).
+        unsafe { self.dev().cmd_begin_query(self.raw, pool.raw, query, vk::QueryControlFlags::empty()) };
+    }
+
+    pub fn end_pipeline_stats(&self, pool: &PipelineStatsPool, query: u32) {
+        // SAFETY: the query was begun by begin_pipeline_stats in this command buffer.
+        unsafe { self.dev().cmd_end_query(self.raw, pool.raw, query) };
     }
 
     /// Reset every query of `pool` (outside a render pass, before the queries begin).

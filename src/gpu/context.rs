@@ -67,6 +67,41 @@ pub struct DeviceInfo {
     /// Whether occlusion queries can count samples exactly (`occlusionQueryPrecise`);
     /// without it a query only tells zero from non-zero.
     pub occlusion_query_precise: bool,
+    /// Whether pipeline-statistics queries are enabled (`pipelineStatisticsQuery`):
+    /// `prism bench --pipeline-stats`.
+    pub pipeline_statistics: bool,
+}
+
+/// Device memory of live buffers, images (2D, arrays, cubes) and volumes (3D images), in
+/// bytes as gpu-allocator allocated them ([`GpuContext::memory_kinds`]). The difference of two
+/// snapshots is what was created in between: the renderer attributes memory to techniques so.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+pub struct MemoryKinds {
+    pub buffer_bytes: u64,
+    pub image_bytes: u64,
+    pub volume_bytes: u64,
+}
+
+impl MemoryKinds {
+    /// What `self` holds beyond `before` (saturating: what was freed in between counts 0).
+    pub fn since(&self, before: &MemoryKinds) -> MemoryKinds {
+        MemoryKinds {
+            buffer_bytes: self.buffer_bytes.saturating_sub(before.buffer_bytes),
+            image_bytes: self.image_bytes.saturating_sub(before.image_bytes),
+            volume_bytes: self.volume_bytes.saturating_sub(before.volume_bytes),
+        }
+    }
+    pub fn total(&self) -> u64 {
+        self.buffer_bytes + self.image_bytes + self.volume_bytes
+    }
+}
+
+/// Which tally of [`MemoryKinds`] an allocation counts in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum MemoryKind {
+    Buffer = 0,
+    Image = 1,
+    Volume = 2,
 }
 
 /// Device memory as gpu-allocator sees it ([`GpuContext::memory_usage`]).
@@ -108,6 +143,8 @@ pub struct GpuContext {
     pub(crate) queue: vk::Queue,
     pub(crate) queue_family: u32,
     pub(crate) allocator: Mutex<Option<Allocator>>,
+    /// Bytes of live buffers, images and volumes ([`MemoryKinds`]), as allocated for them.
+    pub(crate) live_bytes: [std::sync::atomic::AtomicU64; 3],
     pub(crate) debug: Option<debug::Messenger>,
     pub(crate) debug_state: Arc<DebugState>,
     pub(crate) debug_utils_device: Option<ash::ext::debug_utils::Device>,
@@ -331,6 +368,7 @@ impl GpuContext {
             sampler_anisotropy: supported.sampler_anisotropy,
             shader_storage_image_write_without_format: supported.shader_storage_image_write_without_format,
             occlusion_query_precise: supported.occlusion_query_precise,
+            pipeline_statistics_query: supported.pipeline_statistics_query,
             ..Default::default()
         };
         if features.image_cube_array == vk::FALSE {
@@ -388,6 +426,7 @@ impl GpuContext {
             validation,
             sync_validation,
             occlusion_query_precise: supported.occlusion_query_precise == vk::TRUE,
+            pipeline_statistics: supported.pipeline_statistics_query == vk::TRUE,
         };
 
         let pool_info = vk::CommandPoolCreateInfo::default()
@@ -404,6 +443,7 @@ impl GpuContext {
             queue,
             queue_family,
             allocator: Mutex::new(Some(allocator)),
+            live_bytes: Default::default(),
             debug,
             debug_state,
             debug_utils_device,
@@ -468,6 +508,27 @@ impl GpuContext {
             allocated_bytes: report.total_allocated_bytes,
             block_bytes: report.total_capacity_bytes,
             allocations: report.allocations.len(),
+        }
+    }
+
+    /// Bytes of the live buffers, images and volumes.
+    pub fn memory_kinds(&self) -> MemoryKinds {
+        use std::sync::atomic::Ordering::Relaxed;
+        MemoryKinds {
+            buffer_bytes: self.live_bytes[0].load(Relaxed),
+            image_bytes: self.live_bytes[1].load(Relaxed),
+            volume_bytes: self.live_bytes[2].load(Relaxed),
+        }
+    }
+
+    /// Count `bytes` more (`add`) or fewer of `kind` in [`GpuContext::memory_kinds`].
+    pub(crate) fn track(&self, kind: MemoryKind, bytes: u64, add: bool) {
+        use std::sync::atomic::Ordering::Relaxed;
+        let tally = &self.live_bytes[kind as usize];
+        if add {
+            tally.fetch_add(bytes, Relaxed);
+        } else {
+            tally.fetch_sub(bytes.min(tally.load(Relaxed)), Relaxed);
         }
     }
 

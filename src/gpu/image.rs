@@ -5,7 +5,7 @@ use ash::vk;
 use gpu_allocator::vulkan::Allocation;
 use gpu_allocator::MemoryLocation;
 
-use super::context::{Garbage, GpuContext};
+use super::context::{Garbage, GpuContext, MemoryKind};
 use super::error::{GpuResult, VkContext};
 
 /// How the default view of an image is typed.
@@ -87,6 +87,15 @@ pub(crate) fn aspect_of(format: vk::Format) -> vk::ImageAspectFlags {
     }
 }
 
+/// Volumes (3D images) apart from the other images in [`super::MemoryKinds`].
+fn memory_kind(desc: &ImageDesc) -> MemoryKind {
+    if matches!(desc.view, ImageViewKind::D3 { .. }) {
+        MemoryKind::Volume
+    } else {
+        MemoryKind::Image
+    }
+}
+
 impl Image {
     pub fn new(ctx: &Arc<GpuContext>, desc: &ImageDesc) -> GpuResult<Image> {
         let device = ctx.raw();
@@ -114,6 +123,7 @@ impl Image {
         // SAFETY: compatible memory.
         unsafe { device.bind_image_memory(raw, allocation.memory(), allocation.offset()) }.vk("vkBindImageMemory")?;
         ctx.set_name(raw, &desc.name);
+        ctx.track(memory_kind(desc), allocation.size(), true);
 
         let aspect = aspect_of(desc.format);
         let make_view = |ty: vk::ImageViewType, base: u32, count: u32| {
@@ -198,6 +208,7 @@ impl Image {
 impl Drop for Image {
     fn drop(&mut self) {
         if let Some(a) = self.allocation.take() {
+            self.ctx.track(memory_kind(&self.desc), a.size(), false);
             let mut views = vec![self.view];
             views.append(&mut self.layer_views);
             views.extend(self.array_view.take());

@@ -42,7 +42,9 @@ pub use ash::vk;
 pub use bindings::{Bindings, BoundSet};
 pub use buffer::Buffer;
 pub use command::{Clear, Cmd, CommandPool, SubmitSync};
-pub use context::{ContextDesc, DeviceInfo, GpuContext, MemoryUsage, PipelineCounts, Progress, ProgressSink};
+pub use context::{
+    ContextDesc, DeviceInfo, GpuContext, MemoryKinds, MemoryUsage, PipelineCounts, Progress, ProgressSink,
+};
 pub use debug::ValidationLog;
 use descriptor::DescriptorWrite;
 pub use descriptor::{DescriptorSet, DescriptorSetLayout};
@@ -55,7 +57,7 @@ pub use pipeline::{
 pub use render_pass::{Framebuffer, RenderPass, RenderTarget};
 pub use swapchain::{Acquired, Presented, Semaphore, Swapchain, SwapchainImage};
 pub use sync::{Access, BufferBarrier, ImageBarrier};
-pub use timing::{OcclusionQueryPool, TimestampPool, TimestampQuery};
+pub use timing::{OcclusionQueryPool, PassCounts, PipelineStatsPool, TimestampPool, TimestampQuery};
 
 pub use gpu_allocator::MemoryLocation;
 

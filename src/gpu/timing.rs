@@ -20,6 +20,8 @@ pub struct TimestampPool {
 #[derive(Clone, Debug)]
 pub struct TimestampQuery {
     pub name: String,
+    /// The pass's index in its frame: its query in a [`PipelineStatsPool`].
+    pub pass: u32,
     pub start: u32,
     pub end: u32,
 }
@@ -73,7 +75,11 @@ impl TimestampPool {
     }
 }
 
-destroy_on_drop!(TimestampPool => destroy_query_pool, OcclusionQueryPool => destroy_query_pool);
+destroy_on_drop!(
+    TimestampPool => destroy_query_pool,
+    OcclusionQueryPool => destroy_query_pool,
+    PipelineStatsPool => destroy_query_pool,
+);
 
 /// Occlusion queries (samples that pass the depth test), for the visible area V of Shah et
 /// al. 2007 Eq. 6. Results are never read on the host: [`Cmd::copy_occlusion_results`]
@@ -110,5 +116,127 @@ impl OcclusionQueryPool {
     /// Whether the counts are exact (occlusionQueryPrecise).
     pub fn precise(&self) -> bool {
         self.flags.contains(vk::QueryControlFlags::PRECISE)
+    }
+}
+
+/// What one pass made the pipeline do, from a pipeline-statistics query around it
+/// (Vulkan 1.3, §17.4 "Pipeline Statistics Queries"). These tell shading waste (fragment
+/// invocations beyond the pixels that need them) from geometry cost (vertices, primitives).
+/// Some drivers count in blocks: lavapipe's rasterizer adds 16 fragment invocations for every
+/// 4x4 block that any primitive touches, before the depth test.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct PassCounts {
+    pub input_vertices: u64,
+    pub input_primitives: u64,
+    pub vertex_invocations: u64,
+    pub geometry_invocations: u64,
+    pub geometry_primitives: u64,
+    pub clipping_invocations: u64,
+    pub clipping_primitives: u64,
+    pub fragment_invocations: u64,
+    /// `None` where the device is not asked for it: lavapipe (Mesa 22.3) crashes in its
+    /// queue thread when a query counting compute invocations begins (it emits the compute
+    /// state then, bound or not).
+    pub compute_invocations: Option<u64>,
+}
+
+/// The graphics counters [`PassCounts`] holds, in the order of their bits: the order in
+/// which vkGetQueryPoolResults writes them; compute invocations (the highest bit) follow.
+const GRAPHICS_STATISTICS: vk::QueryPipelineStatisticFlags = vk::QueryPipelineStatisticFlags::from_raw(
+    vk::QueryPipelineStatisticFlags::INPUT_ASSEMBLY_VERTICES.as_raw()
+        | vk::QueryPipelineStatisticFlags::INPUT_ASSEMBLY_PRIMITIVES.as_raw()
+        | vk::QueryPipelineStatisticFlags::VERTEX_SHADER_INVOCATIONS.as_raw()
+        | vk::QueryPipelineStatisticFlags::GEOMETRY_SHADER_INVOCATIONS.as_raw()
+        | vk::QueryPipelineStatisticFlags::GEOMETRY_SHADER_PRIMITIVES.as_raw()
+        | vk::QueryPipelineStatisticFlags::CLIPPING_INVOCATIONS.as_raw()
+        | vk::QueryPipelineStatisticFlags::CLIPPING_PRIMITIVES.as_raw()
+        | vk::QueryPipelineStatisticFlags::FRAGMENT_SHADER_INVOCATIONS.as_raw(),
+);
+const GRAPHICS_COUNTERS: usize = 8;
+
+/// Pipeline-statistics queries, one per pass of a frame; one pool per frame in flight, read
+/// after the frame's fence like [`TimestampPool`]. Needs `pipelineStatisticsQuery`.
+pub struct PipelineStatsPool {
+    ctx: Arc<GpuContext>,
+    pub(crate) raw: vk::QueryPool,
+    pub(crate) capacity: u32,
+    /// Whether compute invocations are counted ([`PassCounts::compute_invocations`]).
+    compute: bool,
+}
+
+impl PipelineStatsPool {
+    /// `None` when the device lacks `pipelineStatisticsQuery`.
+    pub fn new(ctx: &Arc<GpuContext>, name: &str, capacity: u32) -> GpuResult<Option<PipelineStatsPool>> {
+        if !ctx.info.pipeline_statistics {
+            return Ok(None);
+        }
+        let compute = ctx.info.driver_name != "llvmpipe";
+        let statistics = if compute {
+            GRAPHICS_STATISTICS | vk::QueryPipelineStatisticFlags::COMPUTE_SHADER_INVOCATIONS
+        } else {
+            GRAPHICS_STATISTICS
+        };
+        let info = vk::QueryPoolCreateInfo::default()
+            .query_type(vk::QueryType::PIPELINE_STATISTICS)
+            .query_count(capacity.max(1))
+            .pipeline_statistics(statistics);
+        // SAFETY: valid create info; the feature is enabled (checked above).
+        let raw = unsafe { ctx.raw().create_query_pool(&info, None) }.vk("vkCreateQueryPool")?;
+        ctx.set_name(raw, name);
+        Ok(Some(PipelineStatsPool { ctx: ctx.clone(), raw, capacity: capacity.max(1), compute }))
+    }
+
+    pub fn capacity(&self) -> u32 {
+        self.capacity
+    }
+
+    /// The first `count` queries' counters after the frame's fence; `None` if any is not
+    /// available.
+    pub fn read(&self, count: u32) -> GpuResult<Option<Vec<PassCounts>>> {
+        if count == 0 {
+            return Ok(Some(Vec::new()));
+        }
+        if self.compute {
+            self.read_words::<{ GRAPHICS_COUNTERS + 2 }>(count)
+        } else {
+            self.read_words::<{ GRAPHICS_COUNTERS + 1 }>(count)
+        }
+    }
+
+    /// Each query as N words: its counters, then its availability.
+    fn read_words<const N: usize>(&self, count: u32) -> GpuResult<Option<Vec<PassCounts>>> {
+        let mut data = vec![[0u64; N]; count as usize];
+        // SAFETY: the frame's fence has signalled; each query writes its N - 1 counters (the
+        // bits of the pool's statistics) and its availability.
+        let result = unsafe {
+            self.ctx.raw().get_query_pool_results(
+                self.raw,
+                0,
+                &mut data,
+                vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WITH_AVAILABILITY,
+            )
+        };
+        match result {
+            Ok(()) | Err(vk::Result::NOT_READY) => {}
+            Err(e) => return Err(e).vk("vkGetQueryPoolResults"),
+        }
+        if data.iter().any(|d| d[N - 1] == 0) {
+            return Ok(None);
+        }
+        Ok(Some(
+            data.iter()
+                .map(|d| PassCounts {
+                    input_vertices: d[0],
+                    input_primitives: d[1],
+                    vertex_invocations: d[2],
+                    geometry_invocations: d[3],
+                    geometry_primitives: d[4],
+                    clipping_invocations: d[5],
+                    clipping_primitives: d[6],
+                    fragment_invocations: d[7],
+                    compute_invocations: self.compute.then_some(d[GRAPHICS_COUNTERS]),
+                })
+                .collect(),
+        ))
     }
 }

@@ -10,7 +10,7 @@ use std::sync::Arc;
 
 use crate::gpu::{
     vk, Access, Buffer, BufferBarrier, Cmd, GpuContext, GpuResult, Image, ImageBarrier, ImageDesc, MemoryLocation,
-    TimestampPool, TimestampQuery,
+    PipelineStatsPool, TimestampPool, TimestampQuery,
 };
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -388,22 +388,48 @@ impl<'g, 'a> Frame<'g, 'a> {
     /// Record every pass into `cmd`: barriers, label, timestamps, the pass's commands.
     /// Returns the timestamp query pairs written (if a pool is given).
     pub fn execute(self, cmd: &Cmd, timestamps: Option<&TimestampPool>) -> Vec<TimestampQuery> {
+        self.execute_with(cmd, timestamps, None)
+    }
+
+    /// [`Frame::execute`], also counting each pass's pipeline statistics into query `pass`
+    /// of `stats` (the query of pass i is i; passes beyond its capacity are not counted).
+    pub fn execute_with(
+        self,
+        cmd: &Cmd,
+        timestamps: Option<&TimestampPool>,
+        stats: Option<&PipelineStatsPool>,
+    ) -> Vec<TimestampQuery> {
         let Frame { graph, passes, release } = self;
         let mut queries = Vec::new();
         if let Some(pool) = timestamps {
             cmd.reset_queries(pool);
         }
+        if let Some(pool) = stats {
+            cmd.reset_pipeline_stats(pool);
+        }
         for (i, pass) in passes.into_iter().enumerate() {
             graph.apply(cmd, &pass.uses);
             cmd.begin_label(&pass.name);
             let q = timestamps.filter(|p| 2 * i as u32 + 1 < p.capacity());
+            let s = stats.filter(|p| (i as u32) < p.capacity());
             if let Some(pool) = q {
                 cmd.write_timestamp(pool, 2 * i as u32, vk::PipelineStageFlags::TOP_OF_PIPE);
             }
+            if let Some(pool) = s {
+                cmd.begin_pipeline_stats(pool, i as u32);
+            }
             (pass.record)(cmd);
+            if let Some(pool) = s {
+                cmd.end_pipeline_stats(pool, i as u32);
+            }
             if let Some(pool) = q {
                 cmd.write_timestamp(pool, 2 * i as u32 + 1, vk::PipelineStageFlags::BOTTOM_OF_PIPE);
-                queries.push(TimestampQuery { name: pass.name.clone(), start: 2 * i as u32, end: 2 * i as u32 + 1 });
+                queries.push(TimestampQuery {
+                    name: pass.name.clone(),
+                    pass: i as u32,
+                    start: 2 * i as u32,
+                    end: 2 * i as u32 + 1,
+                });
             }
             cmd.end_label();
         }

@@ -7,15 +7,15 @@ mod present;
 mod update;
 
 pub use present::{OverlayDraw, WindowTarget, OVERLAY, PRESENT_BLIT};
-pub use update::Update;
+pub use update::{technique_passes, Update};
 
 use std::sync::Arc;
 
 use glam::{Mat4, Vec3};
 
 use crate::gpu::{
-    vk, Access, Buffer, CommandPool, GpuContext, Image, MemoryLocation, Sampler, SamplerDesc, SubmitSync,
-    TimestampPool, TimestampQuery,
+    vk, Access, Buffer, CommandPool, GpuContext, Image, MemoryKinds, MemoryLocation, PassCounts, PipelineStatsPool,
+    Sampler, SamplerDesc, SubmitSync, TimestampPool, TimestampQuery,
 };
 use crate::graph::{Bindings, BoundSet, Frame, FrameGraph, ImageId};
 use crate::scene::techniques::{Flux, PhotonBufferParams};
@@ -64,6 +64,9 @@ pub struct PassTime {
     pub name: String,
     pub start_ms: f64,
     pub end_ms: f64,
+    /// Its pipeline statistics, when they are counted ([`Renderer::count_pipeline_stats`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub counts: Option<PassCounts>,
 }
 
 impl PassTime {
@@ -107,6 +110,10 @@ pub struct Renderer {
     scene: GpuScene,
     targets: Targets,
     timestamps: Vec<TimestampPool>,
+    /// One pipeline-statistics pool per frame in flight; empty unless counting.
+    pipeline_stats: Vec<PipelineStatsPool>,
+    /// Device memory each technique created, and the shared resources' ("frame").
+    memory: Vec<TechniqueMemory>,
     commands: CommandPool,
     graph: FrameGraph,
     recipe: Recipe,
@@ -131,6 +138,8 @@ pub struct Renderer {
     animated: bool,
     /// Every object's vertex range and current (centre, bounding radius), for moving objects.
     objects: Vec<ObjectState>,
+    /// The objects' (centre, bounding radius), copied from `objects` for each frame's inputs.
+    bounds: Vec<(Vec3, f32)>,
     uniforms: FrameUniforms,
     /// (frame index, queries) of each slot's submitted but not yet read frame.
     pending: Vec<Option<(u64, Vec<TimestampQuery>)>>,
@@ -142,6 +151,16 @@ pub struct Renderer {
     /// What the adaptive tone map derived in the last completed frame.
     tonemap_stats: Option<AdaptiveStats>,
     ctx: Arc<GpuContext>,
+}
+
+/// Device memory that one technique's creation allocated (or, under the name "frame", the
+/// resources every technique shares: the scene's buffers, the targets, the atlases).
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct TechniqueMemory {
+    /// The technique's key in [`TECHNIQUES`] (`refraction = "wyman"`, `gbuffer`, ...).
+    pub technique: String,
+    #[serde(flatten)]
+    pub bytes: MemoryKinds,
 }
 
 /// Where an object's vertices are in the scene's vertex buffer, and where the object is now.
@@ -177,6 +196,7 @@ impl Renderer {
     pub fn new(ctx: &Arc<GpuContext>, scene: &Scene) -> Result<Renderer, RenderError> {
         let recipe = crate::technique::recipe(scene);
         let plan = &recipe.passes;
+        let memory_start = ctx.memory_kinds();
         let mut graph = FrameGraph::new();
         let shadow_size = scene.render.shadow_map_size;
         let shadowed = plan::has(plan, crate::technique::baseline::shadow_map::SHADOW_MAP);
@@ -244,9 +264,15 @@ impl Renderer {
         };
         let mut techniques = Vec::with_capacity(TECHNIQUES.len());
         let mut technique_shaders = Vec::with_capacity(TECHNIQUES.len());
+        let shared = ctx.memory_kinds().since(&memory_start);
+        let mut memory = vec![TechniqueMemory { technique: "frame".into(), bytes: shared }];
         for (i, t) in TECHNIQUES.iter().enumerate() {
             ctx.take_shader_log();
+            let before = ctx.memory_kinds();
             techniques.push(if recipe.uses(i) { Some((t.create)(&mut setup)?) } else { None });
+            if recipe.uses(i) {
+                memory.push(TechniqueMemory { technique: t.key.into(), bytes: ctx.memory_kinds().since(&before) });
+            }
             technique_shaders.push(ctx.take_shader_log());
         }
         cache.end();
@@ -280,6 +306,8 @@ impl Renderer {
             scene: gpu_scene,
             targets,
             timestamps,
+            pipeline_stats: Vec::new(),
+            memory,
             commands: CommandPool::new(ctx, FRAMES_IN_FLIGHT as u32)?,
             graph,
             recipe,
@@ -294,6 +322,7 @@ impl Renderer {
             animation_time: None,
             animated: false,
             objects,
+            bounds: Vec::new(),
             uniforms,
             pending: vec![None; FRAMES_IN_FLIGHT],
             completed: Vec::new(),
@@ -387,6 +416,13 @@ impl Renderer {
             }
             let pool = &self.timestamps[slot];
             let last = queries.iter().map(|q| q.end + 1).max().unwrap_or(0);
+            let counts = match self.pipeline_stats.get(slot) {
+                Some(stats) => {
+                    let n = queries.iter().map(|q| q.pass + 1).max().unwrap_or(0).min(stats.capacity());
+                    stats.read(n)?
+                }
+                None => None,
+            };
             if let Some(ticks) = pool.read_ticks(last)? {
                 let origin = queries.iter().map(|q| ticks[q.start as usize]).min().unwrap_or(0);
                 let passes = queries
@@ -395,12 +431,39 @@ impl Renderer {
                         name: q.name.clone(),
                         start_ms: pool.ticks_to_ms(origin, ticks[q.start as usize]),
                         end_ms: pool.ticks_to_ms(origin, ticks[q.end as usize]),
+                        counts: counts.as_ref().and_then(|c| c.get(q.pass as usize).copied()),
                     })
                     .collect();
                 self.completed.push(FrameTiming { frame, gpu_start_ms: pool.ticks_to_ms(0, origin), passes });
             }
         }
         Ok(())
+    }
+
+    /// Count every pass's pipeline statistics (vertex, fragment, compute invocations,
+    /// primitives, clipping) from the next frame on, into [`PassTime::counts`]. False: the
+    /// device cannot (no `pipelineStatisticsQuery`).
+    pub fn count_pipeline_stats(&mut self) -> Result<bool, RenderError> {
+        if !self.pipeline_stats.is_empty() {
+            return Ok(true);
+        }
+        self.finish()?;
+        let capacity = self.timestamps[0].capacity() / 2;
+        let mut pools = Vec::new();
+        for i in 0..FRAMES_IN_FLIGHT {
+            match PipelineStatsPool::new(&self.ctx, &format!("pipeline_stats_{i}"), capacity)? {
+                Some(p) => pools.push(p),
+                None => return Ok(false),
+            }
+        }
+        self.pipeline_stats = pools;
+        Ok(true)
+    }
+
+    /// Device memory created by each technique of this renderer, and by the resources they
+    /// share ("frame"), as the renderer was created.
+    pub fn technique_memory(&self) -> &[TechniqueMemory] {
+        &self.memory
     }
 
     /// Look from `camera` from the next frame on (position, target, up, field of view; its
@@ -449,6 +512,11 @@ impl Renderer {
             t.begin_frame();
         }
         let dt = if self.frame_index == 0 { None } else { self.tonemap_dt };
+        self.bounds.clear();
+        self.bounds.extend(self.objects.iter().map(|o| o.bounds));
+        let eye = Vec3::from_slice(&self.uniforms.camera_position[..3]);
+        // The view's -z axis in world space: the third column of the inverse view, negated.
+        let forward = -Vec3::from_slice(&self.uniforms.inv_view[2][..3]).normalize_or_zero();
         let animate = self.animation.as_ref().zip(self.animation_time.take());
         let Renderer {
             techniques,
@@ -460,6 +528,7 @@ impl Renderer {
             commands,
             graph,
             recipe,
+            bounds,
             ..
         } = self;
         let shadowed = recipe.passes.iter().any(|p| p.name == crate::technique::baseline::shadow_map::SHADOW_MAP);
@@ -471,6 +540,9 @@ impl Renderer {
             slot,
             shadow_atlas: shadowed.then_some(targets.shadow_atlas_id),
             dt,
+            object_bounds: bounds,
+            eye,
+            forward,
         };
         let cmd = commands.begin(slot)?;
         let mut frame = graph.frame();
@@ -504,7 +576,7 @@ impl Renderer {
         }
         extra(&mut frame, FinalImage { ldr: &targets.ldr, ldr_id: targets.ldr_id });
         // `cmd` borrows `commands` until its last use here.
-        let queries = frame.execute(&cmd, Some(&timestamps[slot]));
+        let queries = frame.execute_with(&cmd, Some(&timestamps[slot]), self.pipeline_stats.get(slot));
         commands.submit_with(slot, sync)?;
         self.pending[slot] = Some((self.frame_index, queries));
         self.frame_index += 1;

@@ -184,6 +184,34 @@ pub(super) fn technique_fingerprint(scene: &Scene, recipe: &Recipe, index: usize
     Some(h.finish())
 }
 
+/// For settings compared against each other (`prism bench --versus`), each one's own
+/// technique passes: the passes of every technique that is not the same in all of them,
+/// i.e. whose fingerprint (its steps, its inputs, the placement) differs between the scenes
+/// or which only some of them plan. What all of them share (the G-buffer, the shading, the
+/// tone map, unless a setting changes those) is left out. Pure CPU.
+pub fn technique_passes(scenes: &[&Scene]) -> Vec<Vec<&'static str>> {
+    let recipes: Vec<Recipe> = scenes.iter().map(|s| recipe(s)).collect();
+    let prints: Vec<Vec<Option<u64>>> = scenes
+        .iter()
+        .zip(&recipes)
+        .map(|(s, r)| {
+            let placement = crate::technique::placement_hash(s);
+            (0..TECHNIQUES.len()).map(|i| technique_fingerprint(s, r, i, placement)).collect()
+        })
+        .collect();
+    let varied = |i: usize| prints.iter().any(|p| p[i] != prints[0][i]);
+    recipes
+        .iter()
+        .map(|r| {
+            r.steps
+                .iter()
+                .filter(|s| varied(s.technique))
+                .flat_map(|s| r.passes[s.passes.clone()].iter().map(|p| p.name))
+                .collect()
+        })
+        .collect()
+}
+
 impl Renderer {
     /// Take the changed `scene` into the running renderer, re-creating only what depends on
     /// the change (module doc). Waits for the frames in flight first. On an error the

@@ -251,6 +251,11 @@ pub struct FrameInputs<'a> {
     pub shadow_atlas: Option<ImageId>,
     /// Seconds since the last frame (the window's temporal adaptation); `None`: converged.
     pub dt: Option<f32>,
+    /// Every object's current (centre, bounding radius), in scene order.
+    pub object_bounds: &'a [(Vec3, f32)],
+    /// The camera's position and unit viewing direction this frame.
+    pub eye: Vec3,
+    pub forward: Vec3,
 }
 
 /// A created technique: what the frame recipe calls.

@@ -462,7 +462,10 @@ mod tests {
         FrameTiming {
             frame: 0,
             gpu_start_ms: 0.0,
-            passes: passes.iter().map(|&(n, s, e)| PassTime { name: n.into(), start_ms: s, end_ms: e }).collect(),
+            passes: passes
+                .iter()
+                .map(|&(n, s, e)| PassTime { name: n.into(), start_ms: s, end_ms: e, counts: None })
+                .collect(),
         }
     }
 

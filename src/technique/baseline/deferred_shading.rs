@@ -46,7 +46,10 @@ fn plan(scene: &crate::scene::Scene) -> Vec<(Stage, PlannedPass)> {
 fn create(s: &mut Setup<'_>) -> Result<Box<dyn Technique>, RenderError> {
     let caustics = CausticReads::new(s)?;
     let shadowed = s.planned(super::shadow_map::SHADOW_MAP);
-    Ok(Box::new(DeferredShadingPass::new(s.ctx, s.frame_layout, s.targets, s.nearest, shadowed, caustics)?))
+    // Whether any object is diffuse is part of the shared fingerprint (the materials' kinds):
+    // a change re-creates the renderer, and this pass with it.
+    let diffuse = !diffuse_names(s.scene).is_empty();
+    Ok(Box::new(DeferredShadingPass::new(s.ctx, s.frame_layout, s.targets, s.nearest, shadowed, caustics, diffuse)?))
 }
 
 /// The caustic textures a pass shading diffuse receivers reads (glsl/include/caustic_lookup.glsl),
@@ -124,7 +127,10 @@ impl DeferredShadingPass {
         nearest: &Sampler,
         shadowed: bool,
         caustics: CausticReads,
+        diffuse: bool,
     ) -> GpuResult<Self> {
+        let mut specialization = caustics.specialization().to_vec();
+        specialization.push(("DIFFUSE", Spec::U32(u32::from(diffuse))));
         let pass = FullscreenPass::new(
             ctx,
             &FullscreenDesc {
@@ -132,7 +138,7 @@ impl DeferredShadingPass {
                 fragment_shader: "shading/deferred.frag",
                 target: (&targets.hdr, targets.hdr_id),
                 clear: true,
-                specialization: &caustics.specialization(),
+                specialization: &specialization,
             },
             targets.gbuffer(fragment_set(), nearest, true),
             frame_layout,

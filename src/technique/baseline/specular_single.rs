@@ -4,14 +4,12 @@
 //! (`refraction_single`), with `Mode::Reflection` mirrors and conductors (`reflection_single`).
 //! It is the "1-sided refraction" baseline of Wyman 2005 (Table 1) against which every
 //! refraction technique's cost is compared.
-use std::sync::Arc;
-
-use crate::frame::targets::Targets;
-use crate::gpu::{DescriptorSetLayout, GpuContext, GpuResult, Sampler, Spec};
+use crate::gpu::{GpuResult, Spec};
 use crate::graph::Frame;
-use crate::scene::Scene;
+use crate::scene::{Material, Scene};
 use crate::technique::{
-    dielectric_names, list, metal_names, no_inputs, FrameInputs, PlannedPass, Registration, Stage, Technique,
+    dielectric_names, list, metal_names, no_inputs, FrameInputs, Inputs, PlannedPass, Registration, Setup, Stage,
+    Technique,
 };
 use crate::{SPECULAR_MODE_REFLECTION, SPECULAR_MODE_REFRACTION};
 
@@ -24,15 +22,16 @@ pub const REFLECTION_SINGLE: &str = "reflection_single";
 pub const REFRACTION: Registration = Registration {
     key: "refraction = \"single\"",
     plan: |scene| plan(scene, Mode::Refraction),
-    create: |s| Ok(Box::new(SpecularSinglePass::new(s.ctx, Mode::Refraction, s.frame_layout, s.targets, s.nearest)?)),
-    inputs: no_inputs,
+    create: |s| Ok(Box::new(SpecularSinglePass::new(s, Mode::Refraction)?)),
+    // Material values change in place; whether one disperses changes the shader.
+    inputs: |scene| Inputs { settings: format!("dispersion {}", has_dispersion(scene)), placement: false },
 };
 
 /// `render.reflection = "single"`: the mirrors' and conductors' baseline.
 pub const REFLECTION: Registration = Registration {
     key: "reflection = \"single\"",
     plan: |scene| plan(scene, Mode::Reflection),
-    create: |s| Ok(Box::new(SpecularSinglePass::new(s.ctx, Mode::Reflection, s.frame_layout, s.targets, s.nearest)?)),
+    create: |s| Ok(Box::new(SpecularSinglePass::new(s, Mode::Reflection)?)),
     inputs: no_inputs,
 };
 
@@ -61,9 +60,14 @@ fn plan(scene: &Scene, mode: Mode) -> Vec<(Stage, PlannedPass)> {
 
 impl Technique for SpecularSinglePass {
     fn record<'a>(&'a self, _: Stage, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>) {
-        let (scene, frame_set) = (inputs.scene, inputs.frame_set);
-        self.pass.record(frame, frame_set, &[scene.environment_id]);
+        self.pass.record_covering(frame, inputs, &[inputs.scene.environment_id]);
     }
+}
+
+/// Whether some dielectric has a different ior per channel: only then does the refraction
+/// need a lookup per channel (glsl/specular/single.frag, `DISPERSION`).
+pub fn has_dispersion(scene: &Scene) -> bool {
+    scene.materials.iter().any(|m| matches!(m, Material::Dielectric { ior, .. } if !(ior.x == ior.y && ior.y == ior.z)))
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -77,23 +81,34 @@ pub struct SpecularSinglePass {
 }
 
 impl SpecularSinglePass {
-    pub fn new(
-        ctx: &Arc<GpuContext>,
-        mode: Mode,
-        frame_layout: &DescriptorSetLayout,
-        targets: &Targets,
-        nearest: &Sampler,
-    ) -> GpuResult<Self> {
+    /// The pass of `mode`, shading only its objects' pixels where it can
+    /// ([`super::fullscreen::Cover`]).
+    pub fn new(s: &Setup<'_>, mode: Mode) -> GpuResult<Self> {
         let (name, spec) = match mode {
             Mode::Refraction => (REFRACTION_SINGLE, SPECULAR_MODE_REFRACTION),
             Mode::Reflection => (REFLECTION_SINGLE, SPECULAR_MODE_REFLECTION),
         };
-        let pass = FullscreenPass::new(
-            ctx,
+        let objects = (0..s.scene.objects.len())
+            .filter(|&i| {
+                let m = &s.scene.materials[s.scene.objects[i].material];
+                match mode {
+                    Mode::Refraction => matches!(m, Material::Dielectric { .. }),
+                    Mode::Reflection => matches!(m, Material::Mirror { .. } | Material::Conductor { .. }),
+                }
+            })
+            .collect();
+        let pass = FullscreenPass::covering(
+            s.ctx,
             // Overwrites only the pixels of its materials.
-            &FullscreenDesc::over_hdr(name, "specular/single.frag", targets, &[("MODE", Spec::U32(spec))]),
-            targets.gbuffer(fragment_set(), nearest, false),
-            frame_layout,
+            &FullscreenDesc::over_hdr(
+                name,
+                "specular/single.frag",
+                s.targets,
+                &[("MODE", Spec::U32(spec)), ("DISPERSION", Spec::U32(u32::from(has_dispersion(s.scene))))],
+            ),
+            s.targets.gbuffer(fragment_set(), s.nearest, false),
+            s.frame_layout,
+            objects,
         )?;
         Ok(SpecularSinglePass { pass })
     }

@@ -156,7 +156,7 @@ impl Technique for HuQinPass {
             self.nearby.record(frame, inputs);
         }
         self.layers.record(frame, scene, frame_set);
-        self.shade.record(frame, scene.environment_id, frame_set);
+        self.shade.record(frame, inputs);
     }
 
     /// P2 and T2 (with `debug = true`), see [`ShadePass`].
@@ -224,6 +224,7 @@ impl HuQinPass {
                     ("NEARBY_SEEDS", Spec::U32(params.seed_samples)),
                 ],
                 debug: params.debug,
+                scene,
             },
             graph,
             frame_layout,

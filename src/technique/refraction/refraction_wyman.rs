@@ -54,7 +54,7 @@ fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
 impl Technique for WymanPass {
     fn record<'a>(&'a self, _: Stage, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>) {
         self.layers.record(frame, inputs.scene, inputs.frame_set);
-        self.shade.record(frame, inputs.scene.environment_id, inputs.frame_set);
+        self.shade.record(frame, inputs);
     }
 
     fn debug_targets(&self) -> &[DebugTarget] {
@@ -107,6 +107,7 @@ impl WymanPass {
                 buffers: &[],
                 specialization: &[],
                 debug: params.debug,
+                scene,
             },
             s.graph,
             frame_layout,

@@ -25,7 +25,8 @@ use crate::gpu::{
 };
 use crate::graph::{Bindings, BoundSet, Frame, FrameGraph, ImageId};
 use crate::scene::{Material, Scene};
-use crate::technique::Setup;
+use crate::technique::baseline::fullscreen::Cover;
+use crate::technique::{FrameInputs, Setup};
 use crate::{BINDING_GBUF_DEPTH, BINDING_REFR_DN, LAYER_BACK_FURTHEST, LAYER_BACK_NEAREST, LAYER_FRONT, LAYER_SECOND};
 
 /// Normal (and d_N) layers are 32-bit float like the radiance: P2's error should be the
@@ -195,6 +196,9 @@ pub struct ShadePass {
     target: RenderTarget,
     set: BoundSet,
     pipeline: GraphicsPipeline,
+    /// The dielectrics' meshes in place of the full-screen triangle, where they can be drawn:
+    /// the pass shades only their pixels.
+    cover: Option<Cover>,
     hdr: ImageId,
     pub debug: Vec<DebugTarget>,
 }
@@ -209,6 +213,9 @@ pub struct ShadeDesc<'a> {
     /// Specialisation constants besides `DEBUG` (the debug flag).
     pub specialization: Specs<'a>,
     pub debug: bool,
+    /// The scene: the pass draws its dielectrics' meshes to shade only their pixels
+    /// ([`Cover`]).
+    pub scene: &'a Scene,
 }
 
 impl ShadePass {
@@ -258,11 +265,28 @@ impl ShadePass {
             0,
             &target.pass,
         )?;
-        Ok(ShadePass { name, target, set, pipeline, hdr: targets.hdr_id, debug })
+        // The fragment shader discards every pixel whose G-buffer material is not a
+        // dielectric: octagons around the dielectrics cover every pixel it writes.
+        let scene = desc.scene;
+        let dielectrics = (0..scene.objects.len())
+            .filter(|&i| matches!(scene.material_of(&scene.objects[i]), Material::Dielectric { .. }));
+        let cover = Cover::new(
+            ctx,
+            name,
+            desc.fragment_shader,
+            &specialization,
+            &blend,
+            &[frame_layout, set.layout()],
+            &target.pass,
+            dielectrics.collect(),
+        )?;
+        Ok(ShadePass { name, target, set, pipeline, cover, hdr: targets.hdr_id, debug })
     }
 
     /// Add the pass to `frame`; `environment` is sampled through the frame set.
-    pub fn record<'a>(&'a self, frame: &mut Frame<'_, 'a>, environment: ImageId, frame_set: DescriptorSet) {
+    pub fn record<'a>(&'a self, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>) {
+        let (environment, frame_set) = (inputs.scene.environment_id, inputs.frame_set);
+        let cover = self.cover.as_ref().and_then(|c| Some((c, c.octagons(inputs)?)));
         let mut pass = frame.pass(self.name).read(environment, Access::FragmentSampled).uses(&self.set);
         pass = pass.write(self.hdr, Access::ColorAttachment);
         for d in &self.debug {
@@ -271,9 +295,12 @@ impl ShadePass {
         pass.record(move |cmd| {
             let mut clears = vec![Clear::None];
             clears.extend(self.debug.iter().map(|_| Clear::Color([0.0; 4])));
-            cmd.in_target(&self.target, 0, &clears, |cmd| {
-                cmd.bind_graphics(&self.pipeline, &[frame_set, self.set.set()]);
-                cmd.draw(3, 1);
+            cmd.in_target(&self.target, 0, &clears, |cmd| match cover {
+                Some((cover, octagons)) => cover.draw(cmd, &[frame_set, self.set.set()], &octagons),
+                None => {
+                    cmd.bind_graphics(&self.pipeline, &[frame_set, self.set.set()]);
+                    cmd.draw(3, 1);
+                }
             });
         });
     }

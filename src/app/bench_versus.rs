@@ -1,0 +1,263 @@
+//! `prism bench SCENE --versus KEY=VALUE --versus KEY=VALUE ...`: the cost of settings
+//! against each other, measured in one process with the frames interleaved, so that the
+//! load of a shared machine (and, on lavapipe, the CPU it runs on) weighs on every setting
+//! alike. The papers' metric is a ratio of frame times (Wyman 2005, Table 1; Hu & Qin 2007,
+//! §5), so each setting's technique passes and whole frame are divided by the first
+//! setting's in the same round, frame by frame, and the spread of those ratios is reported.
+use std::collections::BTreeMap;
+
+use anyhow::{Context, Result};
+use indicatif::{ProgressBar, ProgressStyle};
+use serde::Serialize;
+
+use crate::gpu::DeviceInfo;
+use crate::metrics::timing::Stats;
+use crate::renderer::{technique_passes, FrameTiming, Renderer, TechniqueMemory};
+use crate::scene::Scene;
+
+use super::bench::{
+    git_revision, print_counts_table, print_memory_table, print_pass_table, summarize_detailed, BenchArgs, HostState,
+    PassStats,
+};
+use super::check_validation;
+use super::output::{self, Outputs};
+
+/// Min, median and max of one setting's per-frame ratios to the first setting.
+#[derive(Serialize, Debug, Clone)]
+pub struct RatioStats {
+    pub min: f64,
+    pub median: f64,
+    pub max: f64,
+    /// Every round's ratio, in frame order.
+    pub per_frame: Vec<f64>,
+}
+
+impl RatioStats {
+    fn of(per_frame: Vec<f64>) -> Option<RatioStats> {
+        if per_frame.is_empty() {
+            return None;
+        }
+        let s = Stats::of(&per_frame);
+        Some(RatioStats { min: s.min_ms, median: s.median_ms, max: s.max_ms, per_frame })
+    }
+}
+
+#[derive(Serialize, Debug)]
+pub struct VersusSetting {
+    /// The KEY=VALUE of this setting's `--versus`.
+    pub setting: String,
+    /// The effective scene (after --set and this setting), as TOML.
+    pub scene_toml: String,
+    /// The passes of the techniques that differ between the settings
+    /// ([`crate::renderer::technique_passes`]), in the order they run.
+    pub technique_passes: Vec<String>,
+    /// Their summed time per frame.
+    pub technique: PassStats,
+    pub frame: PassStats,
+    /// Per-frame ratios to the first setting's technique passes and frame (absent for the
+    /// first setting, and for the technique where the first setting has no technique pass).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub technique_ratio: Option<RatioStats>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub frame_ratio: Option<RatioStats>,
+    pub passes: Vec<PassStats>,
+    /// Device memory each technique created, and the shared resources' ("frame").
+    pub memory: Vec<TechniqueMemory>,
+}
+
+#[derive(Serialize, Debug)]
+pub struct VersusReport {
+    pub scene: String,
+    pub scene_file: String,
+    pub device: DeviceInfo,
+    pub width: u32,
+    pub height: u32,
+    /// Measured frames per setting, and warm-up frames per setting before them.
+    pub frames: u32,
+    pub warmup: u32,
+    pub git_revision: String,
+    /// The --set overrides every setting shares.
+    pub settings: Vec<String>,
+    /// How the frames were ordered: each round renders one frame of every setting, starting
+    /// one setting later than the previous round, and waits for each frame before the next.
+    pub interleaving: &'static str,
+    pub versus: Vec<VersusSetting>,
+    pub host: HostState,
+    pub note: &'static str,
+}
+
+pub fn run(args: BenchArgs) -> Result<()> {
+    if args.versus.len() < 2 {
+        anyhow::bail!("--versus needs two or more settings to compare (one --versus KEY=VALUE each)");
+    }
+    let scenes: Vec<Scene> = args
+        .versus
+        .iter()
+        .map(|v| {
+            let mut a = args.scene.clone();
+            a.set.push(v.clone());
+            a.load().with_context(|| format!("--versus {v}"))
+        })
+        .collect::<Result<_>>()?;
+    let mut outputs = Outputs::default();
+    let json_out = outputs.prepare_opt(args.json.as_deref())?;
+    let trace_out = outputs.prepare_opt(args.trace.as_deref())?;
+    let host = HostState::before();
+    let ctx = args.gpu.context()?;
+    // Every renderer exists before the first frame, so that creating one (pipeline
+    // compilation, the eikonal light simulation) never overlaps another's measured frames.
+    let mut renderers: Vec<Renderer> = scenes
+        .iter()
+        .zip(&args.versus)
+        .map(|(s, v)| Renderer::new(&ctx, s).with_context(|| format!("cannot set up the renderer for --versus {v}")))
+        .collect::<Result<_>>()?;
+    if args.pipeline_stats {
+        for r in &mut renderers {
+            super::bench::enable_pipeline_stats(r)?;
+        }
+    }
+    let own = technique_passes(&scenes.iter().collect::<Vec<_>>());
+
+    let n = renderers.len();
+    let total = u64::from(args.warmup) + u64::from(args.frames);
+    let bar = ProgressBar::new(total * n as u64).with_style(
+        ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} frames, eta {eta}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    bar.set_message(format!("bench {} versus", scenes[0].name));
+    for round in 0..total {
+        // Rotate which setting goes first, so that none always follows the same one (caches,
+        // the clock ramping after a pause).
+        for k in 0..n {
+            let r = &mut renderers[(round as usize + k) % n];
+            r.render_frame()?;
+            // One frame at a time: recording the next setting's frame must not compete with
+            // this one's execution for the CPU (lavapipe runs on it).
+            r.finish()?;
+            bar.inc(1);
+        }
+        if args.stats.is_some_and(|s| (round + 1) % s == 0) {
+            bar.suspend(|| super::print_stats(round + 1, &ctx));
+        }
+    }
+    bar.finish_and_clear();
+    check_validation(&ctx)?;
+    let host = host.after();
+    let timings: Vec<Vec<FrameTiming>> = renderers
+        .iter_mut()
+        .map(|r| r.take_timings().into_iter().filter(|f| f.frame >= u64::from(args.warmup)).collect())
+        .collect();
+
+    // Technique and frame time per frame number, per setting.
+    let per_frame = |i: usize| -> (BTreeMap<u64, f64>, BTreeMap<u64, f64>) {
+        let names: Vec<&str> = own[i].to_vec();
+        let t = timings[i].iter().map(|f| (f.frame, pass_sum(f, &names))).collect();
+        let w = timings[i].iter().map(|f| (f.frame, f.total_ms())).collect();
+        (t, w)
+    };
+    let series: Vec<_> = (0..n).map(per_frame).collect();
+    let ratios = |a: &BTreeMap<u64, f64>, b: &BTreeMap<u64, f64>| -> Vec<f64> {
+        a.iter().filter_map(|(k, x)| b.get(k).filter(|y| **y > 0.0).map(|y| x / y)).collect()
+    };
+    let results: Vec<VersusSetting> = (0..n)
+        .map(|i| {
+            let (passes, frame) = summarize_detailed(&timings[i]);
+            let (t, w) = &series[i];
+            let (t0, w0) = &series[0];
+            VersusSetting {
+                setting: args.versus[i].clone(),
+                scene_toml: scenes[i].canonical.clone(),
+                technique_passes: own[i].iter().map(|s| s.to_string()).collect(),
+                technique: PassStats::detailed("technique", t.values().copied().collect()),
+                frame,
+                technique_ratio: if i == 0 { None } else { RatioStats::of(ratios(t, t0)) },
+                frame_ratio: if i == 0 { None } else { RatioStats::of(ratios(w, w0)) },
+                passes,
+                memory: renderers[i].technique_memory().to_vec(),
+            }
+        })
+        .collect();
+
+    println!(
+        "prism bench --versus: {} at {}x{}, {} settings interleaved frame by frame, {} frames each after {} warm-up, on {} ({} {})",
+        scenes[0].name,
+        renderers[0].width(),
+        renderers[0].height(),
+        n,
+        args.frames,
+        args.warmup,
+        ctx.info.name,
+        ctx.info.driver_name,
+        ctx.info.driver_info
+    );
+    print_summary(&results);
+    for (i, r) in results.iter().enumerate() {
+        println!("\n#{} {}", i + 1, r.setting);
+        print_pass_table(&r.passes, &r.frame);
+        if args.pipeline_stats {
+            print_counts_table(&r.passes);
+            print_memory_table(&r.memory);
+        }
+    }
+    if ctx.info.device_type == "CPU" {
+        println!(
+            "note: a CPU device (lavapipe): times are CPU time; the interleaved ratios are what compares, not absolute times."
+        );
+    }
+
+    let mut written = Vec::new();
+    if let Some(out) = trace_out {
+        let runs: Vec<(String, &[FrameTiming])> =
+            results.iter().zip(&timings).map(|(r, t)| (format!("prism GPU: {}", r.setting), t.as_slice())).collect();
+        let trace = super::bench::chrome_trace_of(&runs, &scenes[0].name);
+        written.push(out.write(serde_json::to_string(&trace)?.as_bytes())?);
+    }
+    if let Some(out) = json_out {
+        let report = VersusReport {
+            scene: scenes[0].name.clone(),
+            scene_file: scenes[0].source.display().to_string(),
+            device: ctx.info.clone(),
+            width: renderers[0].width(),
+            height: renderers[0].height(),
+            frames: args.frames,
+            warmup: args.warmup,
+            git_revision: git_revision(),
+            settings: args.scene.set.clone(),
+            interleaving: "round-robin, one frame per setting per round, first setting rotating, each frame waited for",
+            versus: results,
+            host,
+            note: "GPU timestamps; on a CPU device (lavapipe) these are CPU times: compare the ratios, not absolute values",
+        };
+        written.push(out.write(serde_json::to_string_pretty(&report)?.as_bytes())?);
+    }
+    output::commit_all(written)
+}
+
+fn pass_sum(f: &FrameTiming, names: &[&str]) -> f64 {
+    f.passes.iter().filter(|p| names.contains(&p.name.as_str())).map(|p| p.duration_ms()).sum()
+}
+
+/// One line per setting: its technique passes, their median time and the frame's, and the
+/// ratios to the first setting.
+fn print_summary(results: &[VersusSetting]) {
+    let sw = results.iter().map(|r| r.setting.len()).max().unwrap_or(7).max(7) + 3;
+    println!(
+        "{:sw$}  {:>12}  {:>12}  {:>24}  {:>24}  technique passes",
+        "setting", "technique ms", "frame ms", "technique ratio min/med/max", "frame ratio min/med/max"
+    );
+    let fmt = |r: &Option<RatioStats>| {
+        r.as_ref().map_or_else(|| "-".to_string(), |r| format!("{:.3}/{:.3}/{:.3}", r.min, r.median, r.max))
+    };
+    for (i, r) in results.iter().enumerate() {
+        let label = format!("#{} {}", i + 1, r.setting);
+        println!(
+            "{:sw$}  {:>12.3}  {:>12.3}  {:>24}  {:>24}  {}",
+            label,
+            r.technique.stats.median_ms,
+            r.frame.stats.median_ms,
+            if i == 0 { "(1)".to_string() } else { fmt(&r.technique_ratio) },
+            if i == 0 { "(1)".to_string() } else { fmt(&r.frame_ratio) },
+            if r.technique_passes.is_empty() { "(none)".to_string() } else { r.technique_passes.join(", ") }
+        );
+    }
+}
