@@ -349,10 +349,13 @@ pub struct SweepRow {
     pub technique: String,
 }
 
+/// Reads one effect's technique from a scene.
+type EffectTechnique = fn(&Scene) -> &str;
+
 /// Each scene's technique, named by the effects whose technique differs between the scenes
 /// ("refraction=wyman"); the refraction technique when none differs.
 pub fn technique_names(scenes: &[&Scene]) -> Vec<String> {
-    let effects: [(&str, fn(&Scene) -> &str); 3] = [
+    let effects: [(&str, EffectTechnique); 3] = [
         ("refraction", |s| s.render.refraction.as_str()),
         ("reflection", |s| s.render.reflection.as_str()),
         ("caustics", |s| s.render.caustics.as_str()),
