@@ -51,14 +51,6 @@ shared_constants! {
     SPECULAR_MODE_REFRACTION: u32 = 0;
     SPECULAR_MODE_REFLECTION: u32 = 1;
 
-    // Which surface of the refractors a layer pass keeps (specialisation constant MODE of
-    // refraction/layers.frag): the nearest front face, the nearest back face, the furthest
-    // back face, or the second surface behind the G-buffer's first (depth peeling).
-    LAYER_FRONT: u32 = 0;
-    LAYER_BACK_NEAREST: u32 = 1;
-    LAYER_BACK_FURTHEST: u32 = 2;
-    LAYER_SECOND: u32 = 3;
-
     // Distance impostor probe modes: Hit() against a map, and the conductor Fresnel terms.
     IMPOSTOR_PROBE_HIT: u32 = 0;
     IMPOSTOR_PROBE_FRESNEL: u32 = 1;

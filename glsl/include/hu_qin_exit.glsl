@@ -33,7 +33,6 @@ vec2 hu_qin_dividing_pixel(vec2 p1, vec2 t1, float span) {
 // point leaves through the front-facing surface. Back-facing where t1 has no length (T1
 // along V).
 bool hu_qin_exit_is_front(vec3 V, vec2 p1, vec3 P1, vec3 T1, float probe, float span) {
-    return false;
     vec2 t1 = exit_project(P1 + probe * T1) - p1;
     if (!(dot(t1, t1) > 1e-14)) return false;
     vec2 pe = hu_qin_dividing_pixel(p1, normalize(t1), span);

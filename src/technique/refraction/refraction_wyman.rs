@@ -3,8 +3,9 @@
 //! "wyman"`, parameters `[render.wyman]` ([`WymanParams`]).
 //!
 //! - `refraction_wyman_layers`: the refractors' back surface, depth and normal (§3.1 Fig. 3a,
-//!   §3.2 Fig. 3d), either the furthest surface or the second one by depth peeling (§3.2,
-//!   `back_surface`), and their front faces carrying d_N interpolated from the vertices.
+//!   §3.2 Fig. 3d), either the furthest surface or the second one, "the first backfacing
+//!   surface" (§3.2, `back_surface`), and their front faces carrying d_N interpolated from
+//!   the vertices.
 //! - `refraction_wyman`: glsl/refraction/wyman.frag, the fragment program of §4: T1 by
 //!   Snell's law at the G-buffer's P1, d_V from the two depths, d~ interpolated between d_V
 //!   and d_N (§3.1), P2~ = P1 + d~ T1 projected into the back normals for N2 (§3.2), T2, the
@@ -87,7 +88,7 @@ impl WymanPass {
         let (ctx, scene, frame_layout, targets, nearest) = (s.ctx, s.scene, s.frame_layout, s.targets, s.nearest);
         let back = match params.back_surface {
             BackSurface::Furthest => LayerKind::BackFurthest,
-            BackSurface::Second => LayerKind::Second,
+            BackSurface::Second => LayerKind::BackNearest,
         };
         let d_n = scene_distance_along_normals(scene);
         let layers = RefractorLayers::new(s, REFRACTION_WYMAN_LAYERS, &[back, LayerKind::Front], Some(&d_n))?;

@@ -11,7 +11,6 @@
 //! | `Front` (nearest front face) | back faces | GREATER (reversed Z: nearest) | 0 |
 //! | `BackNearest` | front faces | GREATER | 0 |
 //! | `BackFurthest` | front faces | LESS (furthest) | 1 (the near plane) |
-//! | `Second` (depth peeling) | none | GREATER, behind the G-buffer's surface | 0 |
 //!
 //! Front faces are counter-clockwise in the (upright, y-flipped) image, as the meshes are
 //! counter-clockwise seen from outside.
@@ -27,7 +26,7 @@ use crate::graph::{Bindings, BoundSet, Frame, FrameGraph, ImageId};
 use crate::scene::{Material, Scene};
 use crate::technique::baseline::fullscreen::Cover;
 use crate::technique::{FrameInputs, Setup};
-use crate::{BINDING_GBUF_DEPTH, BINDING_REFR_DN, LAYER_BACK_FURTHEST, LAYER_BACK_NEAREST, LAYER_FRONT, LAYER_SECOND};
+use crate::BINDING_REFR_DN;
 
 /// Normal (and d_N) layers are 32-bit float like the radiance: P2's error should be the
 /// technique's, not the storage's.
@@ -38,24 +37,13 @@ pub enum LayerKind {
     Front,
     BackNearest,
     BackFurthest,
-    Second,
 }
 
 impl LayerKind {
-    fn mode(self) -> u32 {
-        match self {
-            LayerKind::Front => LAYER_FRONT,
-            LayerKind::BackNearest => LAYER_BACK_NEAREST,
-            LayerKind::BackFurthest => LAYER_BACK_FURTHEST,
-            LayerKind::Second => LAYER_SECOND,
-        }
-    }
-
     fn cull(self) -> vk::CullModeFlags {
         match self {
             LayerKind::Front => vk::CullModeFlags::BACK,
             LayerKind::BackNearest | LayerKind::BackFurthest => vk::CullModeFlags::FRONT,
-            LayerKind::Second => vk::CullModeFlags::NONE,
         }
     }
 
@@ -85,7 +73,7 @@ struct LayerPipeline {
 /// The refractors' layers, drawn in one graph pass named `name`.
 pub struct RefractorLayers {
     name: &'static str,
-    /// d_N, and the G-buffer's depth (read by the depth-peeled layer only).
+    /// d_N.
     set: BoundSet,
     pipelines: Vec<LayerPipeline>,
     pub layers: Vec<Layer>,
@@ -107,19 +95,12 @@ pub fn refractor_draws(scene: &Scene, gpu: &GpuScene) -> Vec<Draw> {
 impl RefractorLayers {
     /// `d_n`: one f32 per scene vertex (in GpuScene's order), written to the layers' w.
     pub fn new(s: &mut Setup<'_>, name: &'static str, kinds: &[LayerKind], d_n: Option<&[f32]>) -> GpuResult<Self> {
-        let (ctx, scene, gpu, frame_layout, targets, nearest) =
-            (s.ctx, s.scene, s.gpu, s.frame_layout, s.targets, s.nearest);
+        let (ctx, scene, gpu, frame_layout, targets) = (s.ctx, s.scene, s.gpu, s.frame_layout, s.targets);
         let graph = &mut *s.graph;
         // A one-float stand-in where the technique has no d_N (the shader never reads it).
         let data: Vec<f32> = d_n.map(|d| d.to_vec()).filter(|d| !d.is_empty()).unwrap_or_else(|| vec![0.0]);
         let d_n_buffer = Buffer::storage(ctx, &format!("{name}_d_n"), &data)?;
-        let reads_gbuffer_depth = kinds.contains(&LayerKind::Second);
-        let set = Bindings::new(vk::ShaderStageFlags::VERTEX)
-            .storage(BINDING_REFR_DN, &d_n_buffer)
-            .stages(vk::ShaderStageFlags::FRAGMENT)
-            .sampled(BINDING_GBUF_DEPTH, &targets.depth, nearest);
-        let set = if reads_gbuffer_depth { set.read(targets.depth_id) } else { set };
-        let set = set.build(ctx, name)?;
+        let set = Bindings::new(vk::ShaderStageFlags::VERTEX).storage(BINDING_REFR_DN, &d_n_buffer).build(ctx, name)?;
         let has_d_n = u32::from(d_n.is_some());
         use vk::ImageUsageFlags as U;
         let mut layers = Vec::new();
@@ -139,7 +120,7 @@ impl RefractorLayers {
                 ctx,
                 &GraphicsPipelineDesc {
                     cull: kind.cull(),
-                    specialization: &[("MODE", Spec::U32(kind.mode())), ("HAS_DN", Spec::U32(has_d_n))],
+                    specialization: &[("HAS_DN", Spec::U32(has_d_n))],
                     ..GraphicsPipelineDesc::mesh(
                         &label,
                         "refraction/layers.vert",
@@ -189,7 +170,9 @@ pub struct DebugTarget {
 
 /// The full-screen shading of a refraction technique: reads the G-buffer and the layers,
 /// overwrites the dielectric pixels of the HDR target (RT0), and with `debug` also writes
-/// P2 (RT1: xyz world position, w = exit kind, 0 where none) and T2 (RT2: xyz unit
+/// P2 (RT1: xyz world position, w = exit kind, 0 where none: 1 back-facing exit, 2
+/// front-facing (Hu & Qin only), 3 (Wyman: any) or 4 (Hu & Qin: front) with P2 outside
+/// the layer's coverage) and T2 (RT2: xyz unit
 /// direction) into [`DebugTarget`]s named `<name>_p2` and `<name>_t2`.
 pub struct ShadePass {
     name: &'static str,
