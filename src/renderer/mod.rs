@@ -644,6 +644,7 @@ impl Renderer {
     /// The caustic map of `render.caustics = "caustics_map"`: flux per texel (W, RGBA f32),
     /// every layer of the atlas (six cube faces per point light, the first of its six for a
     /// directional one), and the texels per side; `None` without a caustics_map pass.
+    #[allow(clippy::type_complexity)] // reason: the texels and their edge are read together
     pub fn read_caustic_map(&mut self) -> Result<Option<(Vec<[f32; 4]>, u32)>, RenderError> {
         if self.technique::<CausticsMapPass>().is_none() {
             return Ok(None);
