@@ -338,7 +338,10 @@ fn caustics_converge_with_more_photons() {
     let ctx = common::context(false);
     let s = common::scene("caustic_sphere", 32, &[]);
     let caustic = |spp: u32, photons: u64, seed: u32| {
-        let st = ReferenceSettings { spp, photons, seed, ..ReferenceSettings::default() };
+        // The fixed initial radius: this checks the photon count's convergence alone; with
+        // the default footprint radii the caustic's visible points also sample each pixel's
+        // area, whose noise at 4 spp on a 32^2 image this ordering does not allow for.
+        let st = ReferenceSettings { spp, photons, seed, footprint: 0.0, ..ReferenceSettings::default() };
         let mut r = reference(&ctx, &s, &st);
         r.run_all(|_, _| {}).unwrap();
         r.caustic_image()
