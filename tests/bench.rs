@@ -136,8 +136,8 @@ fn bench_versus_interleaves_settings_and_divides_frame_by_frame() {
         assert!(min <= med && med <= max, "{ratio}");
     }
     // The technique's time is the sum of its passes'.
-    for i in 0..2 {
-        let passes = versus[i]["passes"].as_array().unwrap();
+    for (i, setting) in versus.iter().enumerate() {
+        let passes = setting["passes"].as_array().unwrap();
         let t = samples(i, "technique");
         for k in 0..frames {
             let sum: f64 = passes

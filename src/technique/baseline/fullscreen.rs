@@ -108,7 +108,7 @@ pub fn octagon((centre, radius): (Vec3, f32), eye: Vec3, forward: Vec3) -> Optio
     let to = centre - eye;
     let d = to.length();
     // A relative margin for rounding: a sphere grazing the eye is drawn full-screen.
-    if !(d > radius * (1.0 + 1e-3)) {
+    if d.is_nan() || d <= radius * (1.0 + 1e-3) {
         return None;
     }
     let w = to / d;
