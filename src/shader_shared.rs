@@ -286,6 +286,7 @@ shared_bindings! {
         LIGHT_BINDING_IRRADIANCE = 10;
         LIGHT_BINDING_DIRECTION = 11;
         LIGHT_BINDING_EXTINCTION = 12;
+        LIGHT_BINDING_SPILL = 13;
     }
     // The window's water animation (glsl/common/heightfield.comp; src/frame/heightfield.rs):
     // one set 0.

@@ -374,7 +374,14 @@ shared_structs! {
         peak: uint,
         /// the last unclamped total
         requested: uint,
-        pad: [uint; 2],
+        /// patches in the spill list: outputs past the list's capacity, continued by a later
+        /// run instead of dropped
+        spilled: uint,
+        /// of them, the last build's (they follow its `next` outputs)
+        spill_new: uint,
+        /// vkCmdDispatchIndirect groups over `next + spill_new` (the traversal and the
+        /// output generator) and one unused word
+        out_args: uvec4,
         /// vkCmdDispatchIndirect groups of the reduction of level k + 1 over the entries that
         /// `count` makes live on it (ceil(count / 4^(k+1))), so that the build costs what
         /// the live list costs, not the capacity

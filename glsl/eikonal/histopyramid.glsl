@@ -14,6 +14,9 @@
 layout(constant_id = 0) const uint CAPACITY = 4u;
 // Entries of the per-step history of output counts.
 layout(constant_id = 1) const uint HISTORY_LEN = 1u;
+// Entries of the spill list (outputs past CAPACITY, continued by a later run); 0: none, the
+// outputs past CAPACITY are dropped and counted.
+layout(constant_id = 19) const uint SPILL_CAPACITY = 0u;
 
 layout(std430, set = 0, binding = LIGHT_BINDING_STATE) buffer State { HpState state; };
 layout(std430, set = 0, binding = LIGHT_BINDING_CLASSES) buffer Classes { uint classes[]; };

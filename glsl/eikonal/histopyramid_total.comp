@@ -10,9 +10,16 @@ void main() {
     // An empty list built nothing: the top entry is stale then.
     uint total = hp_value(hp_top(), 0u);
     uint next = min(total, CAPACITY);
+    // The outputs past the list go to the spill list while it has room: each patch evolves
+    // independently of the others (section 5.2), so a later run continues them exactly.
+    uint over = total - next;
+    uint spill = min(over, SPILL_CAPACITY - state.spilled);
     state.requested = total;
-    state.dropped += total - next;
+    state.dropped += over - spill;
     state.next = next;
+    state.spill_new = spill;
+    state.spilled += spill;
+    state.out_args = uvec4((next + spill + LIGHT_GROUP - 1u) / LIGHT_GROUP, 1u, 1u, 0u);
     // The output list is the next step's input. The traversal below does not need the old
     // count: it only descends into children whose partial sums it has counted.
     state.count = next;

@@ -9,7 +9,7 @@ layout(local_size_x = LIGHT_GROUP) in;
 
 void main() {
     uint j = gl_GlobalInvocationID.x;
-    if (j >= state.next) return;
+    if (j >= state.next + state.spill_new) return;
     uint node = 0u;
     uint rest = j;
     for (uint k = hp_top(); k >= 1u; --k) {

@@ -6,6 +6,8 @@
 
 layout(std430, set = 1, binding = LIGHT_BINDING_SRC) buffer Src { Patch src[]; };
 layout(std430, set = 1, binding = LIGHT_BINDING_DST) buffer Dst { Patch dst[]; };
+// Outputs past the list's capacity (histopyramid_total.comp), continued by a later run.
+layout(std430, set = 1, binding = LIGHT_BINDING_SPILL) buffer Spill { Patch spill[]; };
 // xyz: grad n per metre, w: n - 1 (glsl/eikonal/gradient.comp), over the VOLUME's box.
 layout(set = 1, binding = LIGHT_BINDING_FIELD) uniform sampler3D field;
 // (sigma_a + sigma_s RGB per metre, HG g) of src/scene/volume_sources.rs, over the VOLUME's box.

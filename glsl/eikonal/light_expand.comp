@@ -25,13 +25,23 @@ void wavefront_midpoint(vec3 xa, vec3 va, vec3 xb, vec3 vb, out vec3 x, out vec3
     v = d * index_at(x);
 }
 
+// Output j: the next list's entry j, or past its `next` entries the spill list's entry
+// after those that earlier steps spilled.
+void emit(uint j, Patch q) {
+    if (j < state.next) {
+        dst[j] = q;
+    } else {
+        spill[state.spilled - state.spill_new + (j - state.next)] = q;
+    }
+}
+
 void main() {
     uint j = gl_GlobalInvocationID.x;
-    if (j >= state.next) return;
+    if (j >= state.next + state.spill_new) return;
     uvec2 pair = pairs[j];
     Patch p = src[pair.x];
     if (classes[pair.x] != 4u) {
-        dst[j] = p;
+        emit(j, p);
         return;
     }
     // The 3x3 grid of points of the split, (a, b) in halves: corners 0..3 are (0,0), (2,0),
@@ -71,5 +81,5 @@ void main() {
     // instead moved flux towards the stretched side of patches sheared across the ball's
     // rim (a dark band beside eikonal_sphere's shadow, and as much extra in its caustic).
     out_patch.flux = vec4(p.flux.rgb * 0.25, 0.0);
-    dst[j] = out_patch;
+    emit(j, out_patch);
 }

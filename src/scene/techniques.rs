@@ -828,11 +828,13 @@ params! {
         /// view rays' `integrator`. RK4, the default, is the scheme of every light simulation
         /// measured in docs/ACCURACY.md and docs/BENCHMARKS.md; "euler" is the paper's.
         light_integrator: LightIntegrator = LightIntegrator::Rk4;
-        /// Capacity of the patch list (one storage-buffer binding). The initial wavefront is
-        /// simulated in tiles (`tile_patches`); a tile whose tessellation outgrows the list is
-        /// taken back (rerun with negative deposits) and split into four, so nothing is dropped
-        /// unless a tile of a single patch overflows; that count is reported (`prism render`
-        /// prints it, bench JSON `light_simulation.dropped_patches`, `split_tiles`, `runs`).
+        /// Capacity of the patch list (one storage-buffer binding; a spill list of the same
+        /// size beside it). The initial wavefront is simulated in tiles (`tile_patches`); the
+        /// patches a step produces past the list are spilled and continued by a later run, and
+        /// only a run whose spill list overflows too is taken back (rerun with negative
+        /// deposits) and split into four, so nothing is dropped unless a tile of a single patch
+        /// overflows; that count is reported (`prism render` prints it, bench JSON
+        /// `light_simulation.dropped_patches`, `spilled_patches`, `split_tiles`, `runs`).
         // A list of 900 000 patches of 144 bytes is 124 MiB: one storage-buffer
         // binding may span at most 128 MiB (lavapipe's maxStorageBufferRange).
         max_patches: u32 = 1 << 19, 4..=900_000;

@@ -26,9 +26,11 @@
 //! (section 5.3: "a separate refractive index field for each RGB channel"; each channel's
 //! wavefront carries only that channel's flux), and per tile of the initial wavefront,
 //! whose patches evolve independently (section 5.2: "the wavefront patches are independent
-//! and thus can be stacked"), so that no list outgrows `max_patches`: a tile whose
-//! tessellation overflows the list is taken back (rerun with negative deposits) and split
-//! into four.
+//! and thus can be stacked"), so that no list outgrows `max_patches`: the outputs of a step
+//! past the list go to a spill list of the same size, and a later run continues them from
+//! there (the same patches at the same time of their own evolution: nothing is simulated
+//! twice). Only a run whose spill list fills too is taken back (rerun with negative
+//! deposits) and split into four.
 //!
 //! The irradiance volume covers the volume's box extended `light_below` metres down, so that
 //! a floor just under the volume lies inside it: the simplest honest way to get the caustic
@@ -97,9 +99,10 @@ impl Patch {
     }
 }
 
-/// One run of the simulator: a tile `start..end` of light `light`'s initial wavefront,
-/// travelling through index slab `slab` and carrying the flux of `channel` only (None:
-/// all three), depositing with `sign` (-1 takes an overflowing run's deposits back).
+/// One run of the simulator: a tile `start..end` of light `light`'s initial wavefront (or,
+/// with `spill`, of the patches an earlier run spilled), travelling through index slab
+/// `slab` and carrying the flux of `channel` only (None: all three), depositing with `sign`
+/// (-1 takes an overflowing run's deposits back).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct LightRun {
     pub light: usize,
@@ -108,6 +111,8 @@ pub struct LightRun {
     pub start: usize,
     pub end: usize,
     pub sign: f32,
+    /// Index of the spilled patches this run continues (None: the initial wavefront).
+    pub spill: Option<usize>,
 }
 
 /// What one run did.
@@ -126,6 +131,10 @@ pub struct RunStats {
     pub patch_steps: u64,
     pub peak_patches: u32,
     pub dropped_patches: u32,
+    /// Patches past the list's capacity, continued by a later run.
+    pub spilled_patches: u32,
+    /// The spilled patches this run continued (None: a tile of the initial wavefront).
+    pub spill: Option<usize>,
     /// GPU time of the run's kernels (timestamps around every dispatch), ms.
     pub gpu_ms: f64,
 }
@@ -158,8 +167,10 @@ pub struct LightStats {
     /// Patches lost because tessellation exceeded `max_patches` in a run that could not be
     /// split further (a tile of one patch); overflowing tiles are split and rerun instead.
     pub dropped_patches: u32,
-    /// Tiles that overflowed the list, were taken back and split into four.
+    /// Runs whose spill list overflowed too, taken back and split into four.
     pub split_tiles: u32,
+    /// Patches that overflowed a list and were continued from the spill list by a later run.
+    pub spilled_patches: u64,
     pub runs: Vec<RunStats>,
     /// Wall-clock seconds of the whole simulation, uploads and readbacks included.
     pub seconds: f64,
@@ -343,6 +354,17 @@ pub struct LightSim {
     pub hp: HistoPyramid,
     lists: [Buffer; 2],
     list_ids: [BufferId; 2],
+    /// Outputs of a step past the list's capacity (histopyramid_total.comp), read back after
+    /// the run and continued by a run of their own.
+    spill: Buffer,
+    spill_id: BufferId,
+    /// The spilled patches of every run so far (`LightRun::spill` indexes them).
+    spilled: Vec<Vec<Patch>>,
+    /// The current run's spilled patches, drained from `spill` after every batch so that
+    /// the spill list only has to hold one batch's overflow.
+    pending: Vec<Patch>,
+    /// Initial patches per run (`tile_patches`), also of the runs that continue spills.
+    tile: usize,
     /// Six f32 sums per voxel (as u32 bits) in six slabs along y: irradiance R, G, B and
     /// the vector irradiance (light_common.glsl `accum`).
     _accum: Image,
@@ -407,7 +429,7 @@ pub fn plan_runs(wavefronts: &[Vec<Patch>], channels: u32, tile: usize) -> VecDe
             let mut start = 0;
             while start < w.len() {
                 let end = (start + tile).min(w.len());
-                runs.push_back(LightRun { light, slab, channel, start, end, sign: 1.0 });
+                runs.push_back(LightRun { light, slab, channel, start, end, sign: 1.0, spill: None });
                 start = end;
             }
         }
@@ -450,14 +472,24 @@ impl LightSim {
         let diagonal = (light_max - light_min).length();
         let max_steps =
             ((2.0 * diagonal * max_index(volume) + 2.0 * diagonal) / dt).ceil().min(MAX_LIGHT_STEPS as f32) as u32;
-        let hp = HistoPyramid::new(ctx, params.max_patches, max_steps, graph)?;
+        // A spill list as long as the list: one step's overflow is at most three lists (four
+        // outputs per patch), but a wavefront grows by a small fraction per step, so it
+        // takes the overflows of many steps; only if it fills is the run taken back.
+        let hp = HistoPyramid::new(ctx, params.max_patches, params.max_patches.max(4), max_steps, graph)?;
         let capacity = hp.capacity;
         // Tiles: `tile_patches`, or an eighth of the list (room for the wavefront to grow
         // eightfold by tessellation before a tile must be split), never more than the list.
         let tile = if params.tile_patches > 0 { params.tile_patches } else { capacity / 8 }.clamp(1, capacity);
         let mut queue = plan_runs(&wavefronts, textures.channels, tile as usize);
-        let run =
-            queue.pop_front().unwrap_or(LightRun { light: 0, slab: 0, channel: None, start: 0, end: 0, sign: 1.0 });
+        let run = queue.pop_front().unwrap_or(LightRun {
+            light: 0,
+            slab: 0,
+            channel: None,
+            start: 0,
+            end: 0,
+            sign: 1.0,
+            spill: None,
+        });
 
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
         let list_bytes = (capacity as u64) * std::mem::size_of::<Patch>() as u64;
@@ -465,6 +497,8 @@ impl LightSim {
             Buffer::new(ctx, "eikonal_patches_0", list_bytes, storage, MemoryLocation::GpuToCpu)?,
             Buffer::new(ctx, "eikonal_patches_1", list_bytes, storage, MemoryLocation::GpuToCpu)?,
         ];
+        let spill_bytes = (hp.spill_capacity as u64) * std::mem::size_of::<Patch>() as u64;
+        let spill = Buffer::new(ctx, "eikonal_spill", spill_bytes, storage, MemoryLocation::GpuToCpu)?;
         // TRANSFER_SRC: tests read the volumes back.
         let usage = vk::ImageUsageFlags::STORAGE
             | vk::ImageUsageFlags::SAMPLED
@@ -483,6 +517,7 @@ impl LightSim {
             Bindings::new(vk::ShaderStageFlags::COMPUTE)
                 .storage(LIGHT_BINDING_SRC, &lists[src])
                 .storage(LIGHT_BINDING_DST, &lists[1 - src])
+                .storage(crate::LIGHT_BINDING_SPILL, &spill)
                 .sampled(LIGHT_BINDING_FIELD, &textures.field, sampler)
                 .sampled(crate::LIGHT_BINDING_EXTINCTION, &textures.extinction, sampler)
                 .storage_image(LIGHT_BINDING_ACCUM, &accum)
@@ -499,6 +534,7 @@ impl LightSim {
         let spec: Vec<_> = [
             ("CAPACITY", Spec::U32(capacity)),
             ("HISTORY_LEN", Spec::U32(max_steps)),
+            ("SPILL_CAPACITY", Spec::U32(hp.spill_capacity)),
             ("DT", Spec::F32(dt)),
             // Extinction (Eq. 18) from the material volumes of src/scene/volume_sources.rs.
             ("CHANNELS", Spec::U32(textures.channels)),
@@ -526,6 +562,7 @@ impl LightSim {
         let resolve = pipeline("eikonal_light_resolve", "eikonal/light_resolve.comp")?;
 
         let list_ids = [graph.register_buffer(&lists[0]), graph.register_buffer(&lists[1])];
+        let spill_id = graph.register_buffer(&spill);
         let irradiance_id = graph.register_image(&irradiance);
         let direction_id = graph.register_image(&direction);
         let accum_id = graph.register_image(&accum);
@@ -548,6 +585,11 @@ impl LightSim {
             hp,
             lists,
             list_ids,
+            spill,
+            spill_id,
+            spilled: Vec::new(),
+            pending: Vec::new(),
+            tile: tile as usize,
             _accum: accum,
             accum_id,
             irradiance,
@@ -582,8 +624,11 @@ impl LightSim {
 
     /// Upload `run`'s initial patches into list 0 and reset the bookkeeping (device idle).
     pub fn begin(&mut self, run: LightRun) {
-        let mut patches: Vec<Patch> =
-            self.wavefronts.get(run.light).map_or(&[][..], |w| &w[run.start..run.end]).to_vec();
+        let source = match run.spill {
+            Some(k) => self.spilled.get(k),
+            None => self.wavefronts.get(run.light),
+        };
+        let mut patches: Vec<Patch> = source.map_or(&[][..], |w| &w[run.start..run.end]).to_vec();
         if let Some(c) = run.channel {
             for p in &mut patches {
                 for k in 0..3 {
@@ -604,6 +649,7 @@ impl LightSim {
         self.hp.state.write(0, bytemuck::bytes_of(&initial_state(count)));
         self.current = 0;
         self.steps_taken = 0;
+        self.pending.clear();
         self.initial = patches;
         self.run = run;
         self.run_gpu_ms = 0.0;
@@ -644,8 +690,10 @@ impl LightSim {
             .read(self.field_id, Access::ComputeSampled)
             .read(self.irradiance_id, Access::ComputeRead)
             .write(dst, Access::ComputeWrite)
+            .write(self.spill_id, Access::ComputeWrite)
             .record(move |cmd| {
-                cmd.compute_indirect(expand, &[set0, set1], &push, state, 0);
+                let offset = std::mem::offset_of!(crate::shader_structs::HpState, out_args) as u64;
+                cmd.compute_indirect(expand, &[set0, set1], &push, state, offset);
             });
     }
 
@@ -662,10 +710,11 @@ impl LightSim {
             // More steps than the pool was sized for (a caller's long batch) go untimed.
             let pool = self.timestamps.as_ref().filter(|_| steps <= LIGHT_BATCH);
             let queries = frame.execute(cmd, pool);
-            let host: Vec<_> = [self.hp.state_id, self.hp.classes_id, self.list_ids[0], self.list_ids[1]]
-                .into_iter()
-                .map(|id| (id, Access::HostRead))
-                .collect();
+            let host: Vec<_> =
+                [self.hp.state_id, self.hp.classes_id, self.list_ids[0], self.list_ids[1], self.spill_id]
+                    .into_iter()
+                    .map(|id| (id, Access::HostRead))
+                    .collect();
             graph.access_now(cmd, &[], &host);
             queries
         })?;
@@ -715,6 +764,7 @@ impl LightSim {
         while count > 0 && self.steps_taken < self.max_steps {
             let n = LIGHT_BATCH.min(self.max_steps - self.steps_taken);
             count = self.run_steps(ctx, graph, n)?;
+            self.drain_spill();
             progress(n, count);
         }
         let state = self.hp.read_state();
@@ -737,9 +787,25 @@ impl LightSim {
             patch_steps: if counts.is_empty() { 0 } else { patch_steps },
             peak_patches: state.peak.max(self.initial.len() as u32),
             dropped_patches: state.dropped,
+            spilled_patches: self.pending.len() as u32,
+            spill: r.spill,
             gpu_ms: self.run_gpu_ms,
         };
         Ok((stats, counts))
+    }
+
+    /// Move the patches the last batch spilled to `pending` and empty the spill list (device
+    /// idle).
+    fn drain_spill(&mut self) {
+        let mut state = self.hp.read_state();
+        if state.spilled == 0 {
+            return;
+        }
+        let all: &[Patch] = bytemuck::cast_slice(self.spill.read());
+        self.pending.extend_from_slice(&all[..state.spilled as usize]);
+        state.spilled = 0;
+        state.spill_new = 0;
+        self.hp.state.write(0, bytemuck::bytes_of(&state));
     }
 
     /// Simulate every run (lights, channels, tiles) to its end, splitting the tiles that
@@ -766,7 +832,13 @@ impl LightSim {
                 r.channel.map_or(String::new(), |c| format!(" channel {}", ["R", "G", "B"][c])),
                 r.start,
                 r.end,
-                if r.sign < 0.0 { " (take-back)" } else { "" }
+                if r.sign < 0.0 {
+                    " (take-back)"
+                } else if r.spill.is_some() {
+                    " (spilled)"
+                } else {
+                    ""
+                }
             );
             let mut taken = 0u64;
             let (run_stats, counts) = self.finish_run(ctx, graph, |n, count| {
@@ -805,6 +877,19 @@ impl LightSim {
                 self.queue.push_front(LightRun { sign: -1.0, ..r });
             } else if r.sign > 0.0 {
                 stats.dropped_patches += run_stats.dropped_patches;
+                if !self.pending.is_empty() {
+                    // Continue the spilled patches next, in tiles like the initial wavefront.
+                    let patches = std::mem::take(&mut self.pending);
+                    let n = patches.len();
+                    stats.spilled_patches += n as u64;
+                    self.spilled.push(patches);
+                    let k = self.spilled.len() - 1;
+                    let starts: Vec<usize> = (0..n).step_by(self.tile.max(1)).collect();
+                    for &s0 in starts.iter().rev() {
+                        let e0 = (s0 + self.tile.max(1)).min(n);
+                        self.queue.push_front(LightRun { start: s0, end: e0, spill: Some(k), ..r });
+                    }
+                }
             }
             stats.runs.push(run_stats);
             total = (done_runs + self.queue.len() as u64) * max_steps;

@@ -102,6 +102,8 @@ pub fn cpu_expand(classes: &[u32], count: usize, capacity: u32) -> (Vec<(u32, u3
 /// (set 0 of every light-simulation kernel) and the build/traversal pipelines.
 pub struct HistoPyramid {
     pub capacity: u32,
+    /// Entries of the spill list past the capacity (0: outputs past it are dropped).
+    pub spill_capacity: u32,
     pub history_len: u32,
     top: u32,
     /// Set 0 of every light-simulation kernel.
@@ -127,8 +129,14 @@ pub struct HistoPyramid {
 
 impl HistoPyramid {
     /// Buffers for `capacity` entries (at least 4, so that the pyramid has a level above the
-    /// classes) and a history of `history_len` builds.
-    pub fn new(ctx: &Arc<GpuContext>, capacity: u32, history_len: u32, graph: &mut FrameGraph) -> GpuResult<Self> {
+    /// classes), `spill_capacity` outputs past them, and a history of `history_len` builds.
+    pub fn new(
+        ctx: &Arc<GpuContext>,
+        capacity: u32,
+        spill_capacity: u32,
+        history_len: u32,
+        graph: &mut FrameGraph,
+    ) -> GpuResult<Self> {
         let capacity = capacity.max(4);
         let history_len = history_len.max(1);
         let lens = level_lengths(capacity);
@@ -146,7 +154,7 @@ impl HistoPyramid {
         )?;
         let classes = Buffer::new(ctx, "histopyramid_classes", 4 * capacity as u64, storage, host)?;
         let levels = Buffer::new(ctx, "histopyramid_levels", 4 * level_words, storage, MemoryLocation::GpuOnly)?;
-        let pairs = Buffer::new(ctx, "histopyramid_pairs", 8 * capacity as u64, storage, host)?;
+        let pairs = Buffer::new(ctx, "histopyramid_pairs", 8 * (capacity + spill_capacity) as u64, storage, host)?;
         let history = Buffer::new(ctx, "histopyramid_history", 4 * history_len as u64, storage, host)?;
         let set = Bindings::new(vk::ShaderStageFlags::COMPUTE)
             .storage(LIGHT_BINDING_STATE, &state)
@@ -155,7 +163,11 @@ impl HistoPyramid {
             .storage(LIGHT_BINDING_PAIRS, &pairs)
             .storage(LIGHT_BINDING_HISTORY, &history)
             .build(ctx, "histopyramid")?;
-        let spec = [("CAPACITY", Spec::U32(capacity)), ("HISTORY_LEN", Spec::U32(history_len))];
+        let spec = [
+            ("CAPACITY", Spec::U32(capacity)),
+            ("HISTORY_LEN", Spec::U32(history_len)),
+            ("SPILL_CAPACITY", Spec::U32(spill_capacity)),
+        ];
         let pipeline = |name: &str, shader: &str| ComputePipeline::new(ctx, name, shader, &[set.layout()], 4, &spec);
         let reduce = pipeline("histopyramid_reduce", "eikonal/histopyramid_reduce.comp")?;
         let total = pipeline("histopyramid_total", "eikonal/histopyramid_total.comp")?;
@@ -169,6 +181,7 @@ impl HistoPyramid {
         );
         Ok(HistoPyramid {
             capacity,
+            spill_capacity,
             history_len,
             top,
             set,
@@ -255,7 +268,7 @@ impl HistoPyramid {
             .write(self.pairs_id, Access::ComputeWrite)
             .record(move |cmd| {
                 cmd.bind_compute(traverse, &[set]);
-                cmd.dispatch_indirect(state, 0);
+                cmd.dispatch_indirect(state, std::mem::offset_of!(HpState, out_args) as u64);
             });
     }
 }
@@ -270,7 +283,7 @@ pub fn gpu_expand(
     capacity: u32,
 ) -> GpuResult<(Vec<(u32, u32)>, u32)> {
     let mut graph = FrameGraph::new();
-    let mut hp = HistoPyramid::new(ctx, capacity, 1, &mut graph)?;
+    let mut hp = HistoPyramid::new(ctx, capacity, 0, 1, &mut graph)?;
     let n = count.min(classes.len()).min(hp.capacity as usize);
     let mut words = vec![0xdead_beefu32; hp.capacity as usize];
     words[..classes.len().min(hp.capacity as usize)]
