@@ -74,8 +74,9 @@ vec3 eik_triangle_radiance(uint k, vec3 o, vec3 d, float t, vec2 b) {
     return finite_or_zero(eik_surface_radiance(p, n, albedo));
 }
 
-// glsl/include/nearby.glsl nearby_hit (the nearest surface found through the rectangles, Figs.
-// 13, 16, 17), returning its distance instead of falling back to the environment.
+// glsl/include/nearby.glsl nearby_hit (Fig. 13: the closest rectangle first, the next where its texel
+// is empty), returning the distance of the surface found instead of falling back to the
+// environment.
 bool eik_impostor_hit(vec3 P, vec3 Ray, out vec3 color, out float dist) {
     // The one rectangle set around the volume (NearbyImpostors::around); none: no impostors.
     nearby_set = nearby_header.info.y == 0u ? NEARBY_NO_SET : 0u;

@@ -111,44 +111,18 @@ bool nearby_lookup(uint k, vec3 P, vec3 Ray, float t_rect, vec2 uv_rect, out vec
         }
         dist = best;
         // Fig. 16: distance += (depth - z) / cos(theta), theta between Ray and the projection
-        // direction. That step assumes the surface perpendicular to the projection direction
-        // (exact on the rectangle's own plane); on a surface tilted against it each step
-        // shrinks the depth difference only by the factor (slope of the surface's depth along
-        // the ray) / cos(theta), so that on sphere_nearby the back wall (34 degrees from its
-        // rectangle) was still off after the default 3 steps where rays meet its foot. prism
-        // takes Fig. 16's step first and then secant steps through the last two points, the
-        // same update with the surface's slope measured instead of assumed (exact for any
-        // plane). |cos| is kept >= 0.05 (rays grazing the rectangle: one step then moves at
+        // direction. |cos| is kept >= 0.05 (rays grazing the rectangle: one step then moves at
         // most 20 depth differences instead of dividing by ~0), each step is bounded by the
         // object's size 2 d_i, and the point never goes behind P.
         float cos_t = dot(Ray, r.axis.xyz);
         cos_t = cos_t >= 0.0 ? max(cos_t, 0.05) : min(cos_t, -0.05);
         float tol = NEARBY_TOLERANCE * d_i;
-        float prev_dist = 0.0, prev_diff = 0.0;
-        bool has_prev = false;
         for (uint i = 0u; i < NEARBY_ITERATIONS; ++i) {
             vec3 s = nearby_project(k, P + dist * Ray);
-            vec4 texel = nearby_texel(k, s.xy);
-            // A step that left the object's silhouette in TEX_k (an empty texel, whose depth is
-            // the far plane's) is halved back towards the last covered point, as Hu & Qin's own
-            // d_T search does in prism (glsl/include/hu_qin_exit.glsl): rays meeting the wall
-            // a few centimetres above its foot overshot below it and fell back on the floor.
-            if (has_prev && !nearby_covered(k, texel)) {
-                dist = prev_dist + 0.5 * (dist - prev_dist);
-                continue;
-            }
-            float diff = texel.a - s.z;
+            float depth = nearby_texel(k, s.xy).a;
+            float diff = depth - s.z;
             if (abs(diff) <= tol) break;
-            float step = diff / cos_t;
-            // The secant's slope (diff - prev_diff) / (dist - prev_dist) replaces Fig. 16's
-            // -cos(theta) where it has the same sign (the surface is not turned away from the
-            // ray's depth faster than the ray itself moves; otherwise Fig. 16's step).
-            float slope = has_prev && dist != prev_dist ? (diff - prev_diff) / (dist - prev_dist) : 0.0;
-            if (slope * cos_t < 0.0) step = -diff / slope;
-            has_prev = nearby_covered(k, texel);
-            prev_dist = dist;
-            prev_diff = diff;
-            dist = max(dist + clamp(step, -2.0 * d_i, 2.0 * d_i), 0.0);
+            dist = max(dist + clamp(diff / cos_t, -2.0 * d_i, 2.0 * d_i), 0.0);
         }
         uv = nearby_project(k, P + dist * Ray).xy;
     }
@@ -157,37 +131,39 @@ bool nearby_lookup(uint k, vec3 P, vec3 Ray, float t_rect, vec2 uv_rect, out vec
     return nearby_covered(k, texel);
 }
 
-// The surface the ray P + t Ray (unit) meets through the selected set's rectangles. Fig. 13
-// picks the rectangle whose hit is closest to P and looks up its texture; prism looks up
-// every rectangle the ray hits (Figs. 16-17) and keeps the nearest surface found, the
-// corrected distance rather than the rectangle's. The two differ where a rectangle lies
-// behind its object: RECT_i is perpendicular to O_R O_i, not to the object, so the back
-// wall's rectangle (tilted about 34 degrees on sphere_nearby) lies 2 m behind the wall at
-// the floor, and rays that meet the bottom of the wall hit the floor's rectangle first and
-// showed the floor behind the wall, in the wall's shadow. Without correction
-// (NEARBY_ITERATIONS = 0) the corrected distance is the rectangle's, and this is Fig. 13's
-// choice, the next rectangle being tried where a texel is empty. False when no rectangle
-// holds a surface along the ray.
+// The surface the ray P + t Ray (unit) meets through the selected set's rectangles: Fig. 13
+// picks the rectangle whose hit is closest to P. Where that texel is empty (the square is
+// larger than the object's silhouette), the next-closest rectangle is tried instead of
+// showing TEX_k's background. False when no rectangle holds a surface along the ray.
 bool nearby_hit(vec3 P, vec3 Ray, out vec3 color, out float dist) {
     color = vec3(0.0);
     dist = 1e30;
     if (!nearby_has_set()) return false;
     uint first = nearby_header.sets[nearby_set].x;
-    uint end = first + min(nearby_header.sets[nearby_set].y, MAX_NEARBY_RECTS);
-    bool found = false;
-    for (uint k = first; k < end; ++k) {
-        float t;
-        vec2 uv;
-        if (!nearby_rect_hit(k, P, Ray, t, uv)) continue;
-        vec3 c;
-        float d;
-        if (nearby_lookup(k, P, Ray, t, uv, c, d) && d < dist) {
-            color = finite_or_zero(c);
-            dist = d;
-            found = true;
+    uint n = min(nearby_header.sets[nearby_set].y, MAX_NEARBY_RECTS);
+    uint end = first + n;
+    float last = -1.0;
+    for (uint pass = 0u; pass < n; ++pass) {
+        uint k = end;
+        float t_k = 1e30;
+        vec2 uv_k = vec2(0.0);
+        for (uint i = first; i < end; ++i) {
+            float t;
+            vec2 uv;
+            if (nearby_rect_hit(i, P, Ray, t, uv) && t > last && t < t_k) {
+                k = i;
+                t_k = t;
+                uv_k = uv;
+            }
+        }
+        if (k == end) break;
+        last = t_k;
+        if (nearby_lookup(k, P, Ray, t_k, uv_k, color, dist)) {
+            color = finite_or_zero(color);
+            return true;
         }
     }
-    return found;
+    return false;
 }
 
 // Radiance arriving at P from direction Ray (unit): nearby_hit, else the environment map
