@@ -45,23 +45,9 @@ impl TimestampPool {
         if count == 0 {
             return Ok(Some(Vec::new()));
         }
-        let mut data = vec![[0u64; 2]; count as usize];
-        // SAFETY: the frame's fence has signalled; WITH_AVAILABILITY writes (value, available).
-        let result = unsafe {
-            self.ctx.raw().get_query_pool_results(
-                self.raw,
-                0,
-                &mut data,
-                vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WITH_AVAILABILITY,
-            )
-        };
-        match result {
-            Ok(()) | Err(vk::Result::NOT_READY) => {}
-            Err(e) => return Err(e).vk("vkGetQueryPoolResults"),
-        }
-        if data.iter().any(|d| d[1] == 0) {
+        let Some(data) = read_available::<2>(&self.ctx, self.raw, count)? else {
             return Ok(None);
-        }
+        };
         let bits = self.ctx.info.timestamp_valid_bits;
         let mask = if bits >= 64 { u64::MAX } else { (1u64 << bits) - 1 };
         Ok(Some(data.iter().map(|d| d[0] & mask).collect()))
@@ -205,24 +191,9 @@ impl PipelineStatsPool {
 
     /// Each query as N words: its counters, then its availability.
     fn read_words<const N: usize>(&self, count: u32) -> GpuResult<Option<Vec<PassCounts>>> {
-        let mut data = vec![[0u64; N]; count as usize];
-        // SAFETY: the frame's fence has signalled; each query writes its N - 1 counters (the
-        // bits of the pool's statistics) and its availability.
-        let result = unsafe {
-            self.ctx.raw().get_query_pool_results(
-                self.raw,
-                0,
-                &mut data,
-                vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WITH_AVAILABILITY,
-            )
-        };
-        match result {
-            Ok(()) | Err(vk::Result::NOT_READY) => {}
-            Err(e) => return Err(e).vk("vkGetQueryPoolResults"),
-        }
-        if data.iter().any(|d| d[N - 1] == 0) {
+        let Some(data) = read_available::<N>(&self.ctx, self.raw, count)? else {
             return Ok(None);
-        }
+        };
         Ok(Some(
             data.iter()
                 .map(|d| PassCounts {
@@ -239,4 +210,29 @@ impl PipelineStatsPool {
                 .collect(),
         ))
     }
+}
+
+/// The first `count` queries of `pool` as N words each: the query's N - 1 values, then its
+/// availability. `None` if any query is not yet available (its frame's fence was not waited).
+fn read_available<const N: usize>(
+    ctx: &GpuContext,
+    pool: vk::QueryPool,
+    count: u32,
+) -> GpuResult<Option<Vec<[u64; N]>>> {
+    let mut data = vec![[0u64; N]; count as usize];
+    // SAFETY: the caller's frame fence has signalled; with WITH_AVAILABILITY each query writes
+    // its values and then its availability word, and NOT_READY only leaves that word 0.
+    let result = unsafe {
+        ctx.raw().get_query_pool_results(
+            pool,
+            0,
+            &mut data,
+            vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WITH_AVAILABILITY,
+        )
+    };
+    match result {
+        Ok(()) | Err(vk::Result::NOT_READY) => {}
+        Err(e) => return Err(e).vk("vkGetQueryPoolResults"),
+    }
+    Ok(data.iter().all(|d| d[N - 1] != 0).then_some(data))
 }
