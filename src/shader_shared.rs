@@ -32,7 +32,8 @@ shared_constants! {
     REF_MAX_TARGETS: u32 = 16;
     // Traversal stack depth (a SAH BVH over 1e6 triangles is far shallower).
     REF_STACK_SIZE: u32 = 64;
-    // Threads per workgroup of the 1D reference kernels.
+    // Threads per workgroup of the 1D kernels (the reference's, caustics mapping's splat hits),
+    // dispatched in rows by src/reference/mod.rs `dispatch_size`.
     REF_WORKGROUP: u32 = 64;
     // The raytrace technique's most specular interactions per branch: its shader keeps one
     // pending branch per depth (40 bytes each) in a fixed array.
@@ -187,7 +188,7 @@ shared_bindings! {
         BINDING_IMPOSTOR_PROBE = 12;
     }
     // Caustics mapping (Shah et al. 2007; src/technique/caustics/caustics_map.rs). Set 0 of
-    // the splat pass: the source faces and lights, the materials, the receivers' distance
+    // the splat-hits pass: the source faces and lights, the materials, the receivers' distance
     // atlas (as a cube array and as layers), the refractor layers seen from the light, and
     // Eq. 6's V per source face (occlusion-query sample counts, u32).
     CAUSTIC_BINDINGS {
@@ -202,6 +203,10 @@ shared_bindings! {
         CAUSTIC_BINDING_VISIBLE = 9;
         // The refractor layers' own set: Wyman's d_N per scene vertex (f32).
         CAUSTIC_BINDING_DN = 11;
+        // Each caustic-atlas layer's world -> clip matrix (mat4; zero where the layer is not
+        // drawn), and the splat record of every grid vertex (GpuCausticSplat).
+        CAUSTIC_BINDING_DESTINATIONS = 12;
+        CAUSTIC_BINDING_SPLATS = 13;
     }
     // Photon buffer (Hu & Qin 2007 §3.1): the receiver rectangles, besides the caustic
     // bindings (faces, materials, refractor layers).

@@ -196,7 +196,7 @@ shared_structs! {
 
     // ---- Caustics mapping and the photon buffer (src/technique/caustics) -----------------
 
-    /// One source face of the vertex grid (glsl/caustics/splat.vert, photon_buffer.frag).
+    /// One source face of the vertex grid (glsl/caustics/splat_hits.comp, photon_buffer.frag).
     buffer struct GpuCausticFace {
         /// world -> source face clip space (the refractor textures)
         view_proj: mat4,
@@ -223,14 +223,30 @@ shared_structs! {
         info: uvec4,
     }
 
-    /// Push constants of glsl/caustics/splat.vert.
-    push struct CausticSplatPush {
-        /// world -> destination caustic-map face clip space
-        dest_view_proj: mat4,
-        /// x: first source face, y: source faces, z: destination cube face (6: 2D map), w: channels
+    /// Push constants of glsl/caustics/splat_hits.comp.
+    push struct CausticHitsPush {
+        /// x: source faces (all lights'), y: channels, z: vertices per channel and face
+        /// (grid^2), w: unused
         face: uvec4,
         /// x: splat sigma (texels), y: iterations, z: NEWTON_*, w: map size (texels)
         params: vec4,
+    }
+
+    /// One grid vertex's splat, computed once by glsl/caustics/splat_hits.comp and drawn by
+    /// glsl/caustics/splat.vert into the caustic-atlas layer it lands in.
+    buffer struct GpuCausticSplat {
+        /// xyz: the hit in the destination layer's normalised device coordinates; w: that
+        /// layer (-1: dropped)
+        position: vec4,
+        /// rgb: flux (W) divided by the splat's weight sum; w: sigma (texels)
+        flux: vec4,
+    }
+
+    /// Push constants of glsl/caustics/splat.vert.
+    push struct CausticDrawPush {
+        /// x: the caustic-atlas layer drawn, y: its light's first splat record, z: map size
+        /// (texels), w: unused
+        dest: uvec4,
     }
 
     /// A receiver rectangle RECT_i of Hu & Qin 2007 §2.2.1 (Fig. 12-13), as the photon-buffer

@@ -567,3 +567,15 @@ fn reference_pixel_state_beyond_the_storage_buffer_range() {
     let e = c.fails(&mut cmd);
     assert!(e.contains("--width/--height") && e.contains("maxStorageBufferRange is 128 MiB"), "{e}");
 }
+
+#[test]
+fn caustic_grid_beyond_the_storage_buffer_range() {
+    // caustics mapping keeps one 32-byte splat record per grid vertex (one source face on
+    // caustic_sphere, one channel): 2100^2 of them are 134.6 MB, more than lavapipe's
+    // maxStorageBufferRange of 128 MiB (2^27 = 134.2 MB); 2048^2 (128 MiB exactly) would fit.
+    let c = Case::new("caustic-grid-limit");
+    let scene = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/caustic_sphere.toml");
+    let sets = ["--set", "render.caustics=caustics_map", "--set", "render.caustics_map.grid=2100"];
+    let e = c.render_fails(&scene, &[&["--width", "16", "--height", "16", "--validation"][..], &sets[..]].concat(), &[]);
+    assert!(e.contains("render.caustics_map.grid = 2100") && e.contains("maxStorageBufferRange is 128 MiB"), "{e}");
+}

@@ -21,7 +21,7 @@ fn caustic_scenes_render_with_caustics_map() {
         let refraction: &[&str] = if name == "water_pool" { &["render.refraction=water"] } else { &[] };
         let with = common::render_on(&ctx, &common::scene(name, 96, &common::refs(&caustics(refraction))));
         common::assert_finite(name, &with.hdr);
-        for p in ["caustics_map_receivers", "caustics_map_refractors", "caustics_map"] {
+        for p in ["caustics_map_receivers", "caustics_map_refractors", "caustics_map_hits", "caustics_map"] {
             assert!(with.passes.iter().any(|n| n == p), "{name}: {p} missing from {:?}", with.passes);
         }
         let mut none = vec!["render.caustics=\"none\""];

@@ -107,7 +107,8 @@ fn image_space_refraction_replaces_the_baseline() {
 /// receiver, and `render.caustics = "caustics_map"`; its passes run after the shadow map.
 #[test]
 fn caustic_passes_only_with_light_specular_object_and_receiver() {
-    const CAUSTIC: [&str; 3] = ["caustics_map_receivers", "caustics_map_refractors", "caustics_map"];
+    const CAUSTIC: [&str; 4] =
+        ["caustics_map_receivers", "caustics_map_refractors", "caustics_map_hits", "caustics_map"];
     let on = "render.caustics=caustics_map";
     assert_eq!(
         names("caustic_sphere", &[on]),
@@ -115,6 +116,7 @@ fn caustic_passes_only_with_light_specular_object_and_receiver() {
             "shadow_map",
             "caustics_map_receivers",
             "caustics_map_refractors",
+            "caustics_map_hits",
             "caustics_map",
             "gbuffer",
             "deferred_shading",

@@ -1,5 +1,5 @@
 // The light's path through the specular surface a light-space refractor texel sees, shared by
-// caustics mapping (Shah et al. 2007, glsl/caustics/splat.vert) and the photon buffer of
+// caustics mapping (Shah et al. 2007, glsl/caustics/splat_hits.comp) and the photon buffer of
 // Hu & Qin 2007 §3.1 (glsl/caustics/photon_buffer.frag): where the photon leaves the
 // specular object, in which direction, and with which flux.
 //

@@ -1,249 +1,27 @@
 #version 450
-// Caustics mapping (Shah et al. 2007, §III.C): one point per vertex of the refractor grid.
-// The vertex fetches the refractor textures (vertex texture fetch), refracts (or reflects)
-// the light direction, estimates where the ray meets the receivers from the receivers'
-// positions map (§III.C Eq. 1-2 and §III.D Eq. 3-5), and is splatted there with its flux
-// (§III.E Eq. 6-7). Vertices that see no specular surface, rays that are totally internally
-// reflected, and rays whose receiver lookup finds nothing are dropped (placed outside the
-// clip volume), never written as NaN.
+// Caustics mapping's splat (Shah et al. 2007, §III.F: "textured point primitives with a
+// gaussian fall-off"): one point per grid vertex, drawn into the caustic-atlas layer its
+// record (splat_hits.comp) lands in; the records of other layers are dropped here.
 #include "common.glsl"
-#include "fresnel.glsl"
 
-layout(set = 0, binding = CAUSTIC_BINDING_FACES, std430) readonly buffer Faces { GpuCausticFace faces[]; };
-layout(set = 0, binding = CAUSTIC_BINDING_MATERIALS, std430) readonly buffer Materials { GpuMaterial materials[]; };
-layout(set = 0, binding = CAUSTIC_BINDING_RECEIVER_CUBE) uniform samplerCubeArray receiver_cubes;
-layout(set = 0, binding = CAUSTIC_BINDING_RECEIVER_2D) uniform sampler2DArray receiver_layers;
-layout(set = 0, binding = CAUSTIC_BINDING_FRONT_POSITION) uniform sampler2DArray front_position;
-layout(set = 0, binding = CAUSTIC_BINDING_FRONT_NORMAL) uniform sampler2DArray front_normal;
-layout(set = 0, binding = CAUSTIC_BINDING_BACK_POSITION) uniform sampler2DArray back_position;
-layout(set = 0, binding = CAUSTIC_BINDING_BACK_NORMAL) uniform sampler2DArray back_normal;
-// Eq. 6's V per source face: occlusion-query sample counts copied on the GPU.
-layout(set = 0, binding = CAUSTIC_BINDING_VISIBLE, std430) readonly buffer Visible { uint visible[]; };
-layout(constant_id = 0) const uint FLUX = FLUX_SOLID_ANGLE;
-// render.caustics_map.exit: CAUSTIC_EXIT_WYMAN (the paper's, §IV) or CAUSTIC_EXIT_MARCH.
-layout(constant_id = 1) const uint EXIT = CAUSTIC_EXIT_MARCH;
-// render.caustics_map.splat: SPLAT_FIXED (§III.F) or SPLAT_FOOTPRINT, with its largest sigma.
-layout(constant_id = 2) const uint SPLAT = SPLAT_FIXED;
-layout(constant_id = 3) const float MAX_SIGMA = 8.0;
-#include "light_path.glsl"
-
-layout(push_constant) uniform CausticSplatPushBlock { CausticSplatPush pc; };
+layout(set = 0, binding = CAUSTIC_BINDING_SPLATS, std430) readonly buffer Splats { GpuCausticSplat splats[]; };
+layout(push_constant) uniform CausticDrawPushBlock { CausticDrawPush pc; };
 
 layout(location = 0) flat out vec3 out_flux;
 layout(location = 1) flat out vec3 out_splat;
 
-// Cleared receiver distance ("no receiver in this direction"), FAR_DISTANCE in shadow_map.rs;
-// bilinear filtering next to it still gives far more than any scene distance.
-const float NO_RECEIVER = 1.0e30;
-
-void drop_vertex() {
-    gl_Position = vec4(2.0, 2.0, 2.0, 1.0);   // outside the clip volume: the point is culled
-    gl_PointSize = 1.0;
-    out_flux = vec3(0.0);
-    out_splat = vec3(0.0);
-}
-
-// The receivers' positions texture of §III.B step 1, stored as distances to the light (as
-// the shadow maps are) and turned back into a position. Returns false where no receiver is
-// seen. g = stored distance - x's own distance: zero exactly on the receiver (Theorem 1),
-// positive in front of it, negative behind; the signed form gives true Newton-Raphson a
-// derivative that does not vanish at the root and bisection a bracket.
-bool receiver(GpuCausticFace f, vec3 x, out vec3 r, out float g) {
-    float layer = f.intensity.w;
-    if (uint(f.light.w + 0.5) == LIGHT_POINT) {
-        vec3 v = x - f.light.xyz;
-        float dist = length(v);
-        if (!(dist > 0.0)) return false;
-        float stored = textureLod(receiver_cubes, vec4(v, layer / float(SHADOW_LAYERS_PER_LIGHT)), 0.0).r;
-        if (!(stored < NO_RECEIVER)) return false;
-        r = f.light.xyz + v * (stored / dist);
-        g = stored - dist;
-    } else {
-        vec4 clip = f.receiver_view_proj * vec4(x, 1.0);
-        vec2 uv = clip.xy * 0.5 + 0.5;
-        if (any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0)))) return false;
-        float stored = textureLod(receiver_layers, vec3(uv, layer), 0.0).r;
-        if (!(stored < NO_RECEIVER)) return false;
-        float along = dot(x - f.origin.xyz, f.light.xyz);
-        r = x + f.light.xyz * (stored - along);
-        g = stored - along;
-    }
-    return true;
-}
-
-// Where the ray o + d * dir meets the receivers (§III.C-D). The initial guess is the
-// receiver seen from the light through o: the paper's d = 1 (Eq. 2) is in the units of its
-// scene, while prism's scenes range from 1e-3 to 1e4 m.
-bool intersect(GpuCausticFace f, vec3 o, vec3 dir, out vec3 hit) {
-    vec3 r;
-    float g;
-    if (!receiver(f, o, r, g)) return false;
-    float d = distance(o, r);
-    int iterations = int(pc.params.y + 0.5);
-    if (uint(pc.params.z + 0.5) == NEWTON_APPROXIMATE) {
-        // §III.C: the distance from the ray origin to the receiver point looked up at the
-        // current estimate is the next estimate (Eq. 1 with d = d'); the answer is the
-        // looked-up receiver point itself, as in EstimateIntersection.
-        for (int k = 0; k < iterations; ++k) {
-            if (!receiver(f, o + d * dir, r, g)) return false;
-            d = distance(o, r);
-        }
-        hit = r;
-        return true;
-    }
-    // The appendix's Newton-Raphson (Eq. 4) with the finite-difference derivative of Eq. 5,
-    // on the signed g. The step eps is relative to the distance (the appendix's 0.1 is in
-    // its scene's units). §III.D: NR may oscillate between two estimates; this is detected
-    // by keeping the last two, and then (or when a step leaves the bracket [lo, hi] known
-    // to hold the root, or the derivative vanishes) the step is a bisection instead.
-    float eps = 1e-3 * max(d, 1e-20);
-    float lo = 0.0, hi = -1.0;   // g > 0 at lo; hi < 0: no point behind a receiver seen yet
-    float prev = -1.0;
-    for (int k = 0; k < iterations; ++k) {
-        float g0, g1;
-        vec3 r1;
-        if (!receiver(f, o + d * dir, r, g0)) return false;
-        if (g0 >= 0.0) lo = max(lo, d); else hi = (hi < 0.0) ? d : min(hi, d);
-        if (!receiver(f, o + (d + eps) * dir, r1, g1)) return false;
-        float deriv = (g1 - g0) / eps;
-        float next = d - g0 / deriv;
-        bool oscillating = prev >= 0.0 && abs(next - prev) <= 1e-3 * d && abs(next - d) > 1e-3 * d;
-        bool outside = !(next > lo) || (hi >= 0.0 && !(next < hi));
-        if (oscillating || outside || isnan(next) || isinf(next)) {
-            next = hi >= 0.0 ? 0.5 * (lo + hi) : 2.0 * max(d, lo);
-        }
-        prev = d;
-        d = next;
-    }
-    if (!receiver(f, o + d * dir, r, g)) return false;
-    hit = r;
-    return true;
-}
-
-// Vulkan cube face (+X, -X, +Y, -Y, +Z, -Z) whose major axis holds v.
-uint cube_face(vec3 v) {
-    vec3 a = abs(v);
-    if (a.x >= a.y && a.x >= a.z) return v.x >= 0.0 ? 0u : 1u;
-    if (a.y >= a.z) return v.y >= 0.0 ? 2u : 3u;
-    return v.z >= 0.0 ? 4u : 5u;
-}
-
-// Where the light through grid texel ij of face f lands on the receivers (no flux): for the
-// footprint of a neighbouring vertex.
-bool landing(GpuCausticFace f, int layer, ivec2 ij, int grid, int c, uint channels, out vec3 hit) {
-    hit = vec3(0.0);
-    if (any(lessThan(ij, ivec2(0))) || any(greaterThanEqual(ij, ivec2(grid)))) return false;
-    vec3 origin, dir, weight, absorb;
-    float cos_in;
-    if (!light_path(f, layer, ij, grid, c, channels, EXIT, origin, dir, weight, absorb, cos_in)) return false;
-    return intersect(f, origin, dir, hit);
-}
-
-// The splat's sigma in caustic-map texels. SPLAT_FIXED: the paper's fixed Gaussian (§III.F).
-// SPLAT_FOOTPRINT (a departure): the beam around this vertex covers, on the receivers, about
-// the area between its hit and its grid neighbours' hits; where refraction spreads the beam
-// (a diverging lens such as the bunny's thin parts, or a grazing receiver) those hits are
-// several texels apart and fixed splats leave the caustic as separate dots (§III.F: "the
-// gaps between the point splats give a non-continuous appearance"). Half the larger spacing
-// to the +i and +j neighbours (or -i, -j where those drop out) makes neighbouring Gaussians
-// meet at 0.6 of their peak; clamped to [splat_sigma, max_splat_sigma] so that a neighbour
-// across a silhouette or a fold of the caustic does not smear the whole map.
-float splat_sigma(GpuCausticFace f, int layer, ivec2 ij, int grid, int c, uint channels, vec2 centre) {
-    float sigma = pc.params.x;
-    if (SPLAT != SPLAT_FOOTPRINT) return sigma;
-    float spacing = 0.0;
-    for (int axis = 0; axis < 2; ++axis) {
-        for (int side = 1; side >= -1; side -= 2) {
-            ivec2 nij = ij;
-            nij[axis] += side;
-            vec3 hit;
-            if (!landing(f, layer, nij, grid, c, channels, hit)) continue;
-            vec4 clip = pc.dest_view_proj * vec4(hit, 1.0);
-            if (!(clip.w > 0.0)) continue;
-            vec2 other = (clip.xy / clip.w * 0.5 + 0.5) * pc.params.w;
-            spacing = max(spacing, distance(other, centre));
-            break;   // one neighbour per axis: -1 only where +1 drops out
-        }
-    }
-    return clamp(0.5 * spacing, sigma, MAX_SIGMA);
-}
-
 void main() {
-    GpuCausticFace f0 = faces[pc.face.x];
-    int grid = int(f0.measure.z + 0.5);
-    int per_face = grid * grid;
-    uint s = pc.face.x + uint(gl_VertexIndex / per_face);
-    int texel = gl_VertexIndex % per_face;
-    ivec2 ij = ivec2(texel % grid, texel / grid);
-    GpuCausticFace f = faces[s];
-    int layer = int(s);
-    uint channels = pc.face.w;
-    int c = gl_InstanceIndex;
-    vec3 origin, dir, weight, absorb_to_receiver;
-    float cos_in;
-    if (!light_path(f, layer, ij, grid, c, channels, EXIT, origin, dir, weight, absorb_to_receiver, cos_in)) {
-        drop_vertex();
+    GpuCausticSplat r = splats[pc.dest.y + uint(gl_VertexIndex)];
+    if (r.position.w != float(pc.dest.x)) {
+        gl_Position = vec4(2.0, 2.0, 2.0, 1.0);   // outside the clip volume: the point is culled
+        gl_PointSize = 1.0;
+        out_flux = vec3(0.0);
+        out_splat = vec3(0.0);
         return;
     }
-    vec3 flux;
-    if (FLUX == FLUX_OCCLUSION_QUERY) {
-        // Eq. 6: Phi_i = (N_i . L_i) / V of "the total flux through the surface of the
-        // caustic-forming object visible to the light source", V the occlusion query's count
-        // of rasterized pixels. That total, in W, is the light's flux through those V pixels,
-        // V times a pixel's mean solid angle (or area): in physical units V cancels, and what
-        // remains of Eq. 6 is the face's mean texel measure and the factor N . L.
-        float v = float(visible[s]);
-        if (!(v >= 1.0)) {
-            drop_vertex();
-            return;
-        }
-        flux = f.intensity.rgb * (v * mean_texel_measure(f, grid)) * cos_in / v;
-    } else {
-        flux = f.intensity.rgb * texel_measure(f, ij, grid);
-    }
-    if (channels == 3u) {
-        vec3 mask = vec3(0.0);
-        mask[c] = 1.0;
-        flux *= mask;
-    }
-    vec3 hit;
-    if (!intersect(f, origin, dir, hit)) {
-        drop_vertex();
-        return;
-    }
-    weight *= exp(-absorb_to_receiver * distance(origin, hit));
-    flux *= weight;
-
-    // Destination: a point light's caustic map is a cube, and each splat goes to the face
-    // holding its direction (§III.F, "environment caustic map"); a directional light's is
-    // the orthographic map of its shadow map.
-    if (pc.face.z < 6u && cube_face(hit - f.light.xyz) != pc.face.z) {
-        drop_vertex();
-        return;
-    }
-    vec4 clip = pc.dest_view_proj * vec4(hit, 1.0);
-    if (!(clip.w > 0.0) || any(isnan(flux)) || any(isinf(flux))) {
-        drop_vertex();
-        return;
-    }
-    // Gaussian splat normalised over the texels the point covers: texel centres k + 0.5
-    // within half the point size of the centre, separably in x and y.
-    float n_map = pc.params.w;
-    vec2 centre = (clip.xy / clip.w * 0.5 + 0.5) * n_map;
-    float sigma = splat_sigma(f, layer, ij, grid, c, channels, centre);
-    float size = 2.0 * ceil(3.0 * sigma) + 1.0;
-    float k2 = 1.0 / (2.0 * sigma * sigma);
-    vec2 sum = vec2(0.0);
-    for (float k = floor(centre.x - 0.5 * size) - 1.0; k <= centre.x + 0.5 * size; k += 1.0) {
-        float o = k + 0.5 - centre.x;
-        if (abs(o) <= 0.5 * size) sum.x += exp(-o * o * k2);
-    }
-    for (float k = floor(centre.y - 0.5 * size) - 1.0; k <= centre.y + 0.5 * size; k += 1.0) {
-        float o = k + 0.5 - centre.y;
-        if (abs(o) <= 0.5 * size) sum.y += exp(-o * o * k2);
-    }
-    gl_Position = clip;
-    gl_PointSize = size;
-    out_flux = flux / max(sum.x * sum.y, 1e-12);
-    out_splat = vec3(centre, k2);
+    float sigma = r.flux.w;
+    gl_Position = vec4(r.position.xyz, 1.0);
+    gl_PointSize = 2.0 * ceil(3.0 * sigma) + 1.0;
+    out_flux = r.flux.rgb;
+    out_splat = vec3((r.position.xy * 0.5 + 0.5) * float(pc.dest.z), 1.0 / (2.0 * sigma * sigma));
 }

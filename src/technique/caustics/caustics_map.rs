@@ -5,7 +5,7 @@
 //!
 //! 1. `caustics_map_receivers` (§III.B step 1): the diffuse receivers seen from each light,
 //!    stored like the shadow maps as distances to the light (a cube for a point light, the
-//!    light's orthographic map for a directional one), from which the vertex shader recovers
+//!    light's orthographic map for a directional one), from which the splat-hits pass recovers
 //!    the receivers' positions. Refractors are left out, so the receivers under them are seen.
 //! 2. `caustics_map_refractors` (§III.B step 2): the specular objects from the light as MRT,
 //!    positions and normals, into textures of the grid's resolution: the surface nearest the
@@ -13,14 +13,18 @@
 //!    exit surface of double-surface refraction, §III.E / §IV with Wyman 2005). One source face fitted to the specular
 //!    objects' bounding sphere (a perspective frustum for a point light outside it, an
 //!    orthographic box for a directional light), or six cube faces for a point light inside.
-//! 3. `caustics_map` (§III.C-E): the vertex grid drawn as points, G x G per source face. The
-//!    vertex shader (glsl/caustics/splat.vert) fetches the refractor textures, refracts or
-//!    reflects, estimates the receiver hit with the approximate (§III.C, Eq. 1-2) or true
-//!    (appendix, Eq. 4-5) Newton-Raphson iteration, and splats the vertex's flux (Eq. 6-7)
-//!    with a Gaussian point sprite and additive blending into the caustic-map atlas: six cube
-//!    faces per point light (§III.F "environment caustic map"), the orthographic map for a
-//!    directional light. With an RGB ior the grid is drawn as three instances, one per
-//!    channel (dispersion, Fig. 13).
+//! 3. `caustics_map_hits` (§III.C-E): one compute invocation per vertex of the G x G grid of
+//!    each source face (glsl/caustics/splat_hits.comp) fetches the refractor textures,
+//!    refracts or reflects, estimates the receiver hit with the approximate (§III.C, Eq. 1-2)
+//!    or true (appendix, Eq. 4-5) Newton-Raphson iteration, weighs the vertex's flux
+//!    (Eq. 6-7) and picks the atlas layer the hit lands in. With an RGB ior each vertex does
+//!    this once per channel (dispersion, Fig. 13).
+//! 4. `caustics_map` (§III.F): the records drawn as Gaussian point sprites with additive
+//!    blending into the caustic-map atlas, each into its own layer: six cube faces per point
+//!    light ("environment caustic map"), the orthographic map for a directional light. The
+//!    paper draws its grid once per map; computing each vertex's path once and routing it,
+//!    instead of running the whole grid for every cube face and keeping the sixth that lands
+//!    there, gives the same map for a sixth of the light-path work.
 //!
 //! Units: the map holds flux per texel (W). Deferred shading divides by the receiver area a
 //! texel covers (glsl/shading/deferred.frag, `caustic_irradiance`), giving irradiance in
@@ -31,14 +35,14 @@ use glam::{Mat4, Vec3};
 use crate::frame::gpu_scene::{cube_face_views, Draw, GpuScene};
 use crate::frame::targets::DEPTH_FORMAT;
 use crate::gpu::{
-    vk, Access, Blend, Buffer, Clear, DepthState, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc,
-    ImageViewKind, MemoryLocation, OcclusionQueryPool, RenderTarget, Sampler, SamplerDesc, Spec,
+    vk, Access, Blend, Buffer, Clear, ComputePipeline, DepthState, GpuResult, GraphicsPipeline, GraphicsPipelineDesc,
+    Image, ImageDesc, ImageViewKind, MemoryLocation, OcclusionQueryPool, RenderTarget, Sampler, SamplerDesc, Spec,
 };
 use crate::graph::{Bindings, BoundSet, BufferId, Frame, ImageId};
 use crate::scene::techniques::{CausticExit, CausticsMapParams, Flux, Newton, SplatSize};
 use crate::scene::{Light, Material, Scene};
 pub use crate::shader_structs::GpuCausticFace;
-use crate::shader_structs::{CausticSplatPush, RefractorPush, ShadowPush};
+use crate::shader_structs::{CausticDrawPush, CausticHitsPush, GpuCausticSplat, RefractorPush, ShadowPush};
 use crate::technique::baseline::shadow_map::FAR_DISTANCE;
 use crate::technique::refraction::refraction_wyman::scene_distance_along_normals;
 use crate::technique::{
@@ -46,16 +50,17 @@ use crate::technique::{
     Stage, Technique,
 };
 use crate::{
-    CAUSTIC_BINDING_BACK_NORMAL, CAUSTIC_BINDING_BACK_POSITION, CAUSTIC_BINDING_DN, CAUSTIC_BINDING_FACES,
-    CAUSTIC_BINDING_FRONT_NORMAL, CAUSTIC_BINDING_FRONT_POSITION, CAUSTIC_BINDING_MATERIALS,
-    CAUSTIC_BINDING_RECEIVER_2D, CAUSTIC_BINDING_RECEIVER_CUBE, CAUSTIC_BINDING_VISIBLE, CAUSTIC_EXIT_MARCH,
-    CAUSTIC_EXIT_WYMAN, CAUSTIC_FACE_ORTHOGRAPHIC, CAUSTIC_FACE_PERSPECTIVE, CAUSTIC_LAYER_BACK, CAUSTIC_LAYER_FRONT,
-    FLUX_OCCLUSION_QUERY, FLUX_SOLID_ANGLE, LIGHT_DIRECTIONAL, LIGHT_POINT, NEWTON_APPROXIMATE, NEWTON_TRUE,
-    SHADOW_LAYERS_PER_LIGHT, SPLAT_FIXED, SPLAT_FOOTPRINT,
+    CAUSTIC_BINDING_BACK_NORMAL, CAUSTIC_BINDING_BACK_POSITION, CAUSTIC_BINDING_DESTINATIONS, CAUSTIC_BINDING_DN,
+    CAUSTIC_BINDING_FACES, CAUSTIC_BINDING_FRONT_NORMAL, CAUSTIC_BINDING_FRONT_POSITION, CAUSTIC_BINDING_MATERIALS,
+    CAUSTIC_BINDING_RECEIVER_2D, CAUSTIC_BINDING_RECEIVER_CUBE, CAUSTIC_BINDING_SPLATS, CAUSTIC_BINDING_VISIBLE,
+    CAUSTIC_EXIT_MARCH, CAUSTIC_EXIT_WYMAN, CAUSTIC_FACE_ORTHOGRAPHIC, CAUSTIC_FACE_PERSPECTIVE, CAUSTIC_LAYER_BACK,
+    CAUSTIC_LAYER_FRONT, FLUX_OCCLUSION_QUERY, FLUX_SOLID_ANGLE, LIGHT_DIRECTIONAL, LIGHT_POINT, NEWTON_APPROXIMATE,
+    NEWTON_TRUE, SHADOW_LAYERS_PER_LIGHT, SPLAT_FIXED, SPLAT_FOOTPRINT,
 };
 
 pub const CAUSTICS_MAP_RECEIVERS: &str = "caustics_map_receivers";
 pub const CAUSTICS_MAP_REFRACTORS: &str = "caustics_map_refractors";
+pub const CAUSTICS_MAP_HITS: &str = "caustics_map_hits";
 pub const CAUSTICS_MAP: &str = "caustics_map";
 
 /// `render.caustics = "caustics_map"`, parameters `[render.caustics_map]`.
@@ -79,11 +84,12 @@ fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
                 format!("positions and normals of the specular {} seen from the light(s)", list(&specular)),
             ),
             PlannedPass::new(
+                CAUSTICS_MAP_HITS,
+                format!("where each grid vertex's light path through {} meets the receivers", list(&specular)),
+            ),
+            PlannedPass::new(
                 CAUSTICS_MAP,
-                format!(
-                    "vertex grid splatted onto the receivers through {} (render.caustics = \"caustics_map\")",
-                    list(&specular)
-                ),
+                "the grid vertices splatted into the caustic map (render.caustics = \"caustics_map\")".to_string(),
             ),
         ],
     )
@@ -116,14 +122,16 @@ impl Technique for CausticsMapPass {
 
         self.refractors.record(frame, scene);
 
-        let pass = frame.pass(CAUSTICS_MAP).uses(&self.set);
-        let grid = self.params.grid;
+        frame.pass(CAUSTICS_MAP_HITS).uses(&self.hits_set).record(move |cmd| {
+            cmd.compute(&self.hits_pipeline, &[self.hits_set.set()], &self.hits_push, self.hits_groups);
+        });
+        let pass = frame.pass(CAUSTICS_MAP).uses(&self.splat_set);
         pass.write(targets.caustic.flux_id, Access::ColorAttachment).record(move |cmd| {
             for d in &self.destinations {
-                cmd.in_target(&self.splat_target, d.layer as usize, &[Clear::Color([0.0; 4])], |cmd| {
-                    cmd.bind_graphics(&self.splat_pipeline, &[self.set.set()]);
+                cmd.in_target(&self.splat_target, d.push.dest[0] as usize, &[Clear::Color([0.0; 4])], |cmd| {
+                    cmd.bind_graphics(&self.splat_pipeline, &[self.splat_set.set()]);
                     cmd.push_graphics(&self.splat_pipeline, &d.push);
-                    cmd.draw(d.push.face[1] * grid * grid, self.channels);
+                    cmd.draw(d.records, 1);
                 });
             }
         });
@@ -138,11 +146,11 @@ const LAYER_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 /// radius (or inside it) sees them over too wide an angle for one frustum: six cube faces.
 const FITTED_FRUSTUM_LIMIT: f32 = 0.9;
 
-/// One layer of the caustic atlas to splat into, with the source faces of its light.
-/// A layer of the caustic atlas and what is splatted into it.
+/// A layer of the caustic atlas, drawn from its light's splat records.
 struct Destination {
-    layer: u32,
-    push: CausticSplatPush,
+    push: CausticDrawPush,
+    /// The light's records (the draw's vertex count).
+    records: u32,
 }
 
 /// A face of the receivers' distance atlas.
@@ -237,14 +245,19 @@ pub struct CausticsMapPass {
     receiver_draws: Vec<Draw>,
     // Refractors.
     refractors: RefractorLayers,
+    // Splat records: each grid vertex's light path, once.
+    hits_set: BoundSet,
+    hits_pipeline: ComputePipeline,
+    hits_push: CausticHitsPush,
+    hits_groups: [u32; 3],
     // Splats: a framebuffer per caustic-atlas layer.
     splat_target: RenderTarget,
-    set: BoundSet,
+    splat_set: BoundSet,
     splat_pipeline: GraphicsPipeline,
     destinations: Vec<Destination>,
-    /// Splat instances: 3 with a dispersive (RGB ior) dielectric, one per channel; else 1.
-    channels: u32,
     _faces: Buffer,
+    _layer_matrices: Buffer,
+    _splats: Buffer,
     _samplers: [Sampler; 2],
 }
 
@@ -308,13 +321,71 @@ impl CausticsMapPass {
         let (refractors, faces, light_sources) =
             RefractorLayers::new(s, CAUSTICS_MAP_REFRACTORS, grid, specular_bounds(scene), occlusion)?;
 
-        // 3. The splat pass.
+        // 3. Each grid vertex's light path and hit, once (§III.C-E).
         let faces_buffer = Buffer::storage(ctx, "caustic_faces", &faces)?;
+        let dispersive = scene.materials.iter().any(|m| match m {
+            Material::Dielectric { ior, .. } => ior.x != ior.y || ior.y != ior.z,
+            _ => false,
+        });
+        let channels: u32 = if dispersive { 3 } else { 1 };
+        let per_face = grid * grid;
+        let records = u64::from(faces.len() as u32) * u64::from(per_face) * u64::from(channels);
+        let record_bytes = std::mem::size_of::<GpuCausticSplat>() as u64;
+        let range = u64::from(ctx.limits().max_storage_buffer_range);
+        let max_groups = ctx.limits().max_compute_work_group_count;
+        let groups = u32::try_from(records).ok().and_then(|n| crate::reference::dispatch_size(n, max_groups));
+        let hits_groups = match groups {
+            Some(groups) if records * record_bytes <= range => groups,
+            _ => {
+                return Err(RenderError::Limit(format!(
+                    "render.caustics_map.grid = {grid}: {} source face(s) x {grid}^2 vertices x {channels} channel(s) \
+                     need {} MiB of splat records; the device's maxStorageBufferRange is {} MiB: lower the grid",
+                    faces.len(),
+                    (records * record_bytes) >> 20,
+                    range >> 20
+                )))
+            }
+        };
+        let splats = Buffer::new(
+            ctx,
+            "caustic_splats",
+            records * record_bytes,
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+            MemoryLocation::GpuOnly,
+        )?;
+        let splats_id = s.graph.register_buffer(&splats);
+
+        // Each atlas layer's world -> clip matrix: a point light's shadow-cube faces, a
+        // directional light's orthographic map; zero (nothing drawn) for the others.
+        let mut layer_matrices = vec![[[0.0f32; 4]; 4]; layers as usize];
+        let mut destinations = Vec::new();
+        for (i, l) in scene.lights.iter().enumerate() {
+            let base = i as u32 * SHADOW_LAYERS_PER_LIGHT;
+            let (first, count) = light_sources[i];
+            let dest: Vec<(u32, Mat4)> = match l {
+                Light::Point { .. } => gpu
+                    .shadow_faces
+                    .iter()
+                    .filter(|f| f.layer >= base && f.layer < base + 6)
+                    .map(|f| (f.layer, f.view_proj))
+                    .collect(),
+                Light::Directional { .. } => vec![(base, Mat4::from_cols_array_2d(&gpu.lights[i].view_proj))],
+            };
+            for (layer, view_proj) in dest {
+                layer_matrices[layer as usize] = view_proj.to_cols_array_2d();
+                destinations.push(Destination {
+                    push: CausticDrawPush { dest: [layer, first * per_face * channels, size, 0] },
+                    records: count * per_face * channels,
+                });
+            }
+        }
+        let layer_matrices = Buffer::storage(ctx, "caustic_layer_matrices", &layer_matrices)?;
+
         // Linear filtering of the receivers' distances makes f(d) (Eq. 3) piecewise linear
         // instead of piecewise constant, so that the finite difference of Eq. 5 is not zero.
         let linear = Sampler::new(ctx, "caustic_linear", SamplerDesc::LINEAR_CLAMP)?;
         let nearest = Sampler::new(ctx, "caustic_nearest", SamplerDesc::NEAREST_CLAMP)?;
-        let mut set = Bindings::new(vk::ShaderStageFlags::VERTEX)
+        let mut set = Bindings::new(vk::ShaderStageFlags::COMPUTE)
             .storage(CAUSTIC_BINDING_FACES, &faces_buffer)
             .storage(CAUSTIC_BINDING_MATERIALS, &gpu.materials)
             .sampled(CAUSTIC_BINDING_RECEIVER_CUBE, receiver_atlas, &linear)
@@ -327,7 +398,52 @@ impl CausticsMapPass {
         if occlusion {
             set = set.read(refractors.visible_id);
         }
-        let set = set.build(ctx, CAUSTICS_MAP)?;
+        let hits_set = set
+            .storage(CAUSTIC_BINDING_DESTINATIONS, &layer_matrices)
+            .storage(CAUSTIC_BINDING_SPLATS, &splats)
+            .access(splats_id, Access::ComputeWrite)
+            .build(ctx, CAUSTICS_MAP_HITS)?;
+        let hits_pipeline = ComputePipeline::new(
+            ctx,
+            CAUSTICS_MAP_HITS,
+            "caustics/splat_hits.comp",
+            &[hits_set.layout()],
+            std::mem::size_of::<CausticHitsPush>() as u32,
+            // Eq. 6's flux weight, the exit estimate of double-surface refraction, and the
+            // splats' size.
+            &[
+                ("FLUX", Spec::U32(if occlusion { FLUX_OCCLUSION_QUERY } else { FLUX_SOLID_ANGLE })),
+                (
+                    "EXIT",
+                    Spec::U32(match params.exit {
+                        CausticExit::Wyman => CAUSTIC_EXIT_WYMAN,
+                        CausticExit::March => CAUSTIC_EXIT_MARCH,
+                    }),
+                ),
+                (
+                    "SPLAT",
+                    Spec::U32(match params.splat {
+                        SplatSize::Fixed => SPLAT_FIXED,
+                        SplatSize::Footprint => SPLAT_FOOTPRINT,
+                    }),
+                ),
+                ("MAX_SIGMA", Spec::F32(params.max_splat_sigma.max(params.splat_sigma))),
+            ],
+        )?;
+        let newton = match params.newton {
+            Newton::Approximate => NEWTON_APPROXIMATE,
+            Newton::True => NEWTON_TRUE,
+        };
+        let hits_push = CausticHitsPush {
+            face: [faces.len() as u32, channels, per_face, 0],
+            params: [params.splat_sigma, params.iterations as f32, newton as f32, size as f32],
+        };
+
+        // 4. The splats, each drawn into its layer (§III.F).
+        let splat_set = Bindings::new(vk::ShaderStageFlags::VERTEX)
+            .storage(CAUSTIC_BINDING_SPLATS, &splats)
+            .read(splats_id)
+            .build(ctx, CAUSTICS_MAP)?;
         let splat_target = RenderTarget::layered(
             ctx,
             CAUSTICS_MAP,
@@ -342,68 +458,12 @@ impl CausticsMapPass {
                 vertex_shader: "caustics/splat.vert",
                 topology: vk::PrimitiveTopology::POINT_LIST,
                 blend: &[Blend::Additive],
-                // Eq. 6's flux weight, the exit estimate of double-surface refraction, and the
-                // splats' size.
-                specialization: &[
-                    ("FLUX", Spec::U32(if occlusion { FLUX_OCCLUSION_QUERY } else { FLUX_SOLID_ANGLE })),
-                    (
-                        "EXIT",
-                        Spec::U32(match params.exit {
-                            CausticExit::Wyman => CAUSTIC_EXIT_WYMAN,
-                            CausticExit::March => CAUSTIC_EXIT_MARCH,
-                        }),
-                    ),
-                    (
-                        "SPLAT",
-                        Spec::U32(match params.splat {
-                            SplatSize::Fixed => SPLAT_FIXED,
-                            SplatSize::Footprint => SPLAT_FOOTPRINT,
-                        }),
-                    ),
-                    ("MAX_SIGMA", Spec::F32(params.max_splat_sigma.max(params.splat_sigma))),
-                ],
                 ..GraphicsPipelineDesc::fullscreen(CAUSTICS_MAP, "caustics/splat.frag")
             },
-            &[set.layout()],
-            std::mem::size_of::<CausticSplatPush>() as u32,
+            &[splat_set.layout()],
+            std::mem::size_of::<CausticDrawPush>() as u32,
             &splat_target.pass,
         )?;
-        let dispersive = scene.materials.iter().any(|m| match m {
-            Material::Dielectric { ior, .. } => ior.x != ior.y || ior.y != ior.z,
-            _ => false,
-        });
-        let channels = if dispersive { 3 } else { 1 };
-        let newton = match params.newton {
-            Newton::Approximate => NEWTON_APPROXIMATE,
-            Newton::True => NEWTON_TRUE,
-        };
-        let splat_params = [params.splat_sigma, params.iterations as f32, newton as f32, size as f32];
-        let mut destinations = Vec::new();
-        for (i, l) in scene.lights.iter().enumerate() {
-            let base = i as u32 * SHADOW_LAYERS_PER_LIGHT;
-            let (first, count) = light_sources[i];
-            let dest: Vec<(u32, Mat4, u32)> = match l {
-                Light::Point { .. } => gpu
-                    .shadow_faces
-                    .iter()
-                    .filter(|f| f.layer >= base && f.layer < base + 6)
-                    .map(|f| (f.layer, f.view_proj, f.layer - base))
-                    .collect(),
-                Light::Directional { .. } => {
-                    vec![(base, Mat4::from_cols_array_2d(&gpu.lights[i].view_proj), 6)]
-                }
-            };
-            for (layer, view_proj, cube_face) in dest {
-                destinations.push(Destination {
-                    layer,
-                    push: CausticSplatPush {
-                        dest_view_proj: view_proj.to_cols_array_2d(),
-                        face: [first, count, cube_face, channels],
-                        params: splat_params,
-                    },
-                });
-            }
-        }
 
         Ok(CausticsMapPass {
             params,
@@ -414,12 +474,17 @@ impl CausticsMapPass {
             receiver_faces,
             receiver_draws,
             refractors,
+            hits_set,
+            hits_pipeline,
+            hits_push,
+            hits_groups,
             splat_target,
-            set,
+            splat_set,
             splat_pipeline,
             destinations,
-            channels,
             _faces: faces_buffer,
+            _layer_matrices: layer_matrices,
+            _splats: splats,
             _samplers: [linear, nearest],
         })
     }
