@@ -49,6 +49,10 @@ shared_constants! {
     WORKGROUP_2D: u32 = 8;
 
     // Specular-pass modes (specialisation constant MODE of specular/single.frag).
+    // The step of Hu & Qin's d_T iteration (render.hu_qin.d_t_step, glsl/include/hu_qin_exit.glsl).
+    D_T_STEP_PAPER: u32 = 0;
+    D_T_STEP_NEWTON: u32 = 1;
+
     SPECULAR_MODE_REFRACTION: u32 = 0;
     SPECULAR_MODE_REFLECTION: u32 = 1;
 

@@ -576,6 +576,7 @@ fn caustic_grid_beyond_the_storage_buffer_range() {
     let c = Case::new("caustic-grid-limit");
     let scene = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/caustic_sphere.toml");
     let sets = ["--set", "render.caustics=caustics_map", "--set", "render.caustics_map.grid=2100"];
-    let e = c.render_fails(&scene, &[&["--width", "16", "--height", "16", "--validation"][..], &sets[..]].concat(), &[]);
+    let e =
+        c.render_fails(&scene, &[&["--width", "16", "--height", "16", "--validation"][..], &sets[..]].concat(), &[]);
     assert!(e.contains("render.caustics_map.grid = 2100") && e.contains("maxStorageBufferRange is 128 MiB"), "{e}");
 }

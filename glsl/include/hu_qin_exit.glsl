@@ -9,6 +9,8 @@
 //   float exit_layer_depth(bool front, vec2 uv): that layer's depth at uv, a distance that
 //     grows away from the eye along the view direction;
 //   float exit_point_depth(vec3 P): P's depth in the same measure;
+//   vec3 exit_depth_axis(): the direction in which that depth grows by one per unit length;
+//   constant D_T_STEP: D_T_STEP_PAPER or D_T_STEP_NEWTON (hu_qin_search_d_t);
 //   vec2 exit_project(vec3 P): P's uv in the view;
 //   vec3 exit_back_point(vec2 uv): the back layer's surface point at uv.
 #ifndef PRISM_HU_QIN_EXIT_GLSL
@@ -44,10 +46,18 @@ bool hu_qin_exit_is_front(vec3 V, vec2 p1, vec3 P1, vec3 T1, float probe, float 
 }
 
 // §2.1.3, Fig. 9: d_T by the iterative lookup, against the front (flag -1) or back (flag 1)
-// layer: each step is the depth difference between the layer and the current point. Returns
-// false if P2 left the layer's coverage (section 4: then the exit is front-facing); the step
-// is then halved and the search continues from the last point inside. `found`: some step
-// landed on a covered point (d_T > 0 was accepted).
+// layer: each step is the depth difference between the layer and the current point
+// (D_T_STEP_PAPER). That difference is measured along the view axis while the step is taken
+// along T1, so for a T1 oblique to the axis it under- or overshoots and the iteration
+// converges linearly. D_T_STEP_NEWTON divides it by the rate |T1 . axis| at which depth
+// changes along T1 (at least 0.1, so at most 10 times the paper's step): a Newton step for a
+// layer perpendicular to the axis. Against the converged image of sphere_env at 128^2 (1024
+// iterations), pixels off by more than 2/255 after 3 and 4 iterations: 416 and 112 with the
+// paper's step, 326 and 48 with Newton's; none and none after 8. (The secant method on the
+// same difference did worse, 116 after 6: the nearest-texel layer depth is a step function.)
+// Returns false if P2 left the layer's coverage (section 4: then the exit is front-facing);
+// the step is then halved and the search continues from the last point inside. `found`: some
+// step landed on a covered point (d_T > 0 was accepted).
 bool hu_qin_search_d_t(bool front, vec3 P1, vec3 T1, float tol, float step0, out float d_T, out bool found) {
     float flag = front ? -1.0 : 1.0;
     float step = step0;
@@ -68,6 +78,7 @@ bool hu_qin_search_d_t(bool front, vec3 P1, vec3 T1, float tol, float step0, out
         float z = exit_layer_depth(front, uv);
         step = flag * (z - exit_point_depth(P2));
         if (abs(step) < tol) break;
+        if (D_T_STEP == D_T_STEP_NEWTON) step /= max(abs(dot(T1, exit_depth_axis())), 0.1);
     }
     return stayed;
 }

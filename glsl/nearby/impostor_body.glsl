@@ -33,6 +33,8 @@ layout(constant_id = 3) const uint NEARBY_EXIT = 2;
 // Fig. 7's halvings and Fig. 9's steps (render.hu_qin.search_steps, max_iterations).
 layout(constant_id = 4) const uint SEARCH_STEPS = 8;
 layout(constant_id = 5) const uint MAX_ITERATIONS = 32;
+// Fig. 9's own step in the impostor textures (glsl/include/hu_qin_exit.glsl).
+const uint D_T_STEP = D_T_STEP_PAPER;
 // The dielectrics' nearest back and front faces (BACK_PASS of src/technique/refraction/nearby_impostors.rs),
 // layer = the rectangle's: xyz outward normal (0: none), w axial depth.
 layout(set = 1, binding = BINDING_NEARBY_BACK) uniform sampler2DArray nearby_back;
@@ -63,6 +65,9 @@ vec2 exit_project(vec3 P) {
 }
 float exit_point_depth(vec3 P) {
     return dot(P - pc.origin.xyz, pc.axis.xyz);
+}
+vec3 exit_depth_axis() {
+    return pc.axis.xyz;
 }
 // OBJ_k's front (true) or back layer texel at uv; zero outside the texture.
 vec4 exit_texel(bool front, vec2 uv) {

@@ -26,6 +26,8 @@ layout(constant_id = 4) const uint ASSUME_BACK_FACING = 0;
 layout(constant_id = 5) const uint NEARBY_ITERATIONS = 3;
 layout(constant_id = 6) const float NEARBY_TOLERANCE = 1e-3;
 layout(constant_id = 7) const uint NEARBY_SEEDS = 8;
+// render.hu_qin.d_t_step: Fig. 9's step (D_T_STEP_PAPER) or that step over |T1 . V| (D_T_STEP_NEWTON).
+layout(constant_id = 8) const uint D_T_STEP = D_T_STEP_PAPER;
 #include "nearby.glsl"
 layout(set = 1, binding = BINDING_GBUF_NORMAL) uniform sampler2D gbuf_normal;
 layout(set = 1, binding = BINDING_GBUF_DEPTH) uniform sampler2D gbuf_depth;
@@ -52,6 +54,10 @@ float exit_layer_depth(bool front, vec2 uv) {
 }
 float exit_point_depth(vec3 P) {
     return view_depth(P);
+}
+vec3 exit_depth_axis() {
+    // view_depth is -z in view space: it grows along the camera's forward axis.
+    return -vec3(frame.view[0][2], frame.view[1][2], frame.view[2][2]);
 }
 vec2 exit_project(vec3 P) {
     return project_uv(P);

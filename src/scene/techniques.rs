@@ -561,6 +561,19 @@ choice! {
 }
 
 choice! {
+    /// The step of Hu & Qin's d_T iteration (2007 §2.1.3, Fig. 9).
+    DTStep, hint "Fig. 9's depth difference (the paper's), or that difference over |T1 . V| (Newton)" {
+        /// Fig. 9: Steplength = Flag * (depth - z), a depth difference along the view axis
+        /// taken as a distance along T1; it converges linearly where T1 is oblique to V.
+        Paper = "paper",
+        /// prism's departure: the depth difference divided by |T1 . V| (at least 0.1), the
+        /// distance along T1 that closes it for a layer perpendicular to V; fewer iterations
+        /// for the same image (glsl/include/hu_qin_exit.glsl gives the measurement).
+        Newton = "newton",
+    }
+}
+
+choice! {
     /// How eikonal_view integrates the ray equation (Ihrke et al. 2007, section 4.1).
     Integrator, hint "Euler of Eqs. 11-12 (Ihrke et al. 2007) or fourth-order Runge-Kutta" {
         /// Forward Euler, Eqs. 11-12 (the paper's view renderer).
@@ -626,6 +639,10 @@ params! {
         tolerance: f32 = 1e-4, 1e-7..=0.5;
         /// Upper bound on the d_T iterations (Fig. 9 loops until the tolerance is met).
         max_iterations: u32 = 32, 1..=1024;
+        /// The d_T iteration's step (Fig. 9) in the camera view: the paper's depth difference,
+        /// or that difference over |T1 . V|, a Newton step (the impostor textures of §2.2.1
+        /// keep the paper's).
+        d_t_step: DTStep = DTStep::Paper;
         /// Section 4's acceleration: skip the binary search, assume a back-facing exit, and
         /// decide "front-facing" (the front-facing layer) only when P2 leaves the refractor's
         /// silhouette.

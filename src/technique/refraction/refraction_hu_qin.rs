@@ -20,7 +20,7 @@
 
 use crate::gpu::Spec;
 use crate::graph::Frame;
-use crate::scene::techniques::{HuQinParams, RecursiveExit};
+use crate::scene::techniques::{DTStep, HuQinParams, RecursiveExit};
 use crate::scene::{Material, Scene};
 use crate::technique::{
     in_stage, list, params, refracting_objects, registration, FrameInputs, PlannedPass, Registration, RenderError,
@@ -29,6 +29,7 @@ use crate::technique::{
 use crate::{
     BINDING_GBUF_ALBEDO, BINDING_GBUF_DEPTH, BINDING_GBUF_NORMAL, BINDING_NEARBY_RECTS, BINDING_NEARBY_TEXTURE,
     BINDING_REFR_BACK_DEPTH, BINDING_REFR_BACK_NORMAL, BINDING_REFR_FRONT_DEPTH, BINDING_REFR_FRONT_NORMAL,
+    D_T_STEP_NEWTON, D_T_STEP_PAPER,
 };
 
 use super::nearby_impostors::{
@@ -222,6 +223,13 @@ impl HuQinPass {
                     ("NEARBY_ITERATIONS", Spec::U32(params.correction_iterations)),
                     ("NEARBY_TOLERANCE", Spec::F32(params.correction_tolerance)),
                     ("NEARBY_SEEDS", Spec::U32(params.seed_samples)),
+                    (
+                        "D_T_STEP",
+                        Spec::U32(match params.d_t_step {
+                            DTStep::Paper => D_T_STEP_PAPER,
+                            DTStep::Newton => D_T_STEP_NEWTON,
+                        }),
+                    ),
                 ],
                 debug: params.debug,
                 scene,
