@@ -274,15 +274,12 @@ shared_structs! {
 
     /// Push constants of glsl/caustics/photon_scatter.vert.
     push struct PhotonScatterPush {
-        /// x: photon buffer size, y: source faces, z: this layer's k (rectangle index + 1)
+        /// x: photon buffer size, y: source faces, z: this layer's k (rectangle index + 1),
+        /// w: the filter's k (§3.2)
         info: uvec4,
-    }
-
-    /// Push constants of glsl/caustics/photon_filter.frag.
-    push struct PhotonFilterPush {
-        /// x: layer, y: k, z: PHOTON_PHYSICAL or PHOTON_PAPER
-        info: ivec4,
-        /// x: s, y: texel area on the rectangle (m^2)
+        /// x: PHOTON_PAPER: s; PHOTON_PHYSICAL: texel area on the rectangle (m^2); y: the
+        /// kernel's weight sum W, z: caustic texture size (texels), w: PHOTON_PHYSICAL or
+        /// PHOTON_PAPER
         params: vec4,
     }
 

@@ -142,13 +142,8 @@ fn caustic_passes_only_with_light_specular_object_and_receiver() {
 /// "photon_buffer"`, a light, a specular object and a diffuse receiver.
 #[test]
 fn photon_buffer_passes_only_with_light_specular_object_and_receiver() {
-    const PHOTON: [&str; 5] = [
-        "photon_buffer_refractors",
-        "photon_buffer_receivers",
-        "photon_buffer",
-        "photon_buffer_scatter",
-        "photon_buffer_filter",
-    ];
+    const PHOTON: [&str; 4] =
+        ["photon_buffer_refractors", "photon_buffer_receivers", "photon_buffer", "photon_buffer_scatter"];
     let on = "render.caustics=photon_buffer";
     assert_eq!(
         names("caustic_sphere", &[on]),
@@ -158,7 +153,6 @@ fn photon_buffer_passes_only_with_light_specular_object_and_receiver() {
             "photon_buffer_receivers",
             "photon_buffer",
             "photon_buffer_scatter",
-            "photon_buffer_filter",
             "gbuffer",
             "deferred_shading",
             "refraction_single",

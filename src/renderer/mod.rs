@@ -704,8 +704,7 @@ impl Renderer {
             return Ok(None);
         };
         let c = &self.photon_caustics;
-        let images =
-            [(&p.photons.0, p.photons.1), (&p.flux.0, p.flux.1), (&p.counts.0, p.counts.1), (&c.textures, c.id)];
+        let images = [(&p.photons.0, p.photons.1), (&p.flux.0, p.flux.1), (&c.textures, c.id)];
         let mut out = Vec::new();
         for (image, id) in images {
             let bytes = self.graph.read_back(&self.ctx, image, id, 16, Access::FragmentSampled)?;
@@ -715,14 +714,12 @@ impl Renderer {
         let mut next = || it.next().unwrap();
         let (photon_size, photons) = next();
         let (_, flux) = next();
-        let (texture_size, counts) = next();
-        let (_, caustics) = next();
+        let (texture_size, caustics) = next();
         Ok(Some(PhotonBufferImages {
             photon_size,
             texture_size,
             photons,
             flux,
-            counts,
             caustics,
             rectangles: c.rectangles().to_vec(),
         }))
@@ -760,8 +757,6 @@ pub struct PhotonBufferImages {
     /// The photon buffer (u, v, k, 0) and the photons' power (rgb), one layer per source face.
     pub photons: Vec<[f32; 4]>,
     pub flux: Vec<[f32; 4]>,
-    /// Power (rgb, W) and photon count (a) per caustic-texture texel, one layer per rectangle.
-    pub counts: Vec<[f32; 4]>,
     /// The filtered caustic textures, one layer per rectangle.
     pub caustics: Vec<[f32; 4]>,
     pub rectangles: Vec<crate::technique::caustics::photon_buffer::GpuPhotonRect>,

@@ -23,13 +23,15 @@
 //!    receiver's position in parallel onto RECT_k, so a receiver off its rectangle's plane
 //!    (a wall, a box, anything tilted from O_R O_i) would show the photon displaced along its
 //!    ray. The correction is the paper's own tool for exactly that mismatch (§2.2.2).
-//! 4. `photon_buffer_scatter` (§3.2): the caustic textures TEX_CAUSTICS_i, one layer of a 2D
-//!    array per rectangle. The paper reads the photon buffer back (glReadPixels) and counts
-//!    on the CPU; here, all on the GPU as the paper suggests, one point is drawn per
-//!    photon-buffer pixel, its vertex shader fetches (u, v, k) (vertex texture fetch) and
-//!    additive blending counts the photons on texel (u, v) of layer k - 1.
-//! 5. `photon_buffer_filter` (§3.2): c(u, v) = s sum_{i,j=-k..k} p(u+i, v+j)
-//!    sqrt(1 + 2k^2 - (i^2 + j^2)) per layer (glsl/caustics/photon_filter.frag).
+//! 4. `photon_buffer_scatter` (§3.2): the filtered caustic textures TEX_CAUSTICS_i, one layer
+//!    of a 2D array per rectangle, c(u, v) = s sum_{i,j=-k..k} p(u+i, v+j)
+//!    sqrt(1 + 2k^2 - (i^2 + j^2)). The paper reads the photon buffer back (glReadPixels),
+//!    counts on the CPU, then filters every texel; here, all on the GPU as the paper suggests,
+//!    one point of (2k + 1)^2 texels is drawn per photon-buffer pixel, its vertex shader
+//!    fetches (u, v, k) (vertex texture fetch) and centres the point on texel (u, v) of
+//!    layer k - 1, and additive blending sums each photon's kernel
+//!    (glsl/caustics/photon_scatter.vert): the filter is linear in the counts, so this is the
+//!    same c, for work in proportion to the photons instead of to every texel.
 //!
 //! Deferred shading then looks the caustic up (§3.3, Fig. 23): the receiver's position is
 //! projected with its rectangle's parallel projection into TEX_CAUSTICS_i
@@ -63,7 +65,7 @@ use crate::graph::{Bindings, BoundSet, Frame, FrameGraph, ImageId};
 use crate::scene::techniques::{PhotonBufferParams, PhotonNormalization};
 use crate::scene::Scene;
 pub use crate::shader_structs::GpuPhotonRect;
-use crate::shader_structs::{PhotonBufferPush, PhotonFilterPush, PhotonScatterPush, ShadowPush};
+use crate::shader_structs::{PhotonBufferPush, PhotonScatterPush, ShadowPush};
 use crate::technique::baseline::shadow_map::FAR_DISTANCE;
 use crate::technique::caustics::caustics_map::{is_specular, refractor_bindings, RefractorLayers};
 use crate::technique::refraction::nearby_impostors::{receiver_objects, rect_for};
@@ -84,7 +86,6 @@ pub const PHOTON_BUFFER_REFRACTORS: &str = "photon_buffer_refractors";
 pub const PHOTON_BUFFER_RECEIVERS: &str = "photon_buffer_receivers";
 pub const PHOTON_BUFFER: &str = "photon_buffer";
 pub const PHOTON_BUFFER_SCATTER: &str = "photon_buffer_scatter";
-pub const PHOTON_BUFFER_FILTER: &str = "photon_buffer_filter";
 
 /// `render.caustics = "photon_buffer"`, parameters `[render.photon_buffer]`.
 pub const TECHNIQUE: Registration =
@@ -115,9 +116,8 @@ fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
             ),
             PlannedPass::new(
                 PHOTON_BUFFER_SCATTER,
-                format!("photon counts in the caustic textures of {}", list(&diffuse)),
+                format!("photons filtered (Hu & Qin 2007 §3.2) into the caustic textures of {}", list(&diffuse)),
             ),
-            PlannedPass::new(PHOTON_BUFFER_FILTER, "filter of Hu & Qin 2007 §3.2"),
         ],
     )
 }
@@ -167,28 +167,13 @@ impl Technique for PhotonBufferPass {
                 }
             });
 
-        frame.pass(PHOTON_BUFFER_SCATTER).uses(&self.scatter_set).write(self.counts.1, Access::ColorAttachment).record(
+        frame.pass(PHOTON_BUFFER_SCATTER).uses(&self.scatter_set).write(caustics.id, Access::ColorAttachment).record(
             move |cmd| {
-                for i in 0..rects {
-                    cmd.in_target(&self.scatter_target, i as usize, &[Clear::Color([0.0; 4])], |cmd| {
+                for (i, push) in self.scatter_pushes.iter().enumerate() {
+                    cmd.in_target(&self.scatter_target, i, &[Clear::Color([0.0; 4])], |cmd| {
                         cmd.bind_graphics(&self.scatter_pipeline, &[self.scatter_set.set()]);
-                        cmd.push_graphics(
-                            &self.scatter_pipeline,
-                            &PhotonScatterPush { info: [size, self.faces, i + 1, 0] },
-                        );
+                        cmd.push_graphics(&self.scatter_pipeline, push);
                         cmd.draw(size * size * self.faces, 1);
-                    });
-                }
-            },
-        );
-
-        frame.pass(PHOTON_BUFFER_FILTER).uses(&self.filter_set).write(caustics.id, Access::ColorAttachment).record(
-            move |cmd| {
-                for (i, push) in self.filter_pushes.iter().enumerate() {
-                    cmd.in_target(&self.filter_target, i, &[Clear::Color([0.0; 4])], |cmd| {
-                        cmd.bind_graphics(&self.filter_pipeline, &[self.filter_set.set()]);
-                        cmd.push_graphics(&self.filter_pipeline, push);
-                        cmd.draw(3, 1);
                     });
                 }
             },
@@ -326,18 +311,12 @@ pub struct PhotonBufferPass {
     pub photons: (Image, ImageId),
     pub flux: (Image, ImageId),
     faces: u32,
-    // §3.2 counting: one framebuffer per rectangle.
-    /// Photon power (rgb, W) and count (a) per texel, one layer per rectangle.
-    pub counts: (Image, ImageId),
+    // §3.2 counting and filter: one framebuffer per rectangle into the caustic textures, and
+    // its push constants.
     scatter_target: RenderTarget,
     scatter_set: BoundSet,
     scatter_pipeline: GraphicsPipeline,
-    // §3.2 filter: one framebuffer per rectangle into the caustic textures, and its push
-    // constants.
-    filter_target: RenderTarget,
-    filter_set: BoundSet,
-    filter_pipeline: GraphicsPipeline,
-    filter_pushes: Vec<PhotonFilterPush>,
+    scatter_pushes: Vec<PhotonScatterPush>,
     _faces: Buffer,
     _sampler: Sampler,
 }
@@ -447,9 +426,10 @@ impl PhotonBufferPass {
             &photon_target.pass,
         )?;
 
-        // 2. Counting: points into the caustic textures, additively.
-        let counts = image("photon_counts", t, n_rects.max(1))?;
-        let scatter_target = RenderTarget::layered(ctx, PHOTON_BUFFER_SCATTER, &[&counts.0], None, true, n_rects)?;
+        // 2. Counting and the filter: each photon's kernel into the caustic textures,
+        // additively.
+        let scatter_target =
+            RenderTarget::layered(ctx, PHOTON_BUFFER_SCATTER, &[&caustics.textures], None, true, n_rects)?;
         let scatter_set = Bindings::new(vk::ShaderStageFlags::VERTEX)
             .sampled(0, &photons.0, &sampler)
             .read(photons.1)
@@ -468,31 +448,21 @@ impl PhotonBufferPass {
             std::mem::size_of::<PhotonScatterPush>() as u32,
             &scatter_target.pass,
         )?;
-
-        // 3. The filter, one full-screen triangle per rectangle.
-        let filter_target =
-            RenderTarget::layered(ctx, PHOTON_BUFFER_FILTER, &[&caustics.textures], None, true, n_rects)?;
-        let filter_set = Bindings::new(vk::ShaderStageFlags::FRAGMENT)
-            .sampled(0, &counts.0, &sampler)
-            .read(counts.1)
-            .build(ctx, PHOTON_BUFFER_FILTER)?;
-        let filter_pipeline = GraphicsPipeline::new(
-            ctx,
-            &GraphicsPipelineDesc::fullscreen(PHOTON_BUFFER_FILTER, "caustics/photon_filter.frag"),
-            &[filter_set.layout()],
-            std::mem::size_of::<PhotonFilterPush>() as u32,
-            &filter_target.pass,
-        )?;
-        let filter_pushes = caustics
+        // The kernel's weights sqrt(1 + 2k^2 - (i^2 + j^2)) over i, j = -k..k: W.
+        let k = params.filter_k as i32;
+        let weights: f32 =
+            (-k..=k).flat_map(|j| (-k..=k).map(move |i| ((1 + 2 * k * k - (i * i + j * j)) as f32).sqrt())).sum();
+        let scatter_pushes = caustics
             .rectangles()
             .iter()
             .enumerate()
             .map(|(i, r)| {
                 // A texel of TEX_CAUSTICS_i covers (2 d_i / T)^2 of the rectangle.
                 let texel = 2.0 * r.axis[3] / t as f32;
-                PhotonFilterPush {
-                    info: [i as i32, params.filter_k as i32, caustics.mode as i32, 0],
-                    params: [params.filter_s, texel * texel, 0.0, 0.0],
+                let scale = if caustics.mode == PHOTON_PAPER { params.filter_s } else { texel * texel };
+                PhotonScatterPush {
+                    info: [size, n_faces, i as u32 + 1, params.filter_k],
+                    params: [scale, weights, t as f32, caustics.mode as f32],
                 }
             })
             .collect();
@@ -511,14 +481,10 @@ impl PhotonBufferPass {
             photons,
             flux,
             faces: n_faces,
-            counts,
             scatter_target,
             scatter_set,
             scatter_pipeline,
-            filter_target,
-            filter_set,
-            filter_pipeline,
-            filter_pushes,
+            scatter_pushes,
             _faces: faces_buffer,
             _sampler: sampler,
         })
