@@ -60,13 +60,17 @@ fn eikonal_sphere_ball_shows_the_floor() {
     let mut reference = Reference::new(&ctx, &reference_scene, &settings).expect("reference");
     reference.run_all(|_, _| {}).unwrap();
     let truth = reference.image();
-    let render = |mode: &str| {
-        let s = common::scene("eikonal_sphere", size, &[VOLUME, &format!("render.eikonal.nearby=\"{mode}\"")]);
-        let r = common::render_on(&ctx, &s);
+    // One light simulation for the three modes (common::render_each).
+    let modes = ["off", "exact", "impostor"];
+    let scenes: Vec<_> = modes
+        .iter()
+        .map(|mode| common::scene("eikonal_sphere", size, &[VOLUME, &format!("render.eikonal.nearby=\"{mode}\"")]))
+        .collect();
+    let mut images = common::render_each(&ctx, &scenes).into_iter();
+    let (off, exact, impostor) = (images.next().unwrap(), images.next().unwrap(), images.next().unwrap());
+    for (mode, r) in modes.iter().zip([&off, &exact, &impostor]) {
         common::assert_finite(mode, &r.hdr);
-        r
-    };
-    let (off, exact, impostor) = (render("off"), render("exact"), render("impostor"));
+    }
     assert!(impostor.passes.iter().any(|p| p == "eikonal_nearby"));
     assert!(!exact.passes.iter().any(|p| p == "eikonal_nearby"));
     let ball = ball_pixels(&reference_scene, 0.9);
@@ -127,12 +131,19 @@ fn exit_rays_meeting_geometry_stay_finite() {
         &["volume.bounds.min=[-1.05, -0.1, -1.05]", "volume.index.center=[0, 0.9, 0]", "volume.index.n=0.7"],
     ];
     for case in cases {
-        for mode in ["exact", "impostor"] {
-            let mut o: Vec<&str> = small.to_vec();
-            o.extend_from_slice(case);
-            let m = format!("render.eikonal.nearby=\"{mode}\"");
-            o.push(&m);
-            let r = common::render_on(&ctx, &common::scene("eikonal_sphere", 32, &o));
+        // Both modes around one light simulation (common::render_each).
+        let modes = ["exact", "impostor"];
+        let scenes: Vec<_> = modes
+            .iter()
+            .map(|mode| {
+                let mut o: Vec<&str> = small.to_vec();
+                o.extend_from_slice(case);
+                let m = format!("render.eikonal.nearby=\"{mode}\"");
+                o.push(&m);
+                common::scene("eikonal_sphere", 32, &o)
+            })
+            .collect();
+        for (mode, r) in modes.iter().zip(common::render_each(&ctx, &scenes)) {
             common::assert_finite(&format!("{case:?} {mode}"), &r.hdr);
         }
     }

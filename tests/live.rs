@@ -157,15 +157,18 @@ fn a_resize_makes_new_targets_and_keeps_the_scene() {
 
 #[test]
 fn the_eikonal_light_simulation_survives_a_resize_and_moves_elsewhere() {
-    // The simulation depends on the volume, the lights and its settings; a resize or a moved
-    // floor re-creates the technique around it, not the simulation.
+    // The simulation depends on the volume, the lights and its settings; a resize, a moved
+    // floor or a setting of the view renderer alone (what exit rays meet) re-creates the
+    // technique around it, not the simulation.
     let ctx = common::context(false);
     let base = ["volume.resolution=[16,16,16]"];
     let mut running = Renderer::new(&ctx, &common::scene("eikonal_sphere", SIZE, &base)).unwrap();
     frame(&mut running);
     let seconds = running.light_stats().unwrap().seconds;
     let mut after = base.to_vec();
-    for change in ["camera.width=48", "camera.height=40", "objects.0.center=[0.2, 0, 0.1]"] {
+    for change in
+        ["camera.width=48", "camera.height=40", "objects.0.center=[0.2, 0, 0.1]", "render.eikonal.nearby=\"impostor\""]
+    {
         after.push(change);
         let u = running.update(&common::scene("eikonal_sphere", SIZE, &after)).unwrap();
         assert!(!u.rebuilt && u.recreated.contains(&"[volume]"), "{change}: {u:?}");

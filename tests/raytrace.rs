@@ -90,12 +90,12 @@ fn matches_reference(ctx: &Arc<GpuContext>, name: &str, effect: &str, ior: f64, 
 #[test]
 fn equals_the_converged_reference_on_sphere_env() {
     // max_depth 1: no light leaves the glass.
-    matches_reference(&common::context(false), "sphere_env", "refraction", 1.5, 1024, "render.raytrace.max_depth=1");
+    matches_reference(&common::context(false), "sphere_env", "refraction", 1.5, 256, "render.raytrace.max_depth=1");
 }
 
 #[test]
 fn equals_the_converged_reference_on_bunny_env() {
-    matches_reference(&common::context(false), "bunny_env", "refraction", 1.2, 1024, "render.raytrace.max_depth=1");
+    matches_reference(&common::context(false), "bunny_env", "refraction", 1.2, 256, "render.raytrace.max_depth=1");
 }
 
 #[test]

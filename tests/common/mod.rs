@@ -139,6 +139,28 @@ pub fn render_on(ctx: &Arc<GpuContext>, scene: &Scene) -> Rendered {
     out
 }
 
+/// Render each of `scenes` in turn with one renderer, taking each next scene as a live change
+/// (`Renderer::update`): what a change does not touch is kept, above all the eikonal light
+/// simulation when only the view renderer's settings or the image size differ. tests/live.rs
+/// shows that a live change renders what a fresh renderer does.
+pub fn render_each(ctx: &Arc<GpuContext>, scenes: &[Scene]) -> Vec<Rendered> {
+    let mut r = Renderer::new(ctx, &scenes[0]).expect("renderer");
+    let mut out = Vec::new();
+    for (k, scene) in scenes.iter().enumerate() {
+        if k > 0 {
+            r.update(scene).expect("live update");
+        }
+        r.render_frame().expect("frame");
+        let hdr = r.read_hdr().expect("hdr readback");
+        let ldr = r.read_ldr().expect("ldr readback");
+        let passes = r.plan().iter().map(|p| p.name.to_string()).collect();
+        out.push(Rendered { width: r.width(), height: r.height(), hdr, ldr, passes });
+    }
+    drop(r);
+    assert_no_validation_errors(ctx);
+    out
+}
+
 pub fn render(scene: &Scene) -> Rendered {
     let ctx = context(false);
     render_on(&ctx, scene)

@@ -1021,6 +1021,21 @@ pub fn optical_path(field: &impl IndexField, path: &[DVec3]) -> f64 {
     path.windows(2).map(|w| 0.5 * (field.n(w[0]) + field.n(w[1])) * w[0].distance(w[1])).sum()
 }
 
+/// The settings the light simulation depends on (its cache key, with the volume and the
+/// lights): sigma shapes the field it integrates (volume.rs), the others are its own. The view
+/// renderer's settings (integrator, step, nearby and its iterations and resolution) are left
+/// out, so that changing them re-creates the view around the same simulation.
+fn simulation_settings(p: &EikonalParams) -> impl std::fmt::Debug {
+    (
+        p.sigma,
+        p.energy_threshold,
+        p.light_dt,
+        p.light_integrator,
+        (p.max_patches, p.tile_patches, p.keep_crossed),
+        (p.light_patches, p.light_below, p.light_side),
+    )
+}
+
 /// The renderer's light simulation: run once when the renderer is created (the light and
 /// the volume are static), and the per-frame `eikonal_light` pass that lights the diffuse
 /// receivers inside the irradiance volume (glsl/eikonal/light_receiver.frag).
@@ -1036,7 +1051,7 @@ impl EikonalLight {
     pub fn new(s: &mut crate::technique::Setup<'_>, lit: LitVolume<'_>, textures: &VolumeTextures) -> GpuResult<Self> {
         let (ctx, targets, nearest) = (s.ctx, s.targets, s.nearest);
         // Dropped patches are reported by the caller from `stats.dropped_patches`.
-        let key = crate::technique::cache_key(&(lit.params, lit.volume, lit.lights));
+        let key = crate::technique::cache_key(&(simulation_settings(lit.params), lit.volume, lit.lights));
         let graph = &mut *s.graph;
         let shared = s.cache.get_or_try_insert(key, || -> GpuResult<(LightSim, LightStats)> {
             let mut sim = LightSim::new(ctx, lit, textures, nearest, graph)?;
