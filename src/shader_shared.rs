@@ -263,6 +263,8 @@ shared_bindings! {
         BINDING_EIKONAL_ALBEDO = 21;
         BINDING_EIKONAL_EMISSION = 22;
         BINDING_EIKONAL_TRIANGLES = 25;
+        // The uniform-region map of the leaps (u32 per brick; src/technique/eikonal/volume.rs).
+        BINDING_EIKONAL_BRICKS = 26;
     }
     // Set 1 of refraction_water, besides the tracer's REF_BINDINGS and BINDING_GBUF_ALBEDO /
     // _DEPTH: the environment's SH coefficients as seen from under the water

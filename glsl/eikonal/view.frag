@@ -47,6 +47,12 @@ layout(constant_id = 21) const uint NEARBY_SEEDS = 8u;
 #include "receiver.glsl"
 #include "nearby_exit.glsl"
 // ---- end of the nearby geometry ----
+// Which material volumes hold anything: one that is all zero is never sampled.
+layout(constant_id = 22) const uint EXTINCTION = 1u;
+layout(constant_id = 23) const uint EMISSION = 1u;
+// Straight leaps through uniform bricks of BRICK^3 voxels (render.eikonal.leaps).
+layout(constant_id = 24) const uint LEAPS = 0u;
+layout(constant_id = 25) const uint BRICK = 4u;
 layout(set = 1, binding = BINDING_GBUF_DEPTH) uniform sampler2D gbuf_depth;
 // xyz: grad n per metre, w: n - 1, at the voxel centres; CHANNELS slabs stacked along z.
 layout(set = 1, binding = BINDING_EIKONAL_FIELD) uniform sampler3D field;
@@ -54,6 +60,9 @@ layout(set = 1, binding = BINDING_EIKONAL_FIELD) uniform sampler3D field;
 layout(set = 1, binding = BINDING_EIKONAL_EXTINCTION) uniform sampler3D extinction_map;  // sigma_a + sigma_s, g
 layout(set = 1, binding = BINDING_EIKONAL_ALBEDO) uniform sampler3D albedo_map;          // albedo, reflectance
 layout(set = 1, binding = BINDING_EIKONAL_EMISSION) uniform sampler3D emission_map;      // emission, boundary band
+// Per brick, the Chebyshev distance in bricks to the nearest brick that is not uniform
+// (src/technique/eikonal/volume.rs, `uniform_reach`).
+layout(std430, set = 1, binding = BINDING_EIKONAL_BRICKS) readonly buffer Bricks { uint brick_reach[]; };
 // ---- end of the material volumes ----
 layout(location = 0) in vec2 in_uv;
 layout(location = 0) out vec4 out_radiance;
@@ -87,11 +96,35 @@ vec4 sample_field(vec3 x, int c) {
     return mix(mix(c00, c10, f.y), mix(c01, c11, f.y), f.z);
 }
 
-// The right-hand side of Eqs. 9-10 at (x, v): (dx/ds, dv/ds) = (v / n, grad n).
-void rhs(vec3 x, vec3 v, int c, out vec3 dx, out vec3 dv) {
-    vec4 s = sample_field(x, c);
+// The right-hand side of Eqs. 9-10 for the field sample s = (grad n, n - 1) at x:
+// (dx/ds, dv/ds) = (v / n, grad n).
+void rhs_at(vec4 s, vec3 v, out vec3 dx, out vec3 dv) {
     dx = v / max(1.0 + s.w, 1e-3);
     dv = s.xyz;
+}
+
+void rhs(vec3 x, vec3 v, int c, out vec3 dx, out vec3 dv) {
+    rhs_at(sample_field(x, c), v, dx, dv);
+}
+
+// How far the ray at x with unit direction d may go straight: to the edge of the cube of
+// uniform bricks around x (its brick's distance k: 2k - 1 bricks a side), where grad n = 0
+// and there is nothing to absorb, emit or reflect, so Eqs. 9-10 give a straight line
+// exactly; 0 where x's brick is not uniform or outside the box.
+float leap_length(vec3 x, vec3 d) {
+    ivec3 size = slab_size();
+    ivec3 nb = (size + int(BRICK) - 1) / int(BRICK);
+    vec3 voxel = (BOX_MAX - BOX_MIN) / vec3(size);
+    vec3 brick = voxel * float(BRICK);
+    ivec3 b = ivec3(floor((x - BOX_MIN) / brick));
+    if (any(lessThan(b, ivec3(0))) || any(greaterThanEqual(b, nb))) return 0.0;
+    int k = int(brick_reach[b.x + nb.x * (b.y + nb.y * b.z)]);
+    if (k == 0) return 0.0;
+    vec3 lo = max(BOX_MIN + vec3(b - (k - 1)) * brick, BOX_MIN);
+    vec3 hi = min(BOX_MIN + vec3(b + k) * brick, BOX_MAX);
+    vec3 inv = 1.0 / mix(vec3(1e-30), d, greaterThan(abs(d), vec3(1e-30)));
+    vec3 t = max((lo - x) * inv, (hi - x) * inv);
+    return max(min(min(t.x, t.y), t.z), 0.0);
 }
 
 // ---- material lookups ----
@@ -182,7 +215,9 @@ void run_end(inout Run r, vec3 x, vec3 v, inout vec3 L, inout vec3 T) {
 
 vec3 march(vec3 o, vec3 d, float t_enter, int c, inout bool touched) {
     vec3 x = o + d * t_enter;
-    float n_cur = 1.0 + sample_field(x, c).w;
+    // The field at x: the next step's first stage (the previous step's end sample).
+    vec4 s = sample_field(x, c);
+    float n_cur = 1.0 + s.w;
     vec3 v = d * n_cur;  // |v| = n: v is the ray's optical direction
     vec3 T = vec3(1.0), L = vec3(0.0);
     // A ray that enters the box inside a band comes from the air (n = 1).
@@ -211,11 +246,40 @@ vec3 march(vec3 o, vec3 d, float t_enter, int c, inout bool touched) {
             r.turned = false;
             run_start(r, n_cur, v, T);
         }
+        // In a uniform brick every stage of a step sees the same (0, n - 1), so each step
+        // moves x by STEP v / n and leaves v as it is: m steps at once are one leap of
+        // m STEP v / n, as many whole steps as stay inside the uniform cube. The march
+        // goes on from the point where the full march would be, with the same step count.
+        if (LEAPS != 0u && !banded) {
+            float n_leap = max(n_cur, 1e-3);
+            float per_step = STEP * length(v) / n_leap;
+            float m = min(floor(leap_length(x, normalize(v)) / per_step), float(MAX_STEPS - i));
+            if (m >= 1.0) {
+                vec3 x0 = x, dir = normalize(v);
+                float leap = m * per_step;
+                x += (m * STEP / n_leap) * v;
+                i += uint(m) - 1u;
+                if (TRIANGLES_IN_BOX != 0u) {
+                    float t_hit;
+                    uint k;
+                    vec2 b;
+                    if (eik_triangle_hit(x0, dir, 0.0, leap, t_hit, k, b)) {
+                        return L + T * eik_triangle_radiance(k, x0, dir, t_hit, b);
+                    }
+                }
+                // A constant index other than the air's bends the ray where it enters.
+                touched = touched || abs(n_cur - 1.0) > 1e-4;
+                s = sample_field(x, c);
+                n_cur = 1.0 + s.w;
+                if (in_box(x, 0.0)) x_in = x;
+                continue;
+            }
+        }
         vec3 x0 = x;
         float h = STEP;
         if (INTEGRATOR == EIKONAL_RK4) {
             vec3 k1x, k1v, k2x, k2v, k3x, k3v, k4x, k4v;
-            rhs(x, v, c, k1x, k1v);
+            rhs_at(s, v, k1x, k1v);
             rhs(x + 0.5 * h * k1x, v + 0.5 * h * k1v, c, k2x, k2v);
             rhs(x + 0.5 * h * k2x, v + 0.5 * h * k2v, c, k3x, k3v);
             rhs(x + h * k3x, v + h * k3v, c, k4x, k4v);
@@ -224,11 +288,11 @@ vec3 march(vec3 o, vec3 d, float t_enter, int c, inout bool touched) {
         } else {
             // Eqs. 11-12.
             vec3 dx, dv;
-            rhs(x, v, c, dx, dv);
+            rhs_at(s, v, dx, dv);
             x += h * dx;
             v += h * dv;
         }
-        vec4 s = sample_field(x, c);
+        s = sample_field(x, c);
         n_cur = 1.0 + s.w;
         touched = touched || abs(s.w) > 1e-4;
         // ---- a receiver inside (or touching) the box ends the path where the
@@ -258,15 +322,16 @@ vec3 march(vec3 o, vec3 d, float t_enter, int c, inout bool touched) {
             // Only band voxels carry their surface's factor (the step may have left the band).
             if (in_band(x)) r.rho = max(r.rho, band_reflectance(x));
         }
-        if (MATERIALS != 0u) {
+        if (EXTINCTION != 0u || EMISSION != 0u) {
             vec3 mid = 0.5 * (x0 + x);
             if (in_box(mid, 0.0)) {
                 // Eq. 1 over one segment of length len with constant extinction sigma and
                 // emission E: int_0^len E e^{-sigma s} ds = E (1 - e^{-sigma len}) / sigma
                 // (E len where sigma len is tiny); then Eq. 5's e^{-sigma len}.
                 float len = distance(x0, x);
-                vec3 sigma = sample_material(extinction_map, mid).rgb;
-                vec3 E = sample_material(emission_map, mid).rgb;
+                vec4 ext = EXTINCTION != 0u ? sample_material(extinction_map, mid) : vec4(0.0);
+                vec3 sigma = ext.rgb;
+                vec3 E = EMISSION != 0u ? sample_material(emission_map, mid).rgb : vec3(0.0);
                 vec3 tau = sigma * len;
                 vec3 trans = exp(-tau);
                 vec3 path = mix(vec3(len), (1.0 - trans) / max(sigma, vec3(1e-30)), greaterThan(tau, vec3(1e-4)));
@@ -274,8 +339,7 @@ vec3 march(vec3 o, vec3 d, float t_enter, int c, inout bool touched) {
                 // ---- Eq. 1's in-scattering T sigma_s p dE_omega (Eq. 6)
                 // over the segment, with sigma_s = albedo * extinction and g from the
                 // material volumes; constant over the segment like E.
-                if (SCATTER != 0u) {
-                    vec4 ext = sample_material(extinction_map, mid);
+                if (SCATTER != 0u && EXTINCTION != 0u) {
                     vec3 sigma_s = sample_material(albedo_map, mid).rgb * ext.rgb;
                     if (any(greaterThan(sigma_s, vec3(0.0)))) {
                         vec3 light_min = vec3(LIGHT_MIN_X, LIGHT_MIN_Y, LIGHT_MIN_Z);

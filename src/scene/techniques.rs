@@ -826,6 +826,12 @@ params! {
         /// Arc length per step, in voxels (of the smallest voxel edge).
         // Below 0.01 voxel a 256^3 volume needs more than 10^5 steps per ray.
         step: f32 = 0.5, 0.01..=4.0;
+        /// Cross regions where the smoothed index is constant and the material volumes are zero
+        /// (the air in the box, the inside of a constant-index object) in straight leaps to
+        /// their edge instead of `step`-long steps: there grad n = 0, so Eqs. 9-10 give a
+        /// straight ray exactly (bricks of 4^3 voxels, src/technique/eikonal/volume.rs). false
+        /// marches at `step` everywhere, as the paper does.
+        leaps: bool = true;
         // --- light simulator (section 5.2; src/technique/eikonal/eikonal_light.rs) ---
         /// Run the light simulator (§4.2, §5.2) when the scene has a light: every light's
         /// wavefront (per channel for a per-channel index) is traced through the volume into an

@@ -225,6 +225,12 @@ impl EikonalPass {
             // Index slabs (3: dispersion) and whether materials are bound.
             ("CHANNELS", Spec::U32(textures.channels)),
             ("MATERIALS", Spec::U32(textures.materials as u32)),
+            // Which material volumes hold anything (the others are never sampled).
+            ("EXTINCTION", Spec::U32(textures.extinction_any as u32)),
+            ("EMISSION", Spec::U32(textures.emission_any as u32)),
+            // Straight leaps through uniform bricks (volume.rs, `uniform_reach`).
+            ("LEAPS", Spec::U32(params.leaps as u32)),
+            ("BRICK", Spec::U32(super::volume::BRICK)),
             // Single scattering (glsl/eikonal/scatter.glsl) with the
             // irradiance and direction volumes of the light simulation.
             ("SCATTER", Spec::U32(u32::from(light.is_some()))),
@@ -255,7 +261,8 @@ impl EikonalPass {
             .sampled(crate::BINDING_NEARBY_TEXTURE, &nearby.texture, nearest)
             .read(nearby.texture_id)
             .storage(crate::BINDING_NEARBY_RECTS, &nearby.rect_buffer)
-            .storage(crate::BINDING_EIKONAL_TRIANGLES, &triangles);
+            .storage(crate::BINDING_EIKONAL_TRIANGLES, &triangles)
+            .storage(crate::BINDING_EIKONAL_BRICKS, &textures.bricks);
         let view = FullscreenPass::new(
             ctx,
             // Overwrites the pixels whose ray enters the box.

@@ -138,6 +138,12 @@ pub struct VolumeTextures {
     pub channels: u32,
     /// Whether the material volumes are real (not stand-ins).
     pub materials: bool,
+    /// Whether any voxel has extinction, and whether any has emission (the view renderer
+    /// samples neither volume where it is all zero).
+    pub extinction_any: bool,
+    pub emission_any: bool,
+    /// The uniform-region map of the view rays' leaps ([`uniform_reach`]).
+    pub bricks: crate::gpu::Buffer,
 }
 
 /// The names of the irradiance volume's box in glsl/eikonal (`LIGHT_{MIN,MAX}_{X,Y,Z}`).
@@ -218,9 +224,20 @@ pub(crate) fn prepare_volume(
     // The boundary indicator widened to the band in which the smoothed index still changes
     // (3 sigma of the Gaussian plus the one-voxel coverage ramp), see view.frag.
     let (band, band_reflectance) = fields.boundary_band((3.0 * params.sigma).ceil() as u32 + 1);
-    let materials = band.iter().any(|&b| b > 0.0)
-        || fields.extinction.iter().any(|e| e[0] > 0.0 || e[1] > 0.0 || e[2] > 0.0)
-        || fields.emission.iter().any(|e| e[0] > 0.0 || e[1] > 0.0 || e[2] > 0.0);
+    let rgb_any = |v: &[[f32; 4]]| v.iter().any(|e| e[0] > 0.0 || e[1] > 0.0 || e[2] > 0.0);
+    let (extinction_any, emission_any) = (rgb_any(&fields.extinction), rgb_any(&fields.emission));
+    let materials = band.iter().any(|&b| b > 0.0) || extinction_any || emission_any;
+    // Where a view ray may leap: nothing but a constant index within reach of the smoothing
+    // (ceil(3 sigma), as smooth.comp), the central differences and the trilinear lookup.
+    let material_at: Vec<bool> = (0..fields.voxels())
+        .map(|i| {
+            let (e, m) = (fields.extinction[i], fields.emission[i]);
+            band[i] > 0.0 || e[..3].iter().chain(&m[..3]).any(|&c| c > 0.0)
+        })
+        .collect();
+    let index_slabs: Vec<&[f32]> = fields.index[..channels as usize].iter().map(|v| v.as_slice()).collect();
+    let reach = uniform_reach(&index_slabs, &material_at, fields.resolution, (3.0 * params.sigma).ceil() as usize + 2);
+    let bricks = crate::gpu::Buffer::storage(ctx, "eikonal_bricks", &reach)?;
     let material_extent = if materials { volume.resolution } else { [1, 1, 1] };
     let material_usage = vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST;
     let half = |name: &str| {
@@ -326,5 +343,172 @@ pub(crate) fn prepare_volume(
         emission_id,
         channels,
         materials,
+        extinction_any,
+        emission_any,
+        bricks,
     })
+}
+
+/// Voxels per edge of a brick of the uniform-region map ([`uniform_reach`]).
+pub const BRICK: u32 = 4;
+
+/// The uniform-region map of the view renderer's leaps (glsl/eikonal/view.frag,
+/// `leap_length`), one u32 per brick of [`BRICK`]^3 voxels, x fastest: the Chebyshev
+/// distance, in bricks and at most 255, to the nearest brick that is not uniform (0: this
+/// brick is not). A brick is uniform when every index slab in `index` (n - 1 per voxel) is
+/// one constant over the brick's voxels widened by `radius` voxels, the air beyond the box
+/// (n - 1 = 0) included, and no voxel within one of the brick has a material
+/// (`material`). There the smoothed field has no gradient, so the ray equation's solution
+/// (Eqs. 9-10 with grad n = 0: dv/ds = 0) is a straight line, and the march has nothing to
+/// absorb, emit or reflect: the cube of 2k - 1 bricks around a brick of distance k is
+/// crossed in one straight leap. `radius` must cover everything the march's field sample
+/// reads: the smoothing's ceil(3 sigma), one voxel of central differences and one of the
+/// trilinear lookup.
+pub fn uniform_reach(index: &[&[f32]], material: &[bool], resolution: [u32; 3], radius: usize) -> Vec<u32> {
+    let dims = resolution.map(|n| n as usize);
+    let mut uniform: Option<(Vec<bool>, [usize; 3])> = None;
+    let mut widened_and = |flags: Vec<bool>| {
+        uniform = Some(match uniform.take() {
+            Some((u, d)) => (u.iter().zip(&flags).map(|(a, b)| *a && *b).collect(), d),
+            None => (flags, brick_dims(dims)),
+        });
+    };
+    for slab in index {
+        let (range, _) = brick_range(slab.iter().map(|&v| (v, v)).collect(), dims, radius);
+        widened_and(range.iter().map(|&(lo, hi)| lo == hi).collect());
+    }
+    let m = material.iter().map(|&b| if b { (1.0, 1.0) } else { (0.0, 0.0) }).collect();
+    let (range, _) = brick_range(m, dims, 1);
+    widened_and(range.iter().map(|&(_, hi)| hi == 0.0).collect());
+    let (uniform, nb) = uniform.expect("at least the materials' flags");
+    chebyshev_distance(&uniform, nb)
+}
+
+fn brick_dims(dims: [usize; 3]) -> [usize; 3] {
+    dims.map(|n| n.div_ceil(BRICK as usize))
+}
+
+/// (min, max) of `values` (x fastest, `dims` voxels) over each brick widened by `radius`
+/// voxels, 0 standing for everything beyond the box: three separable passes, one per axis.
+fn brick_range(values: Vec<(f32, f32)>, dims: [usize; 3], radius: usize) -> (Vec<(f32, f32)>, [usize; 3]) {
+    (0..3).fold((values, dims), |(src, dims), axis| {
+        let n = dims[axis];
+        let mut out_dims = dims;
+        out_dims[axis] = n.div_ceil(BRICK as usize);
+        let stride = |d: [usize; 3]| [1, d[0], d[0] * d[1]];
+        let (si, so) = (stride(dims), stride(out_dims));
+        let mut out = vec![(0.0, 0.0); out_dims.iter().product()];
+        for z in 0..out_dims[2] {
+            for y in 0..out_dims[1] {
+                for x in 0..out_dims[0] {
+                    let p = [x, y, z];
+                    let lo = (p[axis] * BRICK as usize) as isize - radius as isize;
+                    let hi = ((p[axis] + 1) * BRICK as usize + radius) as isize;
+                    // A range reaching past the box also reads the air's 0.
+                    let mut r = if lo < 0 || hi > n as isize { (0.0f32, 0.0f32) } else { (f32::MAX, f32::MIN) };
+                    let base: usize = (0..3).filter(|&a| a != axis).map(|a| p[a] * si[a]).sum();
+                    for i in lo.max(0)..hi.min(n as isize) {
+                        let v = src[base + i as usize * si[axis]];
+                        r = (r.0.min(v.0), r.1.max(v.1));
+                    }
+                    out[x * so[0] + y * so[1] + z * so[2]] = r;
+                }
+            }
+        }
+        (out, out_dims)
+    })
+}
+
+/// Chebyshev distance (in bricks, at most 255) from each brick to the nearest one that is
+/// not `uniform`: two raster passes over the 26-neighbourhood with unit weights, which is
+/// exact for the Chebyshev metric.
+fn chebyshev_distance(uniform: &[bool], nb: [usize; 3]) -> Vec<u32> {
+    let mut d: Vec<u32> = uniform.iter().map(|&u| if u { 255 } else { 0 }).collect();
+    let at = |x: usize, y: usize, z: usize| x + nb[0] * (y + nb[1] * z);
+    let neighbours: Vec<[isize; 3]> = (-1..=1)
+        .flat_map(|z| (-1..=1).flat_map(move |y| (-1..=1).map(move |x| [x, y, z])))
+        .filter(|&[x, y, z]| (z, y, x) < (0, 0, 0))
+        .collect();
+    for forward in [true, false] {
+        for k in 0..d.len() {
+            let k = if forward { k } else { d.len() - 1 - k };
+            let (x, y, z) = (k % nb[0], k / nb[0] % nb[1], k / (nb[0] * nb[1]));
+            for o in &neighbours {
+                let o = if forward { *o } else { o.map(|c| -c) };
+                let q = [x as isize + o[0], y as isize + o[1], z as isize + o[2]];
+                if q.iter().zip(nb).all(|(&c, n)| c >= 0 && (c as usize) < n) {
+                    let v = d[at(q[0] as usize, q[1] as usize, q[2] as usize)] + 1;
+                    d[k] = d[k].min(v);
+                }
+            }
+        }
+    }
+    d
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The brick map against brute force on a ball of constant index in a 30^3 volume (not a
+    /// multiple of the brick: the last bricks reach past the box), with a material voxel: a
+    /// brick is uniform exactly when no non-constant index voxel lies within `radius` of it
+    /// (the air beyond the box counted as 0) and no material voxel within 1, and each
+    /// brick's distance is the Chebyshev distance to the nearest brick that is not uniform.
+    #[test]
+    fn uniform_reach_matches_brute_force() {
+        let n = 30usize;
+        let radius = 5usize;
+        let at = |x: usize, y: usize, z: usize| x + n * (y + n * z);
+        let mut index = vec![0.0f32; n * n * n];
+        let mut material = vec![false; n * n * n];
+        for z in 0..n {
+            for y in 0..n {
+                for x in 0..n {
+                    let d = [x, y, z].map(|c| c as f32 + 0.5 - 12.0);
+                    if d.iter().map(|c| c * c).sum::<f32>() < 64.0 {
+                        index[at(x, y, z)] = 0.5;
+                    }
+                }
+            }
+        }
+        material[at(27, 3, 20)] = true;
+        let reach = uniform_reach(&[&index], &material, [n as u32; 3], radius);
+        let b = BRICK as usize;
+        let nb = n.div_ceil(b);
+        assert_eq!(reach.len(), nb * nb * nb);
+        let value = |q: [isize; 3]| {
+            if q.iter().all(|&c| c >= 0 && (c as usize) < n) {
+                index[at(q[0] as usize, q[1] as usize, q[2] as usize)]
+            } else {
+                0.0
+            }
+        };
+        let mat = |q: [isize; 3]| {
+            q.iter().all(|&c| c >= 0 && (c as usize) < n) && material[at(q[0] as usize, q[1] as usize, q[2] as usize)]
+        };
+        let uniform = |bx: usize, by: usize, bz: usize| {
+            let first = value([(bx * b) as isize, (by * b) as isize, (bz * b) as isize]);
+            let r = radius as isize;
+            let range = |c: usize| (c * b) as isize - r..((c + 1) * b) as isize + r;
+            range(bz).all(|z| range(by).all(|y| range(bx).all(|x| value([x, y, z]) == first))) && {
+                let range1 = |c: usize| (c * b) as isize - 1..((c + 1) * b) as isize + 1;
+                !range1(bz).any(|z| range1(by).any(|y| range1(bx).any(|x| mat([x, y, z]))))
+            }
+        };
+        let flags: Vec<bool> = (0..nb * nb * nb).map(|k| uniform(k % nb, k / nb % nb, k / (nb * nb))).collect();
+        assert!(flags.iter().any(|&u| u) && flags.iter().any(|&u| !u), "the case must have both kinds");
+        for (k, &got) in reach.iter().enumerate() {
+            let p = [k % nb, k / nb % nb, k / (nb * nb)].map(|c| c as isize);
+            let expected = (0..flags.len())
+                .filter(|&j| !flags[j])
+                .map(|j| {
+                    let q = [j % nb, j / nb % nb, j / (nb * nb)].map(|c| c as isize);
+                    (0..3).map(|a| (p[a] - q[a]).unsigned_abs() as u32).max().unwrap()
+                })
+                .min()
+                .unwrap_or(255);
+            assert_eq!(got, expected.min(255), "brick {p:?}");
+        }
+    }
 }
