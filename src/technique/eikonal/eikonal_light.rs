@@ -538,7 +538,9 @@ impl LightSim {
             ("DT", Spec::F32(dt)),
             // Extinction (Eq. 18) from the material volumes of src/scene/volume_sources.rs.
             ("CHANNELS", Spec::U32(textures.channels)),
-            ("MATERIALS", Spec::U32(textures.materials as u32)),
+            // Only extinction matters to the light: a volume whose materials are a
+            // Fresnel band alone is never sampled.
+            ("MATERIALS", Spec::U32(textures.extinction_any as u32)),
             ("KEEP_CROSSED", Spec::U32(u32::from(params.keep_crossed))),
             ("INTEGRATOR", Spec::U32(integrator)),
         ]
