@@ -298,8 +298,8 @@ fn object_mask_is_the_balls_projected_disc_and_holds_all_of_its_error() {
     }
     let tonemap = |img: &[f32]| prism::app::output::tonemap_scene(img, &s.render);
     let (tl, rl) = (tonemap(&test), tonemap(&reference));
-    let (all, _) = ErrorMetrics::between(&test, &reference, &tl, &rl, size, size);
-    let over = ErrorMetrics::between_masked(&test, &reference, &tl, &rl, size, size, &mask.pixels).unwrap();
+    let (all, over, _) = ErrorMetrics::between_with_mask(&test, &reference, &tl, &rl, size, size, Some(&mask.pixels));
+    let over = over.expect("the mask holds pixels");
     // Every differing pixel is in the mask, so the sums of squared errors are equal:
     // RMSE_mask^2 N_mask = RMSE^2 N, up to f64 rounding of the division and square root.
     let (sum_all, sum_mask) = (all.rmse.powi(2) * (size * size) as f64, over.rmse.powi(2) * n as f64);

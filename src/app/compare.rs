@@ -219,13 +219,10 @@ pub fn measure(ctx: &Arc<GpuContext>, scene: &Scene, args: &MeasureArgs, referen
         renderer.read_ldr()?
     };
     let (w, h) = (scene.camera.width, scene.camera.height);
-    let (errors, heatmap) = ErrorMetrics::between(&hdr, reference, &ldr, &ref_ldr, w, h);
     let object_mask = ObjectMask::of_scene(scene);
-    let mask = MaskErrors {
-        errors_mask: ErrorMetrics::between_masked(&hdr, reference, &ldr, &ref_ldr, w, h, &object_mask.pixels),
-        mask_pixels: object_mask.count(),
-        mask_surfaces: object_mask.surfaces,
-    };
+    let (errors, errors_mask, heatmap) =
+        ErrorMetrics::between_with_mask(&hdr, reference, &ldr, &ref_ldr, w, h, Some(&object_mask.pixels));
+    let mask = MaskErrors { errors_mask, mask_pixels: object_mask.count(), mask_surfaces: object_mask.surfaces };
     Ok(Measurement { passes, frame, errors, mask, hdr, ldr, heatmap })
 }
 

@@ -162,37 +162,46 @@ impl ErrorMetrics {
         width: u32,
         height: u32,
     ) -> (ErrorMetrics, Vec<u8>) {
-        let (rmse, psnr_db, rel_mse) = linear_metrics(test_hdr, ref_hdr);
-        let (flip_mean, flip_p95, heat) = flip_rgba8(test_ldr, ref_ldr, width, height);
-        (ErrorMetrics { rmse, psnr_db, rel_mse, flip_mean, flip_p95 }, heat)
+        let (whole, _, heat) = Self::between_with_mask(test_hdr, ref_hdr, test_ldr, ref_ldr, width, height, None);
+        (whole, heat)
     }
 
-    /// The same metrics over the pixels where `mask` is true only (row-major, one per pixel;
-    /// src/metrics/mask.rs), `None` when it holds no pixel. RMSE, PSNR and relMSE are the
-    /// linear sums of [`linear_metrics`] over those pixels alone, so where the images differ
-    /// only inside the mask, RMSE_mask^2 N_mask = RMSE^2 N. FLIP is computed on the whole
-    /// image (its filters see each pixel's neighbourhood, inside the mask or not) and its
-    /// per-pixel map is then pooled over the mask: the mean and 95th percentile of the map's
-    /// values there.
-    pub fn between_masked(
+    /// [`ErrorMetrics::between`], and with a `mask` (row-major, one per pixel;
+    /// src/metrics/mask.rs) the same metrics over the pixels where it is true only, `None`
+    /// when it holds no pixel. RMSE, PSNR and relMSE over the mask are [`linear_metrics`]'s
+    /// sums over those pixels alone (PSNR's peak: the reference's largest value there), so
+    /// where the images differ only inside the mask, RMSE_mask^2 N_mask = RMSE^2 N. FLIP is
+    /// computed once on the whole image (its filters see each pixel's neighbourhood, inside the
+    /// mask or not) and its per-pixel map is pooled over the mask: the mean and 95th
+    /// percentile of the map's values there.
+    pub fn between_with_mask(
         test_hdr: &[f32],
         ref_hdr: &[f32],
         test_ldr: &[u8],
         ref_ldr: &[u8],
         width: u32,
         height: u32,
-        mask: &[bool],
-    ) -> Option<ErrorMetrics> {
-        assert_eq!(mask.len(), (width * height) as usize, "the mask differs in size from the images");
-        let n = mask.iter().filter(|&&m| m).count();
-        if n == 0 {
-            return None;
-        }
-        let (rmse, psnr_db, rel_mse) = linear_metrics_over(test_hdr, ref_hdr, Some(mask));
-        let map = flip_map(test_ldr, ref_ldr, width, height).to_vec();
-        let inside: Vec<f32> = map.iter().zip(mask).filter(|(_, &m)| m).map(|(&v, _)| v).collect();
-        let (flip_mean, flip_p95) = flip_stats(&nv_flip::FlipImageFloat::with_data(n as u32, 1, &inside));
-        Some(ErrorMetrics { rmse, psnr_db, rel_mse, flip_mean, flip_p95 })
+        mask: Option<&[bool]>,
+    ) -> (ErrorMetrics, Option<ErrorMetrics>, Vec<u8>) {
+        let (rmse, psnr_db, rel_mse) = linear_metrics(test_hdr, ref_hdr);
+        let map = flip_map(test_ldr, ref_ldr, width, height);
+        let (flip_mean, flip_p95) = flip_stats(&map);
+        let whole = ErrorMetrics { rmse, psnr_db, rel_mse, flip_mean, flip_p95 };
+        let masked = mask.and_then(|mask| {
+            assert_eq!(mask.len(), (width * height) as usize, "the mask differs in size from the images");
+            let values = map.to_vec();
+            let inside: Vec<f32> = values.iter().zip(mask).filter(|(_, &m)| m).map(|(&v, _)| v).collect();
+            if inside.is_empty() {
+                return None;
+            }
+            let (rmse, psnr_db, rel_mse) = linear_metrics_over(test_hdr, ref_hdr, Some(mask));
+            let (flip_mean, flip_p95) =
+                flip_stats(&nv_flip::FlipImageFloat::with_data(inside.len() as u32, 1, &inside));
+            Some(ErrorMetrics { rmse, psnr_db, rel_mse, flip_mean, flip_p95 })
+        });
+        let colored = map.apply_color_lut(&nv_flip::magma_lut()).to_vec();
+        let heat = colored.chunks_exact(3).flat_map(|p| [p[0], p[1], p[2], 255]).collect();
+        (whole, masked, heat)
     }
 }
 
@@ -236,8 +245,9 @@ mod error_tests {
         }
         let ldr = |img: &[f32]| img.iter().map(|&v| (v.clamp(0.0, 1.0) * 255.0) as u8).collect::<Vec<u8>>();
         let (tl, rl) = (ldr(&test), ldr(&reference));
-        let (all, _) = ErrorMetrics::between(&test, &reference, &tl, &rl, w, h);
-        let masked = ErrorMetrics::between_masked(&test, &reference, &tl, &rl, w, h, &mask).unwrap();
+        let (all, masked, _) = ErrorMetrics::between_with_mask(&test, &reference, &tl, &rl, w, h, Some(&mask));
+        let masked = masked.unwrap();
+        assert_eq!(ErrorMetrics::between(&test, &reference, &tl, &rl, w, h).0, all);
         // Every differing pixel is inside: the squared errors' sum is the same.
         let n = mask.iter().filter(|&&m| m).count() as f64;
         let (sum_all, sum_mask) = (all.rmse.powi(2) * (w * h) as f64, masked.rmse.powi(2) * n);
@@ -248,12 +258,10 @@ mod error_tests {
         let mean = map.iter().zip(&mask).filter(|(_, &m)| m).map(|(&v, _)| v as f64).sum::<f64>() / n;
         assert!((masked.flip_mean - mean).abs() < 1e-6, "{} {mean}", masked.flip_mean);
         // The whole mask gives the whole-image metrics; an empty one gives none.
-        let full = ErrorMetrics::between_masked(&test, &reference, &tl, &rl, w, h, &vec![true; (w * h) as usize]);
-        let full = full.unwrap();
+        let with = |m: &[bool]| ErrorMetrics::between_with_mask(&test, &reference, &tl, &rl, w, h, Some(m)).1;
+        let full = with(&vec![true; (w * h) as usize]).unwrap();
         assert_eq!((full.rmse, full.psnr_db, full.rel_mse), (all.rmse, all.psnr_db, all.rel_mse));
         assert!((full.flip_mean - all.flip_mean).abs() < 1e-6 && (full.flip_p95 - all.flip_p95).abs() < 1e-6);
-        assert!(
-            ErrorMetrics::between_masked(&test, &reference, &tl, &rl, w, h, &vec![false; (w * h) as usize]).is_none()
-        );
+        assert!(with(&vec![false; (w * h) as usize]).is_none());
     }
 }
