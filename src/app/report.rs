@@ -306,7 +306,15 @@ fn section_table(
             .points
             .iter()
             .map(|p| {
-                format!("{} {:.2} ms FLIP {:.4} RMSE {:.4}", p.label, p.time_ms, p.errors.flip_mean, p.errors.rmse)
+                let mask = p.errors_mask.map(|e| format!(" (mask: FLIP {:.4} RMSE {:.4})", e.flip_mean, e.rmse));
+                format!(
+                    "{} {:.2} ms FLIP {:.4} RMSE {:.4}{}",
+                    p.label,
+                    p.time_ms,
+                    p.errors.flip_mean,
+                    p.errors.rmse,
+                    mask.unwrap_or_default()
+                )
             })
             .collect();
         writeln!(md, "{}.\n", pts.join("; "))?;
@@ -563,6 +571,7 @@ mod tests {
             label: format!("{t}"),
             time_ms: t,
             errors: ErrorMetrics { flip_mean: flip, ..Default::default() },
+            errors_mask: None,
         };
         Exact {
             curve: ExactCurve { source: ExactSource::Raytrace, points: vec![point(10.0, 0.2), point(100.0, 0.02)] },

@@ -401,8 +401,9 @@ fn quote(s: &str) -> String {
 
 /// The CSV: one row per setting (kind `technique`, numbered as on the plot) and, with an
 /// exact curve, one per exact point (kind `exact`): each parameter's value, each pass's median
-/// ms, frame ms, errors, the mask's pixel count and the errors over it (`mask_*`, empty for
-/// exact rows and where no masked surface is in view) and its surfaces, whether on the Pareto front, the
+/// ms, frame ms, errors, the mask's pixel count, the errors over it and its surfaces
+/// (`mask_*`; an exact row gives only the errors, over the settings' mask; empty where no
+/// masked surface is in view), whether on the Pareto front, the
 /// technique, the lowest value of
 /// `metric` the reference's noise allows, the exact tracer's `metric` at the same time and the
 /// equal-time verdict.
@@ -473,7 +474,10 @@ pub fn csv(params: &[(String, Vec<String>)], rows: &[SweepRow], metric: &str, ex
             csv.push_str(&",".repeat(params.len() + passes.len()));
             csv.push_str(&format!(",{:.4}", p.time_ms));
             csv.push_str(&errors(&p.errors));
-            csv.push_str(&",".repeat(7));
+            // The mask's pixels and surfaces are the settings' rows'.
+            csv.push(',');
+            csv.push_str(&p.errors_mask.as_ref().map(errors).unwrap_or_else(|| ",".repeat(5)));
+            csv.push(',');
             let value = metric_value(&p.errors, metric)?;
             csv.push_str(&format!(",,{name},{:.6},,\n", x.noise.interval(metric, value).0));
         }
@@ -626,6 +630,7 @@ mod tests {
             label: label.into(),
             time_ms: t,
             errors: ErrorMetrics { flip_mean: flip, ..Default::default() },
+            errors_mask: (t > 100.0).then_some(ErrorMetrics { rmse: 0.25, ..Default::default() }),
         };
         let exact = Exact {
             curve: ExactCurve {
@@ -662,6 +667,12 @@ mod tests {
         assert!(lines[2].ends_with(",false,refraction=wyman,0.350000,0.154003,dominated"), "{}", lines[2]);
         assert!(lines[3].ends_with(",true,refraction=hu_qin,0.020000,0.050000,beats exact"), "{}", lines[3]);
         assert!(lines[4].starts_with(",exact,raytrace max_depth=1,,20.0000,"), "{}", lines[4]);
+        assert!(lines[4].contains(",0.25000,0.00000,,,,,,,,,raytrace,"), "no mask errors: {}", lines[4]);
+        assert!(
+            lines[5].contains(",0.05000,0.00000,,0.250000,0.000,0.000000,0.00000,0.00000,,,raytrace,"),
+            "{}",
+            lines[5]
+        );
         let points: Vec<PlotPoint> = rows
             .iter()
             .map(|r| PlotPoint {
