@@ -74,6 +74,16 @@ fn compare_reports_errors_writes_a_heat_map_and_caches_the_reference() {
         assert!(json["errors"][k].as_f64().is_some_and(|v| v.is_finite() && v >= 0.0), "{k}: {}", json["errors"]);
     }
     assert!(json["passes"].as_array().unwrap().iter().any(|p| p["name"] == "refraction_single"));
+    // The errors over the object mask: the ball's pixels (about pi 11.4^2 = 408 of 1024 at 32^2).
+    let mask_line = out.lines().find(|l| l.trim_start().starts_with("over the object mask (")).expect(&out);
+    assert!(mask_line.contains("ball (dielectric)") && mask_line.contains("RMSE"), "{mask_line}");
+    let mask_pixels = json["mask_pixels"].as_u64().unwrap();
+    assert!(mask_pixels > 0 && mask_pixels < 32 * 32, "{mask_pixels}");
+    assert!(json["mask_surfaces"][0].as_str().is_some_and(|s| s.starts_with("ball (dielectric)")), "{json}");
+    for k in ["rmse", "psnr_db", "rel_mse", "flip_mean", "flip_p95"] {
+        let v = &json["errors_mask"][k];
+        assert!(v.as_f64().is_some_and(|v| v.is_finite() && v >= 0.0), "{k}: {}", json["errors_mask"]);
+    }
     assert_eq!(image::open(d.0.join("heat.png")).unwrap().width(), 32);
     // Second run: the reference comes from the cache and the numbers are the same.
     let (ok, out2, _) = d.prism(&args);
@@ -129,10 +139,19 @@ fn sweep_writes_csv_and_plots() {
     assert_eq!(lines.len(), 1 + 4 + 2, "{csv}");
     assert!(
         lines[0].starts_with("n,kind,setting,render.sphere_segments,materials.glass.ior,")
-            && lines[0].ends_with("flip_mean,flip_p95,pareto,technique,flip_mean_low,exact_flip_mean,verdict"),
+            && lines[0].ends_with(
+                "flip_mean,flip_p95,mask_pixels,mask_rmse,mask_psnr_db,mask_rel_mse,mask_flip_mean,mask_flip_p95,\
+                 mask_surfaces,pareto,technique,flip_mean_low,exact_flip_mean,verdict"
+            ),
         "{}",
         lines[0]
     );
+    let column = lines[0].split(',').position(|c| c == "mask_pixels").unwrap();
+    for l in &lines[1..5] {
+        let pixels: u32 = l.split(',').nth(column).unwrap().parse().unwrap();
+        assert!(pixels > 0 && pixels < 32 * 32, "{l}");
+        assert!(l.contains("ball (dielectric)"), "{l}");
+    }
     let verdicts = ["dominated", "beats exact", "within noise", "faster than exact"];
     for (i, l) in lines[1..5].iter().enumerate() {
         assert!(l.starts_with(&format!("{},technique,", i + 1)), "{l}");
@@ -225,4 +244,77 @@ fn baseline_error_is_far_above_the_reference_noise_floor() {
     let baseline = common::render_on(&ctx, &s);
     let error = prism::metrics::image::rmse_rgba(&baseline.hdr, &a);
     assert!(error > 8.0 * noise.max(1e-6), "baseline RMSE {error} vs noise floor {noise}");
+}
+
+/// The object mask of sphere_env at 128^2 is the glass ball's projected disc, and the error
+/// over it accounts for the whole image's error where the images differ only on the ball.
+#[test]
+fn object_mask_is_the_balls_projected_disc_and_holds_all_of_its_error() {
+    use prism::metrics::image::ErrorMetrics;
+    use prism::metrics::mask::ObjectMask;
+    let size = 128u32;
+    let s = common::scene("sphere_env", size, &[]);
+    let mask = ObjectMask::of_scene(&s);
+    // The ball (radius r = 1 at distance D = 4 on the optical axis) subtends the cone of
+    // half-angle asin(r / D); its silhouette on the image plane is the circle of radius
+    // tan(asin(r / D)) / tan(vfov / 2) half-heights, R = 45.40 px at 128^2.
+    let (r, dist) = (1.0f64, s.camera.position.distance(s.camera.target) as f64);
+    let tan_half = ((s.camera.vfov_deg as f64).to_radians() * 0.5).tan();
+    let radius_px = (r / dist).asin().tan() / tan_half * size as f64 / 2.0;
+    // Pixels whose centre lies in a disc of radius R: their unit squares cover the disc of
+    // radius R - sqrt(2)/2 and lie inside the disc of radius R + sqrt(2)/2 (half a pixel's
+    // diagonal), so pi (R -+ sqrt(2)/2)^2 bound the count: +-201 pixels about pi R^2 = 6476.
+    let h = std::f64::consts::FRAC_1_SQRT_2;
+    let (lo, hi) = (std::f64::consts::PI * (radius_px - h).powi(2), std::f64::consts::PI * (radius_px + h).powi(2));
+    let n = mask.count();
+    assert!(lo <= n as f64 && n as f64 <= hi, "mask {n} pixels, the disc allows {lo:.0}..{hi:.0}");
+    assert_eq!(mask.surfaces, [format!("ball (dielectric): {n} px")]);
+    // Pixel (i, j)'s centre is inside the disc when its angle to the axis is below asin(r / D);
+    // shrunk by 0.01 px so that f32 rounding at the silhouette cannot put a pixel of the disc
+    // outside the mask.
+    let in_disc = |i: u32, j: u32| {
+        let c = size as f64 / 2.0;
+        let (x, y) = (i as f64 + 0.5 - c, j as f64 + 0.5 - c);
+        (x * x + y * y).sqrt() < radius_px - 0.01
+    };
+
+    // Images that differ only on the ball: the reference everywhere, the single-interface
+    // baseline's pixels inside the (closed-form) disc.
+    let ctx = common::context(false);
+    let reference = {
+        use prism::reference::{Reference, ReferenceSettings};
+        let settings = ReferenceSettings { spp: 2, photons: 0, ..Default::default() };
+        let mut reference = Reference::new(&ctx, &s, &settings).unwrap();
+        reference.run_all(|_, _| {}).unwrap();
+        reference.image()
+    };
+    let baseline = common::render_on(&ctx, &s);
+    let mut test = reference.clone();
+    for (k, p) in test.chunks_exact_mut(4).enumerate() {
+        let (i, j) = (k as u32 % size, k as u32 / size);
+        if in_disc(i, j) {
+            p.copy_from_slice(&baseline.hdr[4 * k..4 * k + 4]);
+        }
+    }
+    let tonemap = |img: &[f32]| prism::app::output::tonemap_scene(img, &s.render);
+    let (tl, rl) = (tonemap(&test), tonemap(&reference));
+    let (all, over, _) = ErrorMetrics::between_with_mask(&test, &reference, &tl, &rl, size, size, Some(&mask.pixels));
+    let over = over.expect("the mask holds pixels");
+    // Every differing pixel is in the mask, so the sums of squared errors are equal:
+    // RMSE_mask^2 N_mask = RMSE^2 N, up to f64 rounding of the division and square root.
+    let (sum_all, sum_mask) = (all.rmse.powi(2) * (size * size) as f64, over.rmse.powi(2) * n as f64);
+    assert!(sum_all > 0.0, "the baseline differs from the reference on the ball");
+    assert!((sum_all - sum_mask).abs() <= 1e-12 * sum_all, "sum of squared errors: whole {sum_all}, mask {sum_mask}");
+    let (rel_all, rel_mask) = (all.rel_mse * (size * size) as f64, over.rel_mse * n as f64);
+    assert!((rel_all - rel_mask).abs() <= 1e-12 * rel_all, "relMSE sums: whole {rel_all}, mask {rel_mask}");
+    // And so the mask's RMSE is the whole image's scaled by sqrt(N / N_mask) = 1.59.
+    assert!(over.rmse > 1.5 * all.rmse, "mask RMSE {} vs whole {}", over.rmse, all.rmse);
+
+    // With caustics, the diffuse receivers the caustics techniques light join the mask.
+    let without = ObjectMask::of_scene(&common::scene("caustic_sphere", 64, &[]));
+    let with = ObjectMask::of_scene(&common::scene("caustic_sphere", 64, &["render.caustics=caustics_map"]));
+    assert_eq!(without.surfaces.len(), 1, "{:?}", without.surfaces);
+    assert!(without.surfaces[0].starts_with("ball (dielectric)"), "{:?}", without.surfaces);
+    assert!(with.surfaces.iter().any(|s| s.contains("(diffuse caustic receiver)")), "{:?}", with.surfaces);
+    assert!(with.count() > without.count());
 }

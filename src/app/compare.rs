@@ -9,6 +9,7 @@ use clap::Args;
 
 use crate::gpu::GpuContext;
 use crate::metrics::image::ErrorMetrics;
+use crate::metrics::mask::ObjectMask;
 use crate::metrics::timing::Stats;
 use crate::reference::ReferenceSettings;
 use crate::renderer::{FrameTiming, Renderer};
@@ -161,12 +162,37 @@ pub struct Measurement {
     pub passes: Vec<PassStats>,
     pub frame: Stats,
     pub errors: ErrorMetrics,
+    #[serde(flatten)]
+    pub mask: MaskErrors,
     #[serde(skip)]
     pub hdr: Vec<f32>,
     #[serde(skip)]
     pub ldr: Vec<u8>,
     #[serde(skip)]
     pub heatmap: Vec<u8>,
+}
+
+/// The errors over the object mask (src/metrics/mask.rs): the pixels the techniques touch.
+#[derive(Debug, Default, serde::Serialize)]
+pub struct MaskErrors {
+    /// The metrics over the mask's pixels alone; `None` (JSON null) when no masked surface is
+    /// in view.
+    pub errors_mask: Option<ErrorMetrics>,
+    /// Pixels in the mask.
+    pub mask_pixels: usize,
+    /// The surfaces seen in the mask with their role and pixel count.
+    pub mask_surfaces: Vec<String>,
+}
+
+impl MaskErrors {
+    /// "N pixels: surfaces" for the printed line and the report.
+    pub fn describe(&self) -> String {
+        if self.mask_surfaces.is_empty() {
+            format!("{} pixels", self.mask_pixels)
+        } else {
+            format!("{} pixels: {}", self.mask_pixels, self.mask_surfaces.join(", "))
+        }
+    }
 }
 
 /// Render `scene` with its techniques for `warmup + frames` frames, time the last `frames`,
@@ -192,9 +218,12 @@ pub fn measure(ctx: &Arc<GpuContext>, scene: &Scene, args: &MeasureArgs, referen
     } else {
         renderer.read_ldr()?
     };
-    let (errors, heatmap) =
-        ErrorMetrics::between(&hdr, reference, &ldr, &ref_ldr, scene.camera.width, scene.camera.height);
-    Ok(Measurement { passes, frame, errors, hdr, ldr, heatmap })
+    let (w, h) = (scene.camera.width, scene.camera.height);
+    let object_mask = ObjectMask::of_scene(scene);
+    let (errors, errors_mask, heatmap) =
+        ErrorMetrics::between_with_mask(&hdr, reference, &ldr, &ref_ldr, w, h, Some(&object_mask.pixels));
+    let mask = MaskErrors { errors_mask, mask_pixels: object_mask.count(), mask_surfaces: object_mask.surfaces };
+    Ok(Measurement { passes, frame, errors, mask, hdr, ldr, heatmap })
 }
 
 #[derive(serde::Serialize)]
@@ -247,11 +276,17 @@ pub fn print_measurement(m: &Measurement) {
         println!("{:width$}  {:>10.3}", p.name, p.stats.median_ms);
     }
     println!("{:width$}  {:>10.3}", "frame", m.frame.median_ms);
-    let e = &m.errors;
-    println!(
-        "error vs reference: RMSE {:.5}  PSNR {:.2} dB  relMSE {:.5}  FLIP mean {:.4}  FLIP p95 {:.4}",
-        e.rmse, e.psnr_db, e.rel_mse, e.flip_mean, e.flip_p95
-    );
+    let line = |e: &ErrorMetrics| {
+        format!(
+            "RMSE {:.5}  PSNR {:.2} dB  relMSE {:.5}  FLIP mean {:.4}  FLIP p95 {:.4}",
+            e.rmse, e.psnr_db, e.rel_mse, e.flip_mean, e.flip_p95
+        )
+    };
+    println!("error vs reference: {}", line(&m.errors));
+    match &m.mask.errors_mask {
+        Some(e) => println!("  over the object mask ({}): {}", m.mask.describe(), line(e)),
+        None => println!("  over the object mask: no masked surface in view"),
+    }
 }
 
 pub fn run(args: CompareArgs) -> Result<()> {

@@ -73,6 +73,9 @@ pub struct ExactPoint {
     pub label: String,
     pub time_ms: f64,
     pub errors: ErrorMetrics,
+    /// The errors over the object mask (src/metrics/mask.rs), the same pixels as the
+    /// settings'; `None` when no masked surface is in view.
+    pub errors_mask: Option<ErrorMetrics>,
 }
 
 #[derive(Clone, Debug, serde::Serialize)]
@@ -171,6 +174,7 @@ pub fn measure_curve(
                     label: format!("max_depth={d}"),
                     time_ms: m.frame.median_ms,
                     errors: m.errors,
+                    errors_mask: m.mask.errors_mask,
                 });
             }
         }
@@ -191,6 +195,7 @@ pub fn measure_curve(
             };
             let mut r = Reference::new(ctx, &base, &s).context("exact curve: cannot set up the reference")?;
             let ref_ldr = output::tonemap_scene(reference, &base.render);
+            let mask = crate::metrics::mask::ObjectMask::of_scene(&base);
             let mut elapsed = 0.0f64;
             for &n in &spp {
                 let t = std::time::Instant::now();
@@ -198,10 +203,11 @@ pub fn measure_curve(
                 elapsed += t.elapsed().as_secs_f64() * 1e3;
                 let img = r.image();
                 let ldr = output::tonemap_scene(&img, &base.render);
-                let (errors, _) =
-                    ErrorMetrics::between(&img, reference, &ldr, &ref_ldr, base.camera.width, base.camera.height);
+                let (w, h) = (base.camera.width, base.camera.height);
+                let (errors, errors_mask, _) =
+                    ErrorMetrics::between_with_mask(&img, reference, &ldr, &ref_ldr, w, h, Some(&mask.pixels));
                 eprintln!("exact: reference {n} spp");
-                points.push(ExactPoint { label: format!("{n} spp"), time_ms: elapsed, errors });
+                points.push(ExactPoint { label: format!("{n} spp"), time_ms: elapsed, errors, errors_mask });
             }
         }
     }
@@ -340,6 +346,7 @@ mod tests {
                     label: format!("{t}"),
                     time_ms: t,
                     errors: ErrorMetrics { rmse: e, ..Default::default() },
+                    errors_mask: None,
                 })
                 .collect(),
         }

@@ -228,7 +228,9 @@ pub fn run(args: ReportArgs) -> Result<()> {
 
 /// A section's table: one numbered row per setting (the numbers of the plot), each error with
 /// the interval the reference's noise leaves it, the exact tracer's FLIP at the same time and
-/// the verdict; then the exact tracer's own points.
+/// the verdict; then the exact tracer's own points. The mask columns give RMSE and FLIP mean
+/// over the object mask (src/metrics/mask.rs), the pixels the techniques touch; its surfaces
+/// follow the table.
 fn section_table(
     md: &mut String,
     rows: &[(&[String], &crate::app::compare::Measurement)],
@@ -241,13 +243,16 @@ fn section_table(
         }
         None => format!("{v:.4}"),
     };
-    write!(md, "| # | setting | frame ms | technique passes | RMSE | relMSE | FLIP mean | FLIP p95 |")?;
+    write!(
+        md,
+        "| # | setting | frame ms | technique passes | RMSE | relMSE | FLIP mean | FLIP p95 | mask RMSE | mask FLIP mean |"
+    )?;
     if exact.is_some() {
         writeln!(md, " exact FLIP at equal time | verdict |")?;
-        writeln!(md, "|---:|---|---:|---|---:|---:|---:|---:|---:|---|")?;
+        writeln!(md, "|---:|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---|")?;
     } else {
         writeln!(md)?;
-        writeln!(md, "|---:|---|---:|---|---:|---:|---:|---:|")?;
+        writeln!(md, "|---:|---|---:|---|---:|---:|---:|---:|---:|---:|")?;
     }
     for (i, (setting, m)) in rows.iter().enumerate() {
         let passes: Vec<String> = m.passes.iter().map(|p| format!("{} {:.2}", p.name, p.stats.median_ms)).collect();
@@ -263,6 +268,10 @@ fn section_table(
             with_noise("flip_mean", m.errors.flip_mean),
             m.errors.flip_p95
         )?;
+        match &m.mask.errors_mask {
+            Some(e) => write!(md, " {:.4} | {:.4} |", e.rmse, e.flip_mean)?,
+            None => write!(md, " – | – |")?,
+        }
         match exact {
             Some(x) => {
                 let eq = x.equal_time("flip_mean", m)?;
@@ -273,6 +282,14 @@ fn section_table(
         }
     }
     writeln!(md)?;
+    let mut masks: Vec<String> = rows.iter().map(|(_, m)| m.mask.describe()).collect();
+    masks.dedup();
+    writeln!(
+        md,
+        "Object mask (the pixels whose centre ray first meets a specular object, or with caustics a \
+         diffuse receiver): {}.\n",
+        masks.join("; ")
+    )?;
     if let Some(x) = exact {
         let floor = |metric| x.noise.floor(metric);
         writeln!(
@@ -289,7 +306,15 @@ fn section_table(
             .points
             .iter()
             .map(|p| {
-                format!("{} {:.2} ms FLIP {:.4} RMSE {:.4}", p.label, p.time_ms, p.errors.flip_mean, p.errors.rmse)
+                let mask = p.errors_mask.map(|e| format!(" (mask: FLIP {:.4} RMSE {:.4})", e.flip_mean, e.rmse));
+                format!(
+                    "{} {:.2} ms FLIP {:.4} RMSE {:.4}{}",
+                    p.label,
+                    p.time_ms,
+                    p.errors.flip_mean,
+                    p.errors.rmse,
+                    mask.unwrap_or_default()
+                )
             })
             .collect();
         writeln!(md, "{}.\n", pts.join("; "))?;
@@ -534,6 +559,7 @@ mod tests {
             passes: Vec::new(),
             frame: Stats { median_ms: time_ms, ..Default::default() },
             errors: ErrorMetrics { flip_mean: flip, ..Default::default() },
+            mask: Default::default(),
             hdr: Vec::new(),
             ldr: Vec::new(),
             heatmap: Vec::new(),
@@ -545,6 +571,7 @@ mod tests {
             label: format!("{t}"),
             time_ms: t,
             errors: ErrorMetrics { flip_mean: flip, ..Default::default() },
+            errors_mask: None,
         };
         Exact {
             curve: ExactCurve { source: ExactSource::Raytrace, points: vec![point(10.0, 0.2), point(100.0, 0.02)] },

@@ -401,7 +401,10 @@ fn quote(s: &str) -> String {
 
 /// The CSV: one row per setting (kind `technique`, numbered as on the plot) and, with an
 /// exact curve, one per exact point (kind `exact`): each parameter's value, each pass's median
-/// ms, frame ms, errors, whether on the Pareto front, the technique, the lowest value of
+/// ms, frame ms, errors, the mask's pixel count, the errors over it and its surfaces
+/// (`mask_*`; an exact row gives only the errors, over the settings' mask; empty where no
+/// masked surface is in view), whether on the Pareto front, the
+/// technique, the lowest value of
 /// `metric` the reference's noise allows, the exact tracer's `metric` at the same time and the
 /// equal-time verdict.
 pub fn csv(params: &[(String, Vec<String>)], rows: &[SweepRow], metric: &str, exact: Option<&Exact>) -> Result<String> {
@@ -427,7 +430,8 @@ pub fn csv(params: &[(String, Vec<String>)], rows: &[SweepRow], metric: &str, ex
         csv.push_str(&format!(",{p}_ms"));
     }
     csv.push_str(&format!(
-        ",frame_ms,rmse,psnr_db,rel_mse,flip_mean,flip_p95,pareto,technique,{metric}_low,exact_{metric},verdict\n"
+        ",frame_ms,rmse,psnr_db,rel_mse,flip_mean,flip_p95,mask_pixels,mask_rmse,mask_psnr_db,mask_rel_mse,\
+         mask_flip_mean,mask_flip_p95,mask_surfaces,pareto,technique,{metric}_low,exact_{metric},verdict\n"
     ));
     let errors = |e: &crate::metrics::image::ErrorMetrics| {
         format!(",{:.6},{:.3},{:.6},{:.5},{:.5}", e.rmse, e.psnr_db, e.rel_mse, e.flip_mean, e.flip_p95)
@@ -445,6 +449,10 @@ pub fn csv(params: &[(String, Vec<String>)], rows: &[SweepRow], metric: &str, ex
         }
         csv.push_str(&format!(",{:.4}", r.measurement.frame.median_ms));
         csv.push_str(&errors(&r.measurement.errors));
+        csv.push_str(&format!(",{}", r.measurement.mask.mask_pixels));
+        csv.push_str(&r.measurement.mask.errors_mask.as_ref().map(errors).unwrap_or_else(|| ",".repeat(5)));
+        csv.push(',');
+        csv.push_str(&quote(&r.measurement.mask.mask_surfaces.join("; ")));
         csv.push_str(&format!(",{},{}", front.contains(&i), quote(&r.technique)));
         match exact {
             Some(x) => {
@@ -466,6 +474,10 @@ pub fn csv(params: &[(String, Vec<String>)], rows: &[SweepRow], metric: &str, ex
             csv.push_str(&",".repeat(params.len() + passes.len()));
             csv.push_str(&format!(",{:.4}", p.time_ms));
             csv.push_str(&errors(&p.errors));
+            // The mask's pixels and surfaces are the settings' rows'.
+            csv.push(',');
+            csv.push_str(&p.errors_mask.as_ref().map(errors).unwrap_or_else(|| ",".repeat(5)));
+            csv.push(',');
             let value = metric_value(&p.errors, metric)?;
             csv.push_str(&format!(",,{name},{:.6},,\n", x.noise.interval(metric, value).0));
         }
@@ -587,6 +599,7 @@ mod tests {
                 passes: Vec::new(),
                 frame: crate::metrics::timing::Stats { median_ms: time_ms, ..Default::default() },
                 errors: crate::metrics::image::ErrorMetrics { flip_mean: flip, ..Default::default() },
+                mask: Default::default(),
                 hdr: Vec::new(),
                 ldr: Vec::new(),
                 heatmap: Vec::new(),
@@ -603,15 +616,21 @@ mod tests {
         use crate::app::equaltime::{ExactCurve, ExactPoint, Noise};
         use crate::metrics::image::ErrorMetrics;
         let params = parse_params(&["render.refraction=single,wyman,hu_qin".into()]).unwrap();
-        let rows = [
+        let mut rows = [
             row("render.refraction=single", 10.0, 0.30, "refraction=single"),
             row("render.refraction=wyman", 40.0, 0.35, "refraction=wyman"),
             row("render.refraction=hu_qin", 400.0, 0.02, "refraction=hu_qin"),
         ];
+        rows[0].measurement.mask = crate::app::compare::MaskErrors {
+            errors_mask: Some(ErrorMetrics { rmse: 0.5, flip_mean: 0.6, ..Default::default() }),
+            mask_pixels: 120,
+            mask_surfaces: vec!["ball (dielectric): 100 px".into(), "floor (diffuse caustic receiver): 20 px".into()],
+        };
         let point = |label: &str, t: f64, flip: f64| ExactPoint {
             label: label.into(),
             time_ms: t,
             errors: ErrorMetrics { flip_mean: flip, ..Default::default() },
+            errors_mask: (t > 100.0).then_some(ErrorMetrics { rmse: 0.25, ..Default::default() }),
         };
         let exact = Exact {
             curve: ExactCurve {
@@ -625,7 +644,8 @@ mod tests {
         assert_eq!(lines.len(), 1 + 3 + 2, "{text}");
         assert_eq!(
             lines[0],
-            "n,kind,setting,render.refraction,frame_ms,rmse,psnr_db,rel_mse,flip_mean,flip_p95,pareto,technique,\
+            "n,kind,setting,render.refraction,frame_ms,rmse,psnr_db,rel_mse,flip_mean,flip_p95,mask_pixels,\
+             mask_rmse,mask_psnr_db,mask_rel_mse,mask_flip_mean,mask_flip_p95,mask_surfaces,pareto,technique,\
              flip_mean_low,exact_flip_mean,verdict"
         );
         let columns = lines[0].split(',').count();
@@ -634,10 +654,25 @@ mod tests {
             lines[1].starts_with("1,technique,render.refraction=single,single,")
                 && lines[1].ends_with(",,faster than exact")
         );
+        assert!(
+            lines[1].contains(
+                ",120,0.500000,0.000,0.000000,0.60000,0.00000,\
+                 ball (dielectric): 100 px; floor (diffuse caustic receiver): 20 px,true,"
+            ),
+            "{}",
+            lines[1]
+        );
+        assert!(lines[2].contains(",0,,,,,,,false,"), "no mask errors: {}", lines[2]);
         // wyman at 40 ms: exact reaches 0.25 * 0.2^(log 2 / log 10) = 0.1540 < 0.35.
         assert!(lines[2].ends_with(",false,refraction=wyman,0.350000,0.154003,dominated"), "{}", lines[2]);
         assert!(lines[3].ends_with(",true,refraction=hu_qin,0.020000,0.050000,beats exact"), "{}", lines[3]);
         assert!(lines[4].starts_with(",exact,raytrace max_depth=1,,20.0000,"), "{}", lines[4]);
+        assert!(lines[4].contains(",0.25000,0.00000,,,,,,,,,raytrace,"), "no mask errors: {}", lines[4]);
+        assert!(
+            lines[5].contains(",0.05000,0.00000,,0.250000,0.000,0.000000,0.00000,0.00000,,,raytrace,"),
+            "{}",
+            lines[5]
+        );
         let points: Vec<PlotPoint> = rows
             .iter()
             .map(|r| PlotPoint {

@@ -101,9 +101,18 @@ pub struct ErrorMetrics {
 
 /// Linear-radiance metrics of `test` against `reference` (RGBA f32, same size).
 pub fn linear_metrics(test: &[f32], reference: &[f32]) -> (f64, f64, f64) {
+    linear_metrics_over(test, reference, None)
+}
+
+/// [`linear_metrics`] over the pixels where `mask` is true (all pixels without one); the PSNR's
+/// peak is the reference's largest channel value over those pixels.
+fn linear_metrics_over(test: &[f32], reference: &[f32], mask: Option<&[bool]>) -> (f64, f64, f64) {
     assert_eq!(test.len(), reference.len(), "images differ in size");
     let (mut se, mut rel, mut n, mut peak) = (0.0f64, 0.0f64, 0usize, 0.0f64);
-    for (t, r) in test.chunks_exact(4).zip(reference.chunks_exact(4)) {
+    for (i, (t, r)) in test.chunks_exact(4).zip(reference.chunks_exact(4)).enumerate() {
+        if mask.is_some_and(|m| !m[i]) {
+            continue;
+        }
         for c in 0..3 {
             let (x, y) = (t[c] as f64, r[c] as f64);
             let d = x - y;
@@ -118,15 +127,25 @@ pub fn linear_metrics(test: &[f32], reference: &[f32]) -> (f64, f64, f64) {
     (mse.sqrt(), psnr, rel / n.max(1) as f64)
 }
 
-/// FLIP between two RGBA8 sRGB images: (mean, 95th percentile, the error map as RGBA8 in the
-/// magma colour map).
-pub fn flip_rgba8(test: &[u8], reference: &[u8], width: u32, height: u32) -> (f64, f64, Vec<u8>) {
+/// The per-pixel FLIP map between two RGBA8 sRGB images.
+fn flip_map(test: &[u8], reference: &[u8], width: u32, height: u32) -> nv_flip::FlipImageFloat {
     let rgb = |img: &[u8]| img.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect::<Vec<u8>>();
     let r = nv_flip::FlipImageRgb8::with_data(width, height, &rgb(reference));
     let t = nv_flip::FlipImageRgb8::with_data(width, height, &rgb(test));
-    let map = nv_flip::flip(r, t, nv_flip::DEFAULT_PIXELS_PER_DEGREE);
-    let mut pool = nv_flip::FlipPool::from_image(&map);
-    let (mean, p95) = (pool.mean() as f64, pool.get_percentile(0.95, true) as f64);
+    nv_flip::flip(r, t, nv_flip::DEFAULT_PIXELS_PER_DEGREE)
+}
+
+/// Mean and 95th percentile of a FLIP map, by FLIP's own pool (its histogram percentile).
+fn flip_stats(map: &nv_flip::FlipImageFloat) -> (f64, f64) {
+    let mut pool = nv_flip::FlipPool::from_image(map);
+    (pool.mean() as f64, pool.get_percentile(0.95, true) as f64)
+}
+
+/// FLIP between two RGBA8 sRGB images: (mean, 95th percentile, the error map as RGBA8 in the
+/// magma colour map).
+pub fn flip_rgba8(test: &[u8], reference: &[u8], width: u32, height: u32) -> (f64, f64, Vec<u8>) {
+    let map = flip_map(test, reference, width, height);
+    let (mean, p95) = flip_stats(&map);
     let colored = map.apply_color_lut(&nv_flip::magma_lut()).to_vec();
     let heat = colored.chunks_exact(3).flat_map(|p| [p[0], p[1], p[2], 255]).collect();
     (mean, p95, heat)
@@ -143,9 +162,46 @@ impl ErrorMetrics {
         width: u32,
         height: u32,
     ) -> (ErrorMetrics, Vec<u8>) {
+        let (whole, _, heat) = Self::between_with_mask(test_hdr, ref_hdr, test_ldr, ref_ldr, width, height, None);
+        (whole, heat)
+    }
+
+    /// [`ErrorMetrics::between`], and with a `mask` (row-major, one per pixel;
+    /// src/metrics/mask.rs) the same metrics over the pixels where it is true only, `None`
+    /// when it holds no pixel. RMSE, PSNR and relMSE over the mask are [`linear_metrics`]'s
+    /// sums over those pixels alone (PSNR's peak: the reference's largest value there), so
+    /// where the images differ only inside the mask, RMSE_mask^2 N_mask = RMSE^2 N. FLIP is
+    /// computed once on the whole image (its filters see each pixel's neighbourhood, inside the
+    /// mask or not) and its per-pixel map is pooled over the mask: the mean and 95th
+    /// percentile of the map's values there.
+    pub fn between_with_mask(
+        test_hdr: &[f32],
+        ref_hdr: &[f32],
+        test_ldr: &[u8],
+        ref_ldr: &[u8],
+        width: u32,
+        height: u32,
+        mask: Option<&[bool]>,
+    ) -> (ErrorMetrics, Option<ErrorMetrics>, Vec<u8>) {
         let (rmse, psnr_db, rel_mse) = linear_metrics(test_hdr, ref_hdr);
-        let (flip_mean, flip_p95, heat) = flip_rgba8(test_ldr, ref_ldr, width, height);
-        (ErrorMetrics { rmse, psnr_db, rel_mse, flip_mean, flip_p95 }, heat)
+        let map = flip_map(test_ldr, ref_ldr, width, height);
+        let (flip_mean, flip_p95) = flip_stats(&map);
+        let whole = ErrorMetrics { rmse, psnr_db, rel_mse, flip_mean, flip_p95 };
+        let masked = mask.and_then(|mask| {
+            assert_eq!(mask.len(), (width * height) as usize, "the mask differs in size from the images");
+            let values = map.to_vec();
+            let inside: Vec<f32> = values.iter().zip(mask).filter(|(_, &m)| m).map(|(&v, _)| v).collect();
+            if inside.is_empty() {
+                return None;
+            }
+            let (rmse, psnr_db, rel_mse) = linear_metrics_over(test_hdr, ref_hdr, Some(mask));
+            let (flip_mean, flip_p95) =
+                flip_stats(&nv_flip::FlipImageFloat::with_data(inside.len() as u32, 1, &inside));
+            Some(ErrorMetrics { rmse, psnr_db, rel_mse, flip_mean, flip_p95 })
+        });
+        let colored = map.apply_color_lut(&nv_flip::magma_lut()).to_vec();
+        let heat = colored.chunks_exact(3).flat_map(|p| [p[0], p[1], p[2], 255]).collect();
+        (whole, masked, heat)
     }
 }
 
@@ -174,5 +230,38 @@ mod error_tests {
         let (mean, p95, heat) = flip_rgba8(&b, &a, 32, 32);
         assert!(mean > 0.01 && p95 > mean, "{mean} {p95}");
         assert_eq!(heat.len(), 32 * 32 * 4);
+    }
+
+    #[test]
+    fn masked_metrics_are_the_metrics_of_the_masked_pixels() {
+        let (w, h) = (16u32, 16u32);
+        let reference: Vec<f32> = (0..w * h).flat_map(|i| [0.2 + 0.001 * i as f32, 0.5, 0.3, 1.0]).collect();
+        let mut test = reference.clone();
+        let mask: Vec<bool> = (0..w * h).map(|i| (i % w) >= 4 && (i / w) < 6).collect();
+        for (i, p) in test.chunks_exact_mut(4).enumerate() {
+            if mask[i] {
+                p[0] += 0.05 * (i % 7) as f32;
+            }
+        }
+        let ldr = |img: &[f32]| img.iter().map(|&v| (v.clamp(0.0, 1.0) * 255.0) as u8).collect::<Vec<u8>>();
+        let (tl, rl) = (ldr(&test), ldr(&reference));
+        let (all, masked, _) = ErrorMetrics::between_with_mask(&test, &reference, &tl, &rl, w, h, Some(&mask));
+        let masked = masked.unwrap();
+        assert_eq!(ErrorMetrics::between(&test, &reference, &tl, &rl, w, h).0, all);
+        // Every differing pixel is inside: the squared errors' sum is the same.
+        let n = mask.iter().filter(|&&m| m).count() as f64;
+        let (sum_all, sum_mask) = (all.rmse.powi(2) * (w * h) as f64, masked.rmse.powi(2) * n);
+        assert!((sum_all - sum_mask).abs() <= 1e-9 * sum_all, "{sum_all} {sum_mask}");
+        assert!((all.rel_mse * (w * h) as f64 - masked.rel_mse * n).abs() < 1e-9);
+        // FLIP over the mask is the mean of the whole image's map over the mask.
+        let map = flip_map(&tl, &rl, w, h).to_vec();
+        let mean = map.iter().zip(&mask).filter(|(_, &m)| m).map(|(&v, _)| v as f64).sum::<f64>() / n;
+        assert!((masked.flip_mean - mean).abs() < 1e-6, "{} {mean}", masked.flip_mean);
+        // The whole mask gives the whole-image metrics; an empty one gives none.
+        let with = |m: &[bool]| ErrorMetrics::between_with_mask(&test, &reference, &tl, &rl, w, h, Some(m)).1;
+        let full = with(&vec![true; (w * h) as usize]).unwrap();
+        assert_eq!((full.rmse, full.psnr_db, full.rel_mse), (all.rmse, all.psnr_db, all.rel_mse));
+        assert!((full.flip_mean - all.flip_mean).abs() < 1e-6 && (full.flip_p95 - all.flip_p95).abs() < 1e-6);
+        assert!(with(&vec![false; (w * h) as usize]).is_none());
     }
 }

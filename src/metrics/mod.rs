@@ -1,3 +1,4 @@
 //! Image error metrics and timing statistics.
 pub mod image;
+pub mod mask;
 pub mod timing;

@@ -208,6 +208,11 @@ impl Bvh {
 
     /// Closest hit with t in (0, t_max), traversing the tree; `triangles` in caller order.
     pub fn intersect(&self, triangles: &[[Vec3; 3]], o: Vec3, d: Vec3, t_max: f32) -> Option<Hit> {
+        // No triangles: the one node's inverted box still passes the slab test (its min and
+        // max swap), and as a node without a count it would read as interior.
+        if self.order.is_empty() {
+            return None;
+        }
         let inv = d.recip();
         let mut best: Option<Hit> = None;
         let mut closest = t_max;
@@ -323,5 +328,6 @@ mod tests {
         let bvh = Bvh::build(&vec![flat; 10]);
         assert!(bvh.intersect(&vec![flat; 10], Vec3::new(0.5, 0.0, 1.0), -Vec3::Z, f32::INFINITY).is_none());
         assert_eq!(Bvh::build(&[]).nodes.len(), 1);
+        assert!(Bvh::build(&[]).intersect(&[], Vec3::ZERO, Vec3::ONE.normalize(), f32::INFINITY).is_none());
     }
 }

@@ -276,10 +276,25 @@ pub struct TraceGeometry {
     dispersion: bool,
 }
 
-impl TraceGeometry {
-    pub fn new(ctx: &Arc<GpuContext>, scene: &Scene) -> Result<TraceGeometry, RenderError> {
+/// The exact tracer's primitives of a scene, on the CPU: every object that is not an exact
+/// sphere as triangles under one BVH, and the exact spheres. [`TraceGeometry`] uploads them
+/// for the shaders; the object mask (src/metrics/mask.rs) casts its centre rays through them,
+/// so that both see the same surfaces.
+pub struct TracePrimitives {
+    /// Per triangle: its global vertex indices (over all objects' vertices, as in the GPU
+    /// scene) and its object's index, in the caller's (object) order.
+    pub triangles: Vec<[u32; 4]>,
+    /// Each triangle's corners, world space, in the same order.
+    pub corners: Vec<[Vec3; 3]>,
+    pub bvh: Bvh,
+    /// The exact spheres: centre and radius, and the object's index in `info[0]`.
+    pub spheres: Vec<GpuSphere>,
+}
+
+impl TracePrimitives {
+    pub fn new(scene: &Scene) -> TracePrimitives {
         // Triangles of every object that is not an exact sphere, with global vertex indices.
-        let mut tris: Vec<[u32; 4]> = Vec::new();
+        let mut triangles: Vec<[u32; 4]> = Vec::new();
         let mut corners: Vec<[Vec3; 3]> = Vec::new();
         let mut spheres: Vec<GpuSphere> = Vec::new();
         let mut vertex_base = 0u32;
@@ -293,7 +308,7 @@ impl TraceGeometry {
                 }
                 None => {
                     for t in o.mesh.indices.chunks_exact(3) {
-                        tris.push([vertex_base + t[0], vertex_base + t[1], vertex_base + t[2], oi as u32]);
+                        triangles.push([vertex_base + t[0], vertex_base + t[1], vertex_base + t[2], oi as u32]);
                         corners.push([0, 1, 2].map(|k| o.mesh.positions[t[k] as usize]));
                     }
                 }
@@ -301,6 +316,38 @@ impl TraceGeometry {
             vertex_base += o.mesh.positions.len() as u32;
         }
         let bvh = Bvh::build(&corners);
+        TracePrimitives { triangles, corners, bvh, spheres }
+    }
+
+    /// The closest surface the ray `o + t d` (d unit length) meets with t in (0, t_max):
+    /// (t, object index). Spheres are met exactly (the nearer positive root), triangles as
+    /// the shader meets them ([`bvh::intersect_triangle`]).
+    pub fn closest(&self, o: Vec3, d: Vec3, t_max: f32) -> Option<(f32, usize)> {
+        let mut best = self
+            .bvh
+            .intersect(&self.corners, o, d, t_max)
+            .map(|h| (h.t, self.triangles[h.triangle as usize][3] as usize));
+        for s in &self.spheres {
+            let [cx, cy, cz, r] = s.center_radius;
+            let oc = o - Vec3::new(cx, cy, cz);
+            let b = oc.dot(d);
+            let disc = b * b - (oc.length_squared() - r * r);
+            if disc < 0.0 {
+                continue;
+            }
+            let root = disc.sqrt();
+            let t = [-b - root, -b + root].into_iter().find(|&t| t > 0.0);
+            if let Some(t) = t.filter(|&t| t < best.map_or(t_max, |b| b.0)) {
+                best = Some((t, s.info[0] as usize));
+            }
+        }
+        best
+    }
+}
+
+impl TraceGeometry {
+    pub fn new(ctx: &Arc<GpuContext>, scene: &Scene) -> Result<TraceGeometry, RenderError> {
+        let TracePrimitives { triangles: tris, bvh, spheres, .. } = TracePrimitives::new(scene);
         let ordered: Vec<[u32; 4]> = bvh.order.iter().map(|&i| tris[i as usize]).collect();
         let objects: Vec<u32> = scene.objects.iter().map(|o| o.material as u32).collect();
         let (voxels, volume_dispersive) = volume_voxels(scene.volume.as_ref());
