@@ -561,6 +561,19 @@ choice! {
 }
 
 choice! {
+    /// Which surface Hu & Qin's nearby lookup (2007 §2.2, glsl/include/nearby.glsl) keeps.
+    NearbyLookup, hint "Fig. 13's closest rectangle (the paper's), or the nearest corrected surface over all rectangles" {
+        /// Fig. 13: the rectangle hit closest to the ray's origin, corrected by Fig. 16's
+        /// steps (prism tries the next rectangle where the final texel is empty).
+        Paper = "paper",
+        /// prism's departure: every rectangle the ray meets is corrected, with secant steps
+        /// that halve where they land on an empty texel, and the nearest corrected surface
+        /// along the ray is kept.
+        Nearest = "nearest",
+    }
+}
+
+choice! {
     /// The step of Hu & Qin's d_T iteration (2007 §2.1.3, Fig. 9).
     DTStep, hint "Fig. 9's depth difference (the paper's), or that difference over |T1 . V| (Newton)" {
         /// Fig. 9: Steplength = Flag * (depth - z), a depth difference along the view axis
@@ -666,6 +679,17 @@ params! {
         // "using a good initial point ... we can obtain a satisfactory result after two or
         // three iteration steps" (§2.2.2); beyond 64 it only burns time.
         correction_iterations: u32 = 3, 0..=64;
+        /// Which rectangle's corrected surface the refraction pass's R and T2 see (§2.2,
+        /// glsl/include/nearby.glsl): Fig. 13's closest rectangle, or the nearest corrected
+        /// surface over all rectangles (prism's departure; on sphere_nearby at 256² it removes
+        /// the dark arc where rays to the back wall's foot met the floor's rectangle first,
+        /// and the rim speckle of steps landing on empty texels: tests/nearby.rs,
+        /// docs/ACCURACY.md).
+        nearby_lookup: NearbyLookup = NearbyLookup::Nearest;
+        /// The same choice for the lookup inside the impostor textures of the recursive levels
+        /// (`recursion_depth` >= 1). The paper's by default: tests/recursion.rs's bounds on
+        /// the torus and the two balls are derived with it.
+        recursive_lookup: NearbyLookup = NearbyLookup::Paper;
         /// Stop correcting when the point's depth is within this fraction of d_i (the
         /// rectangle's half side) of the texture's depth, |depth - z| < tolerance x d_i, so that
         /// it means the same at every object size.
