@@ -1001,6 +1001,11 @@ mod tests {
             let p = HuQinParams::from_table(Some(&table(&format!("recursive_exit = \"{name}\"")))).unwrap();
             assert_eq!((p.recursive_exit, p.recursive_exit.name()), (exit, *name));
         }
+        for (name, lookup) in NearbyLookup::NAMES.iter().zip([NearbyLookup::Paper, NearbyLookup::Nearest]) {
+            let t = format!("nearby_lookup = \"{name}\"\nrecursive_lookup = \"{name}\"");
+            let p = HuQinParams::from_table(Some(&table(&t))).unwrap();
+            assert_eq!((p.nearby_lookup, p.recursive_lookup), (lookup, lookup));
+        }
         let w = WymanParams::from_table(Some(&table("back_surface = \"second\""))).unwrap();
         assert_eq!(w.back_surface, BackSurface::Second);
     }

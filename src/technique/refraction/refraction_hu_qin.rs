@@ -33,7 +33,8 @@ use crate::{
 };
 
 use super::nearby_impostors::{
-    has_dielectric_rect, nearby_layout, nearby_lookup_constant, needs_copy, NearbyDesc, NearbyImpostors, BACK_PASS, COPY_PASS, RECURSION_PASSES,
+    has_dielectric_rect, nearby_layout, nearby_lookup_constant, needs_copy, NearbyDesc, NearbyImpostors, BACK_PASS,
+    COPY_PASS, RECURSION_PASSES,
 };
 use super::refractor_layers::{DebugTarget, LayerKind, RefractorLayers, ShadeDesc, ShadePass};
 
