@@ -52,6 +52,10 @@ shared_constants! {
     // The step of Hu & Qin's d_T iteration (render.hu_qin.d_t_step, glsl/include/hu_qin_exit.glsl).
     D_T_STEP_PAPER: u32 = 0;
     D_T_STEP_NEWTON: u32 = 1;
+    // Which rectangle's surface Hu & Qin's nearby lookup keeps (render.hu_qin.nearby_lookup,
+    // recursive_lookup; glsl/include/nearby.glsl).
+    NEARBY_LOOKUP_PAPER: u32 = 0;
+    NEARBY_LOOKUP_NEAREST: u32 = 1;
 
     SPECULAR_MODE_REFRACTION: u32 = 0;
     SPECULAR_MODE_REFLECTION: u32 = 1;

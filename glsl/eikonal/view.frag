@@ -43,6 +43,8 @@ layout(constant_id = 18) const uint TRIANGLES_IN_BOX = 0u;  // 1: test every ste
 layout(constant_id = 19) const uint NEARBY_ITERATIONS = 3u; // Fig. 16 correction iterations
 layout(constant_id = 20) const float NEARBY_TOLERANCE = 1e-3;
 layout(constant_id = 21) const uint NEARBY_SEEDS = 8u;
+// Ihrke et al.'s exit rays keep Hu & Qin's Fig. 13 rectangle choice (glsl/include/nearby.glsl).
+const uint NEARBY_LOOKUP = NEARBY_LOOKUP_PAPER;
 #include "lighting.glsl"
 #include "receiver.glsl"
 #include "nearby_exit.glsl"

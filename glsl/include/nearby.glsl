@@ -4,8 +4,9 @@
 // "Ray Tracing Pass" of Fig. 13 with the seed selection of Fig. 17 and the iterative lookup
 // of Fig. 16. The including shader declares, before including this file:
 //   NEARBY_ITERATIONS (uint; 0 = the plain lookup of Fig. 13), NEARBY_TOLERANCE (float, a
-//   fraction of d_i), NEARBY_SEEDS (uint), and set-1 bindings BINDING_NEARBY_RECTS /
-//   BINDING_NEARBY_TEXTURE.
+//   fraction of d_i), NEARBY_SEEDS (uint), NEARBY_LOOKUP (NEARBY_LOOKUP_PAPER or
+//   NEARBY_LOOKUP_NEAREST, render.hu_qin.nearby_lookup / recursive_lookup), and set-1
+//   bindings BINDING_NEARBY_RECTS / BINDING_NEARBY_TEXTURE.
 #ifndef PRISM_NEARBY_GLSL
 #define PRISM_NEARBY_GLSL
 #include "frame.glsl"
@@ -80,36 +81,40 @@ bool nearby_covered(uint k, vec4 texel) {
     return texel.a < nearby_rects[k].axis_u.w - 1e-4 * nearby_rects[k].center.w;
 }
 
+// Fig. 17's seed: P + alpha_j Ray, alpha_j = d_far (j + 1) / NEARBY_SEEDS. "The highest
+// priority: the z-value of the initial point should be larger than the z-value of the
+// corresponding P_select" (the point lies behind the surface seen from O_R): the first such
+// alpha_j along the ray; otherwise the one whose z is closest to P_select's. P_rect itself is
+// the last seed.
+float nearby_seed(uint k, vec3 P, vec3 Ray, float t_rect) {
+    float best = t_rect, best_err = 1e30;
+    for (uint j = 0u; j < NEARBY_SEEDS; ++j) {
+        float alpha = t_rect * float(j + 1u) / float(NEARBY_SEEDS);
+        vec3 s = nearby_project(k, P + alpha * Ray);
+        vec4 texel = nearby_texel(k, s.xy);
+        if (!nearby_covered(k, texel)) continue;
+        float err = s.z - texel.a;
+        if (err > 0.0) return alpha;
+        if (-err < best_err) {
+            best = alpha;
+            best_err = -err;
+        }
+    }
+    return best;
+}
+
 // The colour of RECT_k along the ray, found by Figs. 16-17 from the rectangle hit t_rect =
 // d_far. False where the texel finally looked up is empty (the ray passes beside OBJ_k).
-bool nearby_lookup(uint k, vec3 P, vec3 Ray, float t_rect, vec2 uv_rect, out vec3 color, out float dist) {
+// `residual` is |depth - z| there (0 for the plain lookup), in world units.
+bool nearby_lookup(uint k, vec3 P, vec3 Ray, float t_rect, vec2 uv_rect, out vec3 color, out float dist,
+                   out float residual) {
     GpuNearbyRect r = nearby_rects[k];
     float d_i = r.center.w;
     vec2 uv = uv_rect;
     dist = t_rect;
+    residual = 0.0;
     if (NEARBY_ITERATIONS > 0u) {
-        // Fig. 17: seeds P + alpha_j Ray, alpha_j = d_far (j + 1) / NEARBY_SEEDS. "The
-        // highest priority: the z-value of the initial point should be larger than the
-        // z-value of the corresponding P_select" (the point lies behind the surface seen
-        // from O_R): the first such alpha_j along the ray; otherwise the one whose z is
-        // closest to P_select's. P_rect itself is the last seed.
-        float best = t_rect, best_err = 1e30;
-        bool behind = false;
-        for (uint j = 0u; j < NEARBY_SEEDS && !behind; ++j) {
-            float alpha = t_rect * float(j + 1u) / float(NEARBY_SEEDS);
-            vec3 s = nearby_project(k, P + alpha * Ray);
-            vec4 texel = nearby_texel(k, s.xy);
-            if (!nearby_covered(k, texel)) continue;
-            float err = s.z - texel.a;
-            if (err > 0.0) {
-                best = alpha;
-                behind = true;
-            } else if (-err < best_err) {
-                best = alpha;
-                best_err = -err;
-            }
-        }
-        dist = best;
+        dist = nearby_seed(k, P, Ray, t_rect);
         // Fig. 16: distance += (depth - z) / cos(theta), theta between Ray and the projection
         // direction. |cos| is kept >= 0.05 (rays grazing the rectangle: one step then moves at
         // most 20 depth differences instead of dividing by ~0), each step is bounded by the
@@ -117,12 +122,53 @@ bool nearby_lookup(uint k, vec3 P, vec3 Ray, float t_rect, vec2 uv_rect, out vec
         float cos_t = dot(Ray, r.axis.xyz);
         cos_t = cos_t >= 0.0 ? max(cos_t, 0.05) : min(cos_t, -0.05);
         float tol = NEARBY_TOLERANCE * d_i;
-        for (uint i = 0u; i < NEARBY_ITERATIONS; ++i) {
+        if (NEARBY_LOOKUP == NEARBY_LOOKUP_PAPER) {
+            for (uint i = 0u; i < NEARBY_ITERATIONS; ++i) {
+                vec3 s = nearby_project(k, P + dist * Ray);
+                float diff = nearby_texel(k, s.xy).a - s.z;
+                residual = abs(diff);
+                if (residual <= tol) break;
+                dist = max(dist + clamp(diff / cos_t, -2.0 * d_i, 2.0 * d_i), 0.0);
+            }
+        } else {
+            // prism's departure (render.hu_qin.nearby_lookup = "nearest"): the root of
+            // f(t) = depth(t) - z(t) by secant steps. Fig. 16's step assumes the stored depth
+            // constant along the ray (slope of f = -cos theta); the secant uses the slope
+            // measured between the last two points, which is the surface's own where the ray
+            // meets a tilted surface (the floor seen from the ball at a grazing angle), so
+            // that the few iterations of §2.2.2 suffice there too. A step that lands on an
+            // empty texel (beyond OBJ_k's silhouette, where the texture holds the far plane
+            // and f jumps) is halved, up to 4 times, instead of being taken: a point past the
+            // silhouette would otherwise end the lookup on the background texel.
             vec3 s = nearby_project(k, P + dist * Ray);
-            float depth = nearby_texel(k, s.xy).a;
-            float diff = depth - s.z;
-            if (abs(diff) <= tol) break;
-            dist = max(dist + clamp(diff / cos_t, -2.0 * d_i, 2.0 * d_i), 0.0);
+            vec4 texel = nearby_texel(k, s.xy);
+            float f = texel.a - s.z;
+            float t_prev = dist, f_prev = f;
+            bool have_prev = false;
+            for (uint i = 0u; i < NEARBY_ITERATIONS; ++i) {
+                if (abs(f) <= tol) break;
+                float step = f / cos_t;
+                if (have_prev && abs(f - f_prev) > 1e-6 * d_i) {
+                    float secant = -f * (dist - t_prev) / (f - f_prev);
+                    if (!isnan(secant) && !isinf(secant)) step = secant;
+                }
+                step = clamp(step, -2.0 * d_i, 2.0 * d_i);
+                float t_next = max(dist + step, 0.0);
+                vec3 s_next = nearby_project(k, P + t_next * Ray);
+                vec4 texel_next = nearby_texel(k, s_next.xy);
+                for (uint h = 0u; h < 4u && !nearby_covered(k, texel_next) && nearby_covered(k, texel); ++h) {
+                    t_next = 0.5 * (dist + t_next);
+                    s_next = nearby_project(k, P + t_next * Ray);
+                    texel_next = nearby_texel(k, s_next.xy);
+                }
+                t_prev = dist;
+                f_prev = f;
+                have_prev = true;
+                dist = t_next;
+                texel = texel_next;
+                f = texel.a - s_next.z;
+            }
+            residual = abs(f);
         }
         uv = nearby_project(k, P + dist * Ray).xy;
     }
@@ -131,10 +177,20 @@ bool nearby_lookup(uint k, vec3 P, vec3 Ray, float t_rect, vec2 uv_rect, out vec
     return nearby_covered(k, texel);
 }
 
-// The surface the ray P + t Ray (unit) meets through the selected set's rectangles: Fig. 13
-// picks the rectangle whose hit is closest to P. Where that texel is empty (the square is
-// larger than the object's silhouette), the next-closest rectangle is tried instead of
-// showing TEX_k's background. False when no rectangle holds a surface along the ray.
+// The surface the ray P + t Ray (unit) meets through the selected set's rectangles. False when
+// no rectangle holds a surface along the ray.
+// NEARBY_LOOKUP_PAPER: Fig. 13 picks the rectangle whose hit is closest to P. Where that
+// texel is empty (the square is larger than the object's silhouette), the next-closest
+// rectangle is tried instead of showing TEX_k's background.
+// NEARBY_LOOKUP_NEAREST (prism's departure): every rectangle the ray meets is corrected
+// (Figs. 16-17 with the secant steps above) and the nearest corrected surface along the ray
+// is kept. Fig. 13's order is that of the rectangles, not of the surfaces: each rectangle
+// faces O_R from behind its object, so a large object's rectangle lies far behind its
+// nearest parts (sphere_nearby's back wall: its rectangle stands 2 m behind the wall), and
+// rays towards the wall's foot meet the floor's rectangle first and show the floor beyond
+// the wall. Candidates whose correction converged (residual within 4 texels' width: the
+// nearest-sampled depth is a staircase, and a surface tilted up to ~75 degrees from the
+// projection plane rises tan 75 < 4 texels' width across one texel) beat those that did not.
 bool nearby_hit(vec3 P, vec3 Ray, out vec3 color, out float dist) {
     color = vec3(0.0);
     dist = 1e30;
@@ -142,6 +198,27 @@ bool nearby_hit(vec3 P, vec3 Ray, out vec3 color, out float dist) {
     uint first = nearby_header.sets[nearby_set].x;
     uint n = min(nearby_header.sets[nearby_set].y, MAX_NEARBY_RECTS);
     uint end = first + n;
+    if (NEARBY_LOOKUP == NEARBY_LOOKUP_NEAREST) {
+        float texel_width = 2.0 / float(textureSize(nearby_tex, 0).x);
+        bool found = false, found_converged = false;
+        for (uint i = first; i < end; ++i) {
+            float t;
+            vec2 uv;
+            if (!nearby_rect_hit(i, P, Ray, t, uv)) continue;
+            vec3 c;
+            float d, residual;
+            if (!nearby_lookup(i, P, Ray, t, uv, c, d, residual)) continue;
+            bool converged = residual <= 4.0 * texel_width * nearby_rects[i].center.w;
+            if (!found || (converged && !found_converged) || (converged == found_converged && d < dist)) {
+                color = c;
+                dist = d;
+                found = true;
+                found_converged = converged;
+            }
+        }
+        color = finite_or_zero(color);
+        return found;
+    }
     float last = -1.0;
     for (uint pass = 0u; pass < n; ++pass) {
         uint k = end;
@@ -158,7 +235,8 @@ bool nearby_hit(vec3 P, vec3 Ray, out vec3 color, out float dist) {
         }
         if (k == end) break;
         last = t_k;
-        if (nearby_lookup(k, P, Ray, t_k, uv_k, color, dist)) {
+        float residual;
+        if (nearby_lookup(k, P, Ray, t_k, uv_k, color, dist, residual)) {
             color = finite_or_zero(color);
             return true;
         }

@@ -23,6 +23,9 @@
 layout(constant_id = 0) const uint NEARBY_ITERATIONS = 3;
 layout(constant_id = 1) const float NEARBY_TOLERANCE = 1e-3;
 layout(constant_id = 2) const uint NEARBY_SEEDS = 8;
+// render.hu_qin.recursive_lookup (glsl/include/nearby.glsl); id 12, past the eikonal
+// impostor shader's constants 6..11.
+layout(constant_id = 12) const uint NEARBY_LOOKUP = NEARBY_LOOKUP_PAPER;
 #include "nearby.glsl"
 #endif
 // A dielectric's exit (render.hu_qin.recursive_exit): 2 "full", §2.1's whole method in the

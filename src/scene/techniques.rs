@@ -561,6 +561,19 @@ choice! {
 }
 
 choice! {
+    /// Which surface Hu & Qin's nearby lookup (2007 §2.2, glsl/include/nearby.glsl) keeps.
+    NearbyLookup, hint "Fig. 13's closest rectangle (the paper's), or the nearest corrected surface over all rectangles" {
+        /// Fig. 13: the rectangle hit closest to the ray's origin, corrected by Fig. 16's
+        /// steps (prism tries the next rectangle where the final texel is empty).
+        Paper = "paper",
+        /// prism's departure: every rectangle the ray meets is corrected, with secant steps
+        /// that halve where they land on an empty texel, and the nearest corrected surface
+        /// along the ray is kept.
+        Nearest = "nearest",
+    }
+}
+
+choice! {
     /// The step of Hu & Qin's d_T iteration (2007 §2.1.3, Fig. 9).
     DTStep, hint "Fig. 9's depth difference (the paper's), or that difference over |T1 . V| (Newton)" {
         /// Fig. 9: Steplength = Flag * (depth - z), a depth difference along the view axis
@@ -666,6 +679,27 @@ params! {
         // "using a good initial point ... we can obtain a satisfactory result after two or
         // three iteration steps" (§2.2.2); beyond 64 it only burns time.
         correction_iterations: u32 = 3, 0..=64;
+        /// Which rectangle's corrected surface the refraction pass's R and T2 see (§2.2,
+        /// glsl/include/nearby.glsl): Fig. 13's closest rectangle, or the nearest corrected
+        /// surface over all rectangles (prism's departure; on sphere_nearby at 256² it removes
+        /// the dark arc where rays to the back wall's foot met the floor's rectangle first,
+        /// and the rim speckle of steps landing on empty texels: tests/nearby.rs,
+        /// docs/ACCURACY.md, docs/refraction.md).
+        // Default by RMSE against the reference on the bundled scenes (lavapipe, 96², 64 spp,
+        // no photons): sphere_nearby 0.0225 paper -> 0.0169 nearest (tests/nearby.rs);
+        // two_glass_balls over ball A 0.04971 -> 0.04223, over ball B 0.05121 -> 0.03583
+        // (tests/recursion.rs). tests/recursion.rs's environment-lit variants with B a glass
+        // cube or torus go the other way over A (0.24519 -> 0.28241, 0.23299 -> 0.25043).
+        nearby_lookup: NearbyLookup = NearbyLookup::Nearest;
+        /// The same choice for the lookup inside the impostor textures of the recursive levels
+        /// (`recursion_depth` >= 1).
+        // The paper's by default, by RMSE against the reference (refraction pass "nearest"):
+        // on tests/nearby.rs's mirror bunny behind the ball (96², 64 spp, no photons, depth 1,
+        // whole image) "nearest" raises it from 0.01559 to 0.01781, and the mean over the
+        // pixels depth 1 changes overshoots the reference's (0.0737 against 0.0539); on
+        // two_glass_balls (whole image, 96², `prism compare`) it lowers it only from 0.01957
+        // to 0.01925 (0.02315 and 0.02316 with the refraction pass "paper").
+        recursive_lookup: NearbyLookup = NearbyLookup::Paper;
         /// Stop correcting when the point's depth is within this fraction of d_i (the
         /// rectangle's half side) of the texture's depth, |depth - z| < tolerance x d_i, so that
         /// it means the same at every object size.
@@ -982,6 +1016,11 @@ mod tests {
         ]) {
             let p = HuQinParams::from_table(Some(&table(&format!("recursive_exit = \"{name}\"")))).unwrap();
             assert_eq!((p.recursive_exit, p.recursive_exit.name()), (exit, *name));
+        }
+        for (name, lookup) in NearbyLookup::NAMES.iter().zip([NearbyLookup::Paper, NearbyLookup::Nearest]) {
+            let t = format!("nearby_lookup = \"{name}\"\nrecursive_lookup = \"{name}\"");
+            let p = HuQinParams::from_table(Some(&table(&t))).unwrap();
+            assert_eq!((p.nearby_lookup, p.recursive_lookup), (lookup, lookup));
         }
         let w = WymanParams::from_table(Some(&table("back_surface = \"second\""))).unwrap();
         assert_eq!(w.back_surface, BackSurface::Second);

@@ -184,6 +184,8 @@ impl EikonalPass {
             correction_iterations: params.nearby_iterations,
             correction_tolerance: NEARBY_TOLERANCE,
             seed_samples: NEARBY_SEEDS,
+            // view.frag keeps Fig. 13's rectangle choice.
+            lookup: crate::scene::techniques::NearbyLookup::Paper,
             // Around a volume (NearbyRects::around) no object refracts: the exit settings
             // are never used.
             exit: crate::scene::techniques::RecursiveExit::BoundingSphere,

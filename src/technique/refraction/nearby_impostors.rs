@@ -62,12 +62,20 @@ use crate::gpu::{
     GraphicsPipelineDesc, Image, ImageDesc, ImageViewKind, RenderTarget, Sampler, SamplerDesc, Spec, Specs,
 };
 use crate::graph::{Bindings, BoundSet, Frame, FrameGraph, ImageId};
-use crate::scene::techniques::RecursiveExit;
+use crate::scene::techniques::{NearbyLookup, RecursiveExit};
 use crate::scene::{Material, Scene};
 pub use crate::shader_structs::GpuNearbyRect;
 use crate::shader_structs::{GpuNearbyHeader, NearbyImpostorPush};
 use crate::{BINDING_NEARBY_BACK, BINDING_NEARBY_FRONT, BINDING_NEARBY_RECTS, BINDING_NEARBY_TEXTURE};
 pub use crate::{MAX_NEARBY_RECTS, MAX_NEARBY_SETS};
+
+/// The specialisation constant NEARBY_LOOKUP of glsl/include/nearby.glsl for `lookup`.
+pub fn nearby_lookup_constant(lookup: NearbyLookup) -> u32 {
+    match lookup {
+        NearbyLookup::Paper => crate::NEARBY_LOOKUP_PAPER,
+        NearbyLookup::Nearest => crate::NEARBY_LOOKUP_NEAREST,
+    }
+}
 
 /// TEX_i (rgb radiance) and TEX_DEPTH_i (a: axial distance from O_R) in one layer.
 pub const NEARBY_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
@@ -356,6 +364,8 @@ pub struct NearbyDesc {
     pub correction_iterations: u32,
     pub correction_tolerance: f32,
     pub seed_samples: u32,
+    /// Which rectangle's surface the recursive levels' lookup keeps.
+    pub lookup: NearbyLookup,
     /// A dielectric OBJ_k's second interface in its texture: §2.1's search on its front and
     /// back faces in the rectangle's projection ([`BACK_PASS`]), on its back faces only (§4),
     /// or its bounding sphere.
@@ -507,6 +517,7 @@ impl NearbyImpostors {
             correction_iterations: 3,
             correction_tolerance: 1e-3,
             seed_samples: 8,
+            lookup: NearbyLookup::Paper,
             exit: RecursiveExit::BackFacing,
             search_steps: 8,
             max_iterations: 32,
@@ -565,6 +576,7 @@ impl NearbyImpostors {
             correction_iterations: 0,
             correction_tolerance: 1e-3,
             seed_samples: 1,
+            lookup: NearbyLookup::Paper,
             exit: RecursiveExit::BoundingSphere,
             search_steps: 8,
             max_iterations: 32,
@@ -669,6 +681,7 @@ impl NearbyImpostors {
             ("NEARBY_TOLERANCE", Spec::F32(desc.correction_tolerance)),
             ("NEARBY_SEEDS", Spec::U32(desc.seed_samples)),
             ("NEARBY_EXIT", Spec::U32(exit_mode)),
+            ("NEARBY_LOOKUP", Spec::U32(nearby_lookup_constant(desc.lookup))),
             ("SEARCH_STEPS", Spec::U32(desc.search_steps)),
             ("MAX_ITERATIONS", Spec::U32(desc.max_iterations)),
         ];

@@ -33,7 +33,8 @@ use crate::{
 };
 
 use super::nearby_impostors::{
-    has_dielectric_rect, nearby_layout, needs_copy, NearbyDesc, NearbyImpostors, BACK_PASS, COPY_PASS, RECURSION_PASSES,
+    has_dielectric_rect, nearby_layout, nearby_lookup_constant, needs_copy, NearbyDesc, NearbyImpostors, BACK_PASS,
+    COPY_PASS, RECURSION_PASSES,
 };
 use super::refractor_layers::{DebugTarget, LayerKind, RefractorLayers, ShadeDesc, ShadePass};
 
@@ -187,6 +188,7 @@ impl HuQinPass {
                 correction_iterations: params.correction_iterations,
                 correction_tolerance: params.correction_tolerance,
                 seed_samples: params.seed_samples,
+                lookup: params.recursive_lookup,
                 exit: params.recursive_exit,
                 search_steps: params.search_steps,
                 max_iterations: params.max_iterations,
@@ -223,6 +225,7 @@ impl HuQinPass {
                     ("NEARBY_ITERATIONS", Spec::U32(params.correction_iterations)),
                     ("NEARBY_TOLERANCE", Spec::F32(params.correction_tolerance)),
                     ("NEARBY_SEEDS", Spec::U32(params.seed_samples)),
+                    ("NEARBY_LOOKUP", Spec::U32(nearby_lookup_constant(params.nearby_lookup))),
                     (
                         "D_T_STEP",
                         Spec::U32(match params.d_t_step {
