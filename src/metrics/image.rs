@@ -146,9 +146,13 @@ fn flip_stats(map: &nv_flip::FlipImageFloat) -> (f64, f64) {
 pub fn flip_rgba8(test: &[u8], reference: &[u8], width: u32, height: u32) -> (f64, f64, Vec<u8>) {
     let map = flip_map(test, reference, width, height);
     let (mean, p95) = flip_stats(&map);
+    (mean, p95, heat_rgba8(&map))
+}
+
+/// A FLIP map as RGBA8 in the magma colour map.
+fn heat_rgba8(map: &nv_flip::FlipImageFloat) -> Vec<u8> {
     let colored = map.apply_color_lut(&nv_flip::magma_lut()).to_vec();
-    let heat = colored.chunks_exact(3).flat_map(|p| [p[0], p[1], p[2], 255]).collect();
-    (mean, p95, heat)
+    colored.chunks_exact(3).flat_map(|p| [p[0], p[1], p[2], 255]).collect()
 }
 
 impl ErrorMetrics {
@@ -199,9 +203,7 @@ impl ErrorMetrics {
                 flip_stats(&nv_flip::FlipImageFloat::with_data(inside.len() as u32, 1, &inside));
             Some(ErrorMetrics { rmse, psnr_db, rel_mse, flip_mean, flip_p95 })
         });
-        let colored = map.apply_color_lut(&nv_flip::magma_lut()).to_vec();
-        let heat = colored.chunks_exact(3).flat_map(|p| [p[0], p[1], p[2], 255]).collect();
-        (whole, masked, heat)
+        (whole, masked, heat_rgba8(&map))
     }
 }
 
