@@ -366,26 +366,16 @@ pub const BRICK: u32 = 4;
 /// trilinear lookup.
 pub fn uniform_reach(index: &[&[f32]], material: &[bool], resolution: [u32; 3], radius: usize) -> Vec<u32> {
     let dims = resolution.map(|n| n as usize);
-    let mut uniform: Option<(Vec<bool>, [usize; 3])> = None;
-    let mut widened_and = |flags: Vec<bool>| {
-        uniform = Some(match uniform.take() {
-            Some((u, d)) => (u.iter().zip(&flags).map(|(a, b)| *a && *b).collect(), d),
-            None => (flags, brick_dims(dims)),
-        });
-    };
+    let m = material.iter().map(|&b| if b { (1.0, 1.0) } else { (0.0, 0.0) }).collect();
+    let (range, nb) = brick_range(m, dims, 1);
+    let mut uniform: Vec<bool> = range.iter().map(|&(_, hi)| hi == 0.0).collect();
     for slab in index {
         let (range, _) = brick_range(slab.iter().map(|&v| (v, v)).collect(), dims, radius);
-        widened_and(range.iter().map(|&(lo, hi)| lo == hi).collect());
+        for (u, (lo, hi)) in uniform.iter_mut().zip(range) {
+            *u &= lo == hi;
+        }
     }
-    let m = material.iter().map(|&b| if b { (1.0, 1.0) } else { (0.0, 0.0) }).collect();
-    let (range, _) = brick_range(m, dims, 1);
-    widened_and(range.iter().map(|&(_, hi)| hi == 0.0).collect());
-    let (uniform, nb) = uniform.expect("at least the materials' flags");
     chebyshev_distance(&uniform, nb)
-}
-
-fn brick_dims(dims: [usize; 3]) -> [usize; 3] {
-    dims.map(|n| n.div_ceil(BRICK as usize))
 }
 
 /// (min, max) of `values` (x fastest, `dims` voxels) over each brick widened by `radius`
