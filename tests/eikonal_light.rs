@@ -8,7 +8,9 @@ use glam::{DVec3, Vec3};
 use prism::scene::techniques::EikonalParams;
 use prism::scene::techniques::LightIntegrator;
 use prism::scene::{IndexProfile, Light};
-use prism::technique::eikonal::eikonal_light::{light_rk4_step, light_step, optical_path, Patch, StandaloneLight};
+use prism::technique::eikonal::eikonal_light::{
+    float_atomics_supported, light_rk4_step, light_step, optical_path, Patch, StandaloneLight,
+};
 use prism::technique::eikonal::histopyramid::{cpu_expand, gpu_expand};
 use prism::technique::eikonal::volume::{rk4_step, RayState};
 
@@ -928,6 +930,38 @@ fn spilled_simulation_equals_the_unspilled_one() {
     let rgb = |x: &[f32]| x.chunks(4).flat_map(|p| p[..3].to_vec()).collect::<Vec<f32>>();
     volumes_close("tiled irradiance", &rgb(&b.e), &rgb(&a.e), 1e-5);
     volumes_close("tiled vector irradiance", &b.d, &a.d, 1e-5);
+    common::assert_no_validation_errors(&ctx);
+}
+
+/// The deposits added by float atomics (R32_SFLOAT accumulator, where the device has
+/// shaderImageFloat32AtomicAdd) and by the compare-and-swap loop on the bits (core Vulkan) are
+/// the same sums in another order: 1e-5 of the largest value, as two_lights_add_up (f32 sums
+/// of up to ~10^4 deposits per voxel). On a device without float atomics both runs take the
+/// loop and the comparison is trivially exact; the test says which it compared.
+#[test]
+fn float_atomic_deposits_equal_the_compare_and_swap_loop() {
+    let ctx = common::context(true);
+    let volume = lens_volume(32, &[]);
+    let light = directional(Vec3::new(0.2, -1.0, 0.1));
+    let run = |float_atomics: bool| {
+        let params = EikonalParams { float_atomics, ..EikonalParams::default() };
+        let mut sim = StandaloneLight::new(&ctx, &params, &volume, &light).unwrap();
+        let stats = sim.run(&ctx).unwrap();
+        (stats, LightVolumes::read(&mut sim, &ctx))
+    };
+    let ((cas_stats, cas), (float_stats, float)) = (run(false), run(true));
+    assert!(!cas_stats.float_atomics, "float_atomics = false must take the compare-and-swap loop");
+    assert_eq!(
+        float_stats.float_atomics,
+        float_atomics_supported(&ctx),
+        "float atomics used where the device has them"
+    );
+    eprintln!("compared deposits by {} with deposits by {}", float_stats.deposits(), cas_stats.deposits());
+    assert_eq!(float_stats.patch_steps, cas_stats.patch_steps, "the same simulation");
+    let rgb = |x: &[f32]| x.chunks(4).flat_map(|p| p[..3].to_vec()).collect::<Vec<f32>>();
+    assert!(rgb(&cas.e).iter().any(|&e| e > 0.0), "no light deposited: nothing compared");
+    volumes_close("float-atomic irradiance", &rgb(&float.e), &rgb(&cas.e), 1e-5);
+    volumes_close("float-atomic vector irradiance", &float.d, &cas.d, 1e-5);
     common::assert_no_validation_errors(&ctx);
 }
 

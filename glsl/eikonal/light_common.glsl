@@ -12,11 +12,17 @@ layout(std430, set = 1, binding = LIGHT_BINDING_SPILL) buffer Spill { Patch spil
 layout(set = 1, binding = LIGHT_BINDING_FIELD) uniform sampler3D field;
 // (sigma_a + sigma_s RGB per metre, HG g) of src/scene/volume_sources.rs, over the VOLUME's box.
 layout(set = 1, binding = LIGHT_BINDING_EXTINCTION) uniform sampler3D extinction_map;
-// The additive accumulator of the track-length irradiance estimate (light_step.comp): per
-// voxel of the irradiance volume six f32 sums stored as bits (CAS-added), in six slabs along
-// y: 0..2 the scalar irradiance R, G, B (W/m^2), 3..5 the vector irradiance
-// sum_j (E_r + E_g + E_b)_j l_j. light_resolve.comp turns it into the two volumes below.
+// The additive accumulator of the track-length irradiance estimate (light_step.glsl): per
+// voxel of the irradiance volume six f32 sums, in six slabs along y: 0..2 the scalar
+// irradiance R, G, B (W/m^2), 3..5 the vector irradiance sum_j (E_r + E_g + E_b)_j l_j.
+// light_resolve.glsl turns it into the two volumes below. With ACCUM_FLOAT_ATOMICS an
+// R32_SFLOAT image added to by float atomics; without, the f32 bits in an R32_UINT image
+// added to by a compare-and-swap loop (`accum_add`).
+#ifdef ACCUM_FLOAT_ATOMICS
+layout(set = 1, binding = LIGHT_BINDING_ACCUM, r32f) uniform image3D accum;
+#else
 layout(set = 1, binding = LIGHT_BINDING_ACCUM, r32ui) uniform uimage3D accum;
+#endif
 // rgb: irradiance sum_j dE_omega,j (W/m^2) of every ray through the voxel (Eqs. 6-7 sum
 // over j); a: 1 where lit.
 layout(set = 1, binding = LIGHT_BINDING_IRRADIANCE, rgba32f) uniform image3D irradiance;
@@ -117,15 +123,32 @@ bool in_light_box(vec3 x) {
     return all(greaterThanEqual(x, LIGHT_MIN)) && all(lessThan(x, LIGHT_MAX));
 }
 
-// Add `value` to component `comp` (slab) of voxel q of the accumulator: a compare-and-swap
-// loop on the f32 bits (float atomics are an extension; this is core Vulkan). The order of
-// the additions is not fixed, so sums agree between runs to f32 rounding only.
+// Component `comp` (slab) of voxel q of the accumulator.
+ivec3 accum_texel(ivec3 q, int comp) {
+    return ivec3(q.x, q.y + comp * imageSize(irradiance).y, q.z);
+}
+
+float accum_value(ivec3 q, int comp) {
+#ifdef ACCUM_FLOAT_ATOMICS
+    return imageLoad(accum, accum_texel(q, comp)).x;
+#else
+    return uintBitsToFloat(imageLoad(accum, accum_texel(q, comp)).x);
+#endif
+}
+
+// Add `value` to component `comp` of voxel q. The order of the additions is not fixed, so
+// sums agree between runs to f32 rounding only (with either path).
 void accum_add(ivec3 q, int comp, float value) {
-    ivec3 c = ivec3(q.x, q.y + comp * imageSize(irradiance).y, q.z);
+    ivec3 c = accum_texel(q, comp);
+#ifdef ACCUM_FLOAT_ATOMICS
+    imageAtomicAdd(accum, c, value);
+#else
+    // Float atomics are an extension: this loop is core Vulkan.
     uint old = imageLoad(accum, c).x;
     for (int k = 0; k < 65536; ++k) {
         uint seen = imageAtomicCompSwap(accum, c, old, floatBitsToUint(uintBitsToFloat(old) + value));
         if (seen == old) break;
         old = seen;
     }
+#endif
 }

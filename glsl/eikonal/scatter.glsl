@@ -24,7 +24,7 @@ float henyey_greenstein(float cos_theta, float g) {
 }
 
 // The simulated light at x in the irradiance volume spanning light_min..light_max, by
-// trilinear interpolation (the track-length deposits of light_step.comp are splatted
+// trilinear interpolation (the track-length deposits of light_step.glsl are splatted
 // trilinearly, so no voxel inside the lit region is a hole and the interpolation is linear:
 // the light of several runs, lights and channels adds up exactly). `irradiance` is the sum
 // of every ray's dE_omega (Eqs. 6-7 sum over j); `dir` is the mean direction of travel,

@@ -424,8 +424,8 @@ pub fn run(args: BenchArgs) -> Result<()> {
             l.seconds, l.steps, l.initial_patches, l.peak_patches, l.dropped_patches
         );
         println!(
-            "  {} patch-steps, GPU {:.1} ms ({:.1} ms in overflowing tiles and their take-backs); per kernel:",
-            l.patch_steps, l.gpu_ms, l.overflow_ms
+            "  {} patch-steps, GPU {:.1} ms ({:.1} ms in overflowing tiles and their take-backs); deposits by {}; per kernel:",
+            l.patch_steps, l.gpu_ms, l.overflow_ms, l.deposits()
         );
         for line in l.kernel_lines() {
             println!("{line}");

@@ -258,8 +258,8 @@ fn render(args: RenderArgs) -> Result<()> {
             l.runs.len(), l.split_tiles, l.steps, l.initial_patches, l.peak_patches, l.dropped_patches, l.seconds
         );
         eprintln!(
-            "eikonal light simulation: {} patch-steps, GPU {:.1} ms, of which {:.1} ms in overflowing tiles and their take-backs; per kernel:",
-            l.patch_steps, l.gpu_ms, l.overflow_ms
+            "eikonal light simulation: {} patch-steps, GPU {:.1} ms, of which {:.1} ms in overflowing tiles and their take-backs; deposits by {}; per kernel:",
+            l.patch_steps, l.gpu_ms, l.overflow_ms, l.deposits()
         );
         for line in l.kernel_lines() {
             eprintln!("{line}");

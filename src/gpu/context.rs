@@ -70,6 +70,9 @@ pub struct DeviceInfo {
     /// Whether pipeline-statistics queries are enabled (`pipelineStatisticsQuery`):
     /// `prism bench --pipeline-stats`.
     pub pipeline_statistics: bool,
+    /// Whether shaders may add floats atomically to R32_SFLOAT storage images
+    /// (VK_EXT_shader_atomic_float `shaderImageFloat32AtomicAdd`, enabled when present).
+    pub image_float_atomic_add: bool,
 }
 
 /// Device memory of live buffers, images (2D, arrays, cubes) and volumes (3D images), in
@@ -379,11 +382,34 @@ impl GpuContext {
         let priorities = [1.0f32];
         let queue_info =
             [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&priorities)];
-        let device_extensions = if display.is_some() { vec![ash::khr::swapchain::NAME.as_ptr()] } else { Vec::new() };
-        let device_info = vk::DeviceCreateInfo::default()
+        let mut device_extensions =
+            if display.is_some() { vec![ash::khr::swapchain::NAME.as_ptr()] } else { Vec::new() };
+        // Float atomics: the eikonal light simulator's additive accumulator uses them where
+        // present, and a compare-and-swap loop (core Vulkan) elsewhere.
+        // SAFETY: physical is a handle enumerated from this instance.
+        let available = unsafe { instance.enumerate_device_extension_properties(physical) }.unwrap_or_default();
+        let has_atomic_float = available
+            .iter()
+            .any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == ash::ext::shader_atomic_float::NAME));
+        let mut atomic_float = vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT::default();
+        if has_atomic_float {
+            let mut features2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut atomic_float);
+            // SAFETY: Vulkan 1.1+ instance; the chain holds one valid struct.
+            unsafe { instance.get_physical_device_features2(physical, &mut features2) };
+        }
+        let image_float_atomic_add = has_atomic_float && atomic_float.shader_image_float32_atomic_add == vk::TRUE;
+        let mut enabled_atomic_float =
+            vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT::default().shader_image_float32_atomic_add(true);
+        if image_float_atomic_add {
+            device_extensions.push(ash::ext::shader_atomic_float::NAME.as_ptr());
+        }
+        let mut device_info = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queue_info)
             .enabled_features(&features)
             .enabled_extension_names(&device_extensions);
+        if image_float_atomic_add {
+            device_info = device_info.push_next(&mut enabled_atomic_float);
+        }
         // SAFETY: device_info is valid for the call.
         let device = unsafe { instance.create_device(physical, &device_info, None) }.vk("vkCreateDevice")?;
         // SAFETY: family/index were requested above.
@@ -427,6 +453,7 @@ impl GpuContext {
             sync_validation,
             occlusion_query_precise: supported.occlusion_query_precise == vk::TRUE,
             pipeline_statistics: supported.pipeline_statistics_query == vk::TRUE,
+            image_float_atomic_add,
         };
 
         let pool_info = vk::CommandPoolCreateInfo::default()

@@ -907,6 +907,12 @@ params! {
         /// reaches the floor: on eikonal_sphere half of the ball's light crosses the caustic
         /// before the floor (tests/eikonal_light.rs).
         keep_crossed: bool = true;
+        /// Add the deposits to the irradiance accumulator with the device's float atomics
+        /// (VK_EXT_shader_atomic_float's shaderImageFloat32AtomicAdd) where it has them; false,
+        /// or a device without them: a compare-and-swap loop on the f32 bits (core Vulkan).
+        /// Both give the same sums up to the order of f32 additions; docs/BENCHMARKS.md has
+        /// their times.
+        float_atomics: bool = true;
         /// Initial wavefront patches per side (per cube face for a point light inside the box's
         /// bounding sphere); 0: the largest volume resolution. Clamped so that the initial
         /// wavefront has at most 900000 patches (948 per side, 387 per face for six faces).

@@ -8,14 +8,14 @@
 //!   positions, directions v = n dx/ds, RGB flux), initialized on the CPU as a planar
 //!   wavefront (directional light) or a spherical one (point light) covering the box
 //!   ([`initial_wavefront`]).
-//! - Section 5.2.1 (glsl/eikonal/light_step.comp): every step advances the corners with the
+//! - Section 5.2.1 (glsl/eikonal/light_step.glsl): every step advances the corners with the
 //!   equal-time ray equation, Eqs. 14-15, and absorbs with Eq. 18; the irradiance of a patch
 //!   is its flux over its area (Eq. 17, intensity law Eq. 16).
 //! - Section 5.2.2: each step's segment of the patch midpoint is voxelized by the
 //!   track-length estimate of the intensity law (flux * length / voxel volume, splatted
-//!   trilinearly, summed over all rays: glsl/eikonal/light_step.comp says why not the
+//!   trilinearly, summed over all rays: glsl/eikonal/light_step.glsl says why not the
 //!   paper's highest-energy dE = flux / area, which made the floor caustic's peak several
-//!   times too bright), into an additive accumulator that light_resolve.comp turns into the
+//!   times too bright), into an additive accumulator that light_resolve.glsl turns into the
 //!   irradiance and (vector) direction volumes.
 //! - Section 5.2.3: each patch is classified 0/1/4 and the list is compacted and expanded by
 //!   the HistoPyramid (src/technique/eikonal/histopyramid.rs) and glsl/eikonal/light_expand.comp.
@@ -185,9 +185,20 @@ pub struct LightStats {
     /// GPU time thrown away by tile splitting, ms: the runs that overflowed and were split,
     /// and their take-backs.
     pub overflow_ms: f64,
+    /// Whether the deposits were added by float atomics (else a compare-and-swap loop).
+    pub float_atomics: bool,
 }
 
 impl LightStats {
+    /// How the deposits were added, for the printed reports.
+    pub fn deposits(&self) -> &'static str {
+        if self.float_atomics {
+            "float atomics"
+        } else {
+            "compare-and-swap"
+        }
+    }
+
     /// One line per kernel for `prism render` and `prism bench`: time, share and dispatches.
     pub fn kernel_lines(&self) -> Vec<String> {
         let total = self.gpu_ms.max(f64::MIN_POSITIVE);
@@ -235,6 +246,13 @@ pub fn light_grid(volume: &Volume, below: f32, side: f32) -> (Vec3, Vec3, [u32; 
     let hi = Vec3::new(ex as f32 * voxel.x, 0.0, ez as f32 * voxel.z);
     let [rx, ry, rz] = volume.resolution;
     (volume.min - lo, volume.max + hi, [rx + 2 * ex, ry + ey, rz + 2 * ez])
+}
+
+/// Whether the device can add floats atomically to an R32_SFLOAT storage image: the
+/// extension's feature and the format's atomic support.
+pub fn float_atomics_supported(ctx: &GpuContext) -> bool {
+    ctx.info.image_float_atomic_add
+        && ctx.supports_format(vk::Format::R32_SFLOAT, vk::FormatFeatureFlags::STORAGE_IMAGE_ATOMIC)
 }
 
 /// The largest refractive index of the volume (for the step budget).
@@ -365,9 +383,12 @@ pub struct LightSim {
     pending: Vec<Patch>,
     /// Initial patches per run (`tile_patches`), also of the runs that continue spills.
     tile: usize,
-    /// Six f32 sums per voxel (as u32 bits) in six slabs along y: irradiance R, G, B and
-    /// the vector irradiance (light_common.glsl `accum`).
+    /// Six f32 sums per voxel in six slabs along y: irradiance R, G, B and the vector
+    /// irradiance (light_common.glsl `accum`): R32_SFLOAT with float atomics, else the bits
+    /// in R32_UINT.
     _accum: Image,
+    /// Whether the deposits are added by float atomics (else a compare-and-swap loop).
+    pub float_atomics: bool,
     accum_id: ImageId,
     /// rgb: the irradiance sum_j dE_omega,j (W/m^2) of all rays through the voxel; a: 1
     /// where lit.
@@ -510,8 +531,9 @@ impl LightSim {
             Image::new(ctx, &ImageDesc::d3("eikonal_light_dir", vk::Format::R32G32B32A32_SFLOAT, resolution, usage))?;
         let accum_extent = [resolution[0], 6 * resolution[1], resolution[2]];
         let accum_usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_DST;
-        let accum =
-            Image::new(ctx, &ImageDesc::d3("eikonal_light_accum", vk::Format::R32_UINT, accum_extent, accum_usage))?;
+        let float_atomics = params.float_atomics && float_atomics_supported(ctx);
+        let accum_format = if float_atomics { vk::Format::R32_SFLOAT } else { vk::Format::R32_UINT };
+        let accum = Image::new(ctx, &ImageDesc::d3("eikonal_light_accum", accum_format, accum_extent, accum_usage))?;
 
         let set = |src: usize| {
             Bindings::new(vk::ShaderStageFlags::COMPUTE)
@@ -559,9 +581,14 @@ impl LightSim {
         let layouts = [hp.set_layout(), sets.layout()];
         let push = std::mem::size_of::<RunPush>() as u32;
         let pipeline = |name: &str, shader: &str| ComputePipeline::new(ctx, name, shader, &layouts, push, &spec);
-        let step = pipeline("eikonal_light_step", "eikonal/light_step.comp")?;
+        let (step_shader, resolve_shader) = if float_atomics {
+            ("eikonal/light_step_float_atomics.comp", "eikonal/light_resolve_float_atomics.comp")
+        } else {
+            ("eikonal/light_step.comp", "eikonal/light_resolve.comp")
+        };
+        let step = pipeline("eikonal_light_step", step_shader)?;
         let expand = pipeline("eikonal_light_expand", "eikonal/light_expand.comp")?;
-        let resolve = pipeline("eikonal_light_resolve", "eikonal/light_resolve.comp")?;
+        let resolve = pipeline("eikonal_light_resolve", resolve_shader)?;
 
         let list_ids = [graph.register_buffer(&lists[0]), graph.register_buffer(&lists[1])];
         let spill_id = graph.register_buffer(&spill);
@@ -593,6 +620,7 @@ impl LightSim {
             pending: Vec::new(),
             tile: tile as usize,
             _accum: accum,
+            float_atomics,
             accum_id,
             irradiance,
             irradiance_id,
@@ -822,6 +850,7 @@ impl LightSim {
         };
         let mut stats = LightStats {
             initial_patches: self.wavefronts.iter().map(|w| w.len() as u32).sum(),
+            float_atomics: self.float_atomics,
             ..LightStats::default()
         };
         let lights = self.wavefronts.len();
@@ -986,13 +1015,13 @@ impl StandaloneLight {
 }
 
 /// One equal-time step of Eqs. 14-15 by forward Euler in f64 on an analytic field (§5.2.1 as
-/// the paper has it): the CPU version of light_step.comp's `LightIntegrator::Euler`.
+/// the paper has it): the CPU version of light_step.glsl's `LightIntegrator::Euler`.
 pub fn light_euler_step(field: &impl IndexField, s: RayState, h: f64) -> RayState {
     let n = field.n(s.x);
     RayState { x: s.x + h * s.v / (n * n), v: s.v + h * field.gradient(s.x) / n }
 }
 
-/// One equal-time step of Eqs. 14-15 with `integrator`, as light_step.comp.
+/// One equal-time step of Eqs. 14-15 with `integrator`, as light_step.glsl.
 pub fn light_step(field: &impl IndexField, integrator: LightIntegrator, s: RayState, h: f64) -> RayState {
     match integrator {
         LightIntegrator::Euler => light_euler_step(field, s, h),
@@ -1001,7 +1030,7 @@ pub fn light_step(field: &impl IndexField, integrator: LightIntegrator, s: RaySt
 }
 
 /// One equal-time step of Eqs. 14-15 (dx/dt = v / n^2, dv/dt = grad n / n) by classical
-/// RK4 in f64 on an analytic field: the CPU version of light_step.comp's particle update.
+/// RK4 in f64 on an analytic field: the CPU version of light_step.glsl's particle update.
 pub fn light_rk4_step(field: &impl IndexField, s: RayState, h: f64) -> RayState {
     let rhs = |x: DVec3, v: DVec3| {
         let n = field.n(x);
@@ -1035,6 +1064,7 @@ fn simulation_settings(p: &EikonalParams) -> impl std::fmt::Debug {
         p.light_integrator,
         (p.max_patches, p.tile_patches, p.keep_crossed),
         (p.light_patches, p.light_below, p.light_side),
+        p.float_atomics,
     )
 }
 

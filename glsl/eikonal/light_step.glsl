@@ -1,0 +1,134 @@
+// One step of the eikonal light simulator for every patch (Ihrke et al. 2007):
+// - section 5.2.1: advance the four corners by the equal-time ray equation, Eqs. 14-15
+//   (dx/dt = v / n^2, dv/dt = grad n / n; forward Euler like the paper, or RK4), so that all
+//   particles stay on one wavefront (Appendix, Eqs. 23-24: dS/dt = 1);
+// - Eq. 18: the flux dE * A loses exp(-sigma_r dt / n) (ds = dt / n, Eq. 24); without
+//   absorption it is constant (the intensity law, Eqs. 16-17);
+// - section 5.2.2: voxelize the patch into the irradiance volume. Not the paper's "highest
+//   energy ray" with dE = flux / area (Eq. 17) at the midpoint's voxel: near a focus the
+//   patch area goes to 0 and that value to infinity (the "catastrophic points" of 5.2.3),
+//   and a voxel that a focus narrower than itself crosses kept the focus's peak, not its
+//   mean over the voxel: on eikonal_sphere's floor the caustic came out several times too
+//   bright. Instead the stream tube's energy is binned by the track-length
+//   estimate of the intensity law: a tube of flux Phi = dE A crossing a voxel of volume V
+//   over a length l adds Phi l / V to its irradiance, which for a uniform beam filling the
+//   voxel (cross-section h^2, l = h) is exactly dE, and which near a focus is the flux
+//   through the voxel over its cross-section: finite, and the voxel's mean. The flux is
+//   splatted trilinearly (tent of two voxels) at the midpoint of the step's segment, since
+//   neighbouring midpoints of patches up to a voxel wide are up to a voxel apart. Every
+//   ray's irradiance is summed (Eqs. 6-7 sum over the incoming rays j), and so are the
+//   lights, tiles and channels of src/technique/eikonal/eikonal_light.rs, whose runs all add here;
+// - section 5.2.3: classify it 0 (eliminate: below the energy threshold, leaving the volume,
+//   or its orientation flipped against its direction = it crossed a wavefront singularity,
+//   unless KEEP_CROSSED), 1 (retain) or 4 (tessellate: its corners span more than one voxel
+//   along an axis).
+#include "light_common.glsl"
+layout(local_size_x = LIGHT_GROUP) in;
+
+void rhs(vec3 x, vec3 v, out vec3 dx, out vec3 dv) {
+    vec4 f = sample_field(x);
+    float n = max(1.0 + f.w, 1e-3);
+    dx = v / (n * n);   // Eq. 14
+    dv = f.xyz / n;     // Eq. 15
+}
+
+void advance(inout vec3 x, inout vec3 v) {
+    float h = DT;
+    if (INTEGRATOR == EIKONAL_RK4) {
+        vec3 k1x, k1v, k2x, k2v, k3x, k3v, k4x, k4v;
+        rhs(x, v, k1x, k1v);
+        rhs(x + 0.5 * h * k1x, v + 0.5 * h * k1v, k2x, k2v);
+        rhs(x + 0.5 * h * k2x, v + 0.5 * h * k2v, k3x, k3v);
+        rhs(x + h * k3x, v + h * k3v, k4x, k4v);
+        x += h / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x);
+        v += h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
+    } else {
+        vec3 dx, dv;
+        rhs(x, v, dx, dv);
+        x += h * dx;
+        v += h * dv;
+    }
+}
+
+// Does the straight ray (outside the medium n = 1) from o along d still reach the box?
+bool heads_into_box(vec3 o, vec3 d) {
+    vec3 inv = 1.0 / mix(vec3(1e-30), d, greaterThan(abs(d), vec3(1e-30)));
+    vec3 t0 = (LIGHT_MIN - o) * inv, t1 = (LIGHT_MAX - o) * inv;
+    vec3 lo = min(t0, t1), hi = max(t0, t1);
+    float near = max(max(lo.x, lo.y), lo.z), far = min(min(hi.x, hi.y), hi.z);
+    return near <= far && far > 0.0;
+}
+
+// Track-length deposit of `flux` (W) over the segment a -> b (section 5.2.2, see the top).
+void deposit(vec3 a, vec3 b, vec3 flux, vec3 dir) {
+    float len = distance(a, b);
+    vec3 at = 0.5 * (a + b);
+    ivec3 size = imageSize(irradiance);
+    vec3 voxel = (LIGHT_MAX - LIGHT_MIN) / vec3(size);
+    // Up to a voxel outside the box the splat still reaches the boundary voxels (without
+    // it they would miss half their deposits).
+    if (!(len > 0.0) || any(lessThan(at, LIGHT_MIN - voxel)) || any(greaterThan(at, LIGHT_MAX + voxel))) return;
+    vec3 e = run.sign * flux * (len / (voxel.x * voxel.y * voxel.z));
+    if (any(isnan(e)) || any(isinf(e))) return;
+    vec3 d = dir * (e.r + e.g + e.b);
+    vec3 u = (at - LIGHT_MIN) / voxel - 0.5;
+    ivec3 i0 = ivec3(floor(u));
+    vec3 f = u - vec3(i0);
+    for (int c = 0; c < 8; ++c) {
+        ivec3 o = ivec3(c & 1, (c >> 1) & 1, (c >> 2) & 1);
+        ivec3 q = i0 + o;
+        if (any(lessThan(q, ivec3(0))) || any(greaterThanEqual(q, size))) continue;
+        vec3 w3 = mix(1.0 - f, f, vec3(o));
+        float w = w3.x * w3.y * w3.z;
+        if (!(w > 0.0)) continue;
+        // Zero channels (one channel's run of a dispersive volume) cost no atomics.
+        if (e.r != 0.0) accum_add(q, 0, w * e.r);
+        if (e.g != 0.0) accum_add(q, 1, w * e.g);
+        if (e.b != 0.0) accum_add(q, 2, w * e.b);
+        accum_add(q, 3, w * d.x);
+        accum_add(q, 4, w * d.y);
+        accum_add(q, 5, w * d.z);
+    }
+}
+
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= state.count) return;
+    Patch p = src[i];
+    vec3 mid0 = patch_mid(p);
+    for (int c = 0; c < 4; ++c) {
+        vec3 x = p.x[c].xyz, v = p.v[c].xyz;
+        advance(x, v);
+        p.x[c].xyz = x;
+        p.v[c].xyz = v;
+    }
+    vec3 mid = patch_mid(p);
+    // Eq. 18 with the extinction volume (sigma_r = sigma_a + sigma_s, Eq. 5).
+    vec3 sigma = extinction_at(mid);
+    if (any(greaterThan(sigma, vec3(0.0)))) {
+        p.flux.rgb *= exp(-sigma * DT / index_at(mid));
+    }
+    vec3 normal = patch_normal(p);
+    vec3 dir = patch_dir(p);
+    bool finite_patch = !any(isnan(normal)) && !any(isinf(normal)) && dot(dir, dir) > 0.0;
+    bool singular = !finite_patch || (KEEP_CROSSED == 0u && !(dot(normal, dir) > 0.0));
+    vec3 voxel = (LIGHT_MAX - LIGHT_MIN) / vec3(imageSize(irradiance));
+    vec3 lo = min(min(p.x[0].xyz, p.x[1].xyz), min(p.x[2].xyz, p.x[3].xyz));
+    vec3 hi = max(max(p.x[0].xyz, p.x[1].xyz), max(p.x[2].xyz, p.x[3].xyz));
+    // Within its own size of the box a patch is split already: each step halves it while
+    // moving half a voxel, so it is down to a voxel when it enters (a patch of many voxels
+    // deposited at its midpoint would leave holes in the first layers).
+    vec3 margin = max(voxel, vec3(max(hi.x - lo.x, max(hi.y - lo.y, hi.z - lo.z))));
+    bool near_box = all(greaterThanEqual(hi, LIGHT_MIN - margin)) && all(lessThanEqual(lo, LIGHT_MAX + margin));
+    uint cls = 1u;
+    if (singular || max(p.flux.r, max(p.flux.g, p.flux.b)) < run.min_flux) {
+        cls = 0u;
+    } else if (!near_box && !heads_into_box(mid, dir)) {
+        cls = 0u;   // left the simulation volume (and will not re-enter: straight in air)
+    } else if (near_box && any(greaterThan(hi - lo, voxel))) {
+        cls = 4u;   // tessellate; outside the box rays are straight and need no resolution
+    }
+    classes[i] = cls;
+    src[i] = p;
+    if (!singular) deposit(mid0, mid, p.flux.rgb, normalize(dir));
+}
