@@ -352,7 +352,8 @@ shared_structs! {
         x: [vec4; 4],
         /// corner optical directions v = n dx/ds, |v| = n (w unused)
         v: [vec4; 4],
-        /// rgb: flux (W), w unused
+        /// rgb: flux (W); w: the steps it has taken in its run (its parent's before it was
+        /// tessellated)
         flux: vec4,
     }
 
@@ -366,7 +367,11 @@ shared_structs! {
         sign: float,
         /// energy threshold in W (section 5.2.3, patch termination)
         min_flux: float,
-        pad: uint,
+        /// steps a patch may take in the run (its step count is `Patch::flux.w`)
+        max_steps: uint,
+        /// which of the step kernel's dispatches between two compactions this is (0: the
+        /// first, which steps every patch of the list)
+        substep: uint,
     }
 
     /// The HistoPyramid's state (glsl/eikonal/histopyramid.glsl).
@@ -392,6 +397,11 @@ shared_structs! {
         spilled: uint,
         /// of them, the last build's (they follow its `next` outputs)
         spill_new: uint,
+        /// patches advanced by one step, summed over the run's dispatches (with several steps
+        /// per dispatch the list lengths no longer count them)
+        advanced: uint,
+        /// keeps `out_args` on its 16-byte boundary (std430)
+        pad: [uint; 3],
         /// vkCmdDispatchIndirect groups over `next + spill_new` (the traversal and the
         /// output generator) and one unused word
         out_args: uvec4,

@@ -167,8 +167,14 @@ fn gpu_particles_follow_the_equal_time_ray_equation() {
     let ctx = common::context(true);
     let volume = lens_volume(64, &[]);
     for integrator in [LightIntegrator::Rk4, LightIntegrator::Euler] {
-        let params =
-            EikonalParams { light_integrator: integrator, sigma: 0.0, light_patches: 24, ..EikonalParams::default() };
+        // A compaction per step: after 96 steps every particle has taken 96 steps.
+        let params = EikonalParams {
+            light_integrator: integrator,
+            sigma: 0.0,
+            light_patches: 24,
+            light_substeps: 1,
+            ..EikonalParams::default()
+        };
         let mut sim = StandaloneLight::new(&ctx, &params, &volume, &directional(Vec3::Z)).expect("light");
         let initial = sim.sim.initial.clone();
         let steps = 96;
@@ -183,6 +189,7 @@ fn gpu_particles_follow_the_equal_time_ray_equation() {
         };
         let mut checked = 0;
         for p in &patches {
+            assert_eq!(p.flux[3], steps as f32, "a patch's step count (flux.w)");
             for c in 0..4 {
                 let id = p.x[c][3];
                 if id < 0.0 {
@@ -225,10 +232,12 @@ fn gpu_particles_follow_the_equal_time_ray_equation() {
 fn luneburg_gpu_wavefront_focuses_on_the_far_surface() {
     let ctx = common::context(false);
     let volume = lens_volume(64, &[]);
+    // A compaction per step: the particles are followed step by step.
     let params = EikonalParams {
         light_integrator: LightIntegrator::Rk4,
         sigma: 0.5,
         light_patches: 48,
+        light_substeps: 1,
         ..EikonalParams::default()
     };
     let mut sim = StandaloneLight::new(&ctx, &params, &volume, &directional(Vec3::Z)).expect("light");
@@ -288,7 +297,8 @@ fn flux_sum(patches: &[Patch]) -> f64 {
 fn energy_balance_of_the_wavefront() {
     let ctx = common::context(false);
     let volume = lens_volume(32, &[]);
-    let params = EikonalParams { light_patches: 16, ..EikonalParams::default() };
+    // A compaction per step: the wavefront's flux is balanced step by step.
+    let params = EikonalParams { light_patches: 16, light_substeps: 1, ..EikonalParams::default() };
     let light = Light::Point { position: Vec3::new(0.3, 3.0, 0.2), intensity: Vec3::new(1.0, 2.0, 3.0) };
     let mut sim = StandaloneLight::new(&ctx, &params, &volume, &light).expect("light");
     let initial = flux_sum(&sim.sim.initial);
@@ -933,6 +943,37 @@ fn spilled_simulation_equals_the_unspilled_one() {
     common::assert_no_validation_errors(&ctx);
 }
 
+/// Several steps between two compactions (`light_substeps`) take every patch through the
+/// same steps as a compaction after every step (a patch stops at the step that eliminates or
+/// tessellates it): the same number of patch steps exactly, and the same volumes up to the
+/// order of the float additions (1e-5 of the largest value, as two_lights_add_up), in fewer
+/// compactions.
+#[test]
+fn substeps_take_the_same_steps_as_a_compaction_per_step() {
+    let ctx = common::context(true);
+    let volume = lens_volume(32, &[]);
+    let light = Light::Point { position: Vec3::new(0.3, 3.0, 0.2), intensity: Vec3::splat(10.0) };
+    let run = |light_substeps: u32| {
+        let params = EikonalParams { light_substeps, ..EikonalParams::default() };
+        let mut sim = StandaloneLight::new(&ctx, &params, &volume, &light).unwrap();
+        let stats = sim.run(&ctx).unwrap();
+        (stats, LightVolumes::read(&mut sim, &ctx))
+    };
+    let ((one, a), (eight, b)) = (run(1), run(8));
+    eprintln!(
+        "a compaction per step: {} compactions, {} patch steps; per 8 steps: {} compactions, {} patch steps",
+        one.steps, one.patch_steps, eight.steps, eight.patch_steps
+    );
+    assert_eq!(one.dropped_patches + eight.dropped_patches, 0);
+    assert_eq!(eight.patch_steps, one.patch_steps, "every patch takes the same steps");
+    assert!(eight.steps < one.steps, "no fewer compactions: {} vs {}", eight.steps, one.steps);
+    let rgb = |x: &[f32]| x.chunks(4).flat_map(|p| p[..3].to_vec()).collect::<Vec<f32>>();
+    assert!(rgb(&a.e).iter().any(|&e| e > 0.0), "no light deposited: nothing compared");
+    volumes_close("substep irradiance", &rgb(&b.e), &rgb(&a.e), 1e-5);
+    volumes_close("substep vector irradiance", &b.d, &a.d, 1e-5);
+    common::assert_no_validation_errors(&ctx);
+}
+
 /// The deposits added by float atomics (R32_SFLOAT accumulator, where the device has
 /// shaderImageFloat32AtomicAdd) and by the compare-and-swap loop on the bits (core Vulkan) are
 /// the same sums in another order: 1e-5 of the largest value, as two_lights_add_up (f32 sums
@@ -1043,14 +1084,21 @@ normal = [0, 1, 0]
 
 /// The simulation's own measurements at a tiny volume (16^3, 8^2 initial patches, a list of
 /// 300 so that a tile overflows and spills): every kernel is named and
-/// timed, times and counts are non-negative, the GPU total is the kernels' sum, and the
-/// patch-steps are the per-step live counts summed (each step advances the list the step
-/// before left, the first the tile's initial patches).
+/// timed, times and counts are non-negative, the GPU total is the kernels' sum, and with a
+/// compaction per step the step kernel's count of patch steps is the per-step live counts
+/// summed (each step advances the list the one before left, the first the tile's initial
+/// patches).
 #[test]
 fn light_simulation_reports_kernel_times_and_patch_steps() {
     let ctx = common::context(true);
     let volume = lens_volume(16, &[]);
-    let params = EikonalParams { light_patches: 8, max_patches: 300, tile_patches: 64, ..EikonalParams::default() };
+    let params = EikonalParams {
+        light_patches: 8,
+        max_patches: 300,
+        tile_patches: 64,
+        light_substeps: 1,
+        ..EikonalParams::default()
+    };
     let mut sim = StandaloneLight::new(&ctx, &params, &volume, &directional(Vec3::new(0.2, -1.0, 0.1))).unwrap();
     let stats = sim.run(&ctx).unwrap();
     for line in stats.kernel_lines() {

@@ -80,6 +80,7 @@ void main() {
     // over a patch of at most a voxel): flux / 4. Splitting by the quarters' current areas
     // instead moved flux towards the stretched side of patches sheared across the ball's
     // rim (a dark band beside eikonal_sphere's shadow, and as much extra in its caustic).
-    out_patch.flux = vec4(p.flux.rgb * 0.25, 0.0);
+    // w: the parent's step count (light_step.glsl), which the quarters continue from.
+    out_patch.flux = vec4(p.flux.rgb * 0.25, p.flux.w);
     emit(j, out_patch);
 }

@@ -91,10 +91,22 @@ void deposit(vec3 a, vec3 b, vec3 flux, vec3 dir) {
     }
 }
 
+// `light_substeps` dispatches of this kernel advance the same list before it is compacted
+// (the HistoPyramid and the output generator, section 5.2.3): at each after the first
+// (run.substep > 0) a patch steps on only while it is retained, so every patch takes the
+// steps, deposits and classes of one compaction per step; only the order of the float
+// additions changes. Patches of one list are then at different times, so each carries its
+// own step count (flux.w) and is eliminated at the run's step budget. (A loop over the
+// substeps inside one invocation cost lavapipe half again the step's time.)
 void main() {
     uint i = gl_GlobalInvocationID.x;
     if (i >= state.count) return;
+    if (run.substep > 0u && classes[i] != 1u) return;
     Patch p = src[i];
+    if (p.flux.w >= float(run.max_steps)) {
+        classes[i] = 0u;
+        return;
+    }
     vec3 mid0 = patch_mid(p);
     for (int c = 0; c < 4; ++c) {
         vec3 x = p.x[c].xyz, v = p.v[c].xyz;
@@ -128,7 +140,9 @@ void main() {
     } else if (near_box && any(greaterThan(hi - lo, voxel))) {
         cls = 4u;   // tessellate; outside the box rays are straight and need no resolution
     }
+    p.flux.w += 1.0;
     classes[i] = cls;
     src[i] = p;
+    atomicAdd(state.advanced, 1u);
     if (!singular) deposit(mid0, mid, p.flux.rgb, normalize(dir));
 }

@@ -420,7 +420,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
     }
     if let Some(l) = renderer.light_stats() {
         println!(
-            "eikonal light simulation (once, at setup): {:.3} s wall clock, {} steps, {} initial patches, peak {}, {} dropped",
+            "eikonal light simulation (once, at setup): {:.3} s wall clock, {} step dispatches, {} initial patches, peak {}, {} dropped",
             l.seconds, l.steps, l.initial_patches, l.peak_patches, l.dropped_patches
         );
         println!(

@@ -254,7 +254,7 @@ fn render(args: RenderArgs) -> Result<()> {
     }
     if let Some(l) = renderer.light_stats() {
         eprintln!(
-            "eikonal light simulation: {} runs (lights x channels x tiles; {} tiles split), {} steps, {} initial patches, peak {}, {} dropped at max_patches, {:.2} s",
+            "eikonal light simulation: {} runs (lights x channels x tiles; {} tiles split), {} step dispatches, {} initial patches, peak {}, {} dropped at max_patches, {:.2} s",
             l.runs.len(), l.split_tiles, l.steps, l.initial_patches, l.peak_patches, l.dropped_patches, l.seconds
         );
         eprintln!(
@@ -276,7 +276,7 @@ fn render(args: RenderArgs) -> Result<()> {
             for r in &l.runs {
                 let end = (at + r.steps as usize).min(l.patch_counts.len());
                 eprintln!(
-                    "run light {} channel {:?} tile {}..{} sign {}: patches after each step: {:?}",
+                    "run light {} channel {:?} tile {}..{} sign {}: patches after each dispatch: {:?}",
                     r.light,
                     r.channel,
                     r.start,

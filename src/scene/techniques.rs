@@ -885,6 +885,13 @@ params! {
         /// view rays' `integrator`. RK4, the default, is the scheme of every light simulation
         /// measured in docs/ACCURACY.md and docs/BENCHMARKS.md; "euler" is the paper's.
         light_integrator: LightIntegrator = LightIntegrator::Rk4;
+        /// Steps of the patch list between two compactions (the HistoPyramid and the output
+        /// generator, section 5.2.3; glsl/eikonal/light_step.glsl): after the first, a patch
+        /// steps on only while it is retained, so every patch takes the same steps as with a
+        /// compaction after every step (1, the paper's synchronous wavefront), but the list
+        /// is rebuilt less often. docs/BENCHMARKS.md has the times.
+        // Beyond 64 nearly every patch has stopped long before the compaction.
+        light_substeps: u32 = 4, 1..=64;
         /// Capacity of the patch list (one storage-buffer binding; a spill list of the same
         /// size beside it). The initial wavefront is simulated in tiles (`tile_patches`); the
         /// patches a step produces past the list are spilled and continued by a later run, and

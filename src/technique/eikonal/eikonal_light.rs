@@ -126,8 +126,10 @@ pub struct RunStats {
     pub end: usize,
     /// -1: the take-back of an overflowing tile.
     pub sign: f32,
+    /// Dispatches of the step kernel (each advances every live patch by 1 to
+    /// `light_substeps` steps).
     pub steps: u32,
-    /// Patches advanced, summed over the run's steps (each step's input list length).
+    /// Patch steps taken, summed over the run (as the step kernel counts them).
     pub patch_steps: u64,
     pub peak_patches: u32,
     pub dropped_patches: u32,
@@ -158,9 +160,9 @@ pub struct KernelTime {
 pub struct LightStats {
     /// Initial patches of every light's wavefront (each channel's run starts them again).
     pub initial_patches: u32,
-    /// Steps of all runs.
+    /// Dispatches of the step kernel in all runs.
     pub steps: u32,
-    /// Patches after each step (the HistoPyramid's output count), run after run.
+    /// Patches after each dispatch (the HistoPyramid's output count), run after run.
     pub patch_counts: Vec<u32>,
     /// The largest list of any run.
     pub peak_patches: u32,
@@ -174,8 +176,7 @@ pub struct LightStats {
     pub runs: Vec<RunStats>,
     /// Wall-clock seconds of the whole simulation, uploads and readbacks included.
     pub seconds: f64,
-    /// Patches advanced, summed over every step of every run: the work the step kernel
-    /// did (take-backs included).
+    /// Patch steps taken in every run: the work the step kernel did (take-backs included).
     pub patch_steps: u64,
     /// GPU time per kernel over the whole simulation, in the order they first ran (empty
     /// where the queue has no timestamps).
@@ -389,6 +390,8 @@ pub struct LightSim {
     _accum: Image,
     /// Whether the deposits are added by float atomics (else a compare-and-swap loop).
     pub float_atomics: bool,
+    /// Dispatches of the step kernel between two compactions (`light_substeps`).
+    substeps: u32,
     accum_id: ImageId,
     /// rgb: the irradiance sum_j dE_omega,j (W/m^2) of all rays through the voxel; a: 1
     /// where lit.
@@ -572,7 +575,7 @@ impl LightSim {
         .collect();
         // Two timestamps per pass of a batch: each step is the step kernel, one reduction
         // per pyramid level above the classes, the total, the traversal and the expansion.
-        let passes_per_step = level_lengths(capacity).len() as u32 - 1 + 4;
+        let passes_per_step = level_lengths(capacity).len() as u32 - 1 + 3 + params.light_substeps;
         let timestamps = if ctx.info.timestamp_valid_bits > 0 {
             Some(TimestampPool::new(ctx, "eikonal_light_timestamps", 2 * LIGHT_BATCH * passes_per_step)?)
         } else {
@@ -621,6 +624,7 @@ impl LightSim {
             tile: tile as usize,
             _accum: accum,
             float_atomics,
+            substeps: params.light_substeps,
             accum_id,
             irradiance,
             irradiance_id,
@@ -685,8 +689,14 @@ impl LightSim {
         self.run_gpu_ms = 0.0;
     }
 
-    fn push(&self) -> RunPush {
-        RunPush { slab: self.run.slab, sign: self.run.sign, min_flux: self.min_flux, pad: 0 }
+    fn push(&self, substep: u32) -> RunPush {
+        RunPush {
+            slab: self.run.slab,
+            sign: self.run.sign,
+            min_flux: self.min_flux,
+            max_steps: self.max_steps,
+            substep,
+        }
     }
 
     fn record_step<'a>(&'a self, frame: &mut Frame<'_, 'a>, from: usize) {
@@ -695,20 +705,27 @@ impl LightSim {
         let (src, dst) = (self.list_ids[from], self.list_ids[1 - from]);
         let state = &hp.state;
         let (step, expand) = (&self.step, &self.expand);
-        let push = self.push();
-        frame
-            .pass("eikonal_light_step")
-            .read(hp.state_id, Access::IndirectArgs)
-            .read(hp.state_id, Access::ComputeRead)
-            .read(self.field_id, Access::ComputeSampled)
-            .read(self.extinction_id, Access::ComputeSampled)
-            .read(self.irradiance_id, Access::ComputeRead)
-            .write(src, Access::ComputeWrite)
-            .write(hp.classes_id, Access::ComputeWrite)
-            .write(self.accum_id, Access::ComputeWrite)
-            .record(move |cmd| {
-                cmd.compute_indirect(step, &[set0, set1], &push, state, 0);
-            });
+        let push = self.push(0);
+        // `substeps` dispatches of the step kernel on the same list, then one compaction
+        // (glsl/eikonal/light_step.glsl says why this equals a compaction per step).
+        for substep in 0..self.substeps {
+            let push = self.push(substep);
+            frame
+                .pass("eikonal_light_step")
+                .read(hp.state_id, Access::IndirectArgs)
+                // The count of patch steps (`advanced`).
+                .write(hp.state_id, Access::ComputeWrite)
+                .read(self.field_id, Access::ComputeSampled)
+                .read(self.extinction_id, Access::ComputeSampled)
+                .read(self.irradiance_id, Access::ComputeRead)
+                .write(src, Access::ComputeWrite)
+                // Read too: later substeps step only the patches still retained.
+                .write(hp.classes_id, Access::ComputeWrite)
+                .write(self.accum_id, Access::ComputeWrite)
+                .record(move |cmd| {
+                    cmd.compute_indirect(step, &[set0, set1], &push, state, 0);
+                });
+        }
         hp.record(frame);
         frame
             .pass("eikonal_light_expand")
@@ -761,7 +778,7 @@ impl LightSim {
     pub fn resolve(&mut self, ctx: &Arc<GpuContext>, graph: &mut FrameGraph) -> GpuResult<()> {
         let (set0, set1) = (self.hp.set(), self.sets.set());
         let resolve = &self.resolve;
-        let push = self.push();
+        let push = self.push(0);
         let groups = self.resolution.map(|r| r.div_ceil(EIKONAL_GROUP));
         let pool = self.timestamps.as_ref();
         let queries = ctx.one_shot(|cmd| {
@@ -804,9 +821,9 @@ impl LightSim {
             counts.truncate(last + 1);
         }
         let r = self.run;
-        // Step i advanced the list that step i - 1 left (the first, the initial patches).
-        let patch_steps =
-            self.initial.len() as u64 + counts[..counts.len().saturating_sub(1)].iter().map(|&c| c as u64).sum::<u64>();
+        // Counted by the step kernel: with several steps per dispatch a patch may advance
+        // more than once between two of these counts.
+        let patch_steps = u64::from(state.advanced);
         let stats = RunStats {
             light: r.light,
             channel: r.channel,
@@ -814,7 +831,7 @@ impl LightSim {
             end: r.end,
             sign: r.sign,
             steps: counts.len() as u32,
-            patch_steps: if counts.is_empty() { 0 } else { patch_steps },
+            patch_steps,
             peak_patches: state.peak.max(self.initial.len() as u32),
             dropped_patches: state.dropped,
             spilled_patches: self.pending.len() as u32,
@@ -1061,7 +1078,7 @@ fn simulation_settings(p: &EikonalParams) -> impl std::fmt::Debug {
         p.sigma,
         p.energy_threshold,
         p.light_dt,
-        p.light_integrator,
+        (p.light_integrator, p.light_substeps),
         (p.max_patches, p.tile_patches, p.keep_crossed),
         (p.light_patches, p.light_below, p.light_side),
         p.float_atomics,
