@@ -460,10 +460,8 @@ fn non_finite_patches_deposit_nothing_and_spare_their_neighbours() {
     let (clean, bad) = (run(false), run(true));
     finite("poisoned irradiance", &bad.e);
     finite("poisoned direction", &bad.d);
-    let rgb = |x: &[f32]| x.chunks(4).flat_map(|p| p[..3].to_vec()).collect::<Vec<f32>>();
     assert!(rgb(&clean.e).iter().any(|&e| e > 0.0), "no light deposited: nothing compared");
-    volumes_close("poisoned irradiance", &rgb(&bad.e), &rgb(&clean.e), 1e-5);
-    volumes_close("poisoned vector irradiance", &bad.d, &clean.d, 1e-5);
+    same_volumes("poisoned", &bad, &clean);
     common::assert_clean_teardown(ctx);
 }
 
@@ -816,6 +814,19 @@ fn volumes_close(name: &str, a: &[f32], b: &[f32], rel: f32) {
     assert!(worst <= rel * scale, "{name}: {worst} > {rel} * {scale}");
 }
 
+/// The RGB channels of an RGBA volume (alpha is 1 where lit, not a sum).
+fn rgb(x: &[f32]) -> Vec<f32> {
+    x.chunks(4).flat_map(|p| p[..3].to_vec()).collect()
+}
+
+/// Two simulations' irradiance and vector irradiance agree up to the order of the float
+/// additions: 1e-5 of the largest value (f32 sums of up to ~10^4 deposits per voxel in another
+/// order, as two_lights_add_up).
+fn same_volumes(name: &str, a: &LightVolumes, b: &LightVolumes) {
+    volumes_close(&format!("{name} irradiance"), &rgb(&a.e), &rgb(&b.e), 1e-5);
+    volumes_close(&format!("{name} vector irradiance"), &a.d, &b.d, 1e-5);
+}
+
 /// Item 2: every light is simulated into the same volumes, and they add: the volumes of two
 /// lights together equal the sums of each light's alone, and so do the rendered floors.
 #[test]
@@ -837,8 +848,6 @@ fn two_lights_add_up() {
     };
     let (va, vb, vab) = (read(&[a]), read(&[b]), read(&[a, b]));
     let sum = |x: &[f32], y: &[f32]| x.iter().zip(y).map(|(p, q)| p + q).collect::<Vec<f32>>();
-    // RGB only: alpha is 1 where lit, not a sum.
-    let rgb = |x: &[f32]| x.chunks(4).flat_map(|p| p[..3].to_vec()).collect::<Vec<f32>>();
     // The runs' float additions happen in another order: the f32 rounding of a voxel's sum
     // of N deposits grows as eps sqrt(N) of it (eps = 6e-8), 6e-6 at N = 10^4 deposits per
     // voxel; 1e-5 of the largest value covers that (measured here: 2e-6).
@@ -983,9 +992,7 @@ fn spilled_simulation_equals_the_unspilled_one() {
     assert_eq!(tiled_stats.dropped_patches, 0);
     assert!(tiled_stats.peak_patches <= 4000);
     let (a, b) = (LightVolumes::read(&mut whole, &ctx), LightVolumes::read(&mut tiled, &ctx));
-    let rgb = |x: &[f32]| x.chunks(4).flat_map(|p| p[..3].to_vec()).collect::<Vec<f32>>();
-    volumes_close("tiled irradiance", &rgb(&b.e), &rgb(&a.e), 1e-5);
-    volumes_close("tiled vector irradiance", &b.d, &a.d, 1e-5);
+    same_volumes("tiled", &b, &a);
     common::assert_no_validation_errors(&ctx);
 }
 
@@ -1013,10 +1020,8 @@ fn substeps_take_the_same_steps_as_a_compaction_per_step() {
     assert_eq!(one.dropped_patches + eight.dropped_patches, 0);
     assert_eq!(eight.patch_steps, one.patch_steps, "every patch takes the same steps");
     assert!(eight.steps < one.steps, "no fewer compactions: {} vs {}", eight.steps, one.steps);
-    let rgb = |x: &[f32]| x.chunks(4).flat_map(|p| p[..3].to_vec()).collect::<Vec<f32>>();
     assert!(rgb(&a.e).iter().any(|&e| e > 0.0), "no light deposited: nothing compared");
-    volumes_close("substep irradiance", &rgb(&b.e), &rgb(&a.e), 1e-5);
-    volumes_close("substep vector irradiance", &b.d, &a.d, 1e-5);
+    same_volumes("substep", &b, &a);
     common::assert_no_validation_errors(&ctx);
 }
 
@@ -1045,10 +1050,8 @@ fn float_atomic_deposits_equal_the_compare_and_swap_loop() {
     );
     eprintln!("compared deposits by {} with deposits by {}", float_stats.deposits(), cas_stats.deposits());
     assert_eq!(float_stats.patch_steps, cas_stats.patch_steps, "the same simulation");
-    let rgb = |x: &[f32]| x.chunks(4).flat_map(|p| p[..3].to_vec()).collect::<Vec<f32>>();
     assert!(rgb(&cas.e).iter().any(|&e| e > 0.0), "no light deposited: nothing compared");
-    volumes_close("float-atomic irradiance", &rgb(&float.e), &rgb(&cas.e), 1e-5);
-    volumes_close("float-atomic vector irradiance", &float.d, &cas.d, 1e-5);
+    same_volumes("float-atomic", &float, &cas);
     common::assert_no_validation_errors(&ctx);
 }
 
