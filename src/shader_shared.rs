@@ -174,15 +174,16 @@ shared_bindings! {
         REF_BINDING_VOLUME = 14;
     }
     // Image-space refraction (src/technique/refraction/refractor_layers.rs). Set 1 of the
-    // layer passes: the per-vertex d_N storage buffer (Wyman 2005 only) and
-    // BINDING_GBUF_DEPTH (peeling); set 1 of the refraction shading passes: the refractor
-    // layers, besides BINDING_GBUF_NORMAL / _DEPTH.
+    // layer passes: the per-vertex d_N storage buffer (Wyman 2005 only); set 1 of the
+    // refraction shading passes: the refractor layers, besides BINDING_GBUF_*.
     REFRACTION_BINDINGS {
         BINDING_REFR_DN = 4;
         BINDING_REFR_BACK_NORMAL = 5;
         BINDING_REFR_BACK_DEPTH = 6;
         BINDING_REFR_FRONT_NORMAL = 7;
         BINDING_REFR_FRONT_DEPTH = 8;
+        // Per object, its slot in a per-refractor layer (u32::MAX for other objects).
+        BINDING_REFR_SLOTS = 9;
     }
     // Distance impostors (Szirmay-Kalos et al. 2005, src/technique/impostor/distance_impostor.rs).
     // Set 1 of the impostor shading passes, besides BINDING_GBUF_NORMAL / _DEPTH: the

@@ -720,3 +720,119 @@ fn wyman_second_surface_is_the_refractors_own_back_face() {
     assert!(band.len() >= 50, "only {} pixels exit behind the card", band.len());
     assert!(median < 5.0, "T2 median error {median} degrees behind the card");
 }
+
+/// Wyman's object is one refractor (§3, "a refractive object"): its back surface, furthest or
+/// second, is that object's own. Two more glass balls around sphere_env's: B behind its right
+/// half, C small before its left half. Where a back layer is shared by every refractor, the
+/// furthest surface behind A's right half is B's back face, and the nearest back face where
+/// A's exits project behind C is C's; kept per refractor, both are A's. T2 is compared with
+/// the analytic exit of A over those pixels (visible, off A's silhouette): its median error
+/// must stay within the 5 degrees `wyman_exit_is_near_the_analytic_sphere` allows over a
+/// lone ball (d~'s interpolation, §3.1).
+#[test]
+fn wyman_back_surfaces_are_the_refractors_own() {
+    let size = 96u32;
+    let text = format!(
+        r#"
+        [camera]
+        position = [0, 0, 4]
+        target = [0, 0, 0]
+        vfov_deg = 40
+        width = {size}
+        height = {size}
+        [environment]
+        type = "grid"
+        [materials.glass]
+        type = "dielectric"
+        ior = 1.5
+        [[objects]]
+        name = "a"
+        material = "glass"
+        shape = "sphere"
+        center = [0, 0, 0]
+        radius = 1
+        [[objects]]
+        name = "b"
+        material = "glass"
+        shape = "sphere"
+        center = [1, 0, -2.5]
+        radius = 1
+        [[objects]]
+        name = "c"
+        material = "glass"
+        shape = "sphere"
+        center = [-0.2, 0, 2]
+        radius = 0.15
+    "#
+    );
+    let (b_centre, b_radius) = (Vec3::new(1.0, 0.0, -2.5), 1.0);
+    let (c_centre, c_radius) = (Vec3::new(-0.2, 0.0, 2.0), 0.15);
+    // Nearest hit of the ray o + t d (|d| = 1) on a sphere, for t in (0, t_max).
+    let hits = |o: Vec3, d: Vec3, c: Vec3, r: f32, t_max: f32| {
+        let oc = o - c;
+        let b = oc.dot(d);
+        let disc = b * b - (oc.dot(oc) - r * r);
+        disc >= 0.0 && {
+            let t = -b - disc.sqrt();
+            t > 0.0 && t < t_max
+        }
+    };
+    let ctx = context(false);
+    for surface in ["furthest", "second"] {
+        let mut o: Vec<String> = prism::scene::BASELINE.iter().map(|s| s.to_string()).collect();
+        o.extend(
+            ["render.refraction=wyman", "render.wyman.debug=true", &format!("render.wyman.back_surface=\"{surface}\"")]
+                .iter()
+                .map(|s| s.to_string()),
+        );
+        let s = prism::scene::load_str(&text, std::path::Path::new("three_balls.toml"), &o).unwrap();
+        let mut r = Renderer::new(&ctx, &s).unwrap();
+        r.render_frame().unwrap();
+        let p2 = r.read_target("refraction_wyman_p2").unwrap().unwrap();
+        let t2 = r.read_target("refraction_wyman_t2").unwrap().unwrap();
+        drop(r);
+        let mut band = Vec::new();
+        for j in 0..size {
+            for i in 0..size {
+                let k = (j * size + i) as usize;
+                let Some((p, t)) = analytic_exit(&s, i, j, 1.0, 1.5) else { continue };
+                let (eye, d) = s.camera.primary_ray(i, j);
+                let near_edge = [(-3, 0), (3, 0), (0, -3), (0, 3)].iter().any(|&(di, dj)| {
+                    let (a, b) = (i as i32 + di, j as i32 + dj);
+                    a < 0
+                        || a >= size as i32
+                        || b < 0
+                        || b >= size as i32
+                        || analytic_exit(&s, a as u32, b as u32, 1.0, 1.5).is_none()
+                });
+                // C hides this pixel of A: not A's to shade.
+                let hidden = hits(eye, d, c_centre, c_radius, f32::INFINITY);
+                if near_edge || hidden || p2[4 * k + 3] == 0.0 {
+                    continue;
+                }
+                let affected = match surface {
+                    // B's back face lies behind A's along the view ray.
+                    "furthest" => hits(eye, d, b_centre, b_radius, f32::INFINITY),
+                    // A's exit P2 is seen through C from the eye: its layer texel is C's.
+                    _ => {
+                        let to_p2 = p - eye;
+                        hits(eye, to_p2.normalize(), c_centre, c_radius, to_p2.length())
+                    }
+                };
+                if affected {
+                    let gt = Vec3::new(t2[4 * k], t2[4 * k + 1], t2[4 * k + 2]);
+                    band.push(gt.normalize().dot(t).clamp(-1.0, 1.0).acos().to_degrees());
+                }
+            }
+        }
+        band.sort_by(f32::total_cmp);
+        let median = band.get(band.len() / 2).copied().unwrap_or(f32::NAN);
+        eprintln!(
+            "{surface}: {} pixels where another refractor is in the layer: T2 median {median:.2} deg",
+            band.len()
+        );
+        assert!(band.len() >= 30, "{surface}: only {} pixels see another refractor", band.len());
+        assert!(median < 5.0, "{surface}: T2 median error {median} degrees");
+    }
+    common::assert_no_validation_errors(&ctx);
+}

@@ -8,6 +8,8 @@
 //   P2~ = P1 + d~ T1, projected into the back-face normal layer for N2 (§3.2)
 //   T2 = Refract(T1, -N2), environment lookup; Fresnel reflection at P1 as the baseline.
 // TIR is clamped to the critical angle and P2 outside the silhouette takes N2 from T1 (§3.3).
+// The paper's object is one refractor: the back layer holds one array layer per refractor,
+// and a pixel reads its own refractor's (the G-buffer's object index picks it).
 #include "frame.glsl"
 #include "environment.glsl"
 #include "fresnel.glsl"
@@ -15,14 +17,32 @@
 layout(constant_id = 0) const uint DEBUG = 0;
 layout(set = 1, binding = BINDING_GBUF_NORMAL) uniform sampler2D gbuf_normal;
 layout(set = 1, binding = BINDING_GBUF_DEPTH) uniform sampler2D gbuf_depth;
-layout(set = 1, binding = BINDING_REFR_BACK_NORMAL) uniform sampler2D back_normal;
-layout(set = 1, binding = BINDING_REFR_BACK_DEPTH) uniform sampler2D back_depth;
+layout(set = 1, binding = BINDING_GBUF_ALBEDO) uniform sampler2D gbuf_albedo;
+layout(set = 1, binding = BINDING_REFR_BACK_NORMAL) uniform sampler2DArray back_normal;
+layout(set = 1, binding = BINDING_REFR_BACK_DEPTH) uniform sampler2DArray back_depth;
+layout(set = 1, binding = BINDING_REFR_SLOTS, std430) readonly buffer RefractorSlots {
+    uint slot_of_object[];
+};
 // The front layer: xyz normal, w = d_N interpolated from the vertices.
 layout(set = 1, binding = BINDING_REFR_FRONT_NORMAL) uniform sampler2D front_normal;
 layout(location = 0) in vec2 in_uv;
 layout(location = 0) out vec4 out_radiance;
 layout(location = 1) out vec4 out_p2;
 layout(location = 2) out vec4 out_t2;
+
+// This pixel's refractor: its layer of the back-surface array.
+int slot;
+
+// As refraction.glsl's layer lookups, on this pixel's refractor's layer.
+bool back_covered(vec2 uv) {
+    if (!on_screen(uv)) return false;
+    vec3 n = texelFetch(back_normal, ivec3(texel_of(uv), slot), 0).xyz;
+    return dot(n, n) > 0.25;
+}
+
+vec3 back_normal_at(vec2 uv) {
+    return normalize(texelFetch(back_normal, ivec3(texel_of(uv), slot), 0).xyz);
+}
 
 void main() {
     ivec2 px = ivec2(gl_FragCoord.xy);
@@ -31,6 +51,9 @@ void main() {
     vec4 nm = texelFetch(gbuf_normal, px, 0);
     uint mat = uint(nm.w + 0.5);
     if (material_kind(mat) != MATERIAL_DIELECTRIC) discard;
+    uint object = uint(texelFetch(gbuf_albedo, px, 0).a + 0.5);
+    if (object >= slot_of_object.length() || slot_of_object[object] == 0xffffffffu) discard;
+    slot = int(slot_of_object[object]);
     GpuMaterial m = materials[mat];
     vec3 ior = max(m.spec_a.rgb, vec3(1e-6));
     vec3 V = camera_ray(in_uv);
@@ -46,8 +69,9 @@ void main() {
     vec3 L_reflected = environment(reflect(V, N1));
 
     // d_V: distance between the front and the back surface along the view ray (Fig. 3c).
-    bool back_here = layer_covered(back_normal, in_uv);
-    float d_V = back_here ? max(length(world_from_depth(in_uv, texelFetch(back_depth, px, 0).r) - P1), 0.0) : 0.0;
+    bool back_here = back_covered(in_uv);
+    float back_z = texelFetch(back_depth, ivec3(px, slot), 0).r;
+    float d_V = back_here ? max(length(world_from_depth(in_uv, back_z) - P1), 0.0) : 0.0;
     float d_N = texelFetch(front_normal, px, 0).w;
     if (d_N <= 0.0) d_N = d_V;   // open mesh: no far side along -N
     if (!back_here) d_V = d_N;
@@ -67,8 +91,8 @@ void main() {
         float d = max(ratio * d_V + (1.0 - ratio) * d_N, 0.0);
         vec3 P2 = P1 + d * T1;
         vec2 uv2 = project_uv(P2);
-        bool inside = layer_covered(back_normal, uv2);
-        vec3 N2 = inside ? layer_normal_at(back_normal, uv2) : silhouette_normal(T1);
+        bool inside = back_covered(uv2);
+        vec3 N2 = inside ? back_normal_at(uv2) : silhouette_normal(T1);
         // Leaving the object: the normal facing T1 is -N2, and eta = n_refractor / n_outside.
         vec3 T2 = refract_clamped(T1, -N2, ior[k]);
         vec3 absorb = exp(-m.spec_b.rgb * d);

@@ -397,10 +397,11 @@ choice! {
     BackSurface, hint "Wyman 2005 §3.2: the furthest surface, or the second (the first back-facing one)" {
         /// The surface furthest from the eye (yellow point of Fig. 2), what the back-face pass
         /// with the depth test reversed keeps (§3.1, §4): shows the geometry users expect on
-        /// objects of high depth complexity.
+        /// objects of high depth complexity. The refractor's own, never another's behind it.
         Furthest = "furthest",
         /// The second surface from the eye, "i.e., first backfacing surface" (§3.2, black point
-        /// of Fig. 2): the nearest back face; smoother, ignores more distant surfaces.
+        /// of Fig. 2): the nearest back face; smoother, ignores more distant surfaces. The
+        /// refractor's own, also where another refractor lies in front of it.
         Second = "second",
     }
 }

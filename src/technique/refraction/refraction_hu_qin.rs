@@ -36,7 +36,7 @@ use super::nearby_impostors::{
     has_dielectric_rect, nearby_layout, nearby_lookup_constant, needs_copy, NearbyDesc, NearbyImpostors, BACK_PASS,
     COPY_PASS, RECURSION_PASSES,
 };
-use super::refractor_layers::{DebugTarget, LayerKind, RefractorLayers, ShadeDesc, ShadePass};
+use super::refractor_layers::{DebugTarget, LayerKind, LayerScope, RefractorLayers, ShadeDesc, ShadePass};
 
 pub const REFRACTION_HU_QIN_LAYERS: &str = "refraction_hu_qin_layers";
 pub const REFRACTION_HU_QIN: &str = "refraction_hu_qin";
@@ -197,8 +197,8 @@ impl HuQinPass {
         } else {
             NearbyImpostors::stand_in(ctx, REFRACTION_HU_QIN_NEARBY, gpu, graph, frame_layout)?
         };
-        let layers =
-            RefractorLayers::new(s, REFRACTION_HU_QIN_LAYERS, &[LayerKind::BackNearest, LayerKind::Front], None)?;
+        let kinds = [(LayerKind::BackNearest, LayerScope::Shared), (LayerKind::Front, LayerScope::Shared)];
+        let layers = RefractorLayers::new(s, REFRACTION_HU_QIN_LAYERS, &kinds, None)?;
         let (graph, targets, nearest) = (&mut *s.graph, s.targets, s.nearest);
         let (b, f) = (&layers.layers[0], &layers.layers[1]);
         let shade = ShadePass::new(

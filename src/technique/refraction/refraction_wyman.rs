@@ -5,7 +5,9 @@
 //! - `refraction_wyman_layers`: the refractors' back surface, depth and normal (§3.1 Fig. 3a,
 //!   §3.2 Fig. 3d), either the furthest surface or the second one, "the first backfacing
 //!   surface" (§3.2, `back_surface`), and their front faces carrying d_N interpolated from
-//!   the vertices.
+//!   the vertices. The paper's object is one refractor: the back surface is kept per
+//!   refractor (one array layer each), so that a pixel's d_V and N2 come from its own
+//!   refractor, never from another one behind it or in front of it.
 //! - `refraction_wyman`: glsl/refraction/wyman.frag, the fragment program of §4: T1 by
 //!   Snell's law at the G-buffer's P1, d_V from the two depths, d~ interpolated between d_V
 //!   and d_N (§3.1), P2~ = P1 + d~ T1 projected into the back normals for N2 (§3.2), T2, the
@@ -13,6 +15,7 @@
 //!
 //! d_N is precomputed per vertex on the CPU ([`super::wyman_distance`]).
 
+use crate::gpu::Buffer;
 use crate::graph::Frame;
 use crate::scene::techniques::{BackSurface, WymanParams};
 use crate::scene::{Material, Scene};
@@ -21,11 +24,13 @@ use crate::technique::{
     Setup, Stage, Technique,
 };
 use crate::{
-    BINDING_GBUF_DEPTH, BINDING_GBUF_NORMAL, BINDING_REFR_BACK_DEPTH, BINDING_REFR_BACK_NORMAL,
-    BINDING_REFR_FRONT_NORMAL,
+    BINDING_GBUF_ALBEDO, BINDING_GBUF_DEPTH, BINDING_GBUF_NORMAL, BINDING_REFR_BACK_DEPTH, BINDING_REFR_BACK_NORMAL,
+    BINDING_REFR_FRONT_NORMAL, BINDING_REFR_SLOTS,
 };
 
-use super::refractor_layers::{DebugTarget, LayerKind, RefractorLayers, ShadeDesc, ShadePass};
+use super::refractor_layers::{
+    refractor_slots, DebugTarget, LayerKind, LayerScope, RefractorLayers, ShadeDesc, ShadePass,
+};
 use super::wyman_distance::distance_along_normals;
 
 pub const REFRACTION_WYMAN_LAYERS: &str = "refraction_wyman_layers";
@@ -67,6 +72,8 @@ pub struct WymanPass {
     layers: RefractorLayers,
     shade: ShadePass,
     pub params: WymanParams,
+    /// Per object, its layer in the per-refractor back surface.
+    _slots: Buffer,
 }
 
 /// d_N of every scene vertex, in GpuScene's vertex order (0 for non-refractors).
@@ -91,7 +98,10 @@ impl WymanPass {
             BackSurface::Second => LayerKind::BackNearest,
         };
         let d_n = scene_distance_along_normals(scene);
-        let layers = RefractorLayers::new(s, REFRACTION_WYMAN_LAYERS, &[back, LayerKind::Front], Some(&d_n))?;
+        // The front layer is the visible refractor's wherever the G-buffer sees one: shared.
+        let kinds = [(back, LayerScope::PerRefractor), (LayerKind::Front, LayerScope::Shared)];
+        let layers = RefractorLayers::new(s, REFRACTION_WYMAN_LAYERS, &kinds, Some(&d_n))?;
+        let slots = Buffer::storage(ctx, "refraction_wyman_slots", &refractor_slots(scene, s.gpu))?;
         let (b, f) = (&layers.layers[0], &layers.layers[1]);
         let shade = ShadePass::new(
             ctx,
@@ -101,11 +111,12 @@ impl WymanPass {
                 inputs: &[
                     (BINDING_GBUF_NORMAL, &targets.gbuf_normal, targets.gbuf_normal_id),
                     (BINDING_GBUF_DEPTH, &targets.depth, targets.depth_id),
+                    (BINDING_GBUF_ALBEDO, &targets.gbuf_albedo, targets.gbuf_albedo_id),
                     (BINDING_REFR_BACK_NORMAL, &b.normal, b.normal_id),
                     (BINDING_REFR_BACK_DEPTH, &b.depth, b.depth_id),
                     (BINDING_REFR_FRONT_NORMAL, &f.normal, f.normal_id),
                 ],
-                buffers: &[],
+                buffers: &[(BINDING_REFR_SLOTS, &slots)],
                 specialization: &[],
                 debug: params.debug,
                 scene,
@@ -115,6 +126,6 @@ impl WymanPass {
             targets,
             nearest,
         )?;
-        Ok(WymanPass { layers, shade, params })
+        Ok(WymanPass { layers, shade, params, _slots: slots })
     }
 }

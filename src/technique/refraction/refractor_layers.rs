@@ -14,13 +14,17 @@
 //!
 //! Front faces are counter-clockwise in the (upright, y-flipped) image, as the meshes are
 //! counter-clockwise seen from outside.
+//!
+//! A layer is either shared by every refractor (their faces compete in the depth test) or
+//! kept per refractor ([`LayerScope`]): an array image with one layer per refractor, in the
+//! slot order of [`refractor_slots`], each drawn from that refractor's mesh alone.
 use std::sync::Arc;
 
 use crate::frame::gpu_scene::{Draw, GpuScene};
 use crate::frame::targets::{Targets, DEPTH_FORMAT, HDR_FORMAT};
 use crate::gpu::{
     vk, Access, Blend, Buffer, Clear, DepthState, DescriptorSet, DescriptorSetLayout, GpuContext, GpuResult,
-    GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc, RenderTarget, Sampler, Spec, Specs,
+    GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc, ImageViewKind, RenderTarget, Sampler, Spec, Specs,
 };
 use crate::graph::{Bindings, BoundSet, Frame, FrameGraph, ImageId};
 use crate::scene::{Material, Scene};
@@ -55,9 +59,21 @@ impl LayerKind {
     }
 }
 
+/// Which refractors one layer holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LayerScope {
+    /// One image: every refractor's faces compete in the depth test, so where one refractor
+    /// lies behind or in front of another the layer may hold the other's surface.
+    Shared,
+    /// One array layer per refractor, each holding that refractor's faces alone: a pixel's
+    /// exit is then looked up on its own refractor's surface, wherever the others are.
+    PerRefractor,
+}
+
 /// One layer's targets, registered with the frame graph.
 pub struct Layer {
     pub kind: LayerKind,
+    pub scope: LayerScope,
     pub normal: Image,
     pub depth: Image,
     pub normal_id: ImageId,
@@ -68,6 +84,7 @@ struct LayerPipeline {
     pipeline: GraphicsPipeline,
     target: RenderTarget,
     clear_depth: f32,
+    scope: LayerScope,
 }
 
 /// The refractors' layers, drawn in one graph pass named `name`.
@@ -83,18 +100,41 @@ pub struct RefractorLayers {
     _d_n: Buffer,
 }
 
-/// The draws whose material is a dielectric.
+fn is_refractor(scene: &Scene, d: &Draw) -> bool {
+    matches!(scene.materials.get(d.material as usize), Some(Material::Dielectric { .. }))
+}
+
+/// The draws whose material is a dielectric, in object order (a refractor's slot is its
+/// index here).
 pub fn refractor_draws(scene: &Scene, gpu: &GpuScene) -> Vec<Draw> {
+    gpu.draws.iter().filter(|d| is_refractor(scene, d)).copied().collect()
+}
+
+/// Per object (`gpu.draws[i]` is object i), its refractor slot: its layer in a
+/// [`LayerScope::PerRefractor`] layer, or `u32::MAX` for an object that is not a refractor.
+pub fn refractor_slots(scene: &Scene, gpu: &GpuScene) -> Vec<u32> {
+    let mut next = 0;
     gpu.draws
         .iter()
-        .filter(|d| matches!(scene.materials.get(d.material as usize), Some(Material::Dielectric { .. })))
-        .copied()
+        .map(|d| {
+            if is_refractor(scene, d) {
+                next += 1;
+                next - 1
+            } else {
+                u32::MAX
+            }
+        })
         .collect()
 }
 
 impl RefractorLayers {
     /// `d_n`: one f32 per scene vertex (in GpuScene's order), written to the layers' w.
-    pub fn new(s: &mut Setup<'_>, name: &'static str, kinds: &[LayerKind], d_n: Option<&[f32]>) -> GpuResult<Self> {
+    pub fn new(
+        s: &mut Setup<'_>,
+        name: &'static str,
+        kinds: &[(LayerKind, LayerScope)],
+        d_n: Option<&[f32]>,
+    ) -> GpuResult<Self> {
         let (ctx, scene, gpu, frame_layout, targets) = (s.ctx, s.scene, s.gpu, s.frame_layout, s.targets);
         let graph = &mut *s.graph;
         // A one-float stand-in where the technique has no d_N (the shader never reads it).
@@ -105,17 +145,31 @@ impl RefractorLayers {
         use vk::ImageUsageFlags as U;
         let mut layers = Vec::new();
         let mut pipelines = Vec::new();
-        for (i, &kind) in kinds.iter().enumerate() {
+        let draws = refractor_draws(scene, gpu);
+        for (i, &(kind, scope)) in kinds.iter().enumerate() {
             let label = format!("{name}_{i}");
+            let layer_count = match scope {
+                LayerScope::Shared => 1,
+                LayerScope::PerRefractor => draws.len().max(1) as u32,
+            };
             let image = |what: &str, format, usage| {
-                ImageDesc::d2(&format!("{label}_{what}"), format, targets.width, targets.height, usage)
+                let desc = ImageDesc::d2(&format!("{label}_{what}"), format, targets.width, targets.height, usage);
+                match scope {
+                    LayerScope::Shared => desc,
+                    LayerScope::PerRefractor => ImageDesc { layers: layer_count, view: ImageViewKind::D2Array, ..desc },
+                }
             };
             let (normal, normal_id) =
                 graph.image(ctx, &image("normal", LAYER_FORMAT, U::COLOR_ATTACHMENT | U::SAMPLED | U::TRANSFER_SRC))?;
             let depth_usage = U::DEPTH_STENCIL_ATTACHMENT | U::SAMPLED | U::TRANSFER_SRC;
             let (depth, depth_id) = graph.image(ctx, &image("depth", DEPTH_FORMAT, depth_usage))?;
             let (depth_state, clear_depth) = kind.depth();
-            let target = RenderTarget::new(ctx, &label, &[&normal], Some(&depth), true)?;
+            let target = match scope {
+                LayerScope::Shared => RenderTarget::new(ctx, &label, &[&normal], Some(&depth), true)?,
+                LayerScope::PerRefractor => {
+                    RenderTarget::layered(ctx, &label, &[&normal], Some(&depth), true, layer_count)?
+                }
+            };
             let pipeline = GraphicsPipeline::new(
                 ctx,
                 &GraphicsPipelineDesc {
@@ -132,10 +186,10 @@ impl RefractorLayers {
                 0,
                 &target.pass,
             )?;
-            pipelines.push(LayerPipeline { pipeline, target, clear_depth });
-            layers.push(Layer { kind, normal_id, depth_id, normal, depth });
+            pipelines.push(LayerPipeline { pipeline, target, clear_depth, scope });
+            layers.push(Layer { kind, scope, normal_id, depth_id, normal, depth });
         }
-        Ok(RefractorLayers { name, set, pipelines, layers, draws: refractor_draws(scene, gpu), _d_n: d_n_buffer })
+        Ok(RefractorLayers { name, set, pipelines, layers, draws, _d_n: d_n_buffer })
     }
 
     pub fn layer(&self, kind: LayerKind) -> Option<&Layer> {
@@ -149,13 +203,24 @@ impl RefractorLayers {
         }
         pass.record(move |cmd| {
             for p in &self.pipelines {
-                cmd.in_target(&p.target, 0, &[Clear::Color([0.0; 4]), Clear::Depth(p.clear_depth)], |cmd| {
+                let clears = [Clear::Color([0.0; 4]), Clear::Depth(p.clear_depth)];
+                let draw = |cmd: &crate::gpu::Cmd, draws: &[Draw]| {
                     cmd.bind_graphics(&p.pipeline, &[frame_set, self.set.set()]);
                     cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
-                    for d in &self.draws {
+                    for d in draws {
                         cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
                     }
-                });
+                };
+                match p.scope {
+                    LayerScope::Shared => cmd.in_target(&p.target, 0, &clears, |cmd| draw(cmd, &self.draws)),
+                    // Every array layer is cleared, the one of a scene without refractors too.
+                    LayerScope::PerRefractor => {
+                        for slot in 0..p.target.framebuffers().len() {
+                            let own = self.draws.get(slot..=slot).unwrap_or(&[]);
+                            cmd.in_target(&p.target, slot, &clears, |cmd| draw(cmd, own));
+                        }
+                    }
+                }
             }
         });
     }
