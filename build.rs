@@ -140,28 +140,43 @@ fn main() {
     for file in &files {
         let rel = file.strip_prefix(&glsl).unwrap().to_string_lossy().replace('\\', "/");
         println!("cargo:rerun-if-changed={}", file.display());
-        let mut includes = Vec::new();
-        let result = compile_glsl(&compiler, &glsl, &rel, &header, &mut includes);
-        for p in includes {
-            println!("cargo:rerun-if-changed={}", p.display());
-        }
-        match result {
-            Ok(compiled) => {
-                let spv = out.join("shaders").join(format!("{rel}.spv"));
-                std::fs::create_dir_all(spv.parent().unwrap()).unwrap();
-                std::fs::write(&spv, compiled.spirv).unwrap();
-                let specs: Vec<_> =
-                    compiled.specs.iter().map(|s| format!("({:?}, {}, {:?})", s.name, s.id, s.ty)).collect();
-                writeln!(
-                    generated,
-                    "    ({rel:?}, include_bytes!({:?}), &[{}]),",
-                    spv.display().to_string(),
-                    specs.join(", ")
-                )
-                .unwrap();
+        let spv = out.join("shaders").join(format!("{rel}.spv"));
+        let stamp = out.join("shaders").join(format!("{rel}.stamp"));
+        let specs = match unchanged(file, &header, &spv, &stamp) {
+            Some((specs, includes)) => {
+                for p in includes {
+                    println!("cargo:rerun-if-changed={}", p.display());
+                }
+                specs
             }
-            Err(e) => errors.push(e),
-        }
+            None => {
+                let mut includes = Vec::new();
+                let result = compile_glsl(&compiler, &glsl, &rel, &header, &mut includes);
+                for p in &includes {
+                    println!("cargo:rerun-if-changed={}", p.display());
+                }
+                match result {
+                    Ok(compiled) => {
+                        std::fs::create_dir_all(spv.parent().unwrap()).unwrap();
+                        std::fs::write(&spv, compiled.spirv).unwrap();
+                        let specs: Vec<_> =
+                            compiled.specs.iter().map(|s| format!("({:?}, {}, {:?})", s.name, s.id, s.ty)).collect();
+                        let specs = specs.join(", ");
+                        let mut text = format!("{:x}\n{specs}\n", sources_hash(file, &header, &includes).unwrap());
+                        for p in &includes {
+                            writeln!(text, "{}", p.display()).unwrap();
+                        }
+                        std::fs::write(&stamp, text).unwrap();
+                        specs
+                    }
+                    Err(e) => {
+                        errors.push(e);
+                        continue;
+                    }
+                }
+            }
+        };
+        writeln!(generated, "    ({rel:?}, include_bytes!({:?}), &[{specs}]),", spv.display().to_string()).unwrap();
     }
     generated.push_str("];\n");
     if !errors.is_empty() {
@@ -173,6 +188,69 @@ fn main() {
         panic!("{} shader(s) failed to compile:\n{}", errors.len(), errors.join("\n"));
     }
     std::fs::write(out.join("shaders.rs"), generated).unwrap();
+
+    println!("cargo:rustc-env=PRISM_REVISION={}", revision(&root));
+}
+
+/// The revision of the sources the binary is built from, `git describe`-like, with `-dirty`
+/// when a tracked file it is built from differs from the commit; "unknown" outside a git
+/// checkout. Every result prism writes records it, so it must be the binary's, not that of
+/// whatever the tree holds when the binary runs. The script re-runs when HEAD moves or one of
+/// those files changes (the shaders are then recompiled only if their text changed).
+fn revision(root: &Path) -> String {
+    let git = |args: &[&str]| {
+        std::process::Command::new("git")
+            .args(args)
+            .current_dir(root)
+            .output()
+            .ok()
+            .filter(|o| o.status.success())
+            .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+    };
+    let Some(rev) = git(&["rev-parse", "--short=12", "HEAD"]) else {
+        return "unknown".into();
+    };
+    let mut watched = vec!["HEAD".to_string(), "packed-refs".to_string()];
+    watched.extend(git(&["symbolic-ref", "-q", "HEAD"]));
+    for name in watched {
+        // A path that does not exist would re-run the script on every build.
+        if let Some(path) = git(&["rev-parse", "--git-path", &name]).map(|p| root.join(p)).filter(|p| p.exists()) {
+            println!("cargo:rerun-if-changed={}", path.display());
+        }
+    }
+    let built_from = ["src", "glsl", "assets", "build.rs", "Cargo.toml", "Cargo.lock"];
+    for p in built_from {
+        println!("cargo:rerun-if-changed={p}");
+    }
+    let mut status = vec!["status", "--porcelain", "--untracked-files=no", "--"];
+    status.extend(built_from);
+    match git(&status) {
+        Some(changes) if !changes.is_empty() => format!("{rev}-dirty"),
+        _ => rev,
+    }
+}
+
+/// A hash of everything a shader's SPIR-V depends on: the header, its source and its
+/// includes (None if one cannot be read).
+fn sources_hash(file: &Path, header: &str, includes: &[PathBuf]) -> Option<u64> {
+    use std::hash::{Hash, Hasher};
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    header.hash(&mut h);
+    for p in std::iter::once(file).chain(includes.iter().map(PathBuf::as_path)) {
+        std::fs::read(p).ok()?.hash(&mut h);
+    }
+    Some(h.finish())
+}
+
+/// The specialisation constants and includes recorded in `stamp` when `spv` was compiled from
+/// the same header, source and includes as now; None when it must be compiled.
+fn unchanged(file: &Path, header: &str, spv: &Path, stamp: &Path) -> Option<(String, Vec<PathBuf>)> {
+    let text = std::fs::read_to_string(stamp).ok()?;
+    let mut lines = text.lines();
+    let (hash, specs) = (lines.next()?, lines.next()?);
+    let includes: Vec<PathBuf> = lines.map(PathBuf::from).collect();
+    let same = u64::from_str_radix(hash, 16).ok()? == sources_hash(file, header, &includes)?;
+    (same && spv.exists()).then(|| (specs.to_string(), includes))
 }
 
 /// The doc comments among `attributes` as `//` lines: `stringify!` writes `/// text` as

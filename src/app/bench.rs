@@ -158,29 +158,10 @@ pub struct BenchReport {
     pub note: &'static str,
 }
 
-/// `git describe`-like revision of the source tree, with `-dirty` for local changes.
+/// The git revision of the sources this binary was built from (build.rs), `-dirty` when
+/// they differed from the commit.
 pub fn git_revision() -> String {
-    let dir = env!("CARGO_MANIFEST_DIR");
-    let run = |args: &[&str]| {
-        std::process::Command::new("git")
-            .args(args)
-            .current_dir(dir)
-            .output()
-            .ok()
-            .filter(|o| o.status.success())
-            .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
-    };
-    match run(&["rev-parse", "--short=12", "HEAD"]) {
-        Some(rev) => {
-            let dirty = run(&["status", "--porcelain", "--untracked-files=no"]).is_some_and(|s| !s.is_empty());
-            if dirty {
-                format!("{rev}-dirty")
-            } else {
-                rev
-            }
-        }
-        None => "unknown".into(),
-    }
+    env!("PRISM_REVISION").to_string()
 }
 
 /// Per-pass statistics over `frames`, in the order the passes ran.

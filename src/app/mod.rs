@@ -27,7 +27,7 @@ use output::Outputs;
 #[derive(Parser, Debug)]
 #[command(
     name = "prism",
-    version,
+    version = concat!(env!("CARGO_PKG_VERSION"), " (", env!("PRISM_REVISION"), ")"),
     about = "A Vulkan renderer for refraction, reflection and caustics that measures each technique's GPU time against its error.",
     long_about = long_about()
 )]
