@@ -428,3 +428,35 @@ fn nearest_corrected_surface_removes_the_arc_and_the_speckle() {
         }
     }
 }
+
+/// Hu & Qin §4: "For a static scene, it is unnecessary to compute ... RECT_i, and TEX_i during
+/// rendering". With `nearby_update = "on_change"` (the default) sphere_nearby renders its
+/// textures in the first of three frames only, and the third frame is bit for bit the one
+/// rendered with the textures made every frame (the paper's timings, "every_frame"), which
+/// renders them three times. Moving an object renders them again with the next frame.
+#[test]
+fn static_impostor_textures_are_rendered_once() {
+    use prism::technique::refraction::refraction_hu_qin::HuQinPass;
+    let ctx = context(false);
+    let mut images = Vec::new();
+    for (update, renders) in [("on_change", 1), ("every_frame", 3)] {
+        let s =
+            scene("sphere_nearby", 64, &["render.refraction=hu_qin", &format!("render.hu_qin.nearby_update={update}")]);
+        let mut r = Renderer::new(&ctx, &s).unwrap();
+        for _ in 0..3 {
+            r.render_frame().unwrap();
+        }
+        let generations = |r: &Renderer| r.technique::<HuQinPass>().unwrap().nearby.generations();
+        assert_eq!(generations(&r), renders, "{update}: frames that rendered the textures");
+        images.push(r.read_hdr().unwrap());
+        if update == "on_change" {
+            assert!(r.move_object("bunny", glam::Vec3::new(0.5, 0.0, -0.5)).unwrap());
+            r.render_frame().unwrap();
+            r.render_frame().unwrap();
+            assert_eq!(generations(&r), 2, "after a move: frames that rendered the textures");
+        }
+    }
+    let differing = images[0].chunks(4).zip(images[1].chunks(4)).filter(|(a, b)| a != b).count();
+    assert_eq!(differing, 0, "kept textures: {differing} pixels differ from textures made every frame");
+    common::assert_no_validation_errors(&ctx);
+}

@@ -341,6 +341,9 @@ impl Renderer {
         }
         self.animation_time = Some(time);
         self.animated = true;
+        for t in self.techniques.iter_mut().flatten() {
+            t.contents_changed();
+        }
         // The vertices no longer hold the loaded scene's placement: the next update rewrites them.
         self.placement = None;
         true

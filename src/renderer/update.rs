@@ -368,6 +368,9 @@ impl Renderer {
             if bytes != &self.scene.materials.read()[..bytes.len()] {
                 self.scene.materials.write(0, bytes);
                 update.materials = true;
+                for t in self.techniques.iter_mut().flatten() {
+                    t.contents_changed();
+                }
             }
         }
         set_camera_uniforms(&mut self.uniforms, &scene.camera, scene.render.exposure, &self.scene);

@@ -269,6 +269,11 @@ pub trait Technique: Any {
     /// Objects moved: every object's (centre, bounding radius), in scene order.
     fn objects_moved(&mut self, _bounds: &[(Vec3, f32)]) {}
 
+    /// Something a cache may hold changed in place, with no object moved by
+    /// [`Self::objects_moved`]: the material values were rewritten, or the water's vertices
+    /// animated.
+    fn contents_changed(&mut self) {}
+
     /// Intermediate images a test or a debug view can read back.
     fn debug_targets(&self) -> &[DebugTarget] {
         &[]

@@ -96,6 +96,18 @@ impl Technique for EikonalPass {
         reads.extend(inputs.shadow_atlas);
         self.view.record(frame, inputs.frame_set, &reads);
     }
+
+    fn begin_frame(&mut self) {
+        self.nearby.begin_frame();
+    }
+
+    fn objects_moved(&mut self, _: &[(glam::Vec3, f32)]) {
+        self.nearby.contents_changed();
+    }
+
+    fn contents_changed(&mut self) {
+        self.nearby.contents_changed();
+    }
 }
 
 /// Fig. 16's stopping tolerance (a fraction of d_i) and Fig. 17's seeds for the impostor
@@ -191,6 +203,8 @@ impl EikonalPass {
             exit: crate::scene::techniques::RecursiveExit::BoundingSphere,
             search_steps: 8,
             max_iterations: 32,
+            // The textures hold the light simulation's result, computed once per change.
+            update: crate::scene::techniques::NearbyUpdate::OnChange,
         };
         let nearby = if kept.is_empty() {
             NearbyImpostors::stand_in(ctx, EIKONAL_NEARBY, gpu, graph, frame_layout)?

@@ -133,6 +133,10 @@ macro_rules! impostor_technique {
             fn objects_moved(&mut self, bounds: &[(Vec3, f32)]) {
                 <$t>::objects_moved(self, bounds);
             }
+
+            fn contents_changed(&mut self) {
+                <$t>::contents_changed(self);
+            }
         }
     };
 }
@@ -327,6 +331,15 @@ impl ImpostorMap {
         }
         if c.distance(self.reference) > self.regenerate_distance * self.radius {
             self.reference = c;
+            self.pending = true;
+        }
+    }
+
+    /// What the map shows changed in place (material values, animated vertices): an
+    /// environment map, which holds radiance, is rendered again; a refractor map holds only
+    /// its object's shape.
+    pub fn contents_changed(&mut self) {
+        if self.content == MapContent::Environment {
             self.pending = true;
         }
     }
@@ -645,6 +658,12 @@ impl ImpostorReflection {
         }
     }
 
+    pub fn contents_changed(&mut self) {
+        for m in &mut self.maps {
+            m.contents_changed();
+        }
+    }
+
     pub fn record<'a>(
         &'a self,
         frame: &mut Frame<'_, 'a>,
@@ -711,6 +730,13 @@ impl ImpostorRefraction {
             i.map.objects_moved(bounds);
             i.refractor.objects_moved(bounds);
             i.refractor_center = i.refractor.center_of(bounds);
+        }
+    }
+
+    pub fn contents_changed(&mut self) {
+        for i in &mut self.instances {
+            i.map.contents_changed();
+            i.refractor.contents_changed();
         }
     }
 

@@ -62,7 +62,7 @@ use crate::gpu::{
     GraphicsPipelineDesc, Image, ImageDesc, ImageViewKind, RenderTarget, Sampler, SamplerDesc, Spec, Specs,
 };
 use crate::graph::{Bindings, BoundSet, Frame, FrameGraph, ImageId};
-use crate::scene::techniques::{NearbyLookup, RecursiveExit};
+use crate::scene::techniques::{NearbyLookup, NearbyUpdate, RecursiveExit};
 use crate::scene::{Material, Scene};
 pub use crate::shader_structs::GpuNearbyRect;
 use crate::shader_structs::{GpuNearbyHeader, NearbyImpostorPush};
@@ -351,7 +351,7 @@ pub fn rect_buffer_bytes(layout: &NearbyLayout) -> Vec<u8> {
     bytes
 }
 
-/// How the impostor textures are made beyond [`NearbyImpostors::new`]'s defaults.
+/// How the impostor textures are made.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct NearbyDesc {
     /// Edge of each TEX_i in texels.
@@ -373,10 +373,12 @@ pub struct NearbyDesc {
     /// Fig. 7's halvings and Fig. 9's steps of that search (as the main pass's).
     pub search_steps: u32,
     pub max_iterations: u32,
+    /// When the textures are rendered (§4: a static scene needs them once).
+    pub update: NearbyUpdate,
 }
 
 /// The dielectric OBJ_k's back faces (and with `recursive_exit = "full"` their front faces) in
-/// their rectangles' parallel projections (normal and axial depth), rendered once per frame
+/// their rectangles' parallel projections (normal and axial depth), rendered with the textures
 /// before level 0: the exit surfaces of §2.1's search.
 pub const BACK_PASS: &str = "refraction_hu_qin_nearby_back";
 
@@ -387,7 +389,7 @@ pub fn has_dielectric_rect(scene: &Scene, layout: &NearbyLayout) -> bool {
 }
 
 /// With recursion levels: level 0's diffuse layers copied into the other array of the
-/// ping-pong, once per frame. Diffuse TEX_i do not change between levels, so the levels >= 1
+/// ping-pong, with the textures. Diffuse TEX_i do not change between levels, so the levels >= 1
 /// re-render only the specular layers (mirrors, conductors, dielectrics).
 pub const COPY_PASS: &str = "refraction_hu_qin_nearby_copy";
 
@@ -410,9 +412,12 @@ struct TextureArray {
     target: RenderTarget,
 }
 
-/// TEX_i / TEX_DEPTH_i of every rectangle, rendered each frame (the paper's "Rendering
-/// Pass": nothing is precomputed, so the scene may change from frame to frame), and the
-/// rectangle buffer the shading reads.
+/// TEX_i / TEX_DEPTH_i of every rectangle, and the rectangle buffer the shading reads. The
+/// paper renders the textures every frame (its "Rendering Pass": nothing is precomputed, so
+/// the scene may change from frame to frame), and notes that a static scene needs them once
+/// (§4); [`NearbyUpdate`] chooses. Kept textures are rendered again when an object moves, a
+/// material value changes or the water animates ([`Self::contents_changed`]); what depends on
+/// where things are (the rectangles) is rebuilt with the technique.
 pub struct NearbyImpostors {
     name: &'static str,
     /// The rectangle sets (one per OBJ_R) and all their rectangles.
@@ -454,6 +459,13 @@ pub struct NearbyImpostors {
     lookup_set: Vec<u32>,
     /// [`ImpostorShading`]'s set (level 0).
     extra: Option<BoundSet>,
+    update: NearbyUpdate,
+    /// Something the textures show changed since they were last rendered.
+    pending: bool,
+    /// The frame being recorded renders the textures.
+    rendering: bool,
+    /// How many frames rendered the textures.
+    generations: u32,
 }
 
 /// [`BACK_PASS`]: the dielectric rectangles (indices into the rectangles), drawn into the
@@ -500,32 +512,7 @@ impl NearbyRects {
 }
 
 impl NearbyImpostors {
-    /// The rectangle sets of [`nearby_layout`] and their textures, `resolution`^2 texels each, no
-    /// recursion.
-    pub fn new(
-        ctx: &Arc<GpuContext>,
-        name: &'static str,
-        resolution: u32,
-        scene: &Scene,
-        gpu: &GpuScene,
-        graph: &mut FrameGraph,
-        frame_layout: &DescriptorSetLayout,
-    ) -> GpuResult<Self> {
-        let desc = NearbyDesc {
-            resolution,
-            recursion_depth: 0,
-            correction_iterations: 3,
-            correction_tolerance: 1e-3,
-            seed_samples: 8,
-            lookup: NearbyLookup::Paper,
-            exit: RecursiveExit::BackFacing,
-            search_steps: 8,
-            max_iterations: 32,
-        };
-        Self::with_desc(ctx, name, &desc, scene, gpu, graph, frame_layout)
-    }
-
-    /// As [`Self::new`], with recursion levels and their lookup settings.
+    /// The rectangle sets of [`nearby_layout`] and their textures, made as `desc` says.
     pub fn with_desc(
         ctx: &Arc<GpuContext>,
         name: &'static str,
@@ -580,6 +567,7 @@ impl NearbyImpostors {
             exit: RecursiveExit::BoundingSphere,
             search_steps: 8,
             max_iterations: 32,
+            update: NearbyUpdate::OnChange,
         };
         Self::build(ctx, name, &desc, NearbyRects::none(), graph, frame_layout, None)
     }
@@ -761,7 +749,44 @@ impl NearbyImpostors {
             lookup_set,
             extra: shading.map(|sh| sh.set),
             layout: nearby,
+            update: desc.update,
+            pending: true,
+            rendering: false,
+            generations: 0,
         })
+    }
+
+    /// Decide whether the frame about to be recorded renders the textures.
+    pub fn begin_frame(&mut self) {
+        self.rendering = self.pending || self.update == NearbyUpdate::EveryFrame;
+        self.pending = false;
+        if self.rendering {
+            self.generations += 1;
+        }
+    }
+
+    /// What the textures show changed in place (objects moved, material values, the water's
+    /// vertices): render them again with the next frame.
+    pub fn contents_changed(&mut self) {
+        self.pending = true;
+    }
+
+    /// How many frames rendered the textures.
+    pub fn generations(&self) -> u32 {
+        self.generations
+    }
+
+    /// The graph passes [`Self::record`] adds, in order.
+    fn pass_names(&self) -> Vec<&'static str> {
+        let mut names = Vec::new();
+        names.extend(self.back_pass.as_ref().map(|_| BACK_PASS));
+        for level in 0..=self.levels {
+            names.push(if level == 0 { self.name } else { RECURSION_PASSES[level as usize - 1] });
+            if level == 0 && !self.diffuse_layers.is_empty() && self.other.is_some() {
+                names.push(COPY_PASS);
+            }
+        }
+        names
     }
 
     /// Render every TEX_i (after the shadow maps, which it reads through the frame set): level
@@ -770,6 +795,13 @@ impl NearbyImpostors {
     /// layers are the same at every level: level 0 renders them, [`COPY_PASS`] copies them into
     /// the other array, and the levels >= 1 render the specular layers only.
     pub fn record<'a>(&'a self, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>) {
+        if !self.rendering {
+            // The textures keep their last rendering; the planned passes record nothing.
+            for name in self.pass_names() {
+                frame.pass(name).record(|_| {});
+            }
+            return;
+        }
         let (scene, frame_set, shadow_atlas) = (inputs.scene, inputs.frame_set, inputs.shadow_atlas);
         // Each rectangle's O_R: that of the set it belongs to.
         let mut origins = vec![[0.0; 4]; self.layout.rects.len()];
