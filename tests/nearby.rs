@@ -430,7 +430,7 @@ fn nearest_corrected_surface_removes_the_arc_and_the_speckle() {
 }
 
 /// Hu & Qin §4: "For a static scene, it is unnecessary to compute ... RECT_i, and TEX_i during
-/// rendering". With `nearby_update = "on_change"` (the default) sphere_nearby renders its
+/// rendering". With `render.update = "on_change"` (the default) sphere_nearby renders its
 /// textures in the first of three frames only, and the third frame is bit for bit the one
 /// rendered with the textures made every frame (the paper's timings, "every_frame"), which
 /// renders them three times. Moving an object renders them again with the next frame.
@@ -440,13 +440,12 @@ fn static_impostor_textures_are_rendered_once() {
     let ctx = context(false);
     let mut images = Vec::new();
     for (update, renders) in [("on_change", 1), ("every_frame", 3)] {
-        let s =
-            scene("sphere_nearby", 64, &["render.refraction=hu_qin", &format!("render.hu_qin.nearby_update={update}")]);
+        let s = scene("sphere_nearby", 64, &["render.refraction=hu_qin", &format!("render.update={update}")]);
         let mut r = Renderer::new(&ctx, &s).unwrap();
         for _ in 0..3 {
             r.render_frame().unwrap();
         }
-        let generations = |r: &Renderer| r.technique::<HuQinPass>().unwrap().nearby.generations();
+        let generations = |r: &Renderer| r.technique::<HuQinPass>().unwrap().nearby.regeneration.generations();
         assert_eq!(generations(&r), renders, "{update}: frames that rendered the textures");
         images.push(r.read_hdr().unwrap());
         if update == "on_change" {

@@ -136,6 +136,8 @@ pub struct Renderer {
     animation_time: Option<f32>,
     /// The vertices were animated since the last update.
     animated: bool,
+    /// `render.update = "every_frame"`: what techniques keep is rendered in every frame.
+    every_frame: bool,
     /// Every object's vertex range and current (centre, bounding radius), for moving objects.
     objects: Vec<ObjectState>,
     /// The objects' (centre, bounding radius), copied from `objects` for each frame's inputs.
@@ -321,6 +323,7 @@ impl Renderer {
             animation,
             animation_time: None,
             animated: false,
+            every_frame: scene.render.update == "every_frame",
             objects,
             bounds: Vec::new(),
             uniforms,
@@ -512,6 +515,9 @@ impl Renderer {
         self.frame_buffers[slot].write(0, bytemuck::bytes_of(&self.uniforms));
 
         for t in self.techniques.iter_mut().flatten() {
+            if self.every_frame {
+                t.contents_changed();
+            }
             t.begin_frame();
         }
         let dt = if self.frame_index == 0 { None } else { self.tonemap_dt };

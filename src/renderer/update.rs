@@ -341,6 +341,7 @@ impl Renderer {
             self.clear_and_bind_caustic_atlas()?;
             self.caustic_size = caustic_size;
         }
+        let photon_rebuilt = photon.is_some();
         if let Some(p) = photon {
             self.photon_caustics = p;
             self.bind_photon_caustics();
@@ -356,6 +357,13 @@ impl Renderer {
             self.technique_shaders[i] = shaders;
             update.recreated.push(TECHNIQUES[i].key);
         }
+        // What the kept techniques show may have moved with the vertices, or lost its target.
+        if update.moved || old_atlas.is_some() || photon_rebuilt {
+            for t in self.techniques.iter_mut().flatten() {
+                t.contents_changed();
+            }
+        }
+        self.every_frame = scene.render.update == "every_frame";
         // After the techniques whose framebuffers held their views.
         drop(old_atlas);
         drop(old_targets);

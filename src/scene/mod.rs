@@ -43,12 +43,19 @@ pub const CAUSTICS_TECHNIQUES: &[&str] = &["none", "caustics_map", "photon_buffe
 /// `adaptive`: Ihrke et al. 2007 §5.3 after Krawczyk et al. 2005 (src/technique/baseline/tonemap.rs).
 pub const TONEMAPS: &[&str] = &["clamp", "adaptive"];
 
+/// Accepted values of `render.update`; the first is the default. When what techniques keep
+/// from frame to frame (shadow maps, impostor textures, caustic maps) is rendered: after a
+/// change only, or every frame as in a fully dynamic scene (src/technique/mod.rs,
+/// `Regeneration`).
+pub const UPDATES: &[&str] = &["on_change", "every_frame"];
+
 /// The technique keys of `[render]` and their accepted values.
 pub const TECHNIQUE_KEYS: &[(&str, &[&str])] = &[
     ("refraction", REFRACTION_TECHNIQUES),
     ("reflection", REFLECTION_TECHNIQUES),
     ("caustics", CAUSTICS_TECHNIQUES),
     ("tonemap", TONEMAPS),
+    ("update", UPDATES),
 ];
 
 /// The baseline selection of every effect, as `--set` overrides: single-interface refraction,
@@ -292,6 +299,8 @@ pub struct RenderSettings {
     pub tonemap_named: bool,
     /// Longitude segments of tessellated spheres (latitude: half).
     pub sphere_segments: u32,
+    /// One of [`UPDATES`]: `every_frame` renders every kept result in every frame.
+    pub update: String,
     /// Technique parameter tables, `[render.<name>]`, validated by the technique.
     pub params: BTreeMap<String, toml::Table>,
 }
@@ -307,6 +316,7 @@ impl Default for RenderSettings {
             tonemap: TONEMAPS[0].to_string(),
             tonemap_named: false,
             sphere_segments: 128,
+            update: UPDATES[0].to_string(),
             params: BTreeMap::new(),
         }
     }
@@ -576,8 +586,16 @@ fn render_settings(t: Option<&toml::Table>, src: &Source) -> Result<RenderSettin
     let Some(t) = t else {
         return Ok(r);
     };
-    const KEYS: &[&str] =
-        &["refraction", "reflection", "caustics", "tonemap", "shadow_map_size", "exposure", "sphere_segments"];
+    const KEYS: &[&str] = &[
+        "refraction",
+        "reflection",
+        "caustics",
+        "tonemap",
+        "update",
+        "shadow_map_size",
+        "exposure",
+        "sphere_segments",
+    ];
     let int = |key: &str, v: &toml::Value, lo: i64, hi: i64| -> Result<u32, SceneError> {
         let path = format!("render.{key}");
         match v.as_integer() {
@@ -622,6 +640,7 @@ fn render_settings(t: Option<&toml::Table>, src: &Source) -> Result<RenderSettin
                     r.tonemap = name.to_string();
                     r.tonemap_named = true;
                 }
+                "update" => r.update = name.to_string(),
                 _ => r.caustics = name.to_string(),
             }
             continue;

@@ -575,20 +575,6 @@ choice! {
 }
 
 choice! {
-    /// When Hu & Qin's impostor textures TEX_i are rendered (2007 §4: "For a static scene, it
-    /// is unnecessary to compute caustics, shadow, RECT_i, and TEX_i during rendering").
-    NearbyUpdate, hint "render TEX_i when something changed, or every frame as the paper's timings do" {
-        /// In the first frame, then when an object moves, a material value changes or the
-        /// water animates (the rectangles themselves are rebuilt by the technique's
-        /// re-creation when the scene's placement changes).
-        OnChange = "on_change",
-        /// Every frame: the paper's "Rendering Pass", whose timings assume "that the scenes are
-        /// fully dynamic" (§4); the impostors' full cost shows in every frame.
-        EveryFrame = "every_frame",
-    }
-}
-
-choice! {
     /// The step of Hu & Qin's d_T iteration (2007 §2.1.3, Fig. 9).
     DTStep, hint "Fig. 9's depth difference (the paper's), or that difference over |T1 . V| (Newton)" {
         /// Fig. 9: Steplength = Flag * (depth - z), a depth difference along the view axis
@@ -684,8 +670,6 @@ params! {
         /// environment map; false: the environment only (§2.1 alone). Without another object
         /// there is nothing to stand in for and no `refraction_hu_qin_nearby` pass.
         nearby: bool = true;
-        /// When TEX_i are rendered (§4): only after a change in a static scene, or every frame.
-        nearby_update: NearbyUpdate = NearbyUpdate::OnChange;
         /// Edge in texels of each impostor texture TEX_i (§2.2.1).
         // 2048^2 texels x 16 bytes x MAX_NEARBY_RECTS (8) layers = 512 MiB per rectangle
         // set, a quarter of lavapipe's 2 GiB allocation limit; with several sets the

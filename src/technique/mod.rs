@@ -180,6 +180,58 @@ pub struct Setup<'a> {
     pub cache: &'a mut Cache,
 }
 
+/// When a technique renders what it keeps from frame to frame (shadow maps, impostor
+/// textures, caustic maps): in its first frame and in the frame after anything they show
+/// changed, and in no other. Hu & Qin 2007 §4: "For a static scene, it is unnecessary to
+/// compute caustics, shadow, RECT_i, and TEX_i during rendering"; `render.update =
+/// "every_frame"` makes every frame a change (the papers' timings, which assume fully dynamic
+/// scenes). What depends on where things are is rebuilt with the technique (its
+/// [`Inputs::placement`]); what changes in place reaches it through
+/// [`Technique::objects_moved`] and [`Technique::contents_changed`].
+#[derive(Debug)]
+pub struct Regeneration {
+    pending: bool,
+    rendering: bool,
+    generations: u32,
+}
+
+impl Default for Regeneration {
+    fn default() -> Self {
+        Regeneration { pending: true, rendering: false, generations: 0 }
+    }
+}
+
+impl Regeneration {
+    /// What the kept results show changed: render them with the next frame.
+    pub fn changed(&mut self) {
+        self.pending = true;
+    }
+
+    /// Decide whether the frame about to be recorded renders them.
+    pub fn begin_frame(&mut self) {
+        self.rendering = std::mem::take(&mut self.pending);
+        self.generations += u32::from(self.rendering);
+    }
+
+    /// Whether the frame being recorded renders them.
+    pub fn rendering(&self) -> bool {
+        self.rendering
+    }
+
+    /// How many frames rendered them.
+    pub fn generations(&self) -> u32 {
+        self.generations
+    }
+}
+
+/// The planned passes `names` of a frame that renders nothing new: recorded empty, so that the
+/// frame still has every pass of the recipe (and its timings a zero for each).
+pub fn record_kept(frame: &mut Frame<'_, '_>, names: &[&str]) {
+    for name in names {
+        frame.pass(name).record(|_| {});
+    }
+}
+
 /// Results a technique keeps across its own re-creation, by type and key: what is expensive
 /// and depends on less than the technique does. The eikonal light simulation depends on the
 /// volume, the lights and its settings; the technique around it also depends on the image
@@ -269,9 +321,9 @@ pub trait Technique: Any {
     /// Objects moved: every object's (centre, bounding radius), in scene order.
     fn objects_moved(&mut self, _bounds: &[(Vec3, f32)]) {}
 
-    /// Something a cache may hold changed in place, with no object moved by
-    /// [`Self::objects_moved`]: the material values were rewritten, or the water's vertices
-    /// animated.
+    /// Something a kept result may show changed in place, with no object moved by
+    /// [`Self::objects_moved`]: the material values were rewritten, the water's vertices
+    /// animated, or (`render.update = "every_frame"`) a new frame began.
     fn contents_changed(&mut self) {}
 
     /// Intermediate images a test or a debug view can read back.

@@ -1,6 +1,7 @@
 //! Shadow maps: a cube of six faces for each point light, an orthographic map for each
 //! directional light, all layers of one R32F atlas holding the distance to the light
-//! (see glsl/shadow/shadow.frag for why distance rather than depth).
+//! (see glsl/shadow/shadow.frag for why distance rather than depth). Rendered when something
+//! moved ([`Regeneration`]).
 use std::sync::Arc;
 
 use crate::frame::gpu_scene::{GpuScene, ShadowFace};
@@ -11,8 +12,8 @@ use crate::gpu::{
 use crate::graph::Frame;
 use crate::shader_structs::ShadowPush;
 use crate::technique::{
-    describe_lights, diffuse_names, list, placement, FrameInputs, PlannedPass, Registration, RenderError, Setup, Stage,
-    Technique,
+    describe_lights, diffuse_names, list, placement, record_kept, FrameInputs, PlannedPass, Regeneration, Registration,
+    RenderError, Setup, Stage, Technique,
 };
 
 pub const SHADOW_MAP: &str = "shadow_map";
@@ -36,6 +37,9 @@ fn create(s: &mut Setup<'_>) -> Result<Box<dyn Technique>, RenderError> {
 
 impl Technique for ShadowMapPass {
     fn record<'a>(&'a self, _: Stage, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>) {
+        if !self.regeneration.rendering() {
+            return record_kept(frame, &[SHADOW_MAP]);
+        }
         let (scene, targets) = (inputs.scene, inputs.targets);
         frame
             .pass(SHADOW_MAP)
@@ -66,6 +70,18 @@ impl Technique for ShadowMapPass {
                 }
             });
     }
+
+    fn begin_frame(&mut self) {
+        self.regeneration.begin_frame();
+    }
+
+    fn objects_moved(&mut self, _: &[(glam::Vec3, f32)]) {
+        self.regeneration.changed();
+    }
+
+    fn contents_changed(&mut self) {
+        self.regeneration.changed();
+    }
 }
 
 /// Cleared distance: "no occluder in this direction".
@@ -76,6 +92,7 @@ pub struct ShadowMapPass {
     target: RenderTarget,
     pipeline: GraphicsPipeline,
     faces: Vec<ShadowFace>,
+    regeneration: Regeneration,
 }
 
 impl ShadowMapPass {
@@ -85,6 +102,6 @@ impl ShadowMapPass {
         // Both sides cast: open shapes (quads, the ring) have no back to rely on.
         let desc = GraphicsPipelineDesc::mesh(SHADOW_MAP, "shadow/shadow.vert", "shadow/shadow.frag", DepthState::LESS);
         let pipeline = GraphicsPipeline::new(ctx, &desc, &[], std::mem::size_of::<ShadowPush>() as u32, &target.pass)?;
-        Ok(ShadowMapPass { target, pipeline, faces: scene.shadow_faces.clone() })
+        Ok(ShadowMapPass { target, pipeline, faces: scene.shadow_faces.clone(), regeneration: Regeneration::default() })
     }
 }

@@ -46,8 +46,8 @@ use crate::shader_structs::{CausticDrawPush, CausticHitsPush, GpuCausticSplat, R
 use crate::technique::baseline::shadow_map::FAR_DISTANCE;
 use crate::technique::refraction::refraction_wyman::scene_distance_along_normals;
 use crate::technique::{
-    caustic_objects, in_stage, list, params, registration, FrameInputs, PlannedPass, Registration, RenderError, Setup,
-    Stage, Technique,
+    caustic_objects, in_stage, list, params, record_kept, registration, FrameInputs, PlannedPass, Regeneration,
+    Registration, RenderError, Setup, Stage, Technique,
 };
 use crate::{
     CAUSTIC_BINDING_BACK_NORMAL, CAUSTIC_BINDING_BACK_POSITION, CAUSTIC_BINDING_DESTINATIONS, CAUSTIC_BINDING_DN,
@@ -97,6 +97,12 @@ fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
 
 impl Technique for CausticsMapPass {
     fn record<'a>(&'a self, _: Stage, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>) {
+        if !self.regeneration.rendering() {
+            return record_kept(
+                frame,
+                &[CAUSTICS_MAP_RECEIVERS, CAUSTICS_MAP_REFRACTORS, CAUSTICS_MAP_HITS, CAUSTICS_MAP],
+            );
+        }
         let (scene, targets) = (inputs.scene, inputs.targets);
         frame
             .pass(CAUSTICS_MAP_RECEIVERS)
@@ -135,6 +141,18 @@ impl Technique for CausticsMapPass {
                 });
             }
         });
+    }
+
+    fn begin_frame(&mut self) {
+        self.regeneration.begin_frame();
+    }
+
+    fn objects_moved(&mut self, _: &[(glam::Vec3, f32)]) {
+        self.regeneration.changed();
+    }
+
+    fn contents_changed(&mut self) {
+        self.regeneration.changed();
     }
 }
 
@@ -235,6 +253,8 @@ fn specular_bounds(scene: &Scene) -> (Vec3, f32) {
 }
 
 pub struct CausticsMapPass {
+    /// The caustic maps are rendered when something changed.
+    regeneration: Regeneration,
     params: CausticsMapParams,
     // Receivers: a framebuffer per atlas layer.
     receiver_target: RenderTarget,
@@ -466,6 +486,7 @@ impl CausticsMapPass {
         )?;
 
         Ok(CausticsMapPass {
+            regeneration: Regeneration::default(),
             params,
             receiver_target,
             receiver_pipeline,

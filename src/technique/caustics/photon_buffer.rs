@@ -70,8 +70,8 @@ use crate::technique::baseline::shadow_map::FAR_DISTANCE;
 use crate::technique::caustics::caustics_map::{is_specular, refractor_bindings, RefractorLayers};
 use crate::technique::refraction::nearby_impostors::{receiver_objects, rect_for};
 use crate::technique::{
-    caustic_objects, in_stage, list, params, registration, FrameInputs, PlannedPass, Registration, RenderError, Setup,
-    Stage, Technique,
+    caustic_objects, in_stage, list, params, record_kept, registration, FrameInputs, PlannedPass, Regeneration,
+    Registration, RenderError, Setup, Stage, Technique,
 };
 use crate::{
     CAUSTIC_BINDING_FACES, CAUSTIC_BINDING_MATERIALS, LIGHT_DIRECTIONAL, PHOTON_BINDING_RECEIVER_DEPTH,
@@ -124,6 +124,10 @@ fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
 
 impl Technique for PhotonBufferPass {
     fn record<'a>(&'a self, _: Stage, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>) {
+        if !self.regeneration.rendering() {
+            let passes = [PHOTON_BUFFER_REFRACTORS, PHOTON_BUFFER_RECEIVERS, PHOTON_BUFFER, PHOTON_BUFFER_SCATTER];
+            return record_kept(frame, &passes);
+        }
         let (scene, caustics) = (inputs.scene, inputs.photon_caustics);
         self.refractors.record(frame, scene);
 
@@ -178,6 +182,18 @@ impl Technique for PhotonBufferPass {
                 }
             },
         );
+    }
+
+    fn begin_frame(&mut self) {
+        self.regeneration.begin_frame();
+    }
+
+    fn objects_moved(&mut self, _: &[(glam::Vec3, f32)]) {
+        self.regeneration.changed();
+    }
+
+    fn contents_changed(&mut self) {
+        self.regeneration.changed();
     }
 }
 
@@ -293,6 +309,8 @@ impl PhotonCaustics {
 }
 
 pub struct PhotonBufferPass {
+    /// The caustic maps are rendered when something changed.
+    regeneration: Regeneration,
     params: PhotonBufferParams,
     refractors: RefractorLayers,
     // §2.2.2 TEX_DEPTH_i: one framebuffer per rectangle, and per rectangle its projection
@@ -468,6 +486,7 @@ impl PhotonBufferPass {
             .collect();
 
         Ok(PhotonBufferPass {
+            regeneration: Regeneration::default(),
             params,
             refractors,
             receiver_depth,

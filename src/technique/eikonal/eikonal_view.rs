@@ -98,15 +98,15 @@ impl Technique for EikonalPass {
     }
 
     fn begin_frame(&mut self) {
-        self.nearby.begin_frame();
+        self.nearby.regeneration.begin_frame();
     }
 
     fn objects_moved(&mut self, _: &[(glam::Vec3, f32)]) {
-        self.nearby.contents_changed();
+        self.nearby.regeneration.changed();
     }
 
     fn contents_changed(&mut self) {
-        self.nearby.contents_changed();
+        self.nearby.regeneration.changed();
     }
 }
 
@@ -203,8 +203,6 @@ impl EikonalPass {
             exit: crate::scene::techniques::RecursiveExit::BoundingSphere,
             search_steps: 8,
             max_iterations: 32,
-            // The textures hold the light simulation's result, computed once per change.
-            update: crate::scene::techniques::NearbyUpdate::OnChange,
         };
         let nearby = if kept.is_empty() {
             NearbyImpostors::stand_in(ctx, EIKONAL_NEARBY, gpu, graph, frame_layout)?

@@ -49,7 +49,7 @@
 //!
 //! The photon-buffer caustics (Hu & Qin §3) use [`NearbyRect`], [`receiver_objects`] and
 //! [`rect_for`] with their own O_R: keep those stable.
-use crate::technique::FrameInputs;
+use crate::technique::{record_kept, FrameInputs, Regeneration};
 use std::sync::Arc;
 
 use bytemuck::Zeroable;
@@ -62,7 +62,7 @@ use crate::gpu::{
     GraphicsPipelineDesc, Image, ImageDesc, ImageViewKind, RenderTarget, Sampler, SamplerDesc, Spec, Specs,
 };
 use crate::graph::{Bindings, BoundSet, Frame, FrameGraph, ImageId};
-use crate::scene::techniques::{NearbyLookup, NearbyUpdate, RecursiveExit};
+use crate::scene::techniques::{NearbyLookup, RecursiveExit};
 use crate::scene::{Material, Scene};
 pub use crate::shader_structs::GpuNearbyRect;
 use crate::shader_structs::{GpuNearbyHeader, NearbyImpostorPush};
@@ -373,8 +373,6 @@ pub struct NearbyDesc {
     /// Fig. 7's halvings and Fig. 9's steps of that search (as the main pass's).
     pub search_steps: u32,
     pub max_iterations: u32,
-    /// When the textures are rendered (§4: a static scene needs them once).
-    pub update: NearbyUpdate,
 }
 
 /// The dielectric OBJ_k's back faces (and with `recursive_exit = "full"` their front faces) in
@@ -415,9 +413,7 @@ struct TextureArray {
 /// TEX_i / TEX_DEPTH_i of every rectangle, and the rectangle buffer the shading reads. The
 /// paper renders the textures every frame (its "Rendering Pass": nothing is precomputed, so
 /// the scene may change from frame to frame), and notes that a static scene needs them once
-/// (§4); [`NearbyUpdate`] chooses. Kept textures are rendered again when an object moves, a
-/// material value changes or the water animates ([`Self::contents_changed`]); what depends on
-/// where things are (the rectangles) is rebuilt with the technique.
+/// (§4): they are kept as [`Regeneration`] says.
 pub struct NearbyImpostors {
     name: &'static str,
     /// The rectangle sets (one per OBJ_R) and all their rectangles.
@@ -459,13 +455,8 @@ pub struct NearbyImpostors {
     lookup_set: Vec<u32>,
     /// [`ImpostorShading`]'s set (level 0).
     extra: Option<BoundSet>,
-    update: NearbyUpdate,
-    /// Something the textures show changed since they were last rendered.
-    pending: bool,
-    /// The frame being recorded renders the textures.
-    rendering: bool,
-    /// How many frames rendered the textures.
-    generations: u32,
+    /// When the textures are rendered.
+    pub regeneration: Regeneration,
 }
 
 /// [`BACK_PASS`]: the dielectric rectangles (indices into the rectangles), drawn into the
@@ -567,7 +558,6 @@ impl NearbyImpostors {
             exit: RecursiveExit::BoundingSphere,
             search_steps: 8,
             max_iterations: 32,
-            update: NearbyUpdate::OnChange,
         };
         Self::build(ctx, name, &desc, NearbyRects::none(), graph, frame_layout, None)
     }
@@ -749,31 +739,8 @@ impl NearbyImpostors {
             lookup_set,
             extra: shading.map(|sh| sh.set),
             layout: nearby,
-            update: desc.update,
-            pending: true,
-            rendering: false,
-            generations: 0,
+            regeneration: Regeneration::default(),
         })
-    }
-
-    /// Decide whether the frame about to be recorded renders the textures.
-    pub fn begin_frame(&mut self) {
-        self.rendering = self.pending || self.update == NearbyUpdate::EveryFrame;
-        self.pending = false;
-        if self.rendering {
-            self.generations += 1;
-        }
-    }
-
-    /// What the textures show changed in place (objects moved, material values, the water's
-    /// vertices): render them again with the next frame.
-    pub fn contents_changed(&mut self) {
-        self.pending = true;
-    }
-
-    /// How many frames rendered the textures.
-    pub fn generations(&self) -> u32 {
-        self.generations
     }
 
     /// The graph passes [`Self::record`] adds, in order.
@@ -795,12 +762,8 @@ impl NearbyImpostors {
     /// layers are the same at every level: level 0 renders them, [`COPY_PASS`] copies them into
     /// the other array, and the levels >= 1 render the specular layers only.
     pub fn record<'a>(&'a self, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>) {
-        if !self.rendering {
-            // The textures keep their last rendering; the planned passes record nothing.
-            for name in self.pass_names() {
-                frame.pass(name).record(|_| {});
-            }
-            return;
+        if !self.regeneration.rendering() {
+            return record_kept(frame, &self.pass_names());
         }
         let (scene, frame_set, shadow_atlas) = (inputs.scene, inputs.frame_set, inputs.shadow_atlas);
         // Each rectangle's O_R: that of the set it belongs to.

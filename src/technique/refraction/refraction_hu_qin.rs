@@ -167,15 +167,15 @@ impl Technique for HuQinPass {
     }
 
     fn begin_frame(&mut self) {
-        self.nearby.begin_frame();
+        self.nearby.regeneration.begin_frame();
     }
 
     fn objects_moved(&mut self, _: &[(glam::Vec3, f32)]) {
-        self.nearby.contents_changed();
+        self.nearby.regeneration.changed();
     }
 
     fn contents_changed(&mut self) {
-        self.nearby.contents_changed();
+        self.nearby.regeneration.changed();
     }
 }
 
@@ -204,7 +204,6 @@ impl HuQinPass {
                 exit: params.recursive_exit,
                 search_steps: params.search_steps,
                 max_iterations: params.max_iterations,
-                update: params.nearby_update,
             };
             NearbyImpostors::with_desc(ctx, REFRACTION_HU_QIN_NEARBY, &desc, scene, gpu, graph, frame_layout)?
         } else {
