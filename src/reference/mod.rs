@@ -256,6 +256,9 @@ pub enum Probe {
     SpecularPath = 1,
     /// (cos_i, eta), eta_rgb, k_rgb -> F_dielectric, F_conductor rgb.
     Fresnel = 2,
+    /// (N, M) -> (iterations run by a loop of N, then by a loop of M): the driver's loop
+    /// limit (tests/loop_limit.rs).
+    LoopLimit = 3,
 }
 
 /// Whether a dielectric has an RGB ior (the tracer then follows one channel at a time).

@@ -1,0 +1,88 @@
+//! The driver's loop limit, measured through the reference's probe kernel
+//! (glsl/reference/probe.comp, mode 3: a loop of N iterations, then a loop of M).
+//!
+//! Mesa's llvmpipe (lavapipe) keeps one counter per shader invocation, set to
+//! LP_MAX_TGSI_LOOP_ITERATIONS = 65535 (gallivm/lp_bld_limits.h) and decremented at the end
+//! of every iteration of every loop (lp_exec_endloop in gallivm/lp_bld_ir_common.c); a loop
+//! goes on only while some lane is active and the counter is still positive. The compiled
+//! shader runs a vector of invocations in lockstep, so the counter is the vector's. Vulkan
+//! allows no such limit: on other drivers both loops must run in full.
+mod common;
+
+use prism::reference::{Probe, Reference, ReferenceSettings};
+
+const LP_MAX_TGSI_LOOP_ITERATIONS: u32 = 65_535;
+
+/// (iterations of the first loop, of the second) for each (N, M) run in one dispatch, the
+/// records' invocations side by side (in lockstep where the driver runs them so).
+fn run(r: &mut Reference, records: &[(u32, u32)]) -> Vec<(u32, u32)> {
+    let input: Vec<_> = records.iter().map(|&(n, m)| [[n as f32, m as f32, 0.0, 0.0], [0.0; 4], [0.0; 4]]).collect();
+    r.probe(Probe::LoopLimit, &input).unwrap().iter().map(|o| (o[0][0] as u32, o[0][1] as u32)).collect()
+}
+
+/// What lavapipe's counter lets the two loops run, read from lp_exec_endloop: `budget`
+/// decrements are left when the first loop starts; a loop of n takes n + 1 of them (the
+/// last iteration is the one whose condition fails and breaks), and each iteration runs
+/// its body before the counter is checked, so after the counter runs out a later loop still
+/// runs its body once.
+fn lavapipe_model(n: u32, m: u32, budget: u32) -> (u32, u32) {
+    let first = n.min(budget);
+    let left = budget - (n + 1).min(budget);
+    let second = if left == 0 { m.min(1) } else { m.min(left) };
+    (first, second)
+}
+
+#[test]
+fn loop_limit_is_measured_and_matches_the_driver() {
+    let ctx = common::context(false);
+    let s = common::scene("caustic_sphere", 8, &[]);
+    let mut r = Reference::new(&ctx, &s, &ReferenceSettings { spp: 1, photons: 0, ..Default::default() }).unwrap();
+    let lavapipe = ctx.info.driver_name.to_lowercase().contains("llvmpipe");
+    println!("driver: {} ({})", ctx.info.driver_name, ctx.info.driver_info);
+
+    // A long loop alone tells how many decrements the kernel spends before mode 3's first
+    // loop: probe.comp's other modes hold loops too.
+    let (long, _) = run(&mut r, &[(200_000, 2)])[0];
+    let spent = LP_MAX_TGSI_LOOP_ITERATIONS.saturating_sub(long);
+    println!("a loop of 200000 ran {long} iterations: {spent} decrements spent before it");
+    let budget = LP_MAX_TGSI_LOOP_ITERATIONS - spent;
+    let cases = [
+        (1000, 2),
+        (budget - 4, 2),
+        (budget - 3, 2),
+        (budget - 2, 2),
+        (65_534, 2),
+        (70_000, 2),
+        (200_000, 2),
+        (40_000, 40_000),
+        (0, 70_000),
+    ];
+    for (n, m) in cases {
+        let got = run(&mut r, &[(n, m)])[0];
+        println!("N = {n}, M = {m}: the loops ran {got:?}");
+        if lavapipe {
+            // spent: the other modes' loops, each one decrement (test: fewer than 64).
+            assert!(spent < 64, "{spent} decrements before the probe's loop");
+            assert_eq!(got, lavapipe_model(n, m, budget), "N = {n}, M = {m}");
+        } else {
+            assert_eq!(got, (n, m), "N = {n}, M = {m}: Vulkan runs every loop in full");
+        }
+    }
+
+    // Invocations side by side: one long loop among 64 short ones.
+    let records: Vec<_> = (0..64).map(|i| if i == 40 { (70_000, 2) } else { (0, 2) }).collect();
+    let got = run(&mut r, &records);
+    let cut: Vec<usize> = (0..64).filter(|&i| i != 40 && got[i].1 != 2).collect();
+    println!("64 invocations, number 40 loops 70000 times: the second loop was cut in invocations {cut:?}");
+    if lavapipe {
+        // The long loop's own vector, and only it, lost its budget: an aligned block of
+        // lanes around invocation 40 (8 with AVX2's 256-bit vectors).
+        let width = cut.len() + 1;
+        assert!(width.is_power_of_two() && width <= 16, "cut lanes {cut:?}");
+        let start = 40 / width * width;
+        assert_eq!(cut, (start..start + width).filter(|&i| i != 40).collect::<Vec<_>>());
+        assert_eq!(got[40], lavapipe_model(70_000, 2, budget));
+    } else {
+        assert!(cut.is_empty() && got[40] == (70_000, 2), "{got:?}");
+    }
+}
