@@ -86,3 +86,80 @@ fn loop_limit_is_measured_and_matches_the_driver() {
         assert!(cut.is_empty() && got[40] == (70_000, 2), "{got:?}");
     }
 }
+
+/// A glass slab 0.1 thick in y (256 voxels: RK4 steps of 0.1/256/8 = 4.9e-5,
+/// volume_uniforms in src/reference/mod.rs) and 4 long in z, seen end-on: the centre pixel's
+/// path runs along its length, 4 / 4.9e-5 = 82 000 steps, each at least one loop iteration,
+/// beyond lavapipe's 65 535 and within the step cap (200 000). The other rows miss the slab
+/// (a pixel is 2 tan(20 deg) 4 / 3 = 0.97 tall at its near face) and the centre row's other
+/// pixels leave it through its sides within 0.2 of their way (x = +-0.97 at the near face,
+/// slope 0.24).
+pub const SLAB: &str = r#"name = "loop_limit_slab"
+
+[camera]
+position = [0, 0, 6]
+target = [0, 0, 0]
+up = [0, 1, 0]
+vfov_deg = 40
+width = 3
+height = 3
+
+[environment]
+type = "grid"
+
+[volume]
+name = "slab"
+bounds = { min = [-1, -0.05, -2], max = [1, 0.05, 2] }
+resolution = [8, 256, 8]
+
+[[volume.region]]
+name = "glass"
+shape = "box"
+center = [0, 0, 0]
+size = [2, 0.1, 4]
+n = 1.3
+"#;
+
+fn slab() -> prism::scene::Scene {
+    prism::scene::load_str(SLAB, std::path::Path::new("loop_limit_slab.toml"), &[]).unwrap()
+}
+
+fn reference_stats(
+    ctx: &std::sync::Arc<prism::gpu::GpuContext>,
+    scene: &prism::scene::Scene,
+    spp: u32,
+    photons: u64,
+) -> prism::reference::ReferenceStats {
+    let mut r = Reference::new(ctx, scene, &ReferenceSettings { spp, photons, ..Default::default() }).unwrap();
+    r.run_all(|_, _| {}).unwrap();
+    let stats = r.stats();
+    println!("{}: {stats:?}", scene.name);
+    stats
+}
+
+#[test]
+fn a_path_past_the_loop_limit_is_counted() {
+    let ctx = common::context(false);
+    let lavapipe = ctx.info.driver_name.to_lowercase().contains("llvmpipe");
+    let stats = reference_stats(&ctx, &slab(), 1, 0);
+    if lavapipe {
+        // The centre pixel is cut, and the canary fires in every lane of its vector: at
+        // least 1, at most the 9 invocations of the image.
+        assert!((1..=9).contains(&stats.cut_camera), "{stats:?}");
+    } else {
+        assert_eq!(stats.cut(), 0, "{stats:?}");
+    }
+    // A path cut by the driver is not one that took `steps` steps.
+    assert_eq!(stats.step_capped(), 0, "{stats:?}");
+}
+
+/// The shipped scenes' references are exact: no invocation is cut (camera, photon and gather
+/// kernels all run) and no path reaches the step cap.
+#[test]
+fn default_scenes_report_no_cut() {
+    let ctx = common::context(false);
+    for (name, photons) in [("caustic_sphere", 1 << 14), ("eikonal_sphere", 1 << 12)] {
+        let stats = reference_stats(&ctx, &common::shipped(name, 32, &[]), 2, photons);
+        assert_eq!(stats, Default::default(), "{name}");
+    }
+}
