@@ -158,7 +158,7 @@ const CANARY_TRIPS: u32 = 2;
 
 /// What the reference's kernels counted over a run (glsl/reference/sppm.glsl): where either
 /// is non-zero the image is not the exact reference.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct ReferenceStats {
     /// Camera-kernel invocations (one per pixel and iteration) whose driver loop budget ran
     /// out: their paths were cut short (lavapipe's LP_MAX_TGSI_LOOP_ITERATIONS, 65535 loop
@@ -185,6 +185,45 @@ impl ReferenceStats {
     /// Paths ended by the volume's step cap, camera and photon.
     pub fn step_capped(&self) -> u64 {
         self.step_cap_camera + self.step_cap_photons
+    }
+
+    /// Whether every path ran to its end: nothing cut, nothing step-capped.
+    pub fn exact(&self) -> bool {
+        self.cut() == 0 && self.step_capped() == 0
+    }
+
+    /// What went wrong in the reference of scene `scene`, its causes and what to do; None
+    /// when it is exact.
+    pub fn warning(&self, scene: &str) -> Option<String> {
+        if self.exact() {
+            return None;
+        }
+        let mut w = format!("the reference of scene {scene} is not exact:");
+        if self.cut() > 0 {
+            w += &format!(
+                " {} shader invocations ran out of the driver's loop budget (camera {}, photons {}, gather {}), \
+                 so their paths were cut short: lavapipe (llvmpipe) stops every loop after 65535 loop iterations \
+                 in all per invocation (each count includes the invocations run in lockstep with a cut one). \
+                 Use a coarser `volume.resolution` (fewer RK4 steps per crossing), a smaller --max-depth, \
+                 or another Vulkan driver (--device).",
+                self.cut(),
+                self.cut_camera,
+                self.cut_photons,
+                self.cut_gather
+            );
+        }
+        if self.step_capped() > 0 {
+            w += &format!(
+                " {} paths ended inside the volume at its step cap (camera {}, photons {}; ten crossings of \
+                 the box's diagonal, at most 200000 RK4 steps): light trapped by internal reflections, or a \
+                 crossing longer than the cap. Use a coarser `volume.resolution` (longer steps) or a lower \
+                 index contrast or `reflectance`.",
+                self.step_capped(),
+                self.step_cap_camera,
+                self.step_cap_photons
+            );
+        }
+        Some(w)
     }
 }
 
