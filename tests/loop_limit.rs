@@ -163,3 +163,108 @@ fn default_scenes_report_no_cut() {
         assert_eq!(stats, Default::default(), "{name}");
     }
 }
+
+/// A fresh directory for the CLI runs (DIR/work, the reference cache in DIR/cache), removed
+/// at the end.
+struct Dir(std::path::PathBuf);
+impl Dir {
+    fn new(name: &str) -> Dir {
+        let d = std::env::temp_dir().join(format!("prism-loop-limit-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(d.join("work")).unwrap();
+        Dir(d)
+    }
+    fn work(&self) -> std::path::PathBuf {
+        self.0.join("work")
+    }
+    fn listing(&self) -> Vec<String> {
+        let mut v: Vec<_> = std::fs::read_dir(self.work())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        v.sort();
+        v
+    }
+}
+impl Drop for Dir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+/// Run prism in `dir` with its own reference cache; (exit code, stderr).
+fn prism(dir: &Dir, args: &[&str]) -> (Option<i32>, String) {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_prism"))
+        .args(args)
+        .current_dir(dir.work())
+        .env("PRISM_CACHE_DIR", dir.0.join("cache"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr).to_string();
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    (out.status.code(), stderr)
+}
+
+#[test]
+fn cli_warns_about_a_cut_reference_and_compare_refuses_it() {
+    let ctx = common::context(false);
+    if !ctx.info.driver_name.to_lowercase().contains("llvmpipe") {
+        println!("{}: no loop limit to provoke", ctx.info.driver_name);
+        return;
+    }
+    drop(ctx);
+    let dir = Dir::new("cli");
+    std::fs::write(dir.work().join("slab.toml"), SLAB).unwrap();
+    let quick = ["--spp", "1", "--photons", "0"];
+
+    // `reference` writes its image and warns: scene, count, cause, what to do.
+    let (code, err) = prism(&dir, &[&["reference", "slab.toml", "-o", "ref.exr"][..], &quick].concat());
+    assert_eq!(code, Some(0), "{err}");
+    let warning = err.lines().find(|l| l.starts_with("warning: ")).unwrap_or_else(|| panic!("no warning:\n{err}"));
+    for part in ["loop_limit_slab", "8 shader invocations", "loop budget", "65535", "volume.resolution", "--max-depth"]
+    {
+        assert!(warning.contains(part), "{part:?} missing from {warning}");
+    }
+
+    // `compare` refuses to rank against it: exit 1, no output, the flag named; also when
+    // the reference comes from the cache the run above did not fill (compare's own).
+    let compare = ["compare", "slab.toml", "--frames", "1", "--warmup", "0", "--no-exact", "--json", "c.json"];
+    for attempt in ["rendered", "cached"] {
+        let before = dir.listing();
+        let (code, err) = prism(&dir, &[&compare[..], &quick].concat());
+        assert_eq!(code, Some(1), "{attempt}: {err}");
+        assert!(err.contains("error: the reference of scene loop_limit_slab is not exact"), "{attempt}: {err}");
+        assert!(err.contains("--accept-inexact-reference"), "{attempt}: {err}");
+        assert_eq!(dir.listing(), before, "{attempt}: output left behind");
+    }
+    // With the flag it measures, warns, and the JSON carries the counts.
+    let (code, err) = prism(&dir, &[&compare[..], &quick, &["--accept-inexact-reference"]].concat());
+    assert_eq!(code, Some(0), "{err}");
+    assert!(err.contains("warning: the reference of scene loop_limit_slab is not exact"), "{err}");
+    let json: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.work().join("c.json")).unwrap()).unwrap();
+    assert_eq!(json["reference_stats"]["cut_camera"], 8, "{}", json["reference_stats"]);
+}
+
+#[test]
+fn cli_is_silent_about_an_exact_reference() {
+    let dir = Dir::new("exact");
+    let (code, err) = prism(
+        &dir,
+        &[
+            "reference",
+            "caustic_sphere",
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "--spp",
+            "2",
+            "--photons",
+            "16384",
+            "-o",
+            "r.exr",
+        ],
+    );
+    assert_eq!(code, Some(0), "{err}");
+    assert!(!err.contains("warning"), "{err}");
+}
