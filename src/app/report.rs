@@ -99,7 +99,8 @@ pub fn run(args: ReportArgs) -> Result<()> {
         let stem = format!("{}-{}", e.scene, entry_hash(e));
         let params = parse_params(&e.params)?;
         let mut rows = Vec::new();
-        // Warnings of references accepted with --accept-inexact-reference, for the section.
+        // Warnings of the references (step-capped paths, or cut ones accepted with
+        // --accept-cut-reference), for the section.
         let mut inexact = Vec::new();
         for setting in cartesian(&params) {
             let sa = SceneArgs {
@@ -133,7 +134,7 @@ pub fn run(args: ReportArgs) -> Result<()> {
         check_validation(&ctx)?;
         writeln!(md, "{heading}\n")?;
         for w in &inexact {
-            writeln!(md, "**Warning (measured with --accept-inexact-reference):** {w}\n")?;
+            writeln!(md, "**Warning:** {w}\n")?;
         }
         let techniques = technique_names(&rows.iter().map(|r| &r.1).collect::<Vec<_>>());
         let (s0, ..) = (&rows[0].1, ());
