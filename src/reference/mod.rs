@@ -27,6 +27,13 @@
 //! jumps marked by the boundary indicator (glsl/reference/volume.glsl, VOLUME_FIELDS).
 //! Scattering there only attenuates (in-scattering is the light simulator's), and emission
 //! is counted on camera paths only.
+//!
+//! The reference says when it is not exact ([`ReferenceStats`]): lavapipe stops every loop of
+//! an invocation once 65535 loop iterations are spent over all its loops
+//! (tests/loop_limit.rs measures it), which cuts a path short without a message, so each
+//! kernel ends with a canary loop that tells whether the budget ran out
+//! (glsl/reference/sppm.glsl, `loop_canary`), and the paths that end at the volume's step cap
+//! are counted too.
 pub mod bvh;
 
 use std::sync::Arc;
@@ -145,7 +152,7 @@ pub const DEFAULT_FOOTPRINT: f32 = 0.5;
 
 /// The most photons one photon pass traces. lavapipe ends every loop of an invocation after
 /// 65535 loop iterations in all (LP_MAX_TGSI_LOOP_ITERATIONS, counted over all its loops and
-/// over the invocations it runs in lockstep); under a bright focus the gather's photon lists
+/// over the invocations it runs in lockstep; tests/loop_limit.rs); under a bright focus the gather's photon lists
 /// were cut short there and the cut-off invocations' sums came out zero, so 8-pixel runs of
 /// a caustic were black. A gather walks each of its at most 8 buckets once (gather.comp), and
 /// each list holds at most the pass's photons, so it runs at most 8 * 8000 + 36 < 65535 loop
