@@ -32,10 +32,11 @@ layout(set = 0, binding = REF_BINDING_STATS, std430) buffer Stats { uint ref_sta
 // loop, and once they are spent every later loop runs its body once and stops
 // (tests/loop_limit.rs measures it): the paths of a cut invocation are silently short. Called
 // last in a kernel, this loop of ref_stats[REF_STAT_CANARY_TRIPS] = 2 trips (from a buffer,
-// so that it cannot be unrolled) then runs once. It needs 3 iterations of the budget, so it
-// also fires when 1 or 2 were left and nothing was cut, and it fires for every lane run in
-// lockstep with a cut one: the count over-states cut invocations (by at most the vector
-// width per cut one) and never misses one. Drivers without such a limit never fire it.
+// so that it cannot be unrolled) then runs once. Its second trip needs 2 iterations of the
+// budget left, so it also fires when exactly 1 was left and nothing was cut, and it fires
+// for every lane run in lockstep with a cut one: the count over-states cut invocations (by
+// at most the vector width per cut one) and never misses one. Drivers without such a limit
+// never fire it.
 void loop_canary(uint slot) {
     uint trips = 0u;
     for (uint k = 0u; k < ref_stats[REF_STAT_CANARY_TRIPS]; ++k) ++trips;
