@@ -269,3 +269,16 @@ fn cli_is_silent_about_an_exact_reference() {
     assert_eq!(code, Some(0), "{err}");
     assert!(!err.contains("warning"), "{err}");
 }
+
+/// Paths that reach the volume's step cap are counted apart from cut ones. In
+/// eikonal_dispersion_cube the middle glass (n 1.60 to 1.68) lies between the outer glass
+/// (1.50 to 1.56) and the core (1.45 to 1.47): a light guide, in which a path beyond both
+/// critical angles reflects totally at both of its faces until it has taken the cap's ten
+/// diagonals of steps (17 741 of 1/8 voxel, fewer than lavapipe's 65 535, so no cut).
+#[test]
+fn a_path_trapped_in_a_light_guide_reaches_the_step_cap() {
+    let ctx = common::context(false);
+    let stats = reference_stats(&ctx, &common::shipped("eikonal_dispersion_cube", 32, &[]), 2, 0);
+    assert!(stats.step_cap_camera > 0, "{stats:?}");
+    assert_eq!(stats.cut(), 0, "{stats:?}");
+}
