@@ -44,6 +44,17 @@ shared_constants! {
     PHOTON_ESCAPED: u32 = 2;
     PHOTON_LOST: u32 = 3;
     PHOTON_DIRECT: u32 = 4;
+    // Slots of the reference's stats buffer (REF_BINDING_STATS, glsl/reference/sppm.glsl):
+    // the canary loop's trip count (written 2 by the host), then counters: invocations of
+    // each kernel whose driver loop budget ran out (the canary ran once), and paths of the
+    // camera and photon kernels that ended at volume.glsl's step cap.
+    REF_STAT_CANARY_TRIPS: u32 = 0;
+    REF_STAT_CUT_CAMERA: u32 = 1;
+    REF_STAT_CUT_PHOTONS: u32 = 2;
+    REF_STAT_CUT_GATHER: u32 = 3;
+    REF_STAT_STEP_CAP_CAMERA: u32 = 4;
+    REF_STAT_STEP_CAP_PHOTONS: u32 = 5;
+    REF_STATS: u32 = 6;
 
     // Compute workgroup edge for 2D image kernels.
     WORKGROUP_2D: u32 = 8;
@@ -172,6 +183,8 @@ shared_bindings! {
         REF_BINDING_DEBUG = 13;
         // A volume's voxel fields (glsl/reference/volume.glsl).
         REF_BINDING_VOLUME = 14;
+        // The canary's trip count and the cut / step-cap counters (REF_STAT_*).
+        REF_BINDING_STATS = 15;
     }
     // Image-space refraction (src/technique/refraction/refractor_layers.rs). Set 1 of the
     // layer passes: the per-vertex d_N storage buffer (Wyman 2005 only); set 1 of the

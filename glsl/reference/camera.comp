@@ -6,6 +6,7 @@
 // lights with exact shadow rays, (2) environment light arriving through any specular chain
 // (one cosine-weighted sample), and (3) leaves a visible point for the photon gathering that
 // adds caustics (gather.comp).
+#define REF_STAT_STEP_CAP_SLOT REF_STAT_STEP_CAP_CAMERA
 #include "sppm.glsl"
 #include "paths.glsl"
 
@@ -73,9 +74,8 @@ vec3 camera_path(uint px, vec2 offset, bool record, inout uint rng) {
     return L;
 }
 
-void main() {
-    uint px = invocation_index();
-    if (px >= ref.dims.x * ref.dims.y) return;
+// Pixel px's sample of this iteration.
+void camera_sample(uint px) {
     uint rng = rng_init(px, push.iteration, push.seed);
     // Pixel (i, j) samples the ray through its centre ((i+0.5)/W, (j+0.5)/H), j = 0 the top
     // row (SCENES.md), unless supersampling was asked for.
@@ -97,4 +97,12 @@ void main() {
         camera_path(px, area, true, rng_vp);
     }
     accum[px] += vec4(finite_or_zero(L), 1.0);
+}
+
+void main() {
+    uint px = invocation_index();
+    if (px >= ref.dims.x * ref.dims.y) return;
+    camera_sample(px);
+    // After the whole sample, whatever returns it takes (sppm.glsl).
+    loop_canary(REF_STAT_CUT_CAMERA);
 }

@@ -6,9 +6,8 @@
 // and the caustic radiance is tau / (pi R^2 iterations) (resolved on the host).
 #include "sppm.glsl"
 
-void main() {
-    uint px = invocation_index();
-    if (px >= ref.dims.x * ref.dims.y) return;
+// Pixel px's progressive update from this pass's photons.
+void gather_pixel(uint px) {
     PixelState st = pixels[px];
     if (st.vp_normal.w < 0.5) return;
     vec3 p = st.vp_pos.xyz;
@@ -55,4 +54,12 @@ void main() {
         pixels[px].tau_n = vec4(tau, N + alpha * M);
         pixels[px].vp_pos.w = R2;
     }
+}
+
+void main() {
+    uint px = invocation_index();
+    if (px >= ref.dims.x * ref.dims.y) return;
+    gather_pixel(px);
+    // After the whole update, whatever returns it takes (sppm.glsl).
+    loop_canary(REF_STAT_CUT_GATHER);
 }

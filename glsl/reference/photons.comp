@@ -5,6 +5,7 @@
 // lighting); each carries flux = emitted power / (photons * pdf), with the pdf summed over
 // every target whose cone (point light) or disk (directional light) contains the sample, so
 // overlapping targets are not counted twice.
+#define REF_STAT_STEP_CAP_SLOT REF_STAT_STEP_CAP_PHOTONS
 #include "sppm.glsl"
 #include "volume.glsl"
 
@@ -32,10 +33,8 @@ float cone(vec3 x, vec4 target, vec3 d, out bool inside) {
     return 2.0 * PI * (1.0 - cos_max);
 }
 
-void main() {
-    uint idx = invocation_index();
-    uint total = ref.photon.x;
-    if (idx >= total) return;
+// Photon idx of the pass's `total`.
+void trace_photon(uint idx, uint total) {
     uint lights = ref.dims.z, targets = ref.counts.z;
     // Debug records (tests): (flux, outcome) at idx, where it was deposited at total + idx.
     debug_data[idx] = vec4(0.0, 0.0, 0.0, float(PHOTON_MISSED));
@@ -130,4 +129,13 @@ void main() {
     }
     debug_data[idx] = vec4(flux, float(outcome));
     debug_data[total + idx] = vec4(deposit, 0.0);
+}
+
+void main() {
+    uint idx = invocation_index();
+    uint total = ref.photon.x;
+    if (idx >= total) return;
+    trace_photon(idx, total);
+    // After the whole photon path, whatever returns it takes (sppm.glsl).
+    loop_canary(REF_STAT_CUT_PHOTONS);
 }

@@ -5,7 +5,10 @@
 // mode 1: deterministic specular path, always transmitting where possible (in: o, d; out:
 // final o with w = PHOTON_* outcome, final d with w = bounces, throughput);
 // mode 2: Fresnel (in: (cos_i, eta, _, _), (conductor eta rgb), (k rgb);
-// out: (F_dielectric, _, _, _), (F_conductor rgb), _).
+// out: (F_dielectric, _, _, _), (F_conductor rgb), _);
+// mode 3: the driver's loop limit (in: (N, M, _, _): a loop of N iterations, then one of M;
+// out: (iterations the first ran, iterations the second ran, _, _)). N and M come from the
+// buffer so that neither loop can be unrolled or folded.
 #include "sppm.glsl"
 
 void main() {
@@ -31,6 +34,12 @@ void main() {
         debug_data[3u * i] = vec4(o, float(outcome));
         debug_data[3u * i + 1u] = vec4(d, float(bounce));
         debug_data[3u * i + 2u] = vec4(beta, 0.0);
+    } else if (push.mode == 3u) {
+        uint n = uint(a.x), m = uint(a.y);
+        uint first = 0u, second = 0u;
+        for (uint k = 0u; k < n; ++k) first += 1u;
+        for (uint k = 0u; k < m; ++k) second += 1u;
+        debug_data[3u * i] = vec4(float(first), float(second), 0.0, 0.0);
     } else {
         debug_data[3u * i] = vec4(fresnel_dielectric(a.x, a.y), 0.0, 0.0, 0.0);
         debug_data[3u * i + 1u] = vec4(fresnel_conductor(a.x, b.rgb, c.rgb), 0.0);

@@ -8,6 +8,12 @@
 #define PRISM_REFERENCE_VOLUME_GLSL
 #include "trace.glsl"
 
+// Where a path ends inside the volume because it took `steps` steps (ref.volume[4].w): the
+// reference's kernels count those (glsl/reference/sppm.glsl); the raytrace technique does not.
+#ifndef VOLUME_STEP_CAP_REACHED
+#define VOLUME_STEP_CAP_REACHED()
+#endif
+
 // 3 vec4 per voxel (VOLUME_FIELDS; a one-element stand-in otherwise).
 layout(set = REF_SET, binding = REF_BINDING_VOLUME, std430) readonly buffer VolumeVoxels { vec4 volume_voxels[]; };
 
@@ -112,7 +118,8 @@ bool volume_cross(inout vec3 o, inout vec3 d, float t, inout vec3 beta, inout ve
     float h = ref.volume[1].w;
     vec3 sigma = ref.volume[4].xyz;
     uint steps = uint(ref.volume[4].w);
-    for (uint i = 0u; i < steps; ++i) {
+    uint i = 0u;
+    for (; i < steps; ++i) {
         vec3 x1 = x, v1 = v;
         volume_rk4(x1, v1, h);
         if (in_region(x1)) {
@@ -146,6 +153,8 @@ bool volume_cross(inout vec3 o, inout vec3 d, float t, inout vec3 beta, inout ve
         d = normalize(refract(dir, -Nb, n_b));
         return true;
     }
+    // The loop also ends early where the driver's loop budget ran out (loop_canary).
+    if (i >= steps) VOLUME_STEP_CAP_REACHED();
     return false;
 }
 // ---- the voxel fields (volumes with regions) ----
@@ -247,7 +256,8 @@ bool volume_cross_fields(inout vec3 o, inout vec3 d, float t, inout vec3 beta, i
     bool banded = field_band(x), turned = false;
     float n_a = 1.0, n_peak = 1.0, rho = banded ? field_reflectance(x) : 0.0;
     vec3 x_a = x - eps * d, d_a = d, grad_sum = vec3(0.0), x_prev = x - eps * d, beta_a = beta;
-    for (uint i = 0u; i < steps; ++i) {
+    uint i = 0u;
+    for (; i < steps; ++i) {
         bool inside = in_box_closed(x);
         bool band = inside && field_band(x);
         bool turn = false;
@@ -330,6 +340,8 @@ bool volume_cross_fields(inout vec3 o, inout vec3 d, float t, inout vec3 beta, i
             beta *= trans;
         }
     }
+    // The loop also ends early where the driver's loop budget ran out (loop_canary).
+    if (i >= steps) VOLUME_STEP_CAP_REACHED();
     return false;
 }
 // ---- end of the material volumes ----

@@ -26,7 +26,7 @@ use crate::metrics::image::ErrorMetrics;
 use crate::reference::{Reference, ReferenceSettings};
 use crate::scene::Scene;
 
-use super::compare::{cached_reference, measure, MeasureArgs, Measurement};
+use super::compare::{cached_reference, measure, MeasureArgs, Measurement, ReferencePolicy};
 use super::output;
 use super::SceneArgs;
 
@@ -123,10 +123,10 @@ pub fn reference_noise(
     scene: &Scene,
     settings: &ReferenceSettings,
     reference: &[f32],
-    use_cache: bool,
+    policy: ReferencePolicy,
 ) -> Result<Noise> {
     let second = ReferenceSettings { seed: settings.seed.wrapping_add(1), ..settings.clone() };
-    let (other, _, _) = cached_reference(ctx, scene, &second, use_cache)?;
+    let other = cached_reference(ctx, scene, &second, policy)?.image;
     let (a, b) = (output::tonemap_scene(&other, &scene.render), output::tonemap_scene(reference, &scene.render));
     let (m, _) = ErrorMetrics::between(&other, reference, &a, &b, scene.camera.width, scene.camera.height);
     Ok(Noise { between_references: m })

@@ -6,7 +6,7 @@ use anyhow::{Context, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 
-use crate::reference::{Reference, ReferenceSettings};
+use crate::reference::{Reference, ReferenceSettings, ReferenceStats};
 
 use super::output::{self, Outputs};
 use super::{check_validation, GpuArgs, SceneArgs};
@@ -83,12 +83,13 @@ pub fn progress_bar(len: u64, message: String) -> ProgressBar {
     bar
 }
 
-/// Render the reference of `scene` with a progress bar. Returns RGBA f32.
+/// Render the reference of `scene` with a progress bar. Returns RGBA f32 and what its
+/// kernels counted (paths cut by the driver's loop limit or ended at the step cap).
 pub fn render_reference(
     ctx: &std::sync::Arc<crate::gpu::GpuContext>,
     scene: &crate::scene::Scene,
     settings: &ReferenceSettings,
-) -> Result<Vec<f32>> {
+) -> Result<(Vec<f32>, ReferenceStats)> {
     let mut r = Reference::new(ctx, scene, settings).context("cannot set up the reference renderer")?;
     let bar = progress_bar(
         settings.spp as u64,
@@ -96,7 +97,7 @@ pub fn render_reference(
     );
     r.run_all(|done, _| bar.set_position(done as u64))?;
     bar.finish_and_clear();
-    Ok(r.image())
+    Ok((r.image(), r.stats()))
 }
 
 pub fn run(args: ReferenceCmd) -> Result<()> {
@@ -108,7 +109,7 @@ pub fn run(args: ReferenceCmd) -> Result<()> {
     let png = outputs.prepare_opt(args.png.as_deref())?;
     let ctx = args.gpu.context()?;
     let t = std::time::Instant::now();
-    let image = render_reference(&ctx, &scene, &settings)?;
+    let (image, stats) = render_reference(&ctx, &scene, &settings)?;
     check_validation(&ctx)?;
     let (w, h) = (scene.camera.width, scene.camera.height);
     let is_png = args.output.extension().is_some_and(|e| e.eq_ignore_ascii_case("png"));
@@ -128,5 +129,8 @@ pub fn run(args: ReferenceCmd) -> Result<()> {
         t.elapsed().as_secs_f32(),
         ctx.info.name
     );
+    if let Some(w) = stats.warning(&scene.name) {
+        eprintln!("warning: {w}");
+    }
     Ok(())
 }

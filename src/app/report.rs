@@ -99,6 +99,9 @@ pub fn run(args: ReportArgs) -> Result<()> {
         let stem = format!("{}-{}", e.scene, entry_hash(e));
         let params = parse_params(&e.params)?;
         let mut rows = Vec::new();
+        // Warnings of the references (step-capped paths, or cut ones accepted with
+        // --accept-cut-reference), for the section.
+        let mut inexact = Vec::new();
         for setting in cartesian(&params) {
             let sa = SceneArgs {
                 scene: Some(e.scene.clone().into()),
@@ -108,7 +111,9 @@ pub fn run(args: ReportArgs) -> Result<()> {
             };
             let scene = sa.load().with_context(|| format!("report entry {}", e.scene))?;
             eprintln!("report: {} {}", e.scene, setting.join(" "));
-            let (reference, _, _) = cached_reference(&ctx, &scene, &settings, !args.measure.no_cache)?;
+            let r = cached_reference(&ctx, &scene, &settings, args.measure.reference_policy())?;
+            inexact.extend(r.stats.warning(&scene.name).map(|w| format!("{}: {w}", setting.join(" "))));
+            let reference = r.image;
             let m = measure(&ctx, &scene, &args.measure, &reference)?;
             rows.push((setting, scene, m, reference));
         }
@@ -122,12 +127,15 @@ pub fn run(args: ReportArgs) -> Result<()> {
             None
         } else {
             let (scene, reference) = (&rows[0].1, &rows[0].3);
-            let noise = reference_noise(&ctx, scene, &settings, reference, !args.measure.no_cache)?;
+            let noise = reference_noise(&ctx, scene, &settings, reference, args.measure.reference_policy())?;
             let curve = measure_curve(&ctx, &sa0, &args.measure, &args.exact, reference)?;
             Some(Exact { curve, noise })
         };
         check_validation(&ctx)?;
         writeln!(md, "{heading}\n")?;
+        for w in &inexact {
+            writeln!(md, "**Warning:** {w}\n")?;
+        }
         let techniques = technique_names(&rows.iter().map(|r| &r.1).collect::<Vec<_>>());
         let (s0, ..) = (&rows[0].1, ());
         writeln!(

@@ -511,7 +511,7 @@ pub fn run(args: SweepArgs) -> Result<()> {
     let techniques = technique_names(&scenes.iter().collect::<Vec<_>>());
     let mut rows = Vec::new();
     for ((o, scene), technique) in rows_overrides.iter().zip(&scenes).zip(techniques) {
-        let (reference, _, _) = cached_reference(&ctx, scene, &settings, !args.measure.no_cache)?;
+        let reference = cached_reference(&ctx, scene, &settings, args.measure.reference_policy())?.image;
         let m = measure(&ctx, scene, &args.measure, &reference)?;
         println!("== {}", o.join(" "));
         print_measurement(&m);
@@ -524,8 +524,8 @@ pub fn run(args: SweepArgs) -> Result<()> {
     } else {
         let mut sa = args.scene.clone();
         sa.set.extend(rows_overrides[0].iter().cloned());
-        let (reference, _, _) = cached_reference(&ctx, &scenes[0], &settings, !args.measure.no_cache)?;
-        let noise = reference_noise(&ctx, &scenes[0], &settings, &reference, !args.measure.no_cache)?;
+        let reference = cached_reference(&ctx, &scenes[0], &settings, args.measure.reference_policy())?.image;
+        let noise = reference_noise(&ctx, &scenes[0], &settings, &reference, args.measure.reference_policy())?;
         let curve = measure_curve(&ctx, &sa, &args.measure, &args.exact, &reference)?;
         Some(Exact { curve, noise })
     };

@@ -27,6 +27,13 @@
 //! jumps marked by the boundary indicator (glsl/reference/volume.glsl, VOLUME_FIELDS).
 //! Scattering there only attenuates (in-scattering is the light simulator's), and emission
 //! is counted on camera paths only.
+//!
+//! The reference says when it is not exact ([`ReferenceStats`]): lavapipe stops every loop of
+//! an invocation once 65535 loop iterations are spent over all its loops
+//! (tests/loop_limit.rs measures it), which cuts a path short without a message, so each
+//! kernel ends with a canary loop that tells whether the budget ran out
+//! (glsl/reference/sppm.glsl, `loop_canary`), and the paths that end at the volume's step cap
+//! are counted too.
 pub mod bvh;
 
 use std::sync::Arc;
@@ -145,12 +152,87 @@ pub const DEFAULT_FOOTPRINT: f32 = 0.5;
 
 /// The most photons one photon pass traces. lavapipe ends every loop of an invocation after
 /// 65535 loop iterations in all (LP_MAX_TGSI_LOOP_ITERATIONS, counted over all its loops and
-/// over the invocations it runs in lockstep); under a bright focus the gather's photon lists
+/// over the invocations it runs in lockstep; tests/loop_limit.rs); under a bright focus the gather's photon lists
 /// were cut short there and the cut-off invocations' sums came out zero, so 8-pixel runs of
 /// a caustic were black. A gather walks each of its at most 8 buckets once (gather.comp), and
 /// each list holds at most the pass's photons, so it runs at most 8 * 8000 + 36 < 65535 loop
 /// iterations, whichever buckets the invocations in lockstep walk.
 pub const MAX_PHOTONS_PER_PASS: u32 = 8000;
+
+/// The trip count of the loop canary (glsl/reference/sppm.glsl, `loop_canary`): it runs
+/// fewer exactly when the driver's loop budget ran out before it.
+const CANARY_TRIPS: u32 = 2;
+
+/// What the reference's kernels counted over a run (glsl/reference/sppm.glsl): where either
+/// is non-zero the image is not the exact reference.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct ReferenceStats {
+    /// Camera-kernel invocations (one per pixel and iteration) whose driver loop budget ran
+    /// out: their paths were cut short (lavapipe's LP_MAX_TGSI_LOOP_ITERATIONS, 65535 loop
+    /// iterations per vector of invocations run in lockstep, tests/loop_limit.rs). Counted
+    /// per invocation of a cut vector, so it over-states cut paths by up to the vector
+    /// width (8 on AVX2) and never misses one.
+    pub cut_camera: u64,
+    /// Photon-kernel invocations (one per photon) whose loop budget ran out.
+    pub cut_photons: u64,
+    /// Gather invocations (one per pixel and photon pass) whose loop budget ran out.
+    pub cut_gather: u64,
+    /// Camera paths (and their environment samples) that ended inside the volume at its
+    /// step cap (volume.glsl, ref.volume[4].w steps per crossing).
+    pub step_cap_camera: u64,
+    /// Photon paths that ended inside the volume at its step cap.
+    pub step_cap_photons: u64,
+}
+
+impl ReferenceStats {
+    /// Invocations cut by the driver's loop limit, all kernels.
+    pub fn cut(&self) -> u64 {
+        self.cut_camera + self.cut_photons + self.cut_gather
+    }
+    /// Paths ended by the volume's step cap, camera and photon.
+    pub fn step_capped(&self) -> u64 {
+        self.step_cap_camera + self.step_cap_photons
+    }
+
+    /// Whether every path ran to its end: nothing cut, nothing step-capped.
+    pub fn exact(&self) -> bool {
+        self.cut() == 0 && self.step_capped() == 0
+    }
+
+    /// What went wrong in the reference of scene `scene`, its causes and what to do; None
+    /// when it is exact.
+    pub fn warning(&self, scene: &str) -> Option<String> {
+        if self.exact() {
+            return None;
+        }
+        let mut w = format!("the reference of scene {scene} is not exact:");
+        if self.cut() > 0 {
+            w += &format!(
+                " {} shader invocations ran out of the driver's loop budget (camera {}, photons {}, gather {}), \
+                 so their paths were cut short: lavapipe (llvmpipe) stops every loop after 65535 loop iterations \
+                 in all per invocation (each count includes the invocations run in lockstep with a cut one). \
+                 Use a coarser `volume.resolution` (fewer RK4 steps per crossing), a smaller --max-depth, \
+                 or another Vulkan driver (--device).",
+                self.cut(),
+                self.cut_camera,
+                self.cut_photons,
+                self.cut_gather
+            );
+        }
+        if self.step_capped() > 0 {
+            w += &format!(
+                " {} paths ended inside the volume at its step cap (camera {}, photons {}; ten crossings of \
+                 the box's diagonal, at most 200000 RK4 steps): light trapped by internal reflections, or a \
+                 crossing longer than the cap. Use a coarser `volume.resolution` (longer steps) or a lower \
+                 index contrast or `reflectance`.",
+                self.step_capped(),
+                self.step_cap_camera,
+                self.step_cap_photons
+            );
+        }
+        Some(w)
+    }
+}
 
 /// Workgroup counts that cover `items` invocations of the 1-D reference kernels
 /// (REF_WORKGROUP each, indexed by `invocation_index` in glsl/reference/scene.glsl) within the
@@ -256,6 +338,9 @@ pub enum Probe {
     SpecularPath = 1,
     /// (cos_i, eta), eta_rgb, k_rgb -> F_dielectric, F_conductor rgb.
     Fresnel = 2,
+    /// (N, M) -> (iterations run by a loop of N, then by a loop of M): the driver's loop
+    /// limit (tests/loop_limit.rs).
+    LoopLimit = 3,
 }
 
 /// Whether a dielectric has an RGB ior (the tracer then follows one channel at a time).
@@ -447,7 +532,9 @@ pub struct Reference {
     grid: Buffer,
     counters: Buffer,
     debug: Buffer,
-    ids: [BufferId; 6],
+    /// The canary's trip count and the counters of [`ReferenceStats`] (REF_STAT_*).
+    stats: Buffer,
+    ids: [BufferId; 7],
     _uniforms: Buffer,
     _trace: TraceGeometry,
     _sampler: Sampler,
@@ -587,6 +674,12 @@ impl Reference {
             MemoryLocation::CpuToGpu,
         )?;
 
+        let mut stats =
+            Buffer::new(ctx, "reference_stats", REF_STATS as u64 * 4, U::STORAGE_BUFFER, MemoryLocation::CpuToGpu)?;
+        let mut initial_stats = [0u32; REF_STATS as usize];
+        initial_stats[REF_STAT_CANARY_TRIPS as usize] = CANARY_TRIPS;
+        stats.write(0, bytemuck::cast_slice(&initial_stats));
+
         let sampler = Sampler::new(ctx, "reference_latlong", SamplerDesc::LATLONG)?;
         let mut bindings = Bindings::new(vk::ShaderStageFlags::COMPUTE)
             .storage(REF_BINDING_UNIFORMS, &ubo)
@@ -598,7 +691,8 @@ impl Reference {
             .storage(REF_BINDING_PHOTONS, &photon_buffer)
             .storage(REF_BINDING_GRID, &grid)
             .storage(REF_BINDING_COUNTERS, &counters)
-            .storage(REF_BINDING_DEBUG, &debug);
+            .storage(REF_BINDING_DEBUG, &debug)
+            .storage(REF_BINDING_STATS, &stats);
         for (binding, buffer) in trace.buffers() {
             bindings = bindings.storage(binding, buffer);
         }
@@ -616,6 +710,7 @@ impl Reference {
             graph.register_buffer(&grid),
             graph.register_buffer(&counters),
             graph.register_buffer(&debug),
+            graph.register_buffer(&stats),
         ];
         Ok(Reference {
             settings: settings.clone(),
@@ -639,6 +734,7 @@ impl Reference {
             grid,
             counters,
             debug,
+            stats,
             ids,
             _uniforms: ubo,
             _trace: trace,
@@ -681,7 +777,7 @@ impl Reference {
         // At most MAX_PHOTONS_PER_PASS photons: far below any device's limit.
         let photon_groups = dispatch_size(photons_per_pass, self.max_groups).unwrap_or([1, 1, 1]);
         let (passes, first_pass) = (self.passes_per_iteration, self.passes_done);
-        let [accum, pixels, photons, grid, counters, debug] = self.ids;
+        let [accum, pixels, photons, grid, counters, debug, stats] = self.ids;
         let start = self.iterations_done;
         let Reference {
             graph,
@@ -706,6 +802,7 @@ impl Reference {
                     .pass("reference_camera")
                     .write(accum, Access::ComputeWrite)
                     .write(pixels, Access::ComputeWrite)
+                    .write(stats, Access::ComputeWrite)
                     .record(move |cmd| {
                         cmd.compute(camera, &[set], &push, pixel_groups);
                     });
@@ -726,6 +823,7 @@ impl Reference {
                         .write(grid, Access::ComputeWrite)
                         .write(counters, Access::ComputeWrite)
                         .write(debug, Access::ComputeWrite)
+                        .write(stats, Access::ComputeWrite)
                         .record(move |cmd| {
                             cmd.compute(photon_pipe, &[set], &push, photon_groups);
                         });
@@ -734,6 +832,7 @@ impl Reference {
                         .read(photons, Access::ComputeRead)
                         .read(grid, Access::ComputeRead)
                         .write(pixels, Access::ComputeWrite)
+                        .write(stats, Access::ComputeWrite)
                         .record(move |cmd| {
                             cmd.compute(gather, &[set], &push, pixel_groups);
                         });
@@ -743,7 +842,12 @@ impl Reference {
             graph.access_now(
                 cmd,
                 &[],
-                &[(accum, Access::HostRead), (pixels, Access::HostRead), (debug, Access::HostRead)],
+                &[
+                    (accum, Access::HostRead),
+                    (pixels, Access::HostRead),
+                    (debug, Access::HostRead),
+                    (stats, Access::HostRead),
+                ],
             );
         })?;
         self.iterations_done += count;
@@ -787,6 +891,20 @@ impl Reference {
             out.push(1.0);
         }
         out
+    }
+
+    /// What the kernels counted so far: invocations whose driver loop budget ran out and
+    /// paths that ended at the volume's step cap.
+    pub fn stats(&self) -> ReferenceStats {
+        let s: &[u32] = bytemuck::cast_slice(self.stats.read());
+        let at = |slot: u32| s[slot as usize] as u64;
+        ReferenceStats {
+            cut_camera: at(REF_STAT_CUT_CAMERA),
+            cut_photons: at(REF_STAT_CUT_PHOTONS),
+            cut_gather: at(REF_STAT_CUT_GATHER),
+            step_cap_camera: at(REF_STAT_STEP_CAP_CAMERA),
+            step_cap_photons: at(REF_STAT_STEP_CAP_PHOTONS),
+        }
     }
 
     /// The caustic part alone (for tests of convergence and energy).
