@@ -159,8 +159,14 @@ pub fn cached_reference(
 /// One technique setting, timed and compared.
 #[derive(Debug, serde::Serialize)]
 pub struct Measurement {
+    /// The passes of the steady frames (after the warm-up) that did work there: a cached
+    /// pass that ran only in the first frame is in [`PerChange`] instead.
     pub passes: Vec<PassStats>,
+    /// The steady frame: every pass recorded each frame, none of the costs paid once per
+    /// change ([`PerChange`]).
     pub frame: Stats,
+    #[serde(flatten)]
+    pub per_change: PerChange,
     pub errors: ErrorMetrics,
     #[serde(flatten)]
     pub mask: MaskErrors,
@@ -170,6 +176,70 @@ pub struct Measurement {
     pub ldr: Vec<u8>,
     #[serde(skip)]
     pub heatmap: Vec<u8>,
+}
+
+/// "per change ms": what a setting pays once per light or object change rather than every
+/// frame, measured in the same run as its frames.
+///
+/// - The passes that did work in the first frame and none in every later one (the distance
+///   impostors' environment, uv and refractor maps, src/technique/impostor/): their GPU time in
+///   frame 0. Their techniques are built from where things are (`Inputs::placement`), so a
+///   scene update that moves a light or an object re-creates them and the maps render again;
+///   an object dragged in place (`Renderer::move_object`) re-renders an environment map only
+///   beyond `render.impostor.regenerate_distance` (Szirmay-Kalos et al. 2005, §6), a
+///   refractor map never.
+/// - What techniques compute at creation outside the frame graph
+///   ([`crate::technique::Technique::once_costs`]): the eikonal light simulation's GPU time,
+///   cached by the volume, the lights and its settings (re-run on a light or volume change,
+///   not on an object or camera move), and Wyman 2005 §3.1's d_N on the host, cached per
+///   mesh (re-run only when a mesh changes).
+///
+/// A camera move (`Renderer::set_camera`, the window's) re-runs none of them: it costs only
+/// frames. What is not counted: pipeline creation and uploads at creation, and results
+/// cached for the process or computed on the host without a timer (the tracers' BVH).
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct PerChange {
+    /// The sum of `per_change_costs`, ms.
+    #[serde(rename = "per_change_ms")]
+    pub ms: f64,
+    #[serde(rename = "per_change_costs")]
+    pub costs: Vec<crate::technique::OnceCost>,
+}
+
+impl PerChange {
+    /// The costs of a renderer's run: `timings` of every frame from frame 0 (the passes that
+    /// did work in frame 0 and in no later frame; none without a later frame to tell them
+    /// by) and its techniques' `once` costs.
+    pub fn of(timings: &[FrameTiming], once: Vec<crate::technique::OnceCost>) -> PerChange {
+        let mut costs = Vec::new();
+        let later: Vec<&FrameTiming> = timings.iter().filter(|f| f.frame > 0).collect();
+        if let (Some(first), false) = (timings.iter().find(|f| f.frame == 0), later.is_empty()) {
+            for p in first.passes.iter().filter(|p| !p.idle) {
+                let idle_after = later.iter().flat_map(|f| &f.passes).filter(|q| q.name == p.name).all(|q| q.idle);
+                if idle_after {
+                    costs.push(crate::technique::OnceCost {
+                        name: p.name.clone(),
+                        ms: p.duration_ms(),
+                        clock: "gpu",
+                        rerun_on: "light or object change",
+                    });
+                }
+            }
+        }
+        costs.extend(once);
+        // A fold from +0: `sum` of no f64 is -0, which prints as "-0.000".
+        PerChange { ms: costs.iter().fold(0.0, |a, c| a + c.ms), costs }
+    }
+
+    /// "name 1.234 ms (gpu; light or object change), ..." for the printed line.
+    pub fn describe(&self) -> String {
+        if self.costs.is_empty() {
+            return "none".into();
+        }
+        let each: Vec<String> =
+            self.costs.iter().map(|c| format!("{} {:.3} ms ({}; {})", c.name, c.ms, c.clock, c.rerun_on)).collect();
+        each.join(", ")
+    }
 }
 
 /// The errors over the object mask (src/metrics/mask.rs): the pixels the techniques touch.
@@ -203,9 +273,12 @@ pub fn measure(ctx: &Arc<GpuContext>, scene: &Scene, args: &MeasureArgs, referen
         renderer.render_frame()?;
     }
     renderer.finish()?;
-    let frames: Vec<FrameTiming> =
-        renderer.take_timings().into_iter().filter(|f| f.frame >= u64::from(args.warmup)).collect();
-    let (passes, frame) = summarize(&frames);
+    let timings = renderer.take_timings();
+    let per_change = PerChange::of(&timings, renderer.once_costs());
+    let frames: Vec<FrameTiming> = timings.into_iter().filter(|f| f.frame >= u64::from(args.warmup)).collect();
+    let (mut passes, frame) = summarize(&frames);
+    // A pass idle in every steady frame costs nothing there (its timestamps bracket no work).
+    passes.retain(|p| frames.iter().flat_map(|f| &f.passes).any(|q| q.name == p.name && !q.idle));
     let hdr = renderer.read_hdr()?;
     let ref_ldr = output::tonemap_scene(reference, &scene.render);
     // With the adaptive tone map, both images are mapped with the reference's state (the eye
@@ -223,7 +296,7 @@ pub fn measure(ctx: &Arc<GpuContext>, scene: &Scene, args: &MeasureArgs, referen
     let (errors, errors_mask, heatmap) =
         ErrorMetrics::between_with_mask(&hdr, reference, &ldr, &ref_ldr, w, h, Some(&object_mask.pixels));
     let mask = MaskErrors { errors_mask, mask_pixels: object_mask.count(), mask_surfaces: object_mask.surfaces };
-    Ok(Measurement { passes, frame, errors, mask, hdr, ldr, heatmap })
+    Ok(Measurement { passes, frame, per_change, errors, mask, hdr, ldr, heatmap })
 }
 
 #[derive(serde::Serialize)]
@@ -275,7 +348,11 @@ pub fn print_measurement(m: &Measurement) {
     for p in &m.passes {
         println!("{:width$}  {:>10.3}", p.name, p.stats.median_ms);
     }
-    println!("{:width$}  {:>10.3}", "frame", m.frame.median_ms);
+    println!(
+        "{:width$}  {:>10.3}  (every pass of a steady frame; none of the per-change costs)",
+        "frame", m.frame.median_ms
+    );
+    println!("per change ms {:.3}, paid once per light or object change: {}", m.per_change.ms, m.per_change.describe());
     let line = |e: &ErrorMetrics| {
         format!(
             "RMSE {:.5}  PSNR {:.2} dB  relMSE {:.5}  FLIP mean {:.4}  FLIP p95 {:.4}",

@@ -245,23 +245,24 @@ fn section_table(
     };
     write!(
         md,
-        "| # | setting | frame ms | technique passes | RMSE | relMSE | FLIP mean | FLIP p95 | mask RMSE | mask FLIP mean |"
+        "| # | setting | frame ms | per change ms | technique passes | RMSE | relMSE | FLIP mean | FLIP p95 | mask RMSE | mask FLIP mean |"
     )?;
     if exact.is_some() {
         writeln!(md, " exact FLIP at equal time | verdict |")?;
-        writeln!(md, "|---:|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---|")?;
+        writeln!(md, "|---:|---|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---|")?;
     } else {
         writeln!(md)?;
-        writeln!(md, "|---:|---|---:|---|---:|---:|---:|---:|---:|---:|")?;
+        writeln!(md, "|---:|---|---:|---:|---|---:|---:|---:|---:|---:|---:|")?;
     }
     for (i, (setting, m)) in rows.iter().enumerate() {
         let passes: Vec<String> = m.passes.iter().map(|p| format!("{} {:.2}", p.name, p.stats.median_ms)).collect();
         write!(
             md,
-            "| {} | {} | {:.2} | {} | {} | {:.4} | {} | {:.4} |",
+            "| {} | {} | {:.2} | {:.2} | {} | {} | {:.4} | {} | {:.4} |",
             i + 1,
             if setting.is_empty() { "default".into() } else { format!("`{}`", setting.join(" ")) },
             m.frame.median_ms,
+            m.per_change.ms,
             passes.join(", "),
             with_noise("rmse", m.errors.rmse),
             m.errors.rel_mse,
@@ -282,6 +283,7 @@ fn section_table(
         }
     }
     writeln!(md)?;
+    writeln!(md, "{}\n", cost_caption(rows.iter().map(|(_, m)| &m.per_change)))?;
     let mut masks: Vec<String> = rows.iter().map(|(_, m)| m.mask.describe()).collect();
     masks.dedup();
     writeln!(
@@ -320,6 +322,26 @@ fn section_table(
         writeln!(md, "{}.\n", pts.join("; "))?;
     }
     Ok(())
+}
+
+/// What a table's time columns include: frame ms the steady frame, per change ms the costs
+/// paid once per light or object change (src/app/compare.rs, `PerChange`), named with the
+/// change that re-runs each.
+fn cost_caption<'a>(per_change: impl Iterator<Item = &'a crate::app::compare::PerChange>) -> String {
+    let mut names: Vec<String> = Vec::new();
+    for c in per_change.flat_map(|p| &p.costs) {
+        let name = format!("`{}` ({}, on a {})", c.name, c.clock, c.rerun_on);
+        if !names.contains(&name) {
+            names.push(name);
+        }
+    }
+    let paid = if names.is_empty() { "none here".to_string() } else { names.join(", ") };
+    format!(
+        "*Frame ms* is the median steady frame after the warm-up: every pass that runs each frame \
+         (the technique passes listed, the G-buffer, shading, tone map), none of the costs paid \
+         once. *Per change ms* is paid once per light or object change, not per frame (a camera \
+         move re-runs none of it): {paid}."
+    )
 }
 
 /// The effect an entry compares techniques for at their defaults: an entry whose only
@@ -387,8 +409,8 @@ fn summary_row(
         None => ("not measured".into(), "–".into()),
     };
     let line = format!(
-        "| {} | {effect} | {technique} | {:.2} | {:.4} ({lo:.4}–{hi:.4}) | {at} | {verdict} |",
-        e.scene, m.frame.median_ms, m.errors.flip_mean
+        "| {} | {effect} | {technique} | {:.2} | {:.2} | {:.4} ({lo:.4}–{hi:.4}) | {at} | {verdict} |",
+        e.scene, m.frame.median_ms, m.per_change.ms, m.errors.flip_mean
     );
     Ok(Some(SummaryRow { scene: e.scene.clone(), effect: effect.into(), line }))
 }
@@ -405,9 +427,11 @@ fn summary_table(rows: &[SummaryRow]) -> String {
          at the same GPU time (interpolated on its curve, measured in the same run; each \
          section names the tracer), and the verdict: *dominated* (exact ray tracing is better \
          in the same time), *beats exact*, *within noise*, or *faster than exact* (no exact \
-         image is as fast).\n\n\
-         | scene | effect | best approximation | frame ms | FLIP mean | exact FLIP at equal time | verdict |\n\
-         |---|---|---|---:|---:|---:|---|\n"
+         image is as fast). *Frame ms* is the steady frame, every pass that runs each frame; \
+         *per change ms* is paid once per light or object change (impostor maps, the eikonal \
+         light simulation, Wyman's d_N) and is in no frame, nor in the equal-time verdict.\n\n\
+         | scene | effect | best approximation | frame ms | per change ms | FLIP mean | exact FLIP at equal time | verdict |\n\
+         |---|---|---|---:|---:|---:|---:|---|\n"
     );
     for r in rows {
         t.push_str(&r.line);
@@ -522,7 +546,14 @@ impl Previous {
     fn summary_line(&self, scene: &str, effect: &str) -> Option<String> {
         let (_, body) = self.sections.iter().find(|(h, _)| h == SUMMARY_HEADING)?;
         let prefix = format!("| {scene} | {effect} |");
-        body.lines().find(|l| l.starts_with(&prefix)).map(str::to_string)
+        let line = body.lines().find(|l| l.starts_with(&prefix))?;
+        // A row measured before the per change column has seven cells: it gets an unknown
+        // one after its frame ms, so that the kept row lines up with the header.
+        if line.matches(" | ").count() == 6 {
+            let cells: Vec<&str> = line.split(" | ").collect();
+            return Some(format!("{} | – | {}", cells[..4].join(" | "), cells[4..].join(" | ")));
+        }
+        Some(line.to_string())
     }
 
     /// The section under `heading`, with a provenance line added if it has none; `None` for a
@@ -558,6 +589,7 @@ mod tests {
         Measurement {
             passes: Vec::new(),
             frame: Stats { median_ms: time_ms, ..Default::default() },
+            per_change: Default::default(),
             errors: ErrorMetrics { flip_mean: flip, ..Default::default() },
             mask: Default::default(),
             hdr: Vec::new(),
@@ -604,7 +636,7 @@ mod tests {
         let r = super::summary_row(&e, &rows, &techniques, Some(&x)).unwrap().unwrap();
         assert_eq!(
             r.line,
-            "| sphere_env | refraction | `hu_qin` (within noise: `wyman`) | 50.00 | 0.1000 (0.0950–0.1000) | 0.0400 | dominated |"
+            "| sphere_env | refraction | `hu_qin` (within noise: `wyman`) | 50.00 | 0.00 | 0.1000 (0.0950–0.1000) | 0.0400 | dominated |"
         );
         // An entry that sweeps a parameter has no summary row.
         let sweep = super::Entry { params: vec!["render.hu_qin.search_steps=2,4".into()], ..e };
@@ -614,6 +646,13 @@ mod tests {
         let p = Previous::parse(&text);
         assert!(p.summary_line("sphere_env", "refraction").unwrap().ends_with("| dominated |"));
         assert_eq!(p.summary_line("sphere_env", "caustics"), None);
+        // A row kept from a report without the per change column gets an unknown one.
+        let old = "| a | refraction | `wyman` | 20.00 | 0.1000 (0.0950–0.1000) | 0.0400 | dominated |";
+        let p = Previous::parse(&format!("{}\n\n{old}\n", super::SUMMARY_HEADING));
+        assert_eq!(
+            p.summary_line("a", "refraction").unwrap(),
+            "| a | refraction | `wyman` | 20.00 | – | 0.1000 (0.0950–0.1000) | 0.0400 | dominated |"
+        );
     }
 
     /// A kept section gains the file's provenance line; a placeholder never does (it was not

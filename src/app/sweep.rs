@@ -401,7 +401,9 @@ fn quote(s: &str) -> String {
 
 /// The CSV: one row per setting (kind `technique`, numbered as on the plot) and, with an
 /// exact curve, one per exact point (kind `exact`): each parameter's value, each pass's median
-/// ms, frame ms, errors, the mask's pixel count, the errors over it and its surfaces
+/// ms over the steady frames, frame ms (the steady frame: every pass that runs each frame),
+/// per change ms (paid once per light or object change, not in frame ms:
+/// [`super::compare::PerChange`]; empty on an exact row, whose time is a frame's), errors, the mask's pixel count, the errors over it and its surfaces
 /// (`mask_*`; an exact row gives only the errors, over the settings' mask; empty where no
 /// masked surface is in view), whether on the Pareto front, the
 /// technique, the lowest value of
@@ -430,7 +432,7 @@ pub fn csv(params: &[(String, Vec<String>)], rows: &[SweepRow], metric: &str, ex
         csv.push_str(&format!(",{p}_ms"));
     }
     csv.push_str(&format!(
-        ",frame_ms,rmse,psnr_db,rel_mse,flip_mean,flip_p95,mask_pixels,mask_rmse,mask_psnr_db,mask_rel_mse,\
+        ",frame_ms,per_change_ms,rmse,psnr_db,rel_mse,flip_mean,flip_p95,mask_pixels,mask_rmse,mask_psnr_db,mask_rel_mse,\
          mask_flip_mean,mask_flip_p95,mask_surfaces,pareto,technique,{metric}_low,exact_{metric},verdict\n"
     ));
     let errors = |e: &crate::metrics::image::ErrorMetrics| {
@@ -447,7 +449,7 @@ pub fn csv(params: &[(String, Vec<String>)], rows: &[SweepRow], metric: &str, ex
             csv.push(',');
             csv.push_str(&v.unwrap_or_default());
         }
-        csv.push_str(&format!(",{:.4}", r.measurement.frame.median_ms));
+        csv.push_str(&format!(",{:.4},{:.4}", r.measurement.frame.median_ms, r.measurement.per_change.ms));
         csv.push_str(&errors(&r.measurement.errors));
         csv.push_str(&format!(",{}", r.measurement.mask.mask_pixels));
         csv.push_str(&r.measurement.mask.errors_mask.as_ref().map(errors).unwrap_or_else(|| ",".repeat(5)));
@@ -472,7 +474,7 @@ pub fn csv(params: &[(String, Vec<String>)], rows: &[SweepRow], metric: &str, ex
         for p in &x.curve.points {
             csv.push_str(&format!(",exact,{}", quote(&format!("{name} {}", p.label))));
             csv.push_str(&",".repeat(params.len() + passes.len()));
-            csv.push_str(&format!(",{:.4}", p.time_ms));
+            csv.push_str(&format!(",{:.4},", p.time_ms));
             csv.push_str(&errors(&p.errors));
             // The mask's pixels and surfaces are the settings' rows'.
             csv.push(',');
@@ -598,6 +600,7 @@ mod tests {
             measurement: Measurement {
                 passes: Vec::new(),
                 frame: crate::metrics::timing::Stats { median_ms: time_ms, ..Default::default() },
+                per_change: Default::default(),
                 errors: crate::metrics::image::ErrorMetrics { flip_mean: flip, ..Default::default() },
                 mask: Default::default(),
                 hdr: Vec::new(),
@@ -626,6 +629,7 @@ mod tests {
             mask_pixels: 120,
             mask_surfaces: vec!["ball (dielectric): 100 px".into(), "floor (diffuse caustic receiver): 20 px".into()],
         };
+        rows[2].measurement.per_change = crate::app::compare::PerChange { ms: 12.5, costs: Vec::new() };
         let point = |label: &str, t: f64, flip: f64| ExactPoint {
             label: label.into(),
             time_ms: t,
@@ -644,7 +648,7 @@ mod tests {
         assert_eq!(lines.len(), 1 + 3 + 2, "{text}");
         assert_eq!(
             lines[0],
-            "n,kind,setting,render.refraction,frame_ms,rmse,psnr_db,rel_mse,flip_mean,flip_p95,mask_pixels,\
+            "n,kind,setting,render.refraction,frame_ms,per_change_ms,rmse,psnr_db,rel_mse,flip_mean,flip_p95,mask_pixels,\
              mask_rmse,mask_psnr_db,mask_rel_mse,mask_flip_mean,mask_flip_p95,mask_surfaces,pareto,technique,\
              flip_mean_low,exact_flip_mean,verdict"
         );
@@ -663,10 +667,12 @@ mod tests {
             lines[1]
         );
         assert!(lines[2].contains(",0,,,,,,,false,"), "no mask errors: {}", lines[2]);
+        // Frame ms, then per change ms beside it.
+        assert!(lines[1].contains(",10.0000,0.0000,") && lines[3].contains(",400.0000,12.5000,"), "{text}");
         // wyman at 40 ms: exact reaches 0.25 * 0.2^(log 2 / log 10) = 0.1540 < 0.35.
         assert!(lines[2].ends_with(",false,refraction=wyman,0.350000,0.154003,dominated"), "{}", lines[2]);
         assert!(lines[3].ends_with(",true,refraction=hu_qin,0.020000,0.050000,beats exact"), "{}", lines[3]);
-        assert!(lines[4].starts_with(",exact,raytrace max_depth=1,,20.0000,"), "{}", lines[4]);
+        assert!(lines[4].starts_with(",exact,raytrace max_depth=1,,20.0000,,"), "{}", lines[4]);
         assert!(lines[4].contains(",0.25000,0.00000,,,,,,,,,raytrace,"), "no mask errors: {}", lines[4]);
         assert!(
             lines[5].contains(",0.05000,0.00000,,0.250000,0.000,0.000000,0.00000,0.00000,,,raytrace,"),

@@ -273,6 +273,27 @@ pub trait Technique: Any {
     fn debug_targets(&self) -> &[DebugTarget] {
         &[]
     }
+
+    /// What its creation computed outside the frame's passes and keeps until a change (the
+    /// eikonal light simulation, Wyman's d_N), as measured when it was computed. A cached
+    /// pass inside the frame (a distance impostor's map) is timed by the frame's timestamps
+    /// instead: it does work in the first frame and none after.
+    fn once_costs(&self) -> Vec<OnceCost> {
+        Vec::new()
+    }
+}
+
+/// A cost paid once per change of what a result depends on, not every frame.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct OnceCost {
+    /// The pass, or the computation outside the frame graph.
+    pub name: String,
+    pub ms: f64,
+    /// `gpu`: device timestamps (on lavapipe, CPU time like every pass); `cpu`: wall-clock
+    /// time on the host.
+    pub clock: &'static str,
+    /// Which change runs it again, from what its cache is keyed by.
+    pub rerun_on: &'static str,
 }
 
 /// One step of the recipe: one technique's passes of one stage.

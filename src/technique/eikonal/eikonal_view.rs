@@ -78,6 +78,21 @@ impl Technique for EikonalPass {
     /// Lighting: the simulated light on the receivers (eikonal_light, after deferred
     /// shading; nothing without a simulation). Volume: `eikonal_nearby` (when the scene has
     /// impostor rectangles), then `eikonal_view`.
+    /// The light simulation, run at creation outside the frame graph: its kernels' GPU time.
+    fn once_costs(&self) -> Vec<crate::technique::OnceCost> {
+        self.light_stats()
+            .map(|s| crate::technique::OnceCost {
+                name: "eikonal_light_simulation".into(),
+                ms: s.gpu_ms,
+                clock: "gpu",
+                // Its cache key: the volume, the lights and the simulation's settings; a moved
+                // object or camera re-creates the technique around the cached result.
+                rerun_on: "light or volume change",
+            })
+            .into_iter()
+            .collect()
+    }
+
     fn record<'a>(&'a self, stage: Stage, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>) {
         if stage == Stage::Lighting {
             if let Some(l) = &self.light {
