@@ -238,6 +238,52 @@ fn per_change_cost_is_the_first_frames_cached_passes_and_the_setup() {
     assert!(out.contains("per change ms 0.000, paid once per light or object change: none"), "{out}");
 }
 
+/// The exact points are timed interleaved with the setting (src/app/equaltime.rs): on the
+/// device's clock, an exact point's timed frames fall between the setting's first and last
+/// timed frames, where timing them after the setting would put them all after its last.
+/// With 1 + 8 frames for the setting and 1 + 2 per exact point, the exact points' timed frames
+/// are in rounds 5 and 8 of 9 (src/app/bench_versus.rs, `Interleave`): round 5 is inside.
+#[test]
+fn exact_points_are_timed_between_the_settings_frames() {
+    let d = Dir::new("interleave");
+    let mut args = vec![
+        "compare",
+        "sphere_env",
+        "--set",
+        "render.refraction=single",
+        "--frames",
+        "8",
+        "--warmup",
+        "1",
+        "--exact-depths",
+        "1,2",
+        "--exact-frames",
+        "2",
+        "--json",
+        "c.json",
+        "--heatmap",
+        "heat.png",
+        "--validation",
+    ];
+    args.extend_from_slice(SMALL);
+    let (ok, _, err) = d.prism(&args);
+    assert!(ok, "{err}");
+    let json: serde_json::Value = serde_json::from_slice(&std::fs::read(d.0.join("c.json")).unwrap()).unwrap();
+    let starts = |v: &serde_json::Value| -> Vec<f64> {
+        v.as_array().unwrap_or_else(|| panic!("{json}")).iter().map(|t| t.as_f64().unwrap()).collect()
+    };
+    let setting = starts(&json["frame_starts_ms"]);
+    assert_eq!(setting.len(), 8, "{json}");
+    let (first, last) = (setting[0], setting[7]);
+    let points = json["exact"]["points"].as_array().unwrap();
+    assert_eq!(points.len(), 2, "{json}");
+    for p in points {
+        let s = starts(&p["frame_starts_ms"]);
+        assert_eq!(s.len(), 2, "{p}");
+        assert!(s.iter().any(|&t| first < t && t < last), "{s:?} not within the setting's frames {setting:?}");
+    }
+}
+
 /// `prism report` on a one-entry spec: the summary table opens the report with the entry's
 /// best technique, the exact tracer's FLIP at its time and a verdict; the section's table has
 /// the equal-time columns and its plot the exact curve.

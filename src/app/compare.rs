@@ -167,6 +167,9 @@ pub struct Measurement {
     pub frame: Stats,
     #[serde(flatten)]
     pub per_change: PerChange,
+    /// When each timed frame started on the device's clock, ms: how the frames of settings
+    /// timed together were interleaved (src/app/equaltime.rs).
+    pub frame_starts_ms: Vec<f64>,
     pub errors: ErrorMetrics,
     #[serde(flatten)]
     pub mask: MaskErrors,
@@ -268,35 +271,81 @@ impl MaskErrors {
 /// Render `scene` with its techniques for `warmup + frames` frames, time the last `frames`,
 /// and compare the last image with `reference`.
 pub fn measure(ctx: &Arc<GpuContext>, scene: &Scene, args: &MeasureArgs, reference: &[f32]) -> Result<Measurement> {
-    let mut renderer = Renderer::new(ctx, scene).context("cannot set up the renderer")?;
-    for _ in 0..u64::from(args.warmup) + u64::from(args.frames.max(1)) {
-        renderer.render_frame()?;
+    let mut t = Timing::new(ctx, scene, args.warmup, args.frames, reference)?;
+    for _ in 0..t.frames() {
+        t.renderer.render_frame()?;
     }
-    renderer.finish()?;
-    let timings = renderer.take_timings();
-    let per_change = PerChange::of(&timings, renderer.once_costs());
-    let frames: Vec<FrameTiming> = timings.into_iter().filter(|f| f.frame >= u64::from(args.warmup)).collect();
-    let (mut passes, frame) = summarize(&frames);
-    // A pass idle in every steady frame costs nothing there (its timestamps bracket no work).
-    passes.retain(|p| frames.iter().flat_map(|f| &f.passes).any(|q| q.name == p.name && !q.idle));
-    let hdr = renderer.read_hdr()?;
-    let ref_ldr = output::tonemap_scene(reference, &scene.render);
-    // With the adaptive tone map, both images are mapped with the reference's state (the eye
-    // adapted to the true scene), so that FLIP sees the technique's error under one display
-    // mapping rather than the exposure shift of a second adaptation to the wrong image.
-    let ldr = if scene.render.tonemap == "adaptive" {
-        let p = TonemapAdaptiveParams::from_settings(&scene.render).unwrap_or_default();
-        let state = output::adaptive_stats(reference, &p, scene.render.exposure);
-        output::tonemap_adaptive_with(&hdr, &p, scene.render.exposure, &state)
-    } else {
-        renderer.read_ldr()?
-    };
-    let (w, h) = (scene.camera.width, scene.camera.height);
-    let object_mask = ObjectMask::of_scene(scene);
-    let (errors, errors_mask, heatmap) =
-        ErrorMetrics::between_with_mask(&hdr, reference, &ldr, &ref_ldr, w, h, Some(&object_mask.pixels));
-    let mask = MaskErrors { errors_mask, mask_pixels: object_mask.count(), mask_surfaces: object_mask.surfaces };
-    Ok(Measurement { passes, frame, per_change, errors, mask, hdr, ldr, heatmap })
+    t.finish()
+}
+
+/// A setting's renderer, created before its frames, so that its frames can be interleaved
+/// with other settings' ([`super::bench_versus::Interleave`]) and none of them overlaps a
+/// creation (pipeline compilation, the eikonal light simulation).
+pub struct Timing<'a> {
+    renderer: Renderer,
+    scene: &'a Scene,
+    warmup: u32,
+    reference: &'a [f32],
+    frames: u64,
+}
+
+impl<'a> Timing<'a> {
+    pub fn new(
+        ctx: &Arc<GpuContext>,
+        scene: &'a Scene,
+        warmup: u32,
+        frames: u32,
+        reference: &'a [f32],
+    ) -> Result<Timing<'a>> {
+        let renderer = Renderer::new(ctx, scene).context("cannot set up the renderer")?;
+        let frames = u64::from(warmup) + u64::from(frames.max(1));
+        Ok(Timing { renderer, scene, warmup, reference, frames })
+    }
+
+    /// Its frames, warm-up included.
+    pub fn frames(&self) -> u64 {
+        self.frames
+    }
+
+    /// Render one frame and wait for it: an interleaved frame must not share the CPU
+    /// (lavapipe runs on it) with the next participant's recording.
+    pub fn step(&mut self) -> Result<()> {
+        self.renderer.render_frame()?;
+        self.renderer.finish()?;
+        Ok(())
+    }
+
+    /// The timings of the frames after the warm-up, the costs paid once per change, and the
+    /// last image's errors against the reference.
+    pub fn finish(self) -> Result<Measurement> {
+        let Timing { mut renderer, scene, warmup, reference, .. } = self;
+        renderer.finish()?;
+        let timings = renderer.take_timings();
+        let per_change = PerChange::of(&timings, renderer.once_costs());
+        let frames: Vec<FrameTiming> = timings.into_iter().filter(|f| f.frame >= u64::from(warmup)).collect();
+        let (mut passes, frame) = summarize(&frames);
+        // A pass idle in every steady frame costs nothing there (its timestamps bracket no work).
+        passes.retain(|p| frames.iter().flat_map(|f| &f.passes).any(|q| q.name == p.name && !q.idle));
+        let hdr = renderer.read_hdr()?;
+        let ref_ldr = output::tonemap_scene(reference, &scene.render);
+        // With the adaptive tone map, both images are mapped with the reference's state (the eye
+        // adapted to the true scene), so that FLIP sees the technique's error under one display
+        // mapping rather than the exposure shift of a second adaptation to the wrong image.
+        let ldr = if scene.render.tonemap == "adaptive" {
+            let p = TonemapAdaptiveParams::from_settings(&scene.render).unwrap_or_default();
+            let state = output::adaptive_stats(reference, &p, scene.render.exposure);
+            output::tonemap_adaptive_with(&hdr, &p, scene.render.exposure, &state)
+        } else {
+            renderer.read_ldr()?
+        };
+        let (w, h) = (scene.camera.width, scene.camera.height);
+        let object_mask = ObjectMask::of_scene(scene);
+        let (errors, errors_mask, heatmap) =
+            ErrorMetrics::between_with_mask(&hdr, reference, &ldr, &ref_ldr, w, h, Some(&object_mask.pixels));
+        let mask = MaskErrors { errors_mask, mask_pixels: object_mask.count(), mask_surfaces: object_mask.surfaces };
+        let frame_starts_ms = frames.iter().map(|f| f.gpu_start_ms).collect();
+        Ok(Measurement { passes, frame, per_change, frame_starts_ms, errors, mask, hdr, ldr, heatmap })
+    }
 }
 
 #[derive(serde::Serialize)]
@@ -383,14 +432,17 @@ pub fn run(args: CompareArgs) -> Result<()> {
     };
     let ctx = args.gpu.context()?;
     let (reference, cache, cached) = cached_reference(&ctx, &scene, &settings, !args.measure.no_cache)?;
-    let m = measure(&ctx, &scene, &args.measure, &reference)?;
-    let exact = if args.exact.no_exact {
-        None
+    let (m, exact) = if args.exact.no_exact {
+        (measure(&ctx, &scene, &args.measure, &reference)?, None)
     } else {
-        use super::equaltime::{measure_curve, reference_noise, Exact};
+        // The setting and the exact points timed interleaved (src/app/equaltime.rs).
+        use super::equaltime::{curve_spec, measure_interleaved, reference_noise, Exact, Setting};
+        let spec = curve_spec(&args.scene, &args.measure, &args.exact)?;
         let noise = reference_noise(&ctx, &scene, &settings, &reference, !args.measure.no_cache)?;
-        let curve = measure_curve(&ctx, &args.scene, &args.measure, &args.exact, &reference)?;
-        Some(Exact { curve, noise })
+        let setting = Setting { scene: &scene, reference: &reference };
+        let (mut m, curve) = measure_interleaved(&ctx, &[setting], &args.measure, Some((&spec, &reference)))?;
+        let curve = curve.context("the exact curve")?;
+        (m.remove(0), Some(Exact { curve, noise }))
     };
     check_validation(&ctx)?;
     let (w, h) = (scene.camera.width, scene.camera.height);

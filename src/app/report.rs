@@ -8,8 +8,8 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 use clap::Args;
 
-use super::compare::{cached_reference, measure, MeasureArgs};
-use super::equaltime::{measure_curve, reference_noise, Exact, ExactArgs};
+use super::compare::{cached_reference, MeasureArgs};
+use super::equaltime::{curve_spec, measure_interleaved, reference_noise, Exact, ExactArgs, Setting};
 use super::output::{self, Outputs};
 use super::sweep::{
     cartesian, metric_of, parse_params, plot_exact, plot_svg, short_label, technique_names, Plot, PlotPoint,
@@ -98,7 +98,7 @@ pub fn run(args: ReportArgs) -> Result<()> {
         // entries measured at different times must not overwrite each other's images.
         let stem = format!("{}-{}", e.scene, entry_hash(e));
         let params = parse_params(&e.params)?;
-        let mut rows = Vec::new();
+        let mut loaded = Vec::new();
         for setting in cartesian(&params) {
             let sa = SceneArgs {
                 scene: Some(e.scene.clone().into()),
@@ -109,23 +109,33 @@ pub fn run(args: ReportArgs) -> Result<()> {
             let scene = sa.load().with_context(|| format!("report entry {}", e.scene))?;
             eprintln!("report: {} {}", e.scene, setting.join(" "));
             let (reference, _, _) = cached_reference(&ctx, &scene, &settings, !args.measure.no_cache)?;
-            let m = measure(&ctx, &scene, &args.measure, &reference)?;
-            rows.push((setting, scene, m, reference));
+            loaded.push((setting, scene, reference));
         }
         let sa0 = SceneArgs {
             scene: Some(e.scene.clone().into()),
-            set: spec.set.iter().chain(&rows[0].0).cloned().collect(),
+            set: spec.set.iter().chain(&loaded[0].0).cloned().collect(),
             width: Some(args.size),
             height: Some(args.size),
         };
-        let exact = if args.exact.no_exact {
-            None
+        let (curve_spec, noise) = if args.exact.no_exact {
+            (None, None)
         } else {
-            let (scene, reference) = (&rows[0].1, &rows[0].3);
+            let (scene, reference) = (&loaded[0].1, &loaded[0].2);
             let noise = reference_noise(&ctx, scene, &settings, reference, !args.measure.no_cache)?;
-            let curve = measure_curve(&ctx, &sa0, &args.measure, &args.exact, reference)?;
-            Some(Exact { curve, noise })
+            (Some(curve_spec(&sa0, &args.measure, &args.exact)?), Some(noise))
         };
+        // The entry's settings and the exact points timed interleaved (src/app/equaltime.rs).
+        let timed: Vec<Setting> = loaded.iter().map(|(_, scene, reference)| Setting { scene, reference }).collect();
+        let exact_reference = loaded[0].2.as_slice();
+        let (measured, curve) =
+            measure_interleaved(&ctx, &timed, &args.measure, curve_spec.as_ref().map(|s| (s, exact_reference)))?;
+        drop(timed);
+        let exact = curve.zip(noise).map(|(curve, noise)| Exact { curve, noise });
+        let rows: Vec<_> = loaded
+            .into_iter()
+            .zip(measured)
+            .map(|((setting, scene, reference), m)| (setting, scene, m, reference))
+            .collect();
         check_validation(&ctx)?;
         writeln!(md, "{heading}\n")?;
         let techniques = technique_names(&rows.iter().map(|r| &r.1).collect::<Vec<_>>());
@@ -590,6 +600,7 @@ mod tests {
             passes: Vec::new(),
             frame: Stats { median_ms: time_ms, ..Default::default() },
             per_change: Default::default(),
+            frame_starts_ms: Vec::new(),
             errors: ErrorMetrics { flip_mean: flip, ..Default::default() },
             mask: Default::default(),
             hdr: Vec::new(),
@@ -604,6 +615,7 @@ mod tests {
             time_ms: t,
             errors: ErrorMetrics { flip_mean: flip, ..Default::default() },
             errors_mask: None,
+            frame_starts_ms: Vec::new(),
         };
         Exact {
             curve: ExactCurve { source: ExactSource::Raytrace, points: vec![point(10.0, 0.2), point(100.0, 0.02)] },

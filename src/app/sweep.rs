@@ -7,8 +7,10 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context, Result};
 use clap::Args;
 
-use super::compare::{cached_reference, measure, print_measurement, MeasureArgs, Measurement};
-use super::equaltime::{measure_curve, metric_value, reference_noise, Exact, ExactArgs, ExactSource};
+use super::compare::{cached_reference, print_measurement, MeasureArgs, Measurement};
+use super::equaltime::{
+    curve_spec, measure_interleaved, metric_value, reference_noise, Exact, ExactArgs, ExactSource, Setting,
+};
 use super::output::{self, Outputs};
 use super::{check_validation, GpuArgs, SceneArgs};
 use crate::scene::Scene;
@@ -511,26 +513,35 @@ pub fn run(args: SweepArgs) -> Result<()> {
     let png_out = outputs.prepare(&png_path)?;
     let ctx = args.gpu.context()?;
     let techniques = technique_names(&scenes.iter().collect::<Vec<_>>());
-    let mut rows = Vec::new();
-    for ((o, scene), technique) in rows_overrides.iter().zip(&scenes).zip(techniques) {
-        let (reference, _, _) = cached_reference(&ctx, scene, &settings, !args.measure.no_cache)?;
-        let m = measure(&ctx, scene, &args.measure, &reference)?;
-        println!("== {}", o.join(" "));
-        print_measurement(&m);
-        rows.push(SweepRow { setting: o.clone(), measurement: m, technique });
-    }
     // The exact tracer on the first setting's scene: the settings a sweep compares usually
     // share it (a swept scene parameter changes the truth, and the curve is that of the first).
-    let exact = if args.exact.no_exact {
+    let spec = if args.exact.no_exact {
         None
     } else {
         let mut sa = args.scene.clone();
         sa.set.extend(rows_overrides[0].iter().cloned());
-        let (reference, _, _) = cached_reference(&ctx, &scenes[0], &settings, !args.measure.no_cache)?;
-        let noise = reference_noise(&ctx, &scenes[0], &settings, &reference, !args.measure.no_cache)?;
-        let curve = measure_curve(&ctx, &sa, &args.measure, &args.exact, &reference)?;
-        Some(Exact { curve, noise })
+        Some(curve_spec(&sa, &args.measure, &args.exact)?)
     };
+    let references: Vec<Vec<f32>> = scenes
+        .iter()
+        .map(|scene| Ok(cached_reference(&ctx, scene, &settings, !args.measure.no_cache)?.0))
+        .collect::<Result<_>>()?;
+    let noise = match &spec {
+        Some(_) => Some(reference_noise(&ctx, &scenes[0], &settings, &references[0], !args.measure.no_cache)?),
+        None => None,
+    };
+    // Every setting and the exact points timed interleaved (src/app/equaltime.rs).
+    let timed: Vec<Setting> =
+        scenes.iter().zip(&references).map(|(scene, reference)| Setting { scene, reference }).collect();
+    let (measured, curve) =
+        measure_interleaved(&ctx, &timed, &args.measure, spec.as_ref().map(|s| (s, references[0].as_slice())))?;
+    let exact = curve.zip(noise).map(|(curve, noise)| Exact { curve, noise });
+    let mut rows = Vec::new();
+    for ((o, m), technique) in rows_overrides.iter().zip(measured).zip(techniques) {
+        println!("== {}", o.join(" "));
+        print_measurement(&m);
+        rows.push(SweepRow { setting: o.clone(), measurement: m, technique });
+    }
     check_validation(&ctx)?;
     if let Some(x) = &exact {
         println!("exact tracer: {}", x.curve.source.describe());
@@ -601,6 +612,7 @@ mod tests {
                 passes: Vec::new(),
                 frame: crate::metrics::timing::Stats { median_ms: time_ms, ..Default::default() },
                 per_change: Default::default(),
+                frame_starts_ms: Vec::new(),
                 errors: crate::metrics::image::ErrorMetrics { flip_mean: flip, ..Default::default() },
                 mask: Default::default(),
                 hdr: Vec::new(),
@@ -635,6 +647,7 @@ mod tests {
             time_ms: t,
             errors: ErrorMetrics { flip_mean: flip, ..Default::default() },
             errors_mask: (t > 100.0).then_some(ErrorMetrics { rmse: 0.25, ..Default::default() }),
+            frame_starts_ms: Vec::new(),
         };
         let exact = Exact {
             curve: ExactCurve {
