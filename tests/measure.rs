@@ -175,8 +175,8 @@ fn sweep_writes_csv_and_plots() {
 
 /// "per change ms" (src/app/compare.rs, `PerChange`): the distance impostor's two maps do
 /// work in the first frame and none after, so they are timed in frame 0 and are in no steady
-/// frame; Wyman's d_N is a host cost of creation; the single-interface baseline caches
-/// nothing and pays nothing per change. A pass that draws takes a positive time on any clock
+/// frame; Wyman's d_N and the exact tracer's geometry are host costs of creation; the
+/// single-interface baseline caches nothing and pays nothing per change. A pass that draws takes a positive time on any clock
 /// with sub-millisecond resolution; the sum is checked to the last bits.
 #[test]
 fn per_change_cost_is_the_first_frames_cached_passes_and_the_setup() {
@@ -231,6 +231,12 @@ fn per_change_cost_is_the_first_frames_cached_passes_and_the_setup() {
     assert_eq!(names(&json["per_change_costs"]), ["wyman_d_n"], "{json}");
     let c = &json["per_change_costs"][0];
     assert!(c["ms"].as_f64().unwrap() > 0.0 && c["clock"] == "cpu" && c["rerun_on"] == "mesh change", "{c}");
+
+    // The exact tracer's BVH and buffers, built on the host once per object change.
+    let (_, json) = run("render.refraction=raytrace", "raytrace.json");
+    assert_eq!(names(&json["per_change_costs"]), ["trace_geometry"], "{json}");
+    let c = &json["per_change_costs"][0];
+    assert!(c["ms"].as_f64().unwrap() > 0.0 && c["clock"] == "cpu" && c["rerun_on"] == "object change", "{c}");
 
     let (out, json) = run("render.refraction=single", "single.json");
     assert_eq!(json["per_change_ms"].as_f64(), Some(0.0), "{json}");

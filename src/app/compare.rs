@@ -191,15 +191,19 @@ pub struct Measurement {
 ///   an object dragged in place (`Renderer::move_object`) re-renders an environment map only
 ///   beyond `render.impostor.regenerate_distance` (Szirmay-Kalos et al. 2005, §6), a
 ///   refractor map never.
-/// - What techniques compute at creation outside the frame graph
-///   ([`crate::technique::Technique::once_costs`]): the eikonal light simulation's GPU time,
-///   cached by the volume, the lights and its settings (re-run on a light or volume change,
-///   not on an object or camera move), and Wyman 2005 §3.1's d_N on the host, cached per
-///   mesh (re-run only when a mesh changes).
+/// - What techniques compute at creation outside the frame graph and keep in the technique
+///   cache or the process ([`crate::technique::Technique::once_costs`]), each re-run only when
+///   its cache key changes: the eikonal light simulation's GPU time (keyed by the volume, the
+///   lights and its settings: a light or volume change, not an object or camera move); the
+///   eikonal volume's sampling, smoothing and differentiation (host wall-clock, uploads and
+///   GPU work waited for; keyed by the volume and sigma); the tracers' geometry, BVH and
+///   buffers, of `raytrace` and `water` (host wall-clock; keyed by the objects' triangles,
+///   spheres and materials: an object change); Wyman 2005 §3.1's d_N on the host, for
+///   `wyman` and `caustics_map` (cached per mesh: a mesh change, not a rigid move).
 ///
 /// A camera move (`Renderer::set_camera`, the window's) re-runs none of them: it costs only
-/// frames. What is not counted: pipeline creation and uploads at creation, and results
-/// cached for the process or computed on the host without a timer (the tracers' BVH).
+/// frames. What is not counted: pipeline creation and the uploads every technique makes at
+/// creation (the scene's buffers, cleared stand-in textures).
 #[derive(Clone, Debug, Default, serde::Serialize)]
 pub struct PerChange {
     /// The sum of `per_change_costs`, ms.

@@ -439,7 +439,8 @@ fn summary_table(rows: &[SummaryRow]) -> String {
          in the same time), *beats exact*, *within noise*, or *faster than exact* (no exact \
          image is as fast). *Frame ms* is the steady frame, every pass that runs each frame; \
          *per change ms* is paid once per light or object change (impostor maps, the eikonal \
-         light simulation, Wyman's d_N) and is in no frame, nor in the equal-time verdict.\n\n\
+         light simulation, the tracers' BVH, Wyman's d_N) and is in no frame, nor in the \
+         equal-time verdict.\n\n\
          | scene | effect | best approximation | frame ms | per change ms | FLIP mean | exact FLIP at equal time | verdict |\n\
          |---|---|---|---:|---:|---:|---:|---|\n"
     );

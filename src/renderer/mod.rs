@@ -377,7 +377,15 @@ impl Renderer {
     /// What the techniques computed outside the frame's passes and keep until a change
     /// ([`crate::technique::Technique::once_costs`]).
     pub fn once_costs(&self) -> Vec<crate::technique::OnceCost> {
-        self.techniques.iter().flatten().flat_map(|t| t.once_costs()).collect()
+        let mut costs: Vec<crate::technique::OnceCost> = Vec::new();
+        // Techniques sharing a cached result (raytrace's two effects, its geometry) name it
+        // alike: it was paid once.
+        for c in self.techniques.iter().flatten().flat_map(|t| t.once_costs()) {
+            if !costs.iter().any(|k| k.name == c.name) {
+                costs.push(c);
+            }
+        }
+        costs
     }
 
     /// The passes this renderer records, in order, with the reason for each.

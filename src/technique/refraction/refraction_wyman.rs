@@ -63,14 +63,7 @@ impl Technique for WymanPass {
     }
 
     fn once_costs(&self) -> Vec<crate::technique::OnceCost> {
-        vec![crate::technique::OnceCost {
-            name: "wyman_d_n".into(),
-            ms: self.d_n_ms,
-            clock: "cpu",
-            // Cached per mesh (positions, normals, indices): d_N is measured along the
-            // object's own normals, so a rigid move, a light or the camera leaves it valid.
-            rerun_on: "mesh change",
-        }]
+        vec![d_n_cost(self.d_n_ms)]
     }
 }
 
@@ -80,6 +73,13 @@ pub struct WymanPass {
     pub params: WymanParams,
     /// Host milliseconds §3.1's d_N took for the refractors' meshes when computed.
     d_n_ms: f64,
+}
+
+/// §3.1's d_N as a cost paid once (`ms` host milliseconds, [`scene_distance_along_normals_timed`]):
+/// cached per mesh (positions, normals, indices), and measured along the object's own
+/// normals, so a rigid move, a light or the camera leaves it valid.
+pub fn d_n_cost(ms: f64) -> crate::technique::OnceCost {
+    crate::technique::OnceCost { name: "wyman_d_n".into(), ms, clock: "cpu", rerun_on: "mesh change" }
 }
 
 /// d_N of every scene vertex, in GpuScene's vertex order (0 for non-refractors).
