@@ -272,16 +272,6 @@ impl MaskErrors {
     }
 }
 
-/// Render `scene` with its techniques for `warmup + frames` frames, time the last `frames`,
-/// and compare the last image with `reference`.
-pub fn measure(ctx: &Arc<GpuContext>, scene: &Scene, args: &MeasureArgs, reference: &[f32]) -> Result<Measurement> {
-    let mut t = Timing::new(ctx, scene, args.warmup, args.frames, reference)?;
-    for _ in 0..t.frames() {
-        t.renderer.render_frame()?;
-    }
-    t.finish()
-}
-
 /// A setting's renderer, created before its frames, so that its frames can be interleaved
 /// with other settings' ([`super::bench_versus::Interleave`]) and none of them overlaps a
 /// creation (pipeline compilation, the eikonal light simulation).
@@ -436,18 +426,20 @@ pub fn run(args: CompareArgs) -> Result<()> {
     };
     let ctx = args.gpu.context()?;
     let (reference, cache, cached) = cached_reference(&ctx, &scene, &settings, !args.measure.no_cache)?;
-    let (m, exact) = if args.exact.no_exact {
-        (measure(&ctx, &scene, &args.measure, &reference)?, None)
+    // The setting and the exact points timed interleaved, each frame waited for, as `sweep`
+    // and `report` time theirs (src/app/equaltime.rs).
+    use super::equaltime::{curve_spec, measure_interleaved, reference_noise, Exact, Setting};
+    let (spec, noise) = if args.exact.no_exact {
+        (None, None)
     } else {
-        // The setting and the exact points timed interleaved (src/app/equaltime.rs).
-        use super::equaltime::{curve_spec, measure_interleaved, reference_noise, Exact, Setting};
         let spec = curve_spec(&args.scene, &args.measure, &args.exact)?;
-        let noise = reference_noise(&ctx, &scene, &settings, &reference, !args.measure.no_cache)?;
-        let setting = Setting { scene: &scene, reference: &reference };
-        let (mut m, curve) = measure_interleaved(&ctx, &[setting], &args.measure, Some((&spec, &reference)))?;
-        let curve = curve.context("the exact curve")?;
-        (m.remove(0), Some(Exact { curve, noise }))
+        (Some(spec), Some(reference_noise(&ctx, &scene, &settings, &reference, !args.measure.no_cache)?))
     };
+    let setting = Setting { scene: &scene, reference: &reference };
+    let (mut m, curve) =
+        measure_interleaved(&ctx, &[setting], &args.measure, spec.as_ref().map(|s| (s, &reference[..])))?;
+    let m = m.remove(0);
+    let exact = curve.zip(noise).map(|(curve, noise)| Exact { curve, noise });
     check_validation(&ctx)?;
     let (w, h) = (scene.camera.width, scene.camera.height);
     println!(
