@@ -228,6 +228,9 @@ struct ReferenceCurve<'a> {
     scene: &'a Scene,
     stops: &'a [u32],
     reference: &'a [f32],
+    /// The reference tone-mapped and the object mask, for the errors at each stop.
+    ref_ldr: Vec<u8>,
+    mask: crate::metrics::mask::ObjectMask,
     elapsed_ms: f64,
     points: Vec<ExactPoint>,
 }
@@ -241,12 +244,10 @@ impl ReferenceCurve<'_> {
         if self.stops.contains(&n) {
             let (base, reference) = (self.scene, self.reference);
             let img = self.tracer.image();
-            let (ldr, ref_ldr) =
-                (output::tonemap_scene(&img, &base.render), output::tonemap_scene(reference, &base.render));
-            let mask = crate::metrics::mask::ObjectMask::of_scene(base);
-            let (w, h) = (base.camera.width, base.camera.height);
+            let ldr = output::tonemap_scene(&img, &base.render);
+            let (w, h, mask) = (base.camera.width, base.camera.height, Some(&self.mask.pixels[..]));
             let (errors, errors_mask, _) =
-                ErrorMetrics::between_with_mask(&img, reference, &ldr, &ref_ldr, w, h, Some(&mask.pixels));
+                ErrorMetrics::between_with_mask(&img, reference, &ldr, &self.ref_ldr, w, h, mask);
             eprintln!("exact: reference {n} spp");
             let (label, time_ms) = (format!("{n} spp"), self.elapsed_ms);
             self.points.push(ExactPoint { label, time_ms, errors, errors_mask, frame_starts_ms: Vec::new() });
@@ -255,8 +256,7 @@ impl ReferenceCurve<'_> {
     }
 }
 
-/// One participant of an interleaved run.
-/// Boxed: a renderer and a tracer are a few kilobytes each, moved once into the list.
+/// One participant of an interleaved run. Boxed: a renderer and a tracer are a few kilobytes each, moved once into the list.
 enum Part<'a> {
     Setting(Box<Timing<'a>>),
     Reference(Box<ReferenceCurve<'a>>),
@@ -292,7 +292,10 @@ pub fn measure_interleaved(
         }
         if let Some((scene, s, stops)) = &spec.reference {
             let tracer = Reference::new(ctx, scene, s).context("exact curve: cannot set up the reference")?;
-            let curve = ReferenceCurve { tracer, scene, stops, reference, elapsed_ms: 0.0, points: Vec::new() };
+            let (ref_ldr, mask) =
+                (output::tonemap_scene(reference, &scene.render), crate::metrics::mask::ObjectMask::of_scene(scene));
+            let curve =
+                ReferenceCurve { tracer, scene, stops, reference, ref_ldr, mask, elapsed_ms: 0.0, points: Vec::new() };
             parts.push(Part::Reference(Box::new(curve)));
         }
     }
@@ -303,7 +306,14 @@ pub fn measure_interleaved(
             Part::Reference(r) => u64::from(r.stops.last().copied().unwrap_or(0)),
         })
         .collect();
-    for order in Interleave::new(frames).order() {
+    let schedule = Interleave::new(frames);
+    eprintln!(
+        "timing {} setting(s) and {} exact-curve participant(s) interleaved over {} rounds",
+        settings.len(),
+        parts.len() - settings.len(),
+        schedule.order().count()
+    );
+    for order in schedule.order() {
         for i in order {
             match &mut parts[i] {
                 Part::Setting(t) => t.step()?,

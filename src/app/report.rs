@@ -558,7 +558,7 @@ impl Previous {
         let (_, body) = self.sections.iter().find(|(h, _)| h == SUMMARY_HEADING)?;
         let prefix = format!("| {scene} | {effect} |");
         let line = body.lines().find(|l| l.starts_with(&prefix))?;
-        // A row measured before the per change column has seven cells: it gets an unknown
+        // A row of seven cells (from a report without the per change column) gets an unknown
         // one after its frame ms, so that the kept row lines up with the header.
         if line.matches(" | ").count() == 6 {
             let cells: Vec<&str> = line.split(" | ").collect();
