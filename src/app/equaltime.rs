@@ -263,7 +263,7 @@ enum Part<'a> {
 }
 
 /// Time `settings` (each over `measure_args`' warm-up and frames) and, with `exact`, the exact
-/// tracer's points (against `exact_reference`, the first setting's reference) in one run,
+/// tracer's points (against the reference given with them, the first setting's) in one run,
 /// their frames interleaved ([`Interleave`]): every renderer and the reference's tracer are
 /// created first, all alive at once, then each round renders one frame of each participant
 /// due in it (a `raytrace` point's warm-up frame and `--exact-frames` frames, or one of the
