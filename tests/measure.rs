@@ -146,6 +146,7 @@ fn sweep_writes_csv_and_plots() {
         "{}",
         lines[0]
     );
+    assert!(lines[0].contains(",frame_ms,per_change_ms,"), "{}", lines[0]);
     let column = lines[0].split(',').position(|c| c == "mask_pixels").unwrap();
     for l in &lines[1..5] {
         let pixels: u32 = l.split(',').nth(column).unwrap().parse().unwrap();
@@ -170,6 +171,123 @@ fn sweep_writes_csv_and_plots() {
     let (ok, _, err) = d.prism(&["sweep", "sphere_env", "--param", "render.nonsense=1,2", "-o", "bad"]);
     assert!(!ok && err.contains("nonsense"), "{err}");
     assert!(!d.0.join("bad.csv").exists());
+}
+
+/// "per change ms" (src/app/compare.rs, `PerChange`): the distance impostor's two maps do
+/// work in the first frame and none after, so they are timed in frame 0 and are in no steady
+/// frame; Wyman's d_N and the exact tracer's geometry are host costs of creation; the
+/// single-interface baseline caches nothing and pays nothing per change. A pass that draws takes a positive time on any clock
+/// with sub-millisecond resolution; the sum is checked to the last bits.
+#[test]
+fn per_change_cost_is_the_first_frames_cached_passes_and_the_setup() {
+    let d = Dir::new("per-change");
+    let run = |refraction: &str, json: &str| {
+        let mut args = vec![
+            "compare",
+            "sphere_env",
+            "--set",
+            refraction,
+            "--frames",
+            "2",
+            "--warmup",
+            "1",
+            "--json",
+            json,
+            "--heatmap",
+            "heat.png",
+            "--validation",
+            "--no-exact",
+        ];
+        args.extend_from_slice(SMALL);
+        let (ok, out, err) = d.prism(&args);
+        assert!(ok, "{err}");
+        let v: serde_json::Value = serde_json::from_slice(&std::fs::read(d.0.join(json)).unwrap()).unwrap();
+        (out, v)
+    };
+    let names = |v: &serde_json::Value| -> Vec<String> {
+        v.as_array().unwrap().iter().map(|p| p["name"].as_str().unwrap().to_string()).collect()
+    };
+    let maps = ["refraction_impostor_map", "refraction_impostor_refractor_map"];
+
+    let (out, json) = run("render.refraction=impostor", "impostor.json");
+    let costs = json["per_change_costs"].as_array().unwrap();
+    assert_eq!(names(&json["per_change_costs"]), maps, "{json}");
+    for c in costs {
+        assert!(c["ms"].as_f64().unwrap() > 0.0 && c["clock"] == "gpu", "{c}");
+        assert_eq!(c["rerun_on"], "light or object change", "{c}");
+    }
+    let sum: f64 = costs.iter().map(|c| c["ms"].as_f64().unwrap()).sum();
+    // serde_json parses without `float_roundtrip`: a value may come back one ulp off.
+    let total = json["per_change_ms"].as_f64().unwrap();
+    assert!((total - sum).abs() <= 1e-12 * sum, "{total} vs {sum}");
+    // The steady frames hold the impostor's per-frame pass, and neither map.
+    let steady = names(&json["passes"]);
+    assert!(steady.iter().any(|p| p == "refraction_impostor"), "{steady:?}");
+    assert!(maps.iter().all(|m| !steady.iter().any(|p| p == m)), "{steady:?}");
+    let line = out.lines().find(|l| l.starts_with("per change ms ")).expect(&out);
+    assert!(line.contains("refraction_impostor_map") && line.contains("light or object change"), "{line}");
+
+    let (_, json) = run("render.refraction=wyman", "wyman.json");
+    assert_eq!(names(&json["per_change_costs"]), ["wyman_d_n"], "{json}");
+    let c = &json["per_change_costs"][0];
+    assert!(c["ms"].as_f64().unwrap() > 0.0 && c["clock"] == "cpu" && c["rerun_on"] == "mesh change", "{c}");
+
+    // The exact tracer's BVH and buffers, built on the host once per object change.
+    let (_, json) = run("render.refraction=raytrace", "raytrace.json");
+    assert_eq!(names(&json["per_change_costs"]), ["trace_geometry"], "{json}");
+    let c = &json["per_change_costs"][0];
+    assert!(c["ms"].as_f64().unwrap() > 0.0 && c["clock"] == "cpu" && c["rerun_on"] == "object change", "{c}");
+
+    let (out, json) = run("render.refraction=single", "single.json");
+    assert_eq!(json["per_change_ms"].as_f64(), Some(0.0), "{json}");
+    assert!(json["per_change_costs"].as_array().unwrap().is_empty(), "{json}");
+    assert!(out.contains("per change ms 0.000, paid once per light or object change: none"), "{out}");
+}
+
+/// The exact points are timed interleaved with the setting (src/app/equaltime.rs): on the
+/// device's clock, an exact point's timed frames fall between the setting's first and last
+/// timed frames, where timing them after the setting would put them all after its last.
+/// With 1 + 8 frames for the setting and 1 + 2 per exact point, the exact points' timed frames
+/// are in rounds 5 and 8 of 9 (src/app/bench_versus.rs, `Interleave`): round 5 is inside.
+#[test]
+fn exact_points_are_timed_between_the_settings_frames() {
+    let d = Dir::new("interleave");
+    let mut args = vec![
+        "compare",
+        "sphere_env",
+        "--set",
+        "render.refraction=single",
+        "--frames",
+        "8",
+        "--warmup",
+        "1",
+        "--exact-depths",
+        "1,2",
+        "--exact-frames",
+        "2",
+        "--json",
+        "c.json",
+        "--heatmap",
+        "heat.png",
+        "--validation",
+    ];
+    args.extend_from_slice(SMALL);
+    let (ok, _, err) = d.prism(&args);
+    assert!(ok, "{err}");
+    let json: serde_json::Value = serde_json::from_slice(&std::fs::read(d.0.join("c.json")).unwrap()).unwrap();
+    let starts = |v: &serde_json::Value| -> Vec<f64> {
+        v.as_array().unwrap_or_else(|| panic!("{json}")).iter().map(|t| t.as_f64().unwrap()).collect()
+    };
+    let setting = starts(&json["frame_starts_ms"]);
+    assert_eq!(setting.len(), 8, "{json}");
+    let (first, last) = (setting[0], setting[7]);
+    let points = json["exact"]["points"].as_array().unwrap();
+    assert_eq!(points.len(), 2, "{json}");
+    for p in points {
+        let s = starts(&p["frame_starts_ms"]);
+        assert_eq!(s.len(), 2, "{p}");
+        assert!(s.iter().any(|&t| first < t && t < last), "{s:?} not within the setting's frames {setting:?}");
+    }
 }
 
 /// `prism report` on a one-entry spec: the summary table opens the report with the entry's
@@ -214,6 +332,12 @@ fn report_on_a_tiny_spec_writes_the_summary_and_equal_time_columns() {
         "{row}"
     );
     assert!(md.contains("| # | setting | frame ms |") && md.contains("exact FLIP at equal time | verdict |"), "{md}");
+    // The time columns and the caption that says what each includes.
+    assert!(
+        md.contains("| frame ms | per change ms |")
+            && md.contains("*Per change ms* is paid once per light or object change"),
+        "{md}"
+    );
     assert!(md.contains("Exact tracer: raytrace"), "{md}");
     let svg = std::fs::read_dir(d.0.join("docs/accuracy"))
         .unwrap()

@@ -22,6 +22,55 @@ use super::bench::{
 use super::check_validation;
 use super::output::{self, Outputs};
 
+/// The order in which frames of several participants (renderers, or the reference's
+/// iterations) are rendered when they are timed against each other in one process: in
+/// rounds, each round one frame of every participant due in it, the first of them rotating
+/// so that none always follows the same one (caches, the clock ramping after a pause). A
+/// participant with fewer frames than the longest is spread evenly over the rounds, its last
+/// frame in the last round: participant i with n_i frames in R rounds has rendered
+/// floor((r + 1) n_i / R) by the end of round r. The rotation counts the rounds with as many
+/// participants due (not all rounds: a participant due every sixth of three-participant rounds
+/// would otherwise always take the same place). With equal counts every participant renders
+/// every round, round r starting with participant r mod n.
+#[derive(Clone, Debug)]
+pub struct Interleave {
+    frames: Vec<u64>,
+    rounds: u64,
+}
+
+impl Interleave {
+    /// Participant i renders `frames[i]` frames.
+    pub fn new(frames: Vec<u64>) -> Interleave {
+        let rounds = frames.iter().copied().max().unwrap_or(0);
+        Interleave { frames, rounds }
+    }
+
+    /// Frames participant `i` has rendered by the end of round `r` (`r` = -1: none).
+    fn done(&self, i: usize, r: i64) -> u64 {
+        if r < 0 {
+            return 0;
+        }
+        // u128: frames and rounds are each at most u64.
+        ((r as u128 + 1) * self.frames[i] as u128 / self.rounds.max(1) as u128) as u64
+    }
+
+    /// Every round's participants, in the order they render their frames.
+    pub fn order(&self) -> impl Iterator<Item = Vec<usize>> + '_ {
+        // Rounds seen so far with k participants due, for k = 0..=n.
+        let mut seen = vec![0u64; self.frames.len() + 1];
+        (0..self.rounds).map(move |r| {
+            let mut due: Vec<usize> =
+                (0..self.frames.len()).filter(|&i| self.done(i, r as i64) > self.done(i, r as i64 - 1)).collect();
+            let k = due.len();
+            if k > 0 {
+                due.rotate_left((seen[k] % k as u64) as usize);
+            }
+            seen[k] += 1;
+            due
+        })
+    }
+}
+
 /// Min, median and max of one setting's per-frame ratios to the first setting.
 #[derive(Serialize, Debug, Clone)]
 pub struct RatioStats {
@@ -125,11 +174,10 @@ pub fn run(args: BenchArgs) -> Result<()> {
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     bar.set_message(format!("bench {} versus", scenes[0].name));
-    for round in 0..total {
-        // Rotate which setting goes first, so that none always follows the same one (caches,
-        // the clock ramping after a pause).
-        for k in 0..n {
-            let r = &mut renderers[(round as usize + k) % n];
+    let schedule = Interleave::new(vec![total; n]);
+    for (round, order) in (0..).zip(schedule.order()) {
+        for k in order {
+            let r = &mut renderers[k];
             r.render_frame()?;
             // One frame at a time: recording the next setting's frame must not compete with
             // this one's execution for the CPU (lavapipe runs on it).
@@ -259,5 +307,36 @@ fn print_summary(results: &[VersusSetting]) {
             if i == 0 { "(1)".to_string() } else { fmt(&r.frame_ratio) },
             if r.technique_passes.is_empty() { "(none)".to_string() } else { r.technique_passes.join(", ") }
         );
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Interleave;
+
+    /// Equal counts: every participant every round, the first rotating (`bench --versus`).
+    /// Unequal: the shorter participant spread evenly, its last frame in the last round, and
+    /// every participant renders exactly its frames.
+    #[test]
+    fn interleave_rotates_and_spreads() {
+        let s = Interleave::new(vec![3, 3, 3]);
+        let rounds: Vec<Vec<usize>> = s.order().collect();
+        assert_eq!(rounds, [vec![0, 1, 2], vec![1, 2, 0], vec![2, 0, 1]]);
+        let s = Interleave::new(vec![25, 25, 4]);
+        let rounds: Vec<Vec<usize>> = s.order().collect();
+        assert_eq!(rounds.len(), 25);
+        let with_2: Vec<usize> = (0..25).filter(|&r| rounds[r].contains(&2)).collect();
+        assert_eq!(with_2, [6, 12, 18, 24]);
+        for i in 0..3 {
+            let n = rounds.iter().map(|r| r.iter().filter(|&&k| k == i).count()).sum::<usize>();
+            assert_eq!(n, [25, 25, 4][i]);
+        }
+        // The rounds with all three rotate among themselves: participant 2 takes every place.
+        assert_eq!(
+            [&rounds[6], &rounds[12], &rounds[18], &rounds[24]],
+            [&[0, 1, 2], &[1, 2, 0], &[2, 0, 1], &[0, 1, 2]]
+        );
+        assert_eq!((&rounds[0], &rounds[1], &rounds[7]), (&vec![0, 1], &vec![1, 0], &vec![0, 1]));
+        assert_eq!(Interleave::new(vec![0, 0]).order().count(), 0);
     }
 }

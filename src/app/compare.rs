@@ -220,8 +220,17 @@ fn load_or_render_reference(
 /// One technique setting, timed and compared.
 #[derive(Debug, serde::Serialize)]
 pub struct Measurement {
+    /// The passes of the steady frames (after the warm-up) that did work there: a cached
+    /// pass that ran only in the first frame is in [`PerChange`] instead.
     pub passes: Vec<PassStats>,
+    /// The steady frame: every pass recorded each frame, none of the costs paid once per
+    /// change ([`PerChange`]).
     pub frame: Stats,
+    #[serde(flatten)]
+    pub per_change: PerChange,
+    /// When each timed frame started on the device's clock, ms: how the frames of settings
+    /// timed together were interleaved (src/app/equaltime.rs).
+    pub frame_starts_ms: Vec<f64>,
     pub errors: ErrorMetrics,
     #[serde(flatten)]
     pub mask: MaskErrors,
@@ -231,6 +240,74 @@ pub struct Measurement {
     pub ldr: Vec<u8>,
     #[serde(skip)]
     pub heatmap: Vec<u8>,
+}
+
+/// "per change ms": what a setting pays once per light or object change rather than every
+/// frame, measured in the same run as its frames.
+///
+/// - The passes that did work in the first frame and none in every later one (the distance
+///   impostors' environment, uv and refractor maps, src/technique/impostor/): their GPU time in
+///   frame 0. Their techniques are built from where things are (`Inputs::placement`), so a
+///   scene update that moves a light or an object re-creates them and the maps render again;
+///   an object dragged in place (`Renderer::move_object`) re-renders an environment map only
+///   beyond `render.impostor.regenerate_distance` (Szirmay-Kalos et al. 2005, §6), a
+///   refractor map never.
+/// - What techniques compute at creation outside the frame graph and keep in the technique
+///   cache or the process ([`crate::technique::Technique::once_costs`]), each re-run only when
+///   its cache key changes: the eikonal light simulation's GPU time (keyed by the volume, the
+///   lights and its settings: a light or volume change, not an object or camera move); the
+///   eikonal volume's sampling, smoothing and differentiation (host wall-clock, uploads and
+///   GPU work waited for; keyed by the volume and sigma); the tracers' geometry, BVH and
+///   buffers, of `raytrace` and `water` (host wall-clock; keyed by the objects' triangles,
+///   spheres and materials: an object change); Wyman 2005 §3.1's d_N on the host, for
+///   `wyman` and `caustics_map` (cached per mesh: a mesh change, not a rigid move).
+///
+/// A camera move (`Renderer::set_camera`, the window's) re-runs none of them: it costs only
+/// frames. What is not counted: pipeline creation and the uploads every technique makes at
+/// creation (the scene's buffers, cleared stand-in textures).
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct PerChange {
+    /// The sum of `per_change_costs`, ms.
+    #[serde(rename = "per_change_ms")]
+    pub ms: f64,
+    #[serde(rename = "per_change_costs")]
+    pub costs: Vec<crate::technique::OnceCost>,
+}
+
+impl PerChange {
+    /// The costs of a renderer's run: `timings` of every frame from frame 0 (the passes that
+    /// did work in frame 0 and in no later frame; none without a later frame to tell them
+    /// by) and its techniques' `once` costs.
+    pub fn of(timings: &[FrameTiming], once: Vec<crate::technique::OnceCost>) -> PerChange {
+        let mut costs = Vec::new();
+        let later: Vec<&FrameTiming> = timings.iter().filter(|f| f.frame > 0).collect();
+        if let (Some(first), false) = (timings.iter().find(|f| f.frame == 0), later.is_empty()) {
+            for p in first.passes.iter().filter(|p| !p.idle) {
+                let idle_after = later.iter().flat_map(|f| &f.passes).filter(|q| q.name == p.name).all(|q| q.idle);
+                if idle_after {
+                    costs.push(crate::technique::OnceCost {
+                        name: p.name.clone(),
+                        ms: p.duration_ms(),
+                        clock: "gpu",
+                        rerun_on: "light or object change",
+                    });
+                }
+            }
+        }
+        costs.extend(once);
+        // A fold from +0: `sum` of no f64 is -0, which prints as "-0.000".
+        PerChange { ms: costs.iter().fold(0.0, |a, c| a + c.ms), costs }
+    }
+
+    /// "name 1.234 ms (gpu; light or object change), ..." for the printed line.
+    pub fn describe(&self) -> String {
+        if self.costs.is_empty() {
+            return "none".into();
+        }
+        let each: Vec<String> =
+            self.costs.iter().map(|c| format!("{} {:.3} ms ({}; {})", c.name, c.ms, c.clock, c.rerun_on)).collect();
+        each.join(", ")
+    }
 }
 
 /// The errors over the object mask (src/metrics/mask.rs): the pixels the techniques touch.
@@ -256,35 +333,74 @@ impl MaskErrors {
     }
 }
 
-/// Render `scene` with its techniques for `warmup + frames` frames, time the last `frames`,
-/// and compare the last image with `reference`.
-pub fn measure(ctx: &Arc<GpuContext>, scene: &Scene, args: &MeasureArgs, reference: &[f32]) -> Result<Measurement> {
-    let mut renderer = Renderer::new(ctx, scene).context("cannot set up the renderer")?;
-    for _ in 0..u64::from(args.warmup) + u64::from(args.frames.max(1)) {
-        renderer.render_frame()?;
+/// A setting's renderer, created before its frames, so that its frames can be interleaved
+/// with other settings' ([`super::bench_versus::Interleave`]) and none of them overlaps a
+/// creation (pipeline compilation, the eikonal light simulation).
+pub struct Timing<'a> {
+    renderer: Renderer,
+    scene: &'a Scene,
+    warmup: u32,
+    reference: &'a [f32],
+    frames: u64,
+}
+
+impl<'a> Timing<'a> {
+    pub fn new(
+        ctx: &Arc<GpuContext>,
+        scene: &'a Scene,
+        warmup: u32,
+        frames: u32,
+        reference: &'a [f32],
+    ) -> Result<Timing<'a>> {
+        let renderer = Renderer::new(ctx, scene).context("cannot set up the renderer")?;
+        let frames = u64::from(warmup) + u64::from(frames.max(1));
+        Ok(Timing { renderer, scene, warmup, reference, frames })
     }
-    renderer.finish()?;
-    let frames: Vec<FrameTiming> =
-        renderer.take_timings().into_iter().filter(|f| f.frame >= u64::from(args.warmup)).collect();
-    let (passes, frame) = summarize(&frames);
-    let hdr = renderer.read_hdr()?;
-    let ref_ldr = output::tonemap_scene(reference, &scene.render);
-    // With the adaptive tone map, both images are mapped with the reference's state (the eye
-    // adapted to the true scene), so that FLIP sees the technique's error under one display
-    // mapping rather than the exposure shift of a second adaptation to the wrong image.
-    let ldr = if scene.render.tonemap == "adaptive" {
-        let p = TonemapAdaptiveParams::from_settings(&scene.render).unwrap_or_default();
-        let state = output::adaptive_stats(reference, &p, scene.render.exposure);
-        output::tonemap_adaptive_with(&hdr, &p, scene.render.exposure, &state)
-    } else {
-        renderer.read_ldr()?
-    };
-    let (w, h) = (scene.camera.width, scene.camera.height);
-    let object_mask = ObjectMask::of_scene(scene);
-    let (errors, errors_mask, heatmap) =
-        ErrorMetrics::between_with_mask(&hdr, reference, &ldr, &ref_ldr, w, h, Some(&object_mask.pixels));
-    let mask = MaskErrors { errors_mask, mask_pixels: object_mask.count(), mask_surfaces: object_mask.surfaces };
-    Ok(Measurement { passes, frame, errors, mask, hdr, ldr, heatmap })
+
+    /// Its frames, warm-up included.
+    pub fn frames(&self) -> u64 {
+        self.frames
+    }
+
+    /// Render one frame and wait for it: an interleaved frame must not share the CPU
+    /// (lavapipe runs on it) with the next participant's recording.
+    pub fn step(&mut self) -> Result<()> {
+        self.renderer.render_frame()?;
+        self.renderer.finish()?;
+        Ok(())
+    }
+
+    /// The timings of the frames after the warm-up, the costs paid once per change, and the
+    /// last image's errors against the reference.
+    pub fn finish(self) -> Result<Measurement> {
+        let Timing { mut renderer, scene, warmup, reference, .. } = self;
+        renderer.finish()?;
+        let timings = renderer.take_timings();
+        let per_change = PerChange::of(&timings, renderer.once_costs());
+        let frames: Vec<FrameTiming> = timings.into_iter().filter(|f| f.frame >= u64::from(warmup)).collect();
+        let (mut passes, frame) = summarize(&frames);
+        // A pass idle in every steady frame costs nothing there (its timestamps bracket no work).
+        passes.retain(|p| frames.iter().flat_map(|f| &f.passes).any(|q| q.name == p.name && !q.idle));
+        let hdr = renderer.read_hdr()?;
+        let ref_ldr = output::tonemap_scene(reference, &scene.render);
+        // With the adaptive tone map, both images are mapped with the reference's state (the eye
+        // adapted to the true scene), so that FLIP sees the technique's error under one display
+        // mapping rather than the exposure shift of a second adaptation to the wrong image.
+        let ldr = if scene.render.tonemap == "adaptive" {
+            let p = TonemapAdaptiveParams::from_settings(&scene.render).unwrap_or_default();
+            let state = output::adaptive_stats(reference, &p, scene.render.exposure);
+            output::tonemap_adaptive_with(&hdr, &p, scene.render.exposure, &state)
+        } else {
+            renderer.read_ldr()?
+        };
+        let (w, h) = (scene.camera.width, scene.camera.height);
+        let object_mask = ObjectMask::of_scene(scene);
+        let (errors, errors_mask, heatmap) =
+            ErrorMetrics::between_with_mask(&hdr, reference, &ldr, &ref_ldr, w, h, Some(&object_mask.pixels));
+        let mask = MaskErrors { errors_mask, mask_pixels: object_mask.count(), mask_surfaces: object_mask.surfaces };
+        let frame_starts_ms = frames.iter().map(|f| f.gpu_start_ms).collect();
+        Ok(Measurement { passes, frame, per_change, frame_starts_ms, errors, mask, hdr, ldr, heatmap })
+    }
 }
 
 #[derive(serde::Serialize)]
@@ -338,7 +454,11 @@ pub fn print_measurement(m: &Measurement) {
     for p in &m.passes {
         println!("{:width$}  {:>10.3}", p.name, p.stats.median_ms);
     }
-    println!("{:width$}  {:>10.3}", "frame", m.frame.median_ms);
+    println!(
+        "{:width$}  {:>10.3}  (every pass of a steady frame; none of the per-change costs)",
+        "frame", m.frame.median_ms
+    );
+    println!("per change ms {:.3}, paid once per light or object change: {}", m.per_change.ms, m.per_change.describe());
     let line = |e: &ErrorMetrics| {
         format!(
             "RMSE {:.5}  PSNR {:.2} dB  relMSE {:.5}  FLIP mean {:.4}  FLIP p95 {:.4}",
@@ -371,15 +491,20 @@ pub fn run(args: CompareArgs) -> Result<()> {
     let policy = args.measure.reference_policy();
     let CachedReference { image: reference, path: cache, cached, stats } =
         cached_reference(&ctx, &scene, &settings, policy)?;
-    let m = measure(&ctx, &scene, &args.measure, &reference)?;
-    let exact = if args.exact.no_exact {
-        None
+    // The setting and the exact points timed interleaved, each frame waited for, as `sweep`
+    // and `report` time theirs (src/app/equaltime.rs).
+    use super::equaltime::{curve_spec, measure_interleaved, reference_noise, Exact, Setting};
+    let (spec, noise) = if args.exact.no_exact {
+        (None, None)
     } else {
-        use super::equaltime::{measure_curve, reference_noise, Exact};
-        let noise = reference_noise(&ctx, &scene, &settings, &reference, policy)?;
-        let curve = measure_curve(&ctx, &args.scene, &args.measure, &args.exact, &reference)?;
-        Some(Exact { curve, noise })
+        let spec = curve_spec(&args.scene, &args.measure, &args.exact)?;
+        (Some(spec), Some(reference_noise(&ctx, &scene, &settings, &reference, policy)?))
     };
+    let setting = Setting { scene: &scene, reference: &reference };
+    let (mut m, curve) =
+        measure_interleaved(&ctx, &[setting], &args.measure, spec.as_ref().map(|s| (s, &reference[..])))?;
+    let m = m.remove(0);
+    let exact = curve.zip(noise).map(|(curve, noise)| Exact { curve, noise });
     check_validation(&ctx)?;
     let (w, h) = (scene.camera.width, scene.camera.height);
     println!(

@@ -12,6 +12,18 @@
 //!   the wall-clock time of its iterations alone (setup excluded; each submission waits on
 //!   its fence), which on lavapipe is the same CPU time the GPU timestamps measure.
 //!
+//! The exact points are timed interleaved with the settings, in one run
+//! ([`measure_interleaved`], the round-robin of `prism bench --versus`,
+//! [`super::bench_versus::Interleave`]): every setting's renderer, every `raytrace` point's
+//! and the reference's tracer are created first and kept alive together; then each round
+//! renders one frame of every participant due in it, waiting for each, the first participant
+//! rotating. The settings render every round (`--warmup` + `--frames`); a `raytrace` point's
+//! warm-up and `--exact-frames` frames, or the reference's iterations, are spread evenly over
+//! the same rounds, the last in the last round. A change of load on a shared machine then
+//! weighs on both sides of a verdict alike. Only the timing schedule is shared: each image is
+//! its participant's last frame, as when it is rendered alone, so the errors are unchanged.
+//! The price is memory: all of a sweep's renderers exist at once.
+//!
 //! Every error carries the reference's own noise (a second reference with another seed):
 //! see [`Noise`]. A setting is *dominated* when even its lowest error allowed by that noise
 //! is above the exact tracer's error at the same time, *beats exact* in the mirror case, and
@@ -26,7 +38,8 @@ use crate::metrics::image::ErrorMetrics;
 use crate::reference::{Reference, ReferenceSettings};
 use crate::scene::Scene;
 
-use super::compare::{cached_reference, measure, MeasureArgs, Measurement, ReferencePolicy};
+use super::bench_versus::Interleave;
+use super::compare::{cached_reference, MeasureArgs, Measurement, ReferencePolicy, Timing};
 use super::output;
 use super::SceneArgs;
 
@@ -76,6 +89,10 @@ pub struct ExactPoint {
     /// The errors over the object mask (src/metrics/mask.rs), the same pixels as the
     /// settings'; `None` when no masked surface is in view.
     pub errors_mask: Option<ErrorMetrics>,
+    /// When each timed frame of a `raytrace` point started on the device's clock, ms, as
+    /// [`Measurement::frame_starts_ms`] (none for the reference, timed on the host).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub frame_starts_ms: Vec<f64>,
 }
 
 #[derive(Clone, Debug, serde::Serialize)]
@@ -141,19 +158,24 @@ pub fn source_for(scene: &Scene) -> ExactSource {
     }
 }
 
-/// Measure the exact tracer's curve on the scene that `scene_args` loads (the same scene as
-/// the techniques, with `raytrace` selected for refraction and reflection), against
-/// `reference`.
-pub fn measure_curve(
-    ctx: &Arc<GpuContext>,
-    scene_args: &SceneArgs,
-    measure_args: &MeasureArgs,
-    exact: &ExactArgs,
-    reference: &[f32],
-) -> Result<ExactCurve> {
+/// The exact tracer's points, loaded and checked before any GPU work: the `raytrace`
+/// scenes, one per `--exact-depths` value, or the reference's settings and its stops.
+pub struct CurveSpec {
+    source: ExactSource,
+    /// (label, scene) of each `raytrace` point.
+    raytrace: Vec<(String, Scene)>,
+    /// The scene the reference traces, its settings (every stop's photons) and its stops in
+    /// samples per pixel, ascending.
+    reference: Option<(Scene, ReferenceSettings, Vec<u32>)>,
+    frames: u32,
+}
+
+/// The exact curve of the scene that `scene_args` loads (the same scene as the techniques,
+/// with `raytrace` selected for refraction and reflection, or the reference).
+pub fn curve_spec(scene_args: &SceneArgs, measure_args: &MeasureArgs, exact: &ExactArgs) -> Result<CurveSpec> {
     let base = scene_args.load()?;
     let source = source_for(&base);
-    let mut points = Vec::new();
+    let mut spec = CurveSpec { source, raytrace: Vec::new(), reference: None, frames: exact.exact_frames.max(1) };
     match source {
         ExactSource::Raytrace => {
             if exact.exact_depths.is_empty() {
@@ -167,15 +189,7 @@ pub fn measure_curve(
                     format!("render.raytrace.max_depth={d}"),
                 ]);
                 let scene = sa.load().with_context(|| format!("exact curve, raytrace max_depth={d}"))?;
-                let args = MeasureArgs { frames: exact.exact_frames.max(1), warmup: 1, ..measure_args.clone() };
-                eprintln!("exact: raytrace max_depth={d}");
-                let m = measure(ctx, &scene, &args, reference)?;
-                points.push(ExactPoint {
-                    label: format!("max_depth={d}"),
-                    time_ms: m.frame.median_ms,
-                    errors: m.errors,
-                    errors_mask: m.mask.errors_mask,
-                });
+                spec.raytrace.push((format!("max_depth={d}"), scene));
             }
         }
         ExactSource::Reference => {
@@ -193,25 +207,141 @@ pub fn measure_curve(
                 seed: settings.seed.wrapping_add(2),
                 ..settings
             };
-            let mut r = Reference::new(ctx, &base, &s).context("exact curve: cannot set up the reference")?;
-            let ref_ldr = output::tonemap_scene(reference, &base.render);
-            let mask = crate::metrics::mask::ObjectMask::of_scene(&base);
-            let mut elapsed = 0.0f64;
-            for &n in &spp {
-                let t = std::time::Instant::now();
-                r.run(n - r.iterations_done())?;
-                elapsed += t.elapsed().as_secs_f64() * 1e3;
-                let img = r.image();
-                let ldr = output::tonemap_scene(&img, &base.render);
-                let (w, h) = (base.camera.width, base.camera.height);
-                let (errors, errors_mask, _) =
-                    ErrorMetrics::between_with_mask(&img, reference, &ldr, &ref_ldr, w, h, Some(&mask.pixels));
-                eprintln!("exact: reference {n} spp");
-                points.push(ExactPoint { label: format!("{n} spp"), time_ms: elapsed, errors, errors_mask });
+            spec.reference = Some((base, s, spp));
+        }
+    }
+    Ok(spec)
+}
+
+/// A setting of an interleaved run: its scene, timed over `warmup` + `frames` frames, and the
+/// reference it is compared with.
+pub struct Setting<'a> {
+    pub scene: &'a Scene,
+    pub reference: &'a [f32],
+}
+
+/// The reference stopped at increasing samples per pixel: one iteration per step, timed
+/// alone (its setup excluded; each iteration waits on its fence), the errors taken at each
+/// stop.
+struct ReferenceCurve<'a> {
+    tracer: Reference,
+    scene: &'a Scene,
+    stops: &'a [u32],
+    reference: &'a [f32],
+    /// The reference tone-mapped and the object mask, for the errors at each stop.
+    ref_ldr: Vec<u8>,
+    mask: crate::metrics::mask::ObjectMask,
+    elapsed_ms: f64,
+    points: Vec<ExactPoint>,
+}
+
+impl ReferenceCurve<'_> {
+    fn step(&mut self) -> Result<()> {
+        let t = std::time::Instant::now();
+        self.tracer.run(1)?;
+        self.elapsed_ms += t.elapsed().as_secs_f64() * 1e3;
+        let n = self.tracer.iterations_done();
+        if self.stops.contains(&n) {
+            let (base, reference) = (self.scene, self.reference);
+            let img = self.tracer.image();
+            let ldr = output::tonemap_scene(&img, &base.render);
+            let (w, h, mask) = (base.camera.width, base.camera.height, Some(&self.mask.pixels[..]));
+            let (errors, errors_mask, _) =
+                ErrorMetrics::between_with_mask(&img, reference, &ldr, &self.ref_ldr, w, h, mask);
+            eprintln!("exact: reference {n} spp");
+            let (label, time_ms) = (format!("{n} spp"), self.elapsed_ms);
+            self.points.push(ExactPoint { label, time_ms, errors, errors_mask, frame_starts_ms: Vec::new() });
+        }
+        Ok(())
+    }
+}
+
+/// One participant of an interleaved run. Boxed: a renderer and a tracer are a few kilobytes each, moved once into the list.
+enum Part<'a> {
+    Setting(Box<Timing<'a>>),
+    Reference(Box<ReferenceCurve<'a>>),
+}
+
+/// Time `settings` (each over `measure_args`' warm-up and frames) and, with `exact`, the exact
+/// tracer's points (against the reference given with them, the first setting's) in one run,
+/// their frames interleaved ([`Interleave`]): every renderer and the reference's tracer are
+/// created first, all alive at once, then each round renders one frame of each participant
+/// due in it (a `raytrace` point's warm-up frame and `--exact-frames` frames, or one of the
+/// reference's iterations, spread evenly over the settings' rounds), each frame waited for.
+/// A change of the machine's load then weighs on the settings and the exact points alike.
+/// The images and errors are those of each participant's last frame, as when timed alone.
+pub fn measure_interleaved(
+    ctx: &Arc<GpuContext>,
+    settings: &[Setting<'_>],
+    measure_args: &MeasureArgs,
+    exact: Option<(&CurveSpec, &[f32])>,
+) -> Result<(Vec<Measurement>, Option<ExactCurve>)> {
+    let mut parts = Vec::new();
+    for s in settings {
+        parts.push(Part::Setting(Box::new(Timing::new(
+            ctx,
+            s.scene,
+            measure_args.warmup,
+            measure_args.frames,
+            s.reference,
+        )?)));
+    }
+    if let Some((spec, reference)) = exact {
+        for (_, scene) in &spec.raytrace {
+            parts.push(Part::Setting(Box::new(Timing::new(ctx, scene, 1, spec.frames, reference)?)));
+        }
+        if let Some((scene, s, stops)) = &spec.reference {
+            let tracer = Reference::new(ctx, scene, s).context("exact curve: cannot set up the reference")?;
+            let (ref_ldr, mask) =
+                (output::tonemap_scene(reference, &scene.render), crate::metrics::mask::ObjectMask::of_scene(scene));
+            let curve =
+                ReferenceCurve { tracer, scene, stops, reference, ref_ldr, mask, elapsed_ms: 0.0, points: Vec::new() };
+            parts.push(Part::Reference(Box::new(curve)));
+        }
+    }
+    let frames = parts
+        .iter()
+        .map(|p| match p {
+            Part::Setting(t) => t.frames(),
+            Part::Reference(r) => u64::from(r.stops.last().copied().unwrap_or(0)),
+        })
+        .collect();
+    let schedule = Interleave::new(frames);
+    eprintln!(
+        "timing {} setting(s) and {} exact-curve participant(s) interleaved over {} rounds",
+        settings.len(),
+        parts.len() - settings.len(),
+        schedule.order().count()
+    );
+    for order in schedule.order() {
+        for i in order {
+            match &mut parts[i] {
+                Part::Setting(t) => t.step()?,
+                Part::Reference(r) => r.step()?,
             }
         }
     }
-    Ok(ExactCurve { source, points })
+    let mut measured = Vec::new();
+    let mut points = Vec::new();
+    for (i, p) in parts.into_iter().enumerate() {
+        match p {
+            Part::Setting(t) if i < settings.len() => measured.push(t.finish()?),
+            Part::Setting(t) => {
+                let m = t.finish()?;
+                let label = exact.map(|(spec, _)| spec.raytrace[i - settings.len()].0.clone()).unwrap_or_default();
+                points.push(ExactPoint {
+                    label,
+                    time_ms: m.frame.median_ms,
+                    errors: m.errors,
+                    errors_mask: m.mask.errors_mask,
+                    frame_starts_ms: m.frame_starts_ms,
+                });
+            }
+            Part::Reference(r) => points.extend(r.points),
+        }
+    }
+    let curve = exact.map(|(spec, _)| ExactCurve { source: spec.source, points });
+    Ok((measured, curve))
 }
 
 /// The exact tracer's error at a time, interpolated on its curve.
@@ -347,6 +477,7 @@ mod tests {
                     time_ms: t,
                     errors: ErrorMetrics { rmse: e, ..Default::default() },
                     errors_mask: None,
+                    frame_starts_ms: Vec::new(),
                 })
                 .collect(),
         }

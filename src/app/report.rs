@@ -8,8 +8,8 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 use clap::Args;
 
-use super::compare::{cached_reference, measure, MeasureArgs};
-use super::equaltime::{measure_curve, reference_noise, Exact, ExactArgs};
+use super::compare::{cached_reference, MeasureArgs};
+use super::equaltime::{curve_spec, measure_interleaved, reference_noise, Exact, ExactArgs, Setting};
 use super::output::{self, Outputs};
 use super::sweep::{
     cartesian, metric_of, parse_params, plot_exact, plot_svg, short_label, technique_names, Plot, PlotPoint,
@@ -98,7 +98,7 @@ pub fn run(args: ReportArgs) -> Result<()> {
         // entries measured at different times must not overwrite each other's images.
         let stem = format!("{}-{}", e.scene, entry_hash(e));
         let params = parse_params(&e.params)?;
-        let mut rows = Vec::new();
+        let mut loaded = Vec::new();
         // Warnings of the references (step-capped paths, or cut ones accepted with
         // --accept-cut-reference), for the section.
         let mut inexact = Vec::new();
@@ -113,24 +113,33 @@ pub fn run(args: ReportArgs) -> Result<()> {
             eprintln!("report: {} {}", e.scene, setting.join(" "));
             let r = cached_reference(&ctx, &scene, &settings, args.measure.reference_policy())?;
             inexact.extend(r.stats.warning(&scene.name).map(|w| format!("{}: {w}", setting.join(" "))));
-            let reference = r.image;
-            let m = measure(&ctx, &scene, &args.measure, &reference)?;
-            rows.push((setting, scene, m, reference));
+            loaded.push((setting, scene, r.image));
         }
         let sa0 = SceneArgs {
             scene: Some(e.scene.clone().into()),
-            set: spec.set.iter().chain(&rows[0].0).cloned().collect(),
+            set: spec.set.iter().chain(&loaded[0].0).cloned().collect(),
             width: Some(args.size),
             height: Some(args.size),
         };
-        let exact = if args.exact.no_exact {
-            None
+        let (curve_spec, noise) = if args.exact.no_exact {
+            (None, None)
         } else {
-            let (scene, reference) = (&rows[0].1, &rows[0].3);
+            let (scene, reference) = (&loaded[0].1, &loaded[0].2);
             let noise = reference_noise(&ctx, scene, &settings, reference, args.measure.reference_policy())?;
-            let curve = measure_curve(&ctx, &sa0, &args.measure, &args.exact, reference)?;
-            Some(Exact { curve, noise })
+            (Some(curve_spec(&sa0, &args.measure, &args.exact)?), Some(noise))
         };
+        // The entry's settings and the exact points timed interleaved (src/app/equaltime.rs).
+        let timed: Vec<Setting> = loaded.iter().map(|(_, scene, reference)| Setting { scene, reference }).collect();
+        let exact_reference = loaded[0].2.as_slice();
+        let (measured, curve) =
+            measure_interleaved(&ctx, &timed, &args.measure, curve_spec.as_ref().map(|s| (s, exact_reference)))?;
+        drop(timed);
+        let exact = curve.zip(noise).map(|(curve, noise)| Exact { curve, noise });
+        let rows: Vec<_> = loaded
+            .into_iter()
+            .zip(measured)
+            .map(|((setting, scene, reference), m)| (setting, scene, m, reference))
+            .collect();
         check_validation(&ctx)?;
         writeln!(md, "{heading}\n")?;
         for w in &inexact {
@@ -253,23 +262,24 @@ fn section_table(
     };
     write!(
         md,
-        "| # | setting | frame ms | technique passes | RMSE | relMSE | FLIP mean | FLIP p95 | mask RMSE | mask FLIP mean |"
+        "| # | setting | frame ms | per change ms | technique passes | RMSE | relMSE | FLIP mean | FLIP p95 | mask RMSE | mask FLIP mean |"
     )?;
     if exact.is_some() {
         writeln!(md, " exact FLIP at equal time | verdict |")?;
-        writeln!(md, "|---:|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---|")?;
+        writeln!(md, "|---:|---|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---|")?;
     } else {
         writeln!(md)?;
-        writeln!(md, "|---:|---|---:|---|---:|---:|---:|---:|---:|---:|")?;
+        writeln!(md, "|---:|---|---:|---:|---|---:|---:|---:|---:|---:|---:|")?;
     }
     for (i, (setting, m)) in rows.iter().enumerate() {
         let passes: Vec<String> = m.passes.iter().map(|p| format!("{} {:.2}", p.name, p.stats.median_ms)).collect();
         write!(
             md,
-            "| {} | {} | {:.2} | {} | {} | {:.4} | {} | {:.4} |",
+            "| {} | {} | {:.2} | {:.2} | {} | {} | {:.4} | {} | {:.4} |",
             i + 1,
             if setting.is_empty() { "default".into() } else { format!("`{}`", setting.join(" ")) },
             m.frame.median_ms,
+            m.per_change.ms,
             passes.join(", "),
             with_noise("rmse", m.errors.rmse),
             m.errors.rel_mse,
@@ -290,6 +300,7 @@ fn section_table(
         }
     }
     writeln!(md)?;
+    writeln!(md, "{}\n", cost_caption(rows.iter().map(|(_, m)| &m.per_change)))?;
     let mut masks: Vec<String> = rows.iter().map(|(_, m)| m.mask.describe()).collect();
     masks.dedup();
     writeln!(
@@ -328,6 +339,26 @@ fn section_table(
         writeln!(md, "{}.\n", pts.join("; "))?;
     }
     Ok(())
+}
+
+/// What a table's time columns include: frame ms the steady frame, per change ms the costs
+/// paid once per light or object change (src/app/compare.rs, `PerChange`), named with the
+/// change that re-runs each.
+fn cost_caption<'a>(per_change: impl Iterator<Item = &'a crate::app::compare::PerChange>) -> String {
+    let mut names: Vec<String> = Vec::new();
+    for c in per_change.flat_map(|p| &p.costs) {
+        let name = format!("`{}` ({}, on a {})", c.name, c.clock, c.rerun_on);
+        if !names.contains(&name) {
+            names.push(name);
+        }
+    }
+    let paid = if names.is_empty() { "none here".to_string() } else { names.join(", ") };
+    format!(
+        "*Frame ms* is the median steady frame after the warm-up: every pass that runs each frame \
+         (the technique passes listed, the G-buffer, shading, tone map), none of the costs paid \
+         once. *Per change ms* is paid once per light or object change, not per frame (a camera \
+         move re-runs none of it): {paid}."
+    )
 }
 
 /// The effect an entry compares techniques for at their defaults: an entry whose only
@@ -395,8 +426,8 @@ fn summary_row(
         None => ("not measured".into(), "–".into()),
     };
     let line = format!(
-        "| {} | {effect} | {technique} | {:.2} | {:.4} ({lo:.4}–{hi:.4}) | {at} | {verdict} |",
-        e.scene, m.frame.median_ms, m.errors.flip_mean
+        "| {} | {effect} | {technique} | {:.2} | {:.2} | {:.4} ({lo:.4}–{hi:.4}) | {at} | {verdict} |",
+        e.scene, m.frame.median_ms, m.per_change.ms, m.errors.flip_mean
     );
     Ok(Some(SummaryRow { scene: e.scene.clone(), effect: effect.into(), line }))
 }
@@ -413,9 +444,12 @@ fn summary_table(rows: &[SummaryRow]) -> String {
          at the same GPU time (interpolated on its curve, measured in the same run; each \
          section names the tracer), and the verdict: *dominated* (exact ray tracing is better \
          in the same time), *beats exact*, *within noise*, or *faster than exact* (no exact \
-         image is as fast).\n\n\
-         | scene | effect | best approximation | frame ms | FLIP mean | exact FLIP at equal time | verdict |\n\
-         |---|---|---|---:|---:|---:|---|\n"
+         image is as fast). *Frame ms* is the steady frame, every pass that runs each frame; \
+         *per change ms* is paid once per light or object change (impostor maps, the eikonal \
+         light simulation, the tracers' BVH, Wyman's d_N) and is in no frame, nor in the \
+         equal-time verdict.\n\n\
+         | scene | effect | best approximation | frame ms | per change ms | FLIP mean | exact FLIP at equal time | verdict |\n\
+         |---|---|---|---:|---:|---:|---:|---|\n"
     );
     for r in rows {
         t.push_str(&r.line);
@@ -530,7 +564,14 @@ impl Previous {
     fn summary_line(&self, scene: &str, effect: &str) -> Option<String> {
         let (_, body) = self.sections.iter().find(|(h, _)| h == SUMMARY_HEADING)?;
         let prefix = format!("| {scene} | {effect} |");
-        body.lines().find(|l| l.starts_with(&prefix)).map(str::to_string)
+        let line = body.lines().find(|l| l.starts_with(&prefix))?;
+        // A row of seven cells (from a report without the per change column) gets an unknown
+        // one after its frame ms, so that the kept row lines up with the header.
+        if line.matches(" | ").count() == 6 {
+            let cells: Vec<&str> = line.split(" | ").collect();
+            return Some(format!("{} | – | {}", cells[..4].join(" | "), cells[4..].join(" | ")));
+        }
+        Some(line.to_string())
     }
 
     /// The section under `heading`, with a provenance line added if it has none; `None` for a
@@ -566,6 +607,8 @@ mod tests {
         Measurement {
             passes: Vec::new(),
             frame: Stats { median_ms: time_ms, ..Default::default() },
+            per_change: Default::default(),
+            frame_starts_ms: Vec::new(),
             errors: ErrorMetrics { flip_mean: flip, ..Default::default() },
             mask: Default::default(),
             hdr: Vec::new(),
@@ -580,6 +623,7 @@ mod tests {
             time_ms: t,
             errors: ErrorMetrics { flip_mean: flip, ..Default::default() },
             errors_mask: None,
+            frame_starts_ms: Vec::new(),
         };
         Exact {
             curve: ExactCurve { source: ExactSource::Raytrace, points: vec![point(10.0, 0.2), point(100.0, 0.02)] },
@@ -612,7 +656,7 @@ mod tests {
         let r = super::summary_row(&e, &rows, &techniques, Some(&x)).unwrap().unwrap();
         assert_eq!(
             r.line,
-            "| sphere_env | refraction | `hu_qin` (within noise: `wyman`) | 50.00 | 0.1000 (0.0950–0.1000) | 0.0400 | dominated |"
+            "| sphere_env | refraction | `hu_qin` (within noise: `wyman`) | 50.00 | 0.00 | 0.1000 (0.0950–0.1000) | 0.0400 | dominated |"
         );
         // An entry that sweeps a parameter has no summary row.
         let sweep = super::Entry { params: vec!["render.hu_qin.search_steps=2,4".into()], ..e };
@@ -622,6 +666,13 @@ mod tests {
         let p = Previous::parse(&text);
         assert!(p.summary_line("sphere_env", "refraction").unwrap().ends_with("| dominated |"));
         assert_eq!(p.summary_line("sphere_env", "caustics"), None);
+        // A row kept from a report without the per change column gets an unknown one.
+        let old = "| a | refraction | `wyman` | 20.00 | 0.1000 (0.0950–0.1000) | 0.0400 | dominated |";
+        let p = Previous::parse(&format!("{}\n\n{old}\n", super::SUMMARY_HEADING));
+        assert_eq!(
+            p.summary_line("a", "refraction").unwrap(),
+            "| a | refraction | `wyman` | 20.00 | – | 0.1000 (0.0950–0.1000) | 0.0400 | dominated |"
+        );
     }
 
     /// A kept section gains the file's provenance line; a placeholder never does (it was not

@@ -7,8 +7,10 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context, Result};
 use clap::Args;
 
-use super::compare::{cached_reference, measure, print_measurement, MeasureArgs, Measurement};
-use super::equaltime::{measure_curve, metric_value, reference_noise, Exact, ExactArgs, ExactSource};
+use super::compare::{cached_reference, print_measurement, MeasureArgs, Measurement};
+use super::equaltime::{
+    curve_spec, measure_interleaved, metric_value, reference_noise, Exact, ExactArgs, ExactSource, Setting,
+};
 use super::output::{self, Outputs};
 use super::{check_validation, GpuArgs, SceneArgs};
 use crate::scene::Scene;
@@ -401,7 +403,9 @@ fn quote(s: &str) -> String {
 
 /// The CSV: one row per setting (kind `technique`, numbered as on the plot) and, with an
 /// exact curve, one per exact point (kind `exact`): each parameter's value, each pass's median
-/// ms, frame ms, errors, the mask's pixel count, the errors over it and its surfaces
+/// ms over the steady frames, frame ms (the steady frame: every pass that runs each frame),
+/// per change ms (paid once per light or object change, not in frame ms:
+/// [`super::compare::PerChange`]; empty on an exact row, whose time is a frame's), errors, the mask's pixel count, the errors over it and its surfaces
 /// (`mask_*`; an exact row gives only the errors, over the settings' mask; empty where no
 /// masked surface is in view), whether on the Pareto front, the
 /// technique, the lowest value of
@@ -430,7 +434,7 @@ pub fn csv(params: &[(String, Vec<String>)], rows: &[SweepRow], metric: &str, ex
         csv.push_str(&format!(",{p}_ms"));
     }
     csv.push_str(&format!(
-        ",frame_ms,rmse,psnr_db,rel_mse,flip_mean,flip_p95,mask_pixels,mask_rmse,mask_psnr_db,mask_rel_mse,\
+        ",frame_ms,per_change_ms,rmse,psnr_db,rel_mse,flip_mean,flip_p95,mask_pixels,mask_rmse,mask_psnr_db,mask_rel_mse,\
          mask_flip_mean,mask_flip_p95,mask_surfaces,pareto,technique,{metric}_low,exact_{metric},verdict\n"
     ));
     let errors = |e: &crate::metrics::image::ErrorMetrics| {
@@ -447,7 +451,7 @@ pub fn csv(params: &[(String, Vec<String>)], rows: &[SweepRow], metric: &str, ex
             csv.push(',');
             csv.push_str(&v.unwrap_or_default());
         }
-        csv.push_str(&format!(",{:.4}", r.measurement.frame.median_ms));
+        csv.push_str(&format!(",{:.4},{:.4}", r.measurement.frame.median_ms, r.measurement.per_change.ms));
         csv.push_str(&errors(&r.measurement.errors));
         csv.push_str(&format!(",{}", r.measurement.mask.mask_pixels));
         csv.push_str(&r.measurement.mask.errors_mask.as_ref().map(errors).unwrap_or_else(|| ",".repeat(5)));
@@ -472,7 +476,7 @@ pub fn csv(params: &[(String, Vec<String>)], rows: &[SweepRow], metric: &str, ex
         for p in &x.curve.points {
             csv.push_str(&format!(",exact,{}", quote(&format!("{name} {}", p.label))));
             csv.push_str(&",".repeat(params.len() + passes.len()));
-            csv.push_str(&format!(",{:.4}", p.time_ms));
+            csv.push_str(&format!(",{:.4},", p.time_ms));
             csv.push_str(&errors(&p.errors));
             // The mask's pixels and surfaces are the settings' rows'.
             csv.push(',');
@@ -509,26 +513,35 @@ pub fn run(args: SweepArgs) -> Result<()> {
     let png_out = outputs.prepare(&png_path)?;
     let ctx = args.gpu.context()?;
     let techniques = technique_names(&scenes.iter().collect::<Vec<_>>());
-    let mut rows = Vec::new();
-    for ((o, scene), technique) in rows_overrides.iter().zip(&scenes).zip(techniques) {
-        let reference = cached_reference(&ctx, scene, &settings, args.measure.reference_policy())?.image;
-        let m = measure(&ctx, scene, &args.measure, &reference)?;
-        println!("== {}", o.join(" "));
-        print_measurement(&m);
-        rows.push(SweepRow { setting: o.clone(), measurement: m, technique });
-    }
     // The exact tracer on the first setting's scene: the settings a sweep compares usually
     // share it (a swept scene parameter changes the truth, and the curve is that of the first).
-    let exact = if args.exact.no_exact {
+    let spec = if args.exact.no_exact {
         None
     } else {
         let mut sa = args.scene.clone();
         sa.set.extend(rows_overrides[0].iter().cloned());
-        let reference = cached_reference(&ctx, &scenes[0], &settings, args.measure.reference_policy())?.image;
-        let noise = reference_noise(&ctx, &scenes[0], &settings, &reference, args.measure.reference_policy())?;
-        let curve = measure_curve(&ctx, &sa, &args.measure, &args.exact, &reference)?;
-        Some(Exact { curve, noise })
+        Some(curve_spec(&sa, &args.measure, &args.exact)?)
     };
+    let references: Vec<Vec<f32>> = scenes
+        .iter()
+        .map(|scene| Ok(cached_reference(&ctx, scene, &settings, args.measure.reference_policy())?.image))
+        .collect::<Result<_>>()?;
+    let noise = match &spec {
+        Some(_) => Some(reference_noise(&ctx, &scenes[0], &settings, &references[0], args.measure.reference_policy())?),
+        None => None,
+    };
+    // Every setting and the exact points timed interleaved (src/app/equaltime.rs).
+    let timed: Vec<Setting> =
+        scenes.iter().zip(&references).map(|(scene, reference)| Setting { scene, reference }).collect();
+    let (measured, curve) =
+        measure_interleaved(&ctx, &timed, &args.measure, spec.as_ref().map(|s| (s, references[0].as_slice())))?;
+    let exact = curve.zip(noise).map(|(curve, noise)| Exact { curve, noise });
+    let mut rows = Vec::new();
+    for ((o, m), technique) in rows_overrides.iter().zip(measured).zip(techniques) {
+        println!("== {}", o.join(" "));
+        print_measurement(&m);
+        rows.push(SweepRow { setting: o.clone(), measurement: m, technique });
+    }
     check_validation(&ctx)?;
     if let Some(x) = &exact {
         println!("exact tracer: {}", x.curve.source.describe());
@@ -598,6 +611,8 @@ mod tests {
             measurement: Measurement {
                 passes: Vec::new(),
                 frame: crate::metrics::timing::Stats { median_ms: time_ms, ..Default::default() },
+                per_change: Default::default(),
+                frame_starts_ms: Vec::new(),
                 errors: crate::metrics::image::ErrorMetrics { flip_mean: flip, ..Default::default() },
                 mask: Default::default(),
                 hdr: Vec::new(),
@@ -626,11 +641,13 @@ mod tests {
             mask_pixels: 120,
             mask_surfaces: vec!["ball (dielectric): 100 px".into(), "floor (diffuse caustic receiver): 20 px".into()],
         };
+        rows[2].measurement.per_change = crate::app::compare::PerChange { ms: 12.5, costs: Vec::new() };
         let point = |label: &str, t: f64, flip: f64| ExactPoint {
             label: label.into(),
             time_ms: t,
             errors: ErrorMetrics { flip_mean: flip, ..Default::default() },
             errors_mask: (t > 100.0).then_some(ErrorMetrics { rmse: 0.25, ..Default::default() }),
+            frame_starts_ms: Vec::new(),
         };
         let exact = Exact {
             curve: ExactCurve {
@@ -644,7 +661,7 @@ mod tests {
         assert_eq!(lines.len(), 1 + 3 + 2, "{text}");
         assert_eq!(
             lines[0],
-            "n,kind,setting,render.refraction,frame_ms,rmse,psnr_db,rel_mse,flip_mean,flip_p95,mask_pixels,\
+            "n,kind,setting,render.refraction,frame_ms,per_change_ms,rmse,psnr_db,rel_mse,flip_mean,flip_p95,mask_pixels,\
              mask_rmse,mask_psnr_db,mask_rel_mse,mask_flip_mean,mask_flip_p95,mask_surfaces,pareto,technique,\
              flip_mean_low,exact_flip_mean,verdict"
         );
@@ -663,10 +680,12 @@ mod tests {
             lines[1]
         );
         assert!(lines[2].contains(",0,,,,,,,false,"), "no mask errors: {}", lines[2]);
+        // Frame ms, then per change ms beside it.
+        assert!(lines[1].contains(",10.0000,0.0000,") && lines[3].contains(",400.0000,12.5000,"), "{text}");
         // wyman at 40 ms: exact reaches 0.25 * 0.2^(log 2 / log 10) = 0.1540 < 0.35.
         assert!(lines[2].ends_with(",false,refraction=wyman,0.350000,0.154003,dominated"), "{}", lines[2]);
         assert!(lines[3].ends_with(",true,refraction=hu_qin,0.020000,0.050000,beats exact"), "{}", lines[3]);
-        assert!(lines[4].starts_with(",exact,raytrace max_depth=1,,20.0000,"), "{}", lines[4]);
+        assert!(lines[4].starts_with(",exact,raytrace max_depth=1,,20.0000,,"), "{}", lines[4]);
         assert!(lines[4].contains(",0.25000,0.00000,,,,,,,,,raytrace,"), "no mask errors: {}", lines[4]);
         assert!(
             lines[5].contains(",0.05000,0.00000,,0.250000,0.000,0.000000,0.00000,0.00000,,,raytrace,"),

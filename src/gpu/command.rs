@@ -33,6 +33,10 @@ fn whole_image_region(image: &Image) -> vk::BufferImageCopy {
 pub struct Cmd<'a> {
     ctx: &'a GpuContext,
     pub(crate) raw: vk::CommandBuffer,
+    /// Commands that do work on the device (draws, dispatches, copies, clears, render-pass
+    /// begins) recorded so far: the frame graph tells a pass that recorded nothing this
+    /// frame (a cached map not due) from one that ran, by comparing it before and after.
+    work: std::cell::Cell<u64>,
 }
 
 /// What a render pass attachment is cleared to.
@@ -46,7 +50,16 @@ pub enum Clear {
 
 impl<'a> Cmd<'a> {
     pub(crate) fn wrap(ctx: &'a GpuContext, raw: vk::CommandBuffer) -> Self {
-        Cmd { ctx, raw }
+        Cmd { ctx, raw, work: std::cell::Cell::new(0) }
+    }
+
+    /// Device work recorded so far (see the field's doc): only differences mean anything.
+    pub fn work_recorded(&self) -> u64 {
+        self.work.get()
+    }
+
+    fn note_work(&self) {
+        self.work.set(self.work.get() + 1);
     }
 
     fn dev(&self) -> &ash::Device {
@@ -186,6 +199,7 @@ impl<'a> Cmd<'a> {
             .framebuffer(fb.raw)
             .render_area(vk::Rect2D { offset: vk::Offset2D::default(), extent: fb.extent })
             .clear_values(&values);
+        self.note_work();
         // SAFETY: recording, outside any render pass.
         unsafe { self.dev().cmd_begin_render_pass(self.raw, &info, vk::SubpassContents::INLINE) };
         self.set_viewport(fb.extent);
@@ -265,16 +279,19 @@ impl<'a> Cmd<'a> {
     }
 
     pub fn draw(&self, vertices: u32, instances: u32) {
+        self.note_work();
         // SAFETY: recording inside a render pass with a bound graphics pipeline.
         unsafe { self.dev().cmd_draw(self.raw, vertices, instances, 0, 0) };
     }
 
     pub fn draw_indexed(&self, index_count: u32, first_index: u32, vertex_offset: i32) {
+        self.note_work();
         // SAFETY: as draw, with bound index/vertex buffers.
         unsafe { self.dev().cmd_draw_indexed(self.raw, index_count, 1, first_index, vertex_offset, 0) };
     }
 
     pub fn dispatch(&self, x: u32, y: u32, z: u32) {
+        self.note_work();
         // SAFETY: recording outside a render pass with a bound compute pipeline.
         unsafe { self.dev().cmd_dispatch(self.raw, x, y, z) };
     }
@@ -283,6 +300,7 @@ impl<'a> Cmd<'a> {
     /// `buffer` at byte `offset`: GPU-generated work sizes without a CPU round trip (the
     /// HistoPyramid's output count, src/technique/eikonal/histopyramid.rs).
     pub fn dispatch_indirect(&self, buffer: &Buffer, offset: u64) {
+        self.note_work();
         // SAFETY: recording outside a render pass with a bound compute pipeline; the buffer
         // has INDIRECT_BUFFER usage and holds a VkDispatchIndirectCommand at `offset`.
         unsafe { self.dev().cmd_dispatch_indirect(self.raw, buffer.raw, offset) };
@@ -381,6 +399,7 @@ impl<'a> Cmd<'a> {
     /// Copy every layer of `image` (in TRANSFER_SRC_OPTIMAL) tightly into `buffer`.
     pub fn copy_image_to_buffer(&self, image: &Image, buffer: &Buffer) {
         let region = whole_image_region(image);
+        self.note_work();
         // SAFETY: the caller transitioned the image to TRANSFER_SRC_OPTIMAL; buffer is large enough.
         unsafe {
             self.dev().cmd_copy_image_to_buffer(
@@ -396,6 +415,7 @@ impl<'a> Cmd<'a> {
     /// Copy `buffer` into every layer of `image` (in TRANSFER_DST_OPTIMAL).
     pub fn copy_buffer_to_image(&self, buffer: &Buffer, image: &Image) {
         let region = whole_image_region(image);
+        self.note_work();
         // SAFETY: the caller transitioned the image to TRANSFER_DST_OPTIMAL; buffer holds the texels.
         unsafe {
             self.dev().cmd_copy_buffer_to_image(
@@ -432,6 +452,7 @@ impl<'a> Cmd<'a> {
         if regions.is_empty() {
             return;
         }
+        self.note_work();
         // SAFETY: the caller transitioned both images (frame graph); the layers exist in both,
         // which were created alike with TRANSFER_SRC / TRANSFER_DST usage.
         unsafe {
@@ -455,6 +476,7 @@ impl<'a> Cmd<'a> {
             base_array_layer: 0,
             layer_count: image.layers(),
         };
+        self.note_work();
         // SAFETY: the caller transitioned the image to TRANSFER_DST_OPTIMAL.
         unsafe {
             self.dev().cmd_clear_color_image(
@@ -484,6 +506,7 @@ impl<'a> Cmd<'a> {
             dst_subresource: layers,
             dst_offsets: [vk::Offset3D::default(), corner(dst_extent.width, dst_extent.height)],
         };
+        self.note_work();
         // SAFETY: the caller transitioned both images (frame graph); both are single-layer
         // colour images created with TRANSFER_SRC / TRANSFER_DST usage.
         unsafe {
@@ -501,6 +524,7 @@ impl<'a> Cmd<'a> {
 
     /// Fill a buffer with a repeated u32 (clearing counters and accumulation buffers).
     pub fn fill_buffer(&self, buffer: &Buffer, value: u32) {
+        self.note_work();
         // SAFETY: recording outside a render pass; buffer has TRANSFER_DST usage.
         unsafe { self.dev().cmd_fill_buffer(self.raw, buffer.raw, 0, vk::WHOLE_SIZE, value) };
     }

@@ -24,6 +24,10 @@ pub struct TimestampQuery {
     pub pass: u32,
     pub start: u32,
     pub end: u32,
+    /// Whether the pass recorded any device work ([`super::Cmd::work_recorded`]): a cached
+    /// pass with nothing due this frame (a distance impostor's map between regenerations)
+    /// records none, and its two timestamps then bracket nothing.
+    pub ran: bool,
 }
 
 impl TimestampPool {

@@ -418,7 +418,9 @@ impl<'g, 'a> Frame<'g, 'a> {
             if let Some(pool) = s {
                 cmd.begin_pipeline_stats(pool, i as u32);
             }
+            let work = cmd.work_recorded();
             (pass.record)(cmd);
+            let ran = cmd.work_recorded() > work;
             if let Some(pool) = s {
                 cmd.end_pipeline_stats(pool, i as u32);
             }
@@ -429,6 +431,7 @@ impl<'g, 'a> Frame<'g, 'a> {
                     pass: i as u32,
                     start: 2 * i as u32,
                     end: 2 * i as u32 + 1,
+                    ran,
                 });
             }
             cmd.end_label();

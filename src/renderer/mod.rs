@@ -67,6 +67,10 @@ pub struct PassTime {
     /// Its pipeline statistics, when they are counted ([`Renderer::count_pipeline_stats`]).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub counts: Option<PassCounts>,
+    /// The pass recorded no device work this frame: a cached result with nothing due (a
+    /// distance impostor's map between regenerations), its time only its timestamps' own.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub idle: bool,
 }
 
 impl PassTime {
@@ -376,6 +380,20 @@ impl Renderer {
         self.technique::<EikonalPass>().and_then(|p| p.light_stats())
     }
 
+    /// What the techniques computed outside the frame's passes and keep until a change
+    /// ([`crate::technique::Technique::once_costs`]).
+    pub fn once_costs(&self) -> Vec<crate::technique::OnceCost> {
+        let mut costs: Vec<crate::technique::OnceCost> = Vec::new();
+        // Techniques sharing a cached result (raytrace's two effects, its geometry) name it
+        // alike: it was paid once.
+        for c in self.techniques.iter().flatten().flat_map(|t| t.once_costs()) {
+            if !costs.iter().any(|k| k.name == c.name) {
+                costs.push(c);
+            }
+        }
+        costs
+    }
+
     /// The passes this renderer records, in order, with the reason for each.
     pub fn plan(&self) -> &[PlannedPass] {
         &self.recipe.passes
@@ -438,6 +456,7 @@ impl Renderer {
                         start_ms: pool.ticks_to_ms(origin, ticks[q.start as usize]),
                         end_ms: pool.ticks_to_ms(origin, ticks[q.end as usize]),
                         counts: counts.as_ref().and_then(|c| c.get(q.pass as usize).copied()),
+                        idle: !q.ran,
                     })
                     .collect();
                 self.completed.push(FrameTiming { frame, gpu_start_ms: pool.ticks_to_ms(0, origin), passes });

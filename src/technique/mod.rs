@@ -262,6 +262,21 @@ impl Cache {
         Ok(t)
     }
 
+    /// [`Cache::get_or_try_insert`], with the host milliseconds `make` took when it ran: what
+    /// the entry cost once, reported by the techniques that hold it
+    /// ([`Technique::once_costs`]).
+    pub fn get_or_try_insert_timed<T: 'static, E>(
+        &mut self,
+        key: u64,
+        make: impl FnOnce() -> Result<T, E>,
+    ) -> Result<std::rc::Rc<Timed<T>>, E> {
+        self.get_or_try_insert(key, || {
+            let start = std::time::Instant::now();
+            let value = make()?;
+            Ok(Timed { value, ms: start.elapsed().as_secs_f64() * 1e3 })
+        })
+    }
+
     /// Start a round of creations (a renderer's, or an update's).
     pub(crate) fn begin(&mut self) {
         self.generation += 1;
@@ -330,6 +345,42 @@ pub trait Technique: Any {
     fn debug_targets(&self) -> &[DebugTarget] {
         &[]
     }
+
+    /// What its creation computed outside the frame's passes and keeps until a change (the
+    /// eikonal light simulation, Wyman's d_N), as measured when it was computed. A cached
+    /// pass inside the frame (a distance impostor's map) is timed by the frame's timestamps
+    /// instead: it does work in the first frame and none after. A result shared through the
+    /// cache is named alike by every technique holding it, and counted once.
+    fn once_costs(&self) -> Vec<OnceCost> {
+        Vec::new()
+    }
+}
+
+/// A cached result and the host milliseconds it took to make, uploads and waits included.
+pub struct Timed<T> {
+    pub value: T,
+    pub ms: f64,
+}
+
+/// A cost paid once per change of what a result depends on, not every frame.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct OnceCost {
+    /// The pass, or the computation outside the frame graph.
+    pub name: String,
+    pub ms: f64,
+    /// `gpu`: device timestamps (on lavapipe, CPU time like every pass); `cpu`: wall-clock
+    /// time on the host.
+    pub clock: &'static str,
+    /// Which change runs it again, from what its cache is keyed by.
+    pub rerun_on: &'static str,
+}
+
+/// What the tracers' geometry (the reference's BVH and buffers, shared by `raytrace` and
+/// `water` through the cache) cost to build: keyed by the objects' triangles, spheres and
+/// materials and the volume, so it is built again when an object moves or changes, never
+/// for a light or the camera.
+pub fn trace_geometry_cost(geometry: &Timed<crate::reference::TraceGeometry>) -> OnceCost {
+    OnceCost { name: "trace_geometry".into(), ms: geometry.ms, clock: "cpu", rerun_on: "object change" }
 }
 
 /// One step of the recipe: one technique's passes of one stage.

@@ -111,13 +111,14 @@ struct Raytrace {
     pass: FullscreenPass,
     // Bound in the pass's set 1.
     _uniforms: Buffer,
-    _geometry: Rc<TraceGeometry>,
+    geometry: Rc<crate::technique::Timed<TraceGeometry>>,
 }
 
 fn create(s: &mut Setup<'_>, mode: Mode) -> Result<Box<dyn Technique>, RenderError> {
     let p = params("raytrace", RaytraceParams::from_settings(&s.scene.render))?;
     let (ctx, scene) = (s.ctx, s.scene);
-    let geometry = s.cache.get_or_try_insert(TraceGeometry::key(scene), || TraceGeometry::new(ctx, scene))?;
+    let timed = s.cache.get_or_try_insert_timed(TraceGeometry::key(scene), || TraceGeometry::new(ctx, scene))?;
+    let geometry = &timed.value;
     let (name, spec) = match mode {
         Mode::Refraction => (REFRACTION_RAYTRACE, SPECULAR_MODE_REFRACTION),
         Mode::Reflection => (REFLECTION_RAYTRACE, SPECULAR_MODE_REFLECTION),
@@ -143,11 +144,15 @@ fn create(s: &mut Setup<'_>, mode: Mode) -> Result<Box<dyn Technique>, RenderErr
         set,
         s.frame_layout,
     )?;
-    Ok(Box::new(Raytrace { pass, _uniforms: uniforms, _geometry: geometry }))
+    Ok(Box::new(Raytrace { pass, _uniforms: uniforms, geometry: timed }))
 }
 
 impl Technique for Raytrace {
     fn record<'a>(&'a self, _: Stage, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>) {
         self.pass.record(frame, inputs.frame_set, &[inputs.scene.environment_id]);
+    }
+
+    fn once_costs(&self) -> Vec<crate::technique::OnceCost> {
+        vec![crate::technique::trace_geometry_cost(&self.geometry)]
     }
 }

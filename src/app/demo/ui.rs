@@ -464,7 +464,7 @@ mod tests {
             gpu_start_ms: 0.0,
             passes: passes
                 .iter()
-                .map(|&(n, s, e)| PassTime { name: n.into(), start_ms: s, end_ms: e, counts: None })
+                .map(|&(n, s, e)| PassTime { name: n.into(), start_ms: s, end_ms: e, counts: None, idle: false })
                 .collect(),
         }
     }

@@ -44,7 +44,7 @@ use crate::scene::{Light, Material, Scene};
 pub use crate::shader_structs::GpuCausticFace;
 use crate::shader_structs::{CausticDrawPush, CausticHitsPush, GpuCausticSplat, RefractorPush, ShadowPush};
 use crate::technique::baseline::shadow_map::FAR_DISTANCE;
-use crate::technique::refraction::refraction_wyman::scene_distance_along_normals;
+use crate::technique::refraction::refraction_wyman::scene_distance_along_normals_timed;
 use crate::technique::{
     caustic_objects, in_stage, list, params, record_kept, registration, FrameInputs, PlannedPass, Regeneration,
     Registration, RenderError, Setup, Stage, Technique,
@@ -96,6 +96,11 @@ fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
 }
 
 impl Technique for CausticsMapPass {
+    /// Wyman 2005 §3.1's d_N for the `exit = "wyman"` estimate (computed whatever the exit).
+    fn once_costs(&self) -> Vec<crate::technique::OnceCost> {
+        vec![crate::technique::refraction::refraction_wyman::d_n_cost(self.refractors.d_n_ms)]
+    }
+
     fn record<'a>(&'a self, _: Stage, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>) {
         if !self.regeneration.rendering() {
             return record_kept(
@@ -546,6 +551,8 @@ pub struct RefractorLayers {
     /// layer's position w.
     dn_set: BoundSet,
     _d_n: Buffer,
+    /// Host milliseconds d_N took for the dielectrics' meshes when computed.
+    pub d_n_ms: f64,
 }
 
 /// Where the caustic shaders (glsl/caustics/light_path.glsl) read the first four of
@@ -611,7 +618,7 @@ impl RefractorLayers {
         }
         // Wyman 2005 §3.1's d_N, "precomputed for every vertex" (on the CPU, cached per mesh),
         // for the `exit = "wyman"` estimate; a one-float stand-in without vertices.
-        let d_n = scene_distance_along_normals(scene);
+        let (d_n, d_n_ms) = scene_distance_along_normals_timed(scene);
         let d_n = if d_n.is_empty() { vec![0.0] } else { d_n };
         let d_n_buffer = Buffer::storage(ctx, &format!("{name}_d_n"), &d_n)?;
         let dn_set = Bindings::new(vk::ShaderStageFlags::VERTEX)
@@ -663,6 +670,7 @@ impl RefractorLayers {
         let layers = RefractorLayers {
             dn_set,
             _d_n: d_n_buffer,
+            d_n_ms,
             queries,
             visible,
             visible_id,

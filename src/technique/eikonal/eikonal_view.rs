@@ -78,6 +78,26 @@ impl Technique for EikonalPass {
     /// Lighting: the simulated light on the receivers (eikonal_light, after deferred
     /// shading; nothing without a simulation). Volume: `eikonal_nearby` (when the scene has
     /// impostor rectangles), then `eikonal_view`.
+    /// The light simulation, run at creation outside the frame graph: its kernels' GPU time.
+    fn once_costs(&self) -> Vec<crate::technique::OnceCost> {
+        // Sampled, smoothed and differentiated once per volume and sigma (its cache key).
+        let volume = crate::technique::OnceCost {
+            name: "eikonal_volume".into(),
+            ms: self.volume.ms,
+            clock: "cpu",
+            rerun_on: "volume change",
+        };
+        let light = self.light_stats().map(|s| crate::technique::OnceCost {
+            name: "eikonal_light_simulation".into(),
+            ms: s.gpu_ms,
+            clock: "gpu",
+            // Its cache key: the volume, the lights and the simulation's settings; a moved
+            // object or camera re-creates the technique around the cached result.
+            rerun_on: "light or volume change",
+        });
+        std::iter::once(volume).chain(light).collect()
+    }
+
     fn record<'a>(&'a self, stage: Stage, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>) {
         if stage == Stage::Lighting {
             if let Some(l) = &self.light {
@@ -121,7 +141,7 @@ pub const MAX_VIEW_STEPS: u32 = 8192;
 /// The `eikonal_view` pass and the volume it renders.
 pub struct EikonalPass {
     // Bound by the view pass.
-    _volume: std::rc::Rc<VolumeTextures>,
+    volume: std::rc::Rc<crate::technique::Timed<VolumeTextures>>,
     view: FullscreenPass,
     // The nearby geometry of exit rays
     // (src/technique/eikonal/eikonal_nearby.rs): impostors (a 1x1 stand-in without rectangles)
@@ -153,13 +173,14 @@ impl EikonalPass {
         // only: a resize or a change of another setting re-creates the pass around it.
         let (ctx, graph) = (s.ctx, &mut *s.graph);
         let key = crate::technique::cache_key(&(params.sigma, volume));
-        let textures = s.cache.get_or_try_insert(key, || prepare_volume(ctx, params, volume, graph))?;
+        let timed = s.cache.get_or_try_insert_timed(key, || prepare_volume(ctx, params, volume, graph))?;
+        let textures = &timed.value;
         // Section 5.2's light simulation before the view pass is built.
         // Every light of the scene: their runs add into one pair of volumes.
         let light = match lights {
             [_, ..] if params.light => {
                 let lit = super::eikonal_light::LitVolume { params: &params, volume, lights };
-                Some(super::eikonal_light::EikonalLight::new(s, lit, &textures)?)
+                Some(super::eikonal_light::EikonalLight::new(s, lit, textures)?)
             }
             _ => None,
         };
@@ -284,7 +305,7 @@ impl EikonalPass {
             set,
             frame_layout,
         )?;
-        Ok(EikonalPass { _volume: textures, view, nearby, _triangles: triangles, light })
+        Ok(EikonalPass { volume: timed, view, nearby, _triangles: triangles, light })
     }
 
     /// The light simulation's statistics (None without a simulation).

@@ -76,14 +76,15 @@ struct Water {
     // Bound in the pass's set 1.
     _uniforms: Buffer,
     _sky: Buffer,
-    _geometry: Rc<TraceGeometry>,
+    geometry: Rc<crate::technique::Timed<TraceGeometry>>,
 }
 
 fn create(s: &mut Setup<'_>) -> Result<Box<dyn Technique>, RenderError> {
     let (ctx, scene) = (s.ctx, s.scene);
     let caustics = CausticReads::new(s)?;
     let shadowed = s.planned(crate::technique::baseline::shadow_map::SHADOW_MAP);
-    let geometry = s.cache.get_or_try_insert(TraceGeometry::key(scene), || TraceGeometry::new(ctx, scene))?;
+    let timed = s.cache.get_or_try_insert_timed(TraceGeometry::key(scene), || TraceGeometry::new(ctx, scene))?;
+    let geometry = &timed.value;
     // max_depth is the tracer's; this pass follows one interaction and reads only the rest.
     let uniforms = geometry.uniforms(scene, s.gpu, 1);
     let uniforms = Buffer::storage(ctx, "refraction_water_uniforms", std::slice::from_ref(&uniforms))?;
@@ -108,7 +109,7 @@ fn create(s: &mut Setup<'_>) -> Result<Box<dyn Technique>, RenderError> {
         set,
         s.frame_layout,
     )?;
-    Ok(Box::new(Water { pass, caustics, shadowed, _uniforms: uniforms, _sky: sky, _geometry: geometry }))
+    Ok(Box::new(Water { pass, caustics, shadowed, _uniforms: uniforms, _sky: sky, geometry: timed }))
 }
 
 /// The index of the water: the first dielectric's (green channel).
@@ -144,5 +145,9 @@ impl Technique for Water {
         }
         reads.extend(self.caustics.reads(inputs.targets));
         self.pass.record(frame, inputs.frame_set, &reads);
+    }
+
+    fn once_costs(&self) -> Vec<crate::technique::OnceCost> {
+        vec![crate::technique::trace_geometry_cost(&self.geometry)]
     }
 }

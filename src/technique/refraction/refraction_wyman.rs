@@ -31,7 +31,7 @@ use crate::{
 use super::refractor_layers::{
     refractor_slots, DebugTarget, LayerKind, LayerScope, RefractorLayers, ShadeDesc, ShadePass,
 };
-use super::wyman_distance::distance_along_normals;
+use super::wyman_distance::distance_along_normals_timed;
 
 pub const REFRACTION_WYMAN_LAYERS: &str = "refraction_wyman_layers";
 pub const REFRACTION_WYMAN: &str = "refraction_wyman";
@@ -66,6 +66,10 @@ impl Technique for WymanPass {
     fn debug_targets(&self) -> &[DebugTarget] {
         &self.shade.debug
     }
+
+    fn once_costs(&self) -> Vec<crate::technique::OnceCost> {
+        vec![d_n_cost(self.d_n_ms)]
+    }
 }
 
 pub struct WymanPass {
@@ -74,19 +78,40 @@ pub struct WymanPass {
     pub params: WymanParams,
     /// Per object, its layer in the per-refractor back surface.
     _slots: Buffer,
+    /// Host milliseconds §3.1's d_N took for the refractors' meshes when computed.
+    d_n_ms: f64,
+}
+
+/// §3.1's d_N as a cost paid once (`ms` host milliseconds, [`scene_distance_along_normals_timed`]):
+/// cached per mesh (positions, normals, indices), and measured along the object's own
+/// normals, so a rigid move, a light or the camera leaves it valid.
+pub fn d_n_cost(ms: f64) -> crate::technique::OnceCost {
+    crate::technique::OnceCost { name: "wyman_d_n".into(), ms, clock: "cpu", rerun_on: "mesh change" }
 }
 
 /// d_N of every scene vertex, in GpuScene's vertex order (0 for non-refractors).
 pub fn scene_distance_along_normals(scene: &Scene) -> Vec<f32> {
-    let mut out = Vec::new();
+    scene_distance_along_normals_timed(scene).0
+}
+
+/// [`scene_distance_along_normals`] and the host milliseconds its computation took (the
+/// meshes' own times, cached or not: [`distance_along_normals_timed`]; a mesh shared by
+/// several objects is computed, and counted, once).
+pub fn scene_distance_along_normals_timed(scene: &Scene) -> (Vec<f32>, f64) {
+    let (mut out, mut ms, mut seen) = (Vec::new(), 0.0, Vec::new());
     for o in &scene.objects {
         if matches!(scene.materials[o.material], Material::Dielectric { .. }) {
-            out.extend_from_slice(&distance_along_normals(&o.mesh));
+            let (d, t) = distance_along_normals_timed(&o.mesh);
+            out.extend_from_slice(&d);
+            if !seen.iter().any(|s| std::sync::Arc::ptr_eq(s, &d)) {
+                ms += t;
+                seen.push(d);
+            }
         } else {
             out.extend(std::iter::repeat_n(0.0, o.mesh.positions.len()));
         }
     }
-    out
+    (out, ms)
 }
 
 impl WymanPass {
@@ -97,7 +122,7 @@ impl WymanPass {
             BackSurface::Furthest => LayerKind::BackFurthest,
             BackSurface::Second => LayerKind::BackNearest,
         };
-        let d_n = scene_distance_along_normals(scene);
+        let (d_n, d_n_ms) = scene_distance_along_normals_timed(scene);
         // The front layer is the visible refractor's wherever the G-buffer sees one: shared.
         let kinds = [(back, LayerScope::PerRefractor), (LayerKind::Front, LayerScope::Shared)];
         let layers = RefractorLayers::new(s, REFRACTION_WYMAN_LAYERS, &kinds, Some(&d_n))?;
@@ -126,6 +151,6 @@ impl WymanPass {
             targets,
             nearest,
         )?;
-        Ok(WymanPass { layers, shade, params, _slots: slots })
+        Ok(WymanPass { layers, shade, params, _slots: slots, d_n_ms })
     }
 }

@@ -165,13 +165,22 @@ fn mesh_key(mesh: &Mesh) -> u64 {
 
 /// [`compute_distance_along_normals`], cached per mesh for the life of the process.
 pub fn distance_along_normals(mesh: &Mesh) -> Arc<Vec<f32>> {
-    static CACHE: OnceLock<Mutex<HashMap<u64, Arc<Vec<f32>>>>> = OnceLock::new();
+    distance_along_normals_timed(mesh).0
+}
+
+/// [`distance_along_normals`] and the wall-clock milliseconds its computation took when it
+/// was computed (also when it comes from the cache): the cost paid once per mesh.
+pub fn distance_along_normals_timed(mesh: &Mesh) -> (Arc<Vec<f32>>, f64) {
+    type Entry = (Arc<Vec<f32>>, f64);
+    static CACHE: OnceLock<Mutex<HashMap<u64, Entry>>> = OnceLock::new();
     let key = mesh_key(mesh);
     let cache = CACHE.get_or_init(Default::default);
     if let Some(d) = cache.lock().unwrap_or_else(|e| e.into_inner()).get(&key) {
         return d.clone();
     }
+    let start = std::time::Instant::now();
     let d = Arc::new(compute_distance_along_normals(mesh));
-    cache.lock().unwrap_or_else(|e| e.into_inner()).insert(key, d.clone());
-    d
+    let entry = (d, start.elapsed().as_secs_f64() * 1e3);
+    cache.lock().unwrap_or_else(|e| e.into_inner()).insert(key, entry.clone());
+    entry
 }
