@@ -225,17 +225,23 @@ fn exact_ray_tracing_follows_a_moved_light_and_a_material_value() {
     assert_eq!((u.rebuilt, u.recreated.len(), u.materials), (false, 0, true), "{u:?}");
 }
 
-/// Impostors kept from frame to frame follow what they show when it changes in place: a
-/// material value of a surface seen in them. Hu & Qin's textures TEX_i, rendered once in a
-/// static scene (§4), hold sphere_nearby's bunny as the ball refracts it; room_mirror's
-/// distance impostor (Szirmay-Kalos et al. 2005 §6, regenerated only on large moves) holds
-/// the white walls the mirror ball reflects. Neither technique is re-created by the change.
+/// What techniques keep from frame to frame (`render.update = "on_change"`) follows what it
+/// shows when that changes in place: a material value. Hu & Qin's textures TEX_i hold
+/// sphere_nearby's bunny as the ball refracts it; room_mirror's distance impostor
+/// (Szirmay-Kalos et al. 2005 §6, regenerated only on large moves) holds the white walls the
+/// mirror ball reflects; the three caustic techniques' maps hold caustic_sphere's caustic,
+/// which the ball's index moves. No technique is re-created by the change.
 #[test]
-fn kept_impostors_follow_a_material_value() {
+fn kept_results_follow_a_material_value() {
     let hq = "render.refraction=hu_qin";
     let u = live("sphere_nearby", &[hq], &[hq, "materials.bunny.albedo=[0.2, 0.6, 0.9]"]);
     assert_eq!((u.rebuilt, u.recreated.len(), u.materials), (false, 0, true), "{u:?}");
     let im = "render.reflection=impostor";
     let u = live("room_mirror", &[im], &[im, "materials.white.albedo=0.3"]);
     assert_eq!((u.rebuilt, u.recreated.len(), u.materials), (false, 0, true), "{u:?}");
+    for caustics in ["caustics_map", "photon_buffer", "impostor_lightmap"] {
+        let c = format!("render.caustics={caustics}");
+        let u = live("caustic_sphere", &[&c], &[&c, "materials.glass.ior=1.33"]);
+        assert_eq!((u.rebuilt, u.recreated.len(), u.materials), (false, 0, true), "{caustics}: {u:?}");
+    }
 }

@@ -181,7 +181,7 @@ pub struct Setup<'a> {
 }
 
 /// When a technique renders what it keeps from frame to frame (shadow maps, impostor
-/// textures, caustic maps): in its first frame and in the frame after anything they show
+/// textures, caustic maps, light maps): in its first frame and in the frame after anything they show
 /// changed, and in no other. Hu & Qin 2007 §4: "For a static scene, it is unnecessary to
 /// compute caustics, shadow, RECT_i, and TEX_i during rendering"; `render.update =
 /// "every_frame"` makes every frame a change (the papers' timings, which assume fully dynamic

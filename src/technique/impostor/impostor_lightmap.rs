@@ -53,8 +53,8 @@ use crate::scene::{Light, Material, Scene};
 use crate::shader_structs::{CausticPush, LightmapApplyPush, LightmapSplatPush};
 use crate::technique::impostor::distance_impostor::{object_bounds, record_maps, ImpostorMap, MapContent, MapDesc};
 use crate::technique::{
-    dielectric_names, in_stage, list, params, registration, specular_names, FrameInputs, PlannedPass, Registration,
-    RenderError, Setup, Stage, Technique,
+    dielectric_names, in_stage, list, params, record_kept, registration, specular_names, FrameInputs, PlannedPass,
+    Regeneration, Registration, RenderError, Setup, Stage, Technique,
 };
 use crate::{
     BINDING_GBUF_ALBEDO, BINDING_GBUF_DEPTH, BINDING_GBUF_NORMAL, BINDING_LIGHTMAPS, LIGHTMAP_BINDING_PHOTON_HIT,
@@ -136,6 +136,14 @@ impl Technique for ImpostorLightmap {
 
     fn objects_moved(&mut self, bounds: &[(Vec3, f32)]) {
         ImpostorLightmap::objects_moved(self, bounds);
+    }
+
+    fn contents_changed(&mut self) {
+        self.uv_map.contents_changed();
+        if let Some(r) = &mut self.refractor {
+            r.contents_changed();
+        }
+        self.regeneration.changed();
     }
 }
 
@@ -227,6 +235,8 @@ struct CausticMap {
 /// `render.caustics = "impostor_lightmap"` (§5).
 pub struct ImpostorLightmap {
     pub params: ImpostorLightmapParams,
+    /// The caustic maps and light maps are rendered when something changed.
+    regeneration: Regeneration,
     pub uv_map: ImpostorMap,
     pub refractor: Option<ImpostorMap>,
     refractor_center: Vec3,
@@ -409,6 +419,7 @@ impl ImpostorLightmap {
         )?;
         let bounds = (0..scene.objects.len()).map(|i| object_bounds(scene, i)).collect();
         Ok(ImpostorLightmap {
+            regeneration: Regeneration::default(),
             params,
             uv_map,
             refractor,
@@ -442,9 +453,11 @@ impl ImpostorLightmap {
             self.refractor_center = r.center_of(bounds);
         }
         self.bounds = bounds.to_vec();
+        self.regeneration.changed();
     }
 
     pub fn begin_frame(&mut self) {
+        self.regeneration.begin_frame();
         self.uv_map.begin_frame();
         if let Some(r) = &mut self.refractor {
             r.begin_frame();
@@ -503,6 +516,9 @@ impl ImpostorLightmap {
         record_maps(frame, IMPOSTOR_LIGHTMAP_UV_MAP, vec![&self.uv_map], scene, frame_set, None);
         if let Some(r) = &self.refractor {
             record_maps(frame, IMPOSTOR_LIGHTMAP_REFRACTOR_MAP, vec![r], scene, frame_set, None);
+        }
+        if !self.regeneration.rendering() {
+            return record_kept(frame, &[IMPOSTOR_LIGHTMAP_CAUSTIC_MAP, IMPOSTOR_LIGHTMAP_SPLAT]);
         }
         let mut pass = frame.pass(IMPOSTOR_LIGHTMAP_CAUSTIC_MAP).uses(&self.caustic_set);
         for m in &self.maps {
