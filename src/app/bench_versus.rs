@@ -298,10 +298,15 @@ fn print_summary(results: &[VersusSetting]) {
     };
     for (i, r) in results.iter().enumerate() {
         let label = format!("#{} {}", i + 1, r.setting);
+        // Settings that differ in no technique (render.update, exposure) have no technique time.
+        let technique_ms = match r.technique_passes.is_empty() {
+            true => "-".to_string(),
+            false => format!("{:.3}", r.technique.stats.median_ms),
+        };
         println!(
-            "{:sw$}  {:>12.3}  {:>12.3}  {:>24}  {:>24}  {}",
+            "{:sw$}  {:>12}  {:>12.3}  {:>24}  {:>24}  {}",
             label,
-            r.technique.stats.median_ms,
+            technique_ms,
             r.frame.stats.median_ms,
             if i == 0 { "(1)".to_string() } else { fmt(&r.technique_ratio) },
             if i == 0 { "(1)".to_string() } else { fmt(&r.frame_ratio) },
