@@ -517,3 +517,39 @@ fn readme_demo_commands_run() {
     }
     assert!(ran >= 2, "the README's demo commands were not found");
 }
+
+/// The overlay's invocation counts (`--pipeline-stats`): pipeline-statistics queries around
+/// every pass of the window's frame, with no validation message, and the last frame's counts
+/// printed at the end. Deferred shading is a full-screen pass, so it shades at least every
+/// pixel of the 160x120 frame (lavapipe counts 16 per 4x4 block a triangle touches, never
+/// fewer than the pixels); the G-buffer draws the scene's vertices.
+#[test]
+fn demo_overlay_counts_every_pass() {
+    let Some(display) = display() else { return };
+    let out = demo(
+        &display,
+        &["sphere_nearby", "--frames", "4", "--width", "160", "--height", "120", "--validation", "--pipeline-stats"],
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "prism demo failed:\n{stderr}");
+    assert!(!stderr.contains("VUID") && !stderr.contains("SYNC-HAZARD"), "validation messages:\n{stderr}");
+    let count = |pass: &str, what: &str| -> u64 {
+        let line = stderr
+            .lines()
+            .find(|l| l.starts_with(&format!("demo: counts {pass}:")))
+            .unwrap_or_else(|| panic!("no counts for {pass}:\n{stderr}"));
+        let (n, _) = line
+            .split(':')
+            .nth(2)
+            .unwrap()
+            .split(',')
+            .find(|p| p.trim().ends_with(what))
+            .unwrap()
+            .trim()
+            .split_once(' ')
+            .unwrap();
+        n.parse().unwrap()
+    };
+    assert!(count("deferred_shading", "fragments") >= 160 * 120, "{stderr}");
+    assert!(count("gbuffer", "vertices") > 0, "{stderr}");
+}

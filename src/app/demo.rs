@@ -65,6 +65,11 @@ pub struct DemoArgs {
     /// window to WxH pixels (repeatable), as a user dragging its border would.
     #[arg(long, num_args = 2, value_names = ["FRAME", "WxH"])]
     pub resize_at: Vec<String>,
+    /// Start with the overlay's invocation counts on (pipeline-statistics queries around every
+    /// pass, as `prism bench --pipeline-stats`); with --frames, the last frame's counts are
+    /// printed to stderr at the end.
+    #[arg(long)]
+    pub pipeline_stats: bool,
     /// Every N presented frames, print resident memory and GPU allocator usage to stderr
     /// (scripts/soak).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
@@ -293,6 +298,9 @@ impl ApplicationHandler for App {
                 }
                 if self.args.frames.is_some_and(|n| r.frames >= n) || r.exit_at.is_some_and(|f| r.frames >= f) {
                     eprintln!("demo: {} frames, {} renderer updates", r.frames, r.updates);
+                    if r.ui.counts {
+                        r.print_counts();
+                    }
                     self.finish(event_loop)
                 }
             }
@@ -426,7 +434,7 @@ impl Running {
             updates: 0,
             scene_stale: false,
             reloading: false,
-            ui: ui::UiState::new(!args.no_overlay),
+            ui: ui::UiState { counts: args.pipeline_stats, ..ui::UiState::new(!args.no_overlay) },
             stats: ui::Stats::default(),
             cursor: None,
             modifiers: Default::default(),
@@ -794,6 +802,19 @@ impl Running {
     }
 
     /// Render and present one frame. Returns false when the window should close.
+    /// The overlay's counts of the last frame, one line per pass, to stderr.
+    fn print_counts(&self) {
+        for (name, _, _, counts) in self.stats.passes() {
+            if let Some(c) = counts {
+                let compute = c.compute_invocations.map_or_else(|| "-".to_string(), |n| n.to_string());
+                eprintln!(
+                    "demo: counts {name}: {} vertices, {} fragments, {compute} compute",
+                    c.vertex_invocations, c.fragment_invocations
+                );
+            }
+        }
+    }
+
     fn frame(&mut self, args: &DemoArgs) -> Result<bool> {
         let now = Instant::now();
         let dt = now.duration_since(self.last_frame).as_secs_f32();
@@ -838,6 +859,12 @@ impl Running {
         self.camera.update(dt);
         let camera = self.camera.camera(self.renderer.width(), self.renderer.height());
         self.renderer.set_camera(&camera);
+        // The overlay's counts: the queries start with the next frame (and again after a
+        // rebuilt renderer, which starts without them).
+        if self.ui.counts && !self.renderer.count_pipeline_stats()? {
+            self.ui.counts = false;
+            self.ui.status = Some("this device cannot count pipeline statistics".into());
+        }
 
         // The overlay's UI for this frame.
         let input = self.egui.take_egui_input(&self.window);
@@ -857,6 +884,7 @@ impl Running {
                 camera_mode: self.camera.mode,
                 has_heightfield,
                 tonemap: self.renderer.tonemap_stats(),
+                memory: self.renderer.technique_memory(),
             };
             requests = ui::draw(c, &mut self.ui, &view);
         });

@@ -4,8 +4,9 @@
 //! scene with them and rebuilds the renderer.
 use std::collections::{BTreeMap, VecDeque};
 
+use crate::gpu::PassCounts;
 use crate::renderer::plan::PlannedPass;
-use crate::renderer::FrameTiming;
+use crate::renderer::{FrameTiming, TechniqueMemory};
 use crate::scene::techniques::{controls, Control, TABLES};
 use crate::scene::{Light, Material, Scene, TECHNIQUE_KEYS};
 
@@ -53,8 +54,9 @@ impl Stats {
         self.cpu_ms.back().copied().unwrap_or(0.0)
     }
 
-    /// (name, last ms, average ms) of every pass of the latest frame, in order.
-    pub fn passes(&self) -> Vec<(String, f64, f64)> {
+    /// (name, last ms, average ms, last frame's pipeline statistics) of every pass of the
+    /// latest frame, in order.
+    pub fn passes(&self) -> Vec<(String, f64, f64, Option<PassCounts>)> {
         let Some(last) = self.gpu.back() else { return Vec::new() };
         last.passes
             .iter()
@@ -62,7 +64,7 @@ impl Stats {
                 let avg = mean(
                     self.gpu.iter().flat_map(|f| f.passes.iter().filter(|q| q.name == p.name).map(|q| q.duration_ms())),
                 );
-                (p.name.clone(), p.duration_ms(), avg)
+                (p.name.clone(), p.duration_ms(), avg, p.counts)
             })
             .collect()
     }
@@ -116,11 +118,13 @@ pub struct UiState {
     pub error: Option<String>,
     /// The last status line (a screenshot written, a reload).
     pub status: Option<String>,
+    /// Count each pass's invocations with pipeline-statistics queries, shown beside its time.
+    pub counts: bool,
 }
 
 impl UiState {
     pub fn new(visible: bool) -> Self {
-        UiState { visible, overrides: BTreeMap::new(), animate: true, error: None, status: None }
+        UiState { visible, overrides: BTreeMap::new(), animate: true, error: None, status: None, counts: false }
     }
 
     fn set(&mut self, requests: &mut Requests, key: String, value: String) {
@@ -141,6 +145,8 @@ pub struct View<'a> {
     pub has_heightfield: bool,
     /// The adaptive tone map's state in the last completed frame (`render.tonemap = "adaptive"`).
     pub tonemap: Option<crate::technique::baseline::tonemap::AdaptiveStats>,
+    /// Device memory per technique, as `prism bench --pipeline-stats` prints it.
+    pub memory: &'a [TechniqueMemory],
 }
 
 /// The current value of `render.<key>` for a technique key.
@@ -150,6 +156,7 @@ fn technique_value<'a>(scene: &'a Scene, key: &str, accepted: &'a [&'a str]) -> 
         "reflection" => &scene.render.reflection,
         "caustics" => &scene.render.caustics,
         "tonemap" => &scene.render.tonemap,
+        "update" => &scene.render.update,
         _ => accepted.first().copied().unwrap_or(""),
     }
 }
@@ -180,7 +187,11 @@ pub fn draw(ctx: &egui::Context, state: &mut UiState, view: &View) -> Requests {
                 ui.label(s);
             }
             ui.separator();
-            timings(ui, view);
+            ui.checkbox(&mut state.counts, "count invocations (pipeline statistics)");
+            timings(ui, view, state.counts);
+            egui::CollapsingHeader::new("memory per technique").default_open(false).show(ui, |ui| {
+                memory(ui, view.memory);
+            });
             ui.separator();
             egui::CollapsingHeader::new("passes (why each runs)").default_open(false).show(ui, |ui| {
                 for p in view.plan {
@@ -216,7 +227,33 @@ pub fn draw(ctx: &egui::Context, state: &mut UiState, view: &View) -> Requests {
     req
 }
 
-fn timings(ui: &mut egui::Ui, view: &View) {
+/// A count for a narrow column: 1234 -> "1.2k", 3456789 -> "3.5M".
+fn short_count(n: u64) -> String {
+    match n {
+        0..=9_999 => n.to_string(),
+        10_000..=9_999_999 => format!("{:.1}k", n as f64 / 1e3),
+        _ => format!("{:.1}M", n as f64 / 1e6),
+    }
+}
+
+fn memory(ui: &mut egui::Ui, memory: &[TechniqueMemory]) {
+    let mib = |b: u64| format!("{:.2}", b as f64 / (1024.0 * 1024.0));
+    egui::Grid::new("memory").striped(true).num_columns(4).show(ui, |ui| {
+        for h in ["technique", "buffers MiB", "images MiB", "volumes MiB"] {
+            ui.label(egui::RichText::new(h).strong());
+        }
+        ui.end_row();
+        for m in memory {
+            ui.label(&m.technique);
+            ui.label(mib(m.bytes.buffer_bytes));
+            ui.label(mib(m.bytes.image_bytes));
+            ui.label(mib(m.bytes.volume_bytes));
+            ui.end_row();
+        }
+    });
+}
+
+fn timings(ui: &mut egui::Ui, view: &View, counts: bool) {
     let s = view.stats;
     let cpu = s.cpu_avg_ms();
     ui.label(format!(
@@ -225,17 +262,30 @@ fn timings(ui: &mut egui::Ui, view: &View) {
         if cpu > 0.0 { 1000.0 / cpu } else { 0.0 },
         s.cpu_last_ms()
     ));
-    egui::Grid::new("gpu_times").striped(true).num_columns(3).show(ui, |ui| {
-        ui.label(egui::RichText::new("GPU pass").strong());
-        ui.label(egui::RichText::new("avg ms").strong());
-        ui.label(egui::RichText::new("last ms").strong());
+    let columns = if counts { 6 } else { 3 };
+    egui::Grid::new("gpu_times").striped(true).num_columns(columns).show(ui, |ui| {
+        let mut heads = vec!["GPU pass", "avg ms", "last ms"];
+        if counts {
+            heads.extend(["vertices", "fragments", "compute"]);
+        }
+        for h in heads {
+            ui.label(egui::RichText::new(h).strong());
+        }
         ui.end_row();
-        for (name, last, avg) in s.passes() {
+        for (name, last, avg, pass_counts) in s.passes() {
             let window_pass = name == PRESENT_BLIT || name == OVERLAY;
             let text = if window_pass { format!("({name})") } else { name };
             ui.label(text);
             ui.label(format!("{avg:.3}"));
             ui.label(format!("{last:.3}"));
+            if counts {
+                // Lavapipe counts fragments per 4x4 block a triangle touches, and cannot count
+                // compute invocations (src/gpu/timing.rs): "-" there.
+                let c = pass_counts.unwrap_or_default();
+                ui.label(short_count(c.vertex_invocations));
+                ui.label(short_count(c.fragment_invocations));
+                ui.label(c.compute_invocations.map_or_else(|| "-".to_string(), short_count));
+            }
             ui.end_row();
         }
         ui.label(egui::RichText::new("technique total").strong());
