@@ -538,6 +538,6 @@ mod tests {
         s.push_gpu(frame(&[("gbuffer", 0.0, 3.0), ("tonemap", 3.0, 3.5), (OVERLAY, 3.5, 9.0)]));
         assert_eq!(s.technique_total_ms(), 2.5);
         let passes = s.passes();
-        assert_eq!(passes[0], ("gbuffer".to_string(), 3.0, 2.0));
+        assert_eq!(passes[0], ("gbuffer".to_string(), 3.0, 2.0, None));
     }
 }
