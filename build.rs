@@ -141,8 +141,8 @@ fn main() {
         let rel = file.strip_prefix(&glsl).unwrap().to_string_lossy().replace('\\', "/");
         println!("cargo:rerun-if-changed={}", file.display());
         let spv = out.join("shaders").join(format!("{rel}.spv"));
-        let stamp = out.join("shaders").join(format!("{rel}.stamp"));
-        let specs = match unchanged(file, &header, &spv, &stamp) {
+        let stamp = out.join("shaders").join(format!("{rel}.deps"));
+        let specs = match unchanged(&root, file, &header, &spv, &stamp) {
             Some((specs, includes)) => {
                 for p in includes {
                     println!("cargo:rerun-if-changed={}", p.display());
@@ -163,8 +163,10 @@ fn main() {
                             compiled.specs.iter().map(|s| format!("({:?}, {}, {:?})", s.name, s.id, s.ty)).collect();
                         let specs = specs.join(", ");
                         let mut text = format!("{:x}\n{specs}\n", sources_hash(file, &header, &includes).unwrap());
+                        // Relative to the tree: a target directory copied to another checkout
+                        // must compare that checkout's includes, not the first one's.
                         for p in &includes {
-                            writeln!(text, "{}", p.display()).unwrap();
+                            writeln!(text, "{}", p.strip_prefix(&root).unwrap_or(p).display()).unwrap();
                         }
                         std::fs::write(&stamp, text).unwrap();
                         specs
@@ -230,11 +232,14 @@ fn revision(root: &Path) -> String {
     }
 }
 
-/// A hash of everything a shader's SPIR-V depends on: the header, its source and its
-/// includes (None if one cannot be read).
+/// A hash of everything a shader's SPIR-V depends on: the compiler's options (src/gpu/glsl.rs)
+/// and version (Cargo.lock), the header, its source and its includes (None if one cannot be
+/// read).
 fn sources_hash(file: &Path, header: &str, includes: &[PathBuf]) -> Option<u64> {
     use std::hash::{Hash, Hasher};
     let mut h = std::collections::hash_map::DefaultHasher::new();
+    include_str!("src/gpu/glsl.rs").hash(&mut h);
+    include_str!("Cargo.lock").hash(&mut h);
     header.hash(&mut h);
     for p in std::iter::once(file).chain(includes.iter().map(PathBuf::as_path)) {
         std::fs::read(p).ok()?.hash(&mut h);
@@ -243,12 +248,13 @@ fn sources_hash(file: &Path, header: &str, includes: &[PathBuf]) -> Option<u64> 
 }
 
 /// The specialisation constants and includes recorded in `stamp` when `spv` was compiled from
-/// the same header, source and includes as now; None when it must be compiled.
-fn unchanged(file: &Path, header: &str, spv: &Path, stamp: &Path) -> Option<(String, Vec<PathBuf>)> {
+/// the same header, source and includes as now (includes recorded relative to `root`); None
+/// when it must be compiled.
+fn unchanged(root: &Path, file: &Path, header: &str, spv: &Path, stamp: &Path) -> Option<(String, Vec<PathBuf>)> {
     let text = std::fs::read_to_string(stamp).ok()?;
     let mut lines = text.lines();
     let (hash, specs) = (lines.next()?, lines.next()?);
-    let includes: Vec<PathBuf> = lines.map(PathBuf::from).collect();
+    let includes: Vec<PathBuf> = lines.map(|l| root.join(l)).collect();
     let same = u64::from_str_radix(hash, 16).ok()? == sources_hash(file, header, &includes)?;
     (same && spv.exists()).then(|| (specs.to_string(), includes))
 }
