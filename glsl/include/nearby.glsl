@@ -191,6 +191,14 @@ bool nearby_lookup(uint k, vec3 P, vec3 Ray, float t_rect, vec2 uv_rect, out vec
 // the wall. Candidates whose correction converged (residual within 4 texels' width: the
 // nearest-sampled depth is a staircase, and a surface tilted up to ~75 degrees from the
 // projection plane rises tan 75 < 4 texels' width across one texel) beat those that did not.
+// A dielectric OBJ_k whose TEX_k refracts the environment only (no recursion level: §2.2.1's
+// recursion truncated at level 0; bit k - first of the set's sets[].w) ranks after every other
+// rectangle: its texel is the right surface but not what the glass shows, which is the scene
+// behind it (transmission dominates at all but grazing incidence), displaced little by a slab
+// or a thin tube and turned over by a ball lens; so the surface behind it is kept where a
+// rectangle holds one. Counted on tests/recursion.rs's glass cube behind ball A at depth 0
+// (docs/refraction.md): taking B's environment-only texel instead of the floor behind it cost
+// more than the nearest surface gained everywhere else.
 bool nearby_hit(vec3 P, vec3 Ray, out vec3 color, out float dist) {
     color = vec3(0.0);
     dist = 1e30;
@@ -200,7 +208,10 @@ bool nearby_hit(vec3 P, vec3 Ray, out vec3 color, out float dist) {
     uint end = first + n;
     if (NEARBY_LOOKUP == NEARBY_LOOKUP_NEAREST) {
         float texel_width = 2.0 / float(textureSize(nearby_tex, 0).x);
-        bool found = false, found_converged = false;
+        uint see_through = nearby_header.sets[nearby_set].w;
+        bool found = false;
+        // 2: a surface that is not an environment-only dielectric, + 1: converged.
+        uint found_rank = 0u;
         for (uint i = first; i < end; ++i) {
             float t;
             vec2 uv;
@@ -209,11 +220,12 @@ bool nearby_hit(vec3 P, vec3 Ray, out vec3 color, out float dist) {
             float d, residual;
             if (!nearby_lookup(i, P, Ray, t, uv, c, d, residual)) continue;
             bool converged = residual <= 4.0 * texel_width * nearby_rects[i].center.w;
-            if (!found || (converged && !found_converged) || (converged == found_converged && d < dist)) {
+            uint rank = (((see_through >> (i - first)) & 1u) == 0u ? 2u : 0u) + (converged ? 1u : 0u);
+            if (!found || rank > found_rank || (rank == found_rank && d < dist)) {
                 color = c;
                 dist = d;
                 found = true;
-                found_converged = converged;
+                found_rank = rank;
             }
         }
         color = finite_or_zero(color);

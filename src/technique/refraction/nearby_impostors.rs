@@ -337,11 +337,17 @@ impl From<&NearbyRect> for GpuNearbyRect {
 }
 
 /// Bytes of the storage buffer `NearbyRects` (header + one record per rectangle).
-pub fn rect_buffer_bytes(layout: &NearbyLayout) -> Vec<u8> {
+/// `see_through[i]`: rectangle i's TEX_i shows a dielectric refracting the environment only;
+/// each set's `sets[k].w` holds those of its rectangles as bits (bit i - first), which
+/// glsl/include/nearby.glsl's nearest lookup ranks after every other rectangle.
+pub fn rect_buffer_bytes(layout: &NearbyLayout, see_through: &[bool]) -> Vec<u8> {
     let mut header = GpuNearbyHeader::zeroed();
     header.info = [layout.rects.len() as u32, layout.sets.len() as u32, 0, 0];
     for (k, set) in layout.sets.iter().enumerate().take(MAX_NEARBY_SETS as usize) {
-        header.sets[k] = [set.first, set.count, set.object as u32, 0];
+        let bits = (0..set.count.min(MAX_NEARBY_RECTS))
+            .filter(|&j| see_through.get((set.first + j) as usize).copied().unwrap_or(false))
+            .fold(0u32, |b, j| b | 1 << j);
+        header.sets[k] = [set.first, set.count, set.object as u32, bits];
         header.origins[k] = set.origin.extend(1.0).to_array();
     }
     let mut bytes = bytemuck::bytes_of(&header).to_vec();
@@ -469,18 +475,27 @@ struct BackPass {
 
 /// The rectangles impostors are built over, and per rectangle whether its object is
 /// specular and which set its object's own rectangles are (u32::MAX: none); `back`: the
-/// rectangles whose dielectric back faces are rendered.
+/// rectangles whose dielectric back faces are rendered; `see_through`: per rectangle, whether
+/// its texture shows a dielectric refracting the environment only (level 0 is the last
+/// level), which the nearest lookup looks past ([`rect_buffer_bytes`]).
 pub struct NearbyRects {
     layout: NearbyLayout,
     specular: Vec<bool>,
     lookup_set: Vec<u32>,
     back: Vec<usize>,
+    see_through: Vec<bool>,
 }
 
 impl NearbyRects {
     /// No rectangles (the stand-in's).
     pub fn none() -> Self {
-        NearbyRects { layout: NearbyLayout::default(), specular: Vec::new(), lookup_set: Vec::new(), back: Vec::new() }
+        NearbyRects {
+            layout: NearbyLayout::default(),
+            specular: Vec::new(),
+            lookup_set: Vec::new(),
+            back: Vec::new(),
+            see_through: Vec::new(),
+        }
     }
 
     /// One rectangle set around `origin` that belongs to no object (the eikonal volume's
@@ -498,7 +513,9 @@ impl NearbyRects {
         let count = layout.rects.len() as u32;
         layout.sets.push(NearbySet { object: usize::MAX, origin, first: 0, count, dropped });
         let n = layout.rects.len();
-        NearbyRects { layout, specular: vec![false; n], lookup_set: vec![u32::MAX; n], back: Vec::new() }
+        // Without recursion every dielectric's texture refracts the environment only.
+        let see_through = layout.rects.iter().map(|r| is_dielectric(scene, r.object)).collect();
+        NearbyRects { layout, specular: vec![false; n], lookup_set: vec![u32::MAX; n], back: Vec::new(), see_through }
     }
 }
 
@@ -535,7 +552,10 @@ impl NearbyImpostors {
         } else {
             Vec::new()
         };
-        let rects = NearbyRects { layout, specular, lookup_set, back };
+        // The refraction pass reads the last level's textures: with no level beyond 0 a
+        // dielectric's TEX_k shows it refracting the environment only.
+        let see_through = layout.rects.iter().map(|r| layout.levels == 0 && is_dielectric(scene, r.object)).collect();
+        let rects = NearbyRects { layout, specular, lookup_set, back, see_through };
         Self::build(ctx, name, desc, rects, graph, frame_layout, None)
     }
 
@@ -578,7 +598,7 @@ impl NearbyImpostors {
         frame_layout: &DescriptorSetLayout,
         shading: Option<ImpostorShading<'_>>,
     ) -> GpuResult<Self> {
-        let NearbyRects { layout: nearby, specular, lookup_set, back: back_rects } = rects;
+        let NearbyRects { layout: nearby, specular, lookup_set, back: back_rects, see_through } = rects;
         let (rects, levels) = (&nearby.rects, nearby.levels);
         let layers_n = rects.len().max(1) as u32;
         let size = if rects.is_empty() { 1 } else { desc.resolution };
@@ -619,7 +639,7 @@ impl NearbyImpostors {
         let rect_buffer = Buffer::with_data(
             ctx,
             &format!("{name}_rects"),
-            &rect_buffer_bytes(&nearby),
+            &rect_buffer_bytes(&nearby, &see_through),
             vk::BufferUsageFlags::STORAGE_BUFFER,
         )?;
         // A framebuffer per layer of `image` (the layer of each rectangle).
