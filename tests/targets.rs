@@ -43,10 +43,10 @@ fn channel<'a>(parts: &'a Parts, part: &str, name: &str) -> &'a [f32] {
     &channels.iter().find(|(n, _)| n == name).unwrap_or_else(|| panic!("{part} has no channel {name}")).1
 }
 
-/// Whether the camera ray through (x, y) in pixels (y down) meets the floor quad or the
-/// ball of caustic_sphere (assets/scenes/caustic_sphere.toml): the scene's geometry in
-/// closed form, independent of the renderer.
-fn hits_geometry(x: f32, y: f32) -> bool {
+/// The object the camera ray through (x, y) in pixels (y down) meets first in
+/// caustic_sphere (assets/scenes/caustic_sphere.toml): 0 the floor quad, 1 the ball, `None`
+/// nothing. The scene's geometry in closed form, independent of the renderer.
+fn hits_geometry(x: f32, y: f32) -> Option<u32> {
     let (eye, target) = (Vec3::new(0.0, 3.0, 5.0), Vec3::new(0.0, 0.5, 0.0));
     let forward = (target - eye).normalize();
     let right = forward.cross(Vec3::Y).normalize();
@@ -62,8 +62,16 @@ fn hits_geometry(x: f32, y: f32) -> bool {
     // Ball: centre (0, 1.2, 0), radius 1.
     let oc = eye - Vec3::new(0.0, 1.2, 0.0);
     let b = oc.dot(d);
+    // The ball is above the floor and the camera above both: where a ray meets both, the
+    // ball is in front.
     let ball = b * b - (oc.length_squared() - 1.0) >= 0.0 && b < 0.0;
-    floor || ball
+    if ball {
+        Some(1)
+    } else if floor {
+        Some(0)
+    } else {
+        None
+    }
 }
 
 #[test]
@@ -140,25 +148,62 @@ fn every_image_of_the_frame_is_one_part_of_the_targets_exr() {
 
     // Depth is reversed Z with an infinite far plane (src/renderer/mod.rs
     // camera_projection): 0 where the ray meets nothing, > 0 on the floor and the ball.
-    // Pixels the geometry's outline crosses (centre and corners disagree) are left out.
+    // The G-buffer (glsl/gbuffer/gbuffer.frag) holds the unit world normal in gbuf_normal's
+    // RGB and the object index in gbuf_albedo's A, both RGBA16F: the floor's normal (0, 1, 0)
+    // and the indices 0 and 1 are exact in half floats, a unit normal's length is 1 to
+    // within three half-float roundings of its components (3 * 2^-11 < 2e-3).
+    // Pixels an outline crosses (centre and corners disagree) are left out.
     let depth = channel(&parts, "depth", "Z");
-    let (mut background, mut objects) = (0, 0);
+    let normal = ["R", "G", "B"].map(|c| channel(&parts, "gbuf_normal", c));
+    let object = channel(&parts, "gbuf_albedo", "A");
+    let mut counts = [0; 3];
     for j in 0..SIZE {
         for i in 0..SIZE {
             let (x, y) = (i as f32, j as f32);
-            let samples =
-                [(0.5, 0.5), (0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)].map(|(a, b)| hits_geometry(x + a, y + b));
-            let z = depth[(j * SIZE + i) as usize];
-            if samples.iter().all(|&s| s) {
-                assert!(z > 0.0, "depth {z} at ({i}, {j}) on the floor or ball");
-                objects += 1;
-            } else if samples.iter().all(|&s| !s) {
-                assert_eq!(z, 0.0, "depth at ({i}, {j}), where the ray meets nothing");
-                background += 1;
+            let corners = [(0.5, 0.5), (0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)];
+            let samples = corners.map(|(a, b)| hits_geometry(x + a, y + b));
+            if samples.iter().any(|&s| s != samples[0]) {
+                continue;
+            }
+            let k = (j * SIZE + i) as usize;
+            let (z, n) = (depth[k], Vec3::new(normal[0][k], normal[1][k], normal[2][k]));
+            match samples[0] {
+                None => {
+                    assert_eq!(z, 0.0, "depth at ({i}, {j}), where the ray meets nothing");
+                    counts[2] += 1;
+                }
+                Some(o) => {
+                    assert!(z > 0.0, "depth {z} at ({i}, {j}) on object {o}");
+                    assert_eq!(object[k], o as f32, "object index at ({i}, {j})");
+                    if o == 0 {
+                        assert_eq!(n, Vec3::Y, "the floor's normal at ({i}, {j})");
+                    } else {
+                        assert!((n.length() - 1.0).abs() < 2e-3, "the ball's normal {n} at ({i}, {j})");
+                    }
+                    counts[o as usize] += 1;
+                }
             }
         }
     }
-    // Both kinds of pixel are there in numbers (the horizon is in the upper part of the view).
-    assert!(background > 64 && objects > 64 * 16, "background {background}, objects {objects}");
+    // Every kind of pixel is there in numbers (the horizon is in the upper part of the view).
+    assert!(counts.iter().all(|&c| c > 64), "floor, ball, background pixels: {counts:?}");
+
+    // The shadow map's cube faces are parts shadow_atlas.0 to .5 in Vulkan's face order (+X,
+    // -X, +Y, -Y, +Z, -Z) and hold the distance to the light (glsl/shadow/shadow.frag). The
+    // light at (0, 5, 0) sees nothing upwards (+Y: the cleared FAR_DISTANCE everywhere); the
+    // four centre texels of -Y look down within atan(sqrt(2) / 64) of the axis onto the
+    // ball's top: the distance in closed form, to within the tessellation's sagitta
+    // r (1 - cos(pi / 64)) = 1.2e-3 at render.sphere_segments = 128 (64 rings), taken as 2e-3.
+    use prism::technique::baseline::shadow_map::FAR_DISTANCE;
+    assert!(channel(&parts, "shadow_atlas.2", "Y").iter().all(|&d| d == FAR_DISTANCE), "+Y face");
+    let down = channel(&parts, "shadow_atlas.3", "Y");
+    let d = Vec3::new(1.0 / 64.0, -1.0, 1.0 / 64.0).normalize();
+    let oc = Vec3::new(0.0, 5.0 - 1.2, 0.0);
+    let b = oc.dot(d);
+    let expected = -b - (b * b - (oc.length_squared() - 1.0)).sqrt();
+    for (i, j) in [(31, 31), (32, 31), (31, 32), (32, 32)] {
+        let got = down[j * 64 + i];
+        assert!((got - expected).abs() < 2e-3, "-Y face at ({i}, {j}): {got}, the ball's top at {expected}");
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }
