@@ -43,17 +43,33 @@ fn channel<'a>(parts: &'a Parts, part: &str, name: &str) -> &'a [f32] {
     &channels.iter().find(|(n, _)| n == name).unwrap_or_else(|| panic!("{part} has no channel {name}")).1
 }
 
-/// The object the camera ray through (x, y) in pixels (y down) meets first in
-/// caustic_sphere (assets/scenes/caustic_sphere.toml): 0 the floor quad, 1 the ball, `None`
-/// nothing. The scene's geometry in closed form, independent of the renderer.
-fn hits_geometry(x: f32, y: f32) -> Option<u32> {
+/// The unit ray from the camera through (x, y) in pixels (y down): glam's right-handed
+/// look-at, the vertical field of view of 40 degrees, row 0 at the top (SCENES.md).
+fn camera_ray(x: f32, y: f32) -> (Vec3, Vec3) {
     let (eye, target) = (Vec3::new(0.0, 3.0, 5.0), Vec3::new(0.0, 0.5, 0.0));
     let forward = (target - eye).normalize();
     let right = forward.cross(Vec3::Y).normalize();
     let up = right.cross(forward);
     let t = (40f32.to_radians() / 2.0).tan();
     let (u, v) = (2.0 * x / SIZE as f32 - 1.0, 1.0 - 2.0 * y / SIZE as f32);
-    let d = (forward + u * t * right + v * t * up).normalize();
+    (eye, (forward + u * t * right + v * t * up).normalize())
+}
+
+/// The ball's outward unit normal where the ray through (x, y) first meets it.
+fn ball_normal(x: f32, y: f32) -> Vec3 {
+    let (eye, d) = camera_ray(x, y);
+    let center = Vec3::new(0.0, 1.2, 0.0);
+    let oc = eye - center;
+    let b = oc.dot(d);
+    let t = -b - (b * b - (oc.length_squared() - 1.0)).sqrt();
+    (eye + t * d - center).normalize()
+}
+
+/// The object the camera ray through (x, y) in pixels (y down) meets first in
+/// caustic_sphere (assets/scenes/caustic_sphere.toml): 0 the floor quad, 1 the ball, `None`
+/// nothing. The scene's geometry in closed form, independent of the renderer.
+fn hits_geometry(x: f32, y: f32) -> Option<u32> {
+    let (eye, d) = camera_ray(x, y);
     // Floor: y = 0, |x|, |z| <= 4.
     let floor = d.y < 0.0 && {
         let p = eye + d * (-eye.y / d.y);
@@ -179,6 +195,11 @@ fn every_image_of_the_frame_is_one_part_of_the_targets_exr() {
                         assert_eq!(n, Vec3::Y, "the floor's normal at ({i}, {j})");
                     } else {
                         assert!((n.length() - 1.0).abs() < 2e-3, "the ball's normal {n} at ({i}, {j})");
+                        // The sphere's normal where the pixel's centre ray meets it: the
+                        // interpolated normal of a facet is within one ring step of it
+                        // (cos(pi / 64) = 0.9988), less the half-float rounding (2e-3).
+                        let exact = ball_normal(x + 0.5, y + 0.5);
+                        assert!(n.dot(exact) > 0.996, "the ball's normal {n} at ({i}, {j}), the sphere's {exact}");
                     }
                     counts[o as usize] += 1;
                 }
