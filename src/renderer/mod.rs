@@ -760,12 +760,16 @@ impl Renderer {
     }
 
     /// A debug target, RGBA f32, row 0 at the top; `None` if no pass writes one of that name.
+    /// The generic read-back of [`Renderer::read_frame_image`]: debug targets are images of
+    /// the frame graph like any other, RGBA32F.
     pub fn read_target(&mut self, name: &str) -> Result<Option<Vec<f32>>, RenderError> {
         let Some(id) = self.debug_target_list().find(|d| d.name == name).map(|d| d.id) else {
             return Ok(None);
         };
-        let bytes = self.read_image(id, 16)?;
-        Ok(Some(bytemuck::pod_collect_to_vec(&bytes)))
+        let Some(image) = self.frame_images().into_iter().find(|i| i.id == id) else {
+            return Ok(None);
+        };
+        self.read_frame_image(&image)
     }
 
     /// Every image the frame graph owns (../shared/DESIGN.md: the graph registers each
