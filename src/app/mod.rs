@@ -120,6 +120,12 @@ pub struct RenderArgs {
     /// Also write linear radiance to this OpenEXR file.
     #[arg(long)]
     pub exr: Option<PathBuf>,
+    /// Also write every image of the frame (G-buffer, back-face layers, impostor textures,
+    /// caustic maps, volumes, ...) to this multi-part OpenEXR file: one part per image and
+    /// array layer (`NAME` or `NAME.LAYER`), f32 channels R, G, B, A (Y for one channel, Z
+    /// for depth).
+    #[arg(long, value_name = "PATH")]
+    pub targets: Option<PathBuf>,
     /// Print details: the eikonal light simulation's patch count after every step.
     #[arg(short, long)]
     pub verbose: bool,
@@ -236,6 +242,7 @@ fn render(args: RenderArgs) -> Result<()> {
     let mut outputs = Outputs::default();
     let png = outputs.prepare(&args.output)?;
     let exr = outputs.prepare_opt(args.exr.as_deref())?;
+    let targets = outputs.prepare_opt(args.targets.as_deref())?;
     let ctx = args.gpu.context()?;
     let mut renderer = Renderer::new(&ctx, &scene).context("cannot set up the renderer")?;
     renderer.render_frame()?;
@@ -243,14 +250,28 @@ fn render(args: RenderArgs) -> Result<()> {
     let hdr = renderer.read_hdr()?;
     let ldr = renderer.read_ldr()?;
     let timing = renderer.take_timings();
+    let images = match targets {
+        Some(_) => {
+            let list = renderer.frame_images();
+            let data = list.iter().map(|i| renderer.read_frame_image(i)).collect::<Result<Vec<_>, _>>()?;
+            list.into_iter().zip(data).collect()
+        }
+        None => Vec::new(),
+    };
     check_validation(&ctx)?;
-    // Both files are on disk before either is moved into place.
+    // Every file is on disk before any is moved into place.
     let png = output::write_png(png, w, h, &ldr)?;
     let exr = exr.map(|exr| output::write_exr(exr, w, h, &hdr)).transpose()?;
+    let targets = targets.map(|t| output::write_targets_exr(t, &images)).transpose()?;
     let exr_path = exr.as_ref().map(|e| e.path().to_path_buf());
-    output::commit_all(std::iter::once(png).chain(exr))?;
+    let targets_path = targets.as_ref().map(|e| e.path().to_path_buf());
+    output::commit_all(std::iter::once(png).chain(exr).chain(targets))?;
     if let Some(path) = exr_path {
         eprintln!("wrote {}", path.display());
+    }
+    if let Some(path) = targets_path {
+        eprintln!("wrote {}: every image of the frame", path.display());
+        eprintln!("{}", output::targets_table(&images));
     }
     if let Some(l) = renderer.light_stats() {
         eprintln!(

@@ -18,6 +18,7 @@ use std::sync::{Mutex, MutexGuard};
 
 use anyhow::{bail, Context, Result};
 
+use crate::renderer::FrameImage;
 use crate::scene::techniques::TonemapAdaptiveParams;
 use crate::scene::RenderSettings;
 use crate::technique::baseline::tonemap::AdaptiveStats;
@@ -260,6 +261,94 @@ pub fn write_exr(out: OutputFile, width: u32, height: u32, rgba: &[f32]) -> Resu
     let rgb: Vec<f32> = rgba.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect();
     let img = image::Rgb32FImage::from_raw(width, height, rgb).context("image buffer has the wrong size")?;
     out.write(&encode(image::DynamicImage::ImageRgb32F(img), image::ImageFormat::OpenExr)?)
+}
+
+/// The EXR part names of an image of `layers` array layers (or 3D slices): its name alone
+/// for one, `NAME.LAYER` for several.
+pub fn target_part_names(name: &str, layers: u32) -> Vec<String> {
+    if layers == 1 {
+        vec![name.to_string()]
+    } else {
+        (0..layers).map(|l| format!("{name}.{l}")).collect()
+    }
+}
+
+/// The channel names of an image of `channels` f32 channels: R, G, B, A; Y for one colour
+/// channel, Z for a depth image (OpenEXR's conventions for luminance and depth).
+fn target_channel_names(channels: u32, format: &str) -> &'static [&'static str] {
+    let depth = format.starts_with('D') || format.starts_with("X8_D");
+    match channels {
+        1 if depth => &["Z"],
+        1 => &["Y"],
+        2 => &["R", "G"],
+        3 => &["R", "G", "B"],
+        _ => &["R", "G", "B", "A"],
+    }
+}
+
+/// Every readable image of a frame ([`crate::renderer::Renderer::frame_images`] with what
+/// `read_frame_image` returned) as one multi-part OpenEXR file: one part per image and
+/// array layer (slice of a 3D image), each of its own size, f32 channels
+/// ([`target_channel_names`]). Images that could not be read are left out (the table of
+/// [`targets_table`] says why).
+pub fn write_targets_exr(out: OutputFile, images: &[(FrameImage, Option<Vec<f32>>)]) -> Result<Written> {
+    use exr::prelude::*;
+    let mut parts = Vec::new();
+    for (image, data) in images {
+        let Some(data) = data else { continue };
+        let (w, h, c) = (image.width as usize, image.height as usize, image.channels as usize);
+        let names = target_part_names(&image.name, image.layers * image.depth);
+        let texels = w * h;
+        if data.len() != texels * c * names.len() {
+            bail!("{}: read back {} values, expected {}", image.name, data.len(), texels * c * names.len());
+        }
+        for (part, name) in names.iter().enumerate() {
+            let texels_of_part = &data[part * texels * c..(part + 1) * texels * c];
+            let channels = target_channel_names(image.channels, &image.format)
+                .iter()
+                .enumerate()
+                .map(|(k, channel)| {
+                    let samples = texels_of_part.iter().skip(k).step_by(c).copied().collect();
+                    AnyChannel::new(*channel, FlatSamples::F32(samples))
+                })
+                .collect::<Vec<_>>();
+            let attributes = LayerAttributes::named(name.as_str());
+            parts.push(Layer::new((w, h), attributes, Encoding::FAST_LOSSLESS, AnyChannels::sort(channels.into())));
+        }
+    }
+    if parts.is_empty() {
+        bail!("{}: no image of the frame could be read back", out.path().display());
+    }
+    // The display window covers the largest part; each part keeps its own data window.
+    let (w, h) = parts.iter().fold((1, 1), |(w, h), p| (p.size.width().max(w), p.size.height().max(h)));
+    let image = Image::from_layers(ImageAttributes::new(IntegerBounds::from_dimensions((w, h))), parts);
+    let mut bytes = io::Cursor::new(Vec::new());
+    image
+        .write()
+        .to_buffered(&mut bytes)
+        .with_context(|| format!("{}: cannot encode the EXR", out.path().display()))?;
+    out.write(&bytes.into_inner())
+}
+
+/// What [`write_targets_exr`] wrote, one image a line: name, size, layers, format, and
+/// why an image was left out.
+pub fn targets_table(images: &[(FrameImage, Option<Vec<f32>>)]) -> String {
+    let width = images.iter().map(|(i, _)| i.name.len()).max().unwrap_or(4).max(4);
+    let mut out = format!("{:width$}  {:>11}  {:>6}  format", "name", "size", "layers");
+    for (i, data) in images {
+        let size = if i.depth > 1 {
+            format!("{}x{}x{}", i.width, i.height, i.depth)
+        } else {
+            format!("{}x{}", i.width, i.height)
+        };
+        let note = match (data, i.unreadable) {
+            (Some(_), _) => String::new(),
+            (None, Some(why)) => format!("  (skipped: {why})"),
+            (None, None) => "  (skipped: no longer exists)".to_string(),
+        };
+        out += &format!("\n{:width$}  {size:>11}  {:>6}  {}{note}", i.name, i.layers, i.format);
+    }
+    out
 }
 
 /// The PNG rule of SCENES.md on the CPU, identical to glsl/tonemap/tonemap.frag:

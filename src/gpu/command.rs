@@ -412,6 +412,44 @@ impl<'a> Cmd<'a> {
         };
     }
 
+    /// Copy one `aspect` of every layer of a tracked image (in TRANSFER_SRC_OPTIMAL, of
+    /// `extent` texels and `layers` layers) tightly into `buffer`: the frame graph's read-back
+    /// of an image it knows by handle, not through an [`Image`].
+    pub fn copy_tracked_image_to_buffer(
+        &self,
+        image: vk::Image,
+        aspect: vk::ImageAspectFlags,
+        extent: [u32; 3],
+        layers: u32,
+        buffer: &Buffer,
+    ) {
+        let region = vk::BufferImageCopy {
+            buffer_offset: 0,
+            buffer_row_length: 0,
+            buffer_image_height: 0,
+            image_subresource: vk::ImageSubresourceLayers {
+                aspect_mask: aspect,
+                mip_level: 0,
+                base_array_layer: 0,
+                layer_count: layers,
+            },
+            image_offset: vk::Offset3D::default(),
+            image_extent: vk::Extent3D { width: extent[0], height: extent[1], depth: extent[2] },
+        };
+        self.note_work();
+        // SAFETY: the caller transitioned the image to TRANSFER_SRC_OPTIMAL, the extent and
+        // layers are the image's own, and the buffer holds every texel.
+        unsafe {
+            self.dev().cmd_copy_image_to_buffer(
+                self.raw,
+                image,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                buffer.raw,
+                &[region],
+            )
+        };
+    }
+
     /// Copy `buffer` into every layer of `image` (in TRANSFER_DST_OPTIMAL).
     pub fn copy_buffer_to_image(&self, buffer: &Buffer, image: &Image) {
         let region = whole_image_region(image);

@@ -1,5 +1,5 @@
 //! Images, their views, and samplers.
-use std::sync::Arc;
+use std::sync::{Arc, Weak};
 
 use ash::vk;
 use gpu_allocator::vulkan::Allocation;
@@ -75,6 +75,9 @@ pub struct Image {
     pub(crate) array_view: Option<vk::ImageView>,
     allocation: Option<Allocation>,
     pub desc: ImageDesc,
+    /// Dropped with the image: the frame graph holds a [`Weak`] to it, so that it lists and
+    /// reads back only images that still exist (a dropped image's handle may be reused).
+    alive: Arc<()>,
 }
 
 pub(crate) fn aspect_of(format: vk::Format) -> vk::ImageAspectFlags {
@@ -109,7 +112,10 @@ impl Image {
             .array_layers(desc.layers.max(1))
             .samples(vk::SampleCountFlags::TYPE_1)
             .tiling(vk::ImageTiling::OPTIMAL)
-            .usage(desc.usage)
+            // Every image can be read back for inspection (`prism render --targets`,
+            // FrameGraph::read_back_image); TRANSFER_SRC costs no memory on the implementations
+            // prism runs on, and no image is a transient attachment.
+            .usage(desc.usage | vk::ImageUsageFlags::TRANSFER_SRC)
             .flags(if cube { vk::ImageCreateFlags::CUBE_COMPATIBLE } else { vk::ImageCreateFlags::empty() })
             .initial_layout(vk::ImageLayout::UNDEFINED);
         // SAFETY: valid create info.
@@ -165,6 +171,7 @@ impl Image {
             array_view,
             allocation: Some(allocation),
             desc: desc.clone(),
+            alive: Arc::new(()),
         })
     }
 
@@ -199,9 +206,108 @@ impl Image {
             self.layer_views[layer as usize]
         }
     }
+    /// Alive while this image is: what the frame graph checks before it reads the image.
+    pub fn liveness(&self) -> Weak<()> {
+        Arc::downgrade(&self.alive)
+    }
     /// A 2D-array view over all layers of a cube-compatible image.
     pub fn array_view(&self) -> vk::ImageView {
         self.array_view.unwrap_or(self.view)
+    }
+}
+
+/// How the texels of `format` read back: (channels, bytes per texel) of what
+/// [`texels_to_f32`] decodes; for a depth/stencil format, its depth aspect alone (the aspect
+/// [`read_aspect`] copies). `None`: a format prism cannot decode (compressed, packed, 64-bit).
+pub fn texel_layout(format: vk::Format) -> Option<(u32, u32)> {
+    use vk::Format as F;
+    Some(match format {
+        F::R8_UNORM => (1, 1),
+        F::R8G8B8A8_UNORM | F::B8G8R8A8_UNORM | F::R8G8B8A8_SRGB | F::B8G8R8A8_SRGB => (4, 4),
+        F::R16_SFLOAT | F::D16_UNORM => (1, 2),
+        F::R16G16_SFLOAT => (2, 4),
+        F::R16G16B16A16_SFLOAT => (4, 8),
+        F::R32_SFLOAT | F::R32_UINT | F::D32_SFLOAT | F::D32_SFLOAT_S8_UINT => (1, 4),
+        // The depth aspect of these copies as 32 bits per texel with the value in the low 24.
+        F::X8_D24_UNORM_PACK32 | F::D24_UNORM_S8_UINT => (1, 4),
+        F::R32G32_SFLOAT => (2, 8),
+        F::R32G32B32_SFLOAT => (3, 12),
+        F::R32G32B32A32_SFLOAT => (4, 16),
+        _ => return None,
+    })
+}
+
+/// The aspect a read-back copies: a buffer copy takes one aspect, and for depth/stencil
+/// images the depth is what a person inspects.
+pub fn read_aspect(format: vk::Format) -> vk::ImageAspectFlags {
+    let aspect = aspect_of(format);
+    if aspect.contains(vk::ImageAspectFlags::DEPTH) {
+        vk::ImageAspectFlags::DEPTH
+    } else {
+        aspect
+    }
+}
+
+/// Tightly packed texels of `format` (as copied by a read-back of [`read_aspect`]) as f32
+/// channels in the order R, G, B, A: UNORM to [0, 1] (sRGB formats keep their encoded
+/// values), half floats widened, `R32_UINT` converted (exact below 2^24). `None` for a
+/// format [`texel_layout`] does not know.
+pub fn texels_to_f32(format: vk::Format, bytes: &[u8]) -> Option<Vec<f32>> {
+    use vk::Format as F;
+    let (_, size) = texel_layout(format)?;
+    let u32s = || bytes.chunks_exact(4).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]));
+    let u16s = || bytes.chunks_exact(2).map(|b| u16::from_le_bytes([b[0], b[1]]));
+    Some(match format {
+        F::R8_UNORM | F::R8G8B8A8_UNORM | F::R8G8B8A8_SRGB => bytes.iter().map(|&b| b as f32 / 255.0).collect(),
+        F::B8G8R8A8_UNORM | F::B8G8R8A8_SRGB => {
+            bytes.chunks_exact(size as usize).flat_map(|t| [t[2], t[1], t[0], t[3]].map(|b| b as f32 / 255.0)).collect()
+        }
+        F::R16_SFLOAT | F::R16G16_SFLOAT | F::R16G16B16A16_SFLOAT => u16s().map(f16_to_f32).collect(),
+        F::D16_UNORM => u16s().map(|v| v as f32 / 65535.0).collect(),
+        F::R32_UINT => u32s().map(|v| v as f32).collect(),
+        F::X8_D24_UNORM_PACK32 | F::D24_UNORM_S8_UINT => {
+            u32s().map(|v| (v & 0xff_ffff) as f32 / 0xff_ffff as f32).collect()
+        }
+        _ => u32s().map(f32::from_bits).collect(),
+    })
+}
+
+/// IEEE 754 binary16 to binary32, exactly (subnormals, infinities and NaN included).
+fn f16_to_f32(h: u16) -> f32 {
+    let sign = ((h as u32) & 0x8000) << 16;
+    let exp = ((h >> 10) & 0x1f) as u32;
+    let mant = (h & 0x3ff) as u32;
+    let bits = match (exp, mant) {
+        (0, 0) => sign,
+        // Subnormal: mant * 2^-24, exact in f32.
+        (0, m) => {
+            let v = m as f32 * (-24f32).exp2();
+            return if sign != 0 { -v } else { v };
+        }
+        (0x1f, m) => sign | 0x7f80_0000 | (m << 13),
+        (e, m) => sign | ((e + 112) << 23) | (m << 13),
+    };
+    f32::from_bits(bits)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn half_floats_widen_exactly() {
+        for (h, f) in [(0x3c00, 1.0), (0xc000, -2.0), (0x7bff, 65504.0), (0x0001, 5.960_464_5e-8), (0x8000, -0.0)] {
+            assert_eq!(f16_to_f32(h).to_bits(), f32::to_bits(f), "{h:#x}");
+        }
+        assert!(f16_to_f32(0x7c00).is_infinite() && f16_to_f32(0x7e00).is_nan());
+    }
+
+    #[test]
+    fn texels_decode_in_rgba_order() {
+        let bgra = texels_to_f32(vk::Format::B8G8R8A8_UNORM, &[0, 51, 255, 255]).unwrap();
+        assert_eq!(bgra, [1.0, 0.2, 0.0, 1.0]);
+        let d24 = texels_to_f32(vk::Format::X8_D24_UNORM_PACK32, &0xabff_ffffu32.to_le_bytes()).unwrap();
+        assert_eq!(d24, [1.0]);
     }
 }
 

@@ -49,7 +49,7 @@ pub use debug::ValidationLog;
 use descriptor::DescriptorWrite;
 pub use descriptor::{DescriptorSet, DescriptorSetLayout};
 pub use error::{GpuError, GpuResult};
-pub use image::{Image, ImageDesc, ImageViewKind, Sampler, SamplerDesc};
+pub use image::{read_aspect, texel_layout, texels_to_f32, Image, ImageDesc, ImageViewKind, Sampler, SamplerDesc};
 pub use overlay::Overlay;
 pub use pipeline::{
     Blend, ComputePipeline, DepthState, GraphicsPipeline, GraphicsPipelineDesc, Spec, Specs, VertexLayout,

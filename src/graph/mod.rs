@@ -6,11 +6,11 @@
 //! never record a barrier themselves. Every pass is wrapped in the same debug label and
 //! pair of timestamps, under one snake_case name (rule 5).
 use std::collections::HashSet;
-use std::sync::Arc;
+use std::sync::{Arc, Weak};
 
 use crate::gpu::{
-    vk, Access, Buffer, BufferBarrier, Cmd, GpuContext, GpuResult, Image, ImageBarrier, ImageDesc, MemoryLocation,
-    PipelineStatsPool, TimestampPool, TimestampQuery,
+    read_aspect, texel_layout, vk, Access, Buffer, BufferBarrier, Cmd, GpuContext, GpuResult, Image, ImageBarrier,
+    ImageDesc, MemoryLocation, PipelineStatsPool, TimestampPool, TimestampQuery,
 };
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -72,6 +72,27 @@ struct ImageSlot {
     depth: bool,
     name: String,
     state: State,
+    /// Format and extent (width, height, 3D depth), for read-back.
+    format: vk::Format,
+    extent: [u32; 3],
+    /// The image's [`Image::liveness`]; `None` for an external image, which the graph never
+    /// reads back.
+    alive: Option<Weak<()>>,
+}
+
+/// An image the graph tracks and can read back ([`FrameGraph::images`]).
+#[derive(Clone, Debug)]
+pub struct TrackedImage {
+    pub id: ImageId,
+    pub name: String,
+    pub format: vk::Format,
+    pub width: u32,
+    pub height: u32,
+    /// Slices of a 3D image; 1 otherwise.
+    pub depth: u32,
+    pub layers: u32,
+    /// Something wrote it or gave it a layout: its contents are defined.
+    pub written: bool,
 }
 
 struct BufferSlot {
@@ -164,6 +185,9 @@ impl FrameGraph {
             depth,
             name: image.name().to_string(),
             state: State::NEW,
+            format: image.format(),
+            extent: [image.desc.width, image.desc.height, image.depth()],
+            alive: Some(image.liveness()),
         });
         ImageId(self.images.len() - 1)
     }
@@ -184,6 +208,9 @@ impl FrameGraph {
             depth: aspect.contains(vk::ImageAspectFlags::DEPTH),
             name: name.to_string(),
             state: State::NEW,
+            format: vk::Format::UNDEFINED,
+            extent: [0, 0, 0],
+            alive: None,
         });
         ImageId(self.images.len() - 1)
     }
@@ -326,6 +353,81 @@ impl FrameGraph {
         })?;
         Ok(buffer.read().to_vec())
     }
+}
+
+impl FrameGraph {
+    /// Every image registered through an [`Image`] that still exists, in registration
+    /// order; an image registered twice is listed once, under its last registration (whose
+    /// state the passes update).
+    pub fn images(&self) -> Vec<TrackedImage> {
+        let live = |s: &ImageSlot| s.alive.as_ref().is_some_and(|w| w.strong_count() > 0);
+        self.images
+            .iter()
+            .enumerate()
+            .filter(|&(i, s)| live(s) && !self.images[i + 1..].iter().any(|t| t.raw == s.raw && live(t)))
+            .map(|(i, s)| TrackedImage {
+                id: ImageId(i),
+                name: s.name.clone(),
+                format: s.format,
+                width: s.extent[0],
+                height: s.extent[1],
+                depth: s.extent[2],
+                layers: s.layers,
+                written: s.state.layout != vk::ImageLayout::UNDEFINED,
+            })
+            .collect()
+    }
+
+    /// Every texel of a tracked image, tightly packed (layer by layer, slice by slice, rows
+    /// from the top), in its format's [`texel_layout`]; depth/stencil images give their depth
+    /// aspect. One submission that waits for the GPU; the image is then returned to the
+    /// layout it was in, so that whatever binds it without declaring an access (an atlas in
+    /// the frame set) still finds it there. `None`: the image no longer exists, was never
+    /// written (undefined contents), or has a format [`texel_layout`] does not know.
+    pub fn read_back_image(&mut self, ctx: &Arc<GpuContext>, id: ImageId) -> GpuResult<Option<Vec<u8>>> {
+        let slot = &self.images[id.0];
+        let alive = slot.alive.as_ref().is_some_and(|w| w.strong_count() > 0);
+        let Some((_, bytes_per_texel)) = texel_layout(slot.format) else { return Ok(None) };
+        let Some(after) = access_in_layout(slot.state.layout, slot.depth) else { return Ok(None) };
+        if !alive {
+            return Ok(None);
+        }
+        let (raw, format, extent, layers) = (slot.raw, slot.format, slot.extent, slot.layers);
+        let texels = extent.iter().map(|&e| e as u64).product::<u64>() * layers as u64;
+        let buffer = Buffer::new(
+            ctx,
+            &format!("{}_readback", slot.name),
+            texels * bytes_per_texel as u64,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuToCpu,
+        )?;
+        let buffer_id = self.register_buffer(&buffer);
+        ctx.one_shot(|cmd| {
+            self.access_now(cmd, &[(id, Access::TransferRead)], &[(buffer_id, Access::TransferWrite)]);
+            cmd.copy_tracked_image_to_buffer(raw, read_aspect(format), extent, layers, &buffer);
+            self.access_now(cmd, &[(id, after)], &[(buffer_id, Access::HostRead)]);
+        })?;
+        Ok(Some(buffer.read().to_vec()))
+    }
+}
+
+/// An access that puts an image back in `layout` (what it was in before a read-back);
+/// `None` for UNDEFINED, whose contents a read-back cannot show.
+fn access_in_layout(layout: vk::ImageLayout, depth: bool) -> Option<Access> {
+    use vk::ImageLayout as L;
+    let candidates = [
+        Access::FragmentSampled,
+        Access::ColorAttachment,
+        Access::DepthAttachment,
+        Access::ComputeRead,
+        Access::TransferRead,
+        Access::TransferWrite,
+        Access::Present,
+    ];
+    if layout == L::UNDEFINED {
+        return None;
+    }
+    candidates.into_iter().find(|a| a.info(depth).layout == layout)
 }
 
 type RecordFn<'a> = Box<dyn FnOnce(&Cmd) + 'a>;

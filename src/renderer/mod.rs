@@ -760,13 +760,86 @@ impl Renderer {
     }
 
     /// A debug target, RGBA f32, row 0 at the top; `None` if no pass writes one of that name.
+    /// The generic read-back of [`Renderer::read_frame_image`]: debug targets are images of
+    /// the frame graph like any other, RGBA32F.
     pub fn read_target(&mut self, name: &str) -> Result<Option<Vec<f32>>, RenderError> {
         let Some(id) = self.debug_target_list().find(|d| d.name == name).map(|d| d.id) else {
             return Ok(None);
         };
-        let bytes = self.read_image(id, 16)?;
-        Ok(Some(bytemuck::pod_collect_to_vec(&bytes)))
+        let Some(image) = self.frame_images().into_iter().find(|i| i.id == id) else {
+            return Ok(None);
+        };
+        self.read_frame_image(&image)
     }
+
+    /// Every image the frame graph owns (../shared/DESIGN.md: the graph registers each
+    /// one): G-buffer, back-face layers, impostor textures, caustic maps, volumes, ... in
+    /// the order they were created, each with a unique name (a repeated name gets `~2`,
+    /// `~3`, ...) and, if it cannot be read back, why.
+    pub fn frame_images(&self) -> Vec<FrameImage> {
+        let mut seen: Vec<String> = Vec::new();
+        self.graph
+            .images()
+            .into_iter()
+            .map(|t| {
+                let repeats = seen.iter().filter(|n| **n == t.name).count();
+                seen.push(t.name.clone());
+                let name = if repeats == 0 { t.name.clone() } else { format!("{}~{}", t.name, repeats + 1) };
+                let layout = crate::gpu::texel_layout(t.format);
+                let unreadable = if layout.is_none() {
+                    Some("format not decoded")
+                } else if !t.written {
+                    Some("never written (contents undefined)")
+                } else {
+                    None
+                };
+                FrameImage {
+                    name,
+                    format: format!("{:?}", t.format),
+                    width: t.width,
+                    height: t.height,
+                    depth: t.depth,
+                    layers: t.layers,
+                    channels: layout.map_or(0, |(c, _)| c),
+                    unreadable,
+                    id: t.id,
+                }
+            })
+            .collect()
+    }
+
+    /// One of [`Renderer::frame_images`] as f32 channels (`image.channels` per texel, in the
+    /// order R, G, B, A; the depth of a depth image), layer after layer (slice after slice for
+    /// a 3D image), rows from the top. Waits for the frames in flight. `None` if the image
+    /// is unreadable (see [`FrameImage::unreadable`]) or no longer exists.
+    pub fn read_frame_image(&mut self, image: &FrameImage) -> Result<Option<Vec<f32>>, RenderError> {
+        if image.unreadable.is_some() {
+            return Ok(None);
+        }
+        self.finish()?;
+        let Some(bytes) = self.graph.read_back_image(&self.ctx, image.id)? else { return Ok(None) };
+        let format = self.graph.images().into_iter().find(|t| t.id == image.id).map(|t| t.format);
+        Ok(format.and_then(|f| crate::gpu::texels_to_f32(f, &bytes)))
+    }
+}
+
+/// An image of the frame graph ([`Renderer::frame_images`]).
+#[derive(Clone, Debug)]
+pub struct FrameImage {
+    /// The image's debug name, unique among the frame's images.
+    pub name: String,
+    /// The Vulkan format, e.g. `R32G32B32A32_SFLOAT`.
+    pub format: String,
+    pub width: u32,
+    pub height: u32,
+    /// Slices of a 3D image (a volume); 1 otherwise.
+    pub depth: u32,
+    pub layers: u32,
+    /// f32 channels per texel that [`Renderer::read_frame_image`] returns.
+    pub channels: u32,
+    /// Why it cannot be read back, if it cannot.
+    pub unreadable: Option<&'static str>,
+    id: ImageId,
 }
 
 /// What [`Renderer::caustics_map_visible`] reads back, per source face.
