@@ -303,7 +303,9 @@ shared_structs! {
     buffer struct GpuNearbyHeader {
         /// x: rectangles over all sets, y: sets (0: environment only)
         info: uvec4,
-        /// x: first rectangle, y: count, z: OBJ_R's object index (the G-buffer's albedo.a)
+        /// x: first rectangle, y: count, z: OBJ_R's object index (the G-buffer's albedo.a),
+        /// w: bit k set when the set's rectangle first + k is a dielectric whose texture
+        /// refracts the environment only (ranked last by the nearest lookup)
         sets: [uvec4; MAX_NEARBY_SETS],
         /// xyz: O_R of the set
         origins: [vec4; MAX_NEARBY_SETS],
