@@ -553,3 +553,24 @@ fn demo_overlay_counts_every_pass() {
     assert!(count("deferred_shading", "fragments") >= 160 * 120, "{stderr}");
     assert!(count("gbuffer", "vertices") > 0, "{stderr}");
 }
+
+/// `--show-target NAME` (the overlay's "show" list): the frame's image is read back after
+/// each frame and drawn in place of the final image, with no validation message; a name the
+/// frame has no image for is an error (non-zero exit) that lists the images.
+#[test]
+fn demo_shows_an_intermediate_target() {
+    let Some(display) = display() else { return };
+    let args = |target: &'static str| {
+        ["sphere_nearby", "--frames", "3", "--width", "160", "--height", "120", "--validation", "--show-target", target]
+    };
+    let out = demo(&display, &args("gbuf_normal"));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "prism demo failed:\n{stderr}");
+    assert!(!stderr.contains("VUID") && !stderr.contains("SYNC-HAZARD"), "validation messages:\n{stderr}");
+    assert!(stderr.contains("demo: showing gbuf_normal (160x120, R16G16B16A16_SFLOAT)"), "{stderr}");
+    let out = demo(&display, &args("no_such_image"));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "an unknown target was accepted:\n{stderr}");
+    assert!(stderr.contains("--show-target no_such_image") && stderr.contains("gbuf_normal"), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}

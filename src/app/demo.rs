@@ -65,6 +65,10 @@ pub struct DemoArgs {
     /// window to WxH pixels (repeatable), as a user dragging its border would.
     #[arg(long, num_args = 2, value_names = ["FRAME", "WxH"])]
     pub resize_at: Vec<String>,
+    /// Show the frame's image NAME (as `prism render --targets` names it, layer 0) in place of
+    /// the final image, clamped to [0, 1]; the overlay's "show" list offers every image.
+    #[arg(long, value_name = "NAME")]
+    pub show_target: Option<String>,
     /// Start with the overlay's invocation counts on (pipeline-statistics queries around every
     /// pass, as `prism bench --pipeline-stats`); with --frames, the last frame's counts are
     /// printed to stderr at the end.
@@ -244,6 +248,10 @@ struct Running {
     camera: CameraController,
     ui: ui::UiState,
     stats: ui::Stats,
+    /// The intermediate target shown in place of the final image, and its name.
+    target_texture: Option<(String, egui::TextureHandle)>,
+    /// `--show-target`: a name no image has is an error, not a status line.
+    args_target: Option<String>,
     cursor: Option<Vec2>,
     /// Keyboard modifiers: Ctrl + drag moves an object, Shift + drag the light.
     modifiers: winit::keyboard::ModifiersState,
@@ -434,8 +442,14 @@ impl Running {
             updates: 0,
             scene_stale: false,
             reloading: false,
-            ui: ui::UiState { counts: args.pipeline_stats, ..ui::UiState::new(!args.no_overlay) },
+            ui: ui::UiState {
+                counts: args.pipeline_stats,
+                shown_target: args.show_target.clone(),
+                ..ui::UiState::new(!args.no_overlay)
+            },
             stats: ui::Stats::default(),
+            target_texture: None,
+            args_target: args.show_target.clone(),
             cursor: None,
             modifiers: Default::default(),
             grab: None,
@@ -802,6 +816,72 @@ impl Running {
     }
 
     /// Render and present one frame. Returns false when the window should close.
+    /// Read the target the overlay shows back after the last frame (layer 0, or slice 0 of a
+    /// volume) into the overlay's texture: values clamped to [0, 1], or mapped from their
+    /// finite min..max with "min..max"; one channel grey, two red-green. Returns the names of
+    /// the images that can be shown.
+    fn update_shown_target(&mut self, egui_ctx: &egui::Context) -> Result<Vec<String>> {
+        let images = self.renderer.frame_images();
+        let names = images.iter().filter(|i| i.unreadable.is_none()).map(|i| i.name.clone()).collect();
+        let Some(name) = self.ui.shown_target.clone() else {
+            self.target_texture = None;
+            return Ok(names);
+        };
+        if self.frames == 0 {
+            // Nothing rendered yet: no image holds anything to show.
+            return Ok(names);
+        }
+        let found = images.iter().find(|i| i.name == name && i.unreadable.is_none());
+        let values = match found {
+            Some(image) => self.renderer.read_frame_image(image)?.map(|v| (image, v)),
+            None => None,
+        };
+        let Some((image, values)) = values else {
+            if self.target_texture.is_none() && self.args_target.as_ref() == Some(&name) {
+                anyhow::bail!(
+                    "--show-target {name}: scene {} has no such image (written in the first frame); its images: {}",
+                    self.scene.name,
+                    names.join(", ")
+                );
+            }
+            let why = format!("no image {name} to show in this frame (the overlay's \"show\" list has them)");
+            eprintln!("demo: {why}");
+            self.ui.status = Some(why);
+            self.ui.shown_target = None;
+            self.target_texture = None;
+            return Ok(names);
+        };
+        let (w, h, c) = (image.width as usize, image.height as usize, image.channels.max(1) as usize);
+        let shown = |t: &[f32]| match c {
+            1 => [t[0]; 3],
+            2 => [t[0], t[1], 0.0],
+            _ => [t[0], t[1], t[2]],
+        };
+        let texels: Vec<[f32; 3]> = values.chunks_exact(c).take(w * h).map(shown).collect();
+        let (lo, hi) = match self.ui.normalize_target {
+            true => texels
+                .iter()
+                .flatten()
+                .filter(|v| v.is_finite())
+                .fold((f32::MAX, f32::MIN), |(lo, hi), &v| (lo.min(v), hi.max(v))),
+            false => (0.0, 1.0),
+        };
+        let scale = if hi > lo { 1.0 / (hi - lo) } else { 0.0 };
+        // NaN maps to black (`as u8` saturates and takes NaN to 0).
+        let byte = |v: f32| (((v - lo) * scale).clamp(0.0, 1.0) * 255.0).round() as u8;
+        let pixels = texels.iter().map(|t| egui::Color32::from_rgb(byte(t[0]), byte(t[1]), byte(t[2]))).collect();
+        let picture = egui::ColorImage::new([w, h], pixels);
+        match &mut self.target_texture {
+            Some((shown_name, texture)) if *shown_name == name => texture.set(picture, egui::TextureOptions::NEAREST),
+            _ => {
+                eprintln!("demo: showing {name} ({w}x{h}, {}) in place of the final image", image.format);
+                let texture = egui_ctx.load_texture("shown_target", picture, egui::TextureOptions::NEAREST);
+                self.target_texture = Some((name, texture));
+            }
+        }
+        Ok(names)
+    }
+
     /// The overlay's counts of the last frame, one line per pass, to stderr.
     fn print_counts(&self) {
         for (name, _, _, counts) in self.stats.passes() {
@@ -872,6 +952,7 @@ impl Running {
         let present_mode = format!("{:?}", self.swapchain.present_mode());
         let device = self.ctx.info.name.clone();
         let has_heightfield = self.has_heightfield();
+        let targets = self.update_shown_target(&egui_ctx)?;
         let mut requests = ui::Requests::default();
         let full = egui_ctx.run(input, |c| {
             let view = ui::View {
@@ -885,6 +966,8 @@ impl Running {
                 has_heightfield,
                 tonemap: self.renderer.tonemap_stats(),
                 memory: self.renderer.technique_memory(),
+                targets: &targets,
+                target_texture: self.target_texture.as_ref().map(|(_, t)| t),
             };
             requests = ui::draw(c, &mut self.ui, &view);
         });

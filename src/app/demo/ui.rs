@@ -120,11 +120,25 @@ pub struct UiState {
     pub status: Option<String>,
     /// Count each pass's invocations with pipeline-statistics queries, shown beside its time.
     pub counts: bool,
+    /// The intermediate target shown in place of the final image (`None`: the final image).
+    pub shown_target: Option<String>,
+    /// Map the shown target's range (min..max over its finite values) to black..white
+    /// instead of clamping to [0, 1].
+    pub normalize_target: bool,
 }
 
 impl UiState {
     pub fn new(visible: bool) -> Self {
-        UiState { visible, overrides: BTreeMap::new(), animate: true, error: None, status: None, counts: false }
+        UiState {
+            visible,
+            overrides: BTreeMap::new(),
+            animate: true,
+            error: None,
+            status: None,
+            counts: false,
+            shown_target: None,
+            normalize_target: false,
+        }
     }
 
     fn set(&mut self, requests: &mut Requests, key: String, value: String) {
@@ -147,6 +161,10 @@ pub struct View<'a> {
     pub tonemap: Option<crate::technique::baseline::tonemap::AdaptiveStats>,
     /// Device memory per technique, as `prism bench --pipeline-stats` prints it.
     pub memory: &'a [TechniqueMemory],
+    /// The frame's images that can be shown in place of the final image.
+    pub targets: &'a [String],
+    /// The shown target, read back after the last frame.
+    pub target_texture: Option<&'a egui::TextureHandle>,
 }
 
 /// The current value of `render.<key>` for a technique key.
@@ -168,6 +186,12 @@ pub fn format_vec(v: glam::Vec3) -> String {
 /// Draw the overlay; returns what the window should do.
 pub fn draw(ctx: &egui::Context, state: &mut UiState, view: &View) -> Requests {
     let mut req = Requests::default();
+    if let Some(texture) = view.target_texture {
+        // In place of the final image: the whole window, the overlay on top.
+        egui::CentralPanel::default().frame(egui::Frame::NONE.fill(egui::Color32::BLACK)).show(ctx, |ui| {
+            ui.add(egui::Image::new(texture).fit_to_exact_size(ui.available_size()));
+        });
+    }
     if !state.visible {
         return req;
     }
@@ -192,6 +216,7 @@ pub fn draw(ctx: &egui::Context, state: &mut UiState, view: &View) -> Requests {
             egui::CollapsingHeader::new("memory per technique").default_open(false).show(ui, |ui| {
                 memory(ui, view.memory);
             });
+            shown_target(ui, state, view.targets);
             ui.separator();
             egui::CollapsingHeader::new("passes (why each runs)").default_open(false).show(ui, |ui| {
                 for p in view.plan {
@@ -234,6 +259,21 @@ fn short_count(n: u64) -> String {
         10_000..=9_999_999 => format!("{:.1}k", n as f64 / 1e3),
         _ => format!("{:.1}M", n as f64 / 1e6),
     }
+}
+
+/// Which of the frame's images the window shows (`prism render --targets` writes them all).
+fn shown_target(ui: &mut egui::Ui, state: &mut UiState, targets: &[String]) {
+    ui.horizontal(|ui| {
+        ui.label("show");
+        let selected = state.shown_target.clone().unwrap_or_else(|| "final image".to_string());
+        egui::ComboBox::from_id_salt("shown_target").selected_text(selected).show_ui(ui, |ui| {
+            ui.selectable_value(&mut state.shown_target, None, "final image");
+            for t in targets {
+                ui.selectable_value(&mut state.shown_target, Some(t.clone()), t);
+            }
+        });
+        ui.checkbox(&mut state.normalize_target, "min..max");
+    });
 }
 
 fn memory(ui: &mut egui::Ui, memory: &[TechniqueMemory]) {
