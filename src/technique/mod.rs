@@ -330,16 +330,34 @@ pub trait Technique: Any {
     /// Record this technique's passes of `stage` (exactly those its plan gave that stage).
     fn record<'a>(&'a self, stage: Stage, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>);
 
+    /// What the technique keeps from frame to frame and renders again after any change (the
+    /// three hooks below drive it unless the technique overrides them).
+    fn kept(&mut self) -> Option<&mut Regeneration> {
+        None
+    }
+
     /// Called before every frame is recorded (a cache decides here whether to render again).
-    fn begin_frame(&mut self) {}
+    fn begin_frame(&mut self) {
+        if let Some(k) = self.kept() {
+            k.begin_frame();
+        }
+    }
 
     /// Objects moved: every object's (centre, bounding radius), in scene order.
-    fn objects_moved(&mut self, _bounds: &[(Vec3, f32)]) {}
+    fn objects_moved(&mut self, _bounds: &[(Vec3, f32)]) {
+        if let Some(k) = self.kept() {
+            k.changed();
+        }
+    }
 
     /// Something a kept result may show changed in place, with no object moved by
     /// [`Self::objects_moved`]: the material values were rewritten, the water's vertices
     /// animated, or (`render.update = "every_frame"`) a new frame began.
-    fn contents_changed(&mut self) {}
+    fn contents_changed(&mut self) {
+        if let Some(k) = self.kept() {
+            k.changed();
+        }
+    }
 
     /// Intermediate images a test or a debug view can read back.
     fn debug_targets(&self) -> &[DebugTarget] {

@@ -184,16 +184,8 @@ impl Technique for PhotonBufferPass {
         );
     }
 
-    fn begin_frame(&mut self) {
-        self.regeneration.begin_frame();
-    }
-
-    fn objects_moved(&mut self, _: &[(glam::Vec3, f32)]) {
-        self.regeneration.changed();
-    }
-
-    fn contents_changed(&mut self) {
-        self.regeneration.changed();
+    fn kept(&mut self) -> Option<&mut Regeneration> {
+        Some(&mut self.regeneration)
     }
 }
 

@@ -117,16 +117,8 @@ impl Technique for EikonalPass {
         self.view.record(frame, inputs.frame_set, &reads);
     }
 
-    fn begin_frame(&mut self) {
-        self.nearby.regeneration.begin_frame();
-    }
-
-    fn objects_moved(&mut self, _: &[(glam::Vec3, f32)]) {
-        self.nearby.regeneration.changed();
-    }
-
-    fn contents_changed(&mut self) {
-        self.nearby.regeneration.changed();
+    fn kept(&mut self) -> Option<&mut crate::technique::Regeneration> {
+        Some(&mut self.nearby.regeneration)
     }
 }
 
