@@ -95,6 +95,64 @@ fn analytic_exit(s: &prism::scene::Scene, i: u32, j: u32, r: f32, ior: f32) -> O
     Some((p2, t2))
 }
 
+/// Whether pixel (i, j) lies within 3 pixels of the analytic ball's silhouette (or of the
+/// image's edge), where a pixel's footprint covers the whole range of exits.
+fn near_silhouette(s: &prism::scene::Scene, i: u32, j: u32, size: u32) -> bool {
+    [(-3, 0), (3, 0), (0, -3), (0, 3)].iter().any(|&(di, dj)| {
+        let (a, b) = (i as i32 + di, j as i32 + dj);
+        a < 0
+            || a >= size as i32
+            || b < 0
+            || b >= size as i32
+            || analytic_exit(s, a as u32, b as u32, 1.0, 1.5).is_none()
+    })
+}
+
+/// sphere_env's camera and glass ball (radius 1, ior 1.5, at the origin) on the grid
+/// environment with `extra` scene text, rendered once by Wyman's technique with
+/// `back_surface`: the scene and the debug targets P2 and T2.
+fn wyman_exits(
+    ctx: &std::sync::Arc<prism::gpu::GpuContext>,
+    size: u32,
+    extra: &str,
+    back_surface: &str,
+) -> (prism::scene::Scene, Vec<f32>, Vec<f32>) {
+    let text = format!(
+        r#"
+        [camera]
+        position = [0, 0, 4]
+        target = [0, 0, 0]
+        vfov_deg = 40
+        width = {size}
+        height = {size}
+        [environment]
+        type = "grid"
+        [materials.glass]
+        type = "dielectric"
+        ior = 1.5
+        [[objects]]
+        name = "ball"
+        material = "glass"
+        shape = "sphere"
+        center = [0, 0, 0]
+        radius = 1
+        {extra}
+    "#
+    );
+    let mut o: Vec<String> = prism::scene::BASELINE.iter().map(|s| s.to_string()).collect();
+    o.extend(
+        ["render.refraction=wyman".to_string(), "render.wyman.debug=true".to_string()]
+            .into_iter()
+            .chain([format!("render.wyman.back_surface=\"{back_surface}\"")]),
+    );
+    let s = prism::scene::load_str(&text, std::path::Path::new("wyman.toml"), &o).unwrap();
+    let mut r = Renderer::new(ctx, &s).unwrap();
+    r.render_frame().unwrap();
+    let p2 = r.read_target("refraction_wyman_p2").unwrap().unwrap();
+    let t2 = r.read_target("refraction_wyman_t2").unwrap().unwrap();
+    (s, p2, t2)
+}
+
 struct ExitErrors {
     pixels: usize,
     /// Largest |P2 - exact| over the pixels, in units of the pixel footprint at P2.
@@ -646,28 +704,10 @@ fn masked_rmse(a: &[f32], b: &[f32], mask: &[bool]) -> f64 {
 #[test]
 fn wyman_second_surface_is_the_refractors_own_back_face() {
     let size = 96u32;
-    let text = format!(
-        r#"
-        [camera]
-        position = [0, 0, 4]
-        target = [0, 0, 0]
-        vfov_deg = 40
-        width = {size}
-        height = {size}
-        [environment]
-        type = "grid"
-        [materials.glass]
-        type = "dielectric"
-        ior = 1.5
+    let card = r#"
         [materials.card]
         type = "diffuse"
         albedo = 0.5
-        [[objects]]
-        name = "ball"
-        material = "glass"
-        shape = "sphere"
-        center = [0, 0, 0]
-        radius = 1
         [[objects]]
         name = "card"
         material = "card"
@@ -675,21 +715,9 @@ fn wyman_second_surface_is_the_refractors_own_back_face() {
         center = [-0.7, 0, 1.5]
         size = [2, 3]
         normal = [0, 0, 1]
-    "#
-    );
-    let mut o: Vec<String> = prism::scene::BASELINE.iter().map(|s| s.to_string()).collect();
-    o.extend(
-        ["render.refraction=wyman", "render.wyman.debug=true", "render.wyman.back_surface=\"second\""]
-            .iter()
-            .map(|s| s.to_string()),
-    );
-    let s = prism::scene::load_str(&text, std::path::Path::new("card.toml"), &o).unwrap();
+    "#;
     let ctx = context(false);
-    let mut r = Renderer::new(&ctx, &s).unwrap();
-    r.render_frame().unwrap();
-    let p2 = r.read_target("refraction_wyman_p2").unwrap().unwrap();
-    let t2 = r.read_target("refraction_wyman_t2").unwrap().unwrap();
-    drop(r);
+    let (s, p2, t2) = wyman_exits(&ctx, size, card, "second");
     common::assert_no_validation_errors(&ctx);
     let mut band = Vec::new();
     for j in 0..size {
@@ -697,14 +725,7 @@ fn wyman_second_surface_is_the_refractors_own_back_face() {
             let k = (j * size + i) as usize;
             let Some((p, t)) = analytic_exit(&s, i, j, 1.0, 1.5) else { continue };
             // Away from the silhouette (as exit_errors), and P2 behind the card.
-            let near_edge = [(-3, 0), (3, 0), (0, -3), (0, 3)].iter().any(|&(di, dj)| {
-                let (a, b) = (i as i32 + di, j as i32 + dj);
-                a < 0
-                    || a >= size as i32
-                    || b < 0
-                    || b >= size as i32
-                    || analytic_exit(&s, a as u32, b as u32, 1.0, 1.5).is_none()
-            });
+            let near_edge = near_silhouette(&s, i, j, size);
             // Projected to the screen, x / (4 - z) from the camera; the card's edge x = 0.3 at
             // z = 1.5 is at 0.12. The ball's pixels left of it are hidden (not shaded: no P2).
             if near_edge || p2[4 * k + 3] == 0.0 || p.x / (4.0 - p.z) >= 0.11 {
@@ -732,25 +753,7 @@ fn wyman_second_surface_is_the_refractors_own_back_face() {
 #[test]
 fn wyman_back_surfaces_are_the_refractors_own() {
     let size = 96u32;
-    let text = format!(
-        r#"
-        [camera]
-        position = [0, 0, 4]
-        target = [0, 0, 0]
-        vfov_deg = 40
-        width = {size}
-        height = {size}
-        [environment]
-        type = "grid"
-        [materials.glass]
-        type = "dielectric"
-        ior = 1.5
-        [[objects]]
-        name = "a"
-        material = "glass"
-        shape = "sphere"
-        center = [0, 0, 0]
-        radius = 1
+    let balls = r#"
         [[objects]]
         name = "b"
         material = "glass"
@@ -763,8 +766,7 @@ fn wyman_back_surfaces_are_the_refractors_own() {
         shape = "sphere"
         center = [-0.2, 0, 2]
         radius = 0.15
-    "#
-    );
+    "#;
     let (b_centre, b_radius) = (Vec3::new(1.0, 0.0, -2.5), 1.0);
     let (c_centre, c_radius) = (Vec3::new(-0.2, 0.0, 2.0), 0.15);
     // Nearest hit of the ray o + t d (|d| = 1) on a sphere, for t in (0, t_max).
@@ -779,32 +781,14 @@ fn wyman_back_surfaces_are_the_refractors_own() {
     };
     let ctx = context(false);
     for surface in ["furthest", "second"] {
-        let mut o: Vec<String> = prism::scene::BASELINE.iter().map(|s| s.to_string()).collect();
-        o.extend(
-            ["render.refraction=wyman", "render.wyman.debug=true", &format!("render.wyman.back_surface=\"{surface}\"")]
-                .iter()
-                .map(|s| s.to_string()),
-        );
-        let s = prism::scene::load_str(&text, std::path::Path::new("three_balls.toml"), &o).unwrap();
-        let mut r = Renderer::new(&ctx, &s).unwrap();
-        r.render_frame().unwrap();
-        let p2 = r.read_target("refraction_wyman_p2").unwrap().unwrap();
-        let t2 = r.read_target("refraction_wyman_t2").unwrap().unwrap();
-        drop(r);
+        let (s, p2, t2) = wyman_exits(&ctx, size, balls, surface);
         let mut band = Vec::new();
         for j in 0..size {
             for i in 0..size {
                 let k = (j * size + i) as usize;
                 let Some((p, t)) = analytic_exit(&s, i, j, 1.0, 1.5) else { continue };
                 let (eye, d) = s.camera.primary_ray(i, j);
-                let near_edge = [(-3, 0), (3, 0), (0, -3), (0, 3)].iter().any(|&(di, dj)| {
-                    let (a, b) = (i as i32 + di, j as i32 + dj);
-                    a < 0
-                        || a >= size as i32
-                        || b < 0
-                        || b >= size as i32
-                        || analytic_exit(&s, a as u32, b as u32, 1.0, 1.5).is_none()
-                });
+                let near_edge = near_silhouette(&s, i, j, size);
                 // C hides this pixel of A: not A's to shade.
                 let hidden = hits(eye, d, c_centre, c_radius, f32::INFINITY);
                 if near_edge || hidden || p2[4 * k + 3] == 0.0 {

@@ -338,17 +338,29 @@ impl FrameGraph {
         after: Access,
     ) -> GpuResult<Vec<u8>> {
         let texels = image.desc.width as u64 * image.desc.height as u64 * image.depth() as u64 * image.layers() as u64;
-        let buffer = Buffer::new(
-            ctx,
-            &format!("{}_readback", image.name()),
-            texels * bytes_per_texel,
-            vk::BufferUsageFlags::TRANSFER_DST,
-            MemoryLocation::GpuToCpu,
-        )?;
+        self.copy_to_host(ctx, image.name(), texels * bytes_per_texel, id, after, |cmd, buffer| {
+            cmd.copy_image_to_buffer(image, buffer)
+        })
+    }
+
+    /// Image `id` copied by `copy` into a host-visible buffer of `bytes`, between the barriers
+    /// that make the copy see the image and the host see the copy; the image is left in
+    /// `after`'s layout. One submission that waits for the GPU.
+    fn copy_to_host(
+        &mut self,
+        ctx: &Arc<GpuContext>,
+        name: &str,
+        bytes: u64,
+        id: ImageId,
+        after: Access,
+        copy: impl FnOnce(&crate::gpu::Cmd, &Buffer),
+    ) -> GpuResult<Vec<u8>> {
+        let usage = vk::BufferUsageFlags::TRANSFER_DST;
+        let buffer = Buffer::new(ctx, &format!("{name}_readback"), bytes, usage, MemoryLocation::GpuToCpu)?;
         let buffer_id = self.register_buffer(&buffer);
         ctx.one_shot(|cmd| {
             self.access_now(cmd, &[(id, Access::TransferRead)], &[(buffer_id, Access::TransferWrite)]);
-            cmd.copy_image_to_buffer(image, &buffer);
+            copy(cmd, &buffer);
             self.access_now(cmd, &[(id, after)], &[(buffer_id, Access::HostRead)]);
         })?;
         Ok(buffer.read().to_vec())
@@ -394,20 +406,11 @@ impl FrameGraph {
         }
         let (raw, format, extent, layers) = (slot.raw, slot.format, slot.extent, slot.layers);
         let texels = extent.iter().map(|&e| e as u64).product::<u64>() * layers as u64;
-        let buffer = Buffer::new(
-            ctx,
-            &format!("{}_readback", slot.name),
-            texels * bytes_per_texel as u64,
-            vk::BufferUsageFlags::TRANSFER_DST,
-            MemoryLocation::GpuToCpu,
-        )?;
-        let buffer_id = self.register_buffer(&buffer);
-        ctx.one_shot(|cmd| {
-            self.access_now(cmd, &[(id, Access::TransferRead)], &[(buffer_id, Access::TransferWrite)]);
-            cmd.copy_tracked_image_to_buffer(raw, read_aspect(format), extent, layers, &buffer);
-            self.access_now(cmd, &[(id, after)], &[(buffer_id, Access::HostRead)]);
+        let name = slot.name.clone();
+        let bytes = self.copy_to_host(ctx, &name, texels * bytes_per_texel as u64, id, after, |cmd, buffer| {
+            cmd.copy_tracked_image_to_buffer(raw, read_aspect(format), extent, layers, buffer)
         })?;
-        Ok(Some(buffer.read().to_vec()))
+        Ok(Some(bytes))
     }
 }
 
