@@ -574,3 +574,66 @@ fn demo_shows_an_intermediate_target() {
     assert!(stderr.contains("--show-target no_such_image") && stderr.contains("gbuf_normal"), "{stderr}");
     assert!(!stderr.contains("panicked"), "{stderr}");
 }
+
+/// `--ab`: the exact image accumulates one sample per frame while nothing changes, a change
+/// starts it again, and its live errors are `prism compare`'s against a reference of as many
+/// samples and photons per sample (the same renderer, settings and seed: the same image, so
+/// the errors agree to the log's six digits). The screenshot is the A/B picture: the
+/// technique's image left of the split, the exact image right of it.
+#[test]
+fn demo_ab_view_measures_what_compare_measures() {
+    let Some(display) = display() else { return };
+    let dir = out_dir("demo_ab");
+    let shot = dir.join("ab.png");
+    let size = ["--width", "64", "--height", "64"];
+    let mut args = vec!["sphere_env", "--frames", "9", "--validation", "--ab", "--screenshot", shot.to_str().unwrap()];
+    args.extend(size);
+    args.extend(["--at", "4:render.exposure=2"]);
+    let out = demo(&display, &args);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "prism demo failed:\n{stderr}");
+    assert!(!stderr.contains("VUID") && !stderr.contains("SYNC-HAZARD"), "validation messages:\n{stderr}");
+    assert_eq!(stderr.matches("the exact image starts again").count(), 1, "{stderr}");
+    // Frames 0..=8. The change is queued once 4 frames were presented and applied in frame 4,
+    // where the exact image stops; it is made again in frame 5 (its state held for a frame)
+    // and gains a sample in each of frames 5 to 8. Without the restart it would hold a
+    // sample from each frame since frame 2 (7).
+    let last = stderr.lines().rfind(|l| l.starts_with("demo: A/B: ") && l.contains("exact samples"));
+    let last = last.unwrap_or_else(|| panic!("no A/B errors logged:\n{stderr}"));
+    let field = |name: &str| -> f64 {
+        let at = last.find(name).unwrap_or_else(|| panic!("no {name} in {last}")) + name.len();
+        last[at..].trim_start().split(|c: char| c == ',' || c.is_whitespace()).next().unwrap().parse().unwrap()
+    };
+    let samples: u32 = last["demo: A/B: ".len()..].split_whitespace().next().unwrap().parse().unwrap();
+    assert_eq!(samples, 4, "{stderr}");
+
+    let json = dir.join("compare.json");
+    let prefix = dir.join("compare");
+    let photons = (samples as u64 * 65536).to_string();
+    let spp = samples.to_string();
+    let mut compare = Command::new(env!("CARGO_BIN_EXE_prism"));
+    compare.arg("compare").args(common::baseline_args()).args(["sphere_env", "--set", "render.exposure=2"]);
+    compare.args(size).args(["--spp", &spp, "--photons", &photons, "--no-cache", "--frames", "1", "--warmup", "1"]);
+    compare.args(["--json", json.to_str().unwrap(), "--images", prefix.to_str().unwrap()]);
+    compare.arg("--heatmap").arg(dir.join("heat.png")).current_dir(&dir);
+    let c = compare.output().unwrap();
+    assert!(c.status.success(), "prism compare failed:\n{}", String::from_utf8_lossy(&c.stderr));
+    let report: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    for (name, key) in [("FLIP mean", "flip_mean"), ("relMSE", "rel_mse"), ("RMSE", "rmse")] {
+        let expected = report["errors"][key].as_f64().unwrap();
+        let live = field(name);
+        assert!((live - expected).abs() <= 0.5e-6, "{name}: A/B view {live} vs prism compare {expected}\n{stderr}");
+    }
+
+    let ab = image::open(&shot).unwrap().to_rgba8();
+    let technique = image::open(dir.join("compare-technique.png")).unwrap().to_rgba8();
+    let exact = image::open(dir.join("compare-reference.png")).unwrap().to_rgba8();
+    for (x, y, p) in ab.enumerate_pixels() {
+        let expected = match x {
+            0..32 => technique.get_pixel(x, y),
+            32 => &image::Rgba([255, 255, 255, 255]),
+            _ => exact.get_pixel(x, y),
+        };
+        assert_eq!(p, expected, "A/B screenshot pixel ({x}, {y})");
+    }
+}

@@ -55,6 +55,20 @@ pub struct ReferencePolicy {
     pub accept_cut: bool,
 }
 
+/// The technique's last image tone-mapped as the errors see it: the renderer's own LDR image,
+/// except with the adaptive tone map, where both images are mapped with the reference's state
+/// (the eye adapted to the true scene), so that FLIP sees the technique's error under one
+/// display mapping rather than the exposure shift of a second adaptation to the wrong image.
+pub fn technique_ldr(renderer: &mut Renderer, scene: &Scene, hdr: &[f32], reference: &[f32]) -> Result<Vec<u8>> {
+    if scene.render.tonemap == "adaptive" {
+        let p = TonemapAdaptiveParams::from_settings(&scene.render).unwrap_or_default();
+        let state = output::adaptive_stats(reference, &p, scene.render.exposure);
+        Ok(output::tonemap_adaptive_with(hdr, &p, scene.render.exposure, &state))
+    } else {
+        Ok(renderer.read_ldr()?)
+    }
+}
+
 /// A reference image and where it came from.
 pub struct CachedReference {
     /// RGBA f32.
@@ -383,16 +397,7 @@ impl<'a> Timing<'a> {
         passes.retain(|p| frames.iter().flat_map(|f| &f.passes).any(|q| q.name == p.name && !q.idle));
         let hdr = renderer.read_hdr()?;
         let ref_ldr = output::tonemap_scene(reference, &scene.render);
-        // With the adaptive tone map, both images are mapped with the reference's state (the eye
-        // adapted to the true scene), so that FLIP sees the technique's error under one display
-        // mapping rather than the exposure shift of a second adaptation to the wrong image.
-        let ldr = if scene.render.tonemap == "adaptive" {
-            let p = TonemapAdaptiveParams::from_settings(&scene.render).unwrap_or_default();
-            let state = output::adaptive_stats(reference, &p, scene.render.exposure);
-            output::tonemap_adaptive_with(&hdr, &p, scene.render.exposure, &state)
-        } else {
-            renderer.read_ldr()?
-        };
+        let ldr = technique_ldr(&mut renderer, scene, &hdr, reference)?;
         let (w, h) = (scene.camera.width, scene.camera.height);
         let object_mask = ObjectMask::of_scene(scene);
         let (errors, errors_mask, heatmap) =

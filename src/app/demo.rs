@@ -4,6 +4,7 @@
 //! egui heads-up display on top) and presents. Parameters change by reloading the scene with
 //! `--set`-style overrides and rebuilding the renderer; errors while running (a bad scene
 //! edit, a lost surface) are shown or recovered from, never a panic.
+mod ab;
 mod camera;
 mod drag;
 mod shaders;
@@ -74,6 +75,21 @@ pub struct DemoArgs {
     /// printed to stderr at the end.
     #[arg(long)]
     pub pipeline_stats: bool,
+    /// Start with the A/B view on: the techniques' image wiped against the exact image of the
+    /// same view, which the reference renderer accumulates live (one sample per frame while
+    /// nothing changes); the overlay shows the live FLIP mean and relMSE and both costs. With
+    /// --screenshot, the PNG is the A/B picture.
+    #[arg(long)]
+    pub ab: bool,
+    /// Photons traced per exact sample in the A/B view (0: no caustics; default
+    /// `prism reference`'s rate, 2^22 photons over 64 samples).
+    #[arg(long, value_name = "N", default_value_t = ab::DEFAULT_PHOTONS,
+          value_parser = clap::value_parser!(u32).range(..=ab::MAX_PHOTONS as i64))]
+    pub ab_photons: u32,
+    /// Where the A/B view's wipe starts: the technique left of this fraction of the window's
+    /// width, the exact image right of it (the overlay's "split" slider).
+    #[arg(long, value_name = "F", default_value_t = 0.5, value_parser = unit_fraction)]
+    pub ab_split: f32,
     /// Every N presented frames, print resident memory and GPU allocator usage to stderr
     /// (scripts/soak).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
@@ -99,6 +115,14 @@ pub struct DemoArgs {
     /// surface and swapchain and create new ones, as the error path does.
     #[arg(long, hide = true, value_name = "FRAME")]
     pub lose_surface_at: Option<u64>,
+}
+
+/// A number in [0, 1].
+fn unit_fraction(v: &str) -> Result<f32, String> {
+    match v.parse::<f32>() {
+        Ok(f) if (0.0..=1.0).contains(&f) => Ok(f),
+        _ => Err(format!("{v:?} is not a fraction of the width in [0, 1]")),
+    }
 }
 
 /// `--resize-at FRAME WxH`, each time it is given (clap hands the pairs over in one list).
@@ -216,6 +240,8 @@ struct Grab {
 /// Everything that exists while the window is open. Field order is drop order: GPU objects
 /// before the context, the surface (in the swapchain) before the window.
 struct Running {
+    /// The A/B view's exact renderer (GPU objects, dropped before the context).
+    ab: ab::AbView,
     renderer: Renderer,
     overlay: Overlay,
     swapchain: Swapchain,
@@ -365,7 +391,8 @@ impl App {
     /// check what the validation layer reported.
     fn shutdown(&mut self) {
         if let Some(r) = self.running.take() {
-            let Running { renderer, overlay, swapchain, ctx, window, .. } = r;
+            let Running { ab, renderer, overlay, swapchain, ctx, window, .. } = r;
+            drop(ab);
             drop(renderer);
             drop(overlay);
             drop(swapchain);
@@ -423,6 +450,7 @@ impl Running {
         );
         let now = Instant::now();
         let mut r = Running {
+            ab: ab::AbView::default(),
             renderer,
             overlay,
             swapchain,
@@ -445,6 +473,7 @@ impl Running {
             ui: ui::UiState {
                 counts: args.pipeline_stats,
                 shown_target: args.show_target.clone(),
+                ab: ab::AbOptions { on: args.ab, photons: args.ab_photons, split: args.ab_split, ..Default::default() },
                 ..ui::UiState::new(!args.no_overlay)
             },
             stats: ui::Stats::default(),
@@ -756,7 +785,12 @@ impl Running {
 
     fn write_screenshot(&mut self, png: Option<OutputFile>, exr: Option<OutputFile>) -> Result<()> {
         let (w, h) = (self.renderer.width(), self.renderer.height());
-        let png = png.map(|png| output::write_png(png, w, h, &self.renderer.read_ldr()?)).transpose()?;
+        // The A/B view's picture when it is on: the window's image without the overlay.
+        let ldr = match &self.ab.picture {
+            Some((pw, ph, pixels)) if (*pw, *ph) == (w, h) => pixels.clone(),
+            _ => self.renderer.read_ldr()?,
+        };
+        let png = png.map(|png| output::write_png(png, w, h, &ldr)).transpose()?;
         let exr = exr.map(|exr| output::write_exr(exr, w, h, &self.renderer.read_hdr()?)).transpose()?;
         let written: Vec<_> = png.into_iter().chain(exr).collect();
         let paths: Vec<_> = written.iter().map(|f| f.path().display().to_string()).collect();
@@ -953,6 +987,15 @@ impl Running {
         let device = self.ctx.info.name.clone();
         let has_heightfield = self.has_heightfield();
         let targets = self.update_shown_target(&egui_ctx)?;
+        if self.frames > 0 {
+            // Everything the exact image depends on besides the scene file: the camera, the
+            // size, the overrides (overlay, scripted, water time) and renderer rebuilds.
+            let state =
+                format!("{camera:?} {:?} {}", self.overrides(args, (extent.width, extent.height)), self.updates);
+            let last = args.frames == Some(self.frames + 1);
+            let (ctx, ab) = (self.ctx.clone(), &mut self.ab);
+            ab.update(&ctx, &self.scene, camera, state, &mut self.renderer, &self.ui.ab, last, &egui_ctx)?;
+        }
         let mut requests = ui::Requests::default();
         let full = egui_ctx.run(input, |c| {
             let view = ui::View {
@@ -967,7 +1010,8 @@ impl Running {
                 tonemap: self.renderer.tonemap_stats(),
                 memory: self.renderer.technique_memory(),
                 targets: &targets,
-                target_texture: self.target_texture.as_ref().map(|(_, t)| t),
+                target_texture: self.ab.texture.as_ref().or(self.target_texture.as_ref().map(|(_, t)| t)),
+                ab: self.ab.status(),
             };
             requests = ui::draw(c, &mut self.ui, &view);
         });

@@ -10,6 +10,7 @@ use crate::renderer::{FrameTiming, TechniqueMemory};
 use crate::scene::techniques::{controls, Control, TABLES};
 use crate::scene::{Light, Material, Scene, TECHNIQUE_KEYS};
 
+use super::ab::{AbMode, AbOptions, AbStatus, MAX_PHOTONS};
 use super::camera::Mode;
 
 /// Passes the window appends after the scene's: timed and labelled like every pass, but
@@ -125,6 +126,8 @@ pub struct UiState {
     /// Map the shown target's range (min..max over its finite values) to black..white
     /// instead of clamping to [0, 1].
     pub normalize_target: bool,
+    /// The A/B view against the live exact image.
+    pub ab: AbOptions,
 }
 
 impl UiState {
@@ -138,6 +141,7 @@ impl UiState {
             counts: false,
             shown_target: None,
             normalize_target: false,
+            ab: AbOptions::default(),
         }
     }
 
@@ -165,6 +169,8 @@ pub struct View<'a> {
     pub targets: &'a [String],
     /// The shown target, read back after the last frame.
     pub target_texture: Option<&'a egui::TextureHandle>,
+    /// The A/B view's exact image and live error, while it is on and has samples.
+    pub ab: Option<AbStatus>,
 }
 
 /// The current value of `render.<key>` for a technique key.
@@ -217,6 +223,7 @@ pub fn draw(ctx: &egui::Context, state: &mut UiState, view: &View) -> Requests {
                 memory(ui, view.memory);
             });
             shown_target(ui, state, view.targets);
+            ab_view(ui, &mut state.ab, view);
             ui.separator();
             egui::CollapsingHeader::new("passes (why each runs)").default_open(false).show(ui, |ui| {
                 for p in view.plan {
@@ -274,6 +281,45 @@ fn shown_target(ui: &mut egui::Ui, state: &mut UiState, targets: &[String]) {
         });
         ui.checkbox(&mut state.normalize_target, "min..max");
     });
+}
+
+/// The A/B view's controls, its live error and both costs.
+fn ab_view(ui: &mut egui::Ui, ab: &mut AbOptions, view: &View) {
+    ui.horizontal(|ui| {
+        ui.checkbox(&mut ab.on, "A/B against the exact image");
+        egui::ComboBox::from_id_salt("ab_mode").selected_text(ab.mode.name()).show_ui(ui, |ui| {
+            for m in AbMode::ALL {
+                ui.selectable_value(&mut ab.mode, m, m.name());
+            }
+        });
+    });
+    if !ab.on {
+        return;
+    }
+    ui.horizontal(|ui| {
+        ui.label("split");
+        ui.add(egui::Slider::new(&mut ab.split, 0.0..=1.0).show_value(false));
+        ui.label("photons/sample");
+        ui.add(egui::DragValue::new(&mut ab.photons).range(0..=MAX_PHOTONS).speed(256.0));
+    });
+    let technique_ms = view.stats.technique_total_ms();
+    match &view.ab {
+        None => {
+            ui.label("exact image: starts when the view holds still");
+        }
+        Some(s) => {
+            ui.label(format!(
+                "technique {technique_ms:.1} ms/frame (GPU) · exact {} samples of {} photons, {:.1} ms/sample",
+                s.samples, s.photons, s.ms_per_sample
+            ));
+            if let Some((n, e)) = &s.errors {
+                ui.label(format!(
+                    "FLIP mean {:.4} · relMSE {:.5} · RMSE {:.5} (at {n} samples)",
+                    e.flip_mean, e.rel_mse, e.rmse
+                ));
+            }
+        }
+    }
 }
 
 fn memory(ui: &mut egui::Ui, memory: &[TechniqueMemory]) {
