@@ -1055,6 +1055,36 @@ fn float_atomic_deposits_equal_the_compare_and_swap_loop() {
     common::assert_no_validation_errors(&ctx);
 }
 
+/// The window spreads the simulation over frames: `advance` with a deadline that has
+/// already passed runs one batch of steps per call and resolves the volumes from the deposits
+/// so far. Continued to its end, it takes the very same patch steps as one uninterrupted run,
+/// and its volumes are the same sums in another order (1e-5, as above).
+#[test]
+fn an_interrupted_simulation_equals_one_run() {
+    let ctx = common::context(true);
+    let volume = lens_volume(32, &[]);
+    let light = directional(Vec3::new(0.2, -1.0, 0.1));
+    let params = EikonalParams::default();
+    let mut whole = StandaloneLight::new(&ctx, &params, &volume, &light).unwrap();
+    let whole_stats = whole.run(&ctx).unwrap();
+    let mut parts = StandaloneLight::new(&ctx, &params, &volume, &light).unwrap();
+    let mut calls = 0;
+    let parts_stats = loop {
+        calls += 1;
+        if let Some(stats) = parts.advance(&ctx, Some(std::time::Instant::now())).unwrap() {
+            break stats;
+        }
+    };
+    assert!(calls > 2, "the simulation was not interrupted ({calls} calls)");
+    assert_eq!(parts_stats.steps, whole_stats.steps, "step dispatches");
+    assert_eq!(parts_stats.patch_steps, whole_stats.patch_steps, "patch steps");
+    assert_eq!(parts_stats.runs.len(), whole_stats.runs.len(), "runs");
+    let (a, b) = (LightVolumes::read(&mut parts, &ctx), LightVolumes::read(&mut whole, &ctx));
+    assert!(rgb(&b.e).iter().any(|&e| e > 0.0), "no light deposited: nothing compared");
+    same_volumes("interrupted", &a, &b);
+    common::assert_no_validation_errors(&ctx);
+}
+
 /// eikonal_dispersion_cube (three nested glasses, each with an index per channel) over a
 /// floor under a tilted directional light: the light simulator's own caustic on the floor
 /// separates in colour. Measured on the irradiance volume (the layer at the floor), not on

@@ -90,6 +90,11 @@ pub struct DemoArgs {
     /// width, the exact image right of it (the overlay's "split" slider).
     #[arg(long, value_name = "F", default_value_t = 0.5, value_parser = unit_fraction)]
     pub ab_split: f32,
+    /// Milliseconds the light simulation of a volume runs before each frame, which then shows
+    /// the light simulated so far (the window answers input meanwhile); 0: all of it before
+    /// the next frame, the window frozen until it ends (its progress in the title).
+    #[arg(long, value_name = "MS", default_value_t = 100)]
+    pub work_per_frame: u64,
     /// Every N presented frames, print resident memory and GPU allocator usage to stderr
     /// (scripts/soak).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
@@ -291,6 +296,8 @@ struct Running {
     last_poll: Instant,
     frames: u64,
     screenshots: u32,
+    /// Frames shown while the light simulation was still running.
+    frames_in_progress: u64,
 }
 
 impl ApplicationHandler for App {
@@ -427,7 +434,11 @@ impl Running {
             Swapchain::new(&ctx, &*window, (size.width, size.height), args.vsync == OnOff::On, FRAMES_IN_FLIGHT)
                 .context("cannot create the swapchain")?;
         let overlay = Overlay::new(&ctx, &swapchain, FRAMES_IN_FLIGHT).context("cannot create the overlay")?;
-        let renderer = Renderer::new(&ctx, &scene).context("cannot set up the renderer")?;
+        let mut renderer = Renderer::new(&ctx, &scene).context("cannot set up the renderer")?;
+        // The light simulation of a volume runs a little before each frame, which shows the
+        // light simulated so far, so the window answers input meanwhile.
+        let budget = (args.work_per_frame > 0).then(|| Duration::from_millis(args.work_per_frame));
+        renderer.set_work_budget(budget);
         let egui_ctx = egui::Context::default();
         let max_texture = ctx.limits().max_image_dimension2_d as usize;
         let egui = egui_winit::State::new(
@@ -489,6 +500,7 @@ impl Running {
             last_poll: now,
             frames: 0,
             screenshots: 0,
+            frames_in_progress: 0,
         };
         r.register_swapchain();
         if let Some(w) = &r.shader_watch {
@@ -1051,7 +1063,18 @@ impl Running {
             primitives: &primitives,
         });
         let target = WindowTarget { id: swap_id, raw: swap_raw, extent, index };
+        let preparing = self.renderer.preparing();
         self.renderer.render_to_window(&sync, &target, overlay)?;
+        if self.renderer.preparing() {
+            self.frames_in_progress += 1;
+        } else if preparing {
+            let seconds = self.renderer.light_stats().map_or(0.0, |l| l.seconds);
+            eprintln!(
+                "demo: frame {}: the light simulation finished in {seconds:.2} s; {} frames showed it in progress",
+                self.frames, self.frames_in_progress
+            );
+            self.frames_in_progress = 0;
+        }
         match self.swapchain.present(index) {
             Ok(Presented::Ok) => self.swapchain_stale |= suboptimal,
             Ok(Presented::Stale) => self.swapchain_stale = true,

@@ -142,6 +142,9 @@ pub struct Renderer {
     animated: bool,
     /// `render.update = "every_frame"`: what techniques keep is rendered in every frame.
     every_frame: bool,
+    /// How long work that spans frames (the eikonal light simulation) may run before each
+    /// frame; None: all of it before the first frame that needs it.
+    work_budget: Option<std::time::Duration>,
     /// Every object's vertex range and current (centre, bounding radius), for moving objects.
     objects: Vec<ObjectState>,
     /// The objects' (centre, bounding radius), copied from `objects` for each frame's inputs.
@@ -328,6 +331,7 @@ impl Renderer {
             animation_time: None,
             animated: false,
             every_frame: scene.render.update == "every_frame",
+            work_budget: None,
             objects,
             bounds: Vec::new(),
             uniforms,
@@ -516,6 +520,32 @@ impl Renderer {
 
     /// Record and submit one frame. Timings of frames whose fences have signalled are
     /// collected into [`Renderer::take_timings`].
+    /// Spread work that spans frames (the eikonal light simulation) over the frames, `budget`
+    /// of it before each, so that a window stays responsive while it runs and shows it
+    /// progress; None (the default) does all of it before the first frame that needs it.
+    pub fn set_work_budget(&mut self, budget: Option<std::time::Duration>) {
+        self.work_budget = budget;
+    }
+
+    /// Whether work that spans frames is still in progress.
+    pub fn preparing(&self) -> bool {
+        self.techniques.iter().flatten().any(|t| t.preparing())
+    }
+
+    /// Continue the techniques' work that spans frames before a frame is recorded: its
+    /// kernels write what the frames in flight read, so they finish first.
+    fn prepare_techniques(&mut self) -> Result<(), RenderError> {
+        if !self.preparing() {
+            return Ok(());
+        }
+        self.finish()?;
+        let deadline = self.work_budget.map(|b| std::time::Instant::now() + b);
+        for t in self.techniques.iter_mut().flatten() {
+            t.prepare(&self.ctx, &mut self.graph, deadline)?;
+        }
+        Ok(())
+    }
+
     pub fn render_frame(&mut self) -> Result<(), RenderError> {
         self.render_frame_with(&SubmitSync::default(), |_, _| {})
     }
@@ -529,6 +559,7 @@ impl Renderer {
         sync: &SubmitSync,
         extra: impl FnOnce(&mut Frame<'_, 's>, FinalImage<'s>),
     ) -> Result<(), RenderError> {
+        self.prepare_techniques()?;
         let slot = self.wait_for_next_slot()?;
         self.uniforms.info[1] = self.frame_index as u32;
         self.frame_buffers[slot].write(0, bytemuck::bytes_of(&self.uniforms));

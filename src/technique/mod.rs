@@ -359,6 +359,23 @@ pub trait Technique: Any {
         }
     }
 
+    /// Whether work that spans frames is left ([`Self::prepare`]).
+    fn preparing(&self) -> bool {
+        false
+    }
+
+    /// Work that spans frames (the eikonal light simulation), done before a frame is recorded
+    /// with no frame in flight: continue it until `deadline`, or to its end without one
+    /// (headless rendering), so that the frame shows what it has computed so far.
+    fn prepare(
+        &mut self,
+        _ctx: &Arc<GpuContext>,
+        _graph: &mut FrameGraph,
+        _deadline: Option<std::time::Instant>,
+    ) -> Result<(), RenderError> {
+        Ok(())
+    }
+
     /// Intermediate images a test or a debug view can read back.
     fn debug_targets(&self) -> &[DebugTarget] {
         &[]

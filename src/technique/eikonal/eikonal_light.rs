@@ -40,7 +40,9 @@
 //!
 //! Steps run in batches of [`LIGHT_BATCH`] per command buffer with indirect dispatches sized
 //! by the device; only after a batch is the patch count read back to decide whether to go on.
+use std::cell::RefCell;
 use std::collections::VecDeque;
+use std::rc::Rc;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -395,10 +397,10 @@ pub struct LightSim {
     accum_id: ImageId,
     /// rgb: the irradiance sum_j dE_omega,j (W/m^2) of all rays through the voxel; a: 1
     /// where lit.
-    pub irradiance: Image,
+    pub irradiance: Rc<Image>,
     pub irradiance_id: ImageId,
     /// xyz: the vector irradiance sum_j (E_r + E_g + E_b)_j l_j; w: sum_j (E_r + E_g + E_b)_j.
-    pub direction: Image,
+    pub direction: Rc<Image>,
     pub direction_id: ImageId,
     /// List 0 -> 1 and list 1 -> 0.
     sets: BoundSet,
@@ -433,6 +435,20 @@ pub struct LightSim {
     /// GPU time per kernel since the simulation began, and of the current run.
     pub kernels: Vec<KernelTime>,
     run_gpu_ms: f64,
+    /// Patches of the current run after its last batch.
+    run_count: u32,
+    /// The simulation so far, while it is in progress ([`LightSim::advance`]).
+    progress: Option<SimProgress>,
+    /// Its statistics once finished.
+    finished: Option<LightStats>,
+}
+
+/// What [`LightSim::advance`] keeps between calls.
+struct SimProgress {
+    start: Instant,
+    /// Runs finished so far.
+    done_runs: u64,
+    stats: LightStats,
 }
 
 /// The runs for `wavefronts` (one per light) through a field of `channels` index slabs, in
@@ -626,9 +642,9 @@ impl LightSim {
             float_atomics,
             substeps: params.light_substeps,
             accum_id,
-            irradiance,
+            irradiance: Rc::new(irradiance),
             irradiance_id,
-            direction,
+            direction: Rc::new(direction),
             direction_id,
             sets,
             step,
@@ -651,6 +667,9 @@ impl LightSim {
             timestamps,
             kernels: Vec::new(),
             run_gpu_ms: 0.0,
+            run_count: 0,
+            progress: None,
+            finished: None,
         };
         sim.begin(run);
         Ok(sim)
@@ -687,6 +706,7 @@ impl LightSim {
         self.initial = patches;
         self.run = run;
         self.run_gpu_ms = 0.0;
+        self.run_count = count;
     }
 
     fn push(&self, substep: u32) -> RunPush {
@@ -799,20 +819,27 @@ impl LightSim {
         Ok(())
     }
 
-    /// Run the current run to its end (no patch left, or [`LightSim::max_steps`]) in
-    /// batches of [`LIGHT_BATCH`] steps; `progress` is called after each batch.
-    fn finish_run(
+    /// Step the current run in batches of [`LIGHT_BATCH`] steps until it ends (no patch
+    /// left, or [`LightSim::max_steps`]: returns its statistics) or `deadline` has passed
+    /// after a batch (returns None; the next call continues it), one batch at least.
+    /// `progress` is called after each batch.
+    fn step_run(
         &mut self,
         ctx: &Arc<GpuContext>,
         graph: &mut FrameGraph,
+        deadline: Option<Instant>,
         mut progress: impl FnMut(u32, u32),
-    ) -> GpuResult<(RunStats, Vec<u32>)> {
-        let mut count = self.initial.len() as u32;
-        while count > 0 && self.steps_taken < self.max_steps {
+    ) -> GpuResult<Option<(RunStats, Vec<u32>)>> {
+        while self.run_count > 0 && self.steps_taken < self.max_steps {
             let n = LIGHT_BATCH.min(self.max_steps - self.steps_taken);
-            count = self.run_steps(ctx, graph, n)?;
+            self.run_count = self.run_steps(ctx, graph, n)?;
             self.drain_spill();
-            progress(n, count);
+            progress(n, self.run_count);
+            // At least one batch per call, so that every call advances.
+            let running = self.run_count > 0 && self.steps_taken < self.max_steps;
+            if running && deadline.is_some_and(|d| Instant::now() >= d) {
+                return Ok(None);
+            }
         }
         let state = self.hp.read_state();
         let mut counts = self.hp.read_history(self.steps_taken as usize);
@@ -838,7 +865,7 @@ impl LightSim {
             spill: r.spill,
             gpu_ms: self.run_gpu_ms,
         };
-        Ok((stats, counts))
+        Ok(Some((stats, counts)))
     }
 
     /// Move the patches the last batch spilled to `pending` and empty the spill list (device
@@ -858,21 +885,48 @@ impl LightSim {
     /// Simulate every run (lights, channels, tiles) to its end, splitting the tiles that
     /// overflow the list, then resolve the volumes; a progress bar on a terminal.
     pub fn run(&mut self, ctx: &Arc<GpuContext>, graph: &mut FrameGraph) -> GpuResult<LightStats> {
-        let start = Instant::now();
+        loop {
+            if let Some(stats) = self.advance(ctx, graph, None)? {
+                return Ok(stats);
+            }
+        }
+    }
+
+    /// The simulation's statistics once it has finished.
+    pub fn finished(&self) -> Option<&LightStats> {
+        self.finished.as_ref()
+    }
+
+    /// Continue the simulation until it finishes (returns its statistics; at once when it
+    /// had) or `deadline` passes after a batch of steps (returns None). Stopped early, the
+    /// volumes are resolved from what was deposited so far, so that a frame rendered now shows
+    /// the light simulated up to here; the next call continues where this one stopped, and
+    /// the finished volumes equal those of one uninterrupted run.
+    pub fn advance(
+        &mut self,
+        ctx: &Arc<GpuContext>,
+        graph: &mut FrameGraph,
+        deadline: Option<Instant>,
+    ) -> GpuResult<Option<LightStats>> {
+        if let Some(stats) = &self.finished {
+            return Ok(Some(stats.clone()));
+        }
         let max_steps = self.max_steps as u64;
-        // In steps of max_steps per run: a run that ends early counts as whole.
-        let mut total = (self.queue.len() as u64 + 1) * max_steps;
         let report = |done: u64, total: u64, detail: &str, finished: bool| {
             ctx.report_progress(&Progress { task: LIGHT_SIMULATION, done, total, detail, finished })
         };
-        let mut stats = LightStats {
-            initial_patches: self.wavefronts.iter().map(|w| w.len() as u32).sum(),
-            float_atomics: self.float_atomics,
-            ..LightStats::default()
-        };
         let lights = self.wavefronts.len();
-        let mut done_runs = 0u64;
+        let initial_patches = self.wavefronts.iter().map(|w| w.len() as u32).sum();
+        let float_atomics = self.float_atomics;
+        let sofar = self.progress.get_or_insert_with(|| SimProgress {
+            start: Instant::now(),
+            done_runs: 0,
+            stats: LightStats { initial_patches, float_atomics, ..LightStats::default() },
+        });
+        let (mut done_runs, started) = (sofar.done_runs, sofar.start);
         loop {
+            // In steps of max_steps per run: a run that ends early counts as whole.
+            let total = (done_runs + 1 + self.queue.len() as u64) * max_steps;
             let r = self.run;
             let label = format!(
                 "light {}/{lights}{}, tile {}..{}{}",
@@ -888,13 +942,21 @@ impl LightSim {
                     ""
                 }
             );
-            let mut taken = 0u64;
-            let (run_stats, counts) = self.finish_run(ctx, graph, |n, count| {
+            let mut taken = self.steps_taken as u64;
+            let stepped = self.step_run(ctx, graph, deadline, |n, count| {
                 taken += n as u64;
                 let detail = format!("{label}: {count} patches");
                 report(done_runs * max_steps + taken.min(max_steps), total, &detail, false);
             })?;
+            let Some((run_stats, counts)) = stepped else {
+                if let Some(p) = self.progress.as_mut() {
+                    p.done_runs = done_runs;
+                }
+                self.resolve(ctx, graph)?;
+                return Ok(None);
+            };
             done_runs += 1;
+            let stats = &mut self.progress.as_mut().expect("begun above").stats;
             stats.steps += run_stats.steps;
             stats.patch_steps += run_stats.patch_steps;
             stats.gpu_ms += run_stats.gpu_ms;
@@ -940,19 +1002,21 @@ impl LightSim {
                 }
             }
             stats.runs.push(run_stats);
-            total = (done_runs + self.queue.len() as u64) * max_steps;
             match self.queue.pop_front() {
                 Some(next) => self.begin(next),
                 None => break,
             }
         }
+        let total = done_runs * max_steps;
         report(total, total, "done", true);
         let before = self.kernels.iter().map(|k| k.ms).sum::<f64>();
         self.resolve(ctx, graph)?;
+        let mut stats = self.progress.take().expect("begun above").stats;
         stats.gpu_ms += self.kernels.iter().map(|k| k.ms).sum::<f64>() - before;
         stats.kernels = self.kernels.clone();
-        stats.seconds = start.elapsed().as_secs_f64();
-        Ok(stats)
+        stats.seconds = started.elapsed().as_secs_f64();
+        self.finished = Some(stats.clone());
+        Ok(Some(stats))
     }
 
     /// The current patch list (after the last step's compaction/expansion).
@@ -1005,6 +1069,11 @@ impl StandaloneLight {
 
     pub fn run_steps(&mut self, ctx: &Arc<GpuContext>, steps: u32) -> GpuResult<u32> {
         self.sim.run_steps(ctx, &mut self.graph, steps)
+    }
+
+    /// [`LightSim::advance`]: continue the simulation until `deadline` (one batch at least).
+    pub fn advance(&mut self, ctx: &Arc<GpuContext>, deadline: Option<Instant>) -> GpuResult<Option<LightStats>> {
+        self.sim.advance(ctx, &mut self.graph, deadline)
     }
 
     /// Resolve and read the irradiance (rgba) and direction volumes back, x fastest.
@@ -1089,32 +1158,43 @@ fn simulation_settings(p: &EikonalParams) -> impl std::fmt::Debug {
 /// the volume are static), and the per-frame `eikonal_light` pass that lights the diffuse
 /// receivers inside the irradiance volume (glsl/eikonal/light_receiver.frag).
 pub struct EikonalLight {
-    /// The simulation's volumes and statistics, shared through the technique cache with the
-    /// next instance when only what the simulation does not depend on changed.
-    sim: std::rc::Rc<(LightSim, LightStats)>,
-    pub stats: LightStats,
+    /// The simulation, shared through the technique cache with the next instance when only
+    /// what the simulation does not depend on changed, and continued by [`Self::advance`]
+    /// while it is in progress.
+    sim: Rc<RefCell<LightSim>>,
+    /// Its statistics once finished.
+    pub stats: Option<LightStats>,
+    volumes: [Rc<Image>; 2],
+    ids: [ImageId; 2],
+    light_box: (Vec3, Vec3),
     receiver: FullscreenPass,
 }
 
 impl EikonalLight {
+    /// The simulation's volumes and receiver pass. The simulation itself runs in
+    /// [`Self::advance`], before the frames that show it: all at once, or (in the window) a
+    /// little before each frame, which then shows the light simulated so far.
     pub fn new(s: &mut crate::technique::Setup<'_>, lit: LitVolume<'_>, textures: &VolumeTextures) -> GpuResult<Self> {
         let (ctx, targets, nearest) = (s.ctx, s.targets, s.nearest);
         // Dropped patches are reported by the caller from `stats.dropped_patches`.
         let key = crate::technique::cache_key(&(simulation_settings(lit.params), lit.volume, lit.lights));
         let graph = &mut *s.graph;
-        let shared = s.cache.get_or_try_insert(key, || -> GpuResult<(LightSim, LightStats)> {
-            let mut sim = LightSim::new(ctx, lit, textures, nearest, graph)?;
-            let stats = sim.run(ctx, graph)?;
-            Ok((sim, stats))
+        let sim = s.cache.get_or_try_insert(key, || -> GpuResult<RefCell<LightSim>> {
+            Ok(RefCell::new(LightSim::new(ctx, lit, textures, nearest, graph)?))
         })?;
-        let (sim, stats) = (&shared.0, shared.1.clone());
-        let (lo, hi) = (sim.light_min, sim.light_max);
+        let shared = sim.borrow();
+        let volumes = [shared.irradiance.clone(), shared.direction.clone()];
+        let ids = [shared.irradiance_id, shared.direction_id];
+        let light_box = (shared.light_min, shared.light_max);
+        let stats = shared.finished().cloned();
+        drop(shared);
+        let (lo, hi) = light_box;
         let set = targets
             .gbuffer(fragment_set(), nearest, true)
-            .sampled(crate::BINDING_EIKONAL_IRRADIANCE, &sim.irradiance, nearest)
-            .read(sim.irradiance_id)
-            .sampled(crate::BINDING_EIKONAL_LIGHT_DIR, &sim.direction, nearest)
-            .read(sim.direction_id);
+            .sampled(crate::BINDING_EIKONAL_IRRADIANCE, &volumes[0], nearest)
+            .read(ids[0])
+            .sampled(crate::BINDING_EIKONAL_LIGHT_DIR, &volumes[1], nearest)
+            .read(ids[1]);
         let receiver = FullscreenPass::new(
             ctx,
             // Overwrites deferred shading's receivers inside the irradiance volume only.
@@ -1127,19 +1207,39 @@ impl EikonalLight {
             set,
             s.frame_layout,
         )?;
-        Ok(EikonalLight { sim: shared, stats, receiver })
+        Ok(EikonalLight { sim, stats, volumes, ids, light_box, receiver })
+    }
+
+    /// Whether the simulation has steps left.
+    pub fn simulating(&self) -> bool {
+        self.stats.is_none()
+    }
+
+    /// Continue the simulation until `deadline` (to its end without one; device idle).
+    /// Returns whether it advanced.
+    pub fn advance(
+        &mut self,
+        ctx: &Arc<GpuContext>,
+        graph: &mut FrameGraph,
+        deadline: Option<Instant>,
+    ) -> GpuResult<bool> {
+        if self.stats.is_some() {
+            return Ok(false);
+        }
+        self.stats = self.sim.borrow_mut().advance(ctx, graph, deadline)?;
+        Ok(true)
     }
 
     pub fn light_box(&self) -> (Vec3, Vec3) {
-        (self.sim.0.light_min, self.sim.0.light_max)
+        self.light_box
     }
 
     pub fn images(&self) -> (&Image, &Image) {
-        (&self.sim.0.irradiance, &self.sim.0.direction)
+        (&self.volumes[0], &self.volumes[1])
     }
 
     pub fn image_ids(&self) -> [ImageId; 2] {
-        [self.sim.0.irradiance_id, self.sim.0.direction_id]
+        self.ids
     }
 
     pub fn record<'a>(

@@ -120,6 +120,24 @@ impl Technique for EikonalPass {
     fn kept(&mut self) -> Option<&mut crate::technique::Regeneration> {
         Some(&mut self.nearby.regeneration)
     }
+
+    fn preparing(&self) -> bool {
+        self.light.as_ref().is_some_and(|l| l.simulating())
+    }
+
+    fn prepare(
+        &mut self,
+        ctx: &std::sync::Arc<crate::gpu::GpuContext>,
+        graph: &mut crate::graph::FrameGraph,
+        deadline: Option<std::time::Instant>,
+    ) -> Result<(), RenderError> {
+        let Some(light) = self.light.as_mut() else { return Ok(()) };
+        if light.advance(ctx, graph, deadline)? {
+            // The impostor textures show the simulated light: render them again with it.
+            self.nearby.regeneration.changed();
+        }
+        Ok(())
+    }
 }
 
 /// Fig. 16's stopping tolerance (a fraction of d_i) and Fig. 17's seeds for the impostor
@@ -302,6 +320,6 @@ impl EikonalPass {
 
     /// The light simulation's statistics (None without a simulation).
     pub fn light_stats(&self) -> Option<&super::eikonal_light::LightStats> {
-        self.light.as_ref().map(|l| &l.stats)
+        self.light.as_ref().and_then(|l| l.stats.as_ref())
     }
 }
