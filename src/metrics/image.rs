@@ -344,9 +344,8 @@ impl ErrorMetrics {
         let whole = ErrorMetrics { rmse, psnr_db, rel_mse, flip_mean, flip_p95, hdr_flip_mean, hdr_flip_p95 };
         let masked = mask.and_then(|mask| {
             assert_eq!(mask.len(), (width * height) as usize, "the mask differs in size from the images");
-            let inside = |values: &[f32]| -> Vec<f32> {
-                values.iter().zip(mask).filter(|(_, &m)| m).map(|(&v, _)| v).collect()
-            };
+            let inside =
+                |values: &[f32]| -> Vec<f32> { values.iter().zip(mask).filter(|(_, &m)| m).map(|(&v, _)| v).collect() };
             let ldr_inside = inside(&map.to_vec());
             if ldr_inside.is_empty() {
                 return None;
@@ -415,13 +414,20 @@ mod error_tests {
         // HDR-FLIP over the mask likewise pools the whole image's HDR-FLIP map.
         let (hdr, _) = hdr_flip_map(&test, &reference, w, h);
         let hdr_mean = hdr.iter().zip(&mask).filter(|(_, &m)| m).map(|(&v, _)| v as f64).sum::<f64>() / n;
-        assert!(hdr_mean > 0.0 && (masked.hdr_flip_mean - hdr_mean).abs() < 1e-6, "{} {hdr_mean}", masked.hdr_flip_mean);
+        assert!(
+            hdr_mean > 0.0 && (masked.hdr_flip_mean - hdr_mean).abs() < 1e-6,
+            "{} {hdr_mean}",
+            masked.hdr_flip_mean
+        );
         // The whole mask gives the whole-image metrics; an empty one gives none.
         let with = |m: &[bool]| ErrorMetrics::between_with_mask(&test, &reference, &tl, &rl, w, h, Some(m)).1;
         let full = with(&vec![true; (w * h) as usize]).unwrap();
         assert_eq!((full.rmse, full.psnr_db, full.rel_mse), (all.rmse, all.psnr_db, all.rel_mse));
         assert!((full.flip_mean - all.flip_mean).abs() < 1e-6 && (full.flip_p95 - all.flip_p95).abs() < 1e-6);
-        assert!((full.hdr_flip_mean - all.hdr_flip_mean).abs() < 1e-6 && (full.hdr_flip_p95 - all.hdr_flip_p95).abs() < 1e-6);
+        assert!(
+            (full.hdr_flip_mean - all.hdr_flip_mean).abs() < 1e-6
+                && (full.hdr_flip_p95 - all.hdr_flip_p95).abs() < 1e-6
+        );
         assert!(with(&vec![false; (w * h) as usize]).is_none());
     }
 }
@@ -432,7 +438,12 @@ mod hdr_flip_tests {
 
     /// A `w` x `h` RGBA image of grey `v(x, y)`.
     fn grey(w: u32, h: u32, v: impl Fn(u32, u32) -> f32) -> Vec<f32> {
-        (0..w * h).flat_map(|i| { let g = v(i % w, i / w); [g, g, g, 1.0] }).collect()
+        (0..w * h)
+            .flat_map(|i| {
+                let g = v(i % w, i / w);
+                [g, g, g, 1.0]
+            })
+            .collect()
     }
 
     /// FLIP between uniform sRGB greys `k1` and `k2` in closed form (Andersson et al. 2020,
@@ -540,7 +551,11 @@ mod hdr_flip_tests {
         let patch = |x: u32, y: u32| (4..12).contains(&y) && ((2..6).contains(&x) || (18..26).contains(&x));
         let test = grey(w, h, |x, y| {
             let r = if x < 8 { 8.0 } else { 0.01 };
-            if patch(x, y) { r * if x < 8 { 1.5 } else { 1.1 } } else { r }
+            if patch(x, y) {
+                r * if x < 8 { 1.5 } else { 1.1 }
+            } else {
+                r
+            }
         });
         let (map, e) = hdr_flip_map(&test, &reference, w, h);
         assert_eq!(e.count, 10, "{e:?}");
