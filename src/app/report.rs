@@ -292,13 +292,10 @@ fn section_table(
             Some(e) => write!(md, " {:.4} | {:.4} |", e.rmse, e.flip_mean)?,
             None => write!(md, " – | – |")?,
         }
-        match exact {
-            Some(x) => {
-                let eq = x.equal_time("flip_mean", m)?;
-                let at = eq.exact.map(|a| format!("{:.4}", a.error)).unwrap_or_else(|| "–".into());
-                write!(md, " {at} | {} |", eq.verdict.as_str())?;
-            }
-            None => {}
+        if let Some(x) = exact {
+            let eq = x.equal_time("flip_mean", m)?;
+            let at = eq.exact.map(|a| format!("{:.4}", a.error)).unwrap_or_else(|| "–".into());
+            write!(md, " {at} | {} |", eq.verdict.as_str())?;
         }
         let mask_hdr = m.mask.errors_mask.map(|e| format!("{:.4}", e.hdr_flip_mean)).unwrap_or_else(|| "–".into());
         writeln!(

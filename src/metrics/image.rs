@@ -203,7 +203,8 @@ pub struct Exposures {
 
 impl Exposures {
     /// FLIP's defaults for the ACES tone mapper, from the reference alone (Andersson et al.
-    /// 2021, Sec. 3; FLIP's image.h, `computeExposures`, and FLIP.cpp's exposure count): with
+    /// 2021; FLIP's image.h, `computeExposures`, and the exposure count of FLIP's command-line
+    /// tool, FLIP.cpp, which nv-flip-sys does not ship): with
     /// x_max the input that ACES maps to 0.85 (the larger root of
     /// (c0 - 0.85 c3) x^2 + (c1 - 0.85 c4) x + (c2 - 0.85 c5) = 0),
     /// start = log2(x_max / Y_max), which brings the brightest pixel to 0.85, and
@@ -268,7 +269,8 @@ fn flip_map_rgb8(test: &[u8], reference: &[u8], width: u32, height: u32) -> Vec<
 }
 
 /// The HDR-FLIP map (Andersson et al. 2021, "Visualizing Errors in Rendered High Dynamic
-/// Range Images", Sec. 3) of two RGBA f32 linear-radiance images, and the exposures it took.
+/// Range Images", Eurographics short paper) of two RGBA f32 linear-radiance images, and the
+/// exposures it took.
 /// Both images are exposed at each of the reference's [`Exposures::of_reference`], tone
 /// mapped with ACES, clamped and sRGB-encoded, LDR-FLIP is computed per exposure (through
 /// `nv_flip`, at prism's 67 pixels per degree), and each pixel keeps its largest error over
@@ -283,7 +285,7 @@ fn flip_map_rgb8(test: &[u8], reference: &[u8], width: u32, height: u32) -> Vec<
 /// before rounding stay equal. Two values on either side of a rounding boundary become one
 /// quantum apart: in a flat region that adds at most the FLIP of a uniform grey against the
 /// next 8-bit level, 0.036 at most over all 255 steps (levels 24 and 25, where the lightness
-/// L* changes fastest per level; closed form in `one_quantum_flip_is_bounded`).
+/// L* changes most per level; closed form in `one_quantum_flip_is_bounded`).
 pub fn hdr_flip_map(test: &[f32], reference: &[f32], width: u32, height: u32) -> (Vec<f32>, Exposures) {
     assert_eq!(test.len(), reference.len(), "images differ in size");
     let exposures = Exposures::of_reference(reference);
@@ -447,7 +449,7 @@ mod hdr_flip_tests {
     }
 
     /// FLIP between uniform sRGB greys `k1` and `k2` in closed form (Andersson et al. 2020,
-    /// Sec. 4): on uniform images the spatial filters change nothing and the feature error is 0,
+    /// FLIP's colour pipeline; image.h's `computeColorDifference` in nv-flip-sys): on uniform images the spatial filters change nothing and the feature error is 0,
     /// so FLIP is the colour error alone. A grey's CIELAB a* and b* are 0, so the Hunt-adjusted
     /// HyAB distance is |L1 - L2|, L = 116 Y^(1/3) - 16 (Y > (6/29)^3, Y the linear grey, the
     /// D65 white's Y being 1), raised to q_c = 0.7 and redistributed with p_c = 0.4,
