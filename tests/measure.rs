@@ -67,7 +67,13 @@ fn compare_reports_errors_writes_a_heat_map_and_caches_the_reference() {
     args.extend_from_slice(SMALL);
     let (ok, out, err) = d.prism(&args);
     assert!(ok, "{err}");
-    assert!(out.contains("RMSE") && out.contains("FLIP mean") && out.contains("refraction_single"), "{out}");
+    assert!(
+        out.contains("RMSE")
+            && out.contains("FLIP mean")
+            && out.contains("HDR-FLIP mean")
+            && out.contains("refraction_single"),
+        "{out}"
+    );
     assert!(!out.contains("from the cache"));
     let json: serde_json::Value = serde_json::from_slice(&std::fs::read(d.0.join("c.json")).unwrap()).unwrap();
     for k in ["rmse", "psnr_db", "rel_mse", "flip_mean", "flip_p95", "hdr_flip_mean", "hdr_flip_p95"] {
@@ -338,6 +344,13 @@ fn report_on_a_tiny_spec_writes_the_summary_and_equal_time_columns() {
         "{row}"
     );
     assert!(md.contains("| # | setting | frame ms |") && md.contains("exact FLIP at equal time | verdict |"), "{md}");
+    // HDR-FLIP's columns after the verdict, and every row of the section's table as wide as its header.
+    let head = md.lines().find(|l| l.starts_with("| # | setting | frame ms |")).expect(&md);
+    assert!(head.ends_with("| verdict | HDR-FLIP mean | HDR-FLIP p95 | mask HDR-FLIP mean |"), "{head}");
+    let cells = |l: &str| l.matches(" |").count();
+    let rows: Vec<&str> = md.lines().filter(|l| l.starts_with("| 1 | ") || l.starts_with("| 2 | ")).collect();
+    assert_eq!(rows.len(), 2, "{md}");
+    assert!(rows.iter().all(|r| cells(r) == cells(head)), "{head}\n{rows:?}");
     // The time columns and the caption that says what each includes.
     assert!(
         md.contains("| frame ms | per change ms |")

@@ -539,6 +539,22 @@ mod hdr_flip_tests {
     }
 
     #[test]
+    fn exposures_where_flips_rule_has_no_value() {
+        // More than half black: FLIP's median is 0 and its stop infinite; the smallest non-zero
+        // luminance, 0.3, stands in (the NaN pixel is left out, so n = 5 and the middle values
+        // at indices 1 and 2 are both 0): stop = log2(2.118872 / 0.3) = 2.820262, start =
+        // log2(2.118872 / 4) = -0.916703, count = max(2, ceil(3.736966)) = 4.
+        let g = |v: f32| [v, v, v, 1.0];
+        let reference: Vec<f32> = [0.0, 0.0, 0.0, 0.3, 4.0, f32::NAN].into_iter().flat_map(g).collect();
+        let e = Exposures::of_reference(&reference);
+        assert!((e.start - -0.916703).abs() < 1e-4 && (e.stop - 2.820262).abs() < 1e-4, "{e:?}");
+        assert_eq!(e.count, 4, "{e:?}");
+        // A black reference: one exposure, 2^0, taken twice.
+        let black: Vec<f32> = [0.0; 4].into_iter().flat_map(g).collect();
+        assert_eq!(Exposures::of_reference(&black), Exposures { start: 0.0, stop: 0.0, count: 2 });
+    }
+
+    #[test]
     fn hdr_flip_is_the_per_pixel_maximum_over_exposures() {
         // 3/4 of the reference at 0.01 and 1/4 at 8: Y_max = 8, Y_median = 0.01, so
         // start = log2(2.118872 / 8) = -1.9167 and stop = log2(211.8872) = 7.7271: 10
