@@ -67,10 +67,16 @@ fn compare_reports_errors_writes_a_heat_map_and_caches_the_reference() {
     args.extend_from_slice(SMALL);
     let (ok, out, err) = d.prism(&args);
     assert!(ok, "{err}");
-    assert!(out.contains("RMSE") && out.contains("FLIP mean") && out.contains("refraction_single"), "{out}");
+    assert!(
+        out.contains("RMSE")
+            && out.contains("FLIP mean")
+            && out.contains("HDR-FLIP mean")
+            && out.contains("refraction_single"),
+        "{out}"
+    );
     assert!(!out.contains("from the cache"));
     let json: serde_json::Value = serde_json::from_slice(&std::fs::read(d.0.join("c.json")).unwrap()).unwrap();
-    for k in ["rmse", "psnr_db", "rel_mse", "flip_mean", "flip_p95"] {
+    for k in ["rmse", "psnr_db", "rel_mse", "flip_mean", "flip_p95", "hdr_flip_mean", "hdr_flip_p95"] {
         assert!(json["errors"][k].as_f64().is_some_and(|v| v.is_finite() && v >= 0.0), "{k}: {}", json["errors"]);
     }
     assert!(json["passes"].as_array().unwrap().iter().any(|p| p["name"] == "refraction_single"));
@@ -80,7 +86,7 @@ fn compare_reports_errors_writes_a_heat_map_and_caches_the_reference() {
     let mask_pixels = json["mask_pixels"].as_u64().unwrap();
     assert!(mask_pixels > 0 && mask_pixels < 32 * 32, "{mask_pixels}");
     assert!(json["mask_surfaces"][0].as_str().is_some_and(|s| s.starts_with("ball (dielectric)")), "{json}");
-    for k in ["rmse", "psnr_db", "rel_mse", "flip_mean", "flip_p95"] {
+    for k in ["rmse", "psnr_db", "rel_mse", "flip_mean", "flip_p95", "hdr_flip_mean", "hdr_flip_p95"] {
         let v = &json["errors_mask"][k];
         assert!(v.as_f64().is_some_and(|v| v.is_finite() && v >= 0.0), "{k}: {}", json["errors_mask"]);
     }
@@ -141,7 +147,8 @@ fn sweep_writes_csv_and_plots() {
         lines[0].starts_with("n,kind,setting,render.sphere_segments,materials.glass.ior,")
             && lines[0].ends_with(
                 "flip_mean,flip_p95,mask_pixels,mask_rmse,mask_psnr_db,mask_rel_mse,mask_flip_mean,mask_flip_p95,\
-                 mask_surfaces,pareto,technique,flip_mean_low,exact_flip_mean,verdict"
+                 mask_surfaces,pareto,technique,flip_mean_low,exact_flip_mean,verdict,hdr_flip_mean,hdr_flip_p95,\
+                 mask_hdr_flip_mean,mask_hdr_flip_p95"
             ),
         "{}",
         lines[0]
@@ -153,10 +160,15 @@ fn sweep_writes_csv_and_plots() {
         assert!(pixels > 0 && pixels < 32 * 32, "{l}");
         assert!(l.contains("ball (dielectric)"), "{l}");
     }
+    // The verdict is the column before the appended HDR-FLIP columns, which hold values in [0, 1].
     let verdicts = ["dominated", "beats exact", "within noise", "faster than exact"];
     for (i, l) in lines[1..5].iter().enumerate() {
         assert!(l.starts_with(&format!("{},technique,", i + 1)), "{l}");
-        assert!(verdicts.iter().any(|v| l.ends_with(v)), "{l}");
+        let tail: Vec<&str> = l.rsplitn(5, ',').collect();
+        assert!(verdicts.iter().any(|v| tail[4].ends_with(&format!(",{v}"))), "{l}");
+        for v in &tail[..4] {
+            assert!(v.parse::<f64>().is_ok_and(|v| (0.0..=1.0).contains(&v)), "{l}");
+        }
     }
     assert!(lines[1..5].iter().any(|l| l.contains(",true,")), "some setting is on the Pareto front");
     assert!(
@@ -332,6 +344,13 @@ fn report_on_a_tiny_spec_writes_the_summary_and_equal_time_columns() {
         "{row}"
     );
     assert!(md.contains("| # | setting | frame ms |") && md.contains("exact FLIP at equal time | verdict |"), "{md}");
+    // HDR-FLIP's columns after the verdict, and every row of the section's table as wide as its header.
+    let head = md.lines().find(|l| l.starts_with("| # | setting | frame ms |")).expect(&md);
+    assert!(head.ends_with("| verdict | HDR-FLIP mean | HDR-FLIP p95 | mask HDR-FLIP mean |"), "{head}");
+    let cells = |l: &str| l.matches(" |").count();
+    let rows: Vec<&str> = md.lines().filter(|l| l.starts_with("| 1 | ") || l.starts_with("| 2 | ")).collect();
+    assert_eq!(rows.len(), 2, "{md}");
+    assert!(rows.iter().all(|r| cells(r) == cells(head)), "{head}\n{rows:?}");
     // The time columns and the caption that says what each includes.
     assert!(
         md.contains("| frame ms | per change ms |")

@@ -435,11 +435,11 @@ pub fn print_equal_time(x: &super::equaltime::Exact, m: &Measurement) -> Result<
     println!("exact tracer: {}", x.curve.source.describe());
     for p in &x.curve.points {
         println!(
-            "  {:>12}  {:>10.3} ms  RMSE {:.5}  FLIP mean {:.4}",
-            p.label, p.time_ms, p.errors.rmse, p.errors.flip_mean
+            "  {:>12}  {:>10.3} ms  RMSE {:.5}  FLIP mean {:.4}  HDR-FLIP mean {:.4}",
+            p.label, p.time_ms, p.errors.rmse, p.errors.flip_mean, p.errors.hdr_flip_mean
         );
     }
-    for metric in ["rmse", "flip_mean"] {
+    for metric in ["rmse", "flip_mean", "hdr_flip_mean"] {
         let value = super::equaltime::metric_value(&m.errors, metric)?;
         let (lo, _) = x.noise.interval(metric, value);
         let eq = x.equal_time(metric, m)?;
@@ -466,8 +466,9 @@ pub fn print_measurement(m: &Measurement) {
     println!("per change ms {:.3}, paid once per light or object change: {}", m.per_change.ms, m.per_change.describe());
     let line = |e: &ErrorMetrics| {
         format!(
-            "RMSE {:.5}  PSNR {:.2} dB  relMSE {:.5}  FLIP mean {:.4}  FLIP p95 {:.4}",
-            e.rmse, e.psnr_db, e.rel_mse, e.flip_mean, e.flip_p95
+            "RMSE {:.5}  PSNR {:.2} dB  relMSE {:.5}  FLIP mean {:.4}  FLIP p95 {:.4}  HDR-FLIP mean {:.4}  \
+             HDR-FLIP p95 {:.4}",
+            e.rmse, e.psnr_db, e.rel_mse, e.flip_mean, e.flip_p95, e.hdr_flip_mean, e.hdr_flip_p95
         )
     };
     println!("error vs reference: {}", line(&m.errors));

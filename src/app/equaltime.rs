@@ -107,8 +107,8 @@ pub struct ExactCurve {
 /// E[MSE(T, R)] = MSE(T, mu) + s^2, and two references differ by MSE(R1, R2) = 2 s^2. So the
 /// reference's noise RMSE is s = RMSE(R1, R2) / sqrt(2), and since sqrt(m + s^2) <= sqrt(m) + s,
 /// a measured RMSE e stands for a true one in [e - s, e]. relMSE behaves like MSE (floor
-/// relMSE(R1, R2) / 2). FLIP is not additive; the same rule as RMSE is applied to it as an
-/// estimate of how far the reference's noise moves it.
+/// relMSE(R1, R2) / 2). FLIP and HDR-FLIP are not additive; the same rule as RMSE is applied
+/// to them as an estimate of how far the reference's noise moves them.
 #[derive(Clone, Copy, Debug, Default, serde::Serialize)]
 pub struct Noise {
     pub between_references: ErrorMetrics,
@@ -123,6 +123,8 @@ impl Noise {
             "rel_mse" => b.rel_mse / 2.0,
             "flip_mean" => b.flip_mean / std::f64::consts::SQRT_2,
             "flip_p95" => b.flip_p95 / std::f64::consts::SQRT_2,
+            "hdr_flip_mean" => b.hdr_flip_mean / std::f64::consts::SQRT_2,
+            "hdr_flip_p95" => b.hdr_flip_p95 / std::f64::consts::SQRT_2,
             _ => 0.0,
         }
     }
@@ -397,7 +399,9 @@ pub fn metric_value(e: &ErrorMetrics, name: &str) -> Result<f64> {
         "flip_p95" => e.flip_p95,
         "rmse" => e.rmse,
         "rel_mse" => e.rel_mse,
-        other => bail!("--metric {other}: expected flip_mean, flip_p95, rmse or rel_mse"),
+        "hdr_flip_mean" => e.hdr_flip_mean,
+        "hdr_flip_p95" => e.hdr_flip_p95,
+        other => bail!("--metric {other}: expected flip_mean, flip_p95, rmse, rel_mse, hdr_flip_mean or hdr_flip_p95"),
     })
 }
 

@@ -247,7 +247,8 @@ pub fn run(args: ReportArgs) -> Result<()> {
 /// the interval the reference's noise leaves it, the exact tracer's FLIP at the same time and
 /// the verdict; then the exact tracer's own points. The mask columns give RMSE and FLIP mean
 /// over the object mask (src/metrics/mask.rs), the pixels the techniques touch; its surfaces
-/// follow the table.
+/// follow the table. HDR-FLIP (mean with the reference's noise, 95th percentile, mean over the
+/// mask) comes last, after the columns that existed before it.
 fn section_table(
     md: &mut String,
     rows: &[(&[String], &crate::app::compare::Measurement)],
@@ -264,12 +265,13 @@ fn section_table(
         md,
         "| # | setting | frame ms | per change ms | technique passes | RMSE | relMSE | FLIP mean | FLIP p95 | mask RMSE | mask FLIP mean |"
     )?;
+    let hdr_head = " HDR-FLIP mean | HDR-FLIP p95 | mask HDR-FLIP mean |";
     if exact.is_some() {
-        writeln!(md, " exact FLIP at equal time | verdict |")?;
-        writeln!(md, "|---:|---|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---|")?;
+        writeln!(md, " exact FLIP at equal time | verdict |{hdr_head}")?;
+        writeln!(md, "|---:|---|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|")?;
     } else {
-        writeln!(md)?;
-        writeln!(md, "|---:|---|---:|---:|---|---:|---:|---:|---:|---:|---:|")?;
+        writeln!(md, "{hdr_head}")?;
+        writeln!(md, "|---:|---|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")?;
     }
     for (i, (setting, m)) in rows.iter().enumerate() {
         let passes: Vec<String> = m.passes.iter().map(|p| format!("{} {:.2}", p.name, p.stats.median_ms)).collect();
@@ -290,14 +292,18 @@ fn section_table(
             Some(e) => write!(md, " {:.4} | {:.4} |", e.rmse, e.flip_mean)?,
             None => write!(md, " – | – |")?,
         }
-        match exact {
-            Some(x) => {
-                let eq = x.equal_time("flip_mean", m)?;
-                let at = eq.exact.map(|a| format!("{:.4}", a.error)).unwrap_or_else(|| "–".into());
-                writeln!(md, " {at} | {} |", eq.verdict.as_str())?;
-            }
-            None => writeln!(md)?,
+        if let Some(x) = exact {
+            let eq = x.equal_time("flip_mean", m)?;
+            let at = eq.exact.map(|a| format!("{:.4}", a.error)).unwrap_or_else(|| "–".into());
+            write!(md, " {at} | {} |", eq.verdict.as_str())?;
         }
+        let mask_hdr = m.mask.errors_mask.map(|e| format!("{:.4}", e.hdr_flip_mean)).unwrap_or_else(|| "–".into());
+        writeln!(
+            md,
+            " {} | {:.4} | {mask_hdr} |",
+            with_noise("hdr_flip_mean", m.errors.hdr_flip_mean),
+            m.errors.hdr_flip_p95
+        )?;
     }
     writeln!(md)?;
     writeln!(md, "{}\n", cost_caption(rows.iter().map(|(_, m)| &m.per_change)))?;
@@ -313,11 +319,12 @@ fn section_table(
         let floor = |metric| x.noise.floor(metric);
         writeln!(
             md,
-            "Reference noise (a second reference, next seed): RMSE {:.4}, FLIP mean {:.4}; an error \
-             in parentheses is the range of the true error it allows, and two errors whose ranges \
-             overlap are within noise, not ranked. Exact tracer: {}:",
+            "Reference noise (a second reference, next seed): RMSE {:.4}, FLIP mean {:.4}, HDR-FLIP \
+             mean {:.4}; an error in parentheses is the range of the true error it allows, and two \
+             errors whose ranges overlap are within noise, not ranked. Exact tracer: {}:",
             floor("rmse"),
             floor("flip_mean"),
+            floor("hdr_flip_mean"),
             x.curve.source.describe()
         )?;
         let pts: Vec<String> = x
@@ -327,11 +334,12 @@ fn section_table(
             .map(|p| {
                 let mask = p.errors_mask.map(|e| format!(" (mask: FLIP {:.4} RMSE {:.4})", e.flip_mean, e.rmse));
                 format!(
-                    "{} {:.2} ms FLIP {:.4} RMSE {:.4}{}",
+                    "{} {:.2} ms FLIP {:.4} RMSE {:.4} HDR-FLIP {:.4}{}",
                     p.label,
                     p.time_ms,
                     p.errors.flip_mean,
                     p.errors.rmse,
+                    p.errors.hdr_flip_mean,
                     mask.unwrap_or_default()
                 )
             })
@@ -504,7 +512,8 @@ fn header(frames: u32, warmup: u32, sections: &str) -> String {
          compared with prism's exact reference of the same scene. Image size, the reference's \
          samples per pixel and its photons for caustics: {measured}. Errors are on linear \
          radiance (RMSE, relMSE) and on the tone-mapped images (FLIP, mean and 95th percentile; \
-         0 = identical, 1 = maximal).\n\n"
+         0 = identical, 1 = maximal); HDR-FLIP is FLIP's largest value per pixel over a range of \
+         exposures of the linear images (README, `prism compare`).\n\n"
     )
 }
 

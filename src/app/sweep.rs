@@ -13,6 +13,7 @@ use super::equaltime::{
 };
 use super::output::{self, Outputs};
 use super::{check_validation, GpuArgs, SceneArgs};
+use crate::metrics::image::ErrorMetrics;
 use crate::scene::Scene;
 
 #[derive(Args, Debug)]
@@ -26,7 +27,8 @@ pub struct SweepArgs {
     /// Output prefix: writes PREFIX.csv, PREFIX.svg and PREFIX.png.
     #[arg(short, long, default_value = "sweep")]
     pub out: String,
-    /// The error on the plot's y axis: flip_mean, flip_p95, rmse, rel_mse.
+    /// The error on the plot's y axis: flip_mean, flip_p95, rmse, rel_mse, hdr_flip_mean,
+    /// hdr_flip_p95.
     #[arg(long, default_value = "flip_mean")]
     pub metric: String,
     #[command(flatten)]
@@ -435,10 +437,17 @@ pub fn csv(params: &[(String, Vec<String>)], rows: &[SweepRow], metric: &str, ex
     }
     csv.push_str(&format!(
         ",frame_ms,per_change_ms,rmse,psnr_db,rel_mse,flip_mean,flip_p95,mask_pixels,mask_rmse,mask_psnr_db,mask_rel_mse,\
-         mask_flip_mean,mask_flip_p95,mask_surfaces,pareto,technique,{metric}_low,exact_{metric},verdict\n"
+         mask_flip_mean,mask_flip_p95,mask_surfaces,pareto,technique,{metric}_low,exact_{metric},verdict,\
+         hdr_flip_mean,hdr_flip_p95,mask_hdr_flip_mean,mask_hdr_flip_p95\n"
     ));
-    let errors = |e: &crate::metrics::image::ErrorMetrics| {
+    let errors = |e: &ErrorMetrics| {
         format!(",{:.6},{:.3},{:.6},{:.5},{:.5}", e.rmse, e.psnr_db, e.rel_mse, e.flip_mean, e.flip_p95)
+    };
+    // HDR-FLIP, whole and over the mask: appended after the columns that existed before it, so
+    // that readers of those keep their positions.
+    let hdr = |e: &ErrorMetrics, mask: Option<&ErrorMetrics>| {
+        let m = mask.map(|m| format!("{:.5},{:.5}", m.hdr_flip_mean, m.hdr_flip_p95)).unwrap_or_else(|| ",".into());
+        format!(",{:.5},{:.5},{m}\n", e.hdr_flip_mean, e.hdr_flip_p95)
     };
     for (i, r) in rows.iter().enumerate() {
         csv.push_str(&format!("{},technique,{}", i + 1, quote(&r.setting.join(" "))));
@@ -463,10 +472,11 @@ pub fn csv(params: &[(String, Vec<String>)], rows: &[SweepRow], metric: &str, ex
                 let value = metric_of(&r.measurement, metric)?;
                 let eq = x.equal_time(metric, &r.measurement)?;
                 let at = eq.exact.map(|a| format!("{:.6}", a.error)).unwrap_or_default();
-                csv.push_str(&format!(",{:.6},{at},{}\n", x.noise.interval(metric, value).0, eq.verdict.as_str()));
+                csv.push_str(&format!(",{:.6},{at},{}", x.noise.interval(metric, value).0, eq.verdict.as_str()));
             }
-            None => csv.push_str(",,,\n"),
+            None => csv.push_str(",,,"),
         }
+        csv.push_str(&hdr(&r.measurement.errors, r.measurement.mask.errors_mask.as_ref()));
     }
     if let Some(x) = exact {
         let name = match x.curve.source {
@@ -483,7 +493,8 @@ pub fn csv(params: &[(String, Vec<String>)], rows: &[SweepRow], metric: &str, ex
             csv.push_str(&p.errors_mask.as_ref().map(errors).unwrap_or_else(|| ",".repeat(5)));
             csv.push(',');
             let value = metric_value(&p.errors, metric)?;
-            csv.push_str(&format!(",,{name},{:.6},,\n", x.noise.interval(metric, value).0));
+            csv.push_str(&format!(",,{name},{:.6},,", x.noise.interval(metric, value).0));
+            csv.push_str(&hdr(&p.errors, p.errors_mask.as_ref()));
         }
     }
     Ok(csv)
@@ -637,11 +648,18 @@ mod tests {
             row("render.refraction=hu_qin", 400.0, 0.02, "refraction=hu_qin"),
         ];
         rows[0].measurement.mask = crate::app::compare::MaskErrors {
-            errors_mask: Some(ErrorMetrics { rmse: 0.5, flip_mean: 0.6, ..Default::default() }),
+            errors_mask: Some(ErrorMetrics {
+                rmse: 0.5,
+                flip_mean: 0.6,
+                hdr_flip_mean: 0.8,
+                hdr_flip_p95: 0.9,
+                ..Default::default()
+            }),
             mask_pixels: 120,
             mask_surfaces: vec!["ball (dielectric): 100 px".into(), "floor (diffuse caustic receiver): 20 px".into()],
         };
         rows[2].measurement.per_change = crate::app::compare::PerChange { ms: 12.5, costs: Vec::new() };
+        rows[0].measurement.errors.hdr_flip_mean = 0.7;
         let point = |label: &str, t: f64, flip: f64| ExactPoint {
             label: label.into(),
             time_ms: t,
@@ -663,13 +681,15 @@ mod tests {
             lines[0],
             "n,kind,setting,render.refraction,frame_ms,per_change_ms,rmse,psnr_db,rel_mse,flip_mean,flip_p95,mask_pixels,\
              mask_rmse,mask_psnr_db,mask_rel_mse,mask_flip_mean,mask_flip_p95,mask_surfaces,pareto,technique,\
-             flip_mean_low,exact_flip_mean,verdict"
+             flip_mean_low,exact_flip_mean,verdict,hdr_flip_mean,hdr_flip_p95,mask_hdr_flip_mean,mask_hdr_flip_p95"
         );
         let columns = lines[0].split(',').count();
         assert!(lines.iter().all(|l| l.split(',').count() == columns), "{text}");
         assert!(
             lines[1].starts_with("1,technique,render.refraction=single,single,")
-                && lines[1].ends_with(",,faster than exact")
+                && lines[1].ends_with(",,faster than exact,0.70000,0.00000,0.80000,0.90000"),
+            "{}",
+            lines[1]
         );
         assert!(
             lines[1].contains(
@@ -682,9 +702,18 @@ mod tests {
         assert!(lines[2].contains(",0,,,,,,,false,"), "no mask errors: {}", lines[2]);
         // Frame ms, then per change ms beside it.
         assert!(lines[1].contains(",10.0000,0.0000,") && lines[3].contains(",400.0000,12.5000,"), "{text}");
-        // wyman at 40 ms: exact reaches 0.25 * 0.2^(log 2 / log 10) = 0.1540 < 0.35.
-        assert!(lines[2].ends_with(",false,refraction=wyman,0.350000,0.154003,dominated"), "{}", lines[2]);
-        assert!(lines[3].ends_with(",true,refraction=hu_qin,0.020000,0.050000,beats exact"), "{}", lines[3]);
+        // HDR-FLIP after the verdict (no mask errors: no mask HDR-FLIP). wyman at 40 ms: exact
+        // reaches 0.25 * 0.2^(log 2 / log 10) = 0.1540 < 0.35.
+        assert!(
+            lines[2].ends_with(",false,refraction=wyman,0.350000,0.154003,dominated,0.00000,0.00000,,"),
+            "{}",
+            lines[2]
+        );
+        assert!(
+            lines[3].ends_with(",true,refraction=hu_qin,0.020000,0.050000,beats exact,0.00000,0.00000,,"),
+            "{}",
+            lines[3]
+        );
         assert!(lines[4].starts_with(",exact,raytrace max_depth=1,,20.0000,,"), "{}", lines[4]);
         assert!(lines[4].contains(",0.25000,0.00000,,,,,,,,,raytrace,"), "no mask errors: {}", lines[4]);
         assert!(
@@ -692,6 +721,8 @@ mod tests {
             "{}",
             lines[5]
         );
+        assert!(lines[4].ends_with(",,raytrace,0.250000,,,0.00000,0.00000,,"), "{}", lines[4]);
+        assert!(lines[5].ends_with(",,raytrace,0.050000,,,0.00000,0.00000,0.00000,0.00000"), "{}", lines[5]);
         let points: Vec<PlotPoint> = rows
             .iter()
             .map(|r| PlotPoint {
