@@ -676,7 +676,9 @@ fn demo_ab_view_measures_what_compare_measures() {
     let c = compare.output().unwrap();
     assert!(c.status.success(), "prism compare failed:\n{}", String::from_utf8_lossy(&c.stderr));
     let report: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
-    for (name, key) in [("FLIP mean", "flip_mean"), ("relMSE", "rel_mse"), ("RMSE", "rmse")] {
+    for (name, key) in
+        [("FLIP mean", "flip_mean"), ("HDR-FLIP mean", "hdr_flip_mean"), ("relMSE", "rel_mse"), ("RMSE", "rmse")]
+    {
         let expected = report["errors"][key].as_f64().unwrap();
         let live = field(name);
         assert!((live - expected).abs() <= 0.5e-6, "{name}: A/B view {live} vs prism compare {expected}\n{stderr}");

@@ -5,7 +5,7 @@
 //! window frame while nothing changes, and starts again when the camera, the window size or
 //! any parameter changes, so the comparison follows every edit. The overlay shows the live
 //! error, `prism compare`'s metrics on the same images (relMSE of linear radiance, FLIP of
-//! the tone-mapped images), and both costs: the technique's GPU time per frame and the
+//! the tone-mapped images, HDR-FLIP), and both costs: the technique's GPU time per frame and the
 //! exact renderer's time per sample.
 //!
 //! Falcor's error view compares against a reference image loaded from disk; here the
@@ -198,10 +198,11 @@ impl AbView {
         if due && exact.errors.is_none_or(|(n, _)| n != samples) {
             let (errors, heat) = ErrorMetrics::between(&hdr, &image, &ldr, &exact_ldr, w, h);
             eprintln!(
-                "demo: A/B: {samples} exact samples ({} photons each, {:.1} ms per sample): FLIP mean {:.6}, relMSE {:.6}, RMSE {:.6}",
+                "demo: A/B: {samples} exact samples ({} photons each, {:.1} ms per sample): FLIP mean {:.6}, HDR-FLIP mean {:.6}, relMSE {:.6}, RMSE {:.6}",
                 exact.photons,
                 exact.seconds * 1000.0 / samples.max(1) as f64,
                 errors.flip_mean,
+                errors.hdr_flip_mean,
                 errors.rel_mse,
                 errors.rmse
             );

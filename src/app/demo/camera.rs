@@ -52,6 +52,10 @@ pub struct CameraController {
     keys: HashSet<KeyCode>,
     drag: Option<Drag>,
     changed: bool,
+    /// Nothing moved the camera since the start or the last reset: it is the scene file's
+    /// camera exactly, not its round trip through yaw, pitch and distance (so that an
+    /// untouched window renders what `prism render` does, bit for bit).
+    at_start: bool,
 }
 
 const MAX_PITCH: f32 = 1.55;
@@ -75,6 +79,7 @@ impl CameraController {
             keys: HashSet::new(),
             drag: None,
             changed: true,
+            at_start: true,
         };
         c.reset();
         c
@@ -96,6 +101,7 @@ impl CameraController {
         self.position = s.position;
         self.speed = self.distance * 0.5;
         self.changed = true;
+        self.at_start = true;
     }
 
     /// The scene's size scale (the start camera's distance to its target), for steps of
@@ -160,6 +166,7 @@ impl CameraController {
                 self.yaw += sign * delta.x * ROTATE_PER_PIXEL;
                 self.pitch = (self.pitch - sign * delta.y * ROTATE_PER_PIXEL).clamp(-MAX_PITCH, MAX_PITCH);
                 self.changed = true;
+                self.at_start = false;
             }
             Some(Drag::Pan) => {
                 let forward = self.forward();
@@ -170,6 +177,7 @@ impl CameraController {
                 self.target += offset;
                 self.position += offset;
                 self.changed = true;
+                self.at_start = false;
             }
         }
     }
@@ -178,7 +186,10 @@ impl CameraController {
     pub fn wheel(&mut self, lines: f32) {
         let factor = 0.9f32.powf(lines);
         match self.mode {
-            Mode::Orbit => self.distance = (self.distance * factor).max(1e-6),
+            Mode::Orbit => {
+                self.distance = (self.distance * factor).max(1e-6);
+                self.at_start = false;
+            }
             Mode::Fly => self.speed = (self.speed / factor).max(1e-6),
         }
         self.changed = true;
@@ -215,6 +226,7 @@ impl CameraController {
                 let speed = if fast { self.speed * 4.0 } else { self.speed };
                 self.position += dir.normalize() * speed * dt.min(0.25);
                 self.changed = true;
+                self.at_start = false;
             }
         }
         std::mem::take(&mut self.changed)
@@ -222,6 +234,9 @@ impl CameraController {
 
     /// The camera to render with, `width` x `height` pixels.
     pub fn camera(&self, width: u32, height: u32) -> Camera {
+        if self.at_start {
+            return Camera { width, height, ..self.start };
+        }
         let forward = self.forward();
         let (position, target) = match self.mode {
             Mode::Orbit => (self.target - forward * self.distance, self.target),

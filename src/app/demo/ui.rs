@@ -314,8 +314,8 @@ fn ab_view(ui: &mut egui::Ui, ab: &mut AbOptions, view: &View) {
             ));
             if let Some((n, e)) = &s.errors {
                 ui.label(format!(
-                    "FLIP mean {:.4} · relMSE {:.5} · RMSE {:.5} (at {n} samples)",
-                    e.flip_mean, e.rel_mse, e.rmse
+                    "FLIP mean {:.4} · HDR-FLIP {:.4} · relMSE {:.5} · RMSE {:.5} (at {n} samples)",
+                    e.flip_mean, e.hdr_flip_mean, e.rel_mse, e.rmse
                 ));
             }
         }
