@@ -90,9 +90,11 @@ pub struct DemoArgs {
     /// width, the exact image right of it (the overlay's "split" slider).
     #[arg(long, value_name = "F", default_value_t = 0.5, value_parser = unit_fraction)]
     pub ab_split: f32,
-    /// Milliseconds the light simulation of a volume runs before each frame, which then shows
-    /// the light simulated so far (the window answers input meanwhile); 0: all of it before
-    /// the next frame, the window frozen until it ends (its progress in the title).
+    /// Milliseconds the light simulation of a volume runs at least before each frame, and at
+    /// least as long as the frame's GPU time (so that slow frames do not starve it); each
+    /// frame shows the light simulated so far and the window answers input meanwhile. 0: all
+    /// of it before the next frame, the window frozen until it ends (its progress in the
+    /// title).
     #[arg(long, value_name = "MS", default_value_t = 100)]
     pub work_per_frame: u64,
     /// Every N presented frames, print resident memory and GPU allocator usage to stderr
@@ -298,6 +300,8 @@ struct Running {
     screenshots: u32,
     /// Frames shown while the light simulation was still running.
     frames_in_progress: u64,
+    /// Long work in progress (its task, detail and fraction done), for the overlay.
+    progress: Arc<std::sync::Mutex<Option<ui::WorkProgress>>>,
 }
 
 impl ApplicationHandler for App {
@@ -428,17 +432,14 @@ impl Running {
         let window = Arc::new(event_loop.create_window(attributes).context("cannot open a window")?);
         let display = window.display_handle().context("the window has no display handle")?.as_raw();
         let ctx = GpuContext::for_display(&args.gpu.desc(), display)?;
-        ctx.set_progress(window_progress(window.clone(), format!("prism: {}", scene.name)));
+        let progress = Arc::new(std::sync::Mutex::new(None));
+        ctx.set_progress(window_progress(window.clone(), format!("prism: {}", scene.name), progress.clone()));
         let size = window.inner_size();
         let swapchain =
             Swapchain::new(&ctx, &*window, (size.width, size.height), args.vsync == OnOff::On, FRAMES_IN_FLIGHT)
                 .context("cannot create the swapchain")?;
         let overlay = Overlay::new(&ctx, &swapchain, FRAMES_IN_FLIGHT).context("cannot create the overlay")?;
-        let mut renderer = Renderer::new(&ctx, &scene).context("cannot set up the renderer")?;
-        // The light simulation of a volume runs a little before each frame, which shows the
-        // light simulated so far, so the window answers input meanwhile.
-        let budget = (args.work_per_frame > 0).then(|| Duration::from_millis(args.work_per_frame));
-        renderer.set_work_budget(budget);
+        let renderer = Renderer::new(&ctx, &scene).context("cannot set up the renderer")?;
         let egui_ctx = egui::Context::default();
         let max_texture = ctx.limits().max_image_dimension2_d as usize;
         let egui = egui_winit::State::new(
@@ -501,6 +502,7 @@ impl Running {
             frames: 0,
             screenshots: 0,
             frames_in_progress: 0,
+            progress,
         };
         r.register_swapchain();
         if let Some(w) = &r.shader_watch {
@@ -1023,6 +1025,7 @@ impl Running {
                 memory: self.renderer.technique_memory(),
                 targets: &targets,
                 target_texture: self.ab.texture.as_ref().or(self.target_texture.as_ref().map(|(_, t)| t)),
+                progress: self.progress.lock().unwrap_or_else(|e| e.into_inner()).clone(),
                 ab: self.ab.status(),
             };
             requests = ui::draw(c, &mut self.ui, &view);
@@ -1064,6 +1067,14 @@ impl Running {
         });
         let target = WindowTarget { id: swap_id, raw: swap_raw, extent, index };
         let preparing = self.renderer.preparing();
+        // The light simulation of a volume runs a little before each frame, which shows the
+        // light simulated so far, so the window answers input meanwhile: at least
+        // --work-per-frame, and as long as a frame takes, so that it gets half the time.
+        let budget = (args.work_per_frame > 0).then(|| {
+            let frame = Duration::from_secs_f64(self.stats.technique_total_ms().max(0.0) / 1000.0);
+            Duration::from_millis(args.work_per_frame).max(frame)
+        });
+        self.renderer.set_work_budget(budget);
         self.renderer.render_to_window(&sync, &target, overlay)?;
         if self.renderer.preparing() {
             self.frames_in_progress += 1;
@@ -1109,13 +1120,23 @@ impl Running {
     }
 }
 
-/// Long work inside the renderer (the eikonal light simulation after a light moved) blocks
-/// the frame loop: its progress goes to the window's title, which the window system draws
-/// meanwhile, and to the log every tenth of the way.
-fn window_progress(window: Arc<Window>, title: String) -> crate::gpu::ProgressSink {
+/// Long work inside the renderer (the eikonal light simulation, spread over frames or, with
+/// `--work-per-frame 0`, blocking the frame loop): its progress goes to the window's title,
+/// which the window system draws even while the loop is blocked, to the overlay (`shown`)
+/// and to the log every tenth of the way.
+fn window_progress(
+    window: Arc<Window>,
+    title: String,
+    shown: Arc<std::sync::Mutex<Option<ui::WorkProgress>>>,
+) -> crate::gpu::ProgressSink {
     let logged = std::sync::Mutex::new(None::<u64>);
     Box::new(move |p| {
         let percent = (100 * p.done).checked_div(p.total).unwrap_or(100u64).min(100);
+        *shown.lock().unwrap_or_else(|e| e.into_inner()) = (!p.finished).then(|| ui::WorkProgress {
+            task: p.task.to_string(),
+            detail: p.detail.to_string(),
+            fraction: percent as f32 / 100.0,
+        });
         if p.finished {
             window.set_title(&title);
             eprintln!("demo: {} done", p.task);

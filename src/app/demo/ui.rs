@@ -171,6 +171,17 @@ pub struct View<'a> {
     pub target_texture: Option<&'a egui::TextureHandle>,
     /// The A/B view's exact image and live error, while it is on and has samples.
     pub ab: Option<AbStatus>,
+    /// Long work in progress (the eikonal light simulation).
+    pub progress: Option<WorkProgress>,
+}
+
+/// Long work in progress, as the renderer reports it.
+#[derive(Clone, Debug)]
+pub struct WorkProgress {
+    pub task: String,
+    pub detail: String,
+    /// Done, 0..1.
+    pub fraction: f32,
 }
 
 /// The current value of `render.<key>` for a technique key.
@@ -215,6 +226,10 @@ pub fn draw(ctx: &egui::Context, state: &mut UiState, view: &View) -> Requests {
             }
             if let Some(s) = &state.status {
                 ui.label(s);
+            }
+            if let Some(p) = &view.progress {
+                ui.add(egui::ProgressBar::new(p.fraction).text(format!("{} {:.0}%", p.task, 100.0 * p.fraction)));
+                ui.small(&p.detail);
             }
             ui.separator();
             ui.checkbox(&mut state.counts, "count invocations (pipeline statistics)");

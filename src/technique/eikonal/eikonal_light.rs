@@ -437,6 +437,8 @@ pub struct LightSim {
     run_gpu_ms: f64,
     /// Patches of the current run after its last batch.
     run_count: u32,
+    /// Wall time per step of the last batch, to fit batches into a deadline.
+    seconds_per_step: Option<f64>,
     /// The simulation so far, while it is in progress ([`LightSim::advance`]).
     progress: Option<SimProgress>,
     /// Its statistics once finished.
@@ -668,6 +670,7 @@ impl LightSim {
             kernels: Vec::new(),
             run_gpu_ms: 0.0,
             run_count: 0,
+            seconds_per_step: None,
             progress: None,
             finished: None,
         };
@@ -831,8 +834,16 @@ impl LightSim {
         mut progress: impl FnMut(u32, u32),
     ) -> GpuResult<Option<(RunStats, Vec<u32>)>> {
         while self.run_count > 0 && self.steps_taken < self.max_steps {
-            let n = LIGHT_BATCH.min(self.max_steps - self.steps_taken);
+            let mut n = LIGHT_BATCH.min(self.max_steps - self.steps_taken);
+            if let (Some(d), Some(per_step)) = (deadline, self.seconds_per_step) {
+                // A batch that fits the time left at the last batch's pace (a step of a large
+                // wavefront can take a second on a CPU device), one step at least.
+                let left = d.saturating_duration_since(Instant::now()).as_secs_f64();
+                n = n.min(((left / per_step) as u32).max(1));
+            }
+            let start = Instant::now();
             self.run_count = self.run_steps(ctx, graph, n)?;
+            self.seconds_per_step = Some(start.elapsed().as_secs_f64() / n as f64);
             self.drain_spill();
             progress(n, self.run_count);
             // At least one batch per call, so that every call advances.
