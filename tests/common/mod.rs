@@ -3,7 +3,8 @@
 #![allow(dead_code)] // each test binary uses a different subset
 
 use std::path::PathBuf;
-use std::sync::Arc;
+use std::sync::{Arc, Condvar, Mutex};
+use std::thread::ThreadId;
 
 use prism::gpu::{ContextDesc, GpuContext};
 use prism::metrics::image::{diff_heatmap_rgba8, fraction_differing_rgba8, psnr_rgba8};
@@ -26,12 +27,61 @@ pub fn under_ci() -> bool {
 /// Every GPU test gets its context here, and the returned [`TestContext`] checks the
 /// validation log when it is dropped, teardown included, so no test can forget to.
 pub fn context(sync: bool) -> TestContext {
+    let turn = GpuTurn::take();
     let ctx = GpuContext::new(&ContextDesc { validation: true, sync_validation: sync, device: None })
         .expect("cannot create a Vulkan context (is mesa-vulkan-drivers installed?)");
     if under_ci() {
         assert!(ctx.info.validation, "CI is set but VK_LAYER_KHRONOS_validation is not installed");
     }
-    TestContext(Some(ctx))
+    TestContext(Some(ctx), Some(turn))
+}
+
+/// One GPU test at a time in a test binary. The Khronos validation layer (1.3.239, Debian
+/// bookworm) is not safe with several instances and devices used from parallel threads of
+/// one process: a test binary once died with a general protection fault inside
+/// libVkLayer_khronos_validation.so (tests/photon_buffer.rs, the kernel log's trap line) and
+/// once with a C++ exception thrown through a Vulkan call (tests/impostor.rs), each after
+/// hundreds of clean runs (docs/RELIABILITY.md). Each context holds the binary's turn from
+/// its creation to the end of its teardown check; a thread may hold several contexts.
+/// Separate processes (the CLI tests' `prism` runs) do not share the layer's state.
+struct GpuTurn;
+
+/// The thread holding the turn and how many contexts it holds.
+static TURN: (Mutex<Option<(ThreadId, usize)>>, Condvar) = (Mutex::new(None), Condvar::new());
+
+impl GpuTurn {
+    fn take() -> GpuTurn {
+        let me = std::thread::current().id();
+        let mut held = TURN.0.lock().unwrap_or_else(|e| e.into_inner());
+        loop {
+            match *held {
+                None => {
+                    *held = Some((me, 1));
+                    return GpuTurn;
+                }
+                Some((t, n)) if t == me => {
+                    *held = Some((t, n + 1));
+                    return GpuTurn;
+                }
+                Some(_) => held = TURN.1.wait(held).unwrap_or_else(|e| e.into_inner()),
+            }
+        }
+    }
+}
+
+impl Drop for GpuTurn {
+    fn drop(&mut self) {
+        let mut held = TURN.0.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some((t, n)) = *held {
+            *held = (n > 1).then_some((t, n - 1));
+        }
+        TURN.1.notify_all();
+    }
+}
+
+thread_local! {
+    /// The turns of [`TestContext::unchecked`] contexts, given back when the test's thread ends.
+    static KEPT: std::cell::RefCell<Vec<GpuTurn>> = const { std::cell::RefCell::new(Vec::new()) };
 }
 
 /// A test's Vulkan context. Used as an `Arc<GpuContext>` (it derefs to one); dropping it
@@ -40,11 +90,15 @@ pub fn context(sync: bool) -> TestContext {
 /// `vkDestroyDevice` (leaks) are reported only then. Everything made from the context
 /// (renderers, buffers) must be dropped before it, which Rust's reverse declaration order
 /// does for locals declared after it.
-pub struct TestContext(Option<Arc<GpuContext>>);
+pub struct TestContext(Option<Arc<GpuContext>>, Option<GpuTurn>);
 
 impl TestContext {
-    /// The context without the teardown check, for a test that expects errors.
+    /// The context without the teardown check, for a test that expects errors (it keeps the
+    /// GPU turn until the test's thread ends).
     pub fn unchecked(mut self) -> Arc<GpuContext> {
+        if let Some(turn) = self.1.take() {
+            KEPT.with(|k| k.borrow_mut().push(turn));
+        }
         self.0.take().unwrap()
     }
 }
