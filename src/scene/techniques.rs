@@ -407,6 +407,39 @@ choice! {
 }
 
 choice! {
+    /// Which of Wyman 2005's approximations an oracle replaces by the exact tracer's value
+    /// (an analysis tool: `prism ablation` measures how much of the error each causes). The
+    /// exact values come from tracing T1 from P1 through the reference's geometry
+    /// (glsl/reference/trace.glsl), as `render.refraction = "raytrace"` would.
+    WymanOracle, hint "an analysis tool: the approximations of Wyman 2005 §3.1-3.2 replaced by the \
+                       exact tracer's values" {
+        /// None: the paper's technique.
+        None = "none",
+        /// §3.1's P2~ = P1 + d~ T1 replaced by T1's exact exit point (and d~ by its distance,
+        /// for the absorption); N2 still looked up in the back-normal layer there (§3.2).
+        ExitPoint = "exit_point",
+        /// §3.2's N2 (the back-normal layer at P2~'s texel, or §3.3's silhouette normal)
+        /// replaced by the exact surface normal at T1's exit; P2~ as the paper's.
+        ExitNormal = "exit_normal",
+        /// Both: the exit point and its normal exact. What remains is the model's own error
+        /// (two interfaces, no internal reflection, Fresnel only at P1).
+        All = "all",
+    }
+}
+
+impl WymanOracle {
+    /// The ORACLE_* bits of the shader's specialisation constant.
+    pub fn bits(self) -> u32 {
+        match self {
+            WymanOracle::None => 0,
+            WymanOracle::ExitPoint => crate::ORACLE_EXIT_POINT,
+            WymanOracle::ExitNormal => crate::ORACLE_EXIT_NORMAL,
+            WymanOracle::All => crate::ORACLE_EXIT_POINT | crate::ORACLE_EXIT_NORMAL,
+        }
+    }
+}
+
+choice! {
     /// Where a dielectric OBJ_k's refracted ray leaves it inside its impostor texture (Hu & Qin
     /// 2007 §2.2.1 with §2.1's exit search in the rectangle's parallel projection).
     RecursiveExit,
@@ -638,6 +671,10 @@ params! {
         /// Also write the exit point P2 and direction T2 of every refracting pixel to the debug
         /// targets `refraction_wyman_p2` and `refraction_wyman_t2` (`Renderer::read_target`).
         debug: bool = false;
+        /// An analysis tool, not a rendering setting: replace §3.1's exit point and/or §3.2's
+        /// exit normal by the exact tracer's (the reference's BVH and spheres, bound only when
+        /// this is not `"none"`, so the paper's technique pays nothing for it).
+        oracle: WymanOracle = WymanOracle::None;
     }
 
     /// `[render.hu_qin]`: Hu & Qin 2007 §2 and §4 (src/technique/refraction/refraction_hu_qin.rs).

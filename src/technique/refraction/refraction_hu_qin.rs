@@ -221,6 +221,7 @@ impl HuQinPass {
                     (BINDING_NEARBY_TEXTURE, &nearby.texture, nearby.texture_id),
                 ],
                 buffers: &[(BINDING_NEARBY_RECTS, &nearby.rect_buffer)],
+                tracer: &[],
                 specialization: &[
                     ("SEARCH_STEPS", Spec::U32(params.search_steps)),
                     ("TOLERANCE", Spec::F32(params.tolerance)),

@@ -14,10 +14,19 @@
 //!   environment; TIR clamped to the critical angle and the silhouette fallback of §3.3.
 //!
 //! d_N is precomputed per vertex on the CPU ([`super::wyman_distance`]).
+//!
+//! `oracle` (an analysis tool, [`WymanOracle`]) replaces the exit point of §3.1 and/or the
+//! exit normal of §3.2 by the exact ones, traced through the reference's geometry
+//! (glsl/reference/trace.glsl): the pass then runs glsl/refraction/wyman_oracle.frag, with the
+//! tracer's buffers in a set 2 of its own and the ORACLE specialisation constant. With
+//! `"none"` neither the variant, nor the tracer's geometry, nor its set exist.
 
-use crate::gpu::Buffer;
+use std::rc::Rc;
+
+use crate::gpu::{Buffer, Spec};
 use crate::graph::Frame;
-use crate::scene::techniques::{BackSurface, WymanParams};
+use crate::reference::TraceGeometry;
+use crate::scene::techniques::{BackSurface, WymanOracle, WymanParams};
 use crate::scene::{Material, Scene};
 use crate::technique::{
     in_stage, list, params, refracting_objects, registration, FrameInputs, PlannedPass, Registration, RenderError,
@@ -25,7 +34,7 @@ use crate::technique::{
 };
 use crate::{
     BINDING_GBUF_ALBEDO, BINDING_GBUF_DEPTH, BINDING_GBUF_NORMAL, BINDING_REFR_BACK_DEPTH, BINDING_REFR_BACK_NORMAL,
-    BINDING_REFR_FRONT_NORMAL, BINDING_REFR_SLOTS,
+    BINDING_REFR_FRONT_NORMAL, BINDING_REFR_SLOTS, REF_BINDING_UNIFORMS, REF_BINDING_VERTICES,
 };
 
 use super::refractor_layers::{
@@ -68,7 +77,9 @@ impl Technique for WymanPass {
     }
 
     fn once_costs(&self) -> Vec<crate::technique::OnceCost> {
-        vec![d_n_cost(self.d_n_ms)]
+        let mut costs = vec![d_n_cost(self.d_n_ms)];
+        costs.extend(self.oracle.as_ref().map(|o| crate::technique::trace_geometry_cost(&o.geometry)));
+        costs
     }
 }
 
@@ -80,6 +91,34 @@ pub struct WymanPass {
     _slots: Buffer,
     /// Host milliseconds §3.1's d_N took for the refractors' meshes when computed.
     d_n_ms: f64,
+    /// The exact tracer an oracle reads (bound in the shading pass's set 2).
+    oracle: Option<Oracle>,
+}
+
+/// What `render.wyman.oracle` binds: the reference's geometry and the tracer's uniforms.
+pub(super) struct Oracle {
+    _uniforms: Buffer,
+    geometry: Rc<crate::technique::Timed<TraceGeometry>>,
+}
+
+impl Oracle {
+    /// The exact tracer over `s`'s scene, its geometry shared through the technique cache.
+    pub(super) fn new(s: &mut Setup<'_>) -> Result<Oracle, RenderError> {
+        let (ctx, scene) = (s.ctx, s.scene);
+        let geometry = s.cache.get_or_try_insert_timed(TraceGeometry::key(scene), || TraceGeometry::new(ctx, scene))?;
+        // Only the geometry's counts and the ray epsilon are read: no path is followed, so
+        // max_depth and the cutoff do not matter.
+        let uniforms = geometry.value.uniforms(scene, s.gpu, 1);
+        let uniforms = Buffer::storage(ctx, "refraction_oracle_uniforms", std::slice::from_ref(&uniforms))?;
+        Ok(Oracle { _uniforms: uniforms, geometry })
+    }
+
+    /// The set-2 buffers of the oracle variants (REF_BINDING_*, glsl/reference/trace.glsl).
+    pub(super) fn buffers<'a>(&'a self, gpu: &'a crate::frame::gpu_scene::GpuScene) -> Vec<(u32, &'a Buffer)> {
+        let mut b = vec![(REF_BINDING_UNIFORMS, &self._uniforms), (REF_BINDING_VERTICES, &gpu.vertices)];
+        b.extend(self.geometry.value.buffers());
+        b
+    }
 }
 
 /// §3.1's d_N as a cost paid once (`ms` host milliseconds, [`scene_distance_along_normals_timed`]):
@@ -117,6 +156,7 @@ pub fn scene_distance_along_normals_timed(scene: &Scene) -> (Vec<f32>, f64) {
 impl WymanPass {
     pub fn new(s: &mut Setup<'_>) -> Result<Self, RenderError> {
         let params = params("wyman", WymanParams::from_settings(&s.scene.render))?;
+        let oracle = if params.oracle == WymanOracle::None { None } else { Some(Oracle::new(s)?) };
         let (ctx, scene, frame_layout, targets, nearest) = (s.ctx, s.scene, s.frame_layout, s.targets, s.nearest);
         let back = match params.back_surface {
             BackSurface::Furthest => LayerKind::BackFurthest,
@@ -128,11 +168,16 @@ impl WymanPass {
         let layers = RefractorLayers::new(s, REFRACTION_WYMAN_LAYERS, &kinds, Some(&d_n))?;
         let slots = Buffer::storage(ctx, "refraction_wyman_slots", &refractor_slots(scene, s.gpu))?;
         let (b, f) = (&layers.layers[0], &layers.layers[1]);
+        let tracer = oracle.as_ref().map(|o| o.buffers(s.gpu)).unwrap_or_default();
+        let (fragment_shader, specialization) = match &oracle {
+            None => ("refraction/wyman.frag", vec![]),
+            Some(_) => ("refraction/wyman_oracle.frag", vec![("ORACLE", Spec::U32(params.oracle.bits()))]),
+        };
         let shade = ShadePass::new(
             ctx,
             &ShadeDesc {
                 name: REFRACTION_WYMAN,
-                fragment_shader: "refraction/wyman.frag",
+                fragment_shader,
                 inputs: &[
                     (BINDING_GBUF_NORMAL, &targets.gbuf_normal, targets.gbuf_normal_id),
                     (BINDING_GBUF_DEPTH, &targets.depth, targets.depth_id),
@@ -142,7 +187,8 @@ impl WymanPass {
                     (BINDING_REFR_FRONT_NORMAL, &f.normal, f.normal_id),
                 ],
                 buffers: &[(BINDING_REFR_SLOTS, &slots)],
-                specialization: &[],
+                tracer: &tracer,
+                specialization: &specialization,
                 debug: params.debug,
                 scene,
             },
@@ -151,6 +197,6 @@ impl WymanPass {
             targets,
             nearest,
         )?;
-        Ok(WymanPass { layers, shade, params, _slots: slots, d_n_ms })
+        Ok(WymanPass { layers, shade, params, _slots: slots, d_n_ms, oracle })
     }
 }
