@@ -1,6 +1,6 @@
 //! `prism ablation`: where an image-space refraction technique's error comes from. The
 //! technique is measured with each of its approximations replaced, one at a time, by the
-//! exact tracer's value (`render.wyman.oracle`), and with all of them replaced, in one
+//! exact tracer's value (`render.wyman.oracle`, `render.hu_qin.oracle`), and with all of them replaced, in one
 //! interleaved run against one cached reference. A step's share of the error is the error it
 //! removes when made exact (error of the paper's technique minus error with that step exact);
 //! what remains with every step exact is the model's structural error (two interfaces, no
@@ -15,13 +15,13 @@ use super::compare::{cached_reference, MeasureArgs};
 use super::equaltime::{measure_interleaved, reference_noise, Noise, Setting};
 use super::output::{self, Outputs};
 use super::{check_validation, GpuArgs, SceneArgs};
-use crate::scene::techniques::WymanOracle;
+use crate::scene::techniques::{HuQinOracle, WymanOracle};
 
 #[derive(Args, Debug)]
 pub struct AblationArgs {
     #[command(flatten)]
     pub scene: SceneArgs,
-    /// The technique whose approximations are replaced: wyman.
+    /// The technique whose approximations are replaced: wyman or hu_qin.
     #[arg(long, default_value = "wyman")]
     pub technique: String,
     /// Also write the table as JSON to this file.
@@ -72,7 +72,8 @@ pub struct Ablation {
 pub fn oracle_values(technique: &str) -> Result<Vec<&'static str>> {
     match technique {
         "wyman" => Ok(WymanOracle::NAMES.to_vec()),
-        _ => bail!("--technique {technique}: the oracle ablation knows wyman"),
+        "hu_qin" => Ok(HuQinOracle::NAMES.to_vec()),
+        _ => bail!("--technique {technique}: the oracle ablation knows wyman and hu_qin"),
     }
 }
 
@@ -197,5 +198,6 @@ mod tests {
         assert_eq!(rows[0].rmse_share, 0.0);
         assert_eq!(residual, (0.05, 0.04));
         assert!(oracle_values("single").is_err());
+        assert_eq!(oracle_values("hu_qin").unwrap().last(), Some(&"all"));
     }
 }

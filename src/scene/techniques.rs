@@ -440,6 +440,48 @@ impl WymanOracle {
 }
 
 choice! {
+    /// Which of Hu & Qin 2007's approximations an oracle replaces by the exact tracer's value
+    /// (an analysis tool, as [`WymanOracle`]).
+    HuQinOracle, hint "an analysis tool: the approximations of Hu & Qin 2007 §2.1.2-2.1.4 and \
+                       §2.2 replaced by the exact tracer's values" {
+        /// None: the paper's technique.
+        None = "none",
+        /// §2.1.2-2.1.3's exit (the front/back decision of Fig. 5 and the d_T search of Fig. 9)
+        /// replaced by T1's exact exit point, its facing choosing the layer §2.1.4 reads N2
+        /// from there.
+        ExitPoint = "exit_point",
+        /// §2.1.4's N2 (the normal layer at P2's texel) replaced by the exact normal at T1's
+        /// exit; P2 as the paper's.
+        ExitNormal = "exit_normal",
+        /// Both the exit point and its normal exact.
+        Exit = "exit",
+        /// §2.2's lookup of R (at P1) and T2 (at P2) in the impostor rectangles (Figs. 13,
+        /// 16, 17) replaced by the exact hit of the ray against the scene, shown as the
+        /// technique shows it: the radiance of TEX_k at that point's texel, in the rectangle
+        /// whose TEX_DEPTH_k holds it (the paper's lookup where no texture shows it); the
+        /// environment where the ray hits nothing.
+        Nearby = "nearby",
+        /// The exit and the nearby lookup exact. What remains is the model's own error.
+        All = "all",
+    }
+}
+
+impl HuQinOracle {
+    /// The ORACLE_* bits of the shader's specialisation constant.
+    pub fn bits(self) -> u32 {
+        let exit = crate::ORACLE_EXIT_POINT | crate::ORACLE_EXIT_NORMAL;
+        match self {
+            HuQinOracle::None => 0,
+            HuQinOracle::ExitPoint => crate::ORACLE_EXIT_POINT,
+            HuQinOracle::ExitNormal => crate::ORACLE_EXIT_NORMAL,
+            HuQinOracle::Exit => exit,
+            HuQinOracle::Nearby => crate::ORACLE_NEARBY,
+            HuQinOracle::All => exit | crate::ORACLE_NEARBY,
+        }
+    }
+}
+
+choice! {
     /// Where a dielectric OBJ_k's refracted ray leaves it inside its impostor texture (Hu & Qin
     /// 2007 §2.2.1 with §2.1's exit search in the rectangle's parallel projection).
     RecursiveExit,
@@ -701,6 +743,10 @@ params! {
         /// Also write P2 and T2 to the debug targets `refraction_hu_qin_p2` and
         /// `refraction_hu_qin_t2`, as for `wyman`.
         debug: bool = false;
+        /// An analysis tool, not a rendering setting: replace the exit point, the exit normal
+        /// and/or the nearby lookup by the exact tracer's (bound only when this is not
+        /// `"none"`, as `render.wyman.oracle`).
+        oracle: HuQinOracle = HuQinOracle::None;
         /// §2.2: the reflected ray R (at P1) and the exit ray T2 (at P2) see the scene's other
         /// objects (diffuse, mirrors, conductors, other dielectrics) through impostor
         /// rectangles (Fig. 13; src/technique/refraction/nearby_impostors.rs) before the

@@ -21,11 +21,8 @@
 //! tracer's buffers in a set 2 of its own and the ORACLE specialisation constant. With
 //! `"none"` neither the variant, nor the tracer's geometry, nor its set exist.
 
-use std::rc::Rc;
-
 use crate::gpu::{Buffer, Spec};
 use crate::graph::Frame;
-use crate::reference::TraceGeometry;
 use crate::scene::techniques::{BackSurface, WymanOracle, WymanParams};
 use crate::scene::{Material, Scene};
 use crate::technique::{
@@ -34,9 +31,10 @@ use crate::technique::{
 };
 use crate::{
     BINDING_GBUF_ALBEDO, BINDING_GBUF_DEPTH, BINDING_GBUF_NORMAL, BINDING_REFR_BACK_DEPTH, BINDING_REFR_BACK_NORMAL,
-    BINDING_REFR_FRONT_NORMAL, BINDING_REFR_SLOTS, REF_BINDING_UNIFORMS, REF_BINDING_VERTICES,
+    BINDING_REFR_FRONT_NORMAL, BINDING_REFR_SLOTS,
 };
 
+use super::oracle::Oracle;
 use super::refractor_layers::{
     refractor_slots, DebugTarget, LayerKind, LayerScope, RefractorLayers, ShadeDesc, ShadePass,
 };
@@ -78,7 +76,7 @@ impl Technique for WymanPass {
 
     fn once_costs(&self) -> Vec<crate::technique::OnceCost> {
         let mut costs = vec![d_n_cost(self.d_n_ms)];
-        costs.extend(self.oracle.as_ref().map(|o| crate::technique::trace_geometry_cost(&o.geometry)));
+        costs.extend(self.oracle.as_ref().map(|o| o.cost()));
         costs
     }
 }
@@ -93,32 +91,6 @@ pub struct WymanPass {
     d_n_ms: f64,
     /// The exact tracer an oracle reads (bound in the shading pass's set 2).
     oracle: Option<Oracle>,
-}
-
-/// What `render.wyman.oracle` binds: the reference's geometry and the tracer's uniforms.
-pub(super) struct Oracle {
-    _uniforms: Buffer,
-    geometry: Rc<crate::technique::Timed<TraceGeometry>>,
-}
-
-impl Oracle {
-    /// The exact tracer over `s`'s scene, its geometry shared through the technique cache.
-    pub(super) fn new(s: &mut Setup<'_>) -> Result<Oracle, RenderError> {
-        let (ctx, scene) = (s.ctx, s.scene);
-        let geometry = s.cache.get_or_try_insert_timed(TraceGeometry::key(scene), || TraceGeometry::new(ctx, scene))?;
-        // Only the geometry's counts and the ray epsilon are read: no path is followed, so
-        // max_depth and the cutoff do not matter.
-        let uniforms = geometry.value.uniforms(scene, s.gpu, 1);
-        let uniforms = Buffer::storage(ctx, "refraction_oracle_uniforms", std::slice::from_ref(&uniforms))?;
-        Ok(Oracle { _uniforms: uniforms, geometry })
-    }
-
-    /// The set-2 buffers of the oracle variants (REF_BINDING_*, glsl/reference/trace.glsl).
-    pub(super) fn buffers<'a>(&'a self, gpu: &'a crate::frame::gpu_scene::GpuScene) -> Vec<(u32, &'a Buffer)> {
-        let mut b = vec![(REF_BINDING_UNIFORMS, &self._uniforms), (REF_BINDING_VERTICES, &gpu.vertices)];
-        b.extend(self.geometry.value.buffers());
-        b
-    }
 }
 
 /// §3.1's d_N as a cost paid once (`ms` host milliseconds, [`scene_distance_along_normals_timed`]):
