@@ -413,7 +413,7 @@ choice! {
     /// (glsl/reference/trace.glsl), as `render.refraction = "raytrace"` would.
     WymanOracle, hint "an analysis tool: the approximations of Wyman 2005 §3.1-3.2 replaced by the \
                        exact tracer's values" {
-        /// None: the paper's technique.
+        /// The paper's technique.
         None = "none",
         /// §3.1's P2~ = P1 + d~ T1 replaced by T1's exact exit point (and d~ by its distance,
         /// for the absorption); N2 still looked up in the back-normal layer there (§3.2).
@@ -444,7 +444,7 @@ choice! {
     /// (an analysis tool, as [`WymanOracle`]).
     HuQinOracle, hint "an analysis tool: the approximations of Hu & Qin 2007 §2.1.2-2.1.4 and \
                        §2.2 replaced by the exact tracer's values" {
-        /// None: the paper's technique.
+        /// The paper's technique.
         None = "none",
         /// §2.1.2-2.1.3's exit (the front/back decision of Fig. 5 and the d_T search of Fig. 9)
         /// replaced by T1's exact exit point, its facing choosing the layer §2.1.4 reads N2
