@@ -50,32 +50,33 @@ float oracle_eps(vec3 p) {
 
 // §2.2's lookup replaced: the exact hit X of the ray (P + t Ray, leaving the surface of
 // outward normal N_out at P) against the scene, shown as the technique shows it: TEX_k's
-// radiance at X's texel in the rectangle whose TEX_DEPTH_k holds X (the smallest |depth - z|,
-// within nearby_hit's convergence test: 4 texels of the rectangle). The environment where the
-// ray hits nothing; the paper's lookup where X is in no texture (hidden in every projection).
+// radiance at X's texel, in the rectangle k whose projection holds X and whose TEX_DEPTH_k
+// there is nearest X's own depth (X itself where some projection sees it; where all hide it,
+// the surface that hides it: the textures' limit, which no search removes). The environment
+// where the ray hits nothing or no texture holds a surface at X's texel (the paper's rule
+// where no rectangle is hit). Nothing of the search of Figs. 13, 16, 17 is used, so the
+// result does not depend on its parameters.
 vec3 oracle_nearby_radiance(vec3 P, vec3 Ray, vec3 N_out) {
     vec3 o = P + N_out * (dot(Ray, N_out) >= 0.0 ? 1.0 : -1.0) * oracle_eps(P);
     Hit h = trace(o, Ray, 3.4e38);
-    if (h.kind == 0u) return environment(Ray);
-    if (!nearby_has_set()) return nearby_radiance(P, Ray);
+    if (h.kind == 0u || !nearby_has_set()) return environment(Ray);
     vec3 X = surface_at(o, Ray, h).p;
     uint first = nearby_header.sets[nearby_set].x;
     uint end = first + min(nearby_header.sets[nearby_set].y, MAX_NEARBY_RECTS);
-    float texel_width = 2.0 / float(textureSize(nearby_tex, 0).x);
     float best = 1e30;
-    vec3 color = vec3(0.0);
+    vec3 color = environment(Ray);
     for (uint k = first; k < end; ++k) {
         vec3 q = nearby_project(k, X);
         if (!nearby_inside(q.xy)) continue;
         vec4 texel = nearby_texel(k, q.xy);
         if (!nearby_covered(k, texel)) continue;
         float e = abs(texel.a - q.z);
-        if (e <= 4.0 * texel_width * nearby_rects[k].center.w && e < best) {
+        if (e < best) {
             best = e;
             color = texel.rgb;
         }
     }
-    return best < 1e30 ? finite_or_zero(color) : nearby_radiance(P, Ray);
+    return finite_or_zero(color);
 }
 #endif
 layout(set = 1, binding = BINDING_GBUF_NORMAL) uniform sampler2D gbuf_normal;
