@@ -54,13 +54,27 @@ float oracle_eps(vec3 p) {
 // there is nearest X's own depth (X itself where some projection sees it; where all hide it,
 // the surface that hides it: the textures' limit, which no search removes). The environment
 // where the ray hits nothing or no texture holds a surface at X's texel (the paper's rule
-// where no rectangle is hit). Nothing of the search of Figs. 13, 16, 17 is used, so the
-// result does not depend on its parameters.
+// where no rectangle is hit). OBJ_R itself is passed through: its own rectangle set does not
+// hold it (§2.2.1), and the paper's P2 (or the tessellated P1) may lie inside its exact
+// surface. Nothing of the search of Figs. 13, 16, 17 is used, so the result does not depend
+// on its parameters.
 vec3 oracle_nearby_radiance(vec3 P, vec3 Ray, vec3 N_out) {
+    if (!nearby_has_set()) return environment(Ray);
+    uint own = nearby_header.sets[nearby_set].z;
     vec3 o = P + N_out * (dot(Ray, N_out) >= 0.0 ? 1.0 : -1.0) * oracle_eps(P);
-    Hit h = trace(o, Ray, 3.4e38);
-    if (h.kind == 0u || !nearby_has_set()) return environment(Ray);
-    vec3 X = surface_at(o, Ray, h).p;
+    vec3 X;
+    bool found = false;
+    // A closed OBJ_R is crossed in two hits; 8 allow for a concave one's folds.
+    for (int pass = 0; pass < 8 && !found; ++pass) {
+        Hit h = trace(o, Ray, 3.4e38);
+        if (h.kind == 0u) return environment(Ray);
+        Surface s = surface_at(o, Ray, h);
+        uint object = h.kind == 2u ? spheres[h.prim].info.x : triangles[h.prim].w;
+        found = object != own;
+        X = s.p;
+        o = offset_origin(s, Ray);
+    }
+    if (!found) return environment(Ray);
     uint first = nearby_header.sets[nearby_set].x;
     uint end = first + min(nearby_header.sets[nearby_set].y, MAX_NEARBY_RECTS);
     float best = 1e30;

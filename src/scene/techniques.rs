@@ -459,8 +459,9 @@ choice! {
         /// 16, 17) replaced by the exact hit of the ray against the scene, shown as the
         /// technique shows it: the radiance of TEX_k at that point's texel, in the rectangle
         /// whose TEX_DEPTH_k there is nearest the point's depth (what hides it where every
-        /// texture does); the environment where the ray hits nothing or no texture holds a
-        /// surface there. No part of the lookup's search is used.
+        /// texture does), OBJ_R itself passed through (its own set does not hold it); the
+        /// environment where the ray hits nothing or no texture holds a surface there. No
+        /// part of the lookup's search is used.
         Nearby = "nearby",
         /// The exit and the nearby lookup exact. What remains is the model's own error.
         All = "all",
