@@ -68,6 +68,13 @@ shared_constants! {
     NEARBY_LOOKUP_PAPER: u32 = 0;
     NEARBY_LOOKUP_NEAREST: u32 = 1;
 
+    // The intermediates an oracle replaces by the exact tracer's (render.wyman.oracle,
+    // render.hu_qin.oracle; the bit set of specialisation constant ORACLE of
+    // glsl/refraction/wyman.glsl and hu_qin.glsl, compiled with ORACLE_TRACE).
+    ORACLE_EXIT_POINT: u32 = 1;
+    ORACLE_EXIT_NORMAL: u32 = 2;
+    ORACLE_NEARBY: u32 = 4;
+
     SPECULAR_MODE_REFRACTION: u32 = 0;
     SPECULAR_MODE_REFLECTION: u32 = 1;
 

@@ -1,5 +1,6 @@
 //! The command line: `prism render`, `prism bench`, `prism passes`, `prism scenes`, ... The CLI parses,
 //! loads, and hands work to the renderer; it never records commands itself.
+pub mod ablation;
 pub mod bench;
 mod bench_diff;
 mod bench_versus;
@@ -73,6 +74,10 @@ pub enum Command {
     Compare(compare::CompareArgs),
     /// Measure every combination of parameter values: CSV, and error against time plots.
     Sweep(sweep::SweepArgs),
+    /// Where a technique's error comes from: its approximations replaced one at a time by the
+    /// exact tracer's values (render.wyman.oracle, render.hu_qin.oracle), a table of each one's
+    /// share of the error.
+    Ablation(ablation::AblationArgs),
     /// Regenerate docs/ACCURACY.md: every technique and setting's time and error, with plots.
     Report(report::ReportArgs),
 }
@@ -232,6 +237,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Reference(args) => reference::run(args),
         Command::Compare(args) => compare::run(args),
         Command::Sweep(args) => sweep::run(args),
+        Command::Ablation(args) => ablation::run(args),
         Command::Report(args) => report::run(args),
     }
 }

@@ -407,6 +407,83 @@ choice! {
 }
 
 choice! {
+    /// Which of Wyman 2005's approximations an oracle replaces by the exact tracer's value
+    /// (an analysis tool: `prism ablation` measures how much of the error each causes). The
+    /// exact values come from tracing T1 from P1 through the reference's geometry
+    /// (glsl/reference/trace.glsl), as `render.refraction = "raytrace"` would.
+    WymanOracle, hint "an analysis tool: the approximations of Wyman 2005 §3.1-3.2 replaced by the \
+                       exact tracer's values" {
+        /// The paper's technique.
+        None = "none",
+        /// §3.1's P2~ = P1 + d~ T1 replaced by T1's exact exit point (and d~ by its distance,
+        /// for the absorption); N2 still looked up in the back-normal layer there (§3.2).
+        ExitPoint = "exit_point",
+        /// §3.2's N2 (the back-normal layer at P2~'s texel, or §3.3's silhouette normal)
+        /// replaced by the exact surface normal at T1's exit; P2~ as the paper's.
+        ExitNormal = "exit_normal",
+        /// Both: the exit point and its normal exact. What remains is the model's own error
+        /// (two interfaces, no internal reflection, Fresnel only at P1).
+        All = "all",
+    }
+}
+
+impl WymanOracle {
+    /// The ORACLE_* bits of the shader's specialisation constant.
+    pub fn bits(self) -> u32 {
+        match self {
+            WymanOracle::None => 0,
+            WymanOracle::ExitPoint => crate::ORACLE_EXIT_POINT,
+            WymanOracle::ExitNormal => crate::ORACLE_EXIT_NORMAL,
+            WymanOracle::All => crate::ORACLE_EXIT_POINT | crate::ORACLE_EXIT_NORMAL,
+        }
+    }
+}
+
+choice! {
+    /// Which of Hu & Qin 2007's approximations an oracle replaces by the exact tracer's value
+    /// (an analysis tool, as [`WymanOracle`]).
+    HuQinOracle, hint "an analysis tool: the approximations of Hu & Qin 2007 §2.1.2-2.1.4 and \
+                       §2.2 replaced by the exact tracer's values" {
+        /// The paper's technique.
+        None = "none",
+        /// §2.1.2-2.1.3's exit (the front/back decision of Fig. 5 and the d_T search of Fig. 9)
+        /// replaced by T1's exact exit point, its facing choosing the layer §2.1.4 reads N2
+        /// from there.
+        ExitPoint = "exit_point",
+        /// §2.1.4's N2 (the normal layer at P2's texel) replaced by the exact normal at T1's
+        /// exit; P2 as the paper's.
+        ExitNormal = "exit_normal",
+        /// Both the exit point and its normal exact.
+        Exit = "exit",
+        /// §2.2's lookup of R (at P1) and T2 (at P2) in the impostor rectangles (Figs. 13,
+        /// 16, 17) replaced by the exact hit of the ray against the scene, shown as the
+        /// technique shows it: the radiance of TEX_k at that point's texel, in the rectangle
+        /// whose TEX_DEPTH_k there is nearest the point's depth (what hides it where every
+        /// texture does), OBJ_R itself passed through (its own set does not hold it); the
+        /// environment where the ray hits nothing or no texture holds a surface there. No
+        /// part of the lookup's search is used.
+        Nearby = "nearby",
+        /// The exit and the nearby lookup exact. What remains is the model's own error.
+        All = "all",
+    }
+}
+
+impl HuQinOracle {
+    /// The ORACLE_* bits of the shader's specialisation constant.
+    pub fn bits(self) -> u32 {
+        let exit = crate::ORACLE_EXIT_POINT | crate::ORACLE_EXIT_NORMAL;
+        match self {
+            HuQinOracle::None => 0,
+            HuQinOracle::ExitPoint => crate::ORACLE_EXIT_POINT,
+            HuQinOracle::ExitNormal => crate::ORACLE_EXIT_NORMAL,
+            HuQinOracle::Exit => exit,
+            HuQinOracle::Nearby => crate::ORACLE_NEARBY,
+            HuQinOracle::All => exit | crate::ORACLE_NEARBY,
+        }
+    }
+}
+
+choice! {
     /// Where a dielectric OBJ_k's refracted ray leaves it inside its impostor texture (Hu & Qin
     /// 2007 §2.2.1 with §2.1's exit search in the rectangle's parallel projection).
     RecursiveExit,
@@ -638,6 +715,10 @@ params! {
         /// Also write the exit point P2 and direction T2 of every refracting pixel to the debug
         /// targets `refraction_wyman_p2` and `refraction_wyman_t2` (`Renderer::read_target`).
         debug: bool = false;
+        /// An analysis tool, not a rendering setting: replace §3.1's exit point and/or §3.2's
+        /// exit normal by the exact tracer's (the reference's BVH and spheres, bound only when
+        /// this is not `"none"`, so the paper's technique pays nothing for it).
+        oracle: WymanOracle = WymanOracle::None;
     }
 
     /// `[render.hu_qin]`: Hu & Qin 2007 §2 and §4 (src/technique/refraction/refraction_hu_qin.rs).
@@ -664,6 +745,10 @@ params! {
         /// Also write P2 and T2 to the debug targets `refraction_hu_qin_p2` and
         /// `refraction_hu_qin_t2`, as for `wyman`.
         debug: bool = false;
+        /// An analysis tool, not a rendering setting: replace the exit point, the exit normal
+        /// and/or the nearby lookup by the exact tracer's (bound only when this is not
+        /// `"none"`, as `render.wyman.oracle`).
+        oracle: HuQinOracle = HuQinOracle::None;
         /// §2.2: the reflected ray R (at P1) and the exit ray T2 (at P2) see the scene's other
         /// objects (diffuse, mirrors, conductors, other dielectrics) through impostor
         /// rectangles (Fig. 13; src/technique/refraction/nearby_impostors.rs) before the

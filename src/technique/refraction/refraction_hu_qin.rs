@@ -17,10 +17,14 @@
 //!   (`seed_samples`) and the iterative correction of Fig. 16 (`correction_iterations`,
 //!   `correction_tolerance`), the environment map where no rectangle is hit
 //!   (glsl/include/nearby.glsl); reflection and refraction are weighted by Fresnel.
+//!
+//! `oracle` (an analysis tool, [`HuQinOracle`]) replaces the exit point, the exit normal
+//! and/or the nearby lookup by the exact ones, traced through the reference's geometry
+//! ([`super::oracle`], glsl/refraction/hu_qin_oracle.frag); with `"none"` nothing of it exists.
 
 use crate::gpu::Spec;
 use crate::graph::Frame;
-use crate::scene::techniques::{DTStep, HuQinParams, RecursiveExit};
+use crate::scene::techniques::{DTStep, HuQinOracle, HuQinParams, RecursiveExit};
 use crate::scene::{Material, Scene};
 use crate::technique::{
     in_stage, list, params, refracting_objects, registration, FrameInputs, PlannedPass, Registration, RenderError,
@@ -36,6 +40,7 @@ use super::nearby_impostors::{
     has_dielectric_rect, nearby_layout, nearby_lookup_constant, needs_copy, NearbyDesc, NearbyImpostors, BACK_PASS,
     COPY_PASS, RECURSION_PASSES,
 };
+use super::oracle::Oracle;
 use super::refractor_layers::{DebugTarget, LayerKind, LayerScope, RefractorLayers, ShadeDesc, ShadePass};
 
 pub const REFRACTION_HU_QIN_LAYERS: &str = "refraction_hu_qin_layers";
@@ -169,6 +174,10 @@ impl Technique for HuQinPass {
     fn kept(&mut self) -> Option<&mut crate::technique::Regeneration> {
         Some(&mut self.nearby.regeneration)
     }
+
+    fn once_costs(&self) -> Vec<crate::technique::OnceCost> {
+        self.oracle.iter().map(Oracle::cost).collect()
+    }
 }
 
 pub struct HuQinPass {
@@ -177,11 +186,14 @@ pub struct HuQinPass {
     layers: RefractorLayers,
     shade: ShadePass,
     pub params: HuQinParams,
+    /// The exact tracer an oracle reads (bound in the shading pass's set 2).
+    oracle: Option<Oracle>,
 }
 
 impl HuQinPass {
     pub fn new(s: &mut Setup<'_>) -> Result<Self, RenderError> {
         let params = params("hu_qin", HuQinParams::from_settings(&s.scene.render))?;
+        let oracle = if params.oracle == HuQinOracle::None { None } else { Some(Oracle::new(s)?) };
         let (ctx, scene, gpu, frame_layout) = (s.ctx, s.scene, s.gpu, s.frame_layout);
         let graph = &mut *s.graph;
         // The same rule as the plan's REFRACTION_HU_QIN_NEARBY: rectangles only when asked for.
@@ -205,11 +217,36 @@ impl HuQinPass {
         let layers = RefractorLayers::new(s, REFRACTION_HU_QIN_LAYERS, &kinds, None)?;
         let (graph, targets, nearest) = (&mut *s.graph, s.targets, s.nearest);
         let (b, f) = (&layers.layers[0], &layers.layers[1]);
+        let tracer = oracle.as_ref().map(|o| o.buffers(gpu)).unwrap_or_default();
+        let mut specialization = vec![
+            ("SEARCH_STEPS", Spec::U32(params.search_steps)),
+            ("TOLERANCE", Spec::F32(params.tolerance)),
+            ("MAX_ITERATIONS", Spec::U32(params.max_iterations)),
+            ("ASSUME_BACK_FACING", Spec::U32(u32::from(params.assume_back_facing))),
+            ("NEARBY_ITERATIONS", Spec::U32(params.correction_iterations)),
+            ("NEARBY_TOLERANCE", Spec::F32(params.correction_tolerance)),
+            ("NEARBY_SEEDS", Spec::U32(params.seed_samples)),
+            ("NEARBY_LOOKUP", Spec::U32(nearby_lookup_constant(params.nearby_lookup))),
+            (
+                "D_T_STEP",
+                Spec::U32(match params.d_t_step {
+                    DTStep::Paper => D_T_STEP_PAPER,
+                    DTStep::Newton => D_T_STEP_NEWTON,
+                }),
+            ),
+        ];
+        let fragment_shader = match &oracle {
+            None => "refraction/hu_qin.frag",
+            Some(_) => {
+                specialization.push(("ORACLE", Spec::U32(params.oracle.bits())));
+                "refraction/hu_qin_oracle.frag"
+            }
+        };
         let shade = ShadePass::new(
             ctx,
             &ShadeDesc {
                 name: REFRACTION_HU_QIN,
-                fragment_shader: "refraction/hu_qin.frag",
+                fragment_shader,
                 inputs: &[
                     (BINDING_GBUF_NORMAL, &targets.gbuf_normal, targets.gbuf_normal_id),
                     (BINDING_GBUF_DEPTH, &targets.depth, targets.depth_id),
@@ -221,23 +258,8 @@ impl HuQinPass {
                     (BINDING_NEARBY_TEXTURE, &nearby.texture, nearby.texture_id),
                 ],
                 buffers: &[(BINDING_NEARBY_RECTS, &nearby.rect_buffer)],
-                specialization: &[
-                    ("SEARCH_STEPS", Spec::U32(params.search_steps)),
-                    ("TOLERANCE", Spec::F32(params.tolerance)),
-                    ("MAX_ITERATIONS", Spec::U32(params.max_iterations)),
-                    ("ASSUME_BACK_FACING", Spec::U32(u32::from(params.assume_back_facing))),
-                    ("NEARBY_ITERATIONS", Spec::U32(params.correction_iterations)),
-                    ("NEARBY_TOLERANCE", Spec::F32(params.correction_tolerance)),
-                    ("NEARBY_SEEDS", Spec::U32(params.seed_samples)),
-                    ("NEARBY_LOOKUP", Spec::U32(nearby_lookup_constant(params.nearby_lookup))),
-                    (
-                        "D_T_STEP",
-                        Spec::U32(match params.d_t_step {
-                            DTStep::Paper => D_T_STEP_PAPER,
-                            DTStep::Newton => D_T_STEP_NEWTON,
-                        }),
-                    ),
-                ],
+                tracer: &tracer,
+                specialization: &specialization,
                 debug: params.debug,
                 scene,
             },
@@ -246,6 +268,6 @@ impl HuQinPass {
             targets,
             nearest,
         )?;
-        Ok(HuQinPass { nearby, layers, shade, params })
+        Ok(HuQinPass { nearby, layers, shade, params, oracle })
     }
 }

@@ -14,10 +14,16 @@
 //!   environment; TIR clamped to the critical angle and the silhouette fallback of §3.3.
 //!
 //! d_N is precomputed per vertex on the CPU ([`super::wyman_distance`]).
+//!
+//! `oracle` (an analysis tool, [`WymanOracle`]) replaces the exit point of §3.1 and/or the
+//! exit normal of §3.2 by the exact ones, traced through the reference's geometry
+//! (glsl/reference/trace.glsl): the pass then runs glsl/refraction/wyman_oracle.frag, with the
+//! tracer's buffers in a set 2 of its own and the ORACLE specialisation constant. With
+//! `"none"` neither the variant, nor the tracer's geometry, nor its set exist.
 
-use crate::gpu::Buffer;
+use crate::gpu::{Buffer, Spec};
 use crate::graph::Frame;
-use crate::scene::techniques::{BackSurface, WymanParams};
+use crate::scene::techniques::{BackSurface, WymanOracle, WymanParams};
 use crate::scene::{Material, Scene};
 use crate::technique::{
     in_stage, list, params, refracting_objects, registration, FrameInputs, PlannedPass, Registration, RenderError,
@@ -28,6 +34,7 @@ use crate::{
     BINDING_REFR_FRONT_NORMAL, BINDING_REFR_SLOTS,
 };
 
+use super::oracle::Oracle;
 use super::refractor_layers::{
     refractor_slots, DebugTarget, LayerKind, LayerScope, RefractorLayers, ShadeDesc, ShadePass,
 };
@@ -68,7 +75,9 @@ impl Technique for WymanPass {
     }
 
     fn once_costs(&self) -> Vec<crate::technique::OnceCost> {
-        vec![d_n_cost(self.d_n_ms)]
+        let mut costs = vec![d_n_cost(self.d_n_ms)];
+        costs.extend(self.oracle.as_ref().map(|o| o.cost()));
+        costs
     }
 }
 
@@ -80,6 +89,8 @@ pub struct WymanPass {
     _slots: Buffer,
     /// Host milliseconds §3.1's d_N took for the refractors' meshes when computed.
     d_n_ms: f64,
+    /// The exact tracer an oracle reads (bound in the shading pass's set 2).
+    oracle: Option<Oracle>,
 }
 
 /// §3.1's d_N as a cost paid once (`ms` host milliseconds, [`scene_distance_along_normals_timed`]):
@@ -117,6 +128,7 @@ pub fn scene_distance_along_normals_timed(scene: &Scene) -> (Vec<f32>, f64) {
 impl WymanPass {
     pub fn new(s: &mut Setup<'_>) -> Result<Self, RenderError> {
         let params = params("wyman", WymanParams::from_settings(&s.scene.render))?;
+        let oracle = if params.oracle == WymanOracle::None { None } else { Some(Oracle::new(s)?) };
         let (ctx, scene, frame_layout, targets, nearest) = (s.ctx, s.scene, s.frame_layout, s.targets, s.nearest);
         let back = match params.back_surface {
             BackSurface::Furthest => LayerKind::BackFurthest,
@@ -128,11 +140,16 @@ impl WymanPass {
         let layers = RefractorLayers::new(s, REFRACTION_WYMAN_LAYERS, &kinds, Some(&d_n))?;
         let slots = Buffer::storage(ctx, "refraction_wyman_slots", &refractor_slots(scene, s.gpu))?;
         let (b, f) = (&layers.layers[0], &layers.layers[1]);
+        let tracer = oracle.as_ref().map(|o| o.buffers(s.gpu)).unwrap_or_default();
+        let (fragment_shader, specialization) = match &oracle {
+            None => ("refraction/wyman.frag", vec![]),
+            Some(_) => ("refraction/wyman_oracle.frag", vec![("ORACLE", Spec::U32(params.oracle.bits()))]),
+        };
         let shade = ShadePass::new(
             ctx,
             &ShadeDesc {
                 name: REFRACTION_WYMAN,
-                fragment_shader: "refraction/wyman.frag",
+                fragment_shader,
                 inputs: &[
                     (BINDING_GBUF_NORMAL, &targets.gbuf_normal, targets.gbuf_normal_id),
                     (BINDING_GBUF_DEPTH, &targets.depth, targets.depth_id),
@@ -142,7 +159,8 @@ impl WymanPass {
                     (BINDING_REFR_FRONT_NORMAL, &f.normal, f.normal_id),
                 ],
                 buffers: &[(BINDING_REFR_SLOTS, &slots)],
-                specialization: &[],
+                tracer: &tracer,
+                specialization: &specialization,
                 debug: params.debug,
                 scene,
             },
@@ -151,6 +169,6 @@ impl WymanPass {
             targets,
             nearest,
         )?;
-        Ok(WymanPass { layers, shade, params, _slots: slots, d_n_ms })
+        Ok(WymanPass { layers, shade, params, _slots: slots, d_n_ms, oracle })
     }
 }

@@ -249,6 +249,8 @@ pub struct ShadePass {
     cover: Option<Cover>,
     hdr: ImageId,
     pub debug: Vec<DebugTarget>,
+    /// Set 2: the exact tracer's buffers, for an oracle ([`ShadeDesc::tracer`]).
+    tracer: Option<BoundSet>,
 }
 
 pub struct ShadeDesc<'a> {
@@ -258,6 +260,9 @@ pub struct ShadeDesc<'a> {
     pub inputs: &'a [(u32, &'a Image, ImageId)],
     /// Set-1 storage buffers read by the fragment shader: (binding, buffer).
     pub buffers: &'a [(u32, &'a Buffer)],
+    /// Set-2 storage buffers, (binding, buffer): the exact tracer's (glsl/reference/trace.glsl
+    /// with REF_SET 2), bound only for an oracle; empty: the pipeline has no set 2.
+    pub tracer: &'a [(u32, &'a Buffer)],
     /// Specialisation constants besides `DEBUG` (the debug flag).
     pub specialization: Specs<'a>,
     pub debug: bool,
@@ -299,6 +304,18 @@ impl ShadePass {
             set = set.storage(b, buffer);
         }
         let set = set.build(ctx, name)?;
+        let tracer = if desc.tracer.is_empty() {
+            None
+        } else {
+            // Host-written once at creation, as the buffers above.
+            let b = desc
+                .tracer
+                .iter()
+                .fold(Bindings::new(vk::ShaderStageFlags::FRAGMENT), |b, &(i, buffer)| b.storage(i, buffer));
+            Some(b.build(ctx, &format!("{name}_tracer"))?)
+        };
+        let mut layouts = vec![frame_layout, set.layout()];
+        layouts.extend(tracer.as_ref().map(|t| t.layout()));
         let mut specialization = vec![("DEBUG", Spec::U32(u32::from(desc.debug)))];
         specialization.extend_from_slice(desc.specialization);
         let blend = vec![Blend::Off; 1 + debug.len()];
@@ -309,7 +326,7 @@ impl ShadePass {
                 specialization: &specialization,
                 ..GraphicsPipelineDesc::fullscreen(name, desc.fragment_shader)
             },
-            &[frame_layout, set.layout()],
+            &layouts,
             0,
             &target.pass,
         )?;
@@ -324,11 +341,11 @@ impl ShadePass {
             desc.fragment_shader,
             &specialization,
             &blend,
-            &[frame_layout, set.layout()],
+            &layouts,
             &target.pass,
             dielectrics.collect(),
         )?;
-        Ok(ShadePass { name, target, set, pipeline, cover, hdr: targets.hdr_id, debug })
+        Ok(ShadePass { name, target, set, pipeline, cover, hdr: targets.hdr_id, debug, tracer })
     }
 
     /// Add the pass to `frame`; `environment` is sampled through the frame set.
@@ -336,6 +353,11 @@ impl ShadePass {
         let (environment, frame_set) = (inputs.scene.environment_id, inputs.frame_set);
         let cover = self.cover.as_ref().and_then(|c| Some((c, c.octagons(inputs)?)));
         let mut pass = frame.pass(self.name).read(environment, Access::FragmentSampled).uses(&self.set);
+        if let Some(t) = &self.tracer {
+            pass = pass.uses(t);
+        }
+        let mut sets = vec![frame_set, self.set.set()];
+        sets.extend(self.tracer.as_ref().map(|t| t.set()));
         pass = pass.write(self.hdr, Access::ColorAttachment);
         for d in &self.debug {
             pass = pass.write(d.id, Access::ColorAttachment);
@@ -344,9 +366,9 @@ impl ShadePass {
             let mut clears = vec![Clear::None];
             clears.extend(self.debug.iter().map(|_| Clear::Color([0.0; 4])));
             cmd.in_target(&self.target, 0, &clears, |cmd| match cover {
-                Some((cover, octagons)) => cover.draw(cmd, &[frame_set, self.set.set()], &octagons),
+                Some((cover, octagons)) => cover.draw(cmd, &sets, &octagons),
                 None => {
-                    cmd.bind_graphics(&self.pipeline, &[frame_set, self.set.set()]);
+                    cmd.bind_graphics(&self.pipeline, &sets);
                     cmd.draw(3, 1);
                 }
             });

@@ -1,0 +1,157 @@
+// Wyman 2005, "An Approximate Image-Space Approach for Interactive Refraction": refraction
+// of a distant environment through two interfaces (§3, and the fragment program of §4).
+//   T1 = Refract(V, N1)                            Snell's law at the G-buffer's P1 (§2)
+//   d_V = back-layer distance - front distance     along the view ray (§3.1, Fig. 3c)
+//   d_N = per-vertex distance along -N, interpolated (§3.1, precomputed on the CPU)
+//   d~ = (theta_t / theta_i) d_V + (1 - theta_t / theta_i) d_N   (§3.1, the equation for d~)
+//   P2~ = P1 + d~ T1, projected into the back-face normal layer for N2 (§3.2)
+//   T2 = Refract(T1, -N2), environment lookup; Fresnel reflection at P1 as the baseline.
+// TIR is clamped to the critical angle and P2 outside the silhouette takes N2 from T1 (§3.3).
+// The paper's object is one refractor: the back layer holds one array layer per refractor,
+// and a pixel reads its own refractor's (the G-buffer's object index picks it).
+//
+// Included by wyman.frag (the technique) and wyman_oracle.frag (ORACLE_TRACE defined: the
+// analysis variant, render.wyman.oracle), which also binds the exact tracer's buffers in set 2
+// and replaces the intermediates named by the ORACLE bits by the exact ones.
+#include "frame.glsl"
+#include "environment.glsl"
+#include "fresnel.glsl"
+#include "refraction.glsl"
+layout(constant_id = 0) const uint DEBUG = 0;
+#ifdef ORACLE_TRACE
+// ORACLE_EXIT_POINT | ORACLE_EXIT_NORMAL (src/scene/techniques.rs, WymanOracle).
+layout(constant_id = 1) const uint ORACLE = 0;
+// The reference's own intersection code and buffers (glsl/reference/trace.glsl), in a set of
+// their own: their REF_BINDING_* would meet the G-buffer's and the layers' in set 1.
+#define REF_SET 2
+#include "../reference/trace.glsl"
+#endif
+layout(set = 1, binding = BINDING_GBUF_NORMAL) uniform sampler2D gbuf_normal;
+layout(set = 1, binding = BINDING_GBUF_DEPTH) uniform sampler2D gbuf_depth;
+layout(set = 1, binding = BINDING_GBUF_ALBEDO) uniform sampler2D gbuf_albedo;
+layout(set = 1, binding = BINDING_REFR_BACK_NORMAL) uniform sampler2DArray back_normal;
+layout(set = 1, binding = BINDING_REFR_BACK_DEPTH) uniform sampler2DArray back_depth;
+layout(set = 1, binding = BINDING_REFR_SLOTS, std430) readonly buffer RefractorSlots {
+    uint slot_of_object[];
+};
+// The front layer: xyz normal, w = d_N interpolated from the vertices.
+layout(set = 1, binding = BINDING_REFR_FRONT_NORMAL) uniform sampler2D front_normal;
+layout(location = 0) in vec2 in_uv;
+layout(location = 0) out vec4 out_radiance;
+layout(location = 1) out vec4 out_p2;
+layout(location = 2) out vec4 out_t2;
+
+// This pixel's refractor: its layer of the back-surface array.
+int slot;
+
+// As refraction.glsl's layer lookups, on this pixel's refractor's layer.
+bool back_covered(vec2 uv) {
+    if (!on_screen(uv)) return false;
+    vec3 n = texelFetch(back_normal, ivec3(texel_of(uv), slot), 0).xyz;
+    return dot(n, n) > 0.25;
+}
+
+vec3 back_normal_at(vec2 uv) {
+    return normalize(texelFetch(back_normal, ivec3(texel_of(uv), slot), 0).xyz);
+}
+
+void main() {
+    ivec2 px = ivec2(gl_FragCoord.xy);
+    float depth = texelFetch(gbuf_depth, px, 0).r;
+    if (depth <= 0.0) discard;
+    vec4 nm = texelFetch(gbuf_normal, px, 0);
+    uint mat = uint(nm.w + 0.5);
+    if (material_kind(mat) != MATERIAL_DIELECTRIC) discard;
+    uint object = uint(texelFetch(gbuf_albedo, px, 0).a + 0.5);
+    if (object >= slot_of_object.length() || slot_of_object[object] == 0xffffffffu) discard;
+    slot = int(slot_of_object[object]);
+    GpuMaterial m = materials[mat];
+    vec3 ior = max(m.spec_a.rgb, vec3(1e-6));
+    vec3 V = camera_ray(in_uv);
+    vec3 N1 = normalize(nm.xyz);
+    if (dot(V, N1) > 0.0) {
+        // The camera is inside the refractor: one interface, as the baseline.
+        out_radiance = vec4(finite_or_zero(refraction_from_inside(V, -N1, ior)), 1.0);
+        return;
+    }
+    vec3 P1 = world_from_depth(in_uv, depth);
+    float cos_i = clamp(-dot(V, N1), 0.0, 1.0);
+    float theta_i = acos(cos_i);
+    vec3 L_reflected = environment(reflect(V, N1));
+
+    // d_V: distance between the front and the back surface along the view ray (Fig. 3c).
+    bool back_here = back_covered(in_uv);
+    float back_z = texelFetch(back_depth, ivec3(px, slot), 0).r;
+    float d_V = back_here ? max(length(world_from_depth(in_uv, back_z) - P1), 0.0) : 0.0;
+    float d_N = texelFetch(front_normal, px, 0).w;
+    if (d_N <= 0.0) d_N = d_V;   // open mesh: no far side along -N
+    if (!back_here) d_V = d_N;
+
+    // Exact per-channel refraction (dispersion) when the ior is RGB; one path otherwise.
+    int channels = (ior.r == ior.g && ior.g == ior.b) ? 1 : 3;
+    vec3 L = vec3(0.0);
+    for (int c = 0; c < 3; ++c) {
+        int k = channels == 1 ? 0 : c;
+        float eta = 1.0 / ior[k];
+        vec3 T1 = refract_clamped(V, N1, eta);
+        float theta_t = acos(clamp(-dot(N1, T1), -1.0, 1.0));
+        // theta_t / theta_i -> eta as theta_i -> 0 (Snell for small angles).
+        float ratio = theta_i > 1e-4 ? theta_t / theta_i : eta;
+        // Wyman assumes n_t > n_i (ratio <= 1); for n_t < n_i the same formula
+        // extrapolates beyond d_V, kept non-negative.
+        float d = max(ratio * d_V + (1.0 - ratio) * d_N, 0.0);
+        vec3 P2 = P1 + d * T1;
+#ifdef ORACLE_TRACE
+        // The exact exit of T1: the reference's closest hit from P1, offset inside by its ray
+        // epsilon (offset_origin's), and its shading normal turned to face out along T1 (the
+        // normal interaction_at refracts about, negated). No hit (an open mesh): the paper's.
+        vec3 P2_exact = P2, N2_exact = vec3(0.0);
+        float d_exact = d;
+        bool exact = false;
+        if (ORACLE != 0u) {
+            float eps = ref.proj.z * (1.0 + max(max(abs(P1.x), abs(P1.y)), abs(P1.z)) / max(ref.proj.w, 1e-30));
+            vec3 o = P1 - N1 * eps;
+            Hit h = trace(o, T1, 3.4e38);
+            if (h.kind != 0u) {
+                Surface s = surface_at(o, T1, h);
+                exact = true;
+                P2_exact = s.p;
+                d_exact = length(s.p - P1);
+                N2_exact = dot(T1, s.ng) > 0.0 ? s.ns : -s.ns;
+            }
+        }
+        // §3.1: P2~ = P1 + d~ T1 (and d~ in the absorption) replaced by the exact exit.
+        if (exact && (ORACLE & ORACLE_EXIT_POINT) != 0u) {
+            P2 = P2_exact;
+            d = d_exact;
+        }
+#endif
+        vec2 uv2 = project_uv(P2);
+        bool inside = back_covered(uv2);
+        vec3 N2 = inside ? back_normal_at(uv2) : silhouette_normal(T1);
+#ifdef ORACLE_TRACE
+        // §3.2: N2 from the back-normal layer at P2's texel (or §3.3's silhouette normal)
+        // replaced by the exact normal at T1's exit.
+        if (exact && (ORACLE & ORACLE_EXIT_NORMAL) != 0u) {
+            N2 = N2_exact;
+            inside = true;
+        }
+#endif
+        // Leaving the object: the normal facing T1 is -N2, and eta = n_refractor / n_outside.
+        vec3 T2 = refract_clamped(T1, -N2, ior[k]);
+        vec3 absorb = exp(-m.spec_b.rgb * d);
+        vec3 L_t = environment(T2) * absorb;
+        float F = fresnel_dielectric(cos_i, eta);
+        if (channels == 1) {
+            L = F * L_reflected + (1.0 - F) * L_t;
+        } else {
+            L[c] = F * L_reflected[c] + (1.0 - F) * L_t[c];
+        }
+        if (c == 0 && DEBUG != 0) {
+            out_p2 = vec4(P2, inside ? 1.0 : 3.0);
+            out_t2 = vec4(T2, d);
+        }
+        if (channels == 1) break;
+    }
+    out_radiance = vec4(finite_or_zero(L), 1.0);
+}
