@@ -494,7 +494,8 @@ fn every_flag_is_documented_and_every_documented_flag_exists() {
         }
     }
     let documented = named_flags(&docs);
-    let subcommands = ["render", "bench", "passes", "scenes", "demo", "reference", "compare", "sweep", "report", "ablation"];
+    let subcommands =
+        ["render", "bench", "passes", "scenes", "demo", "reference", "compare", "sweep", "report", "ablation"];
     let mut shown = vec!["--help".to_string()];
     for sub in subcommands {
         for (flag, short) in help_flags(&[sub]) {
