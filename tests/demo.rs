@@ -13,7 +13,7 @@ use std::time::{Duration, Instant};
 /// Xvfb display numbers are picked one test at a time.
 static PICK: Mutex<()> = Mutex::new(());
 
-/// A display to run on; an Xvfb of our own is killed on drop.
+/// A display to run on; an Xvfb of our own is stopped on drop.
 struct Display {
     name: String,
     xvfb: Option<Child>,
@@ -22,9 +22,34 @@ struct Display {
 impl Drop for Display {
     fn drop(&mut self) {
         if let Some(child) = self.xvfb.as_mut() {
+            // SIGTERM, so that Xvfb removes its lock file and socket: a SIGKILLed one leaves
+            // both behind, and after a few hundred test runs they filled every display number
+            // the picker tries. SIGKILL only if it does not end within 5 s.
+            let _ = Command::new("kill").args(["-TERM", &child.id().to_string()]).status();
+            let deadline = Instant::now() + Duration::from_secs(5);
+            while Instant::now() < deadline && child.try_wait().ok().flatten().is_none() {
+                std::thread::sleep(Duration::from_millis(20));
+            }
             let _ = child.kill();
             let _ = child.wait();
         }
+    }
+}
+
+/// Whether display `n` is taken: its lock file names a live process (a lock whose process is
+/// gone, and its socket, are left over by a killed X server and are removed).
+fn display_taken(n: u32) -> bool {
+    let (lock, socket) = (PathBuf::from(format!("/tmp/.X{n}-lock")), PathBuf::from(format!("/tmp/.X11-unix/X{n}")));
+    let owner = std::fs::read_to_string(&lock).ok().and_then(|t| t.trim().parse::<u32>().ok());
+    match owner {
+        Some(pid) if Path::new(&format!("/proc/{pid}")).exists() => true,
+        Some(_) => {
+            let _ = std::fs::remove_file(&lock);
+            let _ = std::fs::remove_file(&socket);
+            false
+        }
+        // No lock (or one being written): taken only while a socket exists.
+        None => socket.exists() || lock.exists(),
     }
 }
 
@@ -49,7 +74,7 @@ fn display() -> Option<Display> {
     let base = 100 + (std::process::id() % 300);
     for n in base..base + 50 {
         let socket = PathBuf::from(format!("/tmp/.X11-unix/X{n}"));
-        if socket.exists() || Path::new(&format!("/tmp/.X{n}-lock")).exists() {
+        if display_taken(n) {
             continue;
         }
         let mut child = Command::new("Xvfb")
