@@ -4,6 +4,8 @@
 //! refractions at planes. With the oracle on, Wyman's exit equals it to float precision, and
 //! its image equals the exact tracer's up to the one thing Wyman's model leaves out at two
 //! interfaces, the Fresnel reflection at the exit.
+//! Hu & Qin 2007's (`render.hu_qin.oracle`) and the distance impostors' `Hit()`
+//! (`render.impostor.oracle`) are checked for independence from the search they replace.
 mod common;
 
 use common::{context, render_on};
@@ -378,4 +380,29 @@ fn every_oracle_renders_a_scene_with_nearby_geometry() {
     eprintln!("values that the lookup's search changes: paper's lookup {paper}, nearby oracle {oracle}");
     assert!(paper > 0, "the search changes nothing here: the test shows nothing");
     assert_eq!(oracle, 0, "the nearby oracle depends on the lookup's search");
+}
+
+/// The Hit() oracle (`render.impostor.oracle = "hit"`): on room_mirror, the mirror ball
+/// reflects planar walls whose points the secant search of Szirmay-Kalos et al. 2005 (§2.2,
+/// Eq. 6) approaches step by step, so its refinement steps (`render.impostor.iterations`) move
+/// the reflected image: 0 steps (d_l of Eq. 4 alone) and 8 give different images. With the
+/// oracle, the hit is the exact tracer's and the radiance is read towards it, so the two
+/// images must be identical bit for bit: any value Hit()'s search still reached would differ.
+#[test]
+fn impostor_hit_oracle_is_independent_of_the_search() {
+    let ctx = context(false);
+    let render = |oracle: &str, iterations: u32| {
+        let o = format!("render.impostor.oracle=\"{oracle}\"");
+        let it = format!("render.impostor.iterations={iterations}");
+        let overrides = ["render.reflection=impostor", o.as_str(), it.as_str()];
+        let r = render_on(&ctx, &common::scene("room_mirror", SIZE, &overrides));
+        common::assert_finite(&format!("impostor oracle {oracle}, {iterations} iterations"), &r.hdr);
+        r.hdr
+    };
+    let differing = |a: &[f32], b: &[f32]| a.iter().zip(b).filter(|(x, y)| x != y).count();
+    let paper = differing(&render("none", 0), &render("none", 8));
+    let oracle = differing(&render("hit", 0), &render("hit", 8));
+    eprintln!("values that Hit()'s refinement steps change: paper's Hit() {paper}, hit oracle {oracle}");
+    assert!(paper > 0, "the search changes nothing here: the test shows nothing");
+    assert_eq!(oracle, 0, "the hit oracle depends on Hit()'s search");
 }

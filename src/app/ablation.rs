@@ -1,6 +1,7 @@
 //! `prism ablation`: where an image-space refraction technique's error comes from. The
 //! technique is measured with each of its approximations replaced, one at a time, by the
-//! exact tracer's value (`render.wyman.oracle`, `render.hu_qin.oracle`), and with all of them replaced, in one
+//! exact tracer's value (`render.wyman.oracle`, `render.hu_qin.oracle`; for the distance
+//! impostors, `render.impostor.oracle`, `Hit()` alone), and with all of them replaced, in one
 //! interleaved run against one cached reference. A step's share of the error is the error it
 //! removes when made exact (error of the paper's technique minus error with that step exact);
 //! what remains with every step exact is the model's structural error (two interfaces, no
@@ -15,13 +16,14 @@ use super::compare::{cached_reference, MeasureArgs};
 use super::equaltime::{measure_interleaved, reference_noise, Noise, Setting};
 use super::output::{self, Outputs};
 use super::{check_validation, GpuArgs, SceneArgs};
-use crate::scene::techniques::{HuQinOracle, WymanOracle};
+use crate::scene::techniques::{HuQinOracle, ImpostorOracle, WymanOracle};
 
 #[derive(Args, Debug)]
 pub struct AblationArgs {
     #[command(flatten)]
     pub scene: SceneArgs,
-    /// The technique whose approximations are replaced: wyman or hu_qin.
+    /// The technique whose approximations are replaced: wyman, hu_qin or impostor (the
+    /// distance impostors' reflection and refraction, whose `Hit()` is replaced).
     #[arg(long, default_value = "wyman")]
     pub technique: String,
     /// Also write the table as JSON to this file.
@@ -73,7 +75,8 @@ pub fn oracle_values(technique: &str) -> Result<Vec<&'static str>> {
     match technique {
         "wyman" => Ok(WymanOracle::NAMES.to_vec()),
         "hu_qin" => Ok(HuQinOracle::NAMES.to_vec()),
-        _ => bail!("--technique {technique}: the oracle ablation knows wyman and hu_qin"),
+        "impostor" => Ok(ImpostorOracle::NAMES.to_vec()),
+        _ => bail!("--technique {technique}: the oracle ablation knows wyman, hu_qin and impostor"),
     }
 }
 
@@ -144,6 +147,10 @@ pub fn run(args: AblationArgs) -> Result<()> {
     for v in &values {
         let mut sa = args.scene.clone();
         sa.set.push(format!("render.refraction={}", args.technique));
+        if args.technique == "impostor" {
+            // The distance impostors serve mirrors and conductors too (§3).
+            sa.set.push("render.reflection=impostor".to_string());
+        }
         sa.set.push(format!("render.{}.oracle={v}", args.technique));
         scenes.push(sa.load()?);
     }
@@ -199,5 +206,6 @@ mod tests {
         assert_eq!(residual, (0.05, 0.04));
         assert!(oracle_values("single").is_err());
         assert_eq!(oracle_values("hu_qin").unwrap().last(), Some(&"all"));
+        assert_eq!(oracle_values("impostor").unwrap(), ["none", "hit"]);
     }
 }

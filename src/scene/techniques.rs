@@ -555,6 +555,24 @@ choice! {
 }
 
 choice! {
+    /// Whether an oracle replaces the result of Szirmay-Kalos et al. 2005's `Hit()` (§2-3: the
+    /// guesses d_p and d_l of Eq. 4 refined by Eq. 6) by the exact hit of the same ray against
+    /// the scene (glsl/reference/trace.glsl), the impostor's radiance then looked up towards
+    /// that exact point (an analysis tool, as [`WymanOracle`]: `prism ablation` measures how
+    /// much of the error `Hit()`'s search causes).
+    ImpostorOracle, hint "an analysis tool: Hit() of Szirmay-Kalos et al. 2005 §2-3 replaced by the \
+                          exact tracer's hit" {
+        /// The paper's technique.
+        None = "none",
+        /// Every `Hit()` in the environment impostor (reflections, §3, and the rays leaving a
+        /// refractor, §4) replaced by the exact hit; the refractor map's `Hit()` (§4's second
+        /// refraction point) stays the paper's. What remains is the map's own error: its
+        /// resolution and its radiance as seen from the reference point.
+        Hit = "hit",
+    }
+}
+
+choice! {
     /// How caustics mapping estimates where a refracted or reflected ray meets the receivers
     /// (Shah et al. 2007, §III.C-D).
     Newton, hint "Shah et al. 2007: the approximate iteration of §III.C or the appendix's" {
@@ -834,6 +852,10 @@ params! {
         /// Which maps the specular objects share (§6). The passes stay the same: the map pass
         /// renders every map that is due, the shading pass draws once per object.
         maps: ImpostorMaps = ImpostorMaps::Shared;
+        /// An analysis tool: `"hit"` replaces `Hit()`'s result in the environment impostor by
+        /// the exact hit of the same ray (binds the exact tracer; default `"none"`, as
+        /// `render.wyman.oracle`).
+        oracle: ImpostorOracle = ImpostorOracle::None;
     }
 
     /// `[render.impostor_lightmap]`: light-map caustics with distance impostors (Szirmay-Kalos

@@ -16,6 +16,11 @@
 //!   glsl/include/impostor.glsl: d_p, d_l of Eq. 4, Eq. 6 by false position), the radiance
 //!   towards the hit, times the conductor Fresnel term (§3's approximation or exact).
 //! - `refraction_impostor` (glsl/impostor/refract.frag): the double refraction of §4 (Fig. 8).
+//! - `oracle` (an analysis tool, [`ImpostorOracle`]): `"hit"` replaces `Hit()` in the
+//!   environment impostor by the exact tracer's closest hit (the shading passes then run
+//!   glsl/impostor/*_oracle.frag with the tracer's buffers in a set 2 of their own,
+//!   src/technique/refraction/oracle.rs), so that `prism ablation --technique impostor` measures
+//!   `Hit()`'s share of the error.
 //!
 //! Regeneration (§6: "this preparation phase is usually not executed in each frame, only if
 //! the object movements are large enough"): [`ImpostorMap::objects_moved`] re-centres a map and
@@ -40,11 +45,12 @@ use crate::gpu::{
     GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc, ImageViewKind, RenderTarget, Sampler, SamplerDesc, Spec,
 };
 use crate::graph::{Bindings, BoundSet, Frame, FrameGraph, ImageId, PassBuilder};
-use crate::scene::techniques::{ImpostorFresnel, ImpostorMaps, ImpostorParams, ImpostorUpdate};
+use crate::scene::techniques::{ImpostorFresnel, ImpostorMaps, ImpostorOracle, ImpostorParams, ImpostorUpdate};
 use crate::scene::{Analytic, Material, Scene};
 use crate::shader_structs::{ImpostorProbePush, MapPush, ShadePush};
+use crate::technique::refraction::oracle::Oracle;
 use crate::technique::{
-    in_stage, list, params, reflecting_objects, refracting_objects, registration, FrameInputs, PlannedPass,
+    in_stage, list, params, reflecting_objects, refracting_objects, registration, FrameInputs, OnceCost, PlannedPass,
     Registration, RenderError, Setup, Stage, Technique,
 };
 use crate::{
@@ -136,6 +142,10 @@ macro_rules! impostor_technique {
 
             fn contents_changed(&mut self) {
                 <$t>::contents_changed(self);
+            }
+
+            fn once_costs(&self) -> Vec<OnceCost> {
+                self.oracle.as_ref().map(|o| o.cost()).into_iter().collect()
             }
         }
     };
@@ -510,17 +520,22 @@ struct ShadePass {
     target: RenderTarget,
     /// One set per instance.
     sets: BoundSet,
+    /// Set 2: the exact tracer's buffers, for the oracle (`render.impostor.oracle`).
+    tracer: Option<BoundSet>,
     pipeline: GraphicsPipeline,
     _linear: Sampler,
 }
 
 impl ShadePass {
+    /// `oracle`: the exact tracer, bound in set 2 of `fragment_shader`'s oracle variant
+    /// (`impostor/reflect.frag` -> `impostor/reflect_oracle.frag`).
     fn new(
         s: &Setup<'_>,
         name: &'static str,
         fragment_shader: &str,
         params: &ImpostorParams,
         instances: &[(&ImpostorMap, Option<&ImpostorMap>)],
+        oracle: Option<&Oracle>,
     ) -> GpuResult<Self> {
         let (ctx, targets) = (s.ctx, s.targets);
         let target = RenderTarget::new(ctx, name, &[&targets.hdr], None, false)?;
@@ -546,6 +561,22 @@ impl ShadePass {
             b
         });
         let sets = Bindings::build_each(ctx, name, sets.collect())?;
+        let tracer = match oracle {
+            // Host-written once at creation: visible at submission.
+            Some(o) => Some(
+                o.buffers(s.gpu)
+                    .into_iter()
+                    .fold(Bindings::new(vk::ShaderStageFlags::FRAGMENT), |b, (i, buffer)| b.storage(i, buffer))
+                    .build(ctx, &format!("{name}_tracer"))?,
+            ),
+            None => None,
+        };
+        let mut layouts = vec![s.frame_layout, sets.layout()];
+        layouts.extend(tracer.as_ref().map(|t| t.layout()));
+        let fragment_shader = match oracle {
+            Some(_) => fragment_shader.replace(".frag", "_oracle.frag"),
+            None => fragment_shader.to_string(),
+        };
         let pipeline = GraphicsPipeline::new(
             ctx,
             &GraphicsPipelineDesc {
@@ -555,13 +586,13 @@ impl ShadePass {
                     ("DISTANCE_CHANNEL", Spec::U32(channel)),
                     ("FRESNEL_EXACT", Spec::U32(u32::from(params.fresnel == ImpostorFresnel::Exact))),
                 ],
-                ..GraphicsPipelineDesc::fullscreen(name, fragment_shader)
+                ..GraphicsPipelineDesc::fullscreen(name, &fragment_shader)
             },
-            &[s.frame_layout, sets.layout()],
+            &layouts,
             std::mem::size_of::<ShadePush>() as u32,
             &target.pass,
         )?;
-        Ok(ShadePass { name, target, sets, pipeline, _linear: linear })
+        Ok(ShadePass { name, target, sets, tracer, pipeline, _linear: linear })
     }
 
     /// One full-screen draw per instance (`pushes[i]` with `sets[i]`).
@@ -573,18 +604,32 @@ impl ShadePass {
         environment: ImageId,
         pushes: Vec<ShadePush>,
     ) {
-        let pass = frame.pass(self.name).uses(&self.sets).read(environment, Access::FragmentSampled);
+        let mut pass = frame.pass(self.name).uses(&self.sets).read(environment, Access::FragmentSampled);
+        if let Some(t) = &self.tracer {
+            pass = pass.uses(t);
+        }
+        let tracer = self.tracer.as_ref().map(|t| t.set());
         pass.write(targets.hdr_id, Access::ColorAttachment).record(move |cmd| {
             // Keeps the deferred result and overwrites only the pixels of its materials (and,
             // per object, of the instance's object).
             cmd.in_target(&self.target, 0, &[Clear::None], |cmd| {
                 for (set, push) in self.sets.sets().iter().zip(&pushes) {
-                    cmd.bind_graphics(&self.pipeline, &[frame_set, *set]);
+                    let mut sets = vec![frame_set, *set];
+                    sets.extend(tracer);
+                    cmd.bind_graphics(&self.pipeline, &sets);
                     cmd.push_graphics(&self.pipeline, push);
                     cmd.draw(3, 1);
                 }
             });
         });
+    }
+}
+
+/// The exact tracer of `render.impostor.oracle = "hit"`; none for the paper's technique.
+fn oracle(s: &mut Setup<'_>, params: &ImpostorParams) -> Result<Option<Oracle>, RenderError> {
+    match params.oracle {
+        ImpostorOracle::None => Ok(None),
+        ImpostorOracle::Hit => Ok(Some(Oracle::new(s)?)),
     }
 }
 
@@ -623,11 +668,14 @@ pub struct ImpostorReflection {
     pub maps: Vec<ImpostorMap>,
     shade: ShadePass,
     pub params: ImpostorParams,
+    /// The exact tracer `render.impostor.oracle = "hit"` reads.
+    oracle: Option<Oracle>,
 }
 
 impl ImpostorReflection {
     pub fn new(s: &mut Setup<'_>) -> Result<Self, RenderError> {
         let params = impostor_params(s)?;
+        let oracle = oracle(s, &params)?;
         let metals = objects_where(s.scene, |m| matches!(m, Material::Mirror { .. } | Material::Conductor { .. }));
         let mut maps = Vec::new();
         for group in map_groups(&params, metals) {
@@ -641,8 +689,9 @@ impl ImpostorReflection {
             maps.push(ImpostorMap::new(s, desc, &params)?);
         }
         let instances: Vec<_> = maps.iter().map(|m| (m, None)).collect();
-        let shade = ShadePass::new(s, REFLECTION_IMPOSTOR, "impostor/reflect.frag", &params, &instances)?;
-        Ok(ImpostorReflection { maps, shade, params })
+        let shade =
+            ShadePass::new(s, REFLECTION_IMPOSTOR, "impostor/reflect.frag", &params, &instances, oracle.as_ref())?;
+        Ok(ImpostorReflection { maps, shade, params, oracle })
     }
 
     /// Objects moved (`bounds[i]`: object i's centre and radius): each map decides (§6).
@@ -700,11 +749,14 @@ pub struct ImpostorRefraction {
     pub instances: Vec<RefractionInstance>,
     shade: ShadePass,
     pub params: ImpostorParams,
+    /// The exact tracer `render.impostor.oracle = "hit"` reads.
+    oracle: Option<Oracle>,
 }
 
 impl ImpostorRefraction {
     pub fn new(s: &mut Setup<'_>) -> Result<Self, RenderError> {
         let params = impostor_params(s)?;
+        let oracle = oracle(s, &params)?;
         let glass = objects_where(s.scene, |m| matches!(m, Material::Dielectric { .. }));
         let mut instances = Vec::new();
         for group in map_groups(&params, glass) {
@@ -721,8 +773,8 @@ impl ImpostorRefraction {
             instances.push(RefractionInstance { map, refractor, refractor_center });
         }
         let pairs: Vec<_> = instances.iter().map(|i| (&i.map, Some(&i.refractor))).collect();
-        let shade = ShadePass::new(s, REFRACTION_IMPOSTOR, "impostor/refract.frag", &params, &pairs)?;
-        Ok(ImpostorRefraction { instances, shade, params })
+        let shade = ShadePass::new(s, REFRACTION_IMPOSTOR, "impostor/refract.frag", &params, &pairs, oracle.as_ref())?;
+        Ok(ImpostorRefraction { instances, shade, params, oracle })
     }
 
     pub fn objects_moved(&mut self, bounds: &[(Vec3, f32)]) {
