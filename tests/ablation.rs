@@ -222,6 +222,9 @@ fn exit_error(s: &Scene, d: &Debug) -> ((f32, f32), (f32, f32), usize) {
 /// the normal N2 are necessary", and P2 only to find N2).
 #[test]
 fn wyman_oracle_exit_is_the_closed_form_exit() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = context(false);
     let s = box_scene(&[]);
     let mut report = Vec::new();
@@ -268,6 +271,9 @@ fn wyman_oracle_exit_is_the_closed_form_exit() {
 /// gradient over 0.01 rad and more.
 #[test]
 fn wyman_with_every_intermediate_exact_is_the_two_interface_tracer() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = context(false);
     let s = box_scene(&[]);
     let w = wyman(&ctx, "all");
@@ -331,6 +337,9 @@ fn wyman_with_every_intermediate_exact_is_the_two_interface_tracer() {
 /// search of §2.1 (Figs. 7, 9) and the layer's texel (§2.1.4) are off by more on some pixels.
 #[test]
 fn hu_qin_oracle_exit_is_the_closed_form_exit() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = context(false);
     let s = box_scene(&[]);
     let mut report = Vec::new();
@@ -359,6 +368,9 @@ fn hu_qin_oracle_exit_is_the_closed_form_exit() {
 /// that fell back on the paper's lookup anywhere would differ there.
 #[test]
 fn every_oracle_renders_a_scene_with_nearby_geometry() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = context(false);
     let render = |t: &str, oracle: &str, extra: &[&str]| {
         let (refraction, o) = (format!("render.refraction={t}"), format!("render.{t}.oracle=\"{oracle}\""));
@@ -390,6 +402,9 @@ fn every_oracle_renders_a_scene_with_nearby_geometry() {
 /// images must be identical bit for bit: any value Hit()'s search still reached would differ.
 #[test]
 fn impostor_hit_oracle_is_independent_of_the_search() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = context(false);
     let render = |oracle: &str, iterations: u32| {
         let o = format!("render.impostor.oracle=\"{oracle}\"");

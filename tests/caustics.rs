@@ -15,6 +15,9 @@ fn caustics(extra: &[&str]) -> Vec<String> {
 
 #[test]
 fn caustic_scenes_render_with_caustics_map() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     for name in ["caustic_sphere", "caustic_bunny", "metal_ring", "water_pool"] {
         // water_pool's floor is seen only through the water, by its single-interface technique.
@@ -53,6 +56,9 @@ fn map_flux(ctx: &std::sync::Arc<prism::gpu::GpuContext>, name: &str, extra: &[&
 /// tessellated ball).
 #[test]
 fn caustic_flux_is_conserved_and_independent_of_the_grid() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let expected = common::sphere_transmitted_flux(50.0, 3.8, 1.0, 1.5);
     let mut fluxes = Vec::new();
@@ -92,6 +98,9 @@ fn caustic_flux_is_conserved_and_independent_of_the_grid() {
 /// 9.24 W (above): solid_angle is the more accurate and stays the default.
 #[test]
 fn occlusion_query_flux_is_independent_of_the_grid() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let mut fluxes = Vec::new();
     for grid in [64, 128, 256] {
@@ -146,6 +155,9 @@ fn occlusion_query_flux_is_independent_of_the_grid() {
 /// tests/reference.rs `caustic_radiance_is_independent_of_resolution`.)
 #[test]
 fn caustics_map_approaches_the_reference_on_caustic_sphere() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let size = 64;
     let s = common::scene("caustic_sphere", size, &[]);
@@ -193,6 +205,9 @@ fn caustics_map_approaches_the_reference_on_caustic_sphere() {
 /// visible on its own (more than 1% of the image's radiance).
 #[test]
 fn two_lights_add_their_caustics_with_every_technique() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     use glam::Vec3;
     use prism::scene::Light;
@@ -251,6 +266,9 @@ const SHELF_SIZE: f32 = 0.6;
 /// is of the order of the floor's caustic, 0.1 to 10.
 #[test]
 fn caustics_reach_only_receivers_facing_and_seen_by_the_light() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     const DARK: f32 = 1e-3;
     // The floor under the shelf, seen past the shelf and the ball, at least `margin` inside
@@ -368,6 +386,9 @@ fn isolated_dots(map: &[[f32; 4]], n: usize, dot: usize) -> (usize, usize) {
 /// dropped (total internal reflection), a thin rim of the 128 x 128 grid.
 #[test]
 fn footprint_splats_keep_the_bunny_caustic_continuous() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let dot = 7 * 7;
     let mut fractions = Vec::new();

@@ -12,6 +12,9 @@ const SIZE: u32 = 64;
 
 #[test]
 fn shipped_techniques_beat_the_baseline_against_the_reference() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let mut names = vec![prism::scene::DEFAULT_SCENE, "caustic_sphere", "room_mirror", "water_pool"];
     names.dedup();

@@ -18,6 +18,9 @@ fn orthogonal(d: DVec3) -> DVec3 {
 
 #[test]
 fn rays_in_a_homogeneous_volume_are_straight() {
+    if !common::in_own_process() {
+        return;
+    }
     let field = IndexProfile::Constant { n: 1.33, sphere: None };
     let d = DVec3::new(0.3, -0.5, 0.8).normalize();
     for integrator in [Integrator::Euler, Integrator::Rk4] {
@@ -35,6 +38,9 @@ fn rays_in_a_homogeneous_volume_are_straight() {
 /// eikonal_luneburg, for impact parameters up to 0.95 R and several directions.
 #[test]
 fn luneburg_lens_focuses_parallel_rays_on_the_far_surface() {
+    if !common::in_own_process() {
+        return;
+    }
     let voxel = 2.1 / 64.0;
     let h = 0.25 * voxel;
     let mut worst: f64 = 0.0;
@@ -83,6 +89,9 @@ fn error(
 
 #[test]
 fn rk4_converges_at_fourth_order_and_euler_at_first() {
+    if !common::in_own_process() {
+        return;
+    }
     // A ray inside the lens (n smooth there) over arc length 0.6.
     let start = RayState::new(&LENS, DVec3::new(0.2, -0.1, 0.1), DVec3::new(0.3, 0.8, 0.5).normalize());
     let s = 0.6;
@@ -134,6 +143,9 @@ fn differing(a: &[f32], b: &[f32], tol: f32) -> usize {
 
 #[test]
 fn a_volume_of_index_one_leaves_the_view_unchanged() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let one = common::scene("eikonal_luneburg", 64, &["volume.index.type=\"constant\"", "volume.index.n=1.0"]);
     assert!(common::render_on(&ctx, &one).passes.contains(&"eikonal_view".to_string()));
@@ -151,6 +163,9 @@ fn a_volume_of_index_one_leaves_the_view_unchanged() {
 
 #[test]
 fn the_view_renderer_renders_the_volume_scenes() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(true);
     for name in ["eikonal_luneburg", "eikonal_sphere"] {
         for integrator in ["euler", "rk4"] {
@@ -173,6 +188,9 @@ fn the_view_renderer_renders_the_volume_scenes() {
 
 #[test]
 fn sharp_single_voxel_and_non_cubic_volumes_give_no_nan() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let cases: &[&[&str]] = &[
         &["render.eikonal.sigma=0"],
@@ -200,6 +218,9 @@ fn sharp_single_voxel_and_non_cubic_volumes_give_no_nan() {
 
 #[test]
 fn absorption_darkens_the_volume() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let clear = common::render_on(&ctx, &common::scene("eikonal_luneburg", 32, &[]));
     let dark = common::render_on(&ctx, &common::scene("eikonal_luneburg", 32, &["volume.attenuation=[0, 0, 2]"]));
@@ -224,6 +245,9 @@ const GOOD: &str = "[volume]\nbounds = { min = [-1, -1, -1], max = [1, 1, 1] }\n
 
 #[test]
 fn invalid_volumes_and_parameters_give_clear_errors() {
+    if !common::in_own_process() {
+        return;
+    }
     let lens = "index = { type = \"luneburg\", center = [0, 0, 0], radius = 1 }";
     let cases = [
         (format!("{GOOD}{lens}").replace("[8, 8, 8]", "[0, 8, 8]"), "", "resolution"),
@@ -271,6 +295,9 @@ fn reference(ctx: &std::sync::Arc<prism::gpu::GpuContext>, s: &scene::Scene, spp
 
 #[test]
 fn the_reference_sees_the_volumes() {
+    if !common::in_own_process() {
+        return;
+    }
     use prism::metrics::image::rmse_rgba;
     let ctx = common::context(false);
     let size = 32;
@@ -331,6 +358,9 @@ fn the_reference_sees_the_volumes() {
 /// everywhere inside, so only its air leaps.
 #[test]
 fn leaps_through_uniform_regions_equal_the_full_march() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let bound = 2.0 * 2048.0 / (2.0 * std::f32::consts::PI) * 256.0 * 2f32.powi(-24);
     for name in ["eikonal_sphere", "eikonal_luneburg"] {

@@ -30,6 +30,9 @@ impl Rng {
 
 #[test]
 fn histopyramid_gpu_matches_cpu_exactly() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(true);
     let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
     // (classes, valid count, capacity)
@@ -75,6 +78,9 @@ const LENS: IndexProfile = IndexProfile::Luneburg { center: Vec3::ZERO, radius: 
 /// launched together stay on one wavefront. Checked on the Luneburg lens in f64.
 #[test]
 fn appendix_constant_spatial_and_temporal_steps() {
+    if !common::in_own_process() {
+        return;
+    }
     let d = DVec3::Z;
     let h = 1e-3;
     let mut worst_ds: f64 = 0.0;
@@ -118,6 +124,9 @@ fn appendix_constant_spatial_and_temporal_steps() {
 /// of the error expansion, about 15% at 8 to 64 steps.
 #[test]
 fn light_integrators_converge_at_their_order() {
+    if !common::in_own_process() {
+        return;
+    }
     let start = RayState::new(&LENS, DVec3::new(0.2, -0.1, 0.1), DVec3::new(0.3, 0.8, 0.5).normalize());
     let t = 0.6;
     let fine = 1 << 14;
@@ -162,6 +171,9 @@ fn lens_volume(resolution: u32, overrides: &[&str]) -> prism::scene::Volume {
 /// integration of the analytic profile by the same scheme, started at the same place.
 #[test]
 fn gpu_particles_follow_the_equal_time_ray_equation() {
+    if !common::in_own_process() {
+        return;
+    }
     // Synchronization validation over 96 steps in one command buffer (indirect dispatches,
     // HistoPyramid levels, ping-pong lists).
     let ctx = common::context(true);
@@ -230,6 +242,9 @@ fn gpu_particles_follow_the_equal_time_ray_equation() {
 /// analytic focus (0, 0, 1).
 #[test]
 fn luneburg_gpu_wavefront_focuses_on_the_far_surface() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let volume = lens_volume(64, &[]);
     // A compaction per step: the particles are followed step by step.
@@ -295,6 +310,9 @@ fn flux_sum(patches: &[Patch]) -> f64 {
 /// area and must conserve it. With absorption (Eq. 18) the flux in flight only falls.
 #[test]
 fn energy_balance_of_the_wavefront() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let volume = lens_volume(32, &[]);
     // A compaction per step: the wavefront's flux is balanced step by step.
@@ -358,6 +376,9 @@ fn finite(name: &str, v: &[f32]) {
 /// `non_finite_patches_deposit_nothing_and_spare_their_neighbours`.
 #[test]
 fn light_simulation_extremes_give_no_nan() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let linear = "volume.index={ type = \"linear\", n0 = 1.3, gradient = [0, 0.4, 0] }";
     let cases: &[(&str, &[&str], Light)] = &[
@@ -431,6 +452,9 @@ fn light_simulation_extremes_give_no_nan() {
 /// accumulator, and the resolve's guard then zeroes the whole voxel, healthy light included.
 #[test]
 fn non_finite_patches_deposit_nothing_and_spare_their_neighbours() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let volume = lens_volume(16, &[]);
     // No energy threshold: it is relative to the largest flux, which is poisoned here.
@@ -471,6 +495,9 @@ fn non_finite_patches_deposit_nothing_and_spare_their_neighbours() {
 /// simulation (render.eikonal.light = false) nothing is scattered in.
 #[test]
 fn single_scattering_follows_the_phase_function() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(true);
     let render = |g: f32, light: bool| {
         let (g, on) = (format!("volume.hg_g={g}"), format!("render.eikonal.light={light}"));
@@ -497,6 +524,9 @@ fn single_scattering_follows_the_phase_function() {
 /// volume casts no shadow) and surrounded by the ball's shadow.
 #[test]
 fn eikonal_sphere_floor_shows_the_focused_light() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let o = ["volume.resolution=[48, 48, 48]"];
     let on = common::render_on(&ctx, &common::scene("eikonal_sphere", 64, &o));
@@ -532,6 +562,9 @@ fn eikonal_sphere_floor_shows_the_focused_light() {
 /// through it against the reference's 9.24 W), and the smoothed rim's penumbra.
 #[test]
 fn eikonal_sphere_floor_approaches_caustic_sphere_reference() {
+    if !common::in_own_process() {
+        return;
+    }
     use prism::reference::{Reference, ReferenceSettings};
     let ctx = common::context(false);
     let size = 48;
@@ -586,6 +619,9 @@ fn eikonal_sphere_floor_approaches_caustic_sphere_reference() {
 /// unshadowed and had no caustic.
 #[test]
 fn the_reference_carries_light_through_the_volume() {
+    if !common::in_own_process() {
+        return;
+    }
     use prism::reference::{Reference, ReferenceSettings};
     let ctx = common::context(false);
     let size = 32;
@@ -725,6 +761,9 @@ fn ball_floor_rings(intensity: f64, h: f64, c: f64, r: f64, ior: f64, dr: f64, r
 /// voxel) made the focus several times too bright; the track-length deposit conserves flux.
 #[test]
 fn floor_flux_matches_the_ball_closed_form() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let scene =
         common::scene("eikonal_sphere", 32, &["volume.resolution=[48, 48, 48]", "render.eikonal.light_side=0.6"]);
@@ -831,6 +870,9 @@ fn same_volumes(name: &str, a: &LightVolumes, b: &LightVolumes) {
 /// lights together equal the sums of each light's alone, and so do the rendered floors.
 #[test]
 fn two_lights_add_up() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(true);
     let a = Light::Point { position: Vec3::new(0.0, 5.0, 0.0), intensity: Vec3::splat(50.0) };
     let b = Light::Directional { direction: Vec3::new(0.4, -1.0, 0.2).normalize(), irradiance: Vec3::splat(2.0) };
@@ -915,6 +957,9 @@ light_below = 0.5
 /// the slab; with one index for all channels the two centroids are the same.
 #[test]
 fn dispersion_separates_the_caustic_colours() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let centroids = |n: &str| {
         let scene = slab_scene(n);
@@ -963,6 +1008,9 @@ fn dispersion_separates_the_caustic_colours() {
 /// value (f32 sums of up to ~10^4 deposits per voxel in another order, as two_lights_add_up).
 #[test]
 fn spilled_simulation_equals_the_unspilled_one() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(true);
     let volume = lens_volume(32, &[]);
     let light = directional(Vec3::new(0.2, -1.0, 0.1));
@@ -1003,6 +1051,9 @@ fn spilled_simulation_equals_the_unspilled_one() {
 /// compactions.
 #[test]
 fn substeps_take_the_same_steps_as_a_compaction_per_step() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(true);
     let volume = lens_volume(32, &[]);
     let light = Light::Point { position: Vec3::new(0.3, 3.0, 0.2), intensity: Vec3::splat(10.0) };
@@ -1032,6 +1083,9 @@ fn substeps_take_the_same_steps_as_a_compaction_per_step() {
 /// loop and the comparison is trivially exact; the test says which it compared.
 #[test]
 fn float_atomic_deposits_equal_the_compare_and_swap_loop() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(true);
     let volume = lens_volume(32, &[]);
     let light = directional(Vec3::new(0.2, -1.0, 0.1));
@@ -1061,6 +1115,9 @@ fn float_atomic_deposits_equal_the_compare_and_swap_loop() {
 /// and its volumes are the same sums in another order (1e-5, as above).
 #[test]
 fn an_interrupted_simulation_equals_one_run() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(true);
     let volume = lens_volume(32, &[]);
     let light = directional(Vec3::new(0.2, -1.0, 0.1));
@@ -1093,6 +1150,9 @@ fn an_interrupted_simulation_equals_one_run() {
 /// coincide. The floor is still rendered, with the eikonal_light pass and finite pixels.
 #[test]
 fn dispersion_cube_floor_caustic_separates_in_colour() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let path = prism::scene::benchmark_scene_path("eikonal_dispersion_cube");
     // Grey absorption (the glasses' coloured absorption would separate the colours too).
@@ -1190,6 +1250,9 @@ normal = [0, 1, 0]
 /// patches).
 #[test]
 fn light_simulation_reports_kernel_times_and_patch_steps() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(true);
     let volume = lens_volume(16, &[]);
     let params = EikonalParams {

@@ -53,6 +53,9 @@ fn mean(a: &[f32], pixels: &[usize]) -> f64 {
 /// shadow (the floor seen through the ball is shaded with the light simulation's irradiance).
 #[test]
 fn eikonal_sphere_ball_shows_the_floor() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let size = 48;
     let reference_scene = common::scene("eikonal_sphere", size, &[VOLUME]);
@@ -122,6 +125,9 @@ fn eikonal_sphere_ball_shows_the_floor() {
 /// validation: the impostor pass writes what the view pass reads.
 #[test]
 fn exit_rays_meeting_geometry_stay_finite() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(true);
     let small = ["volume.resolution=[32, 32, 32]", "render.eikonal.light_patches=32"];
     let cases: [&[&str]; 4] = [

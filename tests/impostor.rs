@@ -80,6 +80,9 @@ fn room_mirror_renderer(ctx: &std::sync::Arc<prism::gpu::GpuContext>, overrides:
 /// bilinearly filtered 256^2 distance map.
 #[test]
 fn hit_points_converge_to_the_walls() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let mut r = room_mirror_renderer(&ctx, &[]);
     let rays = ball_rays(4000);
@@ -124,6 +127,9 @@ fn hit_points_converge_to_the_walls() {
 /// RMSE 2.38 (single) vs 0.027 (impostor), room_glass 0.164 vs 0.047.
 #[test]
 fn impostor_error_is_far_below_classic_environment_mapping() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     for (scene, effect) in [("room_mirror", "reflection"), ("room_glass", "refraction")] {
         let s = common::scene(scene, 64, &[]);
@@ -170,6 +176,9 @@ fn impostor_error_is_far_below_classic_environment_mapping() {
 /// Szirmay-Kalos 2005 add a term for) plus about 10%.
 #[test]
 fn conductor_fresnel_approximation_is_close_to_exact() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let mut r = room_mirror_renderer(&ctx, &[]);
     let metals = [
@@ -205,6 +214,9 @@ fn conductor_fresnel_approximation_is_close_to_exact() {
 /// renderer made for the overridden scene.
 #[test]
 fn moving_the_sphere_regenerates_the_impostor() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let mut r = room_mirror_renderer(&ctx, &[]);
     let map = |r: &Renderer| {
@@ -244,6 +256,9 @@ fn moving_the_sphere_regenerates_the_impostor() {
 /// a wall, the reference point on a wall (distance 0 in the map), iterations 0..32.
 #[test]
 fn stable_at_degenerate_rays_and_reference_points() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let mut r = room_mirror_renderer(&ctx, &["render.impostor.resolution=64"]);
     let mut rays = Vec::new();
@@ -323,6 +338,9 @@ fn two_balls(size: u32, overrides: &[&str]) -> prism::scene::Scene {
 /// behind it, which is closer to what that ball reflects.
 #[test]
 fn per_object_maps_are_closer_to_the_reference_than_a_shared_map() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let s = two_balls(64, &[]);
     let mut r = Reference::new(&ctx, &s, &ReferenceSettings { spp: 64, photons: 0, ..Default::default() }).unwrap();
@@ -370,6 +388,9 @@ fn per_object_maps_are_closer_to_the_reference_than_a_shared_map() {
 /// the shared map follows the mean centre.
 #[test]
 fn moving_one_object_regenerates_only_its_map() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let generations = |r: &Renderer| -> Vec<(u32, Vec3)> {
         r.impostor_maps(ImpostorEffect::Reflection).iter().map(|m| (m.generations(), m.reference())).collect()
@@ -411,6 +432,9 @@ fn moving_one_object_regenerates_only_its_map() {
 /// the G-buffer's object index).
 #[test]
 fn per_object_equals_shared_with_one_object() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     for (scene, effect) in [("room_mirror", "reflection"), ("room_glass", "refraction")] {
         let render = |maps: &str| {

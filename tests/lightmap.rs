@@ -44,6 +44,9 @@ fn lightmap_flux(ctx: &std::sync::Arc<prism::gpu::GpuContext>, name: &str, extra
 
 #[test]
 fn caustic_scenes_render_with_impostor_lightmap() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     for name in ["caustic_sphere", "metal_ring"] {
         let with = common::render_on(&ctx, &common::scene(name, 96, &common::refs(&lightmap(&[]))));
@@ -67,6 +70,9 @@ fn caustic_scenes_render_with_impostor_lightmap() {
 /// (§4) on other drivers. Peak irradiance 47.9 / 49.4 / 49.6 W/m^2 at the floor's centre.
 #[test]
 fn lightmap_flux_matches_the_analytic_flux_and_is_stable_in_the_map_size() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let expected = common::sphere_transmitted_flux(50.0, 3.8, 1.0, 1.5);
     let mut fluxes = Vec::new();
@@ -87,6 +93,9 @@ fn lightmap_flux_matches_the_analytic_flux_and_is_stable_in_the_map_size() {
 /// the caustic alone) lies where the reference's is. Measured: see the test output.
 #[test]
 fn impostor_lightmap_approaches_the_reference_on_caustic_sphere() {
+    if !common::in_own_process() {
+        return;
+    }
     approaches_the_reference("caustic_sphere", 0.7);
 }
 
@@ -96,6 +105,9 @@ fn impostor_lightmap_approaches_the_reference_on_caustic_sphere() {
 /// both at 128^2, one pixel apart at 32^2.
 #[test]
 fn impostor_lightmap_approaches_the_reference_on_metal_ring() {
+    if !common::in_own_process() {
+        return;
+    }
     approaches_the_reference("metal_ring", 0.7);
 }
 
@@ -136,6 +148,9 @@ fn approaches_the_reference(scene: &str, ratio: f64) {
 /// the widest filter, no Hit() iterations; photons without a hit are dropped, not NaN.
 #[test]
 fn stable_at_degenerate_lights_and_parameters() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let cases: &[&[&str]] = &[
         &["lights.0.position=[3, 1.2, 0]"],
@@ -163,6 +178,9 @@ fn stable_at_degenerate_lights_and_parameters() {
 /// caustic map's frustum: the light maps then match a renderer made for the moved scene.
 #[test]
 fn moving_the_refractor_moves_the_caustic() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let peak = |texels: &[[f32; 4]]| -> (usize, f64) {
         let i = (0..texels.len()).max_by(|&a, &b| texels[a][1].total_cmp(&texels[b][1])).unwrap();
@@ -195,6 +213,9 @@ fn moving_the_refractor_moves_the_caustic() {
 /// box whose top face is the floor catches the same flux (the analytic 9.2395 W, as above).
 #[test]
 fn box_receivers_catch_the_caustic_on_their_faces() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let base = std::fs::read_to_string(prism::scene::benchmark_scene_path("caustic_sphere")).unwrap();
     let text = base.replacen(

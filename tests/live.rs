@@ -37,6 +37,9 @@ fn live(scene: &str, before: &[&str], after: &[&str]) -> Update {
 
 #[test]
 fn a_technique_parameter_re_creates_that_technique_only() {
+    if !common::in_own_process() {
+        return;
+    }
     let u = live(
         "sphere_nearby",
         &["render.refraction=hu_qin", "render.hu_qin.search_steps=8"],
@@ -51,12 +54,18 @@ fn a_technique_parameter_re_creates_that_technique_only() {
 
 #[test]
 fn a_material_value_rewrites_the_materials_buffer_only() {
+    if !common::in_own_process() {
+        return;
+    }
     let u = live("sphere_env", &["render.refraction=wyman"], &["render.refraction=wyman", "materials.glass.ior=1.33"]);
     assert_eq!((u.rebuilt, u.recreated.len(), u.materials), (false, 0, true), "{u:?}");
 }
 
 #[test]
 fn switching_a_technique_creates_the_new_one_and_drops_the_old() {
+    if !common::in_own_process() {
+        return;
+    }
     let u = live("sphere_env", &["render.refraction=single"], &["render.refraction=hu_qin"]);
     assert!(!u.rebuilt, "{u:?}");
     assert_eq!(u.recreated, ["refraction = \"hu_qin\""]);
@@ -67,6 +76,9 @@ fn switching_a_technique_creates_the_new_one_and_drops_the_old() {
 
 #[test]
 fn the_field_of_view_and_the_exposure_are_uniforms() {
+    if !common::in_own_process() {
+        return;
+    }
     let u = live("sphere_nearby", &[], &["camera.vfov_deg=35", "render.exposure=1.7"]);
     assert_eq!(u, Update { ms: u.ms, ..Update::default() });
     // The camera's position bounds the scene that the shadow faces are fitted to: a move.
@@ -76,6 +88,9 @@ fn the_field_of_view_and_the_exposure_are_uniforms() {
 
 #[test]
 fn the_adaptive_tone_map_is_re_created_with_its_settings() {
+    if !common::in_own_process() {
+        return;
+    }
     let u = live(
         "caustic_sphere",
         &["render.tonemap=adaptive"],
@@ -86,6 +101,9 @@ fn the_adaptive_tone_map_is_re_created_with_its_settings() {
 
 #[test]
 fn topology_re_creates_the_renderer() {
+    if !common::in_own_process() {
+        return;
+    }
     let u = live("sphere_env", &[], &["render.sphere_segments=24"]);
     assert!(u.rebuilt, "{u:?}");
     let u = live("sphere_nearby", &[], &["objects.3.material=\"bunny\""]);
@@ -94,6 +112,9 @@ fn topology_re_creates_the_renderer() {
 
 #[test]
 fn switching_the_caustics_rebinds_their_textures_without_a_rebuild() {
+    if !common::in_own_process() {
+        return;
+    }
     for (from, to) in [("none", "caustics_map"), ("caustics_map", "photon_buffer"), ("photon_buffer", "none")] {
         let u = live("caustic_sphere", &[&format!("render.caustics={from}")], &[&format!("render.caustics={to}")]);
         assert!(!u.rebuilt, "{from} -> {to}: {u:?}");
@@ -117,6 +138,9 @@ fn switching_the_caustics_rebinds_their_textures_without_a_rebuild() {
 
 #[test]
 fn moving_an_object_or_a_light_updates_everything_built_from_positions() {
+    if !common::in_own_process() {
+        return;
+    }
     // Hu & Qin §2.2's impostor rectangles and textures, caustics mapping's light frusta and
     // Hu & Qin §3's photon rectangles are built from where the objects are: after a move the
     // running renderer draws what a renderer created for the new positions draws.
@@ -138,6 +162,9 @@ fn moving_an_object_or_a_light_updates_everything_built_from_positions() {
 
 #[test]
 fn a_resize_makes_new_targets_and_keeps_the_scene() {
+    if !common::in_own_process() {
+        return;
+    }
     for scene in ["sphere_nearby", "caustic_sphere"] {
         let u = live(scene, &["render.caustics=caustics_map"], &["render.caustics=caustics_map", "camera.width=48"]);
         assert!(!u.rebuilt && u.resized, "{scene}: {u:?}");
@@ -157,6 +184,9 @@ fn a_resize_makes_new_targets_and_keeps_the_scene() {
 
 #[test]
 fn the_eikonal_light_simulation_survives_a_resize_and_moves_elsewhere() {
+    if !common::in_own_process() {
+        return;
+    }
     // The simulation depends on the volume, the lights and its settings; a resize, a moved
     // floor or a setting of the view renderer alone (what exit rays meet) re-creates the
     // technique around it, not the simulation.
@@ -190,6 +220,9 @@ fn the_eikonal_light_simulation_survives_a_resize_and_moves_elsewhere() {
 
 #[test]
 fn the_water_animates_on_the_gpu() {
+    if !common::in_own_process() {
+        return;
+    }
     // The window moves the water's vertices with a compute pass instead of a scene update.
     // Against a renderer created at the new time the image may differ only as much as the
     // golden threshold allows (tests/common/mod.rs): the GPU's sin rounds differently from
@@ -218,6 +251,9 @@ fn the_water_animates_on_the_gpu() {
 
 #[test]
 fn exact_ray_tracing_follows_a_moved_light_and_a_material_value() {
+    if !common::in_own_process() {
+        return;
+    }
     let rt = "render.refraction=raytrace";
     let u = live("sphere_nearby", &[rt], &[rt, "lights.0.position=[-2, 4, 3]"]);
     assert!(u.recreated.contains(&"refraction = \"raytrace\""), "{u:?}");
@@ -233,6 +269,9 @@ fn exact_ray_tracing_follows_a_moved_light_and_a_material_value() {
 /// which the ball's index moves. No technique is re-created by the change.
 #[test]
 fn kept_results_follow_a_material_value() {
+    if !common::in_own_process() {
+        return;
+    }
     let hq = "render.refraction=hu_qin";
     let u = live("sphere_nearby", &[hq], &[hq, "materials.bunny.albedo=[0.2, 0.6, 0.9]"]);
     assert_eq!((u.rebuilt, u.recreated.len(), u.materials), (false, 0, true), "{u:?}");

@@ -34,6 +34,9 @@ fn lavapipe_model(n: u32, m: u32, budget: u32) -> (u32, u32) {
 
 #[test]
 fn loop_limit_is_measured_and_matches_the_driver() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let s = common::scene("caustic_sphere", 8, &[]);
     let mut r = Reference::new(&ctx, &s, &ReferenceSettings { spp: 1, photons: 0, ..Default::default() }).unwrap();
@@ -139,6 +142,9 @@ fn reference_stats(
 
 #[test]
 fn a_path_past_the_loop_limit_is_counted() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let lavapipe = ctx.info.driver_name.to_lowercase().contains("llvmpipe");
     let stats = reference_stats(&ctx, &slab(), 1, 0);
@@ -158,6 +164,9 @@ fn a_path_past_the_loop_limit_is_counted() {
 /// kernels all run) and no path reaches the step cap.
 #[test]
 fn default_scenes_report_no_cut() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     for (name, photons) in [("caustic_sphere", 1 << 14), ("eikonal_sphere", 1 << 12)] {
         let stats = reference_stats(&ctx, &common::shipped(name, 32, &[]), 2, photons);
@@ -208,6 +217,9 @@ fn prism(dir: &Dir, args: &[&str]) -> (Option<i32>, String) {
 
 #[test]
 fn cli_warns_about_a_cut_reference_and_compare_refuses_it() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     if !ctx.info.driver_name.to_lowercase().contains("llvmpipe") {
         println!("{}: no loop limit to provoke", ctx.info.driver_name);
@@ -248,6 +260,9 @@ fn cli_warns_about_a_cut_reference_and_compare_refuses_it() {
 
 #[test]
 fn cli_is_silent_about_an_exact_reference() {
+    if !common::in_own_process() {
+        return;
+    }
     let dir = Dir::new("exact");
     let (code, err) = prism(
         &dir,
@@ -277,6 +292,9 @@ fn cli_is_silent_about_an_exact_reference() {
 /// diagonals of steps (17 741 of 1/8 voxel, fewer than lavapipe's 65 535, so no cut).
 #[test]
 fn a_path_trapped_in_a_light_guide_reaches_the_step_cap() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let stats = reference_stats(&ctx, &common::shipped("eikonal_dispersion_cube", 32, &[]), 2, 0);
     assert!(stats.step_cap_camera > 0, "{stats:?}");

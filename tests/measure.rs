@@ -33,6 +33,9 @@ const SMALL: &[&str] = &["--width", "32", "--height", "32", "--spp", "2", "--pho
 
 #[test]
 fn reference_writes_exr_and_png() {
+    if !common::in_own_process() {
+        return;
+    }
     let d = Dir::new("reference");
     let mut args = vec!["reference", "sphere_env", "-o", "ref.exr", "--png", "ref.png", "--validation"];
     args.extend_from_slice(SMALL);
@@ -47,6 +50,9 @@ fn reference_writes_exr_and_png() {
 
 #[test]
 fn compare_reports_errors_writes_a_heat_map_and_caches_the_reference() {
+    if !common::in_own_process() {
+        return;
+    }
     let d = Dir::new("compare");
     let mut args = vec![
         "compare",
@@ -115,6 +121,9 @@ fn compare_reports_errors_writes_a_heat_map_and_caches_the_reference() {
 
 #[test]
 fn sweep_writes_csv_and_plots() {
+    if !common::in_own_process() {
+        return;
+    }
     let d = Dir::new("sweep");
     let mut args = vec![
         "sweep",
@@ -192,6 +201,9 @@ fn sweep_writes_csv_and_plots() {
 /// with sub-millisecond resolution; the sum is checked to the last bits.
 #[test]
 fn per_change_cost_is_the_first_frames_cached_passes_and_the_setup() {
+    if !common::in_own_process() {
+        return;
+    }
     let d = Dir::new("per-change");
     let run = |refraction: &str, json: &str| {
         let mut args = vec![
@@ -263,6 +275,9 @@ fn per_change_cost_is_the_first_frames_cached_passes_and_the_setup() {
 /// are in rounds 5 and 8 of 9 (src/app/bench_versus.rs, `Interleave`): round 5 is inside.
 #[test]
 fn exact_points_are_timed_between_the_settings_frames() {
+    if !common::in_own_process() {
+        return;
+    }
     let d = Dir::new("interleave");
     let mut args = vec![
         "compare",
@@ -307,6 +322,9 @@ fn exact_points_are_timed_between_the_settings_frames() {
 /// the equal-time columns and its plot the exact curve.
 #[test]
 fn report_on_a_tiny_spec_writes_the_summary_and_equal_time_columns() {
+    if !common::in_own_process() {
+        return;
+    }
     let d = Dir::new("report");
     std::fs::write(
         d.0.join("spec.toml"),
@@ -371,6 +389,9 @@ fn report_on_a_tiny_spec_writes_the_summary_and_equal_time_columns() {
 /// different seeds).
 #[test]
 fn baseline_error_is_far_above_the_reference_noise_floor() {
+    if !common::in_own_process() {
+        return;
+    }
     use prism::reference::{Reference, ReferenceSettings};
     let ctx = common::context(false);
     let s = common::scene("sphere_env", 32, &[]);
@@ -393,6 +414,9 @@ fn baseline_error_is_far_above_the_reference_noise_floor() {
 /// over it accounts for the whole image's error where the images differ only on the ball.
 #[test]
 fn object_mask_is_the_balls_projected_disc_and_holds_all_of_its_error() {
+    if !common::in_own_process() {
+        return;
+    }
     use prism::metrics::image::ErrorMetrics;
     use prism::metrics::mask::ObjectMask;
     let size = 128u32;

@@ -22,6 +22,9 @@ fn assert_finite(what: &str, hdr: &[f32]) {
 /// 0.05, so without them the whole ball is 0.05).
 #[test]
 fn sphere_nearby_renders_through_impostors() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = context(false);
     let with = render_on(&ctx, &scene("sphere_nearby", 96, &["render.refraction=hu_qin"]));
     assert!(with.passes.iter().any(|p| p == "refraction_hu_qin_nearby"), "{:?}", with.passes);
@@ -47,6 +50,9 @@ fn sphere_nearby_renders_through_impostors() {
 /// tolerance, the ball inside the bunny's impostor (O_i next to O_R) and grazing views.
 #[test]
 fn impostor_lookup_is_finite_at_the_extremes() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = context(false);
     for extra in [
         &["materials.glass.ior=1.0"][..],
@@ -81,6 +87,9 @@ fn impostor_lookup_is_finite_at_the_extremes() {
 /// default); the environment alone (`nearby = false`) 0.0284. At 128^2 `prism sweep` gives 0.0301 -> 0.0211.
 #[test]
 fn correction_lowers_the_error_against_the_reference() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = context(false);
     let s = scene("sphere_nearby", 96, &["render.refraction=hu_qin"]);
     let mut r = Reference::new(&ctx, &s, &ReferenceSettings { spp: 64, photons: 0, ..Default::default() }).unwrap();
@@ -126,6 +135,9 @@ fn masked_rmse(a: &[f32], b: &[f32], mask: &[bool]) -> f64 {
 /// the exact answer. Compared over the ball's pixels (the debug target P2 marks them).
 #[test]
 fn ior_one_corrected_lookup_matches_the_scene_without_the_ball() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = context(false);
     let lit = ["lights.0.intensity=0", "environment.radiance=1"];
     let mut o = vec!["render.refraction=hu_qin", "materials.glass.ior=1.0", "render.hu_qin.debug=true"];
@@ -199,6 +211,9 @@ fn mirror_bunny_scene(size: u32, overrides: &[&str]) -> prism::scene::Scene {
 /// texture brings the image closer to the exact reference.
 #[test]
 fn recursive_impostors_of_a_mirror() {
+    if !common::in_own_process() {
+        return;
+    }
     let names = |depth: u32| -> Vec<&'static str> {
         let s = mirror_bunny_scene(32, &[&format!("render.hu_qin.recursion_depth={depth}")]);
         prism::renderer::plan::plan(&s).iter().map(|p| p.name).filter(|n| n.contains("nearby")).collect()
@@ -277,6 +292,9 @@ fn recursive_impostors_of_a_mirror() {
 /// declaration shows here as a hazard.
 #[test]
 fn recursive_levels_have_no_sync_hazard() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = context(true);
     let mut r = Renderer::new(&ctx, &mirror_bunny_scene(32, &["render.hu_qin.recursion_depth=2"])).unwrap();
     for _ in 0..3 {
@@ -293,6 +311,9 @@ fn recursive_levels_have_no_sync_hazard() {
 /// included, is bit-identical with hu_qin and its impostors and with the baseline.
 #[test]
 fn shadows_are_unchanged_by_the_impostor_passes() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = context(false);
     let base = render_on(&ctx, &scene("caustic_sphere", 64, &[]));
     let mut r =
@@ -340,6 +361,9 @@ const BOUND: f32 = 0.035;
 /// omits is in view through the ball.
 #[test]
 fn nearest_corrected_surface_removes_the_arc_and_the_speckle() {
+    if !common::in_own_process() {
+        return;
+    }
     const SIZE: u32 = 256;
     let ctx = context(false);
     // The environment (radiance 0.05) off: the exact image's one cosine-weighted environment
@@ -436,6 +460,9 @@ fn nearest_corrected_surface_removes_the_arc_and_the_speckle() {
 /// renders them three times. Moving an object renders them again with the next frame.
 #[test]
 fn static_impostor_textures_are_rendered_once() {
+    if !common::in_own_process() {
+        return;
+    }
     use prism::technique::refraction::refraction_hu_qin::HuQinPass;
     let ctx = context(false);
     let mut images = Vec::new();

@@ -11,6 +11,9 @@ fn names(scene: &str, overrides: &[&str]) -> Vec<&'static str> {
 
 #[test]
 fn pass_lists_follow_the_scene() {
+    if !common::in_own_process() {
+        return;
+    }
     // No light: no shadow map. A refractor: the refraction baseline.
     assert_eq!(names("sphere_env", &[]), ["gbuffer", "deferred_shading", "refraction_single", "tonemap"]);
     // A point light and diffuse receivers: a shadow map first.
@@ -30,6 +33,9 @@ fn pass_lists_follow_the_scene() {
 
 #[test]
 fn the_adaptive_tone_map_adds_its_reduction_only_when_named() {
+    if !common::in_own_process() {
+        return;
+    }
     // Default (clamp, SCENES.md's PNG rule): the tone map alone, on every scene.
     for scene in ["sphere_env", "caustic_sphere", "eikonal_sphere"] {
         let n = names(scene, &[]);
@@ -46,6 +52,9 @@ fn the_adaptive_tone_map_adds_its_reduction_only_when_named() {
 
 #[test]
 fn a_scene_without_refractors_records_no_refraction_pass() {
+    if !common::in_own_process() {
+        return;
+    }
     // Turning sphere_nearby's glass into a diffuse material removes the refraction pass.
     let n = names("sphere_nearby", &["objects.3.material=\"bunny\""]);
     assert!(!n.contains(&"refraction_single"), "{n:?}");
@@ -54,6 +63,9 @@ fn a_scene_without_refractors_records_no_refraction_pass() {
 
 #[test]
 fn image_space_refraction_replaces_the_baseline() {
+    if !common::in_own_process() {
+        return;
+    }
     assert_eq!(
         names("sphere_env", &["render.refraction=wyman"]),
         ["gbuffer", "deferred_shading", "refraction_wyman_layers", "refraction_wyman", "tonemap"]
@@ -107,6 +119,9 @@ fn image_space_refraction_replaces_the_baseline() {
 /// receiver, and `render.caustics = "caustics_map"`; its passes run after the shadow map.
 #[test]
 fn caustic_passes_only_with_light_specular_object_and_receiver() {
+    if !common::in_own_process() {
+        return;
+    }
     const CAUSTIC: [&str; 4] =
         ["caustics_map_receivers", "caustics_map_refractors", "caustics_map_hits", "caustics_map"];
     let on = "render.caustics=caustics_map";
@@ -142,6 +157,9 @@ fn caustic_passes_only_with_light_specular_object_and_receiver() {
 /// "photon_buffer"`, a light, a specular object and a diffuse receiver.
 #[test]
 fn photon_buffer_passes_only_with_light_specular_object_and_receiver() {
+    if !common::in_own_process() {
+        return;
+    }
     const PHOTON: [&str; 4] =
         ["photon_buffer_refractors", "photon_buffer_receivers", "photon_buffer", "photon_buffer_scatter"];
     let on = "render.caustics=photon_buffer";
@@ -175,6 +193,9 @@ fn photon_buffer_passes_only_with_light_specular_object_and_receiver() {
 
 #[test]
 fn impostor_lightmap_passes_only_with_light_specular_object_and_quad_receiver() {
+    if !common::in_own_process() {
+        return;
+    }
     let on = "render.caustics=impostor_lightmap";
     assert_eq!(
         names("caustic_sphere", &[on]),
@@ -207,6 +228,9 @@ fn impostor_lightmap_passes_only_with_light_specular_object_and_quad_receiver() 
 
 #[test]
 fn distance_impostors_replace_the_baselines() {
+    if !common::in_own_process() {
+        return;
+    }
     assert_eq!(
         names("room_mirror", &["render.reflection=impostor"]),
         ["shadow_map", "gbuffer", "deferred_shading", "reflection_impostor_map", "reflection_impostor", "tonemap"]
@@ -235,6 +259,9 @@ fn distance_impostors_replace_the_baselines() {
 
 #[test]
 fn renderer_records_exactly_the_planned_passes() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     for (name, o) in [
         ("sphere_env", ""),
@@ -263,6 +290,9 @@ fn renderer_records_exactly_the_planned_passes() {
 
 #[test]
 fn prism_passes_prints_the_passes_and_why() {
+    if !common::in_own_process() {
+        return;
+    }
     let out =
         std::process::Command::new(env!("CARGO_BIN_EXE_prism")).args(["passes", "sphere_nearby"]).output().unwrap();
     assert!(out.status.success());
@@ -291,6 +321,9 @@ fn scene_files() -> Vec<String> {
 
 #[test]
 fn prism_scenes_lists_every_bundled_scene_with_its_description_techniques_and_render_time() {
+    if !common::in_own_process() {
+        return;
+    }
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_prism")).arg("scenes").output().unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let text = String::from_utf8_lossy(&out.stdout);
@@ -328,6 +361,9 @@ fn prism_scenes_lists_every_bundled_scene_with_its_description_techniques_and_re
 
 #[test]
 fn prism_help_names_every_bundled_scene() {
+    if !common::in_own_process() {
+        return;
+    }
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_prism")).arg("--help").output().unwrap();
     assert!(out.status.success());
     let text = String::from_utf8_lossy(&out.stdout);
@@ -341,6 +377,9 @@ fn prism_help_names_every_bundled_scene() {
 /// `./x render` and `./x test` are what .ci/run runs.
 #[test]
 fn readme_commands_run() {
+    if !common::in_own_process() {
+        return;
+    }
     let readme = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/README.md")).unwrap();
     let dir = std::env::temp_dir().join(format!("prism-readme-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
@@ -369,6 +408,9 @@ fn readme_commands_run() {
 /// `[volume]`, after the surface techniques and before the tone map.
 #[test]
 fn eikonal_passes_only_with_a_volume() {
+    if !common::in_own_process() {
+        return;
+    }
     assert_eq!(names("eikonal_luneburg", &[]), ["gbuffer", "deferred_shading", "eikonal_view", "tonemap"]);
     // eikonal_sphere has a light: the light simulation's receiver pass follows
     // deferred shading; without the light, or with render.eikonal.light = false, it is gone.
@@ -414,6 +456,9 @@ fn eikonal_passes_only_with_a_volume() {
 /// objects never record it.
 #[test]
 fn eikonal_nearby_only_for_objects_left_to_impostors() {
+    if !common::in_own_process() {
+        return;
+    }
     let lit = ["shadow_map", "gbuffer", "deferred_shading", "eikonal_light", "eikonal_view", "tonemap"];
     assert_eq!(names("eikonal_sphere", &["render.eikonal.nearby=\"exact\""]), lit);
     assert_eq!(names("eikonal_sphere", &["render.eikonal.nearby=\"off\""]), lit);
@@ -484,6 +529,9 @@ fn named_flags(text: &str) -> Vec<String> {
 /// `cargo test` lines), so that neither side names a flag the other lacks.
 #[test]
 fn every_flag_is_documented_and_every_documented_flag_exists() {
+    if !common::in_own_process() {
+        return;
+    }
     let root = env!("CARGO_MANIFEST_DIR");
     let readme = std::fs::read_to_string(format!("{root}/README.md")).unwrap();
     let mut docs = readme.clone();

@@ -54,6 +54,9 @@ fn caustic_power(im: &PhotonBufferImages) -> f64 {
 
 #[test]
 fn caustic_scenes_render_with_photon_buffer() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     for name in ["caustic_sphere", "caustic_bunny", "metal_ring", "water_pool"] {
         // water_pool's floor is seen only through the water, by its single-interface technique.
@@ -146,6 +149,9 @@ fn assert_close(what: &str, gpu: &[[f32; 4]], cpu: &[[f32; 4]]) {
 /// energy: sum c(u, v) A = the photons' total power.
 #[test]
 fn counting_and_filter_match_the_cpu_and_conserve_energy() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     for (k, paper) in [(2, false), (0, false), (1, false), (3, false), (2, true)] {
         let norm = if paper { "paper" } else { "physical" };
@@ -186,6 +192,9 @@ fn counting_and_filter_match_the_cpu_and_conserve_energy() {
 /// caustics mapping, tests/caustics.rs) and the tessellated ball.
 #[test]
 fn physical_flux_matches_the_closed_form_at_every_size() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let expected = common::sphere_transmitted_flux(50.0, 3.8, 1.0, 1.5);
     for size in [32, 64, 128, 256] {
@@ -211,6 +220,9 @@ fn physical_flux_matches_the_closed_form_at_every_size() {
 /// the reference's.
 #[test]
 fn photon_buffer_matches_the_reference_on_caustic_sphere() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let size = 64;
     let s = common::scene("caustic_sphere", size, &[]);
@@ -261,6 +273,9 @@ fn photon_buffer_matches_the_reference_on_caustic_sphere() {
 /// texture, k = 0 and the paper's normalisation: finite images, no validation errors.
 #[test]
 fn extremes_stay_finite() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let cases: [&[&str]; 8] = [
         &["lights.0.position=[20, 1.2, 0]"],
@@ -299,6 +314,9 @@ fn extremes_stay_finite() {
 /// in the same frame): no hazard reported.
 #[test]
 fn sync_validation_is_clean_over_frames_in_flight() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(true);
     assert!(!ctx.info.validation || ctx.info.sync_validation);
     for o in [
@@ -327,6 +345,9 @@ fn sync_validation_is_clean_over_frames_in_flight() {
 /// pixels off as well, so the offset is not the photon buffer's own.
 #[test]
 fn focus_matches_the_reference_on_bunny_and_ring() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let size = 64;
     for name in ["caustic_bunny", "metal_ring"] {
@@ -356,6 +377,9 @@ fn focus_matches_the_reference_on_bunny_and_ring() {
 /// metal_ring's mirror ring gets no rectangle of its own, only the floor does.
 #[test]
 fn mirrors_get_no_receiver_rectangle() {
+    if !common::in_own_process() {
+        return;
+    }
     let s = common::scene("metal_ring", 64, &["render.caustics=photon_buffer"]);
     let rects = prism::technique::caustics::photon_buffer::receiver_rectangles(&s);
     let objects: Vec<&str> = rects.iter().map(|r| s.objects[r.object[0] as usize].name.as_str()).collect();
@@ -372,6 +396,9 @@ fn mirrors_get_no_receiver_rectangle() {
 /// counted where their rays cross RECT's plane instead, 0.03 in u/v away.
 #[test]
 fn photon_uv_is_depth_corrected_on_a_receiver_off_its_rectangle() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let text = "name = \"mirror_wall\"\ndescription = \"a flat mirror reflecting a directional light onto a wall\"\n\
         [camera]\nposition = [-2, 3, 5]\ntarget = [1, 1, 0]\nup = [0, 1, 0]\nvfov_deg = 50\nwidth = 64\nheight = 64\n\

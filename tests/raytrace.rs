@@ -89,17 +89,26 @@ fn matches_reference(ctx: &Arc<GpuContext>, name: &str, effect: &str, ior: f64, 
 
 #[test]
 fn equals_the_converged_reference_on_sphere_env() {
+    if !common::in_own_process() {
+        return;
+    }
     // max_depth 1: no light leaves the glass.
     matches_reference(&common::context(false), "sphere_env", "refraction", 1.5, 256, "render.raytrace.max_depth=1");
 }
 
 #[test]
 fn equals_the_converged_reference_on_bunny_env() {
+    if !common::in_own_process() {
+        return;
+    }
     matches_reference(&common::context(false), "bunny_env", "refraction", 1.2, 256, "render.raytrace.max_depth=1");
 }
 
 #[test]
 fn equals_the_reference_on_room_mirror() {
+    if !common::in_own_process() {
+        return;
+    }
     // A cutoff above the mirror's reflectance 0.95 drops every reflection.
     matches_reference(&common::context(false), "room_mirror", "reflection", 1.0, 16, "render.raytrace.cutoff=0.96");
 }
@@ -123,6 +132,9 @@ fn impact(i: u32, j: u32, size: u32) -> f32 {
 /// 0.95 of its radius from the centre (Fresnel at most 0.2 inside: 0.2^63).
 #[test]
 fn the_split_conserves_energy_through_a_glass_ball() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let l = 0.7f32;
     let n2 = 1.5f32 * 1.5;
@@ -170,6 +182,9 @@ fn the_split_conserves_energy_through_a_glass_ball() {
 /// shortens the chords by 1e-4 of their length and raises the result by about 3e-5 of L.
 #[test]
 fn absorption_along_the_axis_is_the_closed_form_series() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let (l, n, sigma) = (0.7f64, 1.5f64, 0.4f64);
     let s = common::scene(
@@ -196,6 +211,9 @@ fn absorption_along_the_axis_is_the_closed_form_series() {
 
 #[test]
 fn defaults_are_the_reference_s_and_bad_values_are_refused() {
+    if !common::in_own_process() {
+        return;
+    }
     assert_eq!(RaytraceParams::default().max_depth, ReferenceSettings::default().max_depth);
     for bad in ["render.raytrace.max_depth=0", "render.raytrace.max_depth=65", "render.raytrace.cutoff=2"] {
         let e = prism::scene::load(&prism::scene::benchmark_scene_path("sphere_env"), &[bad.to_string()]);
@@ -205,6 +223,9 @@ fn defaults_are_the_reference_s_and_bad_values_are_refused() {
 
 #[test]
 fn its_passes_are_planned_with_their_reasons() {
+    if !common::in_own_process() {
+        return;
+    }
     for (scene, name, what) in [
         ("sphere_env", "refraction_raytrace", "dielectric ball"),
         ("room_mirror", "reflection_raytrace", "mirror/conductor ball"),

@@ -102,6 +102,9 @@ fn b_replaced(tag: &str, b: &str, size: u32) -> impl Fn(&[&str]) -> prism::scene
 
 #[test]
 fn recursion_levels_follow_the_scene() {
+    if !common::in_own_process() {
+        return;
+    }
     let names = |s: &prism::scene::Scene| -> Vec<&'static str> {
         prism::renderer::plan::plan(s).iter().map(|p| p.name).filter(|n| n.contains("nearby")).collect()
     };
@@ -171,6 +174,9 @@ fn recursion_levels_follow_the_scene() {
 ///   breaks worst for a refractive OBJ_k). Reported in docs/scene-format.md.
 #[test]
 fn recursion_against_the_reference_over_ball_a() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = context(false);
     let s = two_balls(SIZE, &[]);
     let mask = ball_a_mask(&s);
@@ -265,6 +271,9 @@ fn recursion_against_the_reference_over_ball_a() {
 /// the floor, wall and box of B's own rectangle set.
 #[test]
 fn ior_one_ball_b_shows_what_lies_behind_it_at_level_one() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = context(false);
     let base = [
         "environment.radiance=1",
@@ -306,6 +315,9 @@ fn ior_one_ball_b_shows_what_lies_behind_it_at_level_one() {
 /// camera in the floor's plane; both balls sharing one centre (O_R O_k of zero length).
 #[test]
 fn recursive_refraction_is_finite_at_the_extremes() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = context(false);
     for extra in [
         &["materials.glass.ior=1.0"][..],
@@ -337,6 +349,9 @@ fn recursive_refraction_is_finite_at_the_extremes() {
 /// copied between them), with the full exit search's front faces.
 #[test]
 fn recursive_refraction_has_no_sync_hazard() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = context(true);
     let s = two_balls(32, &["render.hu_qin.recursion_depth=2", "render.hu_qin.recursive_exit=\"full\""]);
     let mut r = prism::renderer::Renderer::new(&ctx, &s).unwrap();
@@ -354,6 +369,9 @@ fn recursive_refraction_has_no_sync_hazard() {
 /// (tiny textures) with finite radiance and no validation error.
 #[test]
 fn many_dielectrics_keep_the_stated_limits() {
+    if !common::in_own_process() {
+        return;
+    }
     // two_glass_balls' camera, light and materials; its objects replaced by a floor and ten
     // balls in two rows.
     let path = prism::scene::benchmark_scene_path("two_glass_balls");
@@ -409,6 +427,9 @@ fn many_dielectrics_keep_the_stated_limits() {
 /// buy accuracy here; docs/scene-format.md reports it.
 #[test]
 fn exit_of_a_glass_cube_behind_ball_a() {
+    if !common::in_own_process() {
+        return;
+    }
     let cube =
         "name = \"cube_b\"\nmaterial = \"glass\"\nshape = \"box\"\ncenter = [0.5, -0.4, -1.2]\nsize = [1.2, 1.2, 1.2]";
     let load = b_replaced("cube", cube, SIZE);
@@ -488,6 +509,9 @@ fn assert_nearest_no_worse_at_depth_0(what: &str, e_nearest: f64, e_paper: f64) 
 /// A's pixels against the reference (64 spp, no photons), lit by the environment only.
 #[test]
 fn exit_modes_of_a_glass_torus_behind_ball_a() {
+    if !common::in_own_process() {
+        return;
+    }
     let torus = "name = \"torus_b\"\nmaterial = \"glass\"\nshape = \"torus\"\nmajor_radius = 0.5\n\
                  minor_radius = 0.2\nsegments = 64\n\
                  transform = { rotation = [70, 0, 20], translation = [0.5, -0.2, -1.2] }";
@@ -563,6 +587,9 @@ fn exit_modes_of_a_glass_torus_behind_ball_a() {
 /// front faces; the back-facing assumption (§4) reaches the back faces (the base) instead.
 #[test]
 fn front_facing_exits_of_a_glass_cone_behind_ball_a() {
+    if !common::in_own_process() {
+        return;
+    }
     const CONE_SIZE: u32 = 128;
     // Lathe axis +Y turned onto (-0.36, -0.22, 0.9), the base centre -> A's centre direction.
     let cone = "name = \"cone_b\"\nmaterial = \"glass\"\nshape = \"lathe\"\n\

@@ -32,6 +32,9 @@ fn rng(state: &mut u64) -> f32 {
 /// row or group beyond it.
 #[test]
 fn dispatch_covers_every_item_within_the_group_count_limit() {
+    if !common::in_own_process() {
+        return;
+    }
     let spec_minimum = [65_535, 65_535, 65_535];
     for (items, max) in [
         (1u64, spec_minimum),
@@ -58,6 +61,9 @@ fn dispatch_covers_every_item_within_the_group_count_limit() {
 
 #[test]
 fn gpu_bvh_traversal_agrees_exactly_with_brute_force_on_the_bunny() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let s = common::scene("bunny_env", 16, &[]);
     let mut r = reference(&ctx, &s, &settings(1, 0));
@@ -111,6 +117,9 @@ fn refract(i: Vec3, n: Vec3, eta: f32) -> Option<Vec3> {
 
 #[test]
 fn ray_through_a_glass_sphere_matches_snell_twice() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let s = common::scene("sphere_env", 16, &[]);
     let mut r = reference(&ctx, &s, &settings(1, 0));
@@ -145,6 +154,9 @@ fn ray_through_a_glass_sphere_matches_snell_twice() {
 
 #[test]
 fn total_internal_reflection_sets_in_at_the_critical_angle() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let s = common::scene("sphere_env", 16, &[]);
     let mut r = reference(&ctx, &s, &settings(1, 0));
@@ -171,6 +183,9 @@ fn total_internal_reflection_sets_in_at_the_critical_angle() {
 
 #[test]
 fn fresnel_matches_closed_forms() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let s = common::scene("sphere_env", 16, &[]);
     let mut r = reference(&ctx, &s, &settings(1, 0));
@@ -220,6 +235,9 @@ size = [2, 2, 0.3]
 
 #[test]
 fn beer_lambert_through_a_slab() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let s = scene::load_str(SLAB, std::path::Path::new("slab.toml"), &[]).unwrap();
     let mut r = reference(&ctx, &s, &settings(1, 0));
@@ -244,6 +262,9 @@ fn beer_lambert_through_a_slab() {
 /// from its centre, 1/s_i = 2(n-1)/(nR) - 1/s_o (s_o = 3.8, n = 1.5, R = 1: s_i = 2.478).
 #[test]
 fn ball_lens_focus_matches_the_paraxial_formula() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     // Without the floor, so that the rays leave the lens and can be intersected with the axis.
     let s = common::scene("caustic_sphere", 16, &["objects.0.size=[0.001, 0.001]", "objects.0.center=[50, -50, 50]"]);
@@ -276,6 +297,9 @@ fn ball_lens_focus_matches_the_paraxial_formula() {
 /// angle, I * 2 pi (1 - cos theta), sin theta = R / distance.
 #[test]
 fn photon_energy_is_conserved_through_a_clear_sphere() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let s = common::scene("caustic_sphere", 32, &[]);
     let mut r = reference(&ctx, &s, &settings(1, 1 << 16));
@@ -315,6 +339,9 @@ fn photon_energy_is_conserved_through_a_clear_sphere() {
 /// sqrt((1/4 + 1/256) / (1/16 + 1/256)) = 1.96 times the RMSE of 16 spp.
 #[test]
 fn reference_converges_as_one_over_sqrt_samples() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let s = common::scene("sphere_nearby", 32, &[]);
     let render = |spp: u32, seed: u32| {
@@ -335,6 +362,9 @@ fn reference_converges_as_one_over_sqrt_samples() {
 /// count (progressive photon mapping is consistent).
 #[test]
 fn caustics_converge_with_more_photons() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let s = common::scene("caustic_sphere", 32, &[]);
     let caustic = |spp: u32, photons: u64, seed: u32| {
@@ -359,6 +389,9 @@ fn caustics_converge_with_more_photons() {
 
 #[test]
 fn same_seed_same_image() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let s = common::scene("sphere_nearby", 24, &[]);
     let run = || {
@@ -380,6 +413,9 @@ fn same_seed_same_image() {
 /// interior of the disk is about 6.5 W/(m^2 sr), which a 1D trace of the ball lens confirms.
 #[test]
 fn caustic_radiance_is_independent_of_resolution() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let floor_point = |size: u32| {
         let s = common::scene("caustic_sphere", size, &[]);
@@ -646,11 +682,17 @@ fn check_caustic(name: &str, size: u32, overrides: &[&str], spp: u32, photons: u
 // 2^20 photons (17 passes of about 7700 each per iteration).
 #[test]
 fn room_glass_caustic_conserves_the_photons_flux() {
+    if !common::in_own_process() {
+        return;
+    }
     check_caustic("room_glass", 128, &[], 8, 1 << 20, "floor");
 }
 
 #[test]
 fn caustic_sphere_caustic_conserves_the_photons_flux() {
+    if !common::in_own_process() {
+        return;
+    }
     // The scene's camera sees the caustic's centre just past the ball's lower edge, which
     // runs through the caustic; from this lower camera the ray to any point of the caustic
     // disk (radius 0.26) passes under the ball (its lowest point is 0.2 above the floor).
@@ -660,26 +702,41 @@ fn caustic_sphere_caustic_conserves_the_photons_flux() {
 
 #[test]
 fn caustic_bunny_caustic_conserves_the_photons_flux() {
+    if !common::in_own_process() {
+        return;
+    }
     check_caustic("caustic_bunny", 128, &[], 8, 1 << 20, "floor");
 }
 
 #[test]
 fn metal_ring_caustic_conserves_the_photons_flux() {
+    if !common::in_own_process() {
+        return;
+    }
     check_caustic("metal_ring", 128, &[], 8, 1 << 20, "floor");
 }
 
 #[test]
 fn room_mirror_caustic_conserves_the_photons_flux() {
+    if !common::in_own_process() {
+        return;
+    }
     check_caustic("room_mirror", 128, &[], 8, 1 << 20, "floor");
 }
 
 #[test]
 fn sphere_nearby_caustic_conserves_the_photons_flux() {
+    if !common::in_own_process() {
+        return;
+    }
     check_caustic("sphere_nearby", 128, &[], 8, 1 << 20, "floor");
 }
 
 #[test]
 fn two_glass_balls_caustic_conserves_the_photons_flux() {
+    if !common::in_own_process() {
+        return;
+    }
     check_caustic("two_glass_balls", 128, &[], 8, 1 << 20, "floor");
 }
 
@@ -697,6 +754,9 @@ fn two_glass_balls_caustic_conserves_the_photons_flux() {
 /// scene's radius (2.5 footprints at 256^2, `footprint: 0`) spread the rim into it.
 #[test]
 fn caustic_sphere_edge_is_sharp_at_pixel_scale() {
+    if !common::in_own_process() {
+        return;
+    }
     const SIZE: u32 = 256;
     let (light, centre) = (Vec3::new(0.0, 5.0, 0.0), Vec3::new(0.0, 1.2, 0.0));
     let theta_max = (1.0f32 / (light - centre).length()).asin();

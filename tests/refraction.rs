@@ -19,6 +19,9 @@ fn technique(t: &str) -> String {
 /// straight across to the opposite face.
 #[test]
 fn d_n_matches_the_analytic_distance() {
+    if !common::in_own_process() {
+        return;
+    }
     let s = scene("sphere_env", 32, &["objects.0.radius=0.75"]);
     let mesh = &s.objects[0].mesh;
     let start = std::time::Instant::now();
@@ -220,6 +223,9 @@ fn exit_errors(technique: &str, size: u32, extra: &[&str]) -> ExitErrors {
 /// T2 then follows from N2 at that texel.
 #[test]
 fn hu_qin_exit_matches_the_analytic_sphere() {
+    if !common::in_own_process() {
+        return;
+    }
     let e = exit_errors("hu_qin", 64, &[]);
     eprintln!(
         "hu_qin: {} pixels, P2 error max {:.3} / median {:.3} px, T2 error max {:.3} / median {:.3} deg",
@@ -237,6 +243,9 @@ fn hu_qin_exit_matches_the_analytic_sphere() {
 /// loosely (it must land on the right side of the ball).
 #[test]
 fn wyman_exit_is_near_the_analytic_sphere() {
+    if !common::in_own_process() {
+        return;
+    }
     let e = exit_errors("wyman", 64, &[]);
     eprintln!(
         "wyman: {} pixels, P2 error max {:.3} / median {:.3} px, T2 error max {:.3} / median {:.3} deg",
@@ -262,6 +271,9 @@ fn assert_finite(what: &str, hdr: &[f32]) {
 /// neighbours exercise theta_t / theta_i -> 1 and the grazing limits).
 #[test]
 fn every_technique_is_finite_on_every_scene_and_ior() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = context(false);
     for t in TECHNIQUES {
         for name in ["sphere_env", "bunny_env", "bubble_env", "sphere_nearby"] {
@@ -290,6 +302,9 @@ fn every_technique_is_finite_on_every_scene_and_ior() {
 /// not there (as tests/render_scenes.rs checks for the baseline), within the same RMSE.
 #[test]
 fn ior_one_shows_the_environment_unchanged() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = context(false);
     let without = render_on(&ctx, &scene("sphere_env", 64, &["objects.0.radius=0.001"]));
     for t in TECHNIQUES {
@@ -303,6 +318,9 @@ fn ior_one_shows_the_environment_unchanged() {
 /// Golden images at 128^2 (tests/common/mod.rs explains the thresholds).
 #[test]
 fn golden_sphere_env_wyman_and_hu_qin() {
+    if !common::in_own_process() {
+        return;
+    }
     for t in TECHNIQUES {
         let r = render(&scene("sphere_env", 128, &[&technique(t)]));
         assert_golden(&format!("sphere_env_{t}"), &r);
@@ -313,6 +331,9 @@ fn golden_sphere_env_wyman_and_hu_qin() {
 /// every exit is back-facing.
 #[test]
 fn hu_qin_acceleration_agrees_on_a_convex_ball() {
+    if !common::in_own_process() {
+        return;
+    }
     let e = exit_errors("hu_qin", 64, &["render.hu_qin.assume_back_facing=true"]);
     assert!(e.max_p2_pixels <= 1.0, "P2 off by {} pixel footprints", e.max_p2_pixels);
 }
@@ -321,6 +342,9 @@ fn hu_qin_acceleration_agrees_on_a_convex_ball() {
 /// file and line that set it), with a non-zero exit and no output.
 #[test]
 fn bad_parameters_are_clear_errors() {
+    if !common::in_own_process() {
+        return;
+    }
     let dir = std::env::temp_dir().join(format!("prism-refraction-params-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let out = dir.join("out.png");
@@ -365,6 +389,9 @@ fn bad_parameters_are_clear_errors() {
 /// declaration would show here as a hazard.
 #[test]
 fn multi_frame_renders_have_no_sync_hazard() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = context(true);
     for o in [
         ["render.refraction=wyman", "render.wyman.back_surface=\"second\""],
@@ -554,6 +581,9 @@ fn torus_scene(size: u32, ior: f32, extra: &[&str]) -> prism::scene::Scene {
 /// answered "back" finds none of the front exits.
 #[test]
 fn hu_qin_front_facing_exits_match_traced_exits() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = context(false);
     let hu_qin = ["render.refraction=hu_qin", "render.hu_qin.debug=true"];
     let steps = |n: u32| format!("render.hu_qin.search_steps={n}");
@@ -623,6 +653,9 @@ fn depth_complexity(s: &prism::scene::Scene) -> Vec<u32> {
 /// neither is right (the exact ray goes on into the far tube).
 #[test]
 fn wyman_furthest_and_second_surface_on_a_concave_torus() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = context(false);
     let size = 96;
     let wyman = ["render.refraction=wyman", "render.wyman.debug=true"];
@@ -703,6 +736,9 @@ fn masked_rmse(a: &[f32], b: &[f32], mask: &[bool]) -> f64 {
 /// would find the ball's *front* face behind the card and refract at its normal.
 #[test]
 fn wyman_second_surface_is_the_refractors_own_back_face() {
+    if !common::in_own_process() {
+        return;
+    }
     let size = 96u32;
     let card = r#"
         [materials.card]
@@ -752,6 +788,9 @@ fn wyman_second_surface_is_the_refractors_own_back_face() {
 /// lone ball (d~'s interpolation, §3.1).
 #[test]
 fn wyman_back_surfaces_are_the_refractors_own() {
+    if !common::in_own_process() {
+        return;
+    }
     let size = 96u32;
     let balls = r#"
         [[objects]]

@@ -9,6 +9,9 @@ use prism::reference::{Reference, ReferenceSettings};
 
 #[test]
 fn error_single_greater_than_wyman_greater_than_hu_qin() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     for scene_name in ["sphere_env", "bunny_env"] {
         let s = common::scene(scene_name, 96, &[]);
@@ -33,6 +36,9 @@ fn error_single_greater_than_wyman_greater_than_hu_qin() {
 /// fewer pixels may differ from the converged image than with the paper's step.
 #[test]
 fn newton_d_t_step_reaches_the_papers_exit_in_fewer_iterations() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let render = |step: &str, iterations: u32, tolerance: &str| {
         let sets = [

@@ -9,6 +9,9 @@ use prism::scene::BENCHMARK_SCENES;
 
 #[test]
 fn every_benchmark_scene_renders_without_validation_errors_or_nan() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = context(false);
     for name in BENCHMARK_SCENES {
         let s = scene(name, 64, &[]);
@@ -22,6 +25,9 @@ fn every_benchmark_scene_renders_without_validation_errors_or_nan() {
 /// As above, with the techniques each scene file selects (`shipped`) instead of the baseline.
 #[test]
 fn every_benchmark_scene_renders_as_shipped_without_validation_errors_or_nan() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = context(false);
     for name in BENCHMARK_SCENES {
         let r = render_on(&ctx, &shipped(name, 64, &[]));
@@ -36,6 +42,9 @@ fn every_benchmark_scene_renders_as_shipped_without_validation_errors_or_nan() {
 /// flight, so that barriers between frames are checked too.
 #[test]
 fn sync_validation_is_clean_over_frames_in_flight() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = context(true);
     assert!(!ctx.info.validation || ctx.info.sync_validation);
     let s = scene("sphere_nearby", 64, &[]);
@@ -70,6 +79,9 @@ fn pixel_of(s: &prism::scene::Scene, p: Vec3) -> (u32, u32) {
 /// by the baseline).
 #[test]
 fn deferred_lighting_matches_closed_form() {
+    if !common::in_own_process() {
+        return;
+    }
     let s = scene("caustic_sphere", 128, &[]);
     let r = render(&s);
     let (i, j) = pixel_of(&s, Vec3::new(1.8, 0.0, 0.0));
@@ -88,6 +100,9 @@ fn deferred_lighting_matches_closed_form() {
 /// the environment seen without it, up to the Fresnel-free interface).
 #[test]
 fn background_and_ior_one_show_the_environment_unchanged() {
+    if !common::in_own_process() {
+        return;
+    }
     let with = render(&scene("sphere_env", 64, &["materials.glass.ior=1.0"]));
     let without = render(&scene("sphere_env", 64, &["objects.0.radius=0.001"]));
     let rmse = prism::metrics::image::rmse_rgba(&with.hdr, &without.hdr);

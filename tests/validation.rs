@@ -46,6 +46,9 @@ fn two_writes(skip_barrier: bool) -> Option<u64> {
 
 #[test]
 fn missing_barrier_in_a_test_pass_is_reported_by_sync_validation() {
+    if !common::in_own_process() {
+        return;
+    }
     if let Some(errors) = two_writes(true) {
         assert!(errors > 0, "a write-after-write hazard without a barrier must be reported");
     }
@@ -53,6 +56,9 @@ fn missing_barrier_in_a_test_pass_is_reported_by_sync_validation() {
 
 #[test]
 fn the_same_passes_with_the_graph_barriers_are_clean() {
+    if !common::in_own_process() {
+        return;
+    }
     if let Some(errors) = two_writes(false) {
         assert_eq!(errors, 0);
     }
@@ -62,6 +68,9 @@ fn the_same_passes_with_the_graph_barriers_are_clean() {
 /// the test above, run again with the layer search path pointing nowhere).
 #[test]
 fn a_missing_validation_layer_fails_under_ci() {
+    if !common::in_own_process() {
+        return;
+    }
     for ci in ["1", "true", "woodpecker"] {
         let out = std::process::Command::new(std::env::current_exe().unwrap())
             .args(["--exact", "the_same_passes_with_the_graph_barriers_are_clean", "--test-threads", "1"])
@@ -80,6 +89,9 @@ fn a_missing_validation_layer_fails_under_ci() {
 /// renders into an image still in UNDEFINED layout, and the validation layer must say so.
 #[test]
 fn skipped_transition_in_the_renderer_is_reported() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false).unchecked();
     if !ctx.info.validation {
         return;
@@ -98,6 +110,9 @@ fn skipped_transition_in_the_renderer_is_reported() {
 /// once the device is gone and fails the test.
 #[test]
 fn a_leaked_object_is_reported_at_teardown() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     if !ctx.info.validation {
         return;

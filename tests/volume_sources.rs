@@ -67,6 +67,9 @@ const BOX: &str = "[volume]\nbounds = { min = [-1, -1, -1], max = [1, 1, 1] }\n"
 
 #[test]
 fn a_voxelized_sphere_mesh_matches_the_analytic_sphere() {
+    if !common::in_own_process() {
+        return;
+    }
     let obj = write("sphere.obj", &sphere_obj(0.7, 96, 192));
     let res = "resolution = [48, 48, 48]\n";
     let mesh =
@@ -98,6 +101,9 @@ fn a_voxelized_sphere_mesh_matches_the_analytic_sphere() {
 /// the top-left rule counts each crossing once, so the coverage is exact.
 #[test]
 fn scanline_voxelization_is_exact_on_shared_edges() {
+    if !common::in_own_process() {
+        return;
+    }
     let mut m = Mesh::default();
     let c = |x: f32, y: f32, z: f32| glam::Vec3::new(x, y, z);
     m.positions = vec![
@@ -135,6 +141,9 @@ fn scanline_voxelization_is_exact_on_shared_edges() {
 
 #[test]
 fn a_lathe_of_constant_radius_is_a_cylinder() {
+    if !common::in_own_process() {
+        return;
+    }
     let res = "resolution = [40, 40, 40]\n";
     let lathe = fields(&format!(
         "{BOX}{res}[[volume.region]]\nshape = \"lathe\"\ncenter = [0.1, 0, 0]\nprofile = [[0.55, -0.4], [0.55, 0.5]]\nn = 1.5\n"
@@ -157,6 +166,9 @@ fn a_lathe_of_constant_radius_is_a_cylinder() {
 
 #[test]
 fn later_regions_override_earlier_ones() {
+    if !common::in_own_process() {
+        return;
+    }
     let a = "[[volume.region]]\nshape = \"box\"\ncenter = [-0.25, 0, 0]\nsize = [1, 1, 1]\nn = 1.5\nsigma_a = [1, 2, 3]\nemission = 0.5\n";
     let b = "[[volume.region]]\nshape = \"box\"\ncenter = [0.25, 0, 0]\nsize = [1, 1, 1]\nn = [1.3, 1.4, 1.6]\nsigma_s = 4\nhg_g = 0.5\n";
     let res = "resolution = [16, 16, 16]\n";
@@ -196,6 +208,9 @@ fn later_regions_override_earlier_ones() {
 
 #[test]
 fn the_implicit_shapes_have_their_volumes() {
+    if !common::in_own_process() {
+        return;
+    }
     use std::f32::consts::PI;
     let res = "resolution = [40, 40, 40]\n";
     let voxel = (2.0f32 / 40.0).powi(3);
@@ -241,6 +256,9 @@ fn render_volume(ctx: &std::sync::Arc<prism::gpu::GpuContext>, volume: &str, env
 /// gradient, exact on the axis; the measured error is below 1e-4.
 #[test]
 fn fresnel_reflection_at_normal_incidence() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     for n in [1.5f32, 2.4, 1.05] {
         let slab = format!(
@@ -266,6 +284,9 @@ fn fresnel_reflection_at_normal_incidence() {
 /// up to the trilinear interpolation of the 16-bit coefficients (measured < 0.2 %).
 #[test]
 fn emission_adds_emission_times_path_length() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let emitter = "[[volume.region]]\nshape = \"box\"\nsize = [1.2, 1.2, 0.5]\nemission = [0.5, 1, 2]\n";
     let r = render_volume(&ctx, &format!("{BOX}resolution = [40, 40, 40]\n{emitter}"), 0.0, &[]);
@@ -289,6 +310,9 @@ fn emission_adds_emission_times_path_length() {
 /// of a uniform environment of radiance 1 (in-scattering is the light branch's).
 #[test]
 fn rgb_extinction_is_absorption_plus_scattering() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let b = "[[volume.region]]\nshape = \"box\"\nsize = [1.2, 1.2, 0.5]\nsigma_a = [0.5, 1, 0]\nsigma_s = [0, 1, 2]\nhg_g = 0.5\n";
     let l = render_volume(&ctx, &format!("{BOX}resolution = [40, 40, 40]\n{b}"), 1.0, &[]).radiance(16, 16);
@@ -341,6 +365,9 @@ const PRISM_N: [f32; 3] = [1.45, 1.5, 1.6];
 /// rasterized interface is the tilted plane within a quarter voxel.
 #[test]
 fn dispersion_separates_the_channels() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let tilt = 20.0f32;
     let s = prism_scene(PRISM_N, tilt, &[]);
@@ -380,6 +407,9 @@ fn dispersion_separates_the_channels() {
 /// ask for 0, and the environment's seam, reflected, moved these pixels by up to 15 degrees.)
 #[test]
 fn dispersion_matches_snell() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let r = common::render_on(&ctx, &prism_scene(PRISM_N, 20.0, &["render.eikonal.integrator=\"rk4\""]));
     let t = 20.0f64.to_radians();
@@ -406,6 +436,9 @@ fn dispersion_matches_snell() {
 
 #[test]
 fn the_volume_source_scenes_render_without_nan() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(true);
     for name in ["eikonal_wine_glass", "eikonal_amber_bunny", "eikonal_dispersion_cube"] {
         // A coarse initial wavefront (16^2 patches per light instead of one per voxel face):
@@ -427,6 +460,9 @@ fn the_volume_source_scenes_render_without_nan() {
 
 #[test]
 fn extremes_give_no_nan() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = common::context(false);
     let glass = "[[volume.region]]\nshape = \"rounded_box\"\nsize = [1.4, 1.4, 1.4]\nradius = 0.3\nn = 1.5\nsigma_a = [0.1, 0.2, 0.3]\nemission = 0.2\n";
     let cases: Vec<(String, Vec<&str>)> = vec![
@@ -469,6 +505,9 @@ fn extremes_give_no_nan() {
 
 #[test]
 fn invalid_regions_give_clear_errors() {
+    if !common::in_own_process() {
+        return;
+    }
     let open = write("open.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\n");
     let r = |body: &str| format!("{BOX}resolution = [8, 8, 8]\n[[volume.region]]\n{body}\n");
     let cases = [
@@ -512,6 +551,9 @@ fn invalid_regions_give_clear_errors() {
 /// standard deviation 0.003, tolerance 0.01), and through the emissive box it sees E d.
 #[test]
 fn the_reference_traces_the_same_fields() {
+    if !common::in_own_process() {
+        return;
+    }
     use prism::reference::{Reference, ReferenceSettings};
     let ctx = common::context(false);
     // Only the centre matters: 8 x 8 pixels through the middle quarter of the 32 x 32 view's

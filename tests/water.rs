@@ -105,6 +105,9 @@ fn luminance(c: [f32; 3]) -> f64 {
 /// midpoint.
 #[test]
 fn ripples_move_the_checker_edges_by_snells_law() {
+    if !common::in_own_process() {
+        return;
+    }
     let s = common::scene("water_pool", SIZE, &[WATER, CAUSTICS, "materials.pool_floor.checker.b=[0, 0, 0]"]);
     let r = common::render(&s);
     common::assert_finite("water_pool", &r.hdr);
@@ -198,6 +201,9 @@ fn caustic_at(q: DVec3) -> Option<(f64, f64, f64)> {
 /// (tests/caustics.rs: the map's flux over the water).
 #[test]
 fn the_suns_caustic_shows_on_the_floor_through_the_water() {
+    if !common::in_own_process() {
+        return;
+    }
     let uniform = "materials.pool_floor.checker.b=[0.8, 0.8, 0.8]";
     let s = common::scene("water_pool", SIZE, &[WATER, CAUSTICS, uniform]);
     let with = common::render(&s);

@@ -27,6 +27,10 @@ pub fn under_ci() -> bool {
 /// Every GPU test gets its context here, and the returned [`TestContext`] checks the
 /// validation log when it is dropped, teardown included, so no test can forget to.
 pub fn context(sync: bool) -> TestContext {
+    assert!(
+        std::env::var_os(OWN_PROCESS).is_some(),
+        "a GPU test must begin with `if !common::in_own_process() {{ return; }}` (see in_own_process)"
+    );
     let turn = GpuTurn::take();
     let ctx = GpuContext::new(&ContextDesc { validation: true, sync_validation: sync, device: None })
         .expect("cannot create a Vulkan context (is mesa-vulkan-drivers installed?)");
@@ -34,6 +38,48 @@ pub fn context(sync: bool) -> TestContext {
         assert!(ctx.info.validation, "CI is set but VK_LAYER_KHRONOS_validation is not installed");
     }
     TestContext(Some(ctx), Some(turn))
+}
+
+/// Set in the child process that runs one GPU test.
+const OWN_PROCESS: &str = "PRISM_TEST_OWN_PROCESS";
+
+/// Runs the calling test again in a process of its own (this test binary, `--exact` this
+/// test), and returns `false` in the parent once that child passed, `true` in the child,
+/// where the test's body runs. Every GPU test begins with
+/// `if !common::in_own_process() { return; }`, and [`context`] refuses to run anywhere else.
+///
+/// Why: the Khronos validation layer (1.3.239, Debian bookworm) does not survive many
+/// instances and devices in one process. Test binaries died in it three times in about 450
+/// runs of a binary (docs/RELIABILITY.md): a general protection fault and a segfault at
+/// address 8 inside libVkLayer_khronos_validation.so (the kernel log's trap lines; the second
+/// one in an unordered_map lookup, with every GPU test of the binary already serialised by
+/// [`GpuTurn`]), and once a C++ exception thrown through a Vulkan call. The CLI tests, one
+/// `prism` process each, never did. A process per test gives each test a fresh layer (and
+/// fresh loader and driver state), and lets the binary's tests run in parallel again.
+#[must_use]
+pub fn in_own_process() -> bool {
+    if std::env::var_os(OWN_PROCESS).is_some() {
+        return true;
+    }
+    // libtest runs each test on a thread named after it (its full path), whatever the
+    // number of test threads.
+    let name = std::thread::current().name().expect("libtest names each test's thread").to_string();
+    let exe = std::env::current_exe().expect("the test binary's path");
+    let out = std::process::Command::new(exe)
+        .args([name.as_str(), "--exact", "--test-threads=1", "--nocapture"])
+        .env(OWN_PROCESS, "1")
+        .output()
+        .expect("cannot start the test's own process");
+    let (stdout, stderr) = (String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    // The child's output, for `--nocapture` and for a failure's report.
+    print!("{stdout}");
+    eprint!("{stderr}");
+    assert!(
+        out.status.success() && stdout.contains("test result: ok. 1 passed"),
+        "{name} in its own process: {} (its output is above)",
+        out.status
+    );
+    false
 }
 
 /// One GPU test at a time in a test binary. The Khronos validation layer (1.3.239, Debian
