@@ -4,8 +4,9 @@
 //! refractions at planes. With the oracle on, Wyman's exit equals it to float precision, and
 //! its image equals the exact tracer's up to the one thing Wyman's model leaves out at two
 //! interfaces, the Fresnel reflection at the exit.
-//! Hu & Qin 2007's (`render.hu_qin.oracle`) and the distance impostors' `Hit()`
-//! (`render.impostor.oracle`) are checked for independence from the search they replace.
+//! Hu & Qin 2007's (`render.hu_qin.oracle`), the distance impostors' `Hit()`
+//! (`render.impostor.oracle`) and caustics mapping's receiver estimate
+//! (`render.caustics_map.oracle`) are checked for independence from the search they replace.
 mod common;
 
 use common::{context, render_on};
@@ -405,4 +406,58 @@ fn impostor_hit_oracle_is_independent_of_the_search() {
     eprintln!("values that Hit()'s refinement steps change: paper's Hit() {paper}, hit oracle {oracle}");
     assert!(paper > 0, "the search changes nothing here: the test shows nothing");
     assert_eq!(oracle, 0, "the hit oracle depends on Hit()'s search");
+}
+
+/// The caustic map (flux per texel, every layer) of caustic_sphere with caustics mapping and
+/// `extra` overrides, and its total flux (W, green).
+fn caustic_map(ctx: &std::sync::Arc<prism::gpu::GpuContext>, extra: &[&str]) -> (Vec<[f32; 4]>, f64) {
+    let mut o = vec!["render.caustics=caustics_map"];
+    o.extend_from_slice(extra);
+    let mut r = Renderer::new(ctx, &common::scene("caustic_sphere", 32, &o)).expect("renderer");
+    r.render_frame().expect("frame");
+    let (map, _) = r.read_caustic_map().expect("readback").expect("a caustic map");
+    drop(r);
+    common::assert_no_validation_errors(ctx);
+    assert!(map.iter().flatten().all(|v| v.is_finite()), "{extra:?}: a caustic-map texel is not finite");
+    let flux = map.iter().map(|v| f64::from(v[1])).sum();
+    (map, flux)
+}
+
+/// The receiver oracle (`render.caustics_map.oracle = "receiver"`): on caustic_sphere, the
+/// rays leaving the glass ball meet the floor at points the estimate of Shah et al. 2007
+/// (§III.C, Eq. 1-2) approaches iteration by iteration, so its iteration count moves the
+/// splats: 0 iterations (the receiver straight along the light ray) and 8 give different
+/// caustic maps. With the oracle every ray's hit is the exact tracer's, so 0 and 8
+/// iterations, and the appendix's Newton-Raphson (Eq. 4-5) in place of Eq. 1-2, must give the
+/// same map bit for bit: any splat the estimate still placed would differ. And the oracle
+/// places the flux rather than dropping it: every ray the ball transmits reaches the floor,
+/// so the map holds the closed form of tests/caustics.rs (the light's flux through the
+/// ball's solid angle times the two surfaces' Fresnel transmittance) within the same 2%
+/// (the tessellated ball's grazing rays, whose exit ends in spurious total internal
+/// reflection, are the grid's and the exit's, which the oracle keeps).
+#[test]
+fn caustics_map_receiver_oracle_is_independent_of_the_estimate() {
+    let ctx = context(false);
+    let differing =
+        |a: &[[f32; 4]], b: &[[f32; 4]]| a.iter().flatten().zip(b.iter().flatten()).filter(|(x, y)| x != y).count();
+    let render = |oracle: &str, newton: &str, iterations: u32| {
+        let o = format!("render.caustics_map.oracle=\"{oracle}\"");
+        let n = format!("render.caustics_map.newton=\"{newton}\"");
+        let it = format!("render.caustics_map.iterations={iterations}");
+        caustic_map(&ctx, &[o.as_str(), n.as_str(), it.as_str()])
+    };
+    let paper = differing(&render("none", "approximate", 0).0, &render("none", "approximate", 8).0);
+    let (exact, flux) = render("receiver", "approximate", 0);
+    let oracle = differing(&exact, &render("receiver", "approximate", 8).0);
+    let oracle_newton = differing(&exact, &render("receiver", "true", 8).0);
+    let expected = common::sphere_transmitted_flux(50.0, 3.8, 1.0, 1.5);
+    eprintln!(
+        "caustic-map values that the receiver estimate's iterations change: paper's estimate {paper}, \
+         receiver oracle {oracle} (newton = true: {oracle_newton}); oracle flux {flux:.4} W, closed form \
+         {expected:.4} W"
+    );
+    assert!(paper > 0, "the estimate's iterations change nothing here: the test shows nothing");
+    assert_eq!(oracle, 0, "the receiver oracle depends on the estimate's iterations");
+    assert_eq!(oracle_newton, 0, "the receiver oracle depends on the estimate's Newton-Raphson");
+    assert!((flux / expected - 1.0).abs() < 0.02, "oracle flux {flux} W, expected {expected} W");
 }
