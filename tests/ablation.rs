@@ -6,7 +6,8 @@
 //! interfaces, the Fresnel reflection at the exit.
 //! Hu & Qin 2007's (`render.hu_qin.oracle`), the distance impostors' `Hit()`
 //! (`render.impostor.oracle`) and caustics mapping's receiver estimate
-//! (`render.caustics_map.oracle`) are checked for independence from the search they replace.
+//! (`render.caustics_map.oracle`) are checked for independence from the search they replace;
+//! caustics mapping's also against CPU-traced hits on two flat mirrors.
 mod common;
 
 use common::{context, render_on};
