@@ -91,6 +91,7 @@ bool receiver(GpuCausticFace f, vec3 x, out vec3 r, out float g) {
 // (it leaves the scene). The grid, the exit point and direction (light_path, as
 // render.caustics_map.exit says), the flux and the splat are the paper's: only the receiver
 // estimate's error is removed, and its parameters (iterations, newton) no longer matter.
+// With splat = "footprint" the neighbours' hits that size a splat (landing) are exact too.
 bool intersect(GpuCausticFace f, vec3 o, vec3 dir, out vec3 hit) {
     hit = vec3(0.0);
     vec3 p = o;
