@@ -4,8 +4,10 @@
 //! refractions at planes. With the oracle on, Wyman's exit equals it to float precision, and
 //! its image equals the exact tracer's up to the one thing Wyman's model leaves out at two
 //! interfaces, the Fresnel reflection at the exit.
-//! Hu & Qin 2007's (`render.hu_qin.oracle`) and the distance impostors' `Hit()`
-//! (`render.impostor.oracle`) are checked for independence from the search they replace.
+//! Hu & Qin 2007's (`render.hu_qin.oracle`), the distance impostors' `Hit()`
+//! (`render.impostor.oracle`) and caustics mapping's receiver estimate
+//! (`render.caustics_map.oracle`) are checked for independence from the search they replace;
+//! caustics mapping's also against CPU-traced hits on two flat mirrors.
 mod common;
 
 use common::{context, render_on};
@@ -62,7 +64,12 @@ fn ray(s: &Scene, x: f32, y: f32) -> (Vec3, Vec3) {
 
 /// Nearest hit of o + t d (t > 1e-4) on the box's triangles: (t, outward unit face normal).
 fn hit(s: &Scene, o: Vec3, d: Vec3) -> Option<(f32, Vec3)> {
-    let m = &s.objects[0].mesh;
+    hit_mesh(&s.objects[0].mesh, o, d)
+}
+
+/// Nearest hit of o + t d (t > 1e-4) on `m`'s triangles: (t, unit face normal on the side
+/// its normals point to).
+fn hit_mesh(m: &prism::scene::Mesh, o: Vec3, d: Vec3) -> Option<(f32, Vec3)> {
     let mut best: Option<(f32, Vec3)> = None;
     for t in m.indices.chunks_exact(3) {
         let [a, b, c] = [0, 1, 2].map(|k| m.positions[t[k] as usize]);
@@ -420,4 +427,243 @@ fn impostor_hit_oracle_is_independent_of_the_search() {
     eprintln!("values that Hit()'s refinement steps change: paper's Hit() {paper}, hit oracle {oracle}");
     assert!(paper > 0, "the search changes nothing here: the test shows nothing");
     assert_eq!(oracle, 0, "the hit oracle depends on Hit()'s search");
+}
+
+/// The caustic map (flux per texel, every layer) of scene `name` with caustics mapping and
+/// `extra` overrides, and its total flux (W, green).
+fn caustic_map(ctx: &std::sync::Arc<prism::gpu::GpuContext>, name: &str, extra: &[&str]) -> (Vec<[f32; 4]>, f64) {
+    let mut o = vec!["render.caustics=caustics_map"];
+    o.extend_from_slice(extra);
+    let mut r = Renderer::new(ctx, &common::scene(name, 32, &o)).expect("renderer");
+    r.render_frame().expect("frame");
+    let (map, _) = r.read_caustic_map().expect("readback").expect("a caustic map");
+    drop(r);
+    common::assert_no_validation_errors(ctx);
+    assert!(map.iter().flatten().all(|v| v.is_finite()), "{extra:?}: a caustic-map texel is not finite");
+    let flux = map.iter().map(|v| f64::from(v[1])).sum();
+    (map, flux)
+}
+
+/// The receiver oracle (`render.caustics_map.oracle = "receiver"`): on caustic_sphere, the
+/// rays leaving the glass ball meet the floor at points the estimate of Shah et al. 2007
+/// (§III.C, Eq. 1-2) approaches iteration by iteration, so its iteration count moves the
+/// splats: 0 iterations (the receiver straight along the light ray) and 8 give different
+/// caustic maps. With the oracle every ray's hit is the exact tracer's, so 0 and 8
+/// iterations, and the appendix's Newton-Raphson (Eq. 4-5) in place of Eq. 1-2, must give the
+/// same map bit for bit: any splat the estimate still placed would differ. And the oracle
+/// places the flux rather than dropping it: every ray the ball transmits reaches the floor,
+/// so the map holds the closed form of tests/caustics.rs (the light's flux through the
+/// ball's solid angle times the two surfaces' Fresnel transmittance) within the same 2%
+/// (the tessellated ball's grazing rays, whose exit ends in spurious total internal
+/// reflection, are the grid's and the exit's, which the oracle keeps).
+#[test]
+fn caustics_map_receiver_oracle_is_independent_of_the_estimate() {
+    let ctx = context(false);
+    let differing =
+        |a: &[[f32; 4]], b: &[[f32; 4]]| a.iter().flatten().zip(b.iter().flatten()).filter(|(x, y)| x != y).count();
+    let render = |oracle: &str, newton: &str, iterations: u32| {
+        let o = format!("render.caustics_map.oracle=\"{oracle}\"");
+        let n = format!("render.caustics_map.newton=\"{newton}\"");
+        let it = format!("render.caustics_map.iterations={iterations}");
+        caustic_map(&ctx, "caustic_sphere", &[o.as_str(), n.as_str(), it.as_str()])
+    };
+    let paper = differing(&render("none", "approximate", 0).0, &render("none", "approximate", 8).0);
+    let (exact, flux) = render("receiver", "approximate", 0);
+    let oracle = differing(&exact, &render("receiver", "approximate", 8).0);
+    let oracle_newton = differing(&exact, &render("receiver", "true", 8).0);
+    let expected = common::sphere_transmitted_flux(50.0, 3.8, 1.0, 1.5);
+    eprintln!(
+        "caustic-map values that the receiver estimate's iterations change: paper's estimate {paper}, \
+         receiver oracle {oracle} (newton = true: {oracle_newton}); oracle flux {flux:.4} W, closed form \
+         {expected:.4} W"
+    );
+    assert!(paper > 0, "the estimate's iterations change nothing here: the test shows nothing");
+    assert_eq!(oracle, 0, "the receiver oracle depends on the estimate's iterations");
+    assert_eq!(oracle_newton, 0, "the receiver oracle depends on the estimate's Newton-Raphson");
+    assert!((flux / expected - 1.0).abs() < 0.02, "oracle flux {flux} W, expected {expected} W");
+}
+
+/// The receiver oracle on the other caustic scenes, whose rays pass through or reflect off
+/// specular objects of other kinds before they meet a receiver: caustic_bunny (a concave
+/// absorbing dielectric, rays that meet the bunny again), metal_ring (a conductor, reflected
+/// rays that meet the ring again), water_pool (a directional light and a single refracting
+/// surface, absorption over the distance to the hit). Each map is finite and free of
+/// validation errors (in `caustic_map`), and the oracle places flux rather than dropping
+/// every ray.
+#[test]
+fn caustics_map_receiver_oracle_renders_every_caustic_scene() {
+    let ctx = context(false);
+    for name in ["caustic_bunny", "metal_ring", "water_pool"] {
+        let (_, paper) = caustic_map(&ctx, name, &[]);
+        let (_, oracle) = caustic_map(&ctx, name, &["render.caustics_map.oracle=\"receiver\""]);
+        eprintln!("{name}: caustic-map flux, paper's estimate {paper:.4} W, receiver oracle {oracle:.4} W");
+        assert!(oracle > 0.0, "{name}: the receiver oracle drops every ray");
+    }
+}
+
+/// A square mirror standing upright (normal -x) at x = 0 over a diffuse floor (y = 0), lit
+/// by a directional light travelling along (1, -1, 0) / sqrt 2: the mirror sends the light
+/// down along (-1, -1, 0) / sqrt 2, onto the floor at x = -y of the mirror point. A second,
+/// lying mirror at y = 0.3 crosses part of that reflected light on its way to the floor and
+/// sends its own light up along (1, 1, 0) / sqrt 2 through the upright one, into the sky:
+/// neither mirror is a receiver. The two do not overlap as the light sees them, nor shade
+/// each other. Flat surfaces only, so the rasterized refractor layers hold the tracer's
+/// planes exactly.
+fn mirror_scene(overrides: &[&str]) -> Scene {
+    let text = r#"
+        [camera]
+        position = [-3, 3, 3]
+        target = [-1, 0.5, 0]
+        vfov_deg = 50
+        width = 32
+        height = 32
+        [environment]
+        type = "constant"
+        radiance = 0
+        [[lights]]
+        type = "directional"
+        direction = [1, -1, 0]
+        irradiance = 2
+        [materials.floor]
+        type = "diffuse"
+        albedo = 0.8
+        [materials.mirror]
+        type = "mirror"
+        reflectance = 0.9
+        [[objects]]
+        name = "floor"
+        material = "floor"
+        shape = "quad"
+        center = [0, 0, 0]
+        size = [8, 8]
+        normal = [0, 1, 0]
+        [[objects]]
+        name = "mirror"
+        material = "mirror"
+        shape = "quad"
+        center = [0, 1, 0.1]
+        size = [1, 1]
+        normal = [-1, 0, 0]
+        [[objects]]
+        name = "low_mirror"
+        material = "mirror"
+        shape = "quad"
+        center = [-0.6, 0.3, 0.1]
+        size = [0.6, 1]
+        normal = [0, 1, 0]
+    "#;
+    let mut o: Vec<String> = prism::scene::BASELINE.iter().map(|s| s.to_string()).collect();
+    o.push("render.caustics=caustics_map".to_string());
+    o.extend(overrides.iter().map(|s| s.to_string()));
+    prism::scene::load_str(text, std::path::Path::new("oracle_mirror.toml"), &o).unwrap()
+}
+
+/// The closed form of the receiver oracle's caustic map on [`mirror_scene`], traced on the
+/// CPU: every grid vertex of the light's source face (src/technique/caustics/caustics_map.rs
+/// `source_faces`: an orthographic box of half-side 1.02 r around the bounding sphere (c, r)
+/// of the specular objects' box, its eye 2 of those half-sides before c, G^2 texels) whose
+/// light ray meets a mirror reflects there and meets the floor (passing through the other
+/// mirror); the splat lands where the
+/// light's orthographic map (src/frame/gpu_scene.rs `lights`: half-side 1.01 R around the
+/// bounding sphere (C, R) of every object and the camera, eye R before C) sees that point.
+/// Every vertex carries the same flux (E times the texel's area times the reflectance,
+/// Eq. 6 in physical units), so the map's flux-weighted centroid is the plain mean of those
+/// points, in map texels; returns it, the number of vertices that reach the floor and the
+/// source face's half-side.
+fn mirror_caustic_centroid(s: &Scene, grid: u32, map_size: u32) -> (glam::DVec2, usize, f32) {
+    use glam::Mat4;
+    let dir = Vec3::new(1.0, -1.0, 0.0).normalize();
+    let look = |centre: Vec3, half: f32, back: f32, depth: f32| {
+        let eye = centre - dir * back;
+        let up = if dir.y.abs() > 0.99 { Vec3::Z } else { Vec3::Y };
+        Mat4::orthographic_rh(-half, half, -half, half, 0.0, depth) * Mat4::look_at_rh(eye, eye + dir, up)
+    };
+    let bounds = |points: &mut dyn Iterator<Item = Vec3>| {
+        let (lo, hi) = points
+            .fold((Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)), |(lo, hi), p| (lo.min(p), hi.max(p)));
+        ((lo + hi) * 0.5, (hi - lo).length() * 0.5)
+    };
+    let (mirrors, floor) = ([&s.objects[1].mesh, &s.objects[2].mesh], &s.objects[0].mesh);
+    let (c, r) = bounds(&mut mirrors.iter().flat_map(|m| m.positions.iter().copied()));
+    let source = look(c, r * 1.02, 2.0 * r * 1.02, 4.0 * r * 1.02).inverse();
+    let all = s.objects.iter().flat_map(|o| o.mesh.positions.iter().copied());
+    let (big_c, big_r) = bounds(&mut all.chain(std::iter::once(s.camera.position)));
+    let map = look(big_c, big_r * 1.01, big_r * 1.01, 2.0 * big_r * 1.01);
+    let (mut sum, mut n) = (glam::DVec2::ZERO, 0);
+    for j in 0..grid {
+        for i in 0..grid {
+            // The texel centre's ray through the source face (NDC z 0: its near plane).
+            let ndc = (glam::Vec2::new(i as f32, j as f32) + 0.5) / grid as f32 * 2.0 - 1.0;
+            let o = source.project_point3(ndc.extend(0.0));
+            let first = mirrors.iter().filter_map(|m| hit_mesh(m, o, dir)).min_by(|a, b| a.0.total_cmp(&b.0));
+            let Some((t, normal)) = first else { continue };
+            let p1 = o + t * dir;
+            let reflected = dir - 2.0 * dir.dot(normal) * normal;
+            let Some((t2, _)) = hit_mesh(floor, p1, reflected) else { continue };
+            let clip = map.project_point3(p1 + t2 * reflected);
+            sum += ((glam::Vec2::new(clip.x, clip.y) * 0.5 + 0.5) * map_size as f32).as_dvec2();
+            n += 1;
+        }
+    }
+    (sum / n.max(1) as f64, n, r * 1.02)
+}
+
+/// The receiver oracle's splats against CPU-traced hits: on [`mirror_scene`] the caustic
+/// map's flux-weighted centroid (layer 0, the directional light's map) equals the mean of the
+/// closed-form floor hits of the grid vertices that see a mirror, projected into the map.
+/// Tolerance 0.05 map texels: float rounding of metre-sized positions is 1e-4 texel (a
+/// texel is 2.02 R / 512, about 2 cm); a splat's window (offsets within 3.5 sigma of its
+/// centre, sigma 1 texel) holds at most one tail texel on one side only, which moves that
+/// splat's centroid by at most 3.0 exp(-4.5) / 2.5 = 0.013 texel; and a vertex whose texel
+/// centre lies on the mirror's edge to float precision, which the rasterizer and the CPU
+/// may count differently, moves the mean of the 3500 vertices by at most its distance from
+/// the centroid (the floor patch is under 1.5 m, 65 texels, across) over 3500, 0.02 texel:
+/// the bound leaves room for one or two such vertices, which only chance puts on an edge.
+/// The paper's estimate without iterations puts the receiver straight along
+/// the light ray from the upright mirror (at x = +y instead of -y), 2 y metres along x, which
+/// the map sees foreshortened by cos 45 degrees: tens of texels off. The check fails if the
+/// oracle stops at the other mirror (which the positions map of §III.B leaves out, as it
+/// leaves out every specular object) or if the paper's estimate still runs.
+/// The map's total flux is the closed form of those vertices: each carries E (2 h / G)^2
+/// times the reflectance (h the source face's half-side); within 1e-3 (f32 sums over thousands
+/// of splats, 1e-6, and a vertex counted differently at an edge, 1 / 3500 = 3e-4 each).
+#[test]
+fn caustics_map_receiver_oracle_splats_land_on_traced_hits() {
+    let ctx = context(false);
+    let centroid = |overrides: &[&str]| {
+        let s = mirror_scene(overrides);
+        let mut r = Renderer::new(&ctx, &s).expect("renderer");
+        r.render_frame().expect("frame");
+        let (map, size) = r.read_caustic_map().expect("readback").expect("a caustic map");
+        drop(r);
+        common::assert_no_validation_errors(&ctx);
+        let (mut sum, mut flux) = (glam::DVec2::ZERO, 0.0);
+        for (k, t) in map[..(size * size) as usize].iter().enumerate() {
+            let at = glam::DVec2::new((k as u32 % size) as f64 + 0.5, (k as u32 / size) as f64 + 0.5);
+            sum += f64::from(t[1]) * at;
+            flux += f64::from(t[1]);
+        }
+        (sum / flux, flux, s, size)
+    };
+    let (oracle, flux, s, size) = centroid(&["render.caustics_map.oracle=\"receiver\""]);
+    let params = prism::scene::techniques::CausticsMapParams::from_settings(&s.render).unwrap();
+    let (expected, vertices, half) = mirror_caustic_centroid(&s, params.grid, size);
+    // E = 2 W/m^2, reflectance 0.9 (mirror_scene).
+    let texel = 2.0 * f64::from(half) / f64::from(params.grid);
+    let expected_flux = vertices as f64 * 2.0 * texel * texel * 0.9;
+    let (paper, _, _, _) = centroid(&["render.caustics_map.iterations=0"]);
+    eprintln!(
+        "mirror caustic centroid (map texels): receiver oracle {oracle:.4} ({flux:.4} W), CPU-traced {expected:.4} \
+         ({vertices} vertices, {expected_flux:.4} W), paper's estimate with 0 iterations {paper:.4}"
+    );
+    assert!(vertices > 1000, "the mirror covers {vertices} grid vertices: the test shows little");
+    assert!(
+        (oracle - expected).abs().max_element() < 0.05,
+        "the oracle's splats are not the traced hits: {oracle} vs {expected}"
+    );
+    assert!((flux / expected_flux - 1.0).abs() < 1e-3, "oracle flux {flux} W, closed form {expected_flux} W");
+    assert!(
+        (paper - expected).abs().max_element() > 10.0,
+        "the paper's estimate is exact here: the test shows nothing"
+    );
 }

@@ -1,8 +1,9 @@
 //! `prism ablation`: where an image-space refraction technique's error comes from. The
 //! technique is measured with each of its approximations replaced, one at a time, by the
 //! exact tracer's value (`render.wyman.oracle`, `render.hu_qin.oracle`; for the distance
-//! impostors, `render.impostor.oracle`, `Hit()` alone), and with all of them replaced, in one
-//! interleaved run against one cached reference. A step's share of the error is the error it
+//! impostors, `render.impostor.oracle`, `Hit()` alone; for caustics mapping,
+//! `render.caustics_map.oracle`, the receiver estimate alone), and with all of them replaced,
+//! in one interleaved run against one cached reference. A step's share of the error is the error it
 //! removes when made exact (error of the paper's technique minus error with that step exact);
 //! what remains with every step exact is the model's structural error (two interfaces, no
 //! internal reflection, Fresnel at P1 only). The shares need not add up: the steps interact
@@ -16,14 +17,16 @@ use super::compare::{cached_reference, MeasureArgs};
 use super::equaltime::{measure_interleaved, reference_noise, Noise, Setting};
 use super::output::{self, Outputs};
 use super::{check_validation, GpuArgs, SceneArgs};
-use crate::scene::techniques::{HuQinOracle, ImpostorOracle, WymanOracle};
+use crate::scene::techniques::{CausticsMapOracle, HuQinOracle, ImpostorOracle, WymanOracle};
 
 #[derive(Args, Debug)]
 pub struct AblationArgs {
     #[command(flatten)]
     pub scene: SceneArgs,
-    /// The technique whose approximations are replaced: wyman, hu_qin or impostor (the
-    /// distance impostors' reflection and refraction, whose `Hit()` is replaced).
+    /// The technique whose approximations are replaced: wyman, hu_qin, impostor (the
+    /// distance impostors' reflection and refraction, whose `Hit()` is replaced) or
+    /// caustics_map (Shah et al.'s caustics, whose receiver estimate is replaced; the scene's
+    /// refraction stays, and the reference traces its photons as `prism compare`'s does).
     #[arg(long, default_value = "wyman")]
     pub technique: String,
     /// Also write the table as JSON to this file.
@@ -76,7 +79,8 @@ pub fn oracle_values(technique: &str) -> Result<Vec<&'static str>> {
         "wyman" => Ok(WymanOracle::NAMES.to_vec()),
         "hu_qin" => Ok(HuQinOracle::NAMES.to_vec()),
         "impostor" => Ok(ImpostorOracle::NAMES.to_vec()),
-        _ => bail!("--technique {technique}: the oracle ablation knows wyman, hu_qin and impostor"),
+        "caustics_map" => Ok(CausticsMapOracle::NAMES.to_vec()),
+        _ => bail!("--technique {technique}: the oracle ablation knows wyman, hu_qin, impostor and caustics_map"),
     }
 }
 
@@ -146,7 +150,13 @@ pub fn run(args: AblationArgs) -> Result<()> {
     let mut scenes = Vec::new();
     for v in &values {
         let mut sa = args.scene.clone();
-        sa.set.push(format!("render.refraction={}", args.technique));
+        if args.technique == "caustics_map" {
+            // A caustics technique: the scene's refraction and reflection draw the specular
+            // objects as before, and only the caustic map changes between the rows.
+            sa.set.push("render.caustics=caustics_map".to_string());
+        } else {
+            sa.set.push(format!("render.refraction={}", args.technique));
+        }
         if args.technique == "impostor" {
             // The distance impostors serve mirrors and conductors too (§3).
             sa.set.push("render.reflection=impostor".to_string());
@@ -207,5 +217,6 @@ mod tests {
         assert!(oracle_values("single").is_err());
         assert_eq!(oracle_values("hu_qin").unwrap().last(), Some(&"all"));
         assert_eq!(oracle_values("impostor").unwrap(), ["none", "hit"]);
+        assert_eq!(oracle_values("caustics_map").unwrap(), ["none", "receiver"]);
     }
 }

@@ -75,8 +75,8 @@ pub enum Command {
     /// Measure every combination of parameter values: CSV, and error against time plots.
     Sweep(sweep::SweepArgs),
     /// Where a technique's error comes from: its approximations replaced one at a time by the
-    /// exact tracer's values (render.wyman.oracle, render.hu_qin.oracle), a table of each one's
-    /// share of the error.
+    /// exact tracer's values (render.wyman.oracle, render.hu_qin.oracle, render.impostor.oracle,
+    /// render.caustics_map.oracle), a table of each one's share of the error.
     Ablation(ablation::AblationArgs),
     /// Regenerate docs/ACCURACY.md: every technique and setting's time and error, with plots.
     Report(report::ReportArgs),

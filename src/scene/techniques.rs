@@ -573,6 +573,24 @@ choice! {
 }
 
 choice! {
+    /// Whether an oracle replaces caustics mapping's receiver estimate (Shah et al. 2007
+    /// §III.C, Eq. 1-2: where a grid vertex's refracted or reflected ray meets the receivers,
+    /// iterated on the receivers' positions map) by the exact closest hit of the same ray
+    /// against the diffuse receivers (glsl/reference/trace.glsl; an analysis tool, as
+    /// [`WymanOracle`]: `prism ablation` measures how much of the error the estimate causes).
+    CausticsMapOracle, hint "an analysis tool: the receiver estimate of Shah et al. 2007 §III.C \
+                             replaced by the exact tracer's hit" {
+        /// The paper's technique.
+        None = "none",
+        /// The receiver hit of every grid vertex's ray (Eq. 1-2, or the appendix's Eq. 4-5
+        /// with `newton = "true"`) replaced by the ray's exact closest hit on a diffuse
+        /// surface; `iterations` and `newton` then change nothing. The grid, the exit through
+        /// the specular object (`exit`), the flux and the splats stay the paper's.
+        Receiver = "receiver",
+    }
+}
+
+choice! {
     /// How caustics mapping estimates where a refracted or reflected ray meets the receivers
     /// (Shah et al. 2007, §III.C-D).
     Newton, hint "Shah et al. 2007: the approximate iteration of §III.C or the appendix's" {
@@ -920,6 +938,10 @@ params! {
         // The point is 2 ceil(3 sigma) + 1 texels wide: 16 keeps it at 97, within lavapipe's
         // point-size range, and its fill cost bounded.
         max_splat_sigma: f32 = 8.0, 0.5..=16.0;
+        /// An analysis tool: `"receiver"` replaces the receiver estimate (§III.C) by the exact
+        /// hit of the same ray (binds the exact tracer; default `"none"`, as
+        /// `render.wyman.oracle`).
+        oracle: CausticsMapOracle = CausticsMapOracle::None;
     }
 
     /// `[render.photon_buffer]`: photon-buffer caustics (Hu & Qin 2007 §3,

@@ -18,7 +18,11 @@
 //!    refracts or reflects, estimates the receiver hit with the approximate (§III.C, Eq. 1-2)
 //!    or true (appendix, Eq. 4-5) Newton-Raphson iteration, weighs the vertex's flux
 //!    (Eq. 6-7) and picks the atlas layer the hit lands in. With an RGB ior each vertex does
-//!    this once per channel (dispersion, Fig. 13).
+//!    this once per channel (dispersion, Fig. 13). With `oracle = "receiver"` (an analysis
+//!    tool, [`CausticsMapOracle`]) the pass runs glsl/caustics/splat_hits_oracle.comp, which
+//!    replaces the receiver estimate by the exact tracer's closest diffuse hit of the same ray
+//!    (its buffers in set 1, src/technique/refraction/oracle.rs), so that `prism ablation
+//!    --technique caustics_map` measures the estimate's share of the error.
 //! 4. `caustics_map` (§III.F): the records drawn as Gaussian point sprites with additive
 //!    blending into the caustic-map atlas, each into its own layer: six cube faces per point
 //!    light ("environment caustic map"), the orthographic map for a directional light. The
@@ -39,11 +43,12 @@ use crate::gpu::{
     Image, ImageDesc, ImageViewKind, MemoryLocation, OcclusionQueryPool, RenderTarget, Sampler, SamplerDesc, Spec,
 };
 use crate::graph::{Bindings, BoundSet, BufferId, Frame, ImageId};
-use crate::scene::techniques::{CausticExit, CausticsMapParams, Flux, Newton, SplatSize};
+use crate::scene::techniques::{CausticExit, CausticsMapOracle, CausticsMapParams, Flux, Newton, SplatSize};
 use crate::scene::{Light, Material, Scene};
 pub use crate::shader_structs::GpuCausticFace;
 use crate::shader_structs::{CausticDrawPush, CausticHitsPush, GpuCausticSplat, RefractorPush, ShadowPush};
 use crate::technique::baseline::shadow_map::FAR_DISTANCE;
+use crate::technique::refraction::oracle::Oracle;
 use crate::technique::refraction::refraction_wyman::scene_distance_along_normals_timed;
 use crate::technique::{
     caustic_objects, in_stage, list, params, record_kept, registration, FrameInputs, PlannedPass, Regeneration,
@@ -96,9 +101,12 @@ fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
 }
 
 impl Technique for CausticsMapPass {
-    /// Wyman 2005 §3.1's d_N for the `exit = "wyman"` estimate (computed whatever the exit).
+    /// Wyman 2005 §3.1's d_N for the `exit = "wyman"` estimate (computed whatever the exit),
+    /// and the oracle's tracer geometry when `oracle = "receiver"`.
     fn once_costs(&self) -> Vec<crate::technique::OnceCost> {
-        vec![crate::technique::refraction::refraction_wyman::d_n_cost(self.refractors.d_n_ms)]
+        let mut costs = vec![crate::technique::refraction::refraction_wyman::d_n_cost(self.refractors.d_n_ms)];
+        costs.extend(self.oracle.as_ref().map(|(o, _)| o.cost()));
+        costs
     }
 
     fn record<'a>(&'a self, _: Stage, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>) {
@@ -133,8 +141,14 @@ impl Technique for CausticsMapPass {
 
         self.refractors.record(frame, scene);
 
-        frame.pass(CAUSTICS_MAP_HITS).uses(&self.hits_set).record(move |cmd| {
-            cmd.compute(&self.hits_pipeline, &[self.hits_set.set()], &self.hits_push, self.hits_groups);
+        let mut hits = frame.pass(CAUSTICS_MAP_HITS).uses(&self.hits_set);
+        if let Some((_, tracer)) = &self.oracle {
+            hits = hits.uses(tracer);
+        }
+        hits.record(move |cmd| {
+            let mut sets = vec![self.hits_set.set()];
+            sets.extend(self.oracle.as_ref().map(|(_, t)| t.set()));
+            cmd.compute(&self.hits_pipeline, &sets, &self.hits_push, self.hits_groups);
         });
         let pass = frame.pass(CAUSTICS_MAP).uses(&self.splat_set);
         pass.write(targets.caustic.flux_id, Access::ColorAttachment).record(move |cmd| {
@@ -267,6 +281,8 @@ pub struct CausticsMapPass {
     hits_pipeline: ComputePipeline,
     hits_push: CausticHitsPush,
     hits_groups: [u32; 3],
+    /// `oracle = "receiver"`: the exact tracer and its set 1 of the hits pass.
+    oracle: Option<(Oracle, BoundSet)>,
     // Splats: a framebuffer per caustic-atlas layer.
     splat_target: RenderTarget,
     splat_set: BoundSet,
@@ -281,6 +297,10 @@ pub struct CausticsMapPass {
 impl CausticsMapPass {
     pub fn new(s: &mut Setup<'_>) -> Result<Self, RenderError> {
         let params = params("caustics_map", CausticsMapParams::from_settings(&s.scene.render))?;
+        let oracle = match params.oracle {
+            CausticsMapOracle::None => None,
+            CausticsMapOracle::Receiver => Some(Oracle::new(s)?),
+        };
         use vk::ImageUsageFlags as U;
         let (ctx, scene, gpu, targets) = (s.ctx, s.scene, s.gpu, s.targets);
         let size = params.map_size;
@@ -420,11 +440,25 @@ impl CausticsMapPass {
             .storage(CAUSTIC_BINDING_SPLATS, &splats)
             .access(splats_id, Access::ComputeWrite)
             .build(ctx, CAUSTICS_MAP_HITS)?;
+        let oracle = match oracle {
+            // Host-written once at creation: visible at submission.
+            Some(o) => {
+                let set = o
+                    .buffers(gpu)
+                    .into_iter()
+                    .fold(Bindings::new(vk::ShaderStageFlags::COMPUTE), |b, (i, buffer)| b.storage(i, buffer))
+                    .build(ctx, &format!("{CAUSTICS_MAP_HITS}_tracer"))?;
+                Some((o, set))
+            }
+            None => None,
+        };
+        let mut hits_layouts = vec![hits_set.layout()];
+        hits_layouts.extend(oracle.as_ref().map(|(_, t)| t.layout()));
         let hits_pipeline = ComputePipeline::new(
             ctx,
             CAUSTICS_MAP_HITS,
-            "caustics/splat_hits.comp",
-            &[hits_set.layout()],
+            if oracle.is_some() { "caustics/splat_hits_oracle.comp" } else { "caustics/splat_hits.comp" },
+            &hits_layouts,
             std::mem::size_of::<CausticHitsPush>() as u32,
             // Eq. 6's flux weight, the exit estimate of double-surface refraction, and the
             // splats' size.
@@ -496,6 +530,7 @@ impl CausticsMapPass {
             hits_pipeline,
             hits_push,
             hits_groups,
+            oracle,
             splat_target,
             splat_set,
             splat_pipeline,

@@ -1,10 +1,13 @@
 //! The oracles of the image-space refraction techniques (`render.wyman.oracle`,
-//! `render.hu_qin.oracle`) and of the distance impostors (`render.impostor.oracle`): an
-//! analysis tool that replaces a technique's approximate intermediates by the exact tracer's
-//! (`prism ablation`). The oracle variants of the shading passes (glsl/refraction/*_oracle.frag,
-//! glsl/impostor/*_oracle.frag, ORACLE_TRACE defined) include the reference's intersection
-//! code (glsl/reference/trace.glsl) with its buffers in a set 2 of their own: REF_BINDING_*
-//! would meet the G-buffer's, the layers' and the impostors' bindings in set 1.
+//! `render.hu_qin.oracle`), of the distance impostors (`render.impostor.oracle`) and of
+//! caustics mapping (`render.caustics_map.oracle`): an analysis tool that replaces a
+//! technique's approximate intermediates by the exact tracer's (`prism ablation`). The oracle
+//! variants of the shading passes (glsl/refraction/*_oracle.frag, glsl/impostor/*_oracle.frag,
+//! ORACLE_TRACE defined) include the reference's intersection code
+//! (glsl/reference/trace.glsl) with its buffers in a set 2 of their own: REF_BINDING_* would
+//! meet the G-buffer's, the layers' and the impostors' bindings in set 1. Caustics mapping's
+//! hits pass (glsl/caustics/splat_hits_oracle.comp) has one set of its own and binds them in
+//! set 1.
 use std::rc::Rc;
 
 use crate::frame::gpu_scene::GpuScene;
