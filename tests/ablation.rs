@@ -458,6 +458,9 @@ fn caustic_map(ctx: &std::sync::Arc<prism::gpu::GpuContext>, name: &str, extra: 
 /// reflection, are the grid's and the exit's, which the oracle keeps).
 #[test]
 fn caustics_map_receiver_oracle_is_independent_of_the_estimate() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = context(false);
     let differing =
         |a: &[[f32; 4]], b: &[[f32; 4]]| a.iter().flatten().zip(b.iter().flatten()).filter(|(x, y)| x != y).count();
@@ -492,6 +495,9 @@ fn caustics_map_receiver_oracle_is_independent_of_the_estimate() {
 /// every ray.
 #[test]
 fn caustics_map_receiver_oracle_renders_every_caustic_scene() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = context(false);
     for name in ["caustic_bunny", "metal_ring", "water_pool"] {
         let (_, paper) = caustic_map(&ctx, name, &[]);
@@ -629,6 +635,9 @@ fn mirror_caustic_centroid(s: &Scene, grid: u32, map_size: u32) -> (glam::DVec2,
 /// of splats, 1e-6, and a vertex counted differently at an edge, 1 / 3500 = 3e-4 each).
 #[test]
 fn caustics_map_receiver_oracle_splats_land_on_traced_hits() {
+    if !common::in_own_process() {
+        return;
+    }
     let ctx = context(false);
     let centroid = |overrides: &[&str]| {
         let s = mirror_scene(overrides);
