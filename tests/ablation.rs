@@ -22,31 +22,12 @@ const IOR: f32 = 1.5;
 /// refracted rays leave through several: P2~ (Wyman §3.1) lands on the wrong back face near
 /// the box's edges, so the exit normal of §3.2 is wrong there. Grid environment.
 fn box_scene(overrides: &[&str]) -> Scene {
-    let text = format!(
-        r#"
-        [camera]
-        position = [0, 0, 4]
-        target = [0, 0, 0]
-        vfov_deg = 40
-        width = {SIZE}
-        height = {SIZE}
-        [environment]
-        type = "grid"
-        [materials.glass]
-        type = "dielectric"
-        ior = {IOR}
-        [[objects]]
-        name = "box"
-        material = "glass"
+    let object = r#"name = "box"
         shape = "box"
         center = [0, 0, 0]
         size = [1.6, 1.2, 1.0]
-        transform = {{ rotation = [25, 35, 0] }}
-    "#
-    );
-    let mut o: Vec<String> = prism::scene::BASELINE.iter().map(|s| s.to_string()).collect();
-    o.extend(overrides.iter().map(|s| s.to_string()));
-    prism::scene::load_str(&text, std::path::Path::new("oracle_box.toml"), &o).unwrap()
+        transform = { rotation = [25, 35, 0] }"#;
+    common::glass_scene(SIZE, [0.0, 0.0, 4.0], IOR, object, overrides)
 }
 
 /// The camera ray through image point (x, y) in pixels (pixel (i, j)'s centre is

@@ -120,35 +120,21 @@ fn wyman_exits(
     extra: &str,
     back_surface: &str,
 ) -> (prism::scene::Scene, Vec<f32>, Vec<f32>) {
-    let text = format!(
-        r#"
-        [camera]
-        position = [0, 0, 4]
-        target = [0, 0, 0]
-        vfov_deg = 40
-        width = {size}
-        height = {size}
-        [environment]
-        type = "grid"
-        [materials.glass]
-        type = "dielectric"
-        ior = 1.5
-        [[objects]]
-        name = "ball"
-        material = "glass"
+    let object = format!(
+        r#"name = "ball"
         shape = "sphere"
         center = [0, 0, 0]
         radius = 1
-        {extra}
-    "#
+        {extra}"#
     );
-    let mut o: Vec<String> = prism::scene::BASELINE.iter().map(|s| s.to_string()).collect();
-    o.extend(
-        ["render.refraction=wyman".to_string(), "render.wyman.debug=true".to_string()]
-            .into_iter()
-            .chain([format!("render.wyman.back_surface=\"{back_surface}\"")]),
+    let back = format!("render.wyman.back_surface=\"{back_surface}\"");
+    let s = common::glass_scene(
+        size,
+        [0.0, 0.0, 4.0],
+        1.5,
+        &object,
+        &["render.refraction=wyman", "render.wyman.debug=true", &back],
     );
-    let s = prism::scene::load_str(&text, std::path::Path::new("wyman.toml"), &o).unwrap();
     let mut r = Renderer::new(ctx, &s).unwrap();
     r.render_frame().unwrap();
     let p2 = r.read_target("refraction_wyman_p2").unwrap().unwrap();
@@ -534,33 +520,15 @@ fn hu_qin_decisions(s: &prism::scene::Scene, ctx: &common::TestContext) -> Decis
 
 /// A glass torus seen from above its plane: a concave refractor with depth complexity four.
 fn torus_scene(size: u32, ior: f32, extra: &[&str]) -> prism::scene::Scene {
-    let text = format!(
-        r#"
-        [camera]
-        position = [0, 1.1, 3.4]
-        target = [0, 0, 0]
-        vfov_deg = 40
-        width = {size}
-        height = {size}
-        [environment]
-        type = "grid"
-        [materials.glass]
-        type = "dielectric"
-        ior = {ior}
-        [[objects]]
-        name = "torus"
-        material = "glass"
+    let object = r#"name = "torus"
         shape = "torus"
         center = [0, 0, 0]
         major_radius = 0.8
         minor_radius = 0.35
-        segments = 96
-    "#
-    );
-    let mut o: Vec<String> = prism::scene::BASELINE.iter().map(|s| s.to_string()).collect();
-    o.extend(["render.refraction=hu_qin", "render.hu_qin.debug=true"].iter().map(|s| s.to_string()));
-    o.extend(extra.iter().map(|s| s.to_string()));
-    prism::scene::load_str(&text, std::path::Path::new("torus.toml"), &o).unwrap()
+        segments = 96"#;
+    let mut o = vec!["render.refraction=hu_qin", "render.hu_qin.debug=true"];
+    o.extend(extra);
+    common::glass_scene(size, [0.0, 1.1, 3.4], ior, object, &o)
 }
 
 /// Hu & Qin §2.1.2 (Figs. 5-7): the front/back exit decision, against exits traced on the

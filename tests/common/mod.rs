@@ -186,6 +186,35 @@ pub fn assert_clean_teardown(ctx: TestContext) {
     drop(ctx);
 }
 
+/// One glass object of index `ior` alone in the `grid` environment, seen at `size`^2 from
+/// `camera` looking at the origin (40 degrees vertical field of view): `object` holds the
+/// rest of its `[[objects]]` table (name, shape and its keys; the material is "glass"). The
+/// baseline techniques (scene::BASELINE), then `overrides`.
+pub fn glass_scene(size: u32, camera: [f32; 3], ior: f32, object: &str, overrides: &[&str]) -> Scene {
+    let [x, y, z] = camera;
+    let text = format!(
+        r#"
+        [camera]
+        position = [{x}, {y}, {z}]
+        target = [0, 0, 0]
+        vfov_deg = 40
+        width = {size}
+        height = {size}
+        [environment]
+        type = "grid"
+        [materials.glass]
+        type = "dielectric"
+        ior = {ior}
+        [[objects]]
+        material = "glass"
+        {object}
+    "#
+    );
+    let mut o: Vec<String> = scene::BASELINE.iter().map(|s| s.to_string()).collect();
+    o.extend(overrides.iter().map(|s| s.to_string()));
+    scene::load_str(&text, std::path::Path::new("glass.toml"), &o).unwrap()
+}
+
 /// A bundled scene at `size`^2 with the baseline techniques (`prism::scene::BASELINE`:
 /// refraction, reflection and caustics "single", "single", "none"), then `overrides`. The
 /// scene files select better techniques; starting from the baseline, a test measures what
