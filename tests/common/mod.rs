@@ -56,8 +56,16 @@ const OWN_PROCESS: &str = "PRISM_TEST_OWN_PROCESS";
 /// [`GpuTurn`]), and once a C++ exception thrown through a Vulkan call. The CLI tests, one
 /// `prism` process each, never did. A process per test gives each test a fresh layer (and
 /// fresh loader and driver state), and lets the binary's tests run in parallel again.
+///
+/// A child killed by a signal (a crash, not a failed assertion, which exits with status
+/// 101) is run once more, and the crash is reported on stderr: a C++ exception thrown
+/// through a Vulkan call also came in a process holding a single context (tests/eikonal_light.rs,
+/// in the sixth run of a loop of the suite; docs/RELIABILITY.md), from a C++ library under the
+/// Vulkan calls (the layer, or LLVM in lavapipe), not from a test's assertions. A test that
+/// crashes twice fails.
 #[must_use]
 pub fn in_own_process() -> bool {
+    use std::os::unix::process::ExitStatusExt;
     if std::env::var_os(OWN_PROCESS).is_some() {
         return true;
     }
@@ -65,11 +73,26 @@ pub fn in_own_process() -> bool {
     // number of test threads.
     let name = std::thread::current().name().expect("libtest names each test's thread").to_string();
     let exe = std::env::current_exe().expect("the test binary's path");
-    let out = std::process::Command::new(exe)
-        .args([name.as_str(), "--exact", "--test-threads=1", "--nocapture"])
-        .env(OWN_PROCESS, "1")
-        .output()
-        .expect("cannot start the test's own process");
+    let run = || {
+        std::process::Command::new(&exe)
+            .args([name.as_str(), "--exact", "--test-threads=1", "--nocapture"])
+            .env(OWN_PROCESS, "1")
+            .output()
+            .expect("cannot start the test's own process")
+    };
+    let mut out = run();
+    if let Some(signal) = out.status.signal() {
+        // Straight to the process's stderr, which libtest does not capture: the crash shows in
+        // the log even when the second run passes.
+        let notice = format!(
+            "{name}: its process was killed by signal {signal} (a crash, not a failed assertion); \
+             running it once more. Its output:\n{}{}\n",
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let _ = std::io::Write::write_all(&mut std::io::stderr(), notice.as_bytes());
+        out = run();
+    }
     let (stdout, stderr) = (String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
     // The child's output, for `--nocapture` and for a failure's report.
     print!("{stdout}");
