@@ -49,20 +49,18 @@ const OWN_PROCESS: &str = "PRISM_TEST_OWN_PROCESS";
 /// `if !common::in_own_process() { return; }`, and [`context`] refuses to run anywhere else.
 ///
 /// Why: the Khronos validation layer (1.3.239, Debian bookworm) does not survive many
-/// instances and devices in one process. Test binaries died in it three times in about 450
-/// runs of a binary (docs/RELIABILITY.md): a general protection fault and a segfault at
-/// address 8 inside libVkLayer_khronos_validation.so (the kernel log's trap lines; the second
-/// one in an unordered_map lookup, with every GPU test of the binary already serialised by
-/// [`GpuTurn`]), and once a C++ exception thrown through a Vulkan call. The CLI tests, one
-/// `prism` process each, never did. A process per test gives each test a fresh layer (and
-/// fresh loader and driver state), and lets the binary's tests run in parallel again.
+/// instances and devices in one process: test binaries died inside
+/// libVkLayer_khronos_validation.so (a general protection fault, and a segfault in an
+/// unordered_map lookup with every GPU test of the binary serialised by [`GpuTurn`]), while
+/// the CLI tests, one `prism` process each, never did (docs/RELIABILITY.md). A process per
+/// test gives each test a fresh layer (and fresh loader and driver state), and lets the
+/// binary's tests run in parallel.
 ///
 /// A child killed by a signal (a crash, not a failed assertion, which exits with status
 /// 101) is run once more, and the crash is reported on stderr: a C++ exception thrown
-/// through a Vulkan call also came in a process holding a single context (tests/eikonal_light.rs,
-/// in the sixth run of a loop of the suite; docs/RELIABILITY.md), from a C++ library under the
-/// Vulkan calls (the layer, or LLVM in lavapipe), not from a test's assertions. A test that
-/// crashes twice fails.
+/// through a Vulkan call can also end a process that holds a single context, from a C++
+/// library under the Vulkan calls (the layer, or LLVM in lavapipe), not from a test's
+/// assertions (docs/RELIABILITY.md). A test that crashes twice fails.
 #[must_use]
 pub fn in_own_process() -> bool {
     use std::os::unix::process::ExitStatusExt;
