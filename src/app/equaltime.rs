@@ -8,9 +8,10 @@
 //!   the same image: its cost knob is `max_depth`, the specular interactions per branch, and
 //!   its curve runs over `--exact-depths`;
 //! - the reference itself (src/reference) at increasing samples per pixel where `raytrace`
-//!   cannot: when the setting renders caustics, which `raytrace` does not compute. Its time is
-//!   the wall-clock time of its iterations alone (setup excluded; each submission waits on
-//!   its fence), which on lavapipe is the same CPU time the GPU timestamps measure.
+//!   cannot: when the setting renders caustics or a graded-index volume, which `raytrace` does
+//!   not ([`source_for`]). Its time is the wall-clock time of its iterations alone (setup
+//!   excluded; each submission waits on its fence), which on lavapipe is the same CPU time the
+//!   GPU timestamps measure.
 //!
 //! The exact points are timed interleaved with the settings, in one run
 //! ([`measure_interleaved`], the round-robin of `prism bench --versus`,
@@ -49,7 +50,7 @@ pub struct ExactArgs {
     #[arg(long, value_delimiter = ',', default_value = "1,2,4,16")]
     pub exact_depths: Vec<u32>,
     /// Samples per pixel of the reference's curve, used instead of `raytrace` when the setting
-    /// renders caustics (which `raytrace` does not compute).
+    /// renders caustics or a volume (which `raytrace` does not).
     #[arg(long, value_delimiter = ',', default_value = "1,2,4,8")]
     pub exact_spp: Vec<u32>,
     /// Frames timed per point of the exact curve (after one warm-up frame). A raytraced
@@ -67,7 +68,8 @@ pub struct ExactArgs {
 pub enum ExactSource {
     /// The `raytrace` technique at increasing `max_depth`.
     Raytrace,
-    /// The reference at increasing samples per pixel (the setting renders caustics).
+    /// The reference at increasing samples per pixel (the setting renders caustics or a
+    /// graded-index volume).
     Reference,
 }
 
@@ -75,7 +77,9 @@ impl ExactSource {
     pub fn describe(self) -> &'static str {
         match self {
             ExactSource::Raytrace => "raytrace (exact, deterministic splitting) at increasing max_depth",
-            ExactSource::Reference => "the reference at increasing samples per pixel (raytrace has no caustics)",
+            ExactSource::Reference => {
+                "the reference at increasing samples per pixel (raytrace renders no caustics and no volume)"
+            }
         }
     }
 }
@@ -151,9 +155,12 @@ pub fn reference_noise(
     Ok(Noise { between_references: m })
 }
 
-/// Whether a setting's techniques can be replaced by `raytrace` (it has no caustics).
+/// Whether a setting's techniques can be replaced by `raytrace`: it renders no caustics and
+/// no graded-index volume. `raytrace` traces the pixels the G-buffer gives to specular
+/// objects, and a `[volume]` is drawn by the eikonal technique over pixels that are not
+/// (with its caustic on the floor): only the reference renders all of that exactly.
 pub fn source_for(scene: &Scene) -> ExactSource {
-    if scene.render.caustics == "none" {
+    if scene.render.caustics == "none" && scene.volume.is_none() {
         ExactSource::Raytrace
     } else {
         ExactSource::Reference
@@ -510,6 +517,22 @@ mod tests {
         let at = c.error_at("rmse", 40.0).unwrap().error;
         let expect = (0.1f64.ln() + 0.5 * (0.05f64.ln() - 0.1f64.ln())).exp();
         assert!((at - expect).abs() < 1e-12, "{at} vs {expect}");
+    }
+
+    /// The bundled scenes' exact tracer: `raytrace` only where it renders everything the
+    /// techniques do (no caustics and no graded-index volume).
+    #[test]
+    fn the_reference_is_the_exact_tracer_of_caustics_and_volumes() {
+        let load = |name: &str, set: &[&str]| {
+            let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
+            crate::scene::load(&crate::scene::benchmark_scene_path(name), &set).unwrap()
+        };
+        assert_eq!(source_for(&load("sphere_env", &[])), ExactSource::Raytrace);
+        assert_eq!(source_for(&load("room_mirror", &["render.caustics=none"])), ExactSource::Raytrace);
+        assert_eq!(source_for(&load("caustic_sphere", &["render.caustics=caustics_map"])), ExactSource::Reference);
+        for volume in ["eikonal_sphere", "eikonal_amber_bunny"] {
+            assert_eq!(source_for(&load(volume, &["render.caustics=none"])), ExactSource::Reference, "{volume}");
+        }
     }
 
     #[test]
