@@ -189,6 +189,8 @@ pub fn curve_spec(scene_args: &SceneArgs, measure_args: &MeasureArgs, exact: &Ex
                     "render.refraction=raytrace".to_string(),
                     "render.reflection=raytrace".to_string(),
                     format!("render.raytrace.max_depth={d}"),
+                    // The setting renders no caustics: neither does its exact counterpart.
+                    "render.raytrace.photons_per_frame=0".to_string(),
                 ]);
                 let scene = sa.load().with_context(|| format!("exact curve, raytrace max_depth={d}"))?;
                 spec.raytrace.push((format!("max_depth={d}"), scene));

@@ -22,31 +22,53 @@
 //!   included, so a branch dropped inside a dielectric of index n would have carried at most
 //!   `cutoff * n^2` out of it).
 //!
-//! Not computed: the caustics (light reaching a diffuse surface through specular chains),
-//! which the reference gathers from photons; they stay out of this technique. Graded-index
-//! volumes are crossed as the reference crosses them (glsl/reference/volume.glsl).
+//! Caustics (light reaching a diffuse surface through specular chains) come from the
+//! reference's photons, traced anew every frame: where the scene has a light, a specular
+//! object and a diffuse receiver and `photons_per_frame` > 0, the pass is preceded by a
+//! reset of the photon grid's heads and counter and by the reference's photon kernel
+//! (glsl/reference/photons.comp, its buffers and its hashed grid, a new iteration each
+//! frame), and every diffuse vertex a branch reaches adds the photons' radiance estimate
+//! within `gather_radius` pixel footprints (Jensen's photon-map estimate over the grid walk of
+//! the reference's SPPM gather, glsl/reference/photon_grid.glsl). With a fixed radius the
+//! estimate is biased by the blur over that disk and noisy as one frame's photons are; the
+//! frames' mean converges to the caustic averaged over the disk. Graded-index volumes are
+//! crossed as the reference crosses them (glsl/reference/volume.glsl).
 //!
 //! It composites like the other techniques of its stage: a full-screen pass over the HDR
 //! image that keeps every pixel not of its objects. The tracer's buffers are built once per
 //! geometry and kept in the technique cache, so a moved camera or light re-creates only the
-//! uniforms and the pass.
+//! uniforms, the photon buffers and the passes. With both `refraction` and `reflection` set to
+//! `"raytrace"` each of the two techniques traces its own photons.
 use std::rc::Rc;
 
-use crate::gpu::{Buffer, Spec};
-use crate::graph::Frame;
-use crate::reference::TraceGeometry;
+use crate::gpu::{vk, Access, Buffer, ComputePipeline, MemoryLocation, Sampler, SamplerDesc, Spec};
+use crate::graph::{Bindings, BoundSet, BufferId, Frame};
+use crate::reference::{dispatch_size, initial_stats, photon_targets, TraceGeometry};
 use crate::scene::techniques::RaytraceParams;
 use crate::scene::Scene;
+use crate::shader_structs::RefPush;
 use crate::technique::baseline::fullscreen::{fragment_set, FullscreenDesc, FullscreenPass};
 use crate::technique::baseline::specular_single::Mode;
 use crate::technique::{
-    dielectric_names, list, metal_names, params, tables_and_placement, FrameInputs, Inputs, PlannedPass, Registration,
-    RenderError, Setup, Stage, Technique,
+    dielectric_names, diffuse_names, list, metal_names, params, tables_and_placement, FrameInputs, Inputs, PlannedPass,
+    Registration, RenderError, Setup, Stage, Technique,
 };
 use crate::*;
 
 pub const REFRACTION_RAYTRACE: &str = "refraction_raytrace";
 pub const REFLECTION_RAYTRACE: &str = "reflection_raytrace";
+/// Each mode's photon passes: the grid's reset, then the photon kernel.
+pub const REFRACTION_PHOTON_RESET: &str = "refraction_raytrace_photon_reset";
+pub const REFRACTION_PHOTONS: &str = "refraction_raytrace_photons";
+pub const REFLECTION_PHOTON_RESET: &str = "reflection_raytrace_photon_reset";
+pub const REFLECTION_PHOTONS: &str = "reflection_raytrace_photons";
+
+/// The grid's empty bucket (photon_grid.glsl's END_OF_LIST).
+const END_OF_PHOTON_LIST: u32 = u32::MAX;
+
+/// The photon kernel's seed: not the reference's (1 by default), so that a test comparing
+/// the two compares independent photons.
+const PHOTON_SEED: u32 = 0x5eed_ca05;
 
 /// `render.refraction = "raytrace"`: the dielectrics, traced exactly.
 pub const REFRACTION: Registration = Registration {
@@ -80,6 +102,8 @@ const _: () = {
         REF_BINDING_SPHERES,
         REF_BINDING_OBJECTS,
         REF_BINDING_VOLUME,
+        REF_BINDING_PHOTONS,
+        REF_BINDING_GRID,
     ];
     let mut i = 0;
     while i < tracer.len() {
@@ -87,6 +111,13 @@ const _: () = {
         i += 1;
     }
 };
+
+/// Whether the technique traces photons for `scene`: a light, a diffuse receiver and a
+/// photon budget (its objects are the specular casters), as the caustics techniques decide.
+fn has_caustics(scene: &Scene) -> bool {
+    let photons = RaytraceParams::from_settings(&scene.render).map_or(0, |p| p.photons_per_frame);
+    photons > 0 && !scene.lights.is_empty() && !diffuse_names(scene).is_empty()
+}
 
 fn plan(scene: &Scene, mode: Mode) -> Vec<(Stage, PlannedPass)> {
     let (objects, selected, stage, name, what) = match mode {
@@ -101,14 +132,66 @@ fn plan(scene: &Scene, mode: Mode) -> Vec<(Stage, PlannedPass)> {
         return Vec::new();
     }
     let effect = if mode == Mode::Refraction { "refraction" } else { "reflection" };
-    vec![(
+    let mut passes = Vec::new();
+    if has_caustics(scene) {
+        let (reset, photons) = photon_pass_names(mode);
+        let why = format!(
+            "caustics on {} seen through {} (render.raytrace.photons_per_frame)",
+            list(&diffuse_names(scene)),
+            list(&objects)
+        );
+        passes.push((stage, PlannedPass::new(reset, format!("photon grid reset: {why}"))));
+        passes.push((stage, PlannedPass::new(photons, format!("photons from the lights: {why}"))));
+    }
+    passes.push((
         stage,
         PlannedPass::new(name, format!("{what} {} traced exactly (render.{effect} = \"raytrace\")", list(&objects))),
-    )]
+    ));
+    passes
+}
+
+fn photon_pass_names(mode: Mode) -> (&'static str, &'static str) {
+    match mode {
+        Mode::Refraction => (REFRACTION_PHOTON_RESET, REFRACTION_PHOTONS),
+        Mode::Reflection => (REFLECTION_PHOTON_RESET, REFLECTION_PHOTONS),
+    }
+}
+
+/// The photons of one frame: the reference's photon kernel (glsl/reference/photons.comp) with
+/// its buffers, in set 0 as the reference binds them.
+struct PhotonPass {
+    reset: &'static str,
+    trace: &'static str,
+    pipeline: ComputePipeline,
+    set: BoundSet,
+    groups: [u32; 3],
+    grid_id: BufferId,
+    counters: Buffer,
+    counters_id: BufferId,
+    /// The kernel's records of every photon (flux and outcome, where it was deposited) and
+    /// the loop canary's counts: written, never read here.
+    _debug: Buffer,
+    _stats: Buffer,
+    _sampler: Sampler,
+}
+
+/// The photon map one frame's photons are gathered from: the photons and the grid's heads.
+/// Without caustics both are a stand-in of one element, bound but never read
+/// (ref.photon.x = 0).
+struct PhotonMap {
+    photons: Buffer,
+    photons_id: BufferId,
+    grid: Buffer,
+    grid_id: BufferId,
 }
 
 struct Raytrace {
     pass: FullscreenPass,
+    /// This frame's photons, where the scene has caustics.
+    photon_pass: Option<PhotonPass>,
+    map: PhotonMap,
+    /// Frames begun: the photon kernel's iteration, so that every frame traces new photons.
+    frame: u32,
     // Bound in the pass's set 1.
     _uniforms: Buffer,
     geometry: Rc<crate::technique::Timed<TraceGeometry>>,
@@ -123,9 +206,52 @@ fn create(s: &mut Setup<'_>, mode: Mode) -> Result<Box<dyn Technique>, RenderErr
         Mode::Refraction => (REFRACTION_RAYTRACE, SPECULAR_MODE_REFRACTION),
         Mode::Reflection => (REFLECTION_RAYTRACE, SPECULAR_MODE_REFLECTION),
     };
-    let uniforms = geometry.uniforms(scene, s.gpu, p.max_depth).with_cutoff(p.cutoff);
+    let mut uniforms = geometry.uniforms(scene, s.gpu, p.max_depth).with_cutoff(p.cutoff);
+    let caustics = has_caustics(scene);
+    let count = if caustics { p.photons_per_frame } else { 0 };
+    // The reference's photon map for `count` photons (src/reference/mod.rs, Reference::new):
+    // a table of twice as many buckets, at least 4096; the largest radius 1% of the scene's
+    // radius (the reference's initial radius) and cells twice that, so that a gathering disk
+    // overlaps at most 2x2x2 cells (photon_grid.glsl).
+    let table = (2 * count.max(1)).next_power_of_two().max(1 << 12);
+    let cap = 0.01 * s.gpu.bounds_radius.max(1e-20);
+    if caustics {
+        let targets = photon_targets(scene)?;
+        uniforms.counts[2] = targets.len() as u32;
+        uniforms.targets[..targets.len()].copy_from_slice(&targets);
+    }
+    uniforms.photon[0] = count;
+    uniforms.photon[1] = count.max(1);
+    uniforms.photon[2] = table;
+    uniforms.grid[0] = 2.002 * cap;
+    uniforms.grid[1] = cap;
+    uniforms.grid[2] = p.gather_radius;
     let uniforms = Buffer::storage(ctx, &format!("{name}_uniforms"), std::slice::from_ref(&uniforms))?;
-    // Host-written once at creation (the graph tracks images only): visible at submission.
+
+    use vk::BufferUsageFlags as U;
+    let photons = Buffer::new(
+        ctx,
+        &format!("{name}_photon_list"),
+        count.max(1) as u64 * 48,
+        U::STORAGE_BUFFER,
+        MemoryLocation::GpuOnly,
+    )?;
+    let grid = Buffer::new(
+        ctx,
+        &format!("{name}_photon_grid"),
+        if caustics { table as u64 * 4 } else { 4 },
+        U::STORAGE_BUFFER | U::TRANSFER_DST,
+        MemoryLocation::GpuOnly,
+    )?;
+    let map = PhotonMap {
+        photons_id: s.graph.register_buffer(&photons),
+        grid_id: s.graph.register_buffer(&grid),
+        photons,
+        grid,
+    };
+    let photon_pass = if caustics { Some(photon_pass(s, mode, &uniforms, &map, geometry, count)?) } else { None };
+
+    // The uniforms are host-written once at creation: visible at submission.
     let targets = s.targets;
     let mut set = fragment_set()
         .sampled(BINDING_GBUF_ALBEDO, &targets.gbuf_albedo, s.nearest)
@@ -133,7 +259,11 @@ fn create(s: &mut Setup<'_>, mode: Mode) -> Result<Box<dyn Technique>, RenderErr
         .sampled(BINDING_GBUF_DEPTH, &targets.depth, s.nearest)
         .read(targets.depth_id)
         .storage(REF_BINDING_UNIFORMS, &uniforms)
-        .storage(REF_BINDING_VERTICES, &s.gpu.vertices);
+        .storage(REF_BINDING_VERTICES, &s.gpu.vertices)
+        .storage(REF_BINDING_PHOTONS, &map.photons)
+        .read(map.photons_id)
+        .storage(REF_BINDING_GRID, &map.grid)
+        .read(map.grid_id);
     for (binding, buffer) in geometry.buffers() {
         set = set.storage(binding, buffer);
     }
@@ -144,12 +274,98 @@ fn create(s: &mut Setup<'_>, mode: Mode) -> Result<Box<dyn Technique>, RenderErr
         set,
         s.frame_layout,
     )?;
-    Ok(Box::new(Raytrace { pass, _uniforms: uniforms, geometry: timed }))
+    Ok(Box::new(Raytrace { pass, photon_pass, map, frame: 0, _uniforms: uniforms, geometry: timed }))
+}
+
+/// The reference's photon kernel over `map`, `count` photons a frame.
+fn photon_pass(
+    s: &mut Setup<'_>,
+    mode: Mode,
+    uniforms: &Buffer,
+    map: &PhotonMap,
+    geometry: &TraceGeometry,
+    count: u32,
+) -> Result<PhotonPass, RenderError> {
+    use vk::BufferUsageFlags as U;
+    let ctx = s.ctx;
+    let (reset, trace) = photon_pass_names(mode);
+    let counters = Buffer::new(
+        ctx,
+        &format!("{trace}_counters"),
+        16,
+        U::STORAGE_BUFFER | U::TRANSFER_DST,
+        MemoryLocation::GpuOnly,
+    )?;
+    // (flux, outcome) and the deposit's position of every photon (photons.comp).
+    let debug =
+        Buffer::new(ctx, &format!("{trace}_debug"), 2 * count as u64 * 16, U::STORAGE_BUFFER, MemoryLocation::GpuOnly)?;
+    let stats = Buffer::storage(ctx, &format!("{trace}_stats"), &initial_stats())?;
+    let sampler = Sampler::new(ctx, &format!("{trace}_latlong"), SamplerDesc::LATLONG)?;
+    let counters_id = s.graph.register_buffer(&counters);
+    let (debug_id, stats_id) = (s.graph.register_buffer(&debug), s.graph.register_buffer(&stats));
+    let mut bindings = Bindings::new(vk::ShaderStageFlags::COMPUTE)
+        .storage(REF_BINDING_UNIFORMS, uniforms)
+        .storage(REF_BINDING_MATERIALS, &s.gpu.materials)
+        .sampled(REF_BINDING_ENVIRONMENT, &s.gpu.environment, &sampler)
+        .read(s.gpu.environment_id)
+        .storage(REF_BINDING_VERTICES, &s.gpu.vertices)
+        .storage(REF_BINDING_PHOTONS, &map.photons)
+        .access(map.photons_id, Access::ComputeWrite)
+        .storage(REF_BINDING_GRID, &map.grid)
+        .access(map.grid_id, Access::ComputeWrite)
+        .storage(REF_BINDING_COUNTERS, &counters)
+        .access(counters_id, Access::ComputeWrite)
+        .storage(REF_BINDING_DEBUG, &debug)
+        .access(debug_id, Access::ComputeWrite)
+        .storage(REF_BINDING_STATS, &stats)
+        .access(stats_id, Access::ComputeWrite);
+    for (binding, buffer) in geometry.buffers() {
+        bindings = bindings.storage(binding, buffer);
+    }
+    let set = bindings.build(ctx, trace)?;
+    let push = std::mem::size_of::<RefPush>() as u32;
+    let pipeline = ComputePipeline::new(ctx, trace, "reference/photons.comp", &[set.layout()], push, &[])?;
+    let groups = dispatch_size(count, ctx.limits().max_compute_work_group_count).ok_or_else(|| {
+        RenderError::Limit(format!("{count} photons a frame need more workgroups than the device allows"))
+    })?;
+    Ok(PhotonPass {
+        reset,
+        trace,
+        pipeline,
+        set,
+        groups,
+        grid_id: map.grid_id,
+        counters,
+        counters_id,
+        _debug: debug,
+        _stats: stats,
+        _sampler: sampler,
+    })
 }
 
 impl Technique for Raytrace {
     fn record<'a>(&'a self, _: Stage, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>) {
+        if let Some(p) = &self.photon_pass {
+            let (grid, counters) = (&self.map.grid, &p.counters);
+            frame
+                .pass(p.reset)
+                .write(p.grid_id, Access::TransferWrite)
+                .write(p.counters_id, Access::TransferWrite)
+                .record(move |cmd| {
+                    cmd.fill_buffer(grid, END_OF_PHOTON_LIST);
+                    cmd.fill_buffer(counters, 0);
+                });
+            let push = RefPush { iteration: self.frame, seed: PHOTON_SEED, mode: 0, count: 0 };
+            let (pipeline, set, groups) = (&p.pipeline, p.set.set(), p.groups);
+            // The set declares the kernel's accesses: the photons, grid, counter, debug records
+            // and canary counts written, the environment read.
+            frame.pass(p.trace).uses(&p.set).record(move |cmd| cmd.compute(pipeline, &[set], &push, groups));
+        }
         self.pass.record(frame, inputs.frame_set, &[inputs.scene.environment_id]);
+    }
+
+    fn begin_frame(&mut self) {
+        self.frame = self.frame.wrapping_add(1);
     }
 
     fn once_costs(&self) -> Vec<crate::technique::OnceCost> {
