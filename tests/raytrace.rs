@@ -432,3 +432,152 @@ fn no_photons_is_the_image_without_caustics() {
     assert!(brighter > 100, "the photons brightened only {brighter} values");
     common::assert_no_validation_errors(&ctx);
 }
+
+/// The ray from the camera through image point (x, y) in pixels, (0, 0) the top-left corner.
+fn pixel_ray(s: &Scene, x: f32, y: f32) -> Vec3 {
+    let c = &s.camera;
+    let forward = (c.target - c.position).normalize();
+    let right = forward.cross(c.up).normalize();
+    let up = right.cross(forward);
+    let tan_half = (c.vfov_deg.to_radians() * 0.5).tan();
+    let u = (2.0 * x / c.width as f32 - 1.0) * tan_half * c.aspect();
+    let v = (1.0 - 2.0 * y / c.height as f32) * tan_half;
+    (forward + u * right + v * up).normalize()
+}
+
+/// `render.caustics = "raytrace"` conserves the photons' flux: over the floor pixels seen
+/// directly, the caustic it adds, integrated over their footprints, equals the reflected flux
+/// (albedo / pi times the flux, W/sr) of the photons landing in those footprints. The photons
+/// are the technique's own: frame k traces the photons of the reference's photon pass k with
+/// the technique's seed and as many photons a pass (PHOTON_SEED), read back from the
+/// reference. caustic_sphere's light is moved aside so that the caustic falls beside the ball,
+/// in view.
+///
+/// Tolerance, as tests/reference.rs's flux checks: a photon at x counts in the sum over
+/// pixels with weight w(x) = sum over the disks holding x of A_px / (pi r^2), whose mean over
+/// a pixel is 1 (the disk's share of the footprint times its weight) and whose variance is at
+/// most 4 / pi - 1 (the disk inscribed in a square footprint, a disk grows with the pixel's
+/// obliquity faster than its footprint: A_px / (pi r^2) = 4 cos^3(theta) / pi, theta the angle
+/// off the camera's axis). So 3 standard deviations of the sum are 3 sqrt((4/pi - 1) sum f^2)
+/// / sum f of it, over the frames; plus the share of the photons' flux within a disk's reach of
+/// the selection's border (0.5 footprints over sqrt(cos), on either side: there a disk counts
+/// photons the selection leaves out or misses ones it counts). The control: the technique
+/// with its gather disabled (no caustic) misses all of it.
+#[test]
+fn direct_caustic_conserves_the_photons_flux() {
+    if !common::in_own_process() {
+        return;
+    }
+    use prism::PHOTON_DEPOSITED;
+    let ctx = common::context(false);
+    let (frames, per_frame) = (8u32, 8000u32);
+    let photons = format!("render.raytrace.photons_per_frame={per_frame}");
+    let base = ["render.refraction=single", "render.caustics=raytrace", "lights.0.position=[4, 5, 0]", &photons];
+    let s = common::scene("caustic_sphere", SIZE, &base);
+    assert!(prism::technique::has(&prism::technique::recipe(&s).passes, "caustics_raytrace"));
+    let (lit, _) = frame_statistics(&ctx, &s, frames);
+    let dark = common::render_on(
+        &ctx,
+        &common::scene("caustic_sphere", SIZE, &[&base[..], &["render.caustics=none"]].concat()),
+    )
+    .hdr;
+
+    let st = ReferenceSettings {
+        spp: frames,
+        photons: (per_frame * frames) as u64,
+        seed: prism::technique::raytrace::PHOTON_SEED,
+        ..ReferenceSettings::default()
+    };
+    let mut r = Reference::new(&ctx, &s, &st).expect("reference");
+    assert_eq!(r.photons_per_pass(), per_frame);
+    let mut deposited = Vec::new();
+    for _ in 0..frames {
+        r.run(1).unwrap();
+        for (o, p) in r.photon_outcomes().iter().zip(r.photon_positions()) {
+            if o[3] as u32 == PHOTON_DEPOSITED {
+                deposited.push((p, o[0] as f64));
+            }
+        }
+    }
+    drop(r);
+
+    // The floor pixels seen directly: the centre and the four corner rays reach the floor
+    // (y = 0, |x|, |z| < 4) past the ball (centre (0, 1.2, 0), radius 1).
+    let cam = s.camera.position;
+    let (ball, radius, albedo) = (Vec3::new(0.0, 1.2, 0.0), 1.0f32, 0.8f64);
+    let on_floor = |x: f32, y: f32| {
+        let d = pixel_ray(&s, x, y);
+        let t = -cam.y / d.y;
+        let p = cam + t * d;
+        let oc = cam - ball;
+        let b = oc.dot(d);
+        let hits_ball = b * b - (oc.length_squared() - radius * radius) > 0.0 && -b > 0.0;
+        (t > 0.0 && p.x.abs() < 4.0 && p.z.abs() < 4.0 && !hits_ball).then_some(p)
+    };
+    let n = SIZE as usize;
+    let footprint: Vec<Option<f64>> = (0..n * n)
+        .map(|k| {
+            let (i, j) = ((k % n) as f32, (k / n) as f32);
+            on_floor(i + 0.5, j + 0.5)?;
+            let q = [on_floor(i, j)?, on_floor(i + 1.0, j)?, on_floor(i + 1.0, j + 1.0)?, on_floor(i, j + 1.0)?];
+            Some(
+                0.5 * (0..4).map(|m| (q[m].x * q[(m + 1) % 4].z - q[(m + 1) % 4].x * q[m].z) as f64).sum::<f64>().abs(),
+            )
+        })
+        .collect();
+    let selected = |i: i64, j: i64| {
+        (0..n as i64).contains(&i) && (0..n as i64).contains(&j) && footprint[j as usize * n + i as usize].is_some()
+    };
+
+    // Which pixel each photon lands in, and whether a disk can carry it across the border.
+    let (mut sum, mut sum2, mut border, mut count) = (0.0f64, 0.0f64, 0.0f64, 0usize);
+    for &(p, f) in &deposited {
+        if p.y.abs() > 1e-4 {
+            continue;
+        }
+        let e = f * albedo / std::f64::consts::PI;
+        let q = p - cam;
+        let forward = (s.camera.target - cam).normalize();
+        let right = forward.cross(s.camera.up).normalize();
+        let up = right.cross(forward);
+        let tan_y = (s.camera.vfov_deg.to_radians() * 0.5).tan();
+        let z = q.dot(forward);
+        let x = (q.dot(right) / z / (tan_y * s.camera.aspect()) + 1.0) * 0.5 * SIZE as f32;
+        let y = (1.0 - q.dot(up) / z / tan_y) * 0.5 * SIZE as f32;
+        let (i, j) = (x.floor() as i64, y.floor() as i64);
+        let cos = (cam - p).normalize().y.abs().max(0.05);
+        let reach = RaytraceParams::default().gather_radius / cos.sqrt();
+        let k = reach.ceil() as i64;
+        let me = selected(i, j);
+        let crosses = (-k..=k).any(|a| {
+            (-k..=k).any(|b| {
+                let dx = ((i + a) as f32 - x).max(x - (i + a + 1) as f32).max(0.0);
+                let dy = ((j + b) as f32 - y).max(y - (j + b + 1) as f32).max(0.0);
+                selected(i + a, j + b) != me && dx * dx + dy * dy < reach * reach
+            })
+        });
+        if crosses {
+            border += e;
+        }
+        if me {
+            sum += e;
+            sum2 += e * e;
+            count += 1;
+        }
+    }
+    let integral: f64 =
+        footprint.iter().enumerate().filter_map(|(k, a)| Some((lit[4 * k] - dark[4 * k] as f64) * a.as_ref()?)).sum();
+    let flux = sum / frames as f64;
+    let sigma = ((4.0 / std::f64::consts::PI - 1.0) * sum2).sqrt() / sum;
+    let tolerance = 3.0 * sigma + border / sum;
+    eprintln!(
+        "direct caustic: photons' reflected flux {flux:.5} W/sr ({count} photons over {frames} frames), integrated \
+         radiance {integral:.5} (ratio {:.4}), sigma {sigma:.4}, border {:.4}, tolerance {tolerance:.4}, {} pixels",
+        integral / flux,
+        border / sum,
+        footprint.iter().flatten().count()
+    );
+    assert!(count >= 1000, "only {count} photons land on the floor seen directly");
+    assert!((integral - flux).abs() / flux < tolerance, "integrated caustic {integral}, photons' flux {flux}");
+    common::assert_no_validation_errors(&ctx);
+}

@@ -11,9 +11,8 @@
 #include "frame.glsl"
 #include "environment.glsl"
 #define REF_SET 1
-#define PHOTON_GRID_ACCESS readonly
 #include "../reference/paths.glsl"
-#include "../reference/photon_grid.glsl"
+#include "caustic.glsl"
 
 layout(constant_id = 0) const uint MODE = SPECULAR_MODE_REFRACTION;
 // A branch makes at most ref.counts.w specular interactions (the reference's max_depth, at
@@ -38,24 +37,6 @@ struct Branch {
 };
 
 float largest(vec3 v) { return max(v.x, max(v.y, v.z)); }
-
-// The caustic radiance leaving the diffuse point s towards a branch that arrived along d after
-// `travelled` from the camera, n the normal on its side: the photon map's radiance estimate
-// (Jensen 1996; the reference's gather.comp with a fixed radius) over this frame's photons
-// within r, each of flux Phi_p reflected by the Lambertian BRDF albedo / pi:
-//   L = albedo / pi * sum Phi_p / (pi r^2).
-// r is ref.grid.z pixel footprints on the surface (the pixel's angle times the distance
-// travelled, over sqrt(cos) so that the disk has the footprint's area), at most ref.grid.y:
-// the initial radius of the reference's visible points (camera.comp).
-vec3 caustic_at(Surface s, vec3 d, vec3 n, float travelled) {
-    float pixel_angle = 2.0 * ref.proj.y / float(frame.viewport.y);
-    float cosine = max(abs(dot(d, n)), 0.05);
-    float r = min(ref.grid.y, ref.grid.z * pixel_angle * travelled / sqrt(cosine));
-    float M;
-    vec3 phi;
-    photons_within(s.p, n, r, M, phi);
-    return albedo_at(materials[s.material], s.st) / PI * phi / (PI * r * r);
-}
 
 // Radiance along the ray (o, d) with initial throughput beta. Depth first: each branch goes on
 // along its reflection and leaves its transmission on the stack; the stack holds at most one

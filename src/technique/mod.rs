@@ -100,6 +100,7 @@ pub const TECHNIQUES: &[Registration] = &[
     impostor::impostor_lightmap::TECHNIQUE,
     baseline::gbuffer::TECHNIQUE,
     baseline::deferred_shading::TECHNIQUE,
+    raytrace::CAUSTICS,
     baseline::specular_single::REFRACTION,
     refraction::refraction_wyman::TECHNIQUE,
     refraction::refraction_hu_qin::TECHNIQUE,

@@ -48,41 +48,78 @@ use crate::scene::techniques::RaytraceParams;
 use crate::scene::Scene;
 use crate::shader_structs::RefPush;
 use crate::technique::baseline::fullscreen::{fragment_set, FullscreenDesc, FullscreenPass};
-use crate::technique::baseline::specular_single::Mode;
 use crate::technique::{
-    dielectric_names, diffuse_names, list, metal_names, params, tables_and_placement, FrameInputs, Inputs, PlannedPass,
-    Registration, RenderError, Setup, Stage, Technique,
+    dielectric_names, diffuse_names, list, metal_names, params, specular_names, tables_and_placement, FrameInputs,
+    Inputs, PlannedPass, Registration, RenderError, Setup, Stage, Technique,
 };
 use crate::*;
 
 pub const REFRACTION_RAYTRACE: &str = "refraction_raytrace";
 pub const REFLECTION_RAYTRACE: &str = "reflection_raytrace";
-/// Each mode's photon passes: the grid's reset, then the photon kernel.
+pub const CAUSTICS_RAYTRACE: &str = "caustics_raytrace";
+/// Each effect's photon passes: the grid's reset, then the photon kernel.
 pub const REFRACTION_PHOTON_RESET: &str = "refraction_raytrace_photon_reset";
 pub const REFRACTION_PHOTONS: &str = "refraction_raytrace_photons";
 pub const REFLECTION_PHOTON_RESET: &str = "reflection_raytrace_photon_reset";
 pub const REFLECTION_PHOTONS: &str = "reflection_raytrace_photons";
+pub const CAUSTICS_PHOTON_RESET: &str = "caustics_raytrace_photon_reset";
+pub const CAUSTICS_PHOTONS: &str = "caustics_raytrace_photons";
 
 /// The grid's empty bucket (photon_grid.glsl's END_OF_LIST).
 const END_OF_PHOTON_LIST: u32 = u32::MAX;
 
 /// The photon kernel's seed: not the reference's (1 by default), so that a test comparing
-/// the two compares independent photons.
-const PHOTON_SEED: u32 = 0x5eed_ca05;
+/// the two compares independent photons. Frame k (from 0) traces the photons of the
+/// reference's photon pass k with this seed and as many photons per pass (photons.comp), which
+/// a test reads back from the reference.
+pub const PHOTON_SEED: u32 = 0x5eed_ca05;
+
+/// What a `raytrace` technique puts into the frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Effect {
+    /// The dielectrics' pixels, traced.
+    Refraction,
+    /// The mirrors' and conductors' pixels, traced.
+    Reflection,
+    /// The caustic on the diffuse pixels seen directly, added to deferred shading's.
+    Caustics,
+}
+
+impl Effect {
+    /// (stage, fragment pass, photon grid reset, photon kernel).
+    fn passes(self) -> (Stage, &'static str, &'static str, &'static str) {
+        match self {
+            Effect::Refraction => (Stage::Refraction, REFRACTION_RAYTRACE, REFRACTION_PHOTON_RESET, REFRACTION_PHOTONS),
+            Effect::Reflection => (Stage::Reflection, REFLECTION_RAYTRACE, REFLECTION_PHOTON_RESET, REFLECTION_PHOTONS),
+            // After deferred shading, whose diffuse radiance it adds to.
+            Effect::Caustics => (Stage::Lighting, CAUSTICS_RAYTRACE, CAUSTICS_PHOTON_RESET, CAUSTICS_PHOTONS),
+        }
+    }
+}
 
 /// `render.refraction = "raytrace"`: the dielectrics, traced exactly.
 pub const REFRACTION: Registration = Registration {
     key: "refraction = \"raytrace\"",
-    plan: |scene| plan(scene, Mode::Refraction),
-    create: |s| create(s, Mode::Refraction),
+    plan: |scene| plan(scene, Effect::Refraction),
+    create: |s| create(s, Effect::Refraction),
     inputs,
 };
 
 /// `render.reflection = "raytrace"`: the mirrors and conductors, traced exactly.
 pub const REFLECTION: Registration = Registration {
     key: "reflection = \"raytrace\"",
-    plan: |scene| plan(scene, Mode::Reflection),
-    create: |s| create(s, Mode::Reflection),
+    plan: |scene| plan(scene, Effect::Reflection),
+    create: |s| create(s, Effect::Reflection),
+    inputs,
+};
+
+/// `render.caustics = "raytrace"`: the photons' caustic on the diffuse surfaces seen directly,
+/// so that `refraction = reflection = caustics = "raytrace"` traces the whole frame's light
+/// transport exactly.
+pub const CAUSTICS: Registration = Registration {
+    key: "caustics = \"raytrace\"",
+    plan: |scene| plan(scene, Effect::Caustics),
+    create: |s| create(s, Effect::Caustics),
     inputs,
 };
 
@@ -119,42 +156,44 @@ fn has_caustics(scene: &Scene) -> bool {
     photons > 0 && !scene.lights.is_empty() && !diffuse_names(scene).is_empty()
 }
 
-fn plan(scene: &Scene, mode: Mode) -> Vec<(Stage, PlannedPass)> {
-    let (objects, selected, stage, name, what) = match mode {
-        Mode::Refraction => {
-            (dielectric_names(scene), &scene.render.refraction, Stage::Refraction, REFRACTION_RAYTRACE, "dielectric")
+fn plan(scene: &Scene, effect: Effect) -> Vec<(Stage, PlannedPass)> {
+    let (stage, name, reset, photons) = effect.passes();
+    let (objects, selected, key, reason) = match effect {
+        Effect::Refraction => {
+            let objects = dielectric_names(scene);
+            let reason = format!("dielectric {} traced exactly", list(&objects));
+            (objects, &scene.render.refraction, "refraction", reason)
         }
-        Mode::Reflection => {
-            (metal_names(scene), &scene.render.reflection, Stage::Reflection, REFLECTION_RAYTRACE, "mirror/conductor")
+        Effect::Reflection => {
+            let objects = metal_names(scene);
+            let reason = format!("mirror/conductor {} traced exactly", list(&objects));
+            (objects, &scene.render.reflection, "reflection", reason)
+        }
+        Effect::Caustics => {
+            let objects = specular_names(scene);
+            let reason =
+                format!("photons' caustic of {} on {} seen directly", list(&objects), list(&diffuse_names(scene)));
+            (objects, &scene.render.caustics, "caustics", reason)
         }
     };
     if objects.is_empty() || selected != "raytrace" {
         return Vec::new();
     }
-    let effect = if mode == Mode::Refraction { "refraction" } else { "reflection" };
     let mut passes = Vec::new();
     if has_caustics(scene) {
-        let (reset, photons) = photon_pass_names(mode);
         let why = format!(
-            "caustics on {} seen through {} (render.raytrace.photons_per_frame)",
-            list(&diffuse_names(scene)),
-            list(&objects)
+            "caustics of {} on {} (render.raytrace.photons_per_frame)",
+            list(&objects),
+            list(&diffuse_names(scene))
         );
         passes.push((stage, PlannedPass::new(reset, format!("photon grid reset: {why}"))));
         passes.push((stage, PlannedPass::new(photons, format!("photons from the lights: {why}"))));
+    } else if effect == Effect::Caustics {
+        // No light, no receiver or no photons: no caustic to add.
+        return Vec::new();
     }
-    passes.push((
-        stage,
-        PlannedPass::new(name, format!("{what} {} traced exactly (render.{effect} = \"raytrace\")", list(&objects))),
-    ));
+    passes.push((stage, PlannedPass::new(name, format!("{reason} (render.{key} = \"raytrace\")"))));
     passes
-}
-
-fn photon_pass_names(mode: Mode) -> (&'static str, &'static str) {
-    match mode {
-        Mode::Refraction => (REFRACTION_PHOTON_RESET, REFRACTION_PHOTONS),
-        Mode::Reflection => (REFLECTION_PHOTON_RESET, REFLECTION_PHOTONS),
-    }
 }
 
 /// The photons of one frame: the reference's photon kernel (glsl/reference/photons.comp) with
@@ -190,21 +229,27 @@ struct Raytrace {
     /// This frame's photons, where the scene has caustics.
     photon_pass: Option<PhotonPass>,
     map: PhotonMap,
-    /// Frames begun: the photon kernel's iteration, so that every frame traces new photons.
-    frame: u32,
+    /// The photon kernel's iteration: the frames begun before this one, so that every frame
+    /// traces new photons.
+    iteration: u32,
+    begun: u32,
     // Bound in the pass's set 1.
     _uniforms: Buffer,
     geometry: Rc<crate::technique::Timed<TraceGeometry>>,
 }
 
-fn create(s: &mut Setup<'_>, mode: Mode) -> Result<Box<dyn Technique>, RenderError> {
+fn create(s: &mut Setup<'_>, effect: Effect) -> Result<Box<dyn Technique>, RenderError> {
     let p = params("raytrace", RaytraceParams::from_settings(&s.scene.render))?;
     let (ctx, scene) = (s.ctx, s.scene);
     let timed = s.cache.get_or_try_insert_timed(TraceGeometry::key(scene), || TraceGeometry::new(ctx, scene))?;
     let geometry = &timed.value;
-    let (name, spec) = match mode {
-        Mode::Refraction => (REFRACTION_RAYTRACE, SPECULAR_MODE_REFRACTION),
-        Mode::Reflection => (REFLECTION_RAYTRACE, SPECULAR_MODE_REFLECTION),
+    let (_, name, _, _) = effect.passes();
+    let refraction = [("MODE", Spec::U32(SPECULAR_MODE_REFRACTION))];
+    let reflection = [("MODE", Spec::U32(SPECULAR_MODE_REFLECTION))];
+    let (shader, spec): (_, &[_]) = match effect {
+        Effect::Refraction => ("raytrace/raytrace.frag", &refraction),
+        Effect::Reflection => ("raytrace/raytrace.frag", &reflection),
+        Effect::Caustics => ("raytrace/caustics.frag", &[]),
     };
     let mut uniforms = geometry.uniforms(scene, s.gpu, p.max_depth).with_cutoff(p.cutoff);
     let caustics = has_caustics(scene);
@@ -249,7 +294,7 @@ fn create(s: &mut Setup<'_>, mode: Mode) -> Result<Box<dyn Technique>, RenderErr
         photons,
         grid,
     };
-    let photon_pass = if caustics { Some(photon_pass(s, mode, &uniforms, &map, geometry, count)?) } else { None };
+    let photon_pass = if caustics { Some(photon_pass(s, effect, &uniforms, &map, geometry, count)?) } else { None };
 
     // The uniforms are host-written once at creation: visible at submission.
     let targets = s.targets;
@@ -269,18 +314,21 @@ fn create(s: &mut Setup<'_>, mode: Mode) -> Result<Box<dyn Technique>, RenderErr
     }
     let pass = FullscreenPass::new(
         ctx,
-        // Overwrites only the pixels of its objects.
-        &FullscreenDesc::over_hdr(name, "raytrace/raytrace.frag", targets, &[("MODE", Spec::U32(spec))]),
+        // Overwrites only the pixels of its objects; the caustic is added to the diffuse ones'.
+        &FullscreenDesc {
+            additive: effect == Effect::Caustics,
+            ..FullscreenDesc::over_hdr(name, shader, targets, spec)
+        },
         set,
         s.frame_layout,
     )?;
-    Ok(Box::new(Raytrace { pass, photon_pass, map, frame: 0, _uniforms: uniforms, geometry: timed }))
+    Ok(Box::new(Raytrace { pass, photon_pass, map, iteration: 0, begun: 0, _uniforms: uniforms, geometry: timed }))
 }
 
 /// The reference's photon kernel over `map`, `count` photons a frame.
 fn photon_pass(
     s: &mut Setup<'_>,
-    mode: Mode,
+    effect: Effect,
     uniforms: &Buffer,
     map: &PhotonMap,
     geometry: &TraceGeometry,
@@ -288,7 +336,7 @@ fn photon_pass(
 ) -> Result<PhotonPass, RenderError> {
     use vk::BufferUsageFlags as U;
     let ctx = s.ctx;
-    let (reset, trace) = photon_pass_names(mode);
+    let (_, _, reset, trace) = effect.passes();
     let counters = Buffer::new(
         ctx,
         &format!("{trace}_counters"),
@@ -355,7 +403,7 @@ impl Technique for Raytrace {
                     cmd.fill_buffer(grid, END_OF_PHOTON_LIST);
                     cmd.fill_buffer(counters, 0);
                 });
-            let push = RefPush { iteration: self.frame, seed: PHOTON_SEED, mode: 0, count: 0 };
+            let push = RefPush { iteration: self.iteration, seed: PHOTON_SEED, mode: 0, count: 0 };
             let (pipeline, set, groups) = (&p.pipeline, p.set.set(), p.groups);
             // The set declares the kernel's accesses: the photons, grid, counter, debug records
             // and canary counts written, the environment read.
@@ -365,7 +413,8 @@ impl Technique for Raytrace {
     }
 
     fn begin_frame(&mut self) {
-        self.frame = self.frame.wrapping_add(1);
+        self.iteration = self.begun;
+        self.begun = self.begun.wrapping_add(1);
     }
 
     fn once_costs(&self) -> Vec<crate::technique::OnceCost> {
