@@ -360,6 +360,11 @@ pub trait Technique: Any {
         }
     }
 
+    /// The scene was updated and the technique kept: what it varies from frame to frame (the
+    /// raytrace technique's photons) starts again, as in a technique created for the new
+    /// scene.
+    fn restart(&mut self) {}
+
     /// Whether work that spans frames is left ([`Self::prepare`]).
     fn preparing(&self) -> bool {
         false

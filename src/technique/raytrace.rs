@@ -417,6 +417,10 @@ impl Technique for Raytrace {
         self.begun = self.begun.wrapping_add(1);
     }
 
+    fn restart(&mut self) {
+        self.begun = 0;
+    }
+
     fn once_costs(&self) -> Vec<crate::technique::OnceCost> {
         vec![crate::technique::trace_geometry_cost(&self.geometry)]
     }
