@@ -1,9 +1,10 @@
 //! Exact ray tracing of the specular objects, interactive: the reference's light transport
 //! at one centre ray per pixel, so that each approximation can be weighed against exact ray
-//! tracing at equal time (glsl/raytrace/raytrace.frag).
+//! tracing at equal time (glsl/raytrace/raytrace.frag), and its caustics on the diffuse
+//! surfaces seen directly (`render.caustics = "raytrace"`, glsl/raytrace/caustics.frag).
 //!
 //! What it computes is the reference's model (src/reference/mod.rs), SCENES.md's "light
-//! transport measured", without the caustics. Every pixel the G-buffer gives to a dielectric
+//! transport measured". Every pixel the G-buffer gives to a dielectric
 //! (`render.refraction = "raytrace"`, pass `refraction_raytrace`) or to a mirror or conductor
 //! (`render.reflection = "raytrace"`, `reflection_raytrace`) traces the ray through its centre
 //! from the camera, through the reference's BVH and exact spheres
@@ -27,7 +28,8 @@
 //! object and a diffuse receiver and `photons_per_frame` > 0, the pass is preceded by a
 //! reset of the photon grid's heads and counter and by the reference's photon kernel
 //! (glsl/reference/photons.comp, its buffers and its hashed grid, a new iteration each
-//! frame), and every diffuse vertex a branch reaches adds the photons' radiance estimate
+//! frame), and every diffuse vertex a branch reaches (with `caustics = "raytrace"` also the
+//! diffuse surface each diffuse pixel's centre ray meets) adds the photons' radiance estimate
 //! within `gather_radius` pixel footprints (Jensen's photon-map estimate over the grid walk of
 //! the reference's SPPM gather, glsl/reference/photon_grid.glsl). With a fixed radius the
 //! estimate is biased by the blur over that disk and noisy as one frame's photons are; the
@@ -35,10 +37,11 @@
 //! crossed as the reference crosses them (glsl/reference/volume.glsl).
 //!
 //! It composites like the other techniques of its stage: a full-screen pass over the HDR
-//! image that keeps every pixel not of its objects. The tracer's buffers are built once per
-//! geometry and kept in the technique cache, so a moved camera or light re-creates only the
-//! uniforms, the photon buffers and the passes. With both `refraction` and `reflection` set to
-//! `"raytrace"` each of the two techniques traces its own photons.
+//! image that keeps every pixel not of its objects (the caustic pass adds to the diffuse
+//! pixels after deferred shading instead). The tracer's buffers are built once per geometry
+//! and kept in the technique cache, so a moved camera or light re-creates only the uniforms,
+//! the photon buffers and the passes. Each of the `refraction`, `reflection` and `caustics`
+//! techniques set to `"raytrace"` traces its own photons.
 use std::rc::Rc;
 
 use crate::gpu::{vk, Access, Buffer, ComputePipeline, MemoryLocation, Sampler, SamplerDesc, Spec};
