@@ -40,20 +40,25 @@
 //! image that keeps every pixel not of its objects (the caustic pass adds to the diffuse
 //! pixels after deferred shading instead). The tracer's buffers are built once per geometry
 //! and kept in the technique cache, so a moved camera or light re-creates only the uniforms,
-//! the photon buffers and the passes. Each of the `refraction`, `reflection` and `caustics`
-//! techniques set to `"raytrace"` traces its own photons.
+//! the photon buffers and the passes. The `refraction`, `reflection` and `caustics`
+//! techniques set to `"raytrace"` share a frame's photons through the technique cache: the
+//! first of them in the frame traces them, every one gathers them.
 use std::rc::Rc;
+use std::sync::Arc;
 
+use crate::frame::gpu_scene::GpuScene;
+use crate::gpu::GpuContext;
 use crate::gpu::{vk, Access, Buffer, ComputePipeline, MemoryLocation, Sampler, SamplerDesc, Spec};
-use crate::graph::{Bindings, BoundSet, BufferId, Frame};
+use crate::graph::{Bindings, BoundSet, BufferId, Frame, FrameGraph};
 use crate::reference::{dispatch_size, initial_stats, photon_targets, TraceGeometry};
 use crate::scene::techniques::RaytraceParams;
 use crate::scene::Scene;
 use crate::shader_structs::RefPush;
+use crate::shader_structs::RefUniforms;
 use crate::technique::baseline::fullscreen::{fragment_set, FullscreenDesc, FullscreenPass};
 use crate::technique::{
-    dielectric_names, diffuse_names, list, metal_names, params, specular_names, tables_and_placement, FrameInputs,
-    Inputs, PlannedPass, Registration, RenderError, Setup, Stage, Technique,
+    cache_key, dielectric_names, diffuse_names, list, metal_names, params, specular_names, tables_and_placement,
+    FrameInputs, Inputs, PlannedPass, Registration, RenderError, Setup, Stage, Technique,
 };
 use crate::*;
 
@@ -159,8 +164,9 @@ fn has_caustics(scene: &Scene) -> bool {
     photons > 0 && !scene.lights.is_empty() && !diffuse_names(scene).is_empty()
 }
 
-fn plan(scene: &Scene, effect: Effect) -> Vec<(Stage, PlannedPass)> {
-    let (stage, name, reset, photons) = effect.passes();
+/// Whether `effect` is selected in `scene` and has something to trace: the `[render]` key that
+/// selects it and the reason for its pass.
+fn selection(scene: &Scene, effect: Effect) -> Option<(&'static str, String)> {
     let (objects, selected, key, reason) = match effect {
         Effect::Refraction => {
             let objects = dielectric_names(scene);
@@ -173,41 +179,52 @@ fn plan(scene: &Scene, effect: Effect) -> Vec<(Stage, PlannedPass)> {
             (objects, &scene.render.reflection, "reflection", reason)
         }
         Effect::Caustics => {
+            // No light, no receiver or no photons: no caustic to add.
+            if !has_caustics(scene) {
+                return None;
+            }
             let objects = specular_names(scene);
             let reason =
                 format!("photons' caustic of {} on {} seen directly", list(&objects), list(&diffuse_names(scene)));
             (objects, &scene.render.caustics, "caustics", reason)
         }
     };
-    if objects.is_empty() || selected != "raytrace" {
-        return Vec::new();
+    (!objects.is_empty() && selected == "raytrace").then_some((key, reason))
+}
+
+/// The `raytrace` technique that traces the frame's photons, which every `raytrace` technique
+/// of the frame gathers: the first in the recipe (caustics after shading, then refraction,
+/// then reflection), where the scene has caustics.
+fn photon_owner(scene: &Scene) -> Option<Effect> {
+    if !has_caustics(scene) {
+        return None;
     }
+    [Effect::Caustics, Effect::Refraction, Effect::Reflection].into_iter().find(|&e| selection(scene, e).is_some())
+}
+
+fn plan(scene: &Scene, effect: Effect) -> Vec<(Stage, PlannedPass)> {
+    let (stage, name, reset, photons) = effect.passes();
+    let Some((key, reason)) = selection(scene, effect) else { return Vec::new() };
     let mut passes = Vec::new();
-    if has_caustics(scene) {
+    if photon_owner(scene) == Some(effect) {
         let why = format!(
             "caustics of {} on {} (render.raytrace.photons_per_frame)",
-            list(&objects),
+            list(&specular_names(scene)),
             list(&diffuse_names(scene))
         );
         passes.push((stage, PlannedPass::new(reset, format!("photon grid reset: {why}"))));
         passes.push((stage, PlannedPass::new(photons, format!("photons from the lights: {why}"))));
-    } else if effect == Effect::Caustics {
-        // No light, no receiver or no photons: no caustic to add.
-        return Vec::new();
     }
     passes.push((stage, PlannedPass::new(name, format!("{reason} (render.{key} = \"raytrace\")"))));
     passes
 }
 
-/// The photons of one frame: the reference's photon kernel (glsl/reference/photons.comp) with
-/// its buffers, in set 0 as the reference binds them.
-struct PhotonPass {
-    reset: &'static str,
-    trace: &'static str,
+/// The reference's photon kernel (glsl/reference/photons.comp) with its buffers, in set 0 as
+/// the reference binds them.
+struct PhotonKernel {
     pipeline: ComputePipeline,
     set: BoundSet,
     groups: [u32; 3],
-    grid_id: BufferId,
     counters: Buffer,
     counters_id: BufferId,
     /// The kernel's records of every photon (flux and outcome, where it was deposited) and
@@ -215,23 +232,29 @@ struct PhotonPass {
     _debug: Buffer,
     _stats: Buffer,
     _sampler: Sampler,
+    /// What the kernel reads of the tracer's uniforms (the lights, the targets, the photon
+    /// counts, max_depth).
+    _uniforms: Buffer,
 }
 
-/// The photon map one frame's photons are gathered from: the photons and the grid's heads.
-/// Without caustics both are a stand-in of one element, bound but never read
-/// (ref.photon.x = 0).
-struct PhotonMap {
+/// A frame's photons, shared by the frame's `raytrace` techniques through the technique
+/// cache: the photon map (the photons and the grid's heads) that they gather from, and the
+/// kernel that the owner ([`photon_owner`]) runs. Without caustics the map is a stand-in of
+/// one element, bound but never read (ref.photon.x = 0), and there is no kernel.
+struct Photons {
     photons: Buffer,
     photons_id: BufferId,
     grid: Buffer,
     grid_id: BufferId,
+    kernel: Option<PhotonKernel>,
+    _geometry: Rc<crate::technique::Timed<TraceGeometry>>,
 }
 
 struct Raytrace {
     pass: FullscreenPass,
-    /// This frame's photons, where the scene has caustics.
-    photon_pass: Option<PhotonPass>,
-    map: PhotonMap,
+    photons: Rc<Photons>,
+    /// The names of the photon passes, where this technique records them.
+    owner: Option<(&'static str, &'static str)>,
     /// The photon kernel's iteration: the frames begun before this one, so that every frame
     /// traces new photons.
     iteration: u32,
@@ -246,7 +269,7 @@ fn create(s: &mut Setup<'_>, effect: Effect) -> Result<Box<dyn Technique>, Rende
     let (ctx, scene) = (s.ctx, s.scene);
     let timed = s.cache.get_or_try_insert_timed(TraceGeometry::key(scene), || TraceGeometry::new(ctx, scene))?;
     let geometry = &timed.value;
-    let (_, name, _, _) = effect.passes();
+    let (_, name, reset, trace) = effect.passes();
     let refraction = [("MODE", Spec::U32(SPECULAR_MODE_REFRACTION))];
     let reflection = [("MODE", Spec::U32(SPECULAR_MODE_REFLECTION))];
     let (shader, spec): (_, &[_]) = match effect {
@@ -255,49 +278,31 @@ fn create(s: &mut Setup<'_>, effect: Effect) -> Result<Box<dyn Technique>, Rende
         Effect::Caustics => ("raytrace/caustics.frag", &[]),
     };
     let mut uniforms = geometry.uniforms(scene, s.gpu, p.max_depth).with_cutoff(p.cutoff);
-    let caustics = has_caustics(scene);
-    let count = if caustics { p.photons_per_frame } else { 0 };
+    let count = if has_caustics(scene) { p.photons_per_frame } else { 0 };
     // The reference's photon map for `count` photons (src/reference/mod.rs, Reference::new):
     // a table of twice as many buckets, at least 4096; the largest radius 1% of the scene's
     // radius (the reference's initial radius) and cells twice that, so that a gathering disk
     // overlaps at most 2x2x2 cells (photon_grid.glsl).
     let table = (2 * count.max(1)).next_power_of_two().max(1 << 12);
     let cap = 0.01 * s.gpu.bounds_radius.max(1e-20);
-    if caustics {
-        let targets = photon_targets(scene)?;
-        uniforms.counts[2] = targets.len() as u32;
-        uniforms.targets[..targets.len()].copy_from_slice(&targets);
-    }
+    let targets = photon_targets(scene)?;
+    uniforms.counts[2] = targets.len() as u32;
+    uniforms.targets[..targets.len()].copy_from_slice(&targets);
     uniforms.photon[0] = count;
     uniforms.photon[1] = count.max(1);
     uniforms.photon[2] = table;
     uniforms.grid[0] = 2.002 * cap;
     uniforms.grid[1] = cap;
     uniforms.grid[2] = p.gather_radius;
-    let uniforms = Buffer::storage(ctx, &format!("{name}_uniforms"), std::slice::from_ref(&uniforms))?;
 
-    use vk::BufferUsageFlags as U;
-    let photons = Buffer::new(
-        ctx,
-        &format!("{name}_photon_list"),
-        count.max(1) as u64 * 48,
-        U::STORAGE_BUFFER,
-        MemoryLocation::GpuOnly,
-    )?;
-    let grid = Buffer::new(
-        ctx,
-        &format!("{name}_photon_grid"),
-        if caustics { table as u64 * 4 } else { 4 },
-        U::STORAGE_BUFFER | U::TRANSFER_DST,
-        MemoryLocation::GpuOnly,
-    )?;
-    let map = PhotonMap {
-        photons_id: s.graph.register_buffer(&photons),
-        grid_id: s.graph.register_buffer(&grid),
-        photons,
-        grid,
-    };
-    let photon_pass = if caustics { Some(photon_pass(s, effect, &uniforms, &map, geometry, count)?) } else { None };
+    // Shared while what the photons depend on is: the geometry, the lights, the photon count,
+    // max_depth and the grid's cells (the scene's radius, which the camera's position is part
+    // of). The GPU scene's buffers bound with them live as long as the renderer, as the cache.
+    let key = cache_key(&(TraceGeometry::key(scene), &scene.lights, count, p.max_depth, cap.to_bits()));
+    let (cache, graph, gpu) = (&mut *s.cache, &mut *s.graph, s.gpu);
+    let photons = cache.get_or_try_insert(key, || make_photons(ctx, graph, gpu, &timed, &uniforms, count))?;
+    let owner = (photon_owner(scene) == Some(effect)).then_some((reset, trace));
+    let uniforms = Buffer::storage(ctx, &format!("{name}_uniforms"), std::slice::from_ref(&uniforms))?;
 
     // The uniforms are host-written once at creation: visible at submission.
     let targets = s.targets;
@@ -308,10 +313,10 @@ fn create(s: &mut Setup<'_>, effect: Effect) -> Result<Box<dyn Technique>, Rende
         .read(targets.depth_id)
         .storage(REF_BINDING_UNIFORMS, &uniforms)
         .storage(REF_BINDING_VERTICES, &s.gpu.vertices)
-        .storage(REF_BINDING_PHOTONS, &map.photons)
-        .read(map.photons_id)
-        .storage(REF_BINDING_GRID, &map.grid)
-        .read(map.grid_id);
+        .storage(REF_BINDING_PHOTONS, &photons.photons)
+        .read(photons.photons_id)
+        .storage(REF_BINDING_GRID, &photons.grid)
+        .read(photons.grid_id);
     for (binding, buffer) in geometry.buffers() {
         set = set.storage(binding, buffer);
     }
@@ -325,92 +330,112 @@ fn create(s: &mut Setup<'_>, effect: Effect) -> Result<Box<dyn Technique>, Rende
         set,
         s.frame_layout,
     )?;
-    Ok(Box::new(Raytrace { pass, photon_pass, map, iteration: 0, begun: 0, _uniforms: uniforms, geometry: timed }))
+    Ok(Box::new(Raytrace { pass, photons, owner, iteration: 0, begun: 0, _uniforms: uniforms, geometry: timed }))
 }
 
-/// The reference's photon kernel over `map`, `count` photons a frame.
-fn photon_pass(
-    s: &mut Setup<'_>,
-    effect: Effect,
-    uniforms: &Buffer,
-    map: &PhotonMap,
-    geometry: &TraceGeometry,
+/// The photon map for `count` photons a frame and, with photons, the reference's photon
+/// kernel over it, reading `uniforms`.
+fn make_photons(
+    ctx: &Arc<GpuContext>,
+    graph: &mut FrameGraph,
+    gpu: &GpuScene,
+    geometry: &Rc<crate::technique::Timed<TraceGeometry>>,
+    uniforms: &RefUniforms,
     count: u32,
-) -> Result<PhotonPass, RenderError> {
+) -> Result<Photons, RenderError> {
     use vk::BufferUsageFlags as U;
-    let ctx = s.ctx;
-    let (_, _, reset, trace) = effect.passes();
-    let counters = Buffer::new(
+    let table = uniforms.photon[2];
+    let photons =
+        Buffer::new(ctx, "raytrace_photon_list", count.max(1) as u64 * 48, U::STORAGE_BUFFER, MemoryLocation::GpuOnly)?;
+    let grid = Buffer::new(
         ctx,
-        &format!("{trace}_counters"),
-        16,
+        "raytrace_photon_grid",
+        if count > 0 { table as u64 * 4 } else { 4 },
         U::STORAGE_BUFFER | U::TRANSFER_DST,
         MemoryLocation::GpuOnly,
     )?;
-    // (flux, outcome) and the deposit's position of every photon (photons.comp).
-    let debug =
-        Buffer::new(ctx, &format!("{trace}_debug"), 2 * count as u64 * 16, U::STORAGE_BUFFER, MemoryLocation::GpuOnly)?;
-    let stats = Buffer::storage(ctx, &format!("{trace}_stats"), &initial_stats())?;
-    let sampler = Sampler::new(ctx, &format!("{trace}_latlong"), SamplerDesc::LATLONG)?;
-    let counters_id = s.graph.register_buffer(&counters);
-    let (debug_id, stats_id) = (s.graph.register_buffer(&debug), s.graph.register_buffer(&stats));
-    let mut bindings = Bindings::new(vk::ShaderStageFlags::COMPUTE)
-        .storage(REF_BINDING_UNIFORMS, uniforms)
-        .storage(REF_BINDING_MATERIALS, &s.gpu.materials)
-        .sampled(REF_BINDING_ENVIRONMENT, &s.gpu.environment, &sampler)
-        .read(s.gpu.environment_id)
-        .storage(REF_BINDING_VERTICES, &s.gpu.vertices)
-        .storage(REF_BINDING_PHOTONS, &map.photons)
-        .access(map.photons_id, Access::ComputeWrite)
-        .storage(REF_BINDING_GRID, &map.grid)
-        .access(map.grid_id, Access::ComputeWrite)
-        .storage(REF_BINDING_COUNTERS, &counters)
-        .access(counters_id, Access::ComputeWrite)
-        .storage(REF_BINDING_DEBUG, &debug)
-        .access(debug_id, Access::ComputeWrite)
-        .storage(REF_BINDING_STATS, &stats)
-        .access(stats_id, Access::ComputeWrite);
-    for (binding, buffer) in geometry.buffers() {
-        bindings = bindings.storage(binding, buffer);
-    }
-    let set = bindings.build(ctx, trace)?;
-    let push = std::mem::size_of::<RefPush>() as u32;
-    let pipeline = ComputePipeline::new(ctx, trace, "reference/photons.comp", &[set.layout()], push, &[])?;
-    let groups = dispatch_size(count, ctx.limits().max_compute_work_group_count).ok_or_else(|| {
-        RenderError::Limit(format!("{count} photons a frame need more workgroups than the device allows"))
-    })?;
-    Ok(PhotonPass {
-        reset,
-        trace,
-        pipeline,
-        set,
-        groups,
-        grid_id: map.grid_id,
-        counters,
-        counters_id,
-        _debug: debug,
-        _stats: stats,
-        _sampler: sampler,
-    })
+    let (photons_id, grid_id) = (graph.register_buffer(&photons), graph.register_buffer(&grid));
+    let kernel = if count == 0 {
+        None
+    } else {
+        let uniforms = Buffer::storage(ctx, "raytrace_photon_uniforms", std::slice::from_ref(uniforms))?;
+        let counters = Buffer::new(
+            ctx,
+            "raytrace_photon_counter",
+            16,
+            U::STORAGE_BUFFER | U::TRANSFER_DST,
+            MemoryLocation::GpuOnly,
+        )?;
+        // (flux, outcome) and the deposit's position of every photon (photons.comp).
+        let debug = Buffer::new(
+            ctx,
+            "raytrace_photon_debug",
+            2 * count as u64 * 16,
+            U::STORAGE_BUFFER,
+            MemoryLocation::GpuOnly,
+        )?;
+        let stats = Buffer::storage(ctx, "raytrace_photon_stats", &initial_stats())?;
+        let sampler = Sampler::new(ctx, "raytrace_photon_latlong", SamplerDesc::LATLONG)?;
+        let counters_id = graph.register_buffer(&counters);
+        let (debug_id, stats_id) = (graph.register_buffer(&debug), graph.register_buffer(&stats));
+        let mut bindings = Bindings::new(vk::ShaderStageFlags::COMPUTE)
+            .storage(REF_BINDING_UNIFORMS, &uniforms)
+            .storage(REF_BINDING_MATERIALS, &gpu.materials)
+            .sampled(REF_BINDING_ENVIRONMENT, &gpu.environment, &sampler)
+            .read(gpu.environment_id)
+            .storage(REF_BINDING_VERTICES, &gpu.vertices)
+            .storage(REF_BINDING_PHOTONS, &photons)
+            .access(photons_id, Access::ComputeWrite)
+            .storage(REF_BINDING_GRID, &grid)
+            .access(grid_id, Access::ComputeWrite)
+            .storage(REF_BINDING_COUNTERS, &counters)
+            .access(counters_id, Access::ComputeWrite)
+            .storage(REF_BINDING_DEBUG, &debug)
+            .access(debug_id, Access::ComputeWrite)
+            .storage(REF_BINDING_STATS, &stats)
+            .access(stats_id, Access::ComputeWrite);
+        for (binding, buffer) in geometry.value.buffers() {
+            bindings = bindings.storage(binding, buffer);
+        }
+        let set = bindings.build(ctx, "raytrace_photons")?;
+        let push = std::mem::size_of::<RefPush>() as u32;
+        let pipeline =
+            ComputePipeline::new(ctx, "raytrace_photons", "reference/photons.comp", &[set.layout()], push, &[])?;
+        let groups = dispatch_size(count, ctx.limits().max_compute_work_group_count).ok_or_else(|| {
+            RenderError::Limit(format!("{count} photons a frame need more workgroups than the device allows"))
+        })?;
+        Some(PhotonKernel {
+            pipeline,
+            set,
+            groups,
+            counters,
+            counters_id,
+            _debug: debug,
+            _stats: stats,
+            _sampler: sampler,
+            _uniforms: uniforms,
+        })
+    };
+    Ok(Photons { photons, photons_id, grid, grid_id, kernel, _geometry: geometry.clone() })
 }
 
 impl Technique for Raytrace {
     fn record<'a>(&'a self, _: Stage, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>) {
-        if let Some(p) = &self.photon_pass {
-            let (grid, counters) = (&self.map.grid, &p.counters);
+        if let (Some((reset, trace)), Some(k)) = (self.owner, &self.photons.kernel) {
+            let (grid, counters) = (&self.photons.grid, &k.counters);
             frame
-                .pass(p.reset)
-                .write(p.grid_id, Access::TransferWrite)
-                .write(p.counters_id, Access::TransferWrite)
+                .pass(reset)
+                .write(self.photons.grid_id, Access::TransferWrite)
+                .write(k.counters_id, Access::TransferWrite)
                 .record(move |cmd| {
                     cmd.fill_buffer(grid, END_OF_PHOTON_LIST);
                     cmd.fill_buffer(counters, 0);
                 });
             let push = RefPush { iteration: self.iteration, seed: PHOTON_SEED, mode: 0, count: 0 };
-            let (pipeline, set, groups) = (&p.pipeline, p.set.set(), p.groups);
+            let (pipeline, set, groups) = (&k.pipeline, k.set.set(), k.groups);
             // The set declares the kernel's accesses: the photons, grid, counter, debug records
             // and canary counts written, the environment read.
-            frame.pass(p.trace).uses(&p.set).record(move |cmd| cmd.compute(pipeline, &[set], &push, groups));
+            frame.pass(trace).uses(&k.set).record(move |cmd| cmd.compute(pipeline, &[set], &push, groups));
         }
         self.pass.record(frame, inputs.frame_set, &[inputs.scene.environment_id]);
     }
