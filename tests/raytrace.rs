@@ -581,3 +581,54 @@ fn direct_caustic_conserves_the_photons_flux() {
     assert!((integral - flux).abs() / flux < tolerance, "integrated caustic {integral}, photons' flux {flux}");
     common::assert_no_validation_errors(&ctx);
 }
+
+/// The frame's `raytrace` techniques share one photon map: with `caustics = "raytrace"` too,
+/// only the caustics technique traces photons (one photon pass planned), and the refraction
+/// technique gathers exactly the photons it traced alone (frame k's photons are the same
+/// whoever traces them: the kernel's seed and iteration), so every pixel it writes is the
+/// same, bit for bit, caustic included; the other pixels only gain the caustic seen directly.
+/// The camera looks down through the ball at its focused ring, so that the refracted pixels
+/// hold a caustic.
+#[test]
+fn one_photon_map_serves_every_raytrace_technique() {
+    if !common::in_own_process() {
+        return;
+    }
+    let ctx = common::context(false);
+    let view = ["camera.position=[0, 4, 0.3]", "camera.target=[0, 0, 0]", "camera.up=[0, 0, -1]", "camera.vfov_deg=60"];
+    let with = |set: &[&str]| common::scene("caustic_sphere", SIZE, &[&view[..], set].concat());
+    let alone = with(&["render.refraction=raytrace", "render.caustics=none"]);
+    let shared = with(&["render.refraction=raytrace", "render.caustics=raytrace"]);
+    let plan = prism::technique::recipe(&shared).passes;
+    let photon_passes: Vec<_> = plan.iter().filter(|p| p.name.ends_with("_photons")).map(|p| p.name).collect();
+    assert_eq!(photon_passes, ["caustics_raytrace_photons"]);
+    let [alone, shared, single] = [alone, shared, with(&["render.refraction=single", "render.caustics=none"])]
+        .map(|s| common::render_on(&ctx, &s).hdr);
+    let refracted = written(&alone, &single);
+    let (no_photons, _) = stats(
+        &alone,
+        &common::render_on(
+            &ctx,
+            &with(&["render.refraction=raytrace", "render.caustics=none", "render.raytrace.photons_per_frame=0"]),
+        )
+        .hdr,
+        &refracted,
+    );
+    let same = refracted.iter().filter(|&&p| alone[4 * p..4 * p + 3] == shared[4 * p..4 * p + 3]).count();
+    let (mut brighter, mut darker) = (0, 0);
+    for p in 0..alone.len() / 4 {
+        for c in 0..3 {
+            brighter += usize::from(shared[4 * p + c] > alone[4 * p + c]);
+            darker += usize::from(shared[4 * p + c] < alone[4 * p + c]);
+        }
+    }
+    eprintln!(
+        "shared photons: {same} of {} refracted pixels identical (their caustic: RMSE {no_photons:.4} against none); \
+         {brighter} values brighter, {darker} darker",
+        refracted.len()
+    );
+    assert!(refracted.len() > 300 && no_photons > 0.1, "the refracted pixels show no caustic");
+    assert_eq!(same, refracted.len(), "the refraction technique gathered other photons");
+    assert!(darker == 0 && brighter > 100, "{brighter} values brighter, {darker} darker");
+    common::assert_no_validation_errors(&ctx);
+}
