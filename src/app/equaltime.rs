@@ -8,7 +8,8 @@
 //!   the same image: its cost knob is `max_depth`, the specular interactions per branch, and
 //!   its curve runs over `--exact-depths`;
 //! - the reference itself (src/reference) at increasing samples per pixel where `raytrace`
-//!   cannot: when the setting renders caustics, which `raytrace` does not compute. Its time is
+//!   cannot: when the setting renders caustics, which a frame of `raytrace` only estimates
+//!   from its photons (docs/raytrace.md: noise and blur of one frame's photons). Its time is
 //!   the wall-clock time of its iterations alone (setup excluded; each submission waits on
 //!   its fence), which on lavapipe is the same CPU time the GPU timestamps measure.
 //!
@@ -49,7 +50,7 @@ pub struct ExactArgs {
     #[arg(long, value_delimiter = ',', default_value = "1,2,4,16")]
     pub exact_depths: Vec<u32>,
     /// Samples per pixel of the reference's curve, used instead of `raytrace` when the setting
-    /// renders caustics (which `raytrace` does not compute).
+    /// renders caustics (which a frame of `raytrace` only estimates from its photons).
     #[arg(long, value_delimiter = ',', default_value = "1,2,4,8")]
     pub exact_spp: Vec<u32>,
     /// Frames timed per point of the exact curve (after one warm-up frame). A raytraced
@@ -151,7 +152,8 @@ pub fn reference_noise(
     Ok(Noise { between_references: m })
 }
 
-/// Whether a setting's techniques can be replaced by `raytrace` (it has no caustics).
+/// Whether a setting's techniques can be replaced by `raytrace` with its photons off (the
+/// setting renders no caustics).
 pub fn source_for(scene: &Scene) -> ExactSource {
     if scene.render.caustics == "none" {
         ExactSource::Raytrace
