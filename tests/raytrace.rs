@@ -1,7 +1,8 @@
-//! The raytrace technique (src/technique/raytrace.rs) is the reference's light transport
-//! without caustics: its one centre ray per pixel, split deterministically at every
-//! dielectric, equals the converged reference (photons off) within the reference's own noise,
-//! and conserves energy exactly where the answer is known in closed form.
+//! The raytrace technique (src/technique/raytrace.rs) is the reference's light transport: its
+//! one centre ray per pixel, split deterministically at every dielectric, equals the converged
+//! reference (photons off) within the reference's own noise, and conserves energy exactly where
+//! the answer is known in closed form; the caustic it gathers from each frame's photons,
+//! averaged over frames, is the reference's.
 mod common;
 
 use std::sync::Arc;
@@ -58,7 +59,11 @@ fn stats(a: &[f32], b: &[f32], pixels: &[usize]) -> (f64, f64) {
 /// of 1e-4 covers the rounding between the two camera-ray computations (the frame's camera
 /// and the reference's). A control, `broken`, must fail by far.
 fn matches_reference(ctx: &Arc<GpuContext>, name: &str, effect: &str, ior: f64, spp: u32, broken: &str) {
-    let s = common::scene(name, SIZE, &[&format!("render.{effect}=raytrace")]);
+    // The reference without photons: the technique without them too (room_mirror has a light,
+    // a mirror and diffuse walls; caustic_through_the_glass_matches_the_reference checks the
+    // caustics).
+    let off = "render.raytrace.photons_per_frame=0";
+    let s = common::scene(name, SIZE, &[&format!("render.{effect}=raytrace"), off]);
     let traced = common::render_on(ctx, &s).hdr;
     let single = common::render_on(ctx, &common::scene(name, SIZE, &[&format!("render.{effect}=single")])).hdr;
     let pixels = written(&traced, &single);
@@ -80,7 +85,7 @@ fn matches_reference(ctx: &Arc<GpuContext>, name: &str, effect: &str, ior: f64, 
     assert!(error <= threshold, "{name}: RMSE {error} against the reference exceeds its noise {threshold}");
     assert!(bias <= bias_limit && bias >= -bias_limit - cutoff_loss, "{name}: mean difference {bias}");
 
-    let control = common::scene(name, SIZE, &[&format!("render.{effect}=raytrace"), broken]);
+    let control = common::scene(name, SIZE, &[&format!("render.{effect}=raytrace"), off, broken]);
     let (control, _) = stats(&common::render_on(ctx, &control).hdr, &a, &pixels);
     eprintln!("{name}: control {broken}: RMSE {control:.5}");
     assert!(control > 4.0 * threshold, "{name}: the comparison cannot tell {broken} ({control}) from the defaults");
@@ -238,4 +243,392 @@ fn its_passes_are_planned_with_their_reasons() {
     // Nothing to trace, nothing planned.
     let s = common::scene("sphere_env", 16, &["render.reflection=raytrace"]);
     assert!(!prism::technique::has(&prism::technique::recipe(&s).passes, "reflection_raytrace"));
+}
+
+/// The mean and, per value, the variance of that mean over `frames` frames of one renderer:
+/// each frame traces new photons (the photon kernel's iteration is the frame's), and
+/// everything else in a frame is a function of the scene, so the frames are independent
+/// samples of the caustic.
+fn frame_statistics(ctx: &Arc<GpuContext>, s: &Scene, frames: u32) -> (Vec<f64>, Vec<f64>) {
+    let mut r = prism::renderer::Renderer::new(ctx, s).expect("renderer");
+    let (mut sum, mut sum2) = (Vec::new(), Vec::new());
+    for _ in 0..frames {
+        r.render_frame().expect("frame");
+        let hdr = r.read_hdr().expect("hdr");
+        common::assert_finite(&s.name, &hdr);
+        sum.resize(hdr.len(), 0.0f64);
+        sum2.resize(hdr.len(), 0.0f64);
+        for (k, &v) in hdr.iter().enumerate() {
+            sum[k] += v as f64;
+            sum2[k] += v as f64 * v as f64;
+        }
+    }
+    drop(r);
+    common::assert_no_validation_errors(ctx);
+    let n = frames as f64;
+    let mean: Vec<f64> = sum.iter().map(|s| s / n).collect();
+    // The unbiased sample variance of one frame, over n: the variance of the mean.
+    let var = sum2.iter().zip(&mean).map(|(s2, m)| ((s2 / n - m * m) * n / (n - 1.0)).max(0.0) / n).collect();
+    (mean, var)
+}
+
+/// The reference's caustic alone (its photon-mapped part) with the raytrace technique's
+/// gathering disk: every visible point starts at the largest radius (`footprint` 0, 1% of the
+/// scene's radius) and keeps it (alpha close to 1), at the centre ray of its pixel.
+fn reference_caustic(ctx: &Arc<GpuContext>, s: &Scene, spp: u32, photons: u64, seed: u32) -> (Vec<f32>, f32) {
+    let st = ReferenceSettings { spp, photons, seed, footprint: 0.0, alpha: 0.999, ..ReferenceSettings::default() };
+    let mut r = Reference::new(ctx, s, &st).expect("reference");
+    r.run_all(|_, _| {}).unwrap();
+    assert!(r.stats().exact(), "{:?}", r.stats());
+    // How far the radii shrank: the smallest final radius over the initial one.
+    let initial = 0.01 * scene_radius(s);
+    let shrink = (0..(s.camera.width * s.camera.height) as usize)
+        .map(|k| r.pixel_state(k))
+        .filter(|p| p[2][3] > 0.5)
+        .map(|p| p[1][3] / initial)
+        .fold(1.0f32, f32::min);
+    (r.caustic_image(), shrink)
+}
+
+/// The GPU scene's bounding radius (src/frame/gpu_scene.rs): every vertex and the camera.
+fn scene_radius(s: &Scene) -> f32 {
+    let (mut lo, mut hi) = (s.camera.position, s.camera.position);
+    for p in s.objects.iter().flat_map(|o| &o.mesh.positions) {
+        lo = lo.min(*p);
+        hi = hi.max(*p);
+    }
+    (hi - lo).length() * 0.5
+}
+
+/// caustic_sphere's caustic seen through the glass ball from above (the camera over the ball,
+/// looking down through it at the focused ring on the floor): the technique's, averaged over
+/// frames, against the reference's converged one, at the same gathering disk. With
+/// `gather_radius` 16 footprints every disk is at its cap, 1% of the scene's radius (a
+/// footprint through the ball is at least 1.8 m, the way to the ball's top, times the pixel's
+/// 0.018 rad: 16 of them, 0.52 m, exceed the cap, 0.06 m), and
+/// the reference is given the same fixed radius at its pixels' centre rays (reference_caustic),
+/// so both estimate the same disk average of the irradiance: the reference choosing one
+/// Fresnel branch at random, the technique summing them. No blur bias between them but the
+/// reference's radius reduction, which alpha = 0.999 keeps below the printed `shrink` (the
+/// disk's area falls by shrink^2 at most; the flux it collects with it).
+///
+/// Threshold, from the noise of both: the technique's per-pixel variance of its mean over the
+/// frames, and the reference's from two seeds ((A - B)^2 / 2 per pixel estimates one run's).
+/// The mean over the pixels of the squared difference then has the expected value
+/// mean(var_rt) + mean(var_ref); with hundreds of pixels its own relative spread is a few
+/// per cent, so 1.5 times that plus the bias of the shrink (at most (1 - shrink^2) of the
+/// caustic, squared) fails for any systematic error above about 0.7 of the noise. The mean
+/// signed difference must lie within 4 standard errors of zero plus that bias. The control:
+/// the technique with no photons has all of the caustic as its error.
+#[test]
+fn caustic_through_the_glass_matches_the_reference() {
+    if !common::in_own_process() {
+        return;
+    }
+    let ctx = common::context(false);
+    let set = [
+        "render.refraction=raytrace",
+        "render.caustics=none",
+        "render.raytrace.gather_radius=16",
+        "camera.position=[0, 4, 0.3]",
+        "camera.target=[0, 0, 0]",
+        "camera.up=[0, 0, -1]",
+        "camera.vfov_deg=60",
+    ];
+    let s = common::scene("caustic_sphere", SIZE, &set);
+    let frames = 16;
+    let (lit, var_rt) = frame_statistics(&ctx, &s, frames);
+    let dark = common::render_on(
+        &ctx,
+        &common::scene("caustic_sphere", SIZE, &[&set[..], &["render.raytrace.photons_per_frame=0"]].concat()),
+    )
+    .hdr;
+    let single = common::render_on(
+        &ctx,
+        &common::scene("caustic_sphere", SIZE, &["render.refraction=single", "render.caustics=none"]),
+    )
+    .hdr;
+    let pixels = written(&dark, &single);
+    assert!(pixels.len() > 300, "only {} pixels traced", pixels.len());
+    let photons = 1u64 << 21;
+    let (a, shrink) = reference_caustic(&ctx, &s, 32, photons, 1);
+    let (b, _) = reference_caustic(&ctx, &s, 32, photons, 2);
+    let (mut sq, mut sum, mut noise, mut control, mut caustic, mut lit_pixels) =
+        (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0f64, 0);
+    for &p in &pixels {
+        for c in 0..3 {
+            let k = 4 * p + c;
+            let rt = lit[k] - dark[k] as f64;
+            let reference = 0.5 * (a[k] as f64 + b[k] as f64);
+            let d = rt - reference;
+            sq += d * d;
+            sum += d;
+            // Var of the mean of A and B: (A - B)^2 / 2 / 2.
+            let ab = a[k] as f64 - b[k] as f64;
+            noise += var_rt[k] + ab * ab / 4.0;
+            control += reference * reference;
+            caustic += reference;
+        }
+        if a[4 * p] > 0.0 {
+            lit_pixels += 1;
+        }
+    }
+    let n = (3 * pixels.len()) as f64;
+    let (msd, mean, noise, control, caustic) = (sq / n, sum / n, noise / n, control / n, caustic / n);
+    let bias = (1.0 - (shrink as f64).powi(2)) * caustic;
+    let limit = 1.5 * noise + bias * bias;
+    let mean_limit = 4.0 * (noise / n).sqrt() + bias;
+    eprintln!(
+        "caustic through the glass ({} pixels, {lit_pixels} with caustic; {frames} frames, reference 2 x 32 spp, {photons} photons): \
+         mean square difference {msd:.3e}, noise {noise:.3e}, limit {limit:.3e}; mean difference {mean:.3e} (limit {mean_limit:.3e}), \
+         mean caustic {caustic:.4}, shrink {shrink:.5}; control (no photons) {control:.3e}",
+        pixels.len()
+    );
+    assert!(lit_pixels > 50, "only {lit_pixels} pixels see the caustic through the glass");
+    assert!(msd <= limit, "mean square difference {msd} beyond the noise {noise} (limit {limit})");
+    assert!(mean.abs() <= mean_limit, "mean difference {mean}, limit {mean_limit}");
+    assert!(control > 4.0 * limit, "the comparison cannot tell a missing caustic ({control}) from noise ({limit})");
+    common::assert_no_validation_errors(&ctx);
+}
+
+/// Without photons (`photons_per_frame` = 0) the technique plans no photon pass and its image
+/// is the one without caustics: the same in every frame (nothing random changes between
+/// frames but the photons), and with photons the caustic only adds light, on some pixels. That
+/// it is exactly the tracer without caustics is equals_the_reference_on_room_mirror's check:
+/// there, without photons, the technique and the photon-less reference agree to the bit.
+#[test]
+fn no_photons_is_the_image_without_caustics() {
+    if !common::in_own_process() {
+        return;
+    }
+    let ctx = common::context(false);
+    let base = ["render.refraction=raytrace", "render.caustics=none"];
+    let off = common::scene("caustic_sphere", SIZE, &[&base[..], &["render.raytrace.photons_per_frame=0"]].concat());
+    let recipe = prism::technique::recipe(&off);
+    assert!(!prism::technique::has(&recipe.passes, "refraction_raytrace_photons"));
+    let on = common::scene("caustic_sphere", SIZE, &base);
+    let recipe = prism::technique::recipe(&on);
+    assert!(prism::technique::has(&recipe.passes, "refraction_raytrace_photon_reset"));
+    assert!(prism::technique::has(&recipe.passes, "refraction_raytrace_photons"));
+    let frames = common::render_each(&ctx, &[off.clone(), off.clone()]);
+    assert_eq!(frames[0].hdr, frames[1].hdr, "without photons the image changes from frame to frame");
+    let lit = common::render_on(&ctx, &on).hdr;
+    let dark = &frames[0].hdr;
+    let (mut brighter, mut darker) = (0, 0);
+    for p in 0..dark.len() / 4 {
+        for c in 0..3 {
+            let (d, l) = (dark[4 * p + c], lit[4 * p + c]);
+            if l > d {
+                brighter += 1;
+            }
+            if l < d {
+                darker += 1;
+            }
+        }
+    }
+    eprintln!("photons on against off: {brighter} values brighter, {darker} darker");
+    // The caustic only adds light.
+    assert_eq!(darker, 0, "the photons darkened {darker} values");
+    assert!(brighter > 100, "the photons brightened only {brighter} values");
+    common::assert_no_validation_errors(&ctx);
+}
+
+/// The ray from the camera through image point (x, y) in pixels, (0, 0) the top-left corner.
+fn pixel_ray(s: &Scene, x: f32, y: f32) -> Vec3 {
+    let c = &s.camera;
+    let forward = (c.target - c.position).normalize();
+    let right = forward.cross(c.up).normalize();
+    let up = right.cross(forward);
+    let tan_half = (c.vfov_deg.to_radians() * 0.5).tan();
+    let u = (2.0 * x / c.width as f32 - 1.0) * tan_half * c.aspect();
+    let v = (1.0 - 2.0 * y / c.height as f32) * tan_half;
+    (forward + u * right + v * up).normalize()
+}
+
+/// `render.caustics = "raytrace"` conserves the photons' flux: over the floor pixels seen
+/// directly, the caustic it adds, integrated over their footprints, equals the reflected flux
+/// (albedo / pi times the flux, W/sr) of the photons landing in those footprints. The photons
+/// are the technique's own: frame k traces the photons of the reference's photon pass k with
+/// the technique's seed and as many photons a pass (PHOTON_SEED), read back from the
+/// reference. caustic_sphere's light is moved aside so that the caustic falls beside the ball,
+/// in view.
+///
+/// Tolerance, as tests/reference.rs's flux checks: a photon at x counts in the sum over
+/// pixels with weight w(x) = sum over the disks holding x of A_px / (pi r^2), whose mean over
+/// a pixel is 1 (the disk's share of the footprint times its weight) and whose variance is at
+/// most 4 / pi - 1 (the disk inscribed in a square footprint, a disk grows with the pixel's
+/// obliquity faster than its footprint: A_px / (pi r^2) = 4 cos^3(theta) / pi, theta the angle
+/// off the camera's axis). So 3 standard deviations of the sum are 3 sqrt((4/pi - 1) sum f^2)
+/// / sum f of it, over the frames; plus the share of the photons' flux within a disk's reach of
+/// the selection's border (0.5 footprints over sqrt(cos), on either side: there a disk counts
+/// photons the selection leaves out or misses ones it counts). The control: the technique
+/// with its gather disabled (no caustic) misses all of it.
+#[test]
+fn direct_caustic_conserves_the_photons_flux() {
+    if !common::in_own_process() {
+        return;
+    }
+    use prism::PHOTON_DEPOSITED;
+    let ctx = common::context(false);
+    let (frames, per_frame) = (8u32, 8000u32);
+    let photons = format!("render.raytrace.photons_per_frame={per_frame}");
+    let base = ["render.refraction=single", "render.caustics=raytrace", "lights.0.position=[4, 5, 0]", &photons];
+    let s = common::scene("caustic_sphere", SIZE, &base);
+    assert!(prism::technique::has(&prism::technique::recipe(&s).passes, "caustics_raytrace"));
+    let (lit, _) = frame_statistics(&ctx, &s, frames);
+    let dark = common::render_on(
+        &ctx,
+        &common::scene("caustic_sphere", SIZE, &[&base[..], &["render.caustics=none"]].concat()),
+    )
+    .hdr;
+
+    let st = ReferenceSettings {
+        spp: frames,
+        photons: (per_frame * frames) as u64,
+        seed: prism::technique::raytrace::PHOTON_SEED,
+        ..ReferenceSettings::default()
+    };
+    let mut r = Reference::new(&ctx, &s, &st).expect("reference");
+    assert_eq!(r.photons_per_pass(), per_frame);
+    let mut deposited = Vec::new();
+    for _ in 0..frames {
+        r.run(1).unwrap();
+        for (o, p) in r.photon_outcomes().iter().zip(r.photon_positions()) {
+            if o[3] as u32 == PHOTON_DEPOSITED {
+                deposited.push((p, o[0] as f64));
+            }
+        }
+    }
+    drop(r);
+
+    // The floor pixels seen directly: the centre and the four corner rays reach the floor
+    // (y = 0, |x|, |z| < 4) past the ball (centre (0, 1.2, 0), radius 1).
+    let cam = s.camera.position;
+    let (ball, radius, albedo) = (Vec3::new(0.0, 1.2, 0.0), 1.0f32, 0.8f64);
+    let on_floor = |x: f32, y: f32| {
+        let d = pixel_ray(&s, x, y);
+        let t = -cam.y / d.y;
+        let p = cam + t * d;
+        let oc = cam - ball;
+        let b = oc.dot(d);
+        let hits_ball = b * b - (oc.length_squared() - radius * radius) > 0.0 && -b > 0.0;
+        (t > 0.0 && p.x.abs() < 4.0 && p.z.abs() < 4.0 && !hits_ball).then_some(p)
+    };
+    let n = SIZE as usize;
+    let footprint: Vec<Option<f64>> = (0..n * n)
+        .map(|k| {
+            let (i, j) = ((k % n) as f32, (k / n) as f32);
+            on_floor(i + 0.5, j + 0.5)?;
+            let q = [on_floor(i, j)?, on_floor(i + 1.0, j)?, on_floor(i + 1.0, j + 1.0)?, on_floor(i, j + 1.0)?];
+            Some(
+                0.5 * (0..4).map(|m| (q[m].x * q[(m + 1) % 4].z - q[(m + 1) % 4].x * q[m].z) as f64).sum::<f64>().abs(),
+            )
+        })
+        .collect();
+    let selected = |i: i64, j: i64| {
+        (0..n as i64).contains(&i) && (0..n as i64).contains(&j) && footprint[j as usize * n + i as usize].is_some()
+    };
+
+    // Which pixel each photon lands in, and whether a disk can carry it across the border.
+    let (mut sum, mut sum2, mut border, mut count) = (0.0f64, 0.0f64, 0.0f64, 0usize);
+    for &(p, f) in &deposited {
+        if p.y.abs() > 1e-4 {
+            continue;
+        }
+        let e = f * albedo / std::f64::consts::PI;
+        let q = p - cam;
+        let forward = (s.camera.target - cam).normalize();
+        let right = forward.cross(s.camera.up).normalize();
+        let up = right.cross(forward);
+        let tan_y = (s.camera.vfov_deg.to_radians() * 0.5).tan();
+        let z = q.dot(forward);
+        let x = (q.dot(right) / z / (tan_y * s.camera.aspect()) + 1.0) * 0.5 * SIZE as f32;
+        let y = (1.0 - q.dot(up) / z / tan_y) * 0.5 * SIZE as f32;
+        let (i, j) = (x.floor() as i64, y.floor() as i64);
+        let cos = (cam - p).normalize().y.abs().max(0.05);
+        let reach = RaytraceParams::default().gather_radius / cos.sqrt();
+        let k = reach.ceil() as i64;
+        let me = selected(i, j);
+        let crosses = (-k..=k).any(|a| {
+            (-k..=k).any(|b| {
+                let dx = ((i + a) as f32 - x).max(x - (i + a + 1) as f32).max(0.0);
+                let dy = ((j + b) as f32 - y).max(y - (j + b + 1) as f32).max(0.0);
+                selected(i + a, j + b) != me && dx * dx + dy * dy < reach * reach
+            })
+        });
+        if crosses {
+            border += e;
+        }
+        if me {
+            sum += e;
+            sum2 += e * e;
+            count += 1;
+        }
+    }
+    let integral: f64 =
+        footprint.iter().enumerate().filter_map(|(k, a)| Some((lit[4 * k] - dark[4 * k] as f64) * a.as_ref()?)).sum();
+    let flux = sum / frames as f64;
+    let sigma = ((4.0 / std::f64::consts::PI - 1.0) * sum2).sqrt() / sum;
+    let tolerance = 3.0 * sigma + border / sum;
+    eprintln!(
+        "direct caustic: photons' reflected flux {flux:.5} W/sr ({count} photons over {frames} frames), integrated \
+         radiance {integral:.5} (ratio {:.4}), sigma {sigma:.4}, border {:.4}, tolerance {tolerance:.4}, {} pixels",
+        integral / flux,
+        border / sum,
+        footprint.iter().flatten().count()
+    );
+    assert!(count >= 1000, "only {count} photons land on the floor seen directly");
+    assert!((integral - flux).abs() / flux < tolerance, "integrated caustic {integral}, photons' flux {flux}");
+    common::assert_no_validation_errors(&ctx);
+}
+
+/// The frame's `raytrace` techniques share one photon map: with `caustics = "raytrace"` too,
+/// only the caustics technique traces photons (one photon pass planned), and the refraction
+/// technique gathers exactly the photons it traced alone (frame k's photons are the same
+/// whoever traces them: the kernel's seed and iteration), so every pixel it writes is the
+/// same, bit for bit, caustic included; the other pixels only gain the caustic seen directly.
+/// The camera looks down through the ball at its focused ring, so that the refracted pixels
+/// hold a caustic.
+#[test]
+fn one_photon_map_serves_every_raytrace_technique() {
+    if !common::in_own_process() {
+        return;
+    }
+    let ctx = common::context(false);
+    let view = ["camera.position=[0, 4, 0.3]", "camera.target=[0, 0, 0]", "camera.up=[0, 0, -1]", "camera.vfov_deg=60"];
+    let with = |set: &[&str]| common::scene("caustic_sphere", SIZE, &[&view[..], set].concat());
+    let alone = with(&["render.refraction=raytrace", "render.caustics=none"]);
+    let shared = with(&["render.refraction=raytrace", "render.caustics=raytrace"]);
+    let plan = prism::technique::recipe(&shared).passes;
+    let photon_passes: Vec<_> = plan.iter().filter(|p| p.name.ends_with("_photons")).map(|p| p.name).collect();
+    assert_eq!(photon_passes, ["caustics_raytrace_photons"]);
+    let [alone, shared, single] = [alone, shared, with(&["render.refraction=single", "render.caustics=none"])]
+        .map(|s| common::render_on(&ctx, &s).hdr);
+    let refracted = written(&alone, &single);
+    let (no_photons, _) = stats(
+        &alone,
+        &common::render_on(
+            &ctx,
+            &with(&["render.refraction=raytrace", "render.caustics=none", "render.raytrace.photons_per_frame=0"]),
+        )
+        .hdr,
+        &refracted,
+    );
+    let same = refracted.iter().filter(|&&p| alone[4 * p..4 * p + 3] == shared[4 * p..4 * p + 3]).count();
+    let (mut brighter, mut darker) = (0, 0);
+    for p in 0..alone.len() / 4 {
+        for c in 0..3 {
+            brighter += usize::from(shared[4 * p + c] > alone[4 * p + c]);
+            darker += usize::from(shared[4 * p + c] < alone[4 * p + c]);
+        }
+    }
+    eprintln!(
+        "shared photons: {same} of {} refracted pixels identical (their caustic: RMSE {no_photons:.4} against none); \
+         {brighter} values brighter, {darker} darker",
+        refracted.len()
+    );
+    assert!(refracted.len() > 300 && no_photons > 0.1, "the refracted pixels show no caustic");
+    assert_eq!(same, refracted.len(), "the refraction technique gathered other photons");
+    assert!(darker == 0 && brighter > 100, "{brighter} values brighter, {darker} darker");
+    common::assert_no_validation_errors(&ctx);
 }

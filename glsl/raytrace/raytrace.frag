@@ -3,20 +3,24 @@
 // covered pixel's centre follows the exact specular chain with deterministic splitting. At a
 // dielectric both the reflected and the refracted branch are followed, weighted by exact
 // Fresnel (per channel when the ior is), until a branch escapes to the environment, reaches a
-// diffuse surface (which gathers what the reference's camera paths gather there, less the
-// photons' caustics: glsl/reference/paths.glsl), has made max_depth interactions, or carries
-// less than the cutoff. The scene, the intersection and the materials are the reference's own
-// code (glsl/reference/trace.glsl), its buffers bound in set 1.
+// diffuse surface (which gathers what the reference's camera paths gather there,
+// glsl/reference/paths.glsl, and the caustic from this frame's photons), has made max_depth
+// interactions, or carries less than the cutoff. The scene, the intersection, the materials
+// and the photon grid are the reference's own code (glsl/reference/trace.glsl,
+// photon_grid.glsl), their buffers bound in set 1.
 #include "frame.glsl"
 #include "environment.glsl"
 #define REF_SET 1
 #include "../reference/paths.glsl"
+#include "caustic.glsl"
 
 layout(constant_id = 0) const uint MODE = SPECULAR_MODE_REFRACTION;
 // A branch makes at most ref.counts.w specular interactions (the reference's max_depth, at
 // most RAYTRACE_MAX_DEPTH) and is dropped when its largest throughput channel falls below
 // ref.grid.w (the cutoff). Uniforms rather than specialisation constants: one pipeline per
-// mode, whatever the parameters.
+// mode, whatever the parameters. The photons of this frame (ref.photon.x of them, none: no
+// caustics) were traced by the reference's photon kernel just before this pass; ref.grid.z is
+// the gathering radius in pixel footprints, at most ref.grid.y.
 // RT1 of the G-buffer: a = object index. Its binding and the depth's are free in set 1:
 // they fall on REF_BINDING_MATERIALS and _ENVIRONMENT, which come from the frame set here.
 layout(set = 1, binding = BINDING_GBUF_ALBEDO) uniform sampler2D gbuf_albedo;
@@ -29,6 +33,7 @@ struct Branch {
     vec3 d;
     vec3 beta;    // throughput, (n_i/n_t)^2 radiance scaling included
     uint depth;   // rays traced before this one (the reference camera path's `bounce`)
+    float travelled;   // from the camera along the chain, to o
 };
 
 float largest(vec3 v) { return max(v.x, max(v.y, v.z)); }
@@ -41,7 +46,7 @@ vec3 trace_split(vec3 o, vec3 d, vec3 beta, int channel, inout uint rng) {
     float cutoff = ref.grid.w;
     Branch stack[RAYTRACE_MAX_DEPTH];
     uint sp = 0u;
-    Branch b = Branch(o, d, beta, 0u);
+    Branch b = Branch(o, d, beta, 0u, 0.0);
     vec3 L = vec3(0.0);
     while (true) {
         for (; b.depth <= max_depth; ++b.depth) {
@@ -56,8 +61,11 @@ vec3 trace_split(vec3 o, vec3 d, vec3 beta, int channel, inout uint rng) {
                 break;
             }
             Surface s = surface_at(b.o, b.d, h);
+            // Segments through a graded-index volume are not counted (as camera.comp).
+            b.travelled += h.t;
             if (kind_of(materials[s.material]) == MATERIAL_DIFFUSE) {
-                gather_diffuse(s, b.d, b.beta, channel, rng, L);
+                vec3 n = gather_diffuse(s, b.d, b.beta, channel, rng, L);
+                if (ref.photon.x > 0u) L += b.beta * caustic_at(s, b.d, n, b.travelled);
                 break;
             }
             Interaction x;
@@ -66,7 +74,7 @@ vec3 trace_split(vec3 o, vec3 d, vec3 beta, int channel, inout uint rng) {
             if (x.transmits) {
                 vec3 t_beta = weight * (1.0 - x.F) * x.scale;
                 if (b.depth < max_depth && sp < max_depth && largest(t_beta) >= cutoff) {
-                    stack[sp++] = Branch(offset_origin(s, x.refracted), x.refracted, t_beta, b.depth + 1u);
+                    stack[sp++] = Branch(offset_origin(s, x.refracted), x.refracted, t_beta, b.depth + 1u, b.travelled);
                 }
                 weight *= x.F;
             }

@@ -8,10 +8,11 @@
 //!   the same image: its cost knob is `max_depth`, the specular interactions per branch, and
 //!   its curve runs over `--exact-depths`;
 //! - the reference itself (src/reference) at increasing samples per pixel where `raytrace`
-//!   cannot: when the setting renders caustics or a graded-index volume, which `raytrace` does
-//!   not ([`source_for`]). Its time is the wall-clock time of its iterations alone (setup
-//!   excluded; each submission waits on its fence), which on lavapipe is the same CPU time the
-//!   GPU timestamps measure.
+//!   cannot ([`source_for`]): when the setting renders caustics, which a frame of `raytrace`
+//!   only estimates from its photons (docs/raytrace.md: noise and blur of one frame's photons),
+//!   or a graded-index volume, which `raytrace` does not draw. Its time is the wall-clock time
+//!   of its iterations alone (setup excluded; each submission waits on its fence), which on
+//!   lavapipe is the same CPU time the GPU timestamps measure.
 //!
 //! The exact points are timed interleaved with the settings, in one run
 //! ([`measure_interleaved`], the round-robin of `prism bench --versus`,
@@ -50,7 +51,8 @@ pub struct ExactArgs {
     #[arg(long, value_delimiter = ',', default_value = "1,2,4,16")]
     pub exact_depths: Vec<u32>,
     /// Samples per pixel of the reference's curve, used instead of `raytrace` when the setting
-    /// renders caustics or a volume (which `raytrace` does not).
+    /// renders caustics (which a frame of `raytrace` only estimates from its photons) or a
+    /// volume (which `raytrace` does not draw).
     #[arg(long, value_delimiter = ',', default_value = "1,2,4,8")]
     pub exact_spp: Vec<u32>,
     /// Frames timed per point of the exact curve (after one warm-up frame). A raytraced
@@ -78,7 +80,7 @@ impl ExactSource {
         match self {
             ExactSource::Raytrace => "raytrace (exact, deterministic splitting) at increasing max_depth",
             ExactSource::Reference => {
-                "the reference at increasing samples per pixel (raytrace renders no caustics and no volume)"
+                "the reference at increasing samples per pixel (the setting renders caustics or a volume)"
             }
         }
     }
@@ -155,10 +157,11 @@ pub fn reference_noise(
     Ok(Noise { between_references: m })
 }
 
-/// Whether a setting's techniques can be replaced by `raytrace`: it renders no caustics and
-/// no graded-index volume. `raytrace` traces the pixels the G-buffer gives to specular
-/// objects, and a `[volume]` is drawn by the eikonal technique over pixels that are not
-/// (with its caustic on the floor): only the reference renders all of that exactly.
+/// Whether a setting's techniques can be replaced by `raytrace` with its photons off: it
+/// renders no caustics and no graded-index volume. `raytrace` traces the pixels the G-buffer
+/// gives to specular objects, and a `[volume]` is drawn by the eikonal technique over pixels
+/// that are not (with its caustic on the floor): only the reference renders all of that
+/// exactly.
 pub fn source_for(scene: &Scene) -> ExactSource {
     if scene.render.caustics == "none" && scene.volume.is_none() {
         ExactSource::Raytrace
@@ -196,6 +199,8 @@ pub fn curve_spec(scene_args: &SceneArgs, measure_args: &MeasureArgs, exact: &Ex
                     "render.refraction=raytrace".to_string(),
                     "render.reflection=raytrace".to_string(),
                     format!("render.raytrace.max_depth={d}"),
+                    // The setting renders no caustics: neither does its exact counterpart.
+                    "render.raytrace.photons_per_frame=0".to_string(),
                 ]);
                 let scene = sa.load().with_context(|| format!("exact curve, raytrace max_depth={d}"))?;
                 spec.raytrace.push((format!("max_depth={d}"), scene));

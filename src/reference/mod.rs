@@ -542,6 +542,46 @@ pub struct Reference {
     ctx: Arc<GpuContext>,
 }
 
+/// Where the photon kernel (glsl/reference/photons.comp) aims: the bounding spheres (centre,
+/// radius) of the specular objects, and of the refractive volume, whose light reaches the
+/// floor by photons (camera.comp's shadow rays stop at it). Shared by the reference and the
+/// raytrace technique's caustics.
+pub fn photon_targets(scene: &Scene) -> Result<Vec<[f32; 4]>, RenderError> {
+    let mut targets = Vec::new();
+    for o in &scene.objects {
+        if scene.materials[o.material].is_specular() {
+            let (c, r) = match o.analytic {
+                Some(Analytic::Sphere { center, radius }) => (center, radius),
+                None => bounding_sphere(&o.mesh.positions),
+            };
+            // A little margin so that the cone contains the whole tessellated object.
+            targets.push([c.x, c.y, c.z, r * 1.001 + 1e-6]);
+        }
+    }
+    if let Some(v) = &scene.volume {
+        let (c, r) = match v.index.region().filter(|_| v.regions.is_empty()) {
+            Some((c, r)) => (c, r),
+            None => ((v.min + v.max) * 0.5, (v.max - v.min).length() * 0.5),
+        };
+        targets.push([c.x, c.y, c.z, r * 1.001 + 1e-6]);
+    }
+    if targets.len() > REF_MAX_TARGETS as usize {
+        return Err(RenderError::Limit(format!(
+            "the scene has {} specular objects; the reference aims photons at most {REF_MAX_TARGETS} (REF_MAX_TARGETS)",
+            targets.len()
+        )));
+    }
+    Ok(targets)
+}
+
+/// The stats buffer's contents before a kernel runs (glsl/reference/sppm.glsl): every count
+/// zero and the canary's trip count.
+pub fn initial_stats() -> [u32; REF_STATS as usize] {
+    let mut stats = [0u32; REF_STATS as usize];
+    stats[REF_STAT_CANARY_TRIPS as usize] = CANARY_TRIPS;
+    stats
+}
+
 /// Bounding sphere (centre, radius) of an object's vertices.
 fn bounding_sphere(positions: &[Vec3]) -> (Vec3, f32) {
     let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
@@ -586,33 +626,7 @@ impl Reference {
         let gpu_scene = GpuScene::new(ctx, scene, &mut graph, 1)?;
 
         let trace = TraceGeometry::new(ctx, scene)?;
-        // Photon targets: bounding spheres of the specular objects.
-        let mut targets = Vec::new();
-        for o in &scene.objects {
-            if scene.materials[o.material].is_specular() {
-                let (c, r) = match o.analytic {
-                    Some(Analytic::Sphere { center, radius }) => (center, radius),
-                    None => bounding_sphere(&o.mesh.positions),
-                };
-                // A little margin so that the cone contains the whole tessellated object.
-                targets.push([c.x, c.y, c.z, r * 1.001 + 1e-6]);
-            }
-        }
-        // The refractive volume is a target too: the light that reaches the floor through it
-        // comes by photons (camera.comp's shadow rays stop at it).
-        if let Some(v) = &scene.volume {
-            let (c, r) = match v.index.region().filter(|_| v.regions.is_empty()) {
-                Some((c, r)) => (c, r),
-                None => ((v.min + v.max) * 0.5, (v.max - v.min).length() * 0.5),
-            };
-            targets.push([c.x, c.y, c.z, r * 1.001 + 1e-6]);
-        }
-        if targets.len() > REF_MAX_TARGETS as usize {
-            return Err(RenderError::Limit(format!(
-                "the scene has {} specular objects; the reference aims photons at most {REF_MAX_TARGETS} (REF_MAX_TARGETS)",
-                targets.len()
-            )));
-        }
+        let targets = photon_targets(scene)?;
         let has_photons = settings.photons > 0 && !targets.is_empty() && !scene.lights.is_empty();
         let photons_per_iteration = if has_photons { settings.photons_per_iteration() } else { 0 };
         let passes_per_iteration = if has_photons { settings.passes_per_iteration() } else { 0 };
@@ -676,9 +690,7 @@ impl Reference {
 
         let mut stats =
             Buffer::new(ctx, "reference_stats", REF_STATS as u64 * 4, U::STORAGE_BUFFER, MemoryLocation::CpuToGpu)?;
-        let mut initial_stats = [0u32; REF_STATS as usize];
-        initial_stats[REF_STAT_CANARY_TRIPS as usize] = CANARY_TRIPS;
-        stats.write(0, bytemuck::cast_slice(&initial_stats));
+        stats.write(0, bytemuck::cast_slice(&initial_stats()));
 
         let sampler = Sampler::new(ctx, "reference_latlong", SamplerDesc::LATLONG)?;
         let mut bindings = Bindings::new(vk::ShaderStageFlags::COMPUTE)

@@ -382,6 +382,11 @@ impl Renderer {
             }
         }
         set_camera_uniforms(&mut self.uniforms, &scene.camera, scene.render.exposure, &self.scene);
+        // What the kept techniques vary from frame to frame starts again with the new scene,
+        // so that the next frame is the one a renderer created for it renders first.
+        for t in self.techniques.iter_mut().flatten() {
+            t.restart();
+        }
         update.ms = start.elapsed().as_millis() as u64;
         Ok(update)
     }

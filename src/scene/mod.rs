@@ -37,7 +37,7 @@ pub const REFRACTION_TECHNIQUES: &[&str] = &["single", "wyman", "hu_qin", "impos
 /// Accepted values of `render.reflection`; the first is the default.
 pub const REFLECTION_TECHNIQUES: &[&str] = &["single", "impostor", "raytrace"];
 /// Accepted values of `render.caustics`; the first is the default.
-pub const CAUSTICS_TECHNIQUES: &[&str] = &["none", "caustics_map", "photon_buffer", "impostor_lightmap"];
+pub const CAUSTICS_TECHNIQUES: &[&str] = &["none", "caustics_map", "photon_buffer", "impostor_lightmap", "raytrace"];
 
 /// Accepted values of `render.tonemap`; the first is the default (SCENES.md's PNG rule).
 /// `adaptive`: Ihrke et al. 2007 §5.3 after Krawczyk et al. 2005 (src/technique/baseline/tonemap.rs).

@@ -1089,6 +1089,21 @@ params! {
         /// dielectric of index n is at most `cutoff` n^2 of its radiance.
         // Below 1e-6 a concave refractor's branches multiply for no visible change.
         cutoff: f32 = 1e-3, 1e-6..=1.0;
+        /// Photons traced each frame for the caustics that the branches' diffuse vertices
+        /// gather (the reference's photon kernel, a new set every frame); 0: no caustics.
+        /// The default is the reference's photons per sample (2^22 over 64 samples, as in the
+        /// window's A/B view), so that a frame's caustic has the noise of one exact sample's.
+        // Above 2^20 the photon map outgrows what a frame should hold (64 MiB with its grid);
+        // the A/B view offers at most 2^18 per sample.
+        photons_per_frame: u32 = 65_536, 0..=1 << 20;
+        /// Radius of the photon density estimate in pixel footprints on the receiver (the
+        /// pixel's angle times the distance travelled along the branch, over sqrt(cos)), at
+        /// most 1% of the scene's radius, as the reference's initial radius. The default is
+        /// the reference's: the disk inscribed in the pixel's footprint, whose estimate is the
+        /// caustic near the pixel's average that the reference converges to. Larger radii
+        /// lower the noise (photons within r grow as r^2) and blur the caustic over r.
+        // Below 0.01 footprints a disk holds almost no photon; above 16 it blurs over 32 pixels.
+        gather_radius: f32 = 0.5, 0.01..=16.0;
     }
 
     /// `[render.tonemap_adaptive]`: the adaptive tone map of `render.tonemap = "adaptive"`

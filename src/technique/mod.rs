@@ -100,6 +100,7 @@ pub const TECHNIQUES: &[Registration] = &[
     impostor::impostor_lightmap::TECHNIQUE,
     baseline::gbuffer::TECHNIQUE,
     baseline::deferred_shading::TECHNIQUE,
+    raytrace::CAUSTICS,
     baseline::specular_single::REFRACTION,
     refraction::refraction_wyman::TECHNIQUE,
     refraction::refraction_hu_qin::TECHNIQUE,
@@ -358,6 +359,11 @@ pub trait Technique: Any {
             k.changed();
         }
     }
+
+    /// The scene was updated and the technique kept: what it varies from frame to frame (the
+    /// raytrace technique's photons) starts again, as in a technique created for the new
+    /// scene.
+    fn restart(&mut self) {}
 
     /// Whether work that spans frames is left ([`Self::prepare`]).
     fn preparing(&self) -> bool {

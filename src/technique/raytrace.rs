@@ -1,9 +1,10 @@
 //! Exact ray tracing of the specular objects, interactive: the reference's light transport
 //! at one centre ray per pixel, so that each approximation can be weighed against exact ray
-//! tracing at equal time (glsl/raytrace/raytrace.frag).
+//! tracing at equal time (glsl/raytrace/raytrace.frag), and its caustics on the diffuse
+//! surfaces seen directly (`render.caustics = "raytrace"`, glsl/raytrace/caustics.frag).
 //!
 //! What it computes is the reference's model (src/reference/mod.rs), SCENES.md's "light
-//! transport measured", without the caustics. Every pixel the G-buffer gives to a dielectric
+//! transport measured". Every pixel the G-buffer gives to a dielectric
 //! (`render.refraction = "raytrace"`, pass `refraction_raytrace`) or to a mirror or conductor
 //! (`render.reflection = "raytrace"`, `reflection_raytrace`) traces the ray through its centre
 //! from the camera, through the reference's BVH and exact spheres
@@ -22,45 +23,111 @@
 //!   included, so a branch dropped inside a dielectric of index n would have carried at most
 //!   `cutoff * n^2` out of it).
 //!
-//! Not computed: the caustics (light reaching a diffuse surface through specular chains),
-//! which the reference gathers from photons; they stay out of this technique. Graded-index
-//! volumes are crossed as the reference crosses them (glsl/reference/volume.glsl).
+//! Caustics (light reaching a diffuse surface through specular chains) come from the
+//! reference's photons, traced anew every frame: where the scene has a light, a specular
+//! object and a diffuse receiver and `photons_per_frame` > 0, the pass is preceded by a
+//! reset of the photon grid's heads and counter and by the reference's photon kernel
+//! (glsl/reference/photons.comp, its buffers and its hashed grid, a new iteration each
+//! frame), and every diffuse vertex a branch reaches (with `caustics = "raytrace"` also the
+//! diffuse surface each diffuse pixel's centre ray meets) adds the photons' radiance estimate
+//! within `gather_radius` pixel footprints (Jensen's photon-map estimate over the grid walk of
+//! the reference's SPPM gather, glsl/reference/photon_grid.glsl). With a fixed radius the
+//! estimate is biased by the blur over that disk and noisy as one frame's photons are; the
+//! frames' mean converges to the caustic averaged over the disk. Graded-index volumes are
+//! crossed as the reference crosses them (glsl/reference/volume.glsl).
 //!
 //! It composites like the other techniques of its stage: a full-screen pass over the HDR
-//! image that keeps every pixel not of its objects. The tracer's buffers are built once per
-//! geometry and kept in the technique cache, so a moved camera or light re-creates only the
-//! uniforms and the pass.
+//! image that keeps every pixel not of its objects (the caustic pass adds to the diffuse
+//! pixels after deferred shading instead). The tracer's buffers are built once per geometry
+//! and kept in the technique cache, so a moved camera or light re-creates only the uniforms,
+//! the photon buffers and the passes. The `refraction`, `reflection` and `caustics`
+//! techniques set to `"raytrace"` share a frame's photons through the technique cache: the
+//! first of them in the frame traces them, every one gathers them.
 use std::rc::Rc;
+use std::sync::Arc;
 
-use crate::gpu::{Buffer, Spec};
-use crate::graph::Frame;
-use crate::reference::TraceGeometry;
+use crate::frame::gpu_scene::GpuScene;
+use crate::gpu::GpuContext;
+use crate::gpu::{vk, Access, Buffer, ComputePipeline, MemoryLocation, Sampler, SamplerDesc, Spec};
+use crate::graph::{Bindings, BoundSet, BufferId, Frame, FrameGraph};
+use crate::reference::{dispatch_size, initial_stats, photon_targets, TraceGeometry};
 use crate::scene::techniques::RaytraceParams;
 use crate::scene::Scene;
+use crate::shader_structs::RefPush;
+use crate::shader_structs::RefUniforms;
 use crate::technique::baseline::fullscreen::{fragment_set, FullscreenDesc, FullscreenPass};
-use crate::technique::baseline::specular_single::Mode;
 use crate::technique::{
-    dielectric_names, list, metal_names, params, tables_and_placement, FrameInputs, Inputs, PlannedPass, Registration,
-    RenderError, Setup, Stage, Technique,
+    cache_key, dielectric_names, diffuse_names, list, metal_names, params, specular_names, tables_and_placement,
+    FrameInputs, Inputs, PlannedPass, Registration, RenderError, Setup, Stage, Technique,
 };
 use crate::*;
 
 pub const REFRACTION_RAYTRACE: &str = "refraction_raytrace";
 pub const REFLECTION_RAYTRACE: &str = "reflection_raytrace";
+pub const CAUSTICS_RAYTRACE: &str = "caustics_raytrace";
+/// Each effect's photon passes: the grid's reset, then the photon kernel.
+pub const REFRACTION_PHOTON_RESET: &str = "refraction_raytrace_photon_reset";
+pub const REFRACTION_PHOTONS: &str = "refraction_raytrace_photons";
+pub const REFLECTION_PHOTON_RESET: &str = "reflection_raytrace_photon_reset";
+pub const REFLECTION_PHOTONS: &str = "reflection_raytrace_photons";
+pub const CAUSTICS_PHOTON_RESET: &str = "caustics_raytrace_photon_reset";
+pub const CAUSTICS_PHOTONS: &str = "caustics_raytrace_photons";
+
+/// The grid's empty bucket (photon_grid.glsl's END_OF_LIST).
+const END_OF_PHOTON_LIST: u32 = u32::MAX;
+
+/// The photon kernel's seed: not the reference's (1 by default), so that a test comparing
+/// the two compares independent photons. Frame k (from 0) traces the photons of the
+/// reference's photon pass k with this seed and as many photons per pass (photons.comp), which
+/// a test reads back from the reference.
+pub const PHOTON_SEED: u32 = 0x5eed_ca05;
+
+/// What a `raytrace` technique puts into the frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Effect {
+    /// The dielectrics' pixels, traced.
+    Refraction,
+    /// The mirrors' and conductors' pixels, traced.
+    Reflection,
+    /// The caustic on the diffuse pixels seen directly, added to deferred shading's.
+    Caustics,
+}
+
+impl Effect {
+    /// (stage, fragment pass, photon grid reset, photon kernel).
+    fn passes(self) -> (Stage, &'static str, &'static str, &'static str) {
+        match self {
+            Effect::Refraction => (Stage::Refraction, REFRACTION_RAYTRACE, REFRACTION_PHOTON_RESET, REFRACTION_PHOTONS),
+            Effect::Reflection => (Stage::Reflection, REFLECTION_RAYTRACE, REFLECTION_PHOTON_RESET, REFLECTION_PHOTONS),
+            // After deferred shading, whose diffuse radiance it adds to.
+            Effect::Caustics => (Stage::Lighting, CAUSTICS_RAYTRACE, CAUSTICS_PHOTON_RESET, CAUSTICS_PHOTONS),
+        }
+    }
+}
 
 /// `render.refraction = "raytrace"`: the dielectrics, traced exactly.
 pub const REFRACTION: Registration = Registration {
     key: "refraction = \"raytrace\"",
-    plan: |scene| plan(scene, Mode::Refraction),
-    create: |s| create(s, Mode::Refraction),
+    plan: |scene| plan(scene, Effect::Refraction),
+    create: |s| create(s, Effect::Refraction),
     inputs,
 };
 
 /// `render.reflection = "raytrace"`: the mirrors and conductors, traced exactly.
 pub const REFLECTION: Registration = Registration {
     key: "reflection = \"raytrace\"",
-    plan: |scene| plan(scene, Mode::Reflection),
-    create: |s| create(s, Mode::Reflection),
+    plan: |scene| plan(scene, Effect::Reflection),
+    create: |s| create(s, Effect::Reflection),
+    inputs,
+};
+
+/// `render.caustics = "raytrace"`: the photons' caustic on the diffuse surfaces seen directly,
+/// so that `refraction = reflection = caustics = "raytrace"` traces the whole frame's light
+/// transport exactly.
+pub const CAUSTICS: Registration = Registration {
+    key: "caustics = \"raytrace\"",
+    plan: |scene| plan(scene, Effect::Caustics),
+    create: |s| create(s, Effect::Caustics),
     inputs,
 };
 
@@ -80,6 +147,8 @@ const _: () = {
         REF_BINDING_SPHERES,
         REF_BINDING_OBJECTS,
         REF_BINDING_VOLUME,
+        REF_BINDING_PHOTONS,
+        REF_BINDING_GRID,
     ];
     let mut i = 0;
     while i < tracer.len() {
@@ -88,44 +157,154 @@ const _: () = {
     }
 };
 
-fn plan(scene: &Scene, mode: Mode) -> Vec<(Stage, PlannedPass)> {
-    let (objects, selected, stage, name, what) = match mode {
-        Mode::Refraction => {
-            (dielectric_names(scene), &scene.render.refraction, Stage::Refraction, REFRACTION_RAYTRACE, "dielectric")
+/// Whether the technique traces photons for `scene`: a light, a diffuse receiver and a
+/// photon budget (its objects are the specular casters), as the caustics techniques decide.
+fn has_caustics(scene: &Scene) -> bool {
+    let photons = RaytraceParams::from_settings(&scene.render).map_or(0, |p| p.photons_per_frame);
+    photons > 0 && !scene.lights.is_empty() && !diffuse_names(scene).is_empty()
+}
+
+/// Whether `effect` is selected in `scene` and has something to trace: the `[render]` key that
+/// selects it and the reason for its pass.
+fn selection(scene: &Scene, effect: Effect) -> Option<(&'static str, String)> {
+    let (objects, selected, key, reason) = match effect {
+        Effect::Refraction => {
+            let objects = dielectric_names(scene);
+            let reason = format!("dielectric {} traced exactly", list(&objects));
+            (objects, &scene.render.refraction, "refraction", reason)
         }
-        Mode::Reflection => {
-            (metal_names(scene), &scene.render.reflection, Stage::Reflection, REFLECTION_RAYTRACE, "mirror/conductor")
+        Effect::Reflection => {
+            let objects = metal_names(scene);
+            let reason = format!("mirror/conductor {} traced exactly", list(&objects));
+            (objects, &scene.render.reflection, "reflection", reason)
+        }
+        Effect::Caustics => {
+            // No light, no receiver or no photons: no caustic to add.
+            if !has_caustics(scene) {
+                return None;
+            }
+            let objects = specular_names(scene);
+            let reason =
+                format!("photons' caustic of {} on {} seen directly", list(&objects), list(&diffuse_names(scene)));
+            (objects, &scene.render.caustics, "caustics", reason)
         }
     };
-    if objects.is_empty() || selected != "raytrace" {
-        return Vec::new();
+    (!objects.is_empty() && selected == "raytrace").then_some((key, reason))
+}
+
+/// The `raytrace` technique that traces the frame's photons, which every `raytrace` technique
+/// of the frame gathers: the first in the recipe (caustics after shading, then refraction,
+/// then reflection), where the scene has caustics.
+fn photon_owner(scene: &Scene) -> Option<Effect> {
+    if !has_caustics(scene) {
+        return None;
     }
-    let effect = if mode == Mode::Refraction { "refraction" } else { "reflection" };
-    vec![(
-        stage,
-        PlannedPass::new(name, format!("{what} {} traced exactly (render.{effect} = \"raytrace\")", list(&objects))),
-    )]
+    [Effect::Caustics, Effect::Refraction, Effect::Reflection].into_iter().find(|&e| selection(scene, e).is_some())
+}
+
+fn plan(scene: &Scene, effect: Effect) -> Vec<(Stage, PlannedPass)> {
+    let (stage, name, reset, photons) = effect.passes();
+    let Some((key, reason)) = selection(scene, effect) else { return Vec::new() };
+    let mut passes = Vec::new();
+    if photon_owner(scene) == Some(effect) {
+        let why = format!(
+            "caustics of {} on {} (render.raytrace.photons_per_frame)",
+            list(&specular_names(scene)),
+            list(&diffuse_names(scene))
+        );
+        passes.push((stage, PlannedPass::new(reset, format!("photon grid reset: {why}"))));
+        passes.push((stage, PlannedPass::new(photons, format!("photons from the lights: {why}"))));
+    }
+    passes.push((stage, PlannedPass::new(name, format!("{reason} (render.{key} = \"raytrace\")"))));
+    passes
+}
+
+/// The reference's photon kernel (glsl/reference/photons.comp) with its buffers, in set 0 as
+/// the reference binds them.
+struct PhotonKernel {
+    pipeline: ComputePipeline,
+    set: BoundSet,
+    groups: [u32; 3],
+    counters: Buffer,
+    counters_id: BufferId,
+    /// The kernel's records of every photon (flux and outcome, where it was deposited) and
+    /// the loop canary's counts: written, never read here.
+    _debug: Buffer,
+    _stats: Buffer,
+    _sampler: Sampler,
+    /// What the kernel reads of the tracer's uniforms (the lights, the targets, the photon
+    /// counts, max_depth).
+    _uniforms: Buffer,
+}
+
+/// A frame's photons, shared by the frame's `raytrace` techniques through the technique
+/// cache: the photon map (the photons and the grid's heads) that they gather from, and the
+/// kernel that the owner ([`photon_owner`]) runs. Without caustics the map is a stand-in of
+/// one element, bound but never read (ref.photon.x = 0), and there is no kernel.
+struct Photons {
+    photons: Buffer,
+    photons_id: BufferId,
+    grid: Buffer,
+    grid_id: BufferId,
+    kernel: Option<PhotonKernel>,
+    _geometry: Rc<crate::technique::Timed<TraceGeometry>>,
 }
 
 struct Raytrace {
     pass: FullscreenPass,
+    photons: Rc<Photons>,
+    /// The names of the photon passes, where this technique records them.
+    owner: Option<(&'static str, &'static str)>,
+    /// The photon kernel's iteration: the frames begun before this one, so that every frame
+    /// traces new photons.
+    iteration: u32,
+    begun: u32,
     // Bound in the pass's set 1.
     _uniforms: Buffer,
     geometry: Rc<crate::technique::Timed<TraceGeometry>>,
 }
 
-fn create(s: &mut Setup<'_>, mode: Mode) -> Result<Box<dyn Technique>, RenderError> {
+fn create(s: &mut Setup<'_>, effect: Effect) -> Result<Box<dyn Technique>, RenderError> {
     let p = params("raytrace", RaytraceParams::from_settings(&s.scene.render))?;
     let (ctx, scene) = (s.ctx, s.scene);
     let timed = s.cache.get_or_try_insert_timed(TraceGeometry::key(scene), || TraceGeometry::new(ctx, scene))?;
     let geometry = &timed.value;
-    let (name, spec) = match mode {
-        Mode::Refraction => (REFRACTION_RAYTRACE, SPECULAR_MODE_REFRACTION),
-        Mode::Reflection => (REFLECTION_RAYTRACE, SPECULAR_MODE_REFLECTION),
+    let (_, name, reset, trace) = effect.passes();
+    let refraction = [("MODE", Spec::U32(SPECULAR_MODE_REFRACTION))];
+    let reflection = [("MODE", Spec::U32(SPECULAR_MODE_REFLECTION))];
+    let (shader, spec): (_, &[_]) = match effect {
+        Effect::Refraction => ("raytrace/raytrace.frag", &refraction),
+        Effect::Reflection => ("raytrace/raytrace.frag", &reflection),
+        Effect::Caustics => ("raytrace/caustics.frag", &[]),
     };
-    let uniforms = geometry.uniforms(scene, s.gpu, p.max_depth).with_cutoff(p.cutoff);
+    let mut uniforms = geometry.uniforms(scene, s.gpu, p.max_depth).with_cutoff(p.cutoff);
+    let count = if has_caustics(scene) { p.photons_per_frame } else { 0 };
+    // The reference's photon map for `count` photons (src/reference/mod.rs, Reference::new):
+    // a table of twice as many buckets, at least 4096; the largest radius 1% of the scene's
+    // radius (the reference's initial radius) and cells twice that, so that a gathering disk
+    // overlaps at most 2x2x2 cells (photon_grid.glsl).
+    let table = (2 * count.max(1)).next_power_of_two().max(1 << 12);
+    let cap = 0.01 * s.gpu.bounds_radius.max(1e-20);
+    let targets = photon_targets(scene)?;
+    uniforms.counts[2] = targets.len() as u32;
+    uniforms.targets[..targets.len()].copy_from_slice(&targets);
+    uniforms.photon[0] = count;
+    uniforms.photon[1] = count.max(1);
+    uniforms.photon[2] = table;
+    uniforms.grid[0] = 2.002 * cap;
+    uniforms.grid[1] = cap;
+    uniforms.grid[2] = p.gather_radius;
+
+    // Shared while what the photons depend on is: the geometry, the lights, the photon count,
+    // max_depth and the grid's cells (the scene's radius, which the camera's position is part
+    // of). The GPU scene's buffers bound with them live as long as the renderer, as the cache.
+    let key = cache_key(&(TraceGeometry::key(scene), &scene.lights, count, p.max_depth, cap.to_bits()));
+    let (cache, graph, gpu) = (&mut *s.cache, &mut *s.graph, s.gpu);
+    let photons = cache.get_or_try_insert(key, || make_photons(ctx, graph, gpu, &timed, &uniforms, count))?;
+    let owner = (photon_owner(scene) == Some(effect)).then_some((reset, trace));
     let uniforms = Buffer::storage(ctx, &format!("{name}_uniforms"), std::slice::from_ref(&uniforms))?;
-    // Host-written once at creation (the graph tracks images only): visible at submission.
+
+    // The uniforms are host-written once at creation: visible at submission.
     let targets = s.targets;
     let mut set = fragment_set()
         .sampled(BINDING_GBUF_ALBEDO, &targets.gbuf_albedo, s.nearest)
@@ -133,23 +312,141 @@ fn create(s: &mut Setup<'_>, mode: Mode) -> Result<Box<dyn Technique>, RenderErr
         .sampled(BINDING_GBUF_DEPTH, &targets.depth, s.nearest)
         .read(targets.depth_id)
         .storage(REF_BINDING_UNIFORMS, &uniforms)
-        .storage(REF_BINDING_VERTICES, &s.gpu.vertices);
+        .storage(REF_BINDING_VERTICES, &s.gpu.vertices)
+        .storage(REF_BINDING_PHOTONS, &photons.photons)
+        .read(photons.photons_id)
+        .storage(REF_BINDING_GRID, &photons.grid)
+        .read(photons.grid_id);
     for (binding, buffer) in geometry.buffers() {
         set = set.storage(binding, buffer);
     }
     let pass = FullscreenPass::new(
         ctx,
-        // Overwrites only the pixels of its objects.
-        &FullscreenDesc::over_hdr(name, "raytrace/raytrace.frag", targets, &[("MODE", Spec::U32(spec))]),
+        // Overwrites only the pixels of its objects; the caustic is added to the diffuse ones'.
+        &FullscreenDesc {
+            additive: effect == Effect::Caustics,
+            ..FullscreenDesc::over_hdr(name, shader, targets, spec)
+        },
         set,
         s.frame_layout,
     )?;
-    Ok(Box::new(Raytrace { pass, _uniforms: uniforms, geometry: timed }))
+    Ok(Box::new(Raytrace { pass, photons, owner, iteration: 0, begun: 0, _uniforms: uniforms, geometry: timed }))
+}
+
+/// The photon map for `count` photons a frame and, with photons, the reference's photon
+/// kernel over it, reading `uniforms`.
+fn make_photons(
+    ctx: &Arc<GpuContext>,
+    graph: &mut FrameGraph,
+    gpu: &GpuScene,
+    geometry: &Rc<crate::technique::Timed<TraceGeometry>>,
+    uniforms: &RefUniforms,
+    count: u32,
+) -> Result<Photons, RenderError> {
+    use vk::BufferUsageFlags as U;
+    let table = uniforms.photon[2];
+    let photons =
+        Buffer::new(ctx, "raytrace_photon_list", count.max(1) as u64 * 48, U::STORAGE_BUFFER, MemoryLocation::GpuOnly)?;
+    let grid = Buffer::new(
+        ctx,
+        "raytrace_photon_grid",
+        if count > 0 { table as u64 * 4 } else { 4 },
+        U::STORAGE_BUFFER | U::TRANSFER_DST,
+        MemoryLocation::GpuOnly,
+    )?;
+    let (photons_id, grid_id) = (graph.register_buffer(&photons), graph.register_buffer(&grid));
+    let kernel = if count == 0 {
+        None
+    } else {
+        let uniforms = Buffer::storage(ctx, "raytrace_photon_uniforms", std::slice::from_ref(uniforms))?;
+        let counters = Buffer::new(
+            ctx,
+            "raytrace_photon_counter",
+            16,
+            U::STORAGE_BUFFER | U::TRANSFER_DST,
+            MemoryLocation::GpuOnly,
+        )?;
+        // (flux, outcome) and the deposit's position of every photon (photons.comp).
+        let debug = Buffer::new(
+            ctx,
+            "raytrace_photon_debug",
+            2 * count as u64 * 16,
+            U::STORAGE_BUFFER,
+            MemoryLocation::GpuOnly,
+        )?;
+        let stats = Buffer::storage(ctx, "raytrace_photon_stats", &initial_stats())?;
+        let sampler = Sampler::new(ctx, "raytrace_photon_latlong", SamplerDesc::LATLONG)?;
+        let counters_id = graph.register_buffer(&counters);
+        let (debug_id, stats_id) = (graph.register_buffer(&debug), graph.register_buffer(&stats));
+        let mut bindings = Bindings::new(vk::ShaderStageFlags::COMPUTE)
+            .storage(REF_BINDING_UNIFORMS, &uniforms)
+            .storage(REF_BINDING_MATERIALS, &gpu.materials)
+            .sampled(REF_BINDING_ENVIRONMENT, &gpu.environment, &sampler)
+            .read(gpu.environment_id)
+            .storage(REF_BINDING_VERTICES, &gpu.vertices)
+            .storage(REF_BINDING_PHOTONS, &photons)
+            .access(photons_id, Access::ComputeWrite)
+            .storage(REF_BINDING_GRID, &grid)
+            .access(grid_id, Access::ComputeWrite)
+            .storage(REF_BINDING_COUNTERS, &counters)
+            .access(counters_id, Access::ComputeWrite)
+            .storage(REF_BINDING_DEBUG, &debug)
+            .access(debug_id, Access::ComputeWrite)
+            .storage(REF_BINDING_STATS, &stats)
+            .access(stats_id, Access::ComputeWrite);
+        for (binding, buffer) in geometry.value.buffers() {
+            bindings = bindings.storage(binding, buffer);
+        }
+        let set = bindings.build(ctx, "raytrace_photons")?;
+        let push = std::mem::size_of::<RefPush>() as u32;
+        let pipeline =
+            ComputePipeline::new(ctx, "raytrace_photons", "reference/photons.comp", &[set.layout()], push, &[])?;
+        let groups = dispatch_size(count, ctx.limits().max_compute_work_group_count).ok_or_else(|| {
+            RenderError::Limit(format!("{count} photons a frame need more workgroups than the device allows"))
+        })?;
+        Some(PhotonKernel {
+            pipeline,
+            set,
+            groups,
+            counters,
+            counters_id,
+            _debug: debug,
+            _stats: stats,
+            _sampler: sampler,
+            _uniforms: uniforms,
+        })
+    };
+    Ok(Photons { photons, photons_id, grid, grid_id, kernel, _geometry: geometry.clone() })
 }
 
 impl Technique for Raytrace {
     fn record<'a>(&'a self, _: Stage, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>) {
+        if let (Some((reset, trace)), Some(k)) = (self.owner, &self.photons.kernel) {
+            let (grid, counters) = (&self.photons.grid, &k.counters);
+            frame
+                .pass(reset)
+                .write(self.photons.grid_id, Access::TransferWrite)
+                .write(k.counters_id, Access::TransferWrite)
+                .record(move |cmd| {
+                    cmd.fill_buffer(grid, END_OF_PHOTON_LIST);
+                    cmd.fill_buffer(counters, 0);
+                });
+            let push = RefPush { iteration: self.iteration, seed: PHOTON_SEED, mode: 0, count: 0 };
+            let (pipeline, set, groups) = (&k.pipeline, k.set.set(), k.groups);
+            // The set declares the kernel's accesses: the photons, grid, counter, debug records
+            // and canary counts written, the environment read.
+            frame.pass(trace).uses(&k.set).record(move |cmd| cmd.compute(pipeline, &[set], &push, groups));
+        }
         self.pass.record(frame, inputs.frame_set, &[inputs.scene.environment_id]);
+    }
+
+    fn begin_frame(&mut self) {
+        self.iteration = self.begun;
+        self.begun = self.begun.wrapping_add(1);
+    }
+
+    fn restart(&mut self) {
+        self.begun = 0;
     }
 
     fn once_costs(&self) -> Vec<crate::technique::OnceCost> {

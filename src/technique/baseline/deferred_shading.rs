@@ -139,6 +139,7 @@ impl DeferredShadingPass {
                 target: (&targets.hdr, targets.hdr_id),
                 clear: true,
                 specialization: &specialization,
+                additive: false,
             },
             targets.gbuffer(fragment_set(), nearest, true),
             frame_layout,

@@ -141,6 +141,8 @@ pub struct FullscreenDesc<'a> {
     pub clear: bool,
     /// Specialisation constants of the fragment shader, by name.
     pub specialization: Specs<'a>,
+    /// Add to what the target holds (a light added after shading) instead of overwriting it.
+    pub additive: bool,
 }
 
 impl<'a> FullscreenDesc<'a> {
@@ -152,7 +154,14 @@ impl<'a> FullscreenDesc<'a> {
         targets: &'a Targets,
         specialization: Specs<'a>,
     ) -> Self {
-        FullscreenDesc { name, fragment_shader, target: (&targets.hdr, targets.hdr_id), clear: false, specialization }
+        FullscreenDesc {
+            name,
+            fragment_shader,
+            target: (&targets.hdr, targets.hdr_id),
+            clear: false,
+            specialization,
+            additive: false,
+        }
     }
 }
 
@@ -176,6 +185,7 @@ impl FullscreenPass {
             ctx,
             &GraphicsPipelineDesc {
                 specialization: desc.specialization,
+                blend: if desc.additive { &[Blend::Additive] } else { &[Blend::Off] },
                 ..GraphicsPipelineDesc::fullscreen(desc.name, desc.fragment_shader)
             },
             &[frame_layout, set.layout()],

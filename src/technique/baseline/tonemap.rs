@@ -182,6 +182,7 @@ impl TonemapPass {
             target: (&targets.ldr, targets.ldr_id),
             clear: true,
             specialization: &[],
+            additive: false,
         };
         let hdr = fragment_set().sampled(BINDING_HDR, &targets.hdr, nearest).read(targets.hdr_id);
         let Some((params, exposure)) = adaptive else {
