@@ -77,6 +77,8 @@ shared_constants! {
 
     SPECULAR_MODE_REFRACTION: u32 = 0;
     SPECULAR_MODE_REFLECTION: u32 = 1;
+    // raytrace.frag only: every pixel traced from the camera (render.volume = "raytrace").
+    RAYTRACE_MODE_FRAME: u32 = 2;
 
     // Distance impostor probe modes: Hit() against a map, and the conductor Fresnel terms.
     IMPOSTOR_PROBE_HIT: u32 = 0;

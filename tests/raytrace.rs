@@ -245,6 +245,62 @@ fn its_passes_are_planned_with_their_reasons() {
     assert!(!prism::technique::has(&prism::technique::recipe(&s).passes, "reflection_raytrace"));
 }
 
+/// `render.volume = "raytrace"` renders a `[volume]` scene's whole frame (eikonal_sphere: the
+/// graded-index ball over its floor) as the reference does, in place of eikonal rendering.
+///
+/// Threshold: at the volume's boundary the tracer makes the reference's own stochastic Fresnel
+/// choice (glsl/reference/volume.glsl, one choice per pixel, fixed over frames), and on this
+/// scene (no specular surface, a black environment) its paths are the reference's camera
+/// paths; so its image is distributed as a 1-spp reference's. Against reference A (16 spp),
+/// its squared differences and those of a 1-spp reference C of another seed are then samples
+/// of the same mean: with m and s the mean and standard deviation of C's n squared
+/// differences, raytrace's mean square difference lies within m + 4 s sqrt(2 / n) (a 4-sigma
+/// bound on the difference of two means of n). The mean signed difference lies within 4
+/// standard errors of zero. A control, the ball at another index, must fail the bound.
+#[test]
+fn renders_a_volume_scene_as_the_reference_does() {
+    if !common::in_own_process() {
+        return;
+    }
+    let ctx = common::context(false);
+    let size = 32;
+    let off = "render.raytrace.photons_per_frame=0";
+    let s = common::scene("eikonal_sphere", size, &["render.volume=raytrace", off]);
+    let recipe = prism::technique::recipe(&s);
+    let p = recipe.passes.iter().find(|p| p.name == "volume_raytrace").expect("volume_raytrace planned");
+    assert!(p.reason.contains("volume ball") && p.reason.contains("render.volume"), "{}", p.reason);
+    assert!(!prism::technique::has(&recipe.passes, "eikonal_view"), "eikonal rendering planned beside raytrace");
+    let traced = common::render_on(&ctx, &s).hdr;
+    common::assert_finite("volume_raytrace", &traced);
+    let all: Vec<usize> = (0..traced.len() / 4).collect();
+    let a = reference(&ctx, &s, 16, 1);
+    let c = reference(&ctx, &s, 1, 3);
+    let sq: Vec<f64> =
+        all.iter().flat_map(|&p| (0..3).map(move |k| 4 * p + k)).map(|i| ((c[i] - a[i]) as f64).powi(2)).collect();
+    let n = sq.len() as f64;
+    let m = sq.iter().sum::<f64>() / n;
+    let sd = (sq.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+    let bound = m + 4.0 * sd * (2.0 / n).sqrt();
+    let (error, bias) = stats(&traced, &a, &all);
+    let mse = error * error;
+    let bias_limit = 4.0 * m.sqrt() / n.sqrt();
+    eprintln!(
+        "eikonal_sphere, whole frame traced: mean square difference against 16 spp {mse:.6} (1-spp reference: \
+         {m:.6}, bound {bound:.6}); mean difference {bias:.6} (limit {bias_limit:.6})"
+    );
+    assert!(
+        mse <= bound,
+        "mean square difference {mse} against the reference exceeds a 1-spp reference's bound {bound}"
+    );
+    assert!(bias.abs() <= bias_limit, "mean difference {bias}");
+    let control = common::scene("eikonal_sphere", size, &["render.volume=raytrace", off, "volume.index.n=1.2"]);
+    let (control, _) = stats(&common::render_on(&ctx, &control).hdr, &a, &all);
+    eprintln!("control volume.index.n=1.2: mean square difference {:.6}", control * control);
+    // It must fail the same bound (measured: 1.9 times it at 32^2).
+    assert!(control * control > bound, "the comparison cannot tell another index ({control}) from the scene's");
+    common::assert_no_validation_errors(&ctx);
+}
+
 /// The mean and, per value, the variance of that mean over `frames` frames of one renderer:
 /// each frame traces new photons (the photon kernel's iteration is the frame's), and
 /// everything else in a frame is a function of the scene, so the frames are independent

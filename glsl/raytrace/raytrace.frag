@@ -1,6 +1,7 @@
 #version 450
-// Exact ray tracing of the specular objects (src/technique/raytrace.rs): one ray through each
-// covered pixel's centre follows the exact specular chain with deterministic splitting. At a
+// Exact ray tracing of the specular objects, or of the whole frame of a volume scene
+// (src/technique/raytrace.rs): one ray through each covered pixel's centre (every pixel's,
+// MODE = RAYTRACE_MODE_FRAME) follows the exact specular chain with deterministic splitting. At a
 // dielectric both the reflected and the refracted branch are followed, weighted by exact
 // Fresnel (per channel when the ior is), until a branch escapes to the environment, reaches a
 // diffuse surface (which gathers what the reference's camera paths gather there,
@@ -91,12 +92,16 @@ vec3 trace_split(vec3 o, vec3 d, vec3 beta, int channel, inout uint rng) {
 
 void main() {
     ivec2 px = ivec2(gl_FragCoord.xy);
-    if (texelFetch(gbuf_depth, px, 0).r <= 0.0) discard;
-    uint object = uint(texelFetch(gbuf_albedo, px, 0).a + 0.5);
-    uint kind = material_kind(object_material[object]);
-    bool dielectric = kind == MATERIAL_DIELECTRIC;
-    bool metal = kind == MATERIAL_MIRROR || kind == MATERIAL_CONDUCTOR;
-    if ((MODE == SPECULAR_MODE_REFRACTION && !dielectric) || (MODE == SPECULAR_MODE_REFLECTION && !metal)) discard;
+    // The whole frame (render.volume = "raytrace"): every pixel, its first surface or the
+    // volume found by the trace itself, not by the G-buffer, which does not cover a volume.
+    if (MODE != RAYTRACE_MODE_FRAME) {
+        if (texelFetch(gbuf_depth, px, 0).r <= 0.0) discard;
+        uint object = uint(texelFetch(gbuf_albedo, px, 0).a + 0.5);
+        uint kind = material_kind(object_material[object]);
+        bool dielectric = kind == MATERIAL_DIELECTRIC;
+        bool metal = kind == MATERIAL_MIRROR || kind == MATERIAL_CONDUCTOR;
+        if ((MODE == SPECULAR_MODE_REFRACTION && !dielectric) || (MODE == SPECULAR_MODE_REFLECTION && !metal)) discard;
+    }
 
     // The diffuse vertices' environment sample: the same per pixel in every frame, so that
     // the image is a function of the scene.

@@ -159,9 +159,10 @@ pub fn reference_noise(
 
 /// Whether a setting's techniques can be replaced by `raytrace` with its photons off: it
 /// renders no caustics and no graded-index volume. `raytrace` traces the pixels the G-buffer
-/// gives to specular objects, and a `[volume]` is drawn by the eikonal technique over pixels
-/// that are not (with its caustic on the floor): only the reference renders all of that
-/// exactly.
+/// gives to specular objects, and a `[volume]` is drawn over pixels that are not (with its
+/// caustic on the floor); `render.volume = "raytrace"` traces them, but makes the reference's
+/// stochastic Fresnel choice at the volume's boundary, so its curve over `max_depth` is not
+/// its error curve: the reference's over samples is.
 pub fn source_for(scene: &Scene) -> ExactSource {
     if scene.render.caustics == "none" && scene.volume.is_none() {
         ExactSource::Raytrace

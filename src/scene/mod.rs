@@ -38,6 +38,10 @@ pub const REFRACTION_TECHNIQUES: &[&str] = &["single", "wyman", "hu_qin", "impos
 pub const REFLECTION_TECHNIQUES: &[&str] = &["single", "impostor", "raytrace"];
 /// Accepted values of `render.caustics`; the first is the default.
 pub const CAUSTICS_TECHNIQUES: &[&str] = &["none", "caustics_map", "photon_buffer", "impostor_lightmap", "raytrace"];
+/// Accepted values of `render.volume`, how a `[volume]` is rendered; the first is the default.
+/// `eikonal`: Ihrke et al. 2007 (src/technique/eikonal); `raytrace`: the whole frame traced
+/// exactly, the volume crossed as the reference crosses it (src/technique/raytrace.rs).
+pub const VOLUME_TECHNIQUES: &[&str] = &["eikonal", "raytrace"];
 
 /// Accepted values of `render.tonemap`; the first is the default (SCENES.md's PNG rule).
 /// `adaptive`: Ihrke et al. 2007 §5.3 after Krawczyk et al. 2005 (src/technique/baseline/tonemap.rs).
@@ -54,6 +58,7 @@ pub const TECHNIQUE_KEYS: &[(&str, &[&str])] = &[
     ("refraction", REFRACTION_TECHNIQUES),
     ("reflection", REFLECTION_TECHNIQUES),
     ("caustics", CAUSTICS_TECHNIQUES),
+    ("volume", VOLUME_TECHNIQUES),
     ("tonemap", TONEMAPS),
     ("update", UPDATES),
 ];
@@ -290,6 +295,8 @@ pub struct RenderSettings {
     pub refraction: String,
     pub reflection: String,
     pub caustics: String,
+    /// One of [`VOLUME_TECHNIQUES`]: how a `[volume]` is rendered.
+    pub volume: String,
     pub shadow_map_size: u32,
     pub exposure: f32,
     /// One of [`TONEMAPS`]: how PNG output (and the window) maps radiance to 8 bits.
@@ -311,6 +318,7 @@ impl Default for RenderSettings {
             refraction: REFRACTION_TECHNIQUES[0].to_string(),
             reflection: REFLECTION_TECHNIQUES[0].to_string(),
             caustics: CAUSTICS_TECHNIQUES[0].to_string(),
+            volume: VOLUME_TECHNIQUES[0].to_string(),
             shadow_map_size: 1024,
             exposure: 1.0,
             tonemap: TONEMAPS[0].to_string(),
@@ -590,6 +598,7 @@ fn render_settings(t: Option<&toml::Table>, src: &Source) -> Result<RenderSettin
         "refraction",
         "reflection",
         "caustics",
+        "volume",
         "tonemap",
         "update",
         "shadow_map_size",
@@ -641,6 +650,7 @@ fn render_settings(t: Option<&toml::Table>, src: &Source) -> Result<RenderSettin
                     r.tonemap_named = true;
                 }
                 "update" => r.update = name.to_string(),
+                "volume" => r.volume = name.to_string(),
                 _ => r.caustics = name.to_string(),
             }
             continue;

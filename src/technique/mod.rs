@@ -111,6 +111,7 @@ pub const TECHNIQUES: &[Registration] = &[
     impostor::distance_impostor::REFLECTION,
     raytrace::REFLECTION,
     eikonal::eikonal_view::TECHNIQUE,
+    raytrace::VOLUME,
     baseline::tonemap::TECHNIQUE,
 ];
 

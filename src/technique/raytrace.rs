@@ -65,6 +65,7 @@ use crate::*;
 pub const REFRACTION_RAYTRACE: &str = "refraction_raytrace";
 pub const REFLECTION_RAYTRACE: &str = "reflection_raytrace";
 pub const CAUSTICS_RAYTRACE: &str = "caustics_raytrace";
+pub const VOLUME_RAYTRACE: &str = "volume_raytrace";
 /// Each effect's photon passes: the grid's reset, then the photon kernel.
 pub const REFRACTION_PHOTON_RESET: &str = "refraction_raytrace_photon_reset";
 pub const REFRACTION_PHOTONS: &str = "refraction_raytrace_photons";
@@ -72,6 +73,8 @@ pub const REFLECTION_PHOTON_RESET: &str = "reflection_raytrace_photon_reset";
 pub const REFLECTION_PHOTONS: &str = "reflection_raytrace_photons";
 pub const CAUSTICS_PHOTON_RESET: &str = "caustics_raytrace_photon_reset";
 pub const CAUSTICS_PHOTONS: &str = "caustics_raytrace_photons";
+pub const VOLUME_PHOTON_RESET: &str = "volume_raytrace_photon_reset";
+pub const VOLUME_PHOTONS: &str = "volume_raytrace_photons";
 
 /// The grid's empty bucket (photon_grid.glsl's END_OF_LIST).
 const END_OF_PHOTON_LIST: u32 = u32::MAX;
@@ -91,6 +94,9 @@ enum Effect {
     Reflection,
     /// The caustic on the diffuse pixels seen directly, added to deferred shading's.
     Caustics,
+    /// Every pixel of the frame, traced from the camera through the `[volume]` (as the
+    /// reference crosses it) and everything else: the whole frame exact.
+    Volume,
 }
 
 impl Effect {
@@ -101,6 +107,8 @@ impl Effect {
             Effect::Reflection => (Stage::Reflection, REFLECTION_RAYTRACE, REFLECTION_PHOTON_RESET, REFLECTION_PHOTONS),
             // After deferred shading, whose diffuse radiance it adds to.
             Effect::Caustics => (Stage::Lighting, CAUSTICS_RAYTRACE, CAUSTICS_PHOTON_RESET, CAUSTICS_PHOTONS),
+            // The eikonal view pass's stage, which it replaces.
+            Effect::Volume => (Stage::Volume, VOLUME_RAYTRACE, VOLUME_PHOTON_RESET, VOLUME_PHOTONS),
         }
     }
 }
@@ -118,6 +126,15 @@ pub const REFLECTION: Registration = Registration {
     key: "reflection = \"raytrace\"",
     plan: |scene| plan(scene, Effect::Reflection),
     create: |s| create(s, Effect::Reflection),
+    inputs,
+};
+
+/// `render.volume = "raytrace"`: a `[volume]` scene's whole frame traced exactly, in place of
+/// eikonal rendering.
+pub const VOLUME: Registration = Registration {
+    key: "volume = \"raytrace\"",
+    plan: |scene| plan(scene, Effect::Volume),
+    create: |s| create(s, Effect::Volume),
     inputs,
 };
 
@@ -164,6 +181,14 @@ fn has_caustics(scene: &Scene) -> bool {
     photons > 0 && !scene.lights.is_empty() && !diffuse_names(scene).is_empty()
 }
 
+/// What the photons are aimed at: the specular objects and the `[volume]`
+/// (src/reference/mod.rs `photon_targets`).
+fn casters(scene: &Scene) -> Vec<String> {
+    let mut names = specular_names(scene);
+    names.extend(scene.volume.iter().map(|v| v.name.clone()));
+    names
+}
+
 /// Whether `effect` is selected in `scene` and has something to trace: the `[render]` key that
 /// selects it and the reason for its pass.
 fn selection(scene: &Scene, effect: Effect) -> Option<(&'static str, String)> {
@@ -183,10 +208,15 @@ fn selection(scene: &Scene, effect: Effect) -> Option<(&'static str, String)> {
             if !has_caustics(scene) {
                 return None;
             }
-            let objects = specular_names(scene);
+            let objects = casters(scene);
             let reason =
                 format!("photons' caustic of {} on {} seen directly", list(&objects), list(&diffuse_names(scene)));
             (objects, &scene.render.caustics, "caustics", reason)
+        }
+        Effect::Volume => {
+            let Some(v) = &scene.volume else { return None };
+            let reason = format!("volume {} and the whole frame traced exactly from the camera", v.name);
+            (vec![v.name.clone()], &scene.render.volume, "volume", reason)
         }
     };
     (!objects.is_empty() && selected == "raytrace").then_some((key, reason))
@@ -194,12 +224,14 @@ fn selection(scene: &Scene, effect: Effect) -> Option<(&'static str, String)> {
 
 /// The `raytrace` technique that traces the frame's photons, which every `raytrace` technique
 /// of the frame gathers: the first in the recipe (caustics after shading, then refraction,
-/// then reflection), where the scene has caustics.
+/// then reflection, then the whole frame of a volume), where the scene has caustics.
 fn photon_owner(scene: &Scene) -> Option<Effect> {
     if !has_caustics(scene) {
         return None;
     }
-    [Effect::Caustics, Effect::Refraction, Effect::Reflection].into_iter().find(|&e| selection(scene, e).is_some())
+    [Effect::Caustics, Effect::Refraction, Effect::Reflection, Effect::Volume]
+        .into_iter()
+        .find(|&e| selection(scene, e).is_some())
 }
 
 fn plan(scene: &Scene, effect: Effect) -> Vec<(Stage, PlannedPass)> {
@@ -209,7 +241,7 @@ fn plan(scene: &Scene, effect: Effect) -> Vec<(Stage, PlannedPass)> {
     if photon_owner(scene) == Some(effect) {
         let why = format!(
             "caustics of {} on {} (render.raytrace.photons_per_frame)",
-            list(&specular_names(scene)),
+            list(&casters(scene)),
             list(&diffuse_names(scene))
         );
         passes.push((stage, PlannedPass::new(reset, format!("photon grid reset: {why}"))));
@@ -272,10 +304,12 @@ fn create(s: &mut Setup<'_>, effect: Effect) -> Result<Box<dyn Technique>, Rende
     let (_, name, reset, trace) = effect.passes();
     let refraction = [("MODE", Spec::U32(SPECULAR_MODE_REFRACTION))];
     let reflection = [("MODE", Spec::U32(SPECULAR_MODE_REFLECTION))];
+    let frame = [("MODE", Spec::U32(RAYTRACE_MODE_FRAME))];
     let (shader, spec): (_, &[_]) = match effect {
         Effect::Refraction => ("raytrace/raytrace.frag", &refraction),
         Effect::Reflection => ("raytrace/raytrace.frag", &reflection),
         Effect::Caustics => ("raytrace/caustics.frag", &[]),
+        Effect::Volume => ("raytrace/raytrace.frag", &frame),
     };
     let mut uniforms = geometry.uniforms(scene, s.gpu, p.max_depth).with_cutoff(p.cutoff);
     let count = if has_caustics(scene) { p.photons_per_frame } else { 0 };

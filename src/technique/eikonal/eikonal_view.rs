@@ -41,7 +41,7 @@ pub const EIKONAL_NEARBY: &str = "eikonal_nearby";
 pub const TECHNIQUE: Registration = registration!("[volume]", plan, EikonalPass, ["eikonal"]);
 
 fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
-    let Some(v) = &scene.volume else {
+    let Some(v) = scene.volume.as_ref().filter(|_| scene.render.volume == "eikonal") else {
         return Vec::new();
     };
     let p = EikonalParams::from_settings(&scene.render).unwrap_or_default();
