@@ -30,19 +30,6 @@ fn box_scene(overrides: &[&str]) -> Scene {
     common::glass_scene(SIZE, [0.0, 0.0, 4.0], IOR, object, overrides)
 }
 
-/// The camera ray through image point (x, y) in pixels (pixel (i, j)'s centre is
-/// (i + 0.5, j + 0.5)), as `Camera::primary_ray`.
-fn ray(s: &Scene, x: f32, y: f32) -> (Vec3, Vec3) {
-    let c = &s.camera;
-    let forward = (c.target - c.position).normalize();
-    let right = forward.cross(c.up).normalize();
-    let up = right.cross(forward);
-    let tan_half = (c.vfov_deg.to_radians() * 0.5).tan();
-    let u = (2.0 * x / c.width as f32 - 1.0) * tan_half * c.aspect();
-    let v = (1.0 - 2.0 * y / c.height as f32) * tan_half;
-    (c.position, (forward + u * right + v * up).normalize())
-}
-
 /// Nearest hit of o + t d (t > 1e-4) on the box's triangles: (t, outward unit face normal).
 fn hit(s: &Scene, o: Vec3, d: Vec3) -> Option<(f32, Vec3)> {
     hit_mesh(&s.objects[0].mesh, o, d)
@@ -110,7 +97,7 @@ struct Exit {
 }
 
 fn exit(s: &Scene, x: f32, y: f32) -> Option<Exit> {
-    let (o, d) = ray(s, x, y);
+    let (o, d) = s.camera.ray_through(x, y);
     let (t, n1) = hit(s, o, d)?;
     let p1 = o + t * d;
     let t1 = refract(d, n1, 1.0 / IOR)?.normalize();
@@ -284,7 +271,7 @@ fn wyman_with_every_intermediate_exact_is_the_two_interface_tracer() {
     for j in 0..SIZE {
         for i in 0..SIZE {
             let Some(e) = robust(&s, i, j) else { continue };
-            let (_, d) = ray(&s, i as f32 + 0.5, j as f32 + 0.5);
+            let (_, d) = s.camera.primary_ray(i, j);
             let theta_1 = (-d.dot(e.n1)).clamp(-1.0, 1.0).acos();
             let f1 = fresnel(theta_1.cos(), 1.0 / IOR);
             let df1 = [theta_1 - delta, theta_1 + delta]

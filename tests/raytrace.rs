@@ -489,18 +489,6 @@ fn no_photons_is_the_image_without_caustics() {
     common::assert_no_validation_errors(&ctx);
 }
 
-/// The ray from the camera through image point (x, y) in pixels, (0, 0) the top-left corner.
-fn pixel_ray(s: &Scene, x: f32, y: f32) -> Vec3 {
-    let c = &s.camera;
-    let forward = (c.target - c.position).normalize();
-    let right = forward.cross(c.up).normalize();
-    let up = right.cross(forward);
-    let tan_half = (c.vfov_deg.to_radians() * 0.5).tan();
-    let u = (2.0 * x / c.width as f32 - 1.0) * tan_half * c.aspect();
-    let v = (1.0 - 2.0 * y / c.height as f32) * tan_half;
-    (forward + u * right + v * up).normalize()
-}
-
 /// `render.caustics = "raytrace"` conserves the photons' flux: over the floor pixels seen
 /// directly, the caustic it adds, integrated over their footprints, equals the reflected flux
 /// (albedo / pi times the flux, W/sr) of the photons landing in those footprints. The photons
@@ -562,7 +550,7 @@ fn direct_caustic_conserves_the_photons_flux() {
     let cam = s.camera.position;
     let (ball, radius, albedo) = (Vec3::new(0.0, 1.2, 0.0), 1.0f32, 0.8f64);
     let on_floor = |x: f32, y: f32| {
-        let d = pixel_ray(&s, x, y);
+        let (_, d) = s.camera.ray_through(x, y);
         let t = -cam.y / d.y;
         let p = cam + t * d;
         let oc = cam - ball;

@@ -183,13 +183,19 @@ impl Camera {
     /// The ray (origin, unit direction) through the centre of pixel (i, j):
     /// ((i + 0.5) / W, (j + 0.5) / H) of the image, j = 0 the top row.
     pub fn primary_ray(&self, i: u32, j: u32) -> (Vec3, Vec3) {
+        self.ray_through(i as f32 + 0.5, j as f32 + 0.5)
+    }
+
+    /// The ray (origin, unit direction) through image point (x, y) in pixels, (0, 0) the
+    /// top-left corner of the image.
+    pub fn ray_through(&self, x: f32, y: f32) -> (Vec3, Vec3) {
         let forward = (self.target - self.position).normalize();
         let right = forward.cross(self.up).normalize();
         let up = right.cross(forward);
         let tan_half = (self.vfov_deg.to_radians() * 0.5).tan();
-        let x = (2.0 * (i as f32 + 0.5) / self.width as f32 - 1.0) * tan_half * self.aspect();
-        let y = (1.0 - 2.0 * (j as f32 + 0.5) / self.height as f32) * tan_half;
-        (self.position, (forward + x * right + y * up).normalize())
+        let u = (2.0 * x / self.width as f32 - 1.0) * tan_half * self.aspect();
+        let v = (1.0 - 2.0 * y / self.height as f32) * tan_half;
+        (self.position, (forward + u * right + v * up).normalize())
     }
 }
 
