@@ -591,16 +591,8 @@ fn direct_caustic_conserves_the_photons_flux() {
         let (i, j) = (x.floor() as i64, y.floor() as i64);
         let cos = (cam - p).normalize().y.abs().max(0.05);
         let reach = RaytraceParams::default().gather_radius / cos.sqrt();
-        let k = reach.ceil() as i64;
         let me = selected(i, j);
-        let crosses = (-k..=k).any(|a| {
-            (-k..=k).any(|b| {
-                let dx = ((i + a) as f32 - x).max(x - (i + a + 1) as f32).max(0.0);
-                let dy = ((j + b) as f32 - y).max(y - (j + b + 1) as f32).max(0.0);
-                selected(i + a, j + b) != me && dx * dx + dy * dy < reach * reach
-            })
-        });
-        if crosses {
+        if common::disk_crosses_border(selected, x, y, reach) {
             border += e;
         }
         if me {

@@ -634,18 +634,8 @@ fn flux_balance(c: &CausticRender, rec_: &Receiver, footprints: f32) -> FluxBala
         // footprints / sqrt(cos) pixels from the visible point, which lies in its pixel.
         let cos = (s.camera.position - p).normalize().y.abs().max(0.05);
         let reach = footprints / cos.sqrt();
-        let k = reach.ceil() as i64;
         let me = selected(i, j);
-        let crosses = (-k..=k).any(|a| {
-            (-k..=k).any(|b| {
-                let (lo_x, hi_x) = ((i + a) as f32, (i + a + 1) as f32);
-                let (lo_y, hi_y) = ((j + b) as f32, (j + b + 1) as f32);
-                let ddx = (lo_x - x).max(x - hi_x).max(0.0);
-                let ddy = (lo_y - y).max(y - hi_y).max(0.0);
-                selected(i + a, j + b) != me && ddx * ddx + ddy * ddy < reach * reach
-            })
-        });
-        if crosses {
+        if common::disk_crosses_border(selected, x, y, reach) {
             border += e;
         }
         if me {

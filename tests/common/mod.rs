@@ -446,3 +446,19 @@ pub fn total(hdr: &[f32]) -> f64 {
 pub fn refs(v: &[String]) -> Vec<&str> {
     v.iter().map(String::as_str).collect()
 }
+
+/// Whether a disk of `reach` pixels around image point (x, y) (pixel (floor x, floor y))
+/// reaches a pixel whose `selected` differs from its own: a photon gathered by such a disk can
+/// count on either side of the selection's border (the flux checks' border share).
+pub fn disk_crosses_border(selected: impl Fn(i64, i64) -> bool, x: f32, y: f32, reach: f32) -> bool {
+    let (i, j) = (x.floor() as i64, y.floor() as i64);
+    let k = reach.ceil() as i64;
+    let me = selected(i, j);
+    (-k..=k).any(|a| {
+        (-k..=k).any(|b| {
+            let dx = ((i + a) as f32 - x).max(x - (i + a + 1) as f32).max(0.0);
+            let dy = ((j + b) as f32 - y).max(y - (j + b + 1) as f32).max(0.0);
+            selected(i + a, j + b) != me && dx * dx + dy * dy < reach * reach
+        })
+    })
+}
