@@ -325,6 +325,8 @@ shared_bindings! {
         LIGHT_BINDING_DIRECTION = 11;
         LIGHT_BINDING_EXTINCTION = 12;
         LIGHT_BINDING_SPILL = 13;
+        LIGHT_BINDING_AIR_FACES = 14;
+        LIGHT_BINDING_AIR_SKIP = 15;
     }
     // The window's water animation (glsl/common/heightfield.comp; src/frame/heightfield.rs):
     // one set 0.

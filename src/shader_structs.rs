@@ -359,6 +359,26 @@ shared_structs! {
         flux: vec4,
     }
 
+    /// One face of a light's initial wavefront whose patches that only cross air were not
+    /// simulated (`render.eikonal.skip_air`): light_resolve.glsl adds their light in closed
+    /// form (src/technique/eikonal/eikonal_light.rs `WavefrontFace`).
+    #[derive(Default)]
+    buffer struct AirFace {
+        /// xyz: the point light's position, or the directional wavefront's centre; w: 0 point,
+        /// 1 directional
+        origin: vec4,
+        /// xyz: the face's axis (the direction of travel of a directional light); w: tan of the
+        /// half-angle (point) or the half-width in metres (directional)
+        axis: vec4,
+        /// xyz: the first tangent; w: patches per side k
+        t1: vec4,
+        /// xyz: the second tangent; w: index of the face's first k x k skip flag
+        t2: vec4,
+        /// rgb: intensity W/sr (point) or irradiance W/m^2 (directional); w: the radius the
+        /// point light's patches start at
+        power: vec4,
+    }
+
     /// Per run of the light simulator (one light, one index channel, one tile of the initial
     /// wavefront; glsl/eikonal/light_common.glsl).
     #[derive(Default)]

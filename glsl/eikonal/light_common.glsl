@@ -54,6 +54,7 @@ layout(constant_id = 15) const uint CHANNELS = 1u;         // index slabs in `fi
 layout(constant_id = 16) const uint MATERIALS = 0u;        // 0: no extinction anywhere (stand-in)
 layout(constant_id = 17) const uint KEEP_CROSSED = 0u;     // 1: keep patches past a singularity
 layout(constant_id = 18) const uint INTEGRATOR = EIKONAL_EULER;
+layout(constant_id = 20) const uint AIR_FACES = 0u;        // wavefront faces with skipped patches
 
 const vec3 VOL_MIN = vec3(VOL_MIN_X, VOL_MIN_Y, VOL_MIN_Z);
 const vec3 VOL_MAX = vec3(VOL_MAX_X, VOL_MAX_Y, VOL_MAX_Z);

@@ -281,8 +281,8 @@ fn render(args: RenderArgs) -> Result<()> {
     }
     if let Some(l) = renderer.light_stats() {
         eprintln!(
-            "eikonal light simulation: {} runs (lights x channels x tiles; {} tiles split), {} step dispatches, {} initial patches, peak {}, {} dropped at max_patches, {:.2} s",
-            l.runs.len(), l.split_tiles, l.steps, l.initial_patches, l.peak_patches, l.dropped_patches, l.seconds
+            "eikonal light simulation: {} runs (lights x channels x tiles; {} tiles split), {} step dispatches, {} initial patches ({} only crossing air, added in closed form), peak {}, {} dropped at max_patches, {:.2} s",
+            l.runs.len(), l.split_tiles, l.steps, l.initial_patches, l.skipped_patches, l.peak_patches, l.dropped_patches, l.seconds
         );
         eprintln!(
             "eikonal light simulation: {} patch-steps, GPU {:.1} ms, of which {:.1} ms in overflowing tiles and their take-backs; deposits by {}; per kernel:",

@@ -1044,6 +1044,12 @@ params! {
         /// reaches the floor: on eikonal_sphere half of the ball's light crosses the caustic
         /// before the floor (tests/eikonal_light.rs).
         keep_crossed: bool = true;
+        /// Simulate only the initial patches whose straight beam from the light comes near
+        /// the medium (a voxel whose index differs from air or which absorbs, widened by the
+        /// smoothing's reach); the others cross nothing but air, where light travels straight
+        /// with E = I / r^2 (point) or E (directional), and their light is added in closed form
+        /// (glsl/eikonal/light_resolve.glsl). false simulates every patch, as the paper does.
+        skip_air: bool = true;
         /// Add the deposits to the irradiance accumulator with the device's float atomics
         /// (VK_EXT_shader_atomic_float's shaderImageFloat32AtomicAdd) where it has them; false,
         /// or a device without them: a compare-and-swap loop on the f32 bits (core Vulkan).

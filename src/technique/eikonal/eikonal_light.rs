@@ -63,7 +63,7 @@ use crate::{
 use super::histopyramid::{initial_state, level_lengths, HistoPyramid};
 use super::volume::{box_specs, prepare_volume, IndexField, RayState, VolumeTextures, LIGHT_BOX};
 pub use crate::shader_structs::Patch;
-use crate::shader_structs::RunPush;
+use crate::shader_structs::{AirFace, RunPush};
 use crate::technique::baseline::fullscreen::{fragment_set, FullscreenDesc, FullscreenPass};
 
 /// §5.2's light simulation (run when the technique is created) and the diffuse receivers
@@ -162,6 +162,9 @@ pub struct KernelTime {
 pub struct LightStats {
     /// Initial patches of every light's wavefront (each channel's run starts them again).
     pub initial_patches: u32,
+    /// Of those, the patches not simulated because their straight beams only cross air
+    /// (`skip_air`): their light was added in closed form.
+    pub skipped_patches: u32,
     /// Dispatches of the step kernel in all runs.
     pub steps: u32,
     /// Patches after each dispatch (the HistoPyramid's output count), run after run.
@@ -283,25 +286,77 @@ fn frame(w: Vec3) -> (Vec3, Vec3) {
     (t1, w.cross(t1))
 }
 
-/// The initial wavefront (section 5.2: "a planar wavefront (directional light source) or a
-/// spherical wavefront (point light source) ... large enough to cover the simulation
-/// volume") as `per_side` x `per_side` patches per face, just outside the bounding sphere of
-/// the box `min`..`max`, in air (n = 1). A directional light's patches carry its irradiance
-/// E times their area; a point light's carry I / r0^2 times their area at radius r0. A point
-/// light inside the bounding sphere starts on a small sphere around it, all six cube faces.
-pub fn initial_wavefront(volume: &Volume, min: Vec3, max: Vec3, light: &Light, per_side: u32) -> Vec<Patch> {
+/// One face of a light's initial wavefront: a k x k grid of patches. Patch (i, j) of a point
+/// light's face starts at radius `r0` with the directions axis + t1 u + t2 v for u in
+/// -half + 2 half [i, i + 1] / k (v alike with j): a gnomonic grid, so the straight beam of a
+/// patch is exactly the cone over its cell of the plane at unit distance. A directional
+/// light's patch starts at origin + t1 u + t2 v and travels along the axis.
+#[derive(Clone, Copy, Debug)]
+pub struct WavefrontFace {
+    pub point: bool,
+    /// The point light's position, or the directional wavefront's centre.
+    pub origin: Vec3,
+    pub axis: Vec3,
+    pub t1: Vec3,
+    pub t2: Vec3,
+    /// tan of the half-angle (point) or the half-width in metres (directional).
+    pub half: f32,
+    /// Patches per side.
+    pub k: u32,
+    /// The radius a point light's patches start at.
+    pub r0: f32,
+    /// Intensity W/sr (point) or irradiance W/m^2 (directional).
+    pub power: Vec3,
+}
+
+impl WavefrontFace {
+    /// Grid coordinate a = 0..k of u (or v).
+    fn coordinate(&self, a: u32) -> f32 {
+        -self.half + 2.0 * self.half * a as f32 / self.k as f32
+    }
+
+    /// Position and unit direction of grid corner (a, b).
+    fn corner(&self, a: u32, b: u32) -> (Vec3, Vec3) {
+        let (u, v) = (self.coordinate(a), self.coordinate(b));
+        if self.point {
+            let d = (self.axis + self.t1 * u + self.t2 * v).normalize();
+            (self.origin + d * self.r0, d)
+        } else {
+            (self.origin + self.t1 * u + self.t2 * v, self.axis)
+        }
+    }
+
+    /// (u, v) of the straight ray of this face through `x`; None behind a point light's face.
+    fn plane_coordinates(&self, x: Vec3) -> Option<(f32, f32)> {
+        let r = x - self.origin;
+        if self.point {
+            let z = r.dot(self.axis);
+            (z > 0.0).then(|| (r.dot(self.t1) / z, r.dot(self.t2) / z))
+        } else {
+            Some((r.dot(self.t1), r.dot(self.t2)))
+        }
+    }
+
+    /// The cells (clamped to the grid) whose coordinate range overlaps lo..=hi.
+    fn cells(&self, lo: f32, hi: f32) -> Option<std::ops::RangeInclusive<u32>> {
+        if hi < -self.half || lo > self.half {
+            return None;
+        }
+        let k = self.k as f32;
+        let cell = |u: f32| (((u + self.half) * k / (2.0 * self.half)).floor()).clamp(0.0, k - 1.0) as u32;
+        Some(cell(lo)..=cell(hi))
+    }
+}
+
+/// The faces of `light`'s initial wavefront (section 5.2: "a planar wavefront (directional
+/// light source) or a spherical wavefront (point light source) ... large enough to cover the
+/// simulation volume"), `per_side` x `per_side` patches per face, just outside the bounding
+/// sphere of the box `min`..`max`, in air (n = 1). A point light inside the bounding sphere
+/// starts on a small sphere around it, all six cube faces.
+pub fn wavefront_faces(volume: &Volume, min: Vec3, max: Vec3, light: &Light, per_side: u32) -> Vec<WavefrontFace> {
     let center = 0.5 * (min + max);
     let radius = 0.5 * (max - min).length();
     let voxel = volume.voxel_size().min_element();
-    let n_at = |x: Vec3| -> f32 {
-        let inside = x.cmpge(volume.min).all() && x.cmple(volume.max).all();
-        if inside {
-            volume.index.n(x.as_dvec3()) as f32
-        } else {
-            1.0
-        }
-    };
-    let mut patches = Vec::new();
     // At most MAX_INITIAL_PATCHES in all (the list must fit one storage-buffer binding):
     // fewer per side for the six faces of a point light inside the bounding sphere.
     let faces = match *light {
@@ -310,32 +365,12 @@ pub fn initial_wavefront(volume: &Volume, min: Vec3, max: Vec3, light: &Light, p
     };
     let most = ((MAX_INITIAL_PATCHES / faces) as f64).sqrt() as u32;
     let k = per_side.clamp(1, most);
-    // x[c].w numbers the initial particles (4 per patch; exact in f32 below 2^24) so that
-    // tests can follow them; particles created by tessellation get -1.
-    let make = |corners: [Vec3; 4], dirs: [Vec3; 4], e: Vec3, id: usize| -> Patch {
-        let mut p = Patch::default();
-        for c in 0..4 {
-            p.x[c] = corners[c].extend((4 * id + c) as f32).to_array();
-            p.v[c] = (dirs[c] * n_at(corners[c])).extend(0.0).to_array();
-        }
-        let area = p.normal().length();
-        p.flux = (e * area).extend(0.0).to_array();
-        p
-    };
     match *light {
         Light::Directional { direction, irradiance } => {
             let d = direction.normalize();
             let (t1, t2) = frame(d);
             let origin = center - d * (radius + voxel);
-            let side = 2.0 * radius / k as f32;
-            for j in 0..k {
-                for i in 0..k {
-                    let at =
-                        |a: u32, b: u32| origin + t1 * (-radius + a as f32 * side) + t2 * (-radius + b as f32 * side);
-                    let corners = [at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)];
-                    patches.push(make(corners, [d; 4], irradiance, patches.len()));
-                }
-            }
+            vec![WavefrontFace { point: false, origin, axis: d, t1, t2, half: radius, k, r0: 0.0, power: irradiance }]
         }
         Light::Point { position, intensity } => {
             let to_center = center - position;
@@ -350,24 +385,130 @@ pub fn initial_wavefront(volume: &Volume, min: Vec3, max: Vec3, light: &Light, p
                     .map(|&a| (a, 1.0, 0.5 * voxel))
                     .collect()
             };
-            for (w, tan, r0) in faces {
-                let (t1, t2) = frame(w);
-                let e = intensity / (r0 * r0);
-                let dir = |a: u32, b: u32| {
-                    let u = -tan + 2.0 * tan * a as f32 / k as f32;
-                    let v = -tan + 2.0 * tan * b as f32 / k as f32;
-                    (w + t1 * u + t2 * v).normalize()
-                };
-                for j in 0..k {
-                    for i in 0..k {
-                        let dirs = [dir(i, j), dir(i + 1, j), dir(i + 1, j + 1), dir(i, j + 1)];
-                        patches.push(make(dirs.map(|d| position + d * r0), dirs, e, patches.len()));
-                    }
+            faces
+                .into_iter()
+                .map(|(w, tan, r0)| {
+                    let (t1, t2) = frame(w);
+                    WavefrontFace { point: true, origin: position, axis: w, t1, t2, half: tan, k, r0, power: intensity }
+                })
+                .collect()
+        }
+    }
+}
+
+/// The initial wavefront of [`wavefront_faces`], face after face, row (j) after row, i
+/// fastest. A directional light's patches carry its irradiance E times their area; a point
+/// light's carry I / r0^2 times their area at radius r0.
+pub fn initial_wavefront(volume: &Volume, min: Vec3, max: Vec3, light: &Light, per_side: u32) -> Vec<Patch> {
+    let n_at = |x: Vec3| -> f32 {
+        let inside = x.cmpge(volume.min).all() && x.cmple(volume.max).all();
+        if inside {
+            volume.index.n(x.as_dvec3()) as f32
+        } else {
+            1.0
+        }
+    };
+    let mut patches = Vec::new();
+    for face in wavefront_faces(volume, min, max, light, per_side) {
+        let e = if face.point { face.power / (face.r0 * face.r0) } else { face.power };
+        for j in 0..face.k {
+            for i in 0..face.k {
+                let corners =
+                    [face.corner(i, j), face.corner(i + 1, j), face.corner(i + 1, j + 1), face.corner(i, j + 1)];
+                // x[c].w numbers the initial particles (4 per patch; exact in f32 below 2^24)
+                // so that tests can follow them; particles created by tessellation get -1.
+                let id = patches.len();
+                let mut p = Patch::default();
+                for (c, &(x, d)) in corners.iter().enumerate() {
+                    p.x[c] = x.extend((4 * id + c) as f32).to_array();
+                    p.v[c] = (d * n_at(x)).extend(0.0).to_array();
                 }
+                let area = p.normal().length();
+                p.flux = (e * area).extend(0.0).to_array();
+                patches.push(p);
             }
         }
     }
     patches
+}
+
+/// The skip flags of light_resolve.glsl, per cell of `faces`: bit 0 the cell's patch was
+/// skipped (`skip`, [`air_patches`]), bit 1 a cell within the reach of a voxel's deposit
+/// footprint (x +- one voxel, anywhere in the box `min`..`max`) differs from it, so that the
+/// voxels whose rays pass this cell need the footprint's mean of the flags; elsewhere the
+/// cell's own flag is that mean.
+pub fn air_flags(faces: &[WavefrontFace], skip: &[bool], voxel: f32, min: Vec3, max: Vec3) -> Vec<u32> {
+    let mut flags = Vec::with_capacity(skip.len());
+    let mut first = 0;
+    for face in faces {
+        let k = face.k as usize;
+        let cells = &skip[first..first + k * k];
+        first += k * k;
+        // How far a footprint of half-diagonal sqrt(3) voxels moves u (or v): as far for a
+        // directional light; for a point light (u = x_t / z) at most (1 + tan) of it over the
+        // box's nearest distance from the light.
+        let step = 3f32.sqrt() * voxel;
+        let reach = if face.point {
+            let nearest = (face.origin.clamp(min, max) - face.origin).length().max(face.r0);
+            step * (1.0 + face.half) / nearest
+        } else {
+            step
+        };
+        let r = ((reach / (2.0 * face.half / face.k as f32)).ceil() as usize).min(k);
+        for j in 0..k {
+            for i in 0..k {
+                let own = cells[j * k + i];
+                let near_edge = (j.saturating_sub(r)..(j + r + 1).min(k))
+                    .any(|b| (i.saturating_sub(r)..(i + r + 1).min(k)).any(|a| cells[b * k + a] != own));
+                flags.push(u32::from(own) | (u32::from(near_edge) << 1));
+            }
+        }
+    }
+    flags
+}
+
+/// Which patches of `faces` (in [`initial_wavefront`]'s order) only ever cross air: their
+/// straight beams pass no box of `medium` widened by `margin`. A box is projected onto each
+/// face's plane of (u, v) coordinates and every cell its corners' bounding rectangle overlaps
+/// is simulated; the gnomonic grid maps the beams to these cells and the box's silhouette
+/// into the rectangle, so the test is conservative. A box reaching behind a point light's
+/// face (the light inside it, or beside it) keeps the whole face simulated.
+pub fn air_patches(faces: &[WavefrontFace], medium: &[(Vec3, Vec3)], margin: f32) -> Vec<bool> {
+    let mut skip = Vec::new();
+    for face in faces {
+        let k = face.k as usize;
+        let mut cells = vec![true; k * k];
+        for &(lo, hi) in medium {
+            let (lo, hi) = (lo - Vec3::splat(margin), hi + Vec3::splat(margin));
+            let corners = (0..8).map(|c| {
+                Vec3::new(
+                    if c & 1 == 0 { lo.x } else { hi.x },
+                    if c & 2 == 0 { lo.y } else { hi.y },
+                    if c & 4 == 0 { lo.z } else { hi.z },
+                )
+            });
+            let uv: Vec<Option<(f32, f32)>> = corners.map(|x| face.plane_coordinates(x)).collect();
+            if uv.iter().all(|c| c.is_none()) {
+                continue; // wholly behind a point light's face: none of its rays go there
+            }
+            if uv.iter().any(|c| c.is_none()) {
+                cells.fill(false);
+                break;
+            }
+            let (u, v): (Vec<f32>, Vec<f32>) = uv.into_iter().flatten().unzip();
+            let range = |w: &[f32]| {
+                face.cells(w.iter().copied().fold(f32::MAX, f32::min), w.iter().copied().fold(f32::MIN, f32::max))
+            };
+            let (Some(iu), Some(iv)) = (range(&u), range(&v)) else { continue };
+            for j in iv {
+                for i in iu.clone() {
+                    cells[j as usize * k + i as usize] = false;
+                }
+            }
+        }
+        skip.extend(cells);
+    }
+    skip
 }
 
 /// The GPU light simulator for the lights of a scene and one volume.
@@ -417,8 +558,15 @@ pub struct LightSim {
     /// The current run's initial patches (as uploaded: a dispersive run's flux masked to
     /// its channel).
     pub initial: Vec<Patch>,
-    /// Every light's whole initial wavefront.
+    /// Every light's initial wavefront, less the patches skipped as air-only (`skip_air`).
     pub wavefronts: Vec<Vec<Patch>>,
+    /// Per light, the largest initial patch's flux per channel (skipped patches included).
+    largest: Vec<Vec3>,
+    /// Initial patches not simulated: only air on their way (`skip_air`).
+    skipped: u32,
+    /// The faces of every light's wavefront and their skip flags, which the resolve kernel
+    /// reads to add the skipped patches' light.
+    _air: [Buffer; 2],
     /// The run in progress and the runs still to do.
     pub run: LightRun,
     pub queue: VecDeque<LightRun>,
@@ -505,8 +653,43 @@ impl LightSim {
         } else {
             volume.resolution.iter().copied().max().unwrap_or(1)
         };
-        let wavefronts: Vec<Vec<Patch>> =
+        let mut wavefronts: Vec<Vec<Patch>> =
             lights.iter().map(|l| initial_wavefront(volume, light_min, light_max, l, per_side)).collect();
+        // The energy threshold's reference, the largest initial patch per channel, is that
+        // of the whole wavefront (skipped patches included).
+        let largest: Vec<Vec3> = wavefronts.iter().map(|w| w.iter().fold(Vec3::ZERO, |m, p| m.max(p.flux()))).collect();
+        // Beyond the medium's voxels the smoothed field reaches ceil(3 sigma) voxels
+        // (smooth.comp), its gradient one more (central differences), and a trilinear lookup
+        // one more; one voxel of slack besides.
+        let margin = ((3.0 * params.sigma).ceil() + 3.0) * volume.voxel_size().max_element();
+        let (mut air_faces, mut air_skip, mut skipped) = (Vec::<AirFace>::new(), Vec::<u32>::new(), 0u32);
+        if params.skip_air {
+            for (light, wavefront) in lights.iter().zip(&mut wavefronts) {
+                let faces = wavefront_faces(volume, light_min, light_max, light, per_side);
+                let skip = air_patches(&faces, &textures.medium, margin);
+                let base = air_skip.len();
+                for (i, f) in faces.iter().enumerate() {
+                    air_faces.push(AirFace {
+                        origin: f.origin.extend(if f.point { 0.0 } else { 1.0 }).to_array(),
+                        axis: f.axis.extend(f.half).to_array(),
+                        t1: f.t1.extend(f.k as f32).to_array(),
+                        // Cell indices stay exact in f32: at most MAX_INITIAL_PATCHES per light.
+                        t2: f.t2.extend((base + i * (f.k * f.k) as usize) as f32).to_array(),
+                        power: f.power.extend(f.r0).to_array(),
+                    });
+                }
+                air_skip.extend(air_flags(&faces, &skip, volume.voxel_size().max_element(), light_min, light_max));
+                let mut flags = skip.iter();
+                wavefront.retain(|_| !*flags.next().expect("one flag per patch"));
+                skipped += skip.iter().filter(|&&s| s).count() as u32;
+            }
+        }
+        let air_count = air_faces.len() as u32;
+        // Storage buffers may not be empty.
+        air_faces.resize(air_faces.len().max(1), AirFace::default());
+        air_skip.resize(air_skip.len().max(1), 0);
+        let air_faces = Buffer::storage(ctx, "eikonal_air_faces", &air_faces)?;
+        let air_skip = Buffer::storage(ctx, "eikonal_air_skip", &air_skip)?;
         let voxel = volume.voxel_size().min_element();
         let dt = params.light_dt * voxel;
         // Enough time for the optical path of two box diagonals at the largest index, plus
@@ -566,6 +749,8 @@ impl LightSim {
                 .storage_image(LIGHT_BINDING_ACCUM, &accum)
                 .storage_image(LIGHT_BINDING_IRRADIANCE, &irradiance)
                 .storage_image(LIGHT_BINDING_DIRECTION, &direction)
+                .storage(crate::LIGHT_BINDING_AIR_FACES, &air_faces)
+                .storage(crate::LIGHT_BINDING_AIR_SKIP, &air_skip)
         };
         let sets = Bindings::build_each(ctx, "eikonal_light", vec![set(0), set(1)])?;
 
@@ -586,6 +771,7 @@ impl LightSim {
             ("MATERIALS", Spec::U32(textures.extinction_any as u32)),
             ("KEEP_CROSSED", Spec::U32(u32::from(params.keep_crossed))),
             ("INTEGRATOR", Spec::U32(integrator)),
+            ("AIR_FACES", Spec::U32(air_count)),
         ]
         .into_iter()
         .chain(box_specs(volume_names, volume.min, volume.max))
@@ -659,6 +845,9 @@ impl LightSim {
             max_steps,
             initial: Vec::new(),
             wavefronts,
+            largest,
+            skipped,
+            _air: [air_faces, air_skip],
             run,
             queue,
             light_min,
@@ -696,9 +885,7 @@ impl LightSim {
         }
         // The threshold is relative to the largest initial patch of this light and channel
         // (not of this tile, so that tiling does not change which patches are terminated).
-        let largest = self.wavefronts.get(run.light).map_or(0.0, |w| {
-            w.iter().map(|p| run.channel.map_or(p.flux().max_element(), |c| p.flux[c])).fold(0.0f32, f32::max)
-        });
+        let largest = self.largest.get(run.light).map_or(0.0, |m| run.channel.map_or(m.max_element(), |c| m[c]));
         self.min_flux = self.threshold * largest;
         let count = patches.len() as u32;
         self.lists[0].write(0, bytemuck::cast_slice(&patches));
@@ -927,12 +1114,13 @@ impl LightSim {
             ctx.report_progress(&Progress { task: LIGHT_SIMULATION, done, total, detail, finished })
         };
         let lights = self.wavefronts.len();
-        let initial_patches = self.wavefronts.iter().map(|w| w.len() as u32).sum();
+        let skipped_patches = self.skipped;
+        let initial_patches = self.wavefronts.iter().map(|w| w.len() as u32).sum::<u32>() + skipped_patches;
         let float_atomics = self.float_atomics;
         let sofar = self.progress.get_or_insert_with(|| SimProgress {
             start: Instant::now(),
             done_runs: 0,
-            stats: LightStats { initial_patches, float_atomics, ..LightStats::default() },
+            stats: LightStats { initial_patches, skipped_patches, float_atomics, ..LightStats::default() },
         });
         let (mut done_runs, started) = (sofar.done_runs, sofar.start);
         loop {

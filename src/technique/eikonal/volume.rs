@@ -144,6 +144,8 @@ pub struct VolumeTextures {
     pub emission_any: bool,
     /// The uniform-region map of the view rays' leaps ([`uniform_reach`]).
     pub bricks: crate::gpu::Buffer,
+    /// Where the light can be anything but straight ([`medium_bricks`]).
+    pub medium: Vec<(glam::Vec3, glam::Vec3)>,
 }
 
 /// The names of the irradiance volume's box in glsl/eikonal (`LIGHT_{MIN,MAX}_{X,Y,Z}`).
@@ -238,6 +240,8 @@ pub(crate) fn prepare_volume(
     let index_slabs: Vec<&[f32]> = fields.index[..channels as usize].iter().map(|v| v.as_slice()).collect();
     let reach = uniform_reach(&index_slabs, &material_at, fields.resolution, (3.0 * params.sigma).ceil() as usize + 2);
     let bricks = crate::gpu::Buffer::storage(ctx, "eikonal_bricks", &reach)?;
+    let absorbs: Vec<bool> = fields.extinction.iter().map(|e| e[..3].iter().any(|&c| c > 0.0)).collect();
+    let medium = medium_bricks(&index_slabs, &absorbs, fields.resolution, volume.min, volume.voxel_size());
     let material_extent = if materials { volume.resolution } else { [1, 1, 1] };
     let material_usage = vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST;
     let half = |name: &str| {
@@ -346,7 +350,43 @@ pub(crate) fn prepare_volume(
         extinction_any,
         emission_any,
         bricks,
+        medium,
     })
+}
+
+/// The boxes (world space) of the bricks of [`BRICK`]^3 voxels holding a voxel whose index
+/// differs from air's in any slab of `index` (n - 1 per voxel, before smoothing) or which
+/// `absorbs`: beyond these, widened by the smoothing's and the lookups' reach, the light
+/// simulator's field is exactly n = 1 with no gradient and no extinction, so light travels
+/// straight (its `skip_air`).
+pub fn medium_bricks(
+    index: &[&[f32]],
+    absorbs: &[bool],
+    resolution: [u32; 3],
+    min: glam::Vec3,
+    voxel: glam::Vec3,
+) -> Vec<(glam::Vec3, glam::Vec3)> {
+    let (dims, brick) = (resolution.map(|r| r as usize), BRICK as usize);
+    let nb = dims.map(|d| d.div_ceil(brick));
+    let mut hit = vec![false; nb[0] * nb[1] * nb[2]];
+    for z in 0..dims[2] {
+        for y in 0..dims[1] {
+            for x in 0..dims[0] {
+                let i = x + dims[0] * (y + dims[1] * z);
+                if absorbs[i] || index.iter().any(|slab| slab[i] != 0.0) {
+                    hit[x / brick + nb[0] * (y / brick + nb[1] * (z / brick))] = true;
+                }
+            }
+        }
+    }
+    let mut boxes = Vec::new();
+    for (b, _) in hit.iter().enumerate().filter(|(_, &h)| h) {
+        let at = glam::UVec3::new((b % nb[0]) as u32, ((b / nb[0]) % nb[1]) as u32, (b / (nb[0] * nb[1])) as u32);
+        let lo = at * BRICK;
+        let hi = (lo + BRICK).min(glam::UVec3::from(resolution));
+        boxes.push((min + lo.as_vec3() * voxel, min + hi.as_vec3() * voxel));
+    }
+    boxes
 }
 
 /// Voxels per edge of a brick of the uniform-region map ([`uniform_reach`]).
