@@ -372,3 +372,38 @@ fn leaps_through_uniform_regions_equal_the_full_march() {
         assert!(worst <= bound, "{name}: the leaps moved a pixel by {worst}, more than f32 rounding's {bound}");
     }
 }
+
+/// `render.eikonal.hardware_filtering` samples the field with the device's trilinear filter
+/// instead of eight fetches interpolated in f32. The device may interpolate with coarser
+/// weights (8 fractional bits on many GPUs), so the images differ; the trade is worth
+/// offering only while that difference stays below the march's own discretisation error,
+/// measured here as the change when the step is halved. Both the ball (a steep smoothed
+/// shell) and the Luneburg lens (a gradient everywhere inside) are checked.
+#[test]
+fn hardware_filtering_stays_within_the_march_error() {
+    if !common::in_own_process() {
+        return;
+    }
+    let ctx = common::context(false);
+    let rms = |a: &[f32], b: &[f32]| {
+        (a.iter().zip(b).map(|(x, y)| ((x - y) as f64).powi(2)).sum::<f64>() / a.len() as f64).sqrt()
+    };
+    for name in ["eikonal_sphere", "eikonal_luneburg"] {
+        let at = |o: &[&str]| view_scene(name, 64, o);
+        let r = common::render_each(
+            &ctx,
+            &[
+                at(&["render.eikonal.hardware_filtering=false"]),
+                at(&["render.eikonal.hardware_filtering=true"]),
+                at(&["render.eikonal.hardware_filtering=false", "render.eikonal.step=0.25"]),
+            ],
+        );
+        no_nan(name, &r[1].hdr);
+        let (filtering, step) = (rms(&r[1].hdr, &r[0].hdr), rms(&r[2].hdr, &r[0].hdr));
+        let worst = r[1].hdr.iter().zip(&r[0].hdr).map(|(a, b)| (a - b).abs()).fold(0.0f32, f32::max);
+        eprintln!("{name}: hardware filtering moves the image by RMS {filtering:.3e} (largest {worst:.3e}); halving the step by {step:.3e}");
+        // The filtered lookup ran (on lavapipe its weights are f32, so only rounding differs).
+        assert!(worst > 0.0, "{name}: hardware filtering left every pixel as it was");
+        assert!(filtering < step, "{name}: the filtering's change {filtering} exceeds the step's {step}");
+    }
+}

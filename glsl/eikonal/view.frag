@@ -55,6 +55,7 @@ layout(constant_id = 23) const uint EMISSION = 1u;
 // Straight leaps through uniform bricks of BRICK^3 voxels (render.eikonal.leaps).
 layout(constant_id = 24) const uint LEAPS = 0u;
 layout(constant_id = 25) const uint BRICK = 4u;
+layout(constant_id = 26) const uint HARDWARE_FILTER = 0u;  // the device's trilinear field lookup
 layout(set = 1, binding = BINDING_GBUF_DEPTH) uniform sampler2D gbuf_depth;
 // xyz: grad n per metre, w: n - 1, at the voxel centres; CHANNELS slabs stacked along z.
 layout(set = 1, binding = BINDING_EIKONAL_FIELD) uniform sampler3D field;
@@ -84,8 +85,11 @@ vec4 voxel(ivec3 q, ivec3 size, int c) {
     return inside ? texelFetch(field, q + ivec3(0, 0, c * size.z), 0) : vec4(0.0);
 }
 
-// Trilinear interpolation in full precision (the same on every device), (grad n, n - 1).
+// Trilinear interpolation in full precision (the same on every device), (grad n, n - 1);
+// with HARDWARE_FILTER the device's filtering (render.eikonal.hardware_filtering: one slab,
+// a linear sampler whose border is zero, as `voxel` beyond the box).
 vec4 sample_field(vec3 x, int c) {
+    if (HARDWARE_FILTER != 0u) return textureLod(field, (x - BOX_MIN) / (BOX_MAX - BOX_MIN), 0.0);
     ivec3 size = slab_size();
     vec3 u = (x - BOX_MIN) / (BOX_MAX - BOX_MIN) * vec3(size) - 0.5;
     u = clamp(u, vec3(-1.0), vec3(size));

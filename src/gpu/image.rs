@@ -328,6 +328,9 @@ pub struct SamplerDesc {
     pub filter: vk::Filter,
     pub address_u: vk::SamplerAddressMode,
     pub address_v: vk::SamplerAddressMode,
+    pub address_w: vk::SamplerAddressMode,
+    /// The colour beyond the edge with CLAMP_TO_BORDER.
+    pub border: vk::BorderColor,
 }
 
 impl SamplerDesc {
@@ -335,17 +338,20 @@ impl SamplerDesc {
         filter: vk::Filter::NEAREST,
         address_u: vk::SamplerAddressMode::CLAMP_TO_EDGE,
         address_v: vk::SamplerAddressMode::CLAMP_TO_EDGE,
+        address_w: vk::SamplerAddressMode::CLAMP_TO_EDGE,
+        border: vk::BorderColor::FLOAT_TRANSPARENT_BLACK,
     };
-    pub const LINEAR_CLAMP: SamplerDesc = SamplerDesc {
-        filter: vk::Filter::LINEAR,
-        address_u: vk::SamplerAddressMode::CLAMP_TO_EDGE,
-        address_v: vk::SamplerAddressMode::CLAMP_TO_EDGE,
-    };
+    pub const LINEAR_CLAMP: SamplerDesc = SamplerDesc { filter: vk::Filter::LINEAR, ..SamplerDesc::NEAREST_CLAMP };
     /// Latitude-longitude maps wrap in u (longitude) and clamp in v (poles).
-    pub const LATLONG: SamplerDesc = SamplerDesc {
+    pub const LATLONG: SamplerDesc =
+        SamplerDesc { address_u: vk::SamplerAddressMode::REPEAT, ..SamplerDesc::LINEAR_CLAMP };
+    /// Trilinear, zero beyond every face (a volume surrounded by nothing).
+    pub const LINEAR_BORDER: SamplerDesc = SamplerDesc {
         filter: vk::Filter::LINEAR,
-        address_u: vk::SamplerAddressMode::REPEAT,
-        address_v: vk::SamplerAddressMode::CLAMP_TO_EDGE,
+        address_u: vk::SamplerAddressMode::CLAMP_TO_BORDER,
+        address_v: vk::SamplerAddressMode::CLAMP_TO_BORDER,
+        address_w: vk::SamplerAddressMode::CLAMP_TO_BORDER,
+        border: vk::BorderColor::FLOAT_TRANSPARENT_BLACK,
     };
 }
 
@@ -374,7 +380,8 @@ impl Sampler {
                 .mipmap_mode(vk::SamplerMipmapMode::NEAREST)
                 .address_mode_u(desc.address_u)
                 .address_mode_v(desc.address_v)
-                .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+                .address_mode_w(desc.address_w)
+                .border_color(desc.border)
                 .max_lod(0.0);
             // SAFETY: valid create info.
             let raw = unsafe { ctx.raw().create_sampler(&info, None) }.vk("vkCreateSampler")?;

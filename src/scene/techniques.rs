@@ -996,6 +996,14 @@ params! {
         /// straight ray exactly (bricks of 4^3 voxels, src/technique/eikonal/volume.rs). false
         /// marches at `step` everywhere, as the paper does.
         leaps: bool = true;
+        /// Sample the smoothed index field with the device's trilinear filtering (one
+        /// filtered fetch, zero beyond the box by a transparent-black border) instead of eight
+        /// fetches interpolated in f32. GPUs interpolate with reduced-precision weights (8
+        /// fractional bits on many), which perturbs the gradient the rays follow;
+        /// docs/BENCHMARKS.md has the time and the image difference. Used where the device
+        /// filters RGBA32F linearly and the index has one channel (a dispersive volume's
+        /// three slabs would blend into each other); elsewhere the f32 path runs.
+        hardware_filtering: bool = false;
         // --- light simulator (section 5.2; src/technique/eikonal/eikonal_light.rs) ---
         /// Run the light simulator (§4.2, §5.2) when the scene has a light: every light's
         /// wavefront (per channel for a per-channel index) is traced through the volume into an

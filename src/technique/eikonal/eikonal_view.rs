@@ -13,7 +13,7 @@
 //!   and smoothed/differentiated slab by slab (dispersion: one march per channel), and the
 //!   materials go to three RGBA16F volumes ([`VolumeTextures`]) for RGB extinction, emission
 //!   and Fresnel reflection at the boundary indicator's band.
-use crate::gpu::{vk, GpuResult, Spec};
+use crate::gpu::{vk, GpuResult, Sampler, SamplerDesc, Spec};
 use crate::graph::Frame;
 use crate::scene::techniques::{EikonalParams, Integrator};
 use crate::scene::{Scene, Volume};
@@ -158,6 +158,8 @@ pub struct EikonalPass {
     // and the exact triangles.
     nearby: NearbyImpostors,
     _triangles: crate::gpu::Buffer,
+    // The field's sampler (trilinear with a zero border for `hardware_filtering`).
+    _field_sampler: Sampler,
     // The light simulation and its receiver pass.
     light: Option<super::eikonal_light::EikonalLight>,
 }
@@ -262,6 +264,17 @@ impl EikonalPass {
             let rects = NearbyRects::around(origin, &kept, scene);
             NearbyImpostors::build(ctx, EIKONAL_NEARBY, &desc, rects, graph, frame_layout, shading)?
         };
+        // The device's trilinear filtering of the field: one slab only, and a format the device
+        // filters linearly (else the f32 interpolation of eight fetches).
+        let hardware_filter = params.hardware_filtering
+            && textures.channels == 1
+            && ctx
+                .supports_format(vk::Format::R32G32B32A32_SFLOAT, vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR);
+        let field_sampler = Sampler::new(
+            ctx,
+            "eikonal_field",
+            if hardware_filter { SamplerDesc::LINEAR_BORDER } else { SamplerDesc::NEAREST_CLAMP },
+        )?;
         let box_names = ["BOX_MIN_X", "BOX_MIN_Y", "BOX_MIN_Z", "BOX_MAX_X", "BOX_MAX_Y", "BOX_MAX_Z"];
         let spec: Vec<_> = [
             ("INTEGRATOR", Spec::U32(integrator)),
@@ -275,6 +288,7 @@ impl EikonalPass {
             ("EMISSION", Spec::U32(textures.emission_any as u32)),
             // Straight leaps through uniform bricks (volume.rs, `uniform_reach`).
             ("LEAPS", Spec::U32(params.leaps as u32)),
+            ("HARDWARE_FILTER", Spec::U32(u32::from(hardware_filter))),
             ("BRICK", Spec::U32(super::volume::BRICK)),
             // Single scattering (glsl/eikonal/scatter.glsl) with the
             // irradiance and direction volumes of the light simulation.
@@ -292,7 +306,7 @@ impl EikonalPass {
         let set = fragment_set()
             .sampled(BINDING_GBUF_DEPTH, &targets.depth, nearest)
             .read(targets.depth_id)
-            .sampled(BINDING_EIKONAL_FIELD, &textures.field, nearest)
+            .sampled(BINDING_EIKONAL_FIELD, &textures.field, &field_sampler)
             .read(textures.field_id)
             .sampled(BINDING_EIKONAL_EXTINCTION, &textures.extinction, nearest)
             .read(textures.extinction_id)
@@ -315,7 +329,7 @@ impl EikonalPass {
             set,
             frame_layout,
         )?;
-        Ok(EikonalPass { volume: timed, view, nearby, _triangles: triangles, light })
+        Ok(EikonalPass { volume: timed, view, nearby, _triangles: triangles, _field_sampler: field_sampler, light })
     }
 
     /// The light simulation's statistics (None without a simulation).
