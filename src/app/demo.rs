@@ -1027,6 +1027,7 @@ impl Running {
                 target_texture: self.ab.texture.as_ref().or(self.target_texture.as_ref().map(|(_, t)| t)),
                 progress: self.progress.lock().unwrap_or_else(|e| e.into_inner()).clone(),
                 ab: self.ab.status(),
+                accumulated: self.renderer.accumulated_frames(),
             };
             requests = ui::draw(c, &mut self.ui, &view);
         });
