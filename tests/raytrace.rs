@@ -845,7 +845,7 @@ fn any_change_restarts_the_mean() {
 /// count, and every frame is shown as traced, its own photons' caustic, so that consecutive
 /// frames differ where the caustic is (a mean would hold them ever closer). With accumulation
 /// on, the pass is planned after the frame's last raytrace pass, where the mean of everything
-/// they wrote is taken.
+/// they wrote is taken, and only where photons make the frames differ.
 #[test]
 fn accumulate_one_shows_every_frame_as_traced() {
     if !common::in_own_process() {
@@ -859,6 +859,9 @@ fn accumulate_one_shows_every_frame_as_traced() {
     let with: Vec<_> = with.iter().map(|p| p.name).collect();
     let at = with.iter().position(|&p| p == "raytrace_accumulate").expect("no raytrace_accumulate planned");
     assert_eq!(with[at - 1], "refraction_raytrace", "{with:?}");
+    // Without photons every frame is the same image: nothing to average.
+    let dark = accumulating(SIZE, 2, &["render.raytrace.photons_per_frame=0"]);
+    assert!(!prism::technique::has(&prism::technique::recipe(&dark).passes, "raytrace_accumulate"));
     let mut r = prism::renderer::Renderer::new(&ctx, &s).expect("renderer");
     let mut last: Option<Vec<f32>> = None;
     for k in 0..4 {

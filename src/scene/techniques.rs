@@ -1111,8 +1111,9 @@ params! {
         /// object or light, the water's animation. What differs between the frames is the
         /// photon batch (a new one every frame), so the mean's caustic has the noise of
         /// `accumulate` times `photons_per_frame` photons; everything else in a frame is a
-        /// function of the scene and is its own mean. 1: no accumulation, every frame shown as
-        /// traced. The default, 64, leaves 1/sqrt(64) = 1/8 of a single frame's noise.
+        /// function of the scene and is its own mean, and without photons nothing is
+        /// accumulated. 1: no accumulation, every frame shown as traced. The default, 64,
+        /// leaves 1/sqrt(64) = 1/8 of a single frame's noise.
         // Beyond 2^16 frames the f32 running mean's rounding (about 2^-24 of the value per
         // frame, 2^-8 after 2^16 frames) approaches the noise left (2^-8 of a frame's).
         accumulate: u32 = 64, 1..=1 << 16;

@@ -245,9 +245,10 @@ fn accumulation(scene: &Scene) -> u32 {
 
 /// The `raytrace` technique that keeps the running mean: the last in the recipe, so that the
 /// mean is taken of the image every `raytrace` pass of the frame has written, where
-/// `render.raytrace.accumulate` > 1.
+/// `render.raytrace.accumulate` > 1 and the frames differ: where photons are traced
+/// ([`has_caustics`]). Without photons every frame is the same image, its own mean.
 fn accumulator(scene: &Scene) -> Option<Effect> {
-    if accumulation(scene) <= 1 {
+    if accumulation(scene) <= 1 || !has_caustics(scene) {
         return None;
     }
     [Effect::Caustics, Effect::Refraction, Effect::Reflection, Effect::Volume]
