@@ -43,6 +43,31 @@
 //! the photon buffers and the passes. The `refraction`, `reflection` and `caustics`
 //! techniques set to `"raytrace"` share a frame's photons through the technique cache: the
 //! first of them in the frame traces them, every one gathers them.
+//!
+//! Progressive accumulation (`render.raytrace.accumulate` = N > 1, pass
+//! `raytrace_accumulate`): while nothing changes, the image shown is the running mean of the
+//! frames since the last change, frame n (from 0) blended in with weight 1/(n + 1), up to N
+//! frames, after which the mean of the first N is held (glsl/raytrace/accumulate.comp). What
+//! differs between frames is the photon batch alone, so the mean's caustic is the estimate of
+//! N batches of photons, its noise 1/sqrt(N) of a frame's, and its bias the same blur over
+//! the gathering disk; the rest of a frame is a function of the scene (the diffuse vertices'
+//! environment chain is sampled the same way in every frame, and every ray goes through its
+//! pixel's centre: a sub-pixel jitter would move the traced ray off the pixel the G-buffer
+//! gave to the object, and antialias only the pixels inside its coverage), its own mean bit
+//! for bit. Without photons nothing differs and nothing is accumulated. The mean is one
+//! compute pass over the HDR image after the frame's last `raytrace` pass (the technique
+//! that records it is the last one in the recipe), so that the refraction, reflection and
+//! caustics of one frame are averaged together and every later pass (the tone map) reads the
+//! mean as it would the frame; it lives in the technique, not in the renderer, because the
+//! technique is what varies from frame to frame and knows whether it does. The frames it
+//! costs are the frames `prism bench` times, plus that pass. Every change starts it again:
+//! the camera ([`Technique::camera_moved`], from `Renderer::set_camera`), a live update
+//! ([`Technique::restart`]; a resize or a changed parameter re-creates the technique), a
+//! dragged object ([`Technique::objects_moved`]), rewritten materials or animated water
+//! ([`Technique::contents_changed`]; with `render.update = "every_frame"` every frame is a
+//! change, and nothing accumulates). The first frame after a change is that frame, bit for
+//! bit the frame with `accumulate = 1`; with `accumulate = 1` there is no pass and every
+//! frame is shown as traced.
 use std::rc::Rc;
 use std::sync::Arc;
 
