@@ -335,6 +335,12 @@ shared_bindings! {
         HEIGHTFIELD_BINDING_WAVES = 1;
         HEIGHTFIELD_BINDING_VERTICES = 2;
     }
+    // The raytrace technique's running mean (glsl/raytrace/accumulate.comp;
+    // src/technique/raytrace.rs): one set 0.
+    ACCUMULATE_BINDINGS {
+        ACCUMULATE_BINDING_HDR = 0;
+        ACCUMULATE_BINDING_MEAN = 1;
+    }
 }
 
 // The descriptor sets made of several groups.

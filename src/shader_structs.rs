@@ -98,6 +98,17 @@ shared_structs! {
         time: float,
     }
 
+    /// Push constants of glsl/raytrace/accumulate.comp (src/technique/raytrace.rs).
+    push struct AccumulatePush {
+        /// The frames blended before this one since the last change (0: the frame itself).
+        frames: uint,
+        /// `render.raytrace.accumulate`: from this many frames on the mean is held.
+        limit: uint,
+        /// The image's width and height.
+        width: uint,
+        height: uint,
+    }
+
     /// Push constants of glsl/common/cover.vert: the proxy sphere drawn over an object's
     /// pixels (src/technique/baseline/fullscreen.rs, `Cover`).
     push struct CoverPush {

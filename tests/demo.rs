@@ -721,3 +721,26 @@ fn demo_ab_view_measures_what_compare_measures() {
         assert_eq!(p, expected, "A/B screenshot pixel ({x}, {y})");
     }
 }
+
+/// The window shows the raytrace technique's running mean while nothing changes
+/// (`render.raytrace.accumulate`, default 64) and starts it again on a change: with the
+/// camera left alone, 8 frames with a scripted change applied after frame 5 end with a mean of
+/// the 3 frames since (the count the overlay shows, logged on exit). A window camera that
+/// restarted it every frame would leave 1, a change that did not restart it 8.
+#[test]
+fn demo_accumulates_the_raytraced_frames_until_a_change() {
+    let Some(display) = display() else { return };
+    let set = ["render.refraction=raytrace", "render.caustics=raytrace", "render.raytrace.photons_per_frame=2000"];
+    let mut args = vec!["caustic_sphere", "--width", "48", "--height", "48", "--frames", "8", "--validation"];
+    args.extend(set.iter().flat_map(|s| ["--set", s]));
+    let still = demo(&display, &args);
+    args.extend(["--at", "5:render.exposure=1.5"]);
+    let changed = demo(&display, &args);
+    for (out, count) in [(still, 8), (changed, 3)] {
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "prism demo failed:\n{stderr}");
+        let line = stderr.lines().find(|l| l.starts_with("demo: raytrace: ")).unwrap_or_else(|| panic!("{stderr}"));
+        eprintln!("{line}");
+        assert_eq!(line, format!("demo: raytrace: {count} of 64 frames accumulated"), "{stderr}");
+    }
+}

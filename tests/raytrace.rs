@@ -15,6 +15,9 @@ use prism::scene::Scene;
 
 const SIZE: u32 = 64;
 
+/// Every frame shown as traced, not the running mean of the frames.
+const SINGLE: &str = "render.raytrace.accumulate=1";
+
 /// The reference at `spp` samples per pixel, centre rays (SCENES.md), no photons.
 fn reference(ctx: &Arc<GpuContext>, s: &Scene, spp: u32, seed: u32) -> Vec<f32> {
     let st = ReferenceSettings { spp, photons: 0, seed, ..ReferenceSettings::default() };
@@ -304,8 +307,10 @@ fn renders_a_volume_scene_as_the_reference_does() {
 /// The mean and, per value, the variance of that mean over `frames` frames of one renderer:
 /// each frame traces new photons (the photon kernel's iteration is the frame's), and
 /// everything else in a frame is a function of the scene, so the frames are independent
-/// samples of the caustic.
+/// samples of the caustic. The scene shows single frames (`render.raytrace.accumulate = 1`,
+/// [`SINGLE`]), not their running mean.
 fn frame_statistics(ctx: &Arc<GpuContext>, s: &Scene, frames: u32) -> (Vec<f64>, Vec<f64>) {
+    assert_eq!(RaytraceParams::from_settings(&s.render).unwrap().accumulate, 1, "{}: frames accumulated", s.name);
     let mut r = prism::renderer::Renderer::new(ctx, s).expect("renderer");
     let (mut sum, mut sum2) = (Vec::new(), Vec::new());
     for _ in 0..frames {
@@ -386,6 +391,7 @@ fn caustic_through_the_glass_matches_the_reference() {
         "render.refraction=raytrace",
         "render.caustics=none",
         "render.raytrace.gather_radius=16",
+        SINGLE,
         "camera.position=[0, 4, 0.3]",
         "camera.target=[0, 0, 0]",
         "camera.up=[0, 0, -1]",
@@ -516,7 +522,8 @@ fn direct_caustic_conserves_the_photons_flux() {
     let ctx = common::context(false);
     let (frames, per_frame) = (8u32, 8000u32);
     let photons = format!("render.raytrace.photons_per_frame={per_frame}");
-    let base = ["render.refraction=single", "render.caustics=raytrace", "lights.0.position=[4, 5, 0]", &photons];
+    let base =
+        ["render.refraction=single", "render.caustics=raytrace", "lights.0.position=[4, 5, 0]", &photons, SINGLE];
     let s = common::scene("caustic_sphere", SIZE, &base);
     assert!(prism::technique::has(&prism::technique::recipe(&s).passes, "caustics_raytrace"));
     let (lit, _) = frame_statistics(&ctx, &s, frames);
@@ -666,5 +673,208 @@ fn one_photon_map_serves_every_raytrace_technique() {
     assert!(refracted.len() > 300 && no_photons > 0.1, "the refracted pixels show no caustic");
     assert_eq!(same, refracted.len(), "the refraction technique gathered other photons");
     assert!(darker == 0 && brighter > 100, "{brighter} values brighter, {darker} darker");
+    common::assert_no_validation_errors(&ctx);
+}
+
+/// caustic_sphere's caustic seen directly, traced from `photons` photons a frame, showing up
+/// to `accumulate` frames' running mean.
+fn accumulating(size: u32, accumulate: u32, extra: &[&str]) -> Scene {
+    let acc = format!("render.raytrace.accumulate={accumulate}");
+    let base = ["render.refraction=raytrace", "render.caustics=raytrace", "render.raytrace.photons_per_frame=4000"];
+    common::scene("caustic_sphere", size, &[&base[..], extra, &[acc.as_str()]].concat())
+}
+
+/// The values where `a` and `b` differ.
+fn differing(a: &[f32], b: &[f32]) -> usize {
+    a.iter().zip(b).filter(|(x, y)| x != y).count()
+}
+
+/// `render.raytrace.accumulate = N` shows the running mean of the frames since the last
+/// change: frame k (from 0) shows the mean of frames 0..=k, up to N frames, then holds the mean
+/// of the first N. The single frames come from a second renderer with `accumulate = 1`: the
+/// two trace the same photons frame by frame (the photon kernel's iteration is the frame's
+/// since the renderer began), so its frame k is what the first blended in.
+///
+/// Threshold, a rounding bound: one step m + (x - m) / (n + 1) in f32 rounds a difference and
+/// a sum (correctly rounded, 2^-24 of the result each) and a quotient (Vulkan allows 2.5 ulp,
+/// 5 2^-24 of the result); with P the largest |value| of that channel over the frames, the
+/// difference is at most 2P and enters divided by n + 1, the quotient and the sum at most P:
+/// at most 7 2^-24 P a step, and the earlier steps' errors shrink by n / (n + 1). After n
+/// frames the mean is within 7 n 2^-24 P of the exact mean; the test allows 8 n 2^-24 P. A
+/// value equal in every frame (all but the caustic) stays exactly itself.
+#[test]
+fn accumulation_is_the_mean_of_the_single_frames() {
+    if !common::in_own_process() {
+        return;
+    }
+    let ctx = common::context(false);
+    let (limit, frames) = (6u32, 8u32);
+    let (single_scene, mean_scene) = (accumulating(SIZE, 1, &[]), accumulating(SIZE, limit, &[]));
+    let planned = |s: &Scene| prism::technique::has(&prism::technique::recipe(s).passes, "raytrace_accumulate");
+    assert!(planned(&mean_scene) && !planned(&single_scene));
+    let mut single = prism::renderer::Renderer::new(&ctx, &single_scene).expect("renderer");
+    let mut mean = prism::renderer::Renderer::new(&ctx, &mean_scene).expect("renderer");
+    let (mut sum, mut peak, mut first) = (Vec::new(), Vec::new(), Vec::new());
+    let mut held: Option<Vec<f32>> = None;
+    for k in 0..frames {
+        single.render_frame().expect("frame");
+        mean.render_frame().expect("frame");
+        let (x, m) = (single.read_hdr().expect("hdr"), mean.read_hdr().expect("hdr"));
+        let n = (k + 1).min(limit);
+        assert_eq!((single.accumulated_frames(), mean.accumulated_frames()), (None, Some(n)), "frame {k}");
+        if k == 0 {
+            assert_eq!(m, x, "the first frame's mean is not the frame");
+            (sum, peak, first) = (vec![0f64; x.len()], vec![0f32; x.len()], x.clone());
+        }
+        if k >= limit {
+            let d = differing(&m, held.as_ref().unwrap());
+            eprintln!("frame {k}: {d} values differ from the mean of {limit} frames held");
+            assert_eq!(d, 0, "frame {k}: the mean of {limit} frames is not held");
+            continue;
+        }
+        for (i, &v) in x.iter().enumerate() {
+            sum[i] += v as f64;
+            peak[i] = peak[i].max(v.abs());
+        }
+        let (mut worst, mut over) = (0f64, 0usize);
+        for i in 0..m.len() {
+            let error = (m[i] as f64 - sum[i] / n as f64).abs();
+            let bound = 8.0 * n as f64 * 2f64.powi(-24) * peak[i] as f64;
+            if error > bound {
+                over += 1;
+            }
+            if error > 0.0 {
+                worst = worst.max(error / bound);
+            }
+        }
+        let varied = differing(&x, &first);
+        eprintln!(
+            "frame {k}: mean of {n} frames; {varied} values of this frame differ from frame 0's, {} from the \
+             mean shown; the mean's largest error {worst:.3} of its rounding bound, {over} values over it",
+            differing(&x, &m)
+        );
+        assert_eq!(over, 0, "frame {k}: the image shown is not the mean of the {n} single frames");
+        if k > 0 {
+            assert!(varied > 50, "frame {k}: the photons' caustic does not vary ({varied} values)");
+        }
+        held = Some(m);
+    }
+    drop((single, mean));
+    common::assert_no_validation_errors(&ctx);
+}
+
+/// Any change starts the mean again: the frame after it shows the frame itself, bit for bit
+/// the frame of a renderer that does not accumulate (`accumulate = 1`, driven through the same
+/// changes, so that both trace the same photons), and the count is 1; the frame after that is
+/// a mean of two again. Setting the same camera again is no change. The changes: the camera
+/// (`Renderer::set_camera`, as the window moves it every frame), a live update that keeps the
+/// techniques (the exposure), one that re-creates them (a light moved), a dragged object
+/// (`Renderer::move_object`) and a resize.
+#[test]
+fn any_change_restarts_the_mean() {
+    if !common::in_own_process() {
+        return;
+    }
+    let ctx = common::context(false);
+    let mut single = prism::renderer::Renderer::new(&ctx, &accumulating(SIZE, 1, &[])).expect("renderer");
+    let mut mean = prism::renderer::Renderer::new(&ctx, &accumulating(SIZE, 16, &[])).expect("renderer");
+    let frame = |single: &mut prism::renderer::Renderer, mean: &mut prism::renderer::Renderer| {
+        single.render_frame().expect("frame");
+        mean.render_frame().expect("frame");
+        let (x, m) = (single.read_hdr().expect("hdr"), mean.read_hdr().expect("hdr"));
+        (differing(&x, &m), mean.accumulated_frames())
+    };
+    for _ in 0..3 {
+        frame(&mut single, &mut mean);
+    }
+    let camera = accumulating(SIZE, 16, &[]).camera;
+    single.set_camera(&camera);
+    mean.set_camera(&camera);
+    let (d, n) = frame(&mut single, &mut mean);
+    eprintln!("the same camera set again: {n:?} frames, {d} values differ from the single frame");
+    assert!(n == Some(4) && d > 50, "setting the same camera restarted the mean ({n:?} frames, {d} values)");
+
+    // Each change as given to a renderer accumulating `a` frames.
+    type Change = Box<dyn Fn(&mut prism::renderer::Renderer, u32)>;
+    let moved = prism::scene::Camera { position: camera.position + Vec3::new(0.4, 0.2, 0.0), ..camera };
+    let changes: [(&str, Change); 5] = [
+        ("camera moved", Box::new(move |r, _| r.set_camera(&moved))),
+        (
+            "exposure (techniques kept)",
+            Box::new(|r, a| {
+                let u = r.update(&accumulating(SIZE, a, &["render.exposure=1.5"])).expect("update");
+                assert!(!u.rebuilt && u.recreated.is_empty(), "{u:?}");
+            }),
+        ),
+        (
+            "light moved (techniques re-created)",
+            Box::new(|r, a| {
+                let u = r.update(&accumulating(SIZE, a, &["lights.0.position=[0.5, 6, 0]"])).expect("update");
+                assert!(!u.recreated.is_empty(), "{u:?}");
+            }),
+        ),
+        ("object dragged", Box::new(|r, _| assert!(r.move_object("ball", Vec3::new(0.3, 1.2, 0.0)).expect("move")))),
+        (
+            "resize",
+            Box::new(|r, a| {
+                r.update(&accumulating(48, a, &["lights.0.position=[0.5, 6, 0]"])).expect("update");
+            }),
+        ),
+    ];
+    for (what, change) in changes {
+        // The running mean is of several frames before the change.
+        frame(&mut single, &mut mean);
+        let (_, before) = frame(&mut single, &mut mean);
+        change(&mut single, 1);
+        change(&mut mean, 16);
+        let (d, n) = frame(&mut single, &mut mean);
+        let (d2, n2) = frame(&mut single, &mut mean);
+        eprintln!(
+            "{what}: {before:?} frames before; after it {n:?} frames, {d} values differ from the single frame; \
+             then {n2:?} frames, {d2} values differ"
+        );
+        assert!(before.unwrap() >= 2, "{what}: no mean before the change");
+        assert_eq!((n, d), (Some(1), 0), "{what}: the frame after the change is not the frame itself");
+        assert!(n2 == Some(2) && d2 > 50, "{what}: the mean does not go on after the change");
+    }
+    drop((single, mean));
+    common::assert_no_validation_errors(&ctx);
+}
+
+/// `accumulate = 1` is the technique without accumulation: no `raytrace_accumulate` pass, no
+/// count, and every frame is shown as traced, its own photons' caustic, so that consecutive
+/// frames differ where the caustic is (a mean would hold them ever closer). With accumulation
+/// on, the pass is planned after the frame's last raytrace pass, where the mean of everything
+/// they wrote is taken, and only where photons make the frames differ.
+#[test]
+fn accumulate_one_shows_every_frame_as_traced() {
+    if !common::in_own_process() {
+        return;
+    }
+    let ctx = common::context(false);
+    let s = accumulating(SIZE, 1, &[]);
+    let names: Vec<_> = prism::technique::recipe(&s).passes.iter().map(|p| p.name).collect();
+    assert!(!names.contains(&"raytrace_accumulate"), "{names:?}");
+    let with = prism::technique::recipe(&accumulating(SIZE, 2, &[])).passes;
+    let with: Vec<_> = with.iter().map(|p| p.name).collect();
+    let at = with.iter().position(|&p| p == "raytrace_accumulate").expect("no raytrace_accumulate planned");
+    assert_eq!(with[at - 1], "refraction_raytrace", "{with:?}");
+    // Without photons every frame is the same image: nothing to average.
+    let dark = accumulating(SIZE, 2, &["render.raytrace.photons_per_frame=0"]);
+    assert!(!prism::technique::has(&prism::technique::recipe(&dark).passes, "raytrace_accumulate"));
+    let mut r = prism::renderer::Renderer::new(&ctx, &s).expect("renderer");
+    let mut last: Option<Vec<f32>> = None;
+    for k in 0..4 {
+        r.render_frame().expect("frame");
+        let x = r.read_hdr().expect("hdr");
+        assert_eq!(r.accumulated_frames(), None);
+        if let Some(l) = &last {
+            let d = differing(&x, l);
+            eprintln!("accumulate = 1, frame {k}: {d} values differ from frame {}", k - 1);
+            assert!(d > 50, "frame {k} is not a frame of its own ({d} values differ)");
+        }
+        last = Some(x);
+    }
+    drop(r);
     common::assert_no_validation_errors(&ctx);
 }

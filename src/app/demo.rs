@@ -28,6 +28,7 @@ use winit::window::{Window, WindowId};
 use crate::gpu::{vk, Acquired, GpuContext, GpuError, Overlay, Presented, SubmitSync, Swapchain};
 use crate::graph::ImageId;
 use crate::renderer::{OverlayDraw, RenderError, Renderer, WindowTarget, FRAMES_IN_FLIGHT};
+use crate::scene::techniques::RaytraceParams;
 use crate::scene::{self, Scene};
 
 use super::output::{self, OutputFile, Outputs};
@@ -386,6 +387,11 @@ impl App {
     /// Normal end: write the requested screenshots, check validation, close.
     fn finish(&mut self, event_loop: &ActiveEventLoop) {
         if let Some(r) = self.running.as_mut() {
+            // What the overlay shows of the running mean, for scripted runs (--frames).
+            if let Some(n) = r.renderer.accumulated_frames() {
+                let limit = RaytraceParams::from_settings(&r.scene.render).map_or(1, |p| p.accumulate);
+                eprintln!("demo: raytrace: {n} of {limit} frames accumulated");
+            }
             let png = self.screenshot.take();
             let exr = self.screenshot_exr.take();
             if png.is_some() || exr.is_some() {
@@ -1027,6 +1033,7 @@ impl Running {
                 target_texture: self.ab.texture.as_ref().or(self.target_texture.as_ref().map(|(_, t)| t)),
                 progress: self.progress.lock().unwrap_or_else(|e| e.into_inner()).clone(),
                 ab: self.ab.status(),
+                accumulated: self.renderer.accumulated_frames(),
             };
             requests = ui::draw(c, &mut self.ui, &view);
         });

@@ -497,9 +497,23 @@ impl Renderer {
 
     /// Look from `camera` from the next frame on (position, target, up, field of view; its
     /// width and height must be the renderer's: a new size needs a new renderer).
+    /// A camera that differs from the last one restarts what the techniques average over the
+    /// frames of one view ([`Technique::camera_moved`]).
     pub fn set_camera(&mut self, camera: &Camera) {
         let exposure = self.uniforms.camera_position[3];
+        let before = self.uniforms;
         set_camera_uniforms(&mut self.uniforms, camera, exposure, &self.scene);
+        if bytemuck::bytes_of(&before) != bytemuck::bytes_of(&self.uniforms) {
+            for t in self.techniques.iter_mut().flatten() {
+                t.camera_moved();
+            }
+        }
+    }
+
+    /// The frames averaged into the image shown, where a technique accumulates them
+    /// (`render.raytrace.accumulate`), as of the last frame rendered.
+    pub fn accumulated_frames(&self) -> Option<u32> {
+        self.techniques.iter().flatten().find_map(|t| t.accumulated())
     }
 
     /// The frame graph, to register external images (the demo's swapchain images).

@@ -1118,6 +1118,19 @@ params! {
         /// lower the noise (photons within r grow as r^2) and blur the caustic over r.
         // Below 0.01 footprints a disk holds almost no photon; above 16 it blurs over 32 pixels.
         gather_radius: f32 = 0.5, 0.01..=16.0;
+        /// Frames averaged at most into the image shown (the pass `raytrace_accumulate`):
+        /// frame n since the last change is blended into the running mean with weight
+        /// 1/(n+1), and after this many frames the mean is held. Any change starts it again:
+        /// the camera, the window size, a live update of the scene or its parameters, a moved
+        /// object or light, the water's animation. What differs between the frames is the
+        /// photon batch (a new one every frame), so the mean's caustic has the noise of
+        /// `accumulate` times `photons_per_frame` photons; everything else in a frame is a
+        /// function of the scene and is its own mean, and without photons nothing is
+        /// accumulated. 1: no accumulation, every frame shown as traced. The default, 64,
+        /// leaves 1/sqrt(64) = 1/8 of a single frame's noise.
+        // Beyond 2^16 frames the f32 running mean's rounding (about 2^-24 of the value per
+        // frame, 2^-8 after 2^16 frames) approaches the noise left (2^-8 of a frame's).
+        accumulate: u32 = 64, 1..=1 << 16;
     }
 
     /// `[render.tonemap_adaptive]`: the adaptive tone map of `render.tonemap = "adaptive"`

@@ -366,6 +366,17 @@ pub trait Technique: Any {
     /// scene.
     fn restart(&mut self) {}
 
+    /// The camera moved (its position, direction or field of view): what the technique
+    /// averages over the frames of one view starts again.
+    fn camera_moved(&mut self) {}
+
+    /// The frames averaged into the image the technique shows (the raytrace technique's
+    /// running mean, `render.raytrace.accumulate`), as of the last frame begun; `None`: it
+    /// shows every frame as rendered.
+    fn accumulated(&self) -> Option<u32> {
+        None
+    }
+
     /// Whether work that spans frames is left ([`Self::prepare`]).
     fn preparing(&self) -> bool {
         false

@@ -43,16 +43,43 @@
 //! the photon buffers and the passes. The `refraction`, `reflection` and `caustics`
 //! techniques set to `"raytrace"` share a frame's photons through the technique cache: the
 //! first of them in the frame traces them, every one gathers them.
+//!
+//! Progressive accumulation (`render.raytrace.accumulate` = N > 1, pass
+//! `raytrace_accumulate`): while nothing changes, the image shown is the running mean of the
+//! frames since the last change, frame n (from 0) blended in with weight 1/(n + 1), up to N
+//! frames, after which the mean of the first N is held (glsl/raytrace/accumulate.comp). What
+//! differs between frames is the photon batch alone, so the mean's caustic is the estimate of
+//! N batches of photons, its noise 1/sqrt(N) of a frame's, and its bias the same blur over
+//! the gathering disk; the rest of a frame is a function of the scene (the diffuse vertices'
+//! environment chain is sampled the same way in every frame, and every ray goes through its
+//! pixel's centre: a sub-pixel jitter would move the traced ray off the pixel the G-buffer
+//! gave to the object, and antialias only the pixels inside its coverage), its own mean bit
+//! for bit. Without photons nothing differs and nothing is accumulated. The mean is one
+//! compute pass over the HDR image after the frame's last `raytrace` pass (the technique
+//! that records it is the last one in the recipe), so that the refraction, reflection and
+//! caustics of one frame are averaged together and every later pass (the tone map) reads the
+//! mean as it would the frame; it lives in the technique, not in the renderer, because the
+//! technique is what varies from frame to frame and knows whether it does. The frames it
+//! costs are the frames `prism bench` times, plus that pass. Every change starts it again:
+//! the camera ([`Technique::camera_moved`], from `Renderer::set_camera`), a live update
+//! ([`Technique::restart`]; a resize or a changed parameter re-creates the technique), a
+//! dragged object ([`Technique::objects_moved`]), rewritten materials or animated water
+//! ([`Technique::contents_changed`]; with `render.update = "every_frame"` every frame is a
+//! change, and nothing accumulates). The first frame after a change is that frame, bit for
+//! bit the frame with `accumulate = 1`; with `accumulate = 1` there is no pass and every
+//! frame is shown as traced.
 use std::rc::Rc;
 use std::sync::Arc;
 
 use crate::frame::gpu_scene::GpuScene;
+use crate::frame::targets::HDR_FORMAT;
 use crate::gpu::GpuContext;
-use crate::gpu::{vk, Access, Buffer, ComputePipeline, MemoryLocation, Sampler, SamplerDesc, Spec};
+use crate::gpu::{vk, Access, Buffer, ComputePipeline, Image, ImageDesc, MemoryLocation, Sampler, SamplerDesc, Spec};
 use crate::graph::{Bindings, BoundSet, BufferId, Frame, FrameGraph};
 use crate::reference::{dispatch_size, initial_stats, photon_targets, TraceGeometry};
 use crate::scene::techniques::RaytraceParams;
 use crate::scene::Scene;
+use crate::shader_structs::AccumulatePush;
 use crate::shader_structs::RefPush;
 use crate::shader_structs::RefUniforms;
 use crate::technique::baseline::fullscreen::{fragment_set, FullscreenDesc, FullscreenPass};
@@ -75,6 +102,8 @@ pub const CAUSTICS_PHOTON_RESET: &str = "caustics_raytrace_photon_reset";
 pub const CAUSTICS_PHOTONS: &str = "caustics_raytrace_photons";
 pub const VOLUME_PHOTON_RESET: &str = "volume_raytrace_photon_reset";
 pub const VOLUME_PHOTONS: &str = "volume_raytrace_photons";
+/// The running mean of the frames since the last change (`render.raytrace.accumulate`).
+pub const RAYTRACE_ACCUMULATE: &str = "raytrace_accumulate";
 
 /// The grid's empty bucket (photon_grid.glsl's END_OF_LIST).
 const END_OF_PHOTON_LIST: u32 = u32::MAX;
@@ -234,6 +263,25 @@ fn photon_owner(scene: &Scene) -> Option<Effect> {
         .find(|&e| selection(scene, e).is_some())
 }
 
+/// `render.raytrace.accumulate`: the frames the running mean averages at most (1: none).
+fn accumulation(scene: &Scene) -> u32 {
+    RaytraceParams::from_settings(&scene.render).map_or(1, |p| p.accumulate)
+}
+
+/// The `raytrace` technique that keeps the running mean: the last in the recipe, so that the
+/// mean is taken of the image every `raytrace` pass of the frame has written, where
+/// `render.raytrace.accumulate` > 1 and the frames differ: where photons are traced
+/// ([`has_caustics`]). Without photons every frame is the same image, its own mean.
+fn accumulator(scene: &Scene) -> Option<Effect> {
+    if accumulation(scene) <= 1 || !has_caustics(scene) {
+        return None;
+    }
+    [Effect::Caustics, Effect::Refraction, Effect::Reflection, Effect::Volume]
+        .into_iter()
+        .rev()
+        .find(|&e| selection(scene, e).is_some())
+}
+
 fn plan(scene: &Scene, effect: Effect) -> Vec<(Stage, PlannedPass)> {
     let (stage, name, reset, photons) = effect.passes();
     let Some((key, reason)) = selection(scene, effect) else { return Vec::new() };
@@ -248,6 +296,13 @@ fn plan(scene: &Scene, effect: Effect) -> Vec<(Stage, PlannedPass)> {
         passes.push((stage, PlannedPass::new(photons, format!("photons from the lights: {why}"))));
     }
     passes.push((stage, PlannedPass::new(name, format!("{reason} (render.{key} = \"raytrace\")"))));
+    if accumulator(scene) == Some(effect) {
+        let why = format!(
+            "mean of up to {} frames of the photons' caustic while nothing changes (render.raytrace.accumulate)",
+            accumulation(scene)
+        );
+        passes.push((stage, PlannedPass::new(RAYTRACE_ACCUMULATE, why)));
+    }
     passes
 }
 
@@ -282,8 +337,35 @@ struct Photons {
     _geometry: Rc<crate::technique::Timed<TraceGeometry>>,
 }
 
+/// The running mean of the frames since the last change (glsl/raytrace/accumulate.comp), in
+/// an image of its own, written back over the frame's HDR image.
+///
+/// It lives in the technique rather than in the renderer because what varies between frames,
+/// and so what there is to average, is the technique's own (its photon batches): the
+/// renderer's other images are functions of the scene, and a technique that does not vary
+/// has no mean to show. It is one pass over the HDR image after the last `raytrace` pass,
+/// rather than a mean per pass, so that the refraction, reflection and caustics passes of
+/// one frame are averaged once, together, and the passes after it (a tone map, another
+/// stage's technique) read the mean as they would read the frame.
+struct Accumulation {
+    pipeline: ComputePipeline,
+    set: BoundSet,
+    groups: [u32; 3],
+    /// `render.raytrace.accumulate`.
+    limit: u32,
+    size: (u32, u32),
+    /// The mean, bound in the set.
+    _mean: Image,
+}
+
 struct Raytrace {
     pass: FullscreenPass,
+    /// The running mean, where this technique keeps it ([`accumulator`]).
+    accumulation: Option<Accumulation>,
+    /// The frames begun since the last change (camera, scene, objects, contents), and of
+    /// them those before the frame being recorded: its weight in the mean is 1/(frames + 1).
+    since_change: u32,
+    frames: u32,
     photons: Rc<Photons>,
     /// The names of the photon passes, where this technique records them.
     owner: Option<(&'static str, &'static str)>,
@@ -364,7 +446,48 @@ fn create(s: &mut Setup<'_>, effect: Effect) -> Result<Box<dyn Technique>, Rende
         set,
         s.frame_layout,
     )?;
-    Ok(Box::new(Raytrace { pass, photons, owner, iteration: 0, begun: 0, _uniforms: uniforms, geometry: timed }))
+    let accumulation = match accumulator(scene) == Some(effect) {
+        true => Some(make_accumulation(ctx, s.graph, targets, p.accumulate)?),
+        false => None,
+    };
+    Ok(Box::new(Raytrace {
+        pass,
+        accumulation,
+        since_change: 0,
+        frames: 0,
+        photons,
+        owner,
+        iteration: 0,
+        begun: 0,
+        _uniforms: uniforms,
+        geometry: timed,
+    }))
+}
+
+/// The running mean over the frame's HDR image, of up to `limit` frames.
+fn make_accumulation(
+    ctx: &Arc<GpuContext>,
+    graph: &mut FrameGraph,
+    targets: &crate::frame::targets::Targets,
+    limit: u32,
+) -> Result<Accumulation, RenderError> {
+    let (width, height) = (targets.width, targets.height);
+    // The HDR image's format: the mean of its values in the same precision, so that a pixel
+    // equal in every frame is copied back unchanged.
+    let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
+    let mean = Image::new(ctx, &ImageDesc::d2("raytrace_mean", HDR_FORMAT, width, height, usage))?;
+    let mean_id = graph.register_image(&mean);
+    let set = Bindings::new(vk::ShaderStageFlags::COMPUTE)
+        .storage_image(ACCUMULATE_BINDING_HDR, &targets.hdr)
+        .access(targets.hdr_id, Access::ComputeWrite)
+        .storage_image(ACCUMULATE_BINDING_MEAN, &mean)
+        .access(mean_id, Access::ComputeWrite)
+        .build(ctx, RAYTRACE_ACCUMULATE)?;
+    let push = std::mem::size_of::<AccumulatePush>() as u32;
+    let pipeline =
+        ComputePipeline::new(ctx, RAYTRACE_ACCUMULATE, "raytrace/accumulate.comp", &[set.layout()], push, &[])?;
+    let groups = [width.div_ceil(WORKGROUP_2D), height.div_ceil(WORKGROUP_2D), 1];
+    Ok(Accumulation { pipeline, set, groups, limit, size: (width, height), _mean: mean })
 }
 
 /// The photon map for `count` photons a frame and, with photons, the reference's photon
@@ -472,15 +595,44 @@ impl Technique for Raytrace {
             frame.pass(trace).uses(&k.set).record(move |cmd| cmd.compute(pipeline, &[set], &push, groups));
         }
         self.pass.record(frame, inputs.frame_set, &[inputs.scene.environment_id]);
+        if let Some(a) = &self.accumulation {
+            let push = AccumulatePush { frames: self.frames, limit: a.limit, width: a.size.0, height: a.size.1 };
+            let (pipeline, set, groups) = (&a.pipeline, a.set.set(), a.groups);
+            // The set declares the HDR image and the mean, both read and written.
+            frame
+                .pass(RAYTRACE_ACCUMULATE)
+                .uses(&a.set)
+                .record(move |cmd| cmd.compute(pipeline, &[set], &push, groups));
+        }
     }
 
     fn begin_frame(&mut self) {
         self.iteration = self.begun;
         self.begun = self.begun.wrapping_add(1);
+        self.frames = self.since_change;
+        self.since_change = self.since_change.saturating_add(1);
     }
 
     fn restart(&mut self) {
         self.begun = 0;
+        self.since_change = 0;
+    }
+
+    // Every change restarts the mean: what the frames before it show is not this view.
+    fn camera_moved(&mut self) {
+        self.since_change = 0;
+    }
+
+    fn objects_moved(&mut self, _bounds: &[(glam::Vec3, f32)]) {
+        self.since_change = 0;
+    }
+
+    fn contents_changed(&mut self) {
+        self.since_change = 0;
+    }
+
+    fn accumulated(&self) -> Option<u32> {
+        self.accumulation.as_ref().map(|a| self.since_change.min(a.limit))
     }
 
     fn once_costs(&self) -> Vec<crate::technique::OnceCost> {

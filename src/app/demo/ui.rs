@@ -7,7 +7,7 @@ use std::collections::{BTreeMap, VecDeque};
 use crate::gpu::PassCounts;
 use crate::renderer::plan::PlannedPass;
 use crate::renderer::{FrameTiming, TechniqueMemory};
-use crate::scene::techniques::{controls, Control, TABLES};
+use crate::scene::techniques::{controls, Control, RaytraceParams, TABLES};
 use crate::scene::{Light, Material, Scene, TECHNIQUE_KEYS};
 
 use super::ab::{AbMode, AbOptions, AbStatus, MAX_PHOTONS};
@@ -173,6 +173,9 @@ pub struct View<'a> {
     pub ab: Option<AbStatus>,
     /// Long work in progress (the eikonal light simulation).
     pub progress: Option<WorkProgress>,
+    /// The frames the shown image averages, where the raytrace technique accumulates them
+    /// (`render.raytrace.accumulate`).
+    pub accumulated: Option<u32>,
 }
 
 /// Long work in progress, as the renderer reports it.
@@ -395,6 +398,11 @@ fn timings(ui: &mut egui::Ui, view: &View, counts: bool) {
         ui.end_row();
     });
     ui.small("(window passes in parentheses: not in the total)");
+    if let Some(n) = view.accumulated {
+        let limit = RaytraceParams::from_settings(&view.scene.render).map_or(1, |p| p.accumulate);
+        // The pass list's raytrace_accumulate averages these; any change starts again at 1.
+        ui.label(format!("raytrace: {n} of {limit} frames accumulated (any change restarts)"));
+    }
 }
 
 fn parameters(ui: &mut egui::Ui, state: &mut UiState, view: &View, req: &mut Requests) {
