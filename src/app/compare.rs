@@ -509,7 +509,7 @@ pub fn run(args: CompareArgs) -> Result<()> {
     let (spec, noise) = if args.exact.no_exact {
         (None, None)
     } else {
-        let spec = curve_spec(&args.scene, &args.measure, &args.exact)?;
+        let spec = curve_spec(&args.scene, &args.measure, &args.exact, [&scene])?;
         (Some(spec), Some(reference_noise(&ctx, &scene, &settings, &reference, policy)?))
     };
     let setting = Setting { scene: &scene, reference: &reference };

@@ -183,11 +183,32 @@ pub struct CurveSpec {
     frames: u32,
 }
 
+/// The source of one exact curve for every setting of `settings` (a sweep's, a report
+/// entry's): the reference as soon as one of them renders what a frame of `raytrace`
+/// cannot, since the curve is drawn against each setting (a sweep from `caustics = none` to
+/// `caustics_map` must be weighed against an exact image with the caustic).
+pub fn source_for_all<'a>(settings: impl IntoIterator<Item = &'a Scene>) -> ExactSource {
+    if settings.into_iter().any(|s| source_for(s) == ExactSource::Reference) {
+        ExactSource::Reference
+    } else {
+        ExactSource::Raytrace
+    }
+}
+
 /// The exact curve of the scene that `scene_args` loads (the same scene as the techniques,
-/// with `raytrace` selected for refraction and reflection, or the reference).
-pub fn curve_spec(scene_args: &SceneArgs, measure_args: &MeasureArgs, exact: &ExactArgs) -> Result<CurveSpec> {
+/// with `raytrace` selected for refraction and reflection, or the reference), drawn for the
+/// `settings` it is compared with ([`source_for_all`]).
+pub fn curve_spec<'a>(
+    scene_args: &SceneArgs,
+    measure_args: &MeasureArgs,
+    exact: &ExactArgs,
+    settings: impl IntoIterator<Item = &'a Scene>,
+) -> Result<CurveSpec> {
     let base = scene_args.load()?;
-    let source = source_for(&base);
+    let source = match source_for(&base) {
+        ExactSource::Raytrace => source_for_all(settings),
+        reference => reference,
+    };
     let mut spec = CurveSpec { source, raytrace: Vec::new(), reference: None, frames: exact.exact_frames.max(1) };
     match source {
         ExactSource::Raytrace => {
@@ -539,6 +560,14 @@ mod tests {
         for volume in ["eikonal_sphere", "eikonal_amber_bunny"] {
             assert_eq!(source_for(&load(volume, &["render.caustics=none"])), ExactSource::Reference, "{volume}");
         }
+        // A sweep over caustic techniques whose first setting renders none: one curve for
+        // all, with the caustic.
+        let sweep = [
+            load("caustic_sphere", &["render.caustics=none"]),
+            load("caustic_sphere", &["render.caustics=photon_buffer"]),
+        ];
+        assert_eq!(source_for_all(&sweep), ExactSource::Reference);
+        assert_eq!(source_for_all(&sweep[..1]), ExactSource::Raytrace);
     }
 
     #[test]

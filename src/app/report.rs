@@ -126,7 +126,8 @@ pub fn run(args: ReportArgs) -> Result<()> {
         } else {
             let (scene, reference) = (&loaded[0].1, &loaded[0].2);
             let noise = reference_noise(&ctx, scene, &settings, reference, args.measure.reference_policy())?;
-            (Some(curve_spec(&sa0, &args.measure, &args.exact)?), Some(noise))
+            let settings = loaded.iter().map(|(_, scene, _)| scene);
+            (Some(curve_spec(&sa0, &args.measure, &args.exact, settings)?), Some(noise))
         };
         // The entry's settings and the exact points timed interleaved (src/app/equaltime.rs).
         let timed: Vec<Setting> = loaded.iter().map(|(_, scene, reference)| Setting { scene, reference }).collect();

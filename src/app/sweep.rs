@@ -531,7 +531,7 @@ pub fn run(args: SweepArgs) -> Result<()> {
     } else {
         let mut sa = args.scene.clone();
         sa.set.extend(rows_overrides[0].iter().cloned());
-        Some(curve_spec(&sa, &args.measure, &args.exact)?)
+        Some(curve_spec(&sa, &args.measure, &args.exact, &scenes)?)
     };
     let references: Vec<Vec<f32>> = scenes
         .iter()
