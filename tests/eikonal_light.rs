@@ -762,6 +762,12 @@ fn ball_floor_rings(intensity: f64, h: f64, c: f64, r: f64, ior: f64, dr: f64, r
 /// - The caustic (r < 0.35 m, where all the refracted light lands): the ball's cone flux,
 ///   I 2 pi (1 - cos alpha).
 ///
+/// eikonal_sphere at 48^3 with its irradiance volume 0.6 m wider on every side than the box
+/// (to |x|, |z| < 1.65 m: the ball's whole shadow and penumbra on the floor).
+fn floor_flux_scene() -> prism::scene::Scene {
+    common::scene("eikonal_sphere", 32, &["volume.resolution=[48, 48, 48]", "render.eikonal.light_side=0.6"])
+}
+
 /// The highest-energy voxelization of before (dE = flux / smallest patch area in the
 /// voxel) made the focus several times too bright; the track-length deposit conserves flux.
 #[test]
@@ -770,8 +776,7 @@ fn floor_flux_matches_the_ball_closed_form() {
         return;
     }
     let ctx = common::context(false);
-    let scene =
-        common::scene("eikonal_sphere", 32, &["volume.resolution=[48, 48, 48]", "render.eikonal.light_side=0.6"]);
+    let scene = floor_flux_scene();
     let volume = scene.volume.clone().unwrap();
     let light = scene.lights[0];
     let dr = 0.05;
@@ -1340,8 +1345,7 @@ fn skipped_air_patches_equal_their_simulation() {
         return;
     }
     let ctx = common::context(false);
-    let scene =
-        common::scene("eikonal_sphere", 32, &["volume.resolution=[48, 48, 48]", "render.eikonal.light_side=0.6"]);
+    let scene = floor_flux_scene();
     let volume = scene.volume.clone().unwrap();
     let light = scene.lights[0];
     let run = |skip: bool| {
