@@ -396,10 +396,11 @@ pub fn wavefront_faces(volume: &Volume, min: Vec3, max: Vec3, light: &Light, per
     }
 }
 
-/// The initial wavefront of [`wavefront_faces`], face after face, row (j) after row, i
-/// fastest. A directional light's patches carry its irradiance E times their area; a point
-/// light's carry I / r0^2 times their area at radius r0.
-pub fn initial_wavefront(volume: &Volume, min: Vec3, max: Vec3, light: &Light, per_side: u32) -> Vec<Patch> {
+/// The initial wavefront of `faces` ([`wavefront_faces`]), face after face, row (j) after
+/// row, i fastest, in air or in `volume`'s index where a corner starts inside it. A
+/// directional light's patches carry its irradiance E times their area; a point light's carry
+/// I / r0^2 times their area at radius r0.
+pub fn initial_wavefront(volume: &Volume, faces: &[WavefrontFace]) -> Vec<Patch> {
     let n_at = |x: Vec3| -> f32 {
         let inside = x.cmpge(volume.min).all() && x.cmple(volume.max).all();
         if inside {
@@ -409,7 +410,7 @@ pub fn initial_wavefront(volume: &Volume, min: Vec3, max: Vec3, light: &Light, p
         }
     };
     let mut patches = Vec::new();
-    for face in wavefront_faces(volume, min, max, light, per_side) {
+    for face in faces {
         let e = if face.point { face.power / (face.r0 * face.r0) } else { face.power };
         for j in 0..face.k {
             for i in 0..face.k {
@@ -653,8 +654,9 @@ impl LightSim {
         } else {
             volume.resolution.iter().copied().max().unwrap_or(1)
         };
-        let mut wavefronts: Vec<Vec<Patch>> =
-            lights.iter().map(|l| initial_wavefront(volume, light_min, light_max, l, per_side)).collect();
+        let faces: Vec<Vec<WavefrontFace>> =
+            lights.iter().map(|l| wavefront_faces(volume, light_min, light_max, l, per_side)).collect();
+        let mut wavefronts: Vec<Vec<Patch>> = faces.iter().map(|f| initial_wavefront(volume, f)).collect();
         // The energy threshold's reference, the largest initial patch per channel, is that
         // of the whole wavefront (skipped patches included).
         let largest: Vec<Vec3> = wavefronts.iter().map(|w| w.iter().fold(Vec3::ZERO, |m, p| m.max(p.flux()))).collect();
@@ -664,9 +666,8 @@ impl LightSim {
         let margin = ((3.0 * params.sigma).ceil() + 3.0) * volume.voxel_size().max_element();
         let (mut air_faces, mut air_skip, mut skipped) = (Vec::<AirFace>::new(), Vec::<u32>::new(), 0u32);
         if params.skip_air {
-            for (light, wavefront) in lights.iter().zip(&mut wavefronts) {
-                let faces = wavefront_faces(volume, light_min, light_max, light, per_side);
-                let skip = air_patches(&faces, &textures.medium, margin);
+            for (faces, wavefront) in faces.iter().zip(&mut wavefronts) {
+                let skip = air_patches(faces, &textures.medium, margin);
                 let base = air_skip.len();
                 for (i, f) in faces.iter().enumerate() {
                     air_faces.push(AirFace {
@@ -678,7 +679,7 @@ impl LightSim {
                         power: f.power.extend(f.r0).to_array(),
                     });
                 }
-                air_skip.extend(air_flags(&faces, &skip, volume.voxel_size().max_element(), light_min, light_max));
+                air_skip.extend(air_flags(faces, &skip, volume.voxel_size().max_element(), light_min, light_max));
                 let mut flags = skip.iter();
                 wavefront.retain(|_| !*flags.next().expect("one flag per patch"));
                 skipped += skip.iter().filter(|&&s| s).count() as u32;
