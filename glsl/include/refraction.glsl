@@ -32,6 +32,15 @@ bool layer_covered(sampler2D layer_normal, vec2 uv) {
     return dot(n, n) > 0.25;
 }
 
+// The same test on a layer's depth, where the layer is kept nearest-first in reversed Z
+// (cleared to 0, depth test GREATER: `Front`, `BackNearest`): a refractor's fragment writes
+// near / distance > 0 with its normal, so the two tests agree texel for texel, and the
+// one-channel depth is a quarter of the RGBA32F normal's bytes per lookup.
+bool layer_depth_covered(sampler2D layer_depth, vec2 uv) {
+    if (!on_screen(uv)) return false;
+    return texelFetch(layer_depth, texel_of(uv), 0).r > 0.0;
+}
+
 // View-space distance along -z of the layer's surface at uv (reversed Z: near / depth).
 float layer_view_depth(sampler2D layer_depth, vec2 uv) {
     return frame.clip.x / max(texelFetch(layer_depth, texel_of(uv), 0).r, 1e-30);
@@ -68,9 +77,17 @@ vec3 silhouette_normal(vec3 T1) {
 
 // Single interface seen from inside a refractor (the camera inside it): what
 // specular/single.frag does, so that every technique agrees with the baseline there.
-vec3 refraction_from_inside(vec3 I, vec3 n_inward, vec3 ior) {
+// one_ior: the three channels share ior.x, so one refracted lookup serves them all (callers
+// pass a specialisation constant's test, so that the per-channel code is compiled out).
+vec3 refraction_from_inside(vec3 I, vec3 n_inward, vec3 ior, bool one_ior) {
     vec3 R = environment(reflect(I, n_inward));
     float cos_i = clamp(-dot(I, n_inward), 0.0, 1.0);
+    if (one_ior) {
+        float F = fresnel_dielectric(cos_i, ior.x);
+        vec3 T = refract(I, n_inward, ior.x);
+        vec3 L_t = dot(T, T) > 0.0 ? environment(T) : vec3(0.0);
+        return F * R + (1.0 - F) * L_t;
+    }
     vec3 L;
     for (int c = 0; c < 3; ++c) {
         float F = fresnel_dielectric(cos_i, ior[c]);

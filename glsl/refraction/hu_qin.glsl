@@ -34,7 +34,21 @@ layout(constant_id = 8) const uint D_T_STEP = D_T_STEP_PAPER;
 // render.hu_qin.nearby_lookup: Fig. 13's closest rectangle (NEARBY_LOOKUP_PAPER) or the nearest
 // corrected surface over all rectangles (NEARBY_LOOKUP_NEAREST), glsl/include/nearby.glsl.
 layout(constant_id = 9) const uint NEARBY_LOOKUP = NEARBY_LOOKUP_PAPER;
+// 0 when no rectangle exists (no other object, or render.hu_qin.nearby = false): R and T2 see
+// the environment only. A specialisation constant rather than the empty rectangle list's own
+// test, because a CPU device (lavapipe) runs both sides of a per-pixel branch with lanes
+// masked: the lookup's code must not be in the shader when nothing can be looked up.
+layout(constant_id = 11) const uint NEARBY = 1;
+// 1 when some dielectric of the scene has a different ior per channel (as in
+// specular/single.frag): lavapipe runs both sides of a per-pixel branch, so the per-channel
+// code is compiled out otherwise.
+layout(constant_id = 12) const uint DISPERSION = 1;
 #include "nearby.glsl"
+
+// What a ray leaving OBJ_R at P sees: the nearby objects (§2.2) or the environment map.
+vec3 seen_from(vec3 P, vec3 Ray) {
+    return NEARBY != 0u ? nearby_radiance(P, Ray) : environment(Ray);
+}
 #ifdef ORACLE_TRACE
 // ORACLE_EXIT_POINT | ORACLE_EXIT_NORMAL | ORACLE_NEARBY (src/scene/techniques.rs, HuQinOracle).
 layout(constant_id = 10) const uint ORACLE = 0;
@@ -110,8 +124,9 @@ layout(location = 2) out vec4 out_t2;
 // (glsl/include/hu_qin_exit.glsl). Depths are the view-space distances along -z rather than
 // the paper's [0, 1] buffer z, which with prism's reversed-Z infinite projection is far from
 // linear; the back layer's coverage is the refractor's silhouette.
+// Coverage from the depth layers, which the d_T search reads anyway at the same texel.
 bool exit_covered(bool front, vec2 uv) {
-    return front ? layer_covered(front_normal, uv) : layer_covered(back_normal, uv);
+    return front ? layer_depth_covered(front_depth, uv) : layer_depth_covered(back_depth, uv);
 }
 float exit_layer_depth(bool front, vec2 uv) {
     return front ? layer_view_depth(front_depth, uv) : layer_view_depth(back_depth, uv);
@@ -140,19 +155,20 @@ void main() {
     if (material_kind(mat) != MATERIAL_DIELECTRIC) discard;
     GpuMaterial m = materials[mat];
     vec3 ior = max(m.spec_a.rgb, vec3(1e-6));
+    bool one_ior = DISPERSION == 0u || (ior.r == ior.g && ior.g == ior.b);
     vec3 V = camera_ray(in_uv);
     vec3 N1 = normalize(nm.xyz);
     if (dot(V, N1) > 0.0) {
         // The camera is inside the refractor: one interface, as the baseline.
-        out_radiance = vec4(finite_or_zero(refraction_from_inside(V, -N1, ior)), 1.0);
+        out_radiance = vec4(finite_or_zero(refraction_from_inside(V, -N1, ior, one_ior)), 1.0);
         return;
     }
     vec3 P1 = world_from_depth(in_uv, depth);
     float dist1 = length(P1 - frame.camera_position.xyz);
     float tol = TOLERANCE * dist1;
     float cos_i = clamp(-dot(V, N1), 0.0, 1.0);
-    nearby_select_object(uint(texelFetch(gbuf_albedo, px, 0).a + 0.5));
-    vec3 L_reflected = nearby_radiance(P1, reflect(V, N1));
+    if (NEARBY != 0u) nearby_select_object(uint(texelFetch(gbuf_albedo, px, 0).a + 0.5));
+    vec3 L_reflected = seen_from(P1, reflect(V, N1));
 #ifdef ORACLE_TRACE
     if ((ORACLE & ORACLE_NEARBY) != 0u) L_reflected = oracle_nearby_radiance(P1, reflect(V, N1), N1);
 #endif
@@ -161,7 +177,7 @@ void main() {
     float d_V = max(layer_view_depth(back_depth, in_uv) - view_depth(P1), tol);
 
     // Exact per-channel refraction (dispersion) when the ior is RGB; one path otherwise.
-    int channels = (ior.r == ior.g && ior.g == ior.b) ? 1 : 3;
+    int channels = one_ior ? 1 : 3;
     vec3 L = vec3(0.0);
     for (int c = 0; c < 3; ++c) {
         int k = channels == 1 ? 0 : c;
@@ -218,7 +234,7 @@ void main() {
 #endif
             vec2 uv2 = project_uv(P2);
             // §2.1.4: N2 from the normal layer matching the exit surface.
-            bool covered = front ? layer_covered(front_normal, uv2) : layer_covered(back_normal, uv2);
+            bool covered = exit_covered(front, uv2);
             vec3 N2 = !covered ? silhouette_normal(T1)
                                : (front ? layer_normal_at(front_normal, uv2) : layer_normal_at(back_normal, uv2));
 #ifdef ORACLE_TRACE
@@ -232,7 +248,7 @@ void main() {
             // Leaving the object: the normal facing T1 is -N2 and eta = n_refractor / n_outside;
             // TIR at P2 is clamped to the critical angle as in Wyman 2005 §3.3.
             T2 = refract_clamped(T1, -N2, ior[k]);
-            vec3 L_T2 = nearby_radiance(P2, T2);
+            vec3 L_T2 = seen_from(P2, T2);
 #ifdef ORACLE_TRACE
             if ((ORACLE & ORACLE_NEARBY) != 0u) L_T2 = oracle_nearby_radiance(P2, T2, N2);
 #endif

@@ -18,6 +18,10 @@
 #include "fresnel.glsl"
 #include "refraction.glsl"
 layout(constant_id = 0) const uint DEBUG = 0;
+// 1 when some dielectric of the scene has a different ior per channel (as in
+// specular/single.frag): lavapipe runs both sides of a per-pixel branch, so the per-channel
+// code is compiled out otherwise.
+layout(constant_id = 2) const uint DISPERSION = 1;
 #ifdef ORACLE_TRACE
 // ORACLE_EXIT_POINT | ORACLE_EXIT_NORMAL (src/scene/techniques.rs, WymanOracle).
 layout(constant_id = 1) const uint ORACLE = 0;
@@ -67,11 +71,12 @@ void main() {
     slot = int(slot_of_object[object]);
     GpuMaterial m = materials[mat];
     vec3 ior = max(m.spec_a.rgb, vec3(1e-6));
+    bool one_ior = DISPERSION == 0u || (ior.r == ior.g && ior.g == ior.b);
     vec3 V = camera_ray(in_uv);
     vec3 N1 = normalize(nm.xyz);
     if (dot(V, N1) > 0.0) {
         // The camera is inside the refractor: one interface, as the baseline.
-        out_radiance = vec4(finite_or_zero(refraction_from_inside(V, -N1, ior)), 1.0);
+        out_radiance = vec4(finite_or_zero(refraction_from_inside(V, -N1, ior, one_ior)), 1.0);
         return;
     }
     vec3 P1 = world_from_depth(in_uv, depth);
@@ -88,7 +93,7 @@ void main() {
     if (!back_here) d_V = d_N;
 
     // Exact per-channel refraction (dispersion) when the ior is RGB; one path otherwise.
-    int channels = (ior.r == ior.g && ior.g == ior.b) ? 1 : 3;
+    int channels = one_ior ? 1 : 3;
     vec3 L = vec3(0.0);
     for (int c = 0; c < 3; ++c) {
         int k = channels == 1 ? 0 : c;

@@ -24,6 +24,7 @@
 
 use crate::gpu::Spec;
 use crate::graph::Frame;
+use crate::technique::baseline::specular_single::has_dispersion;
 use crate::scene::techniques::{DTStep, HuQinOracle, HuQinParams, RecursiveExit};
 use crate::scene::{Material, Scene};
 use crate::technique::{
@@ -227,6 +228,9 @@ impl HuQinPass {
             ("NEARBY_TOLERANCE", Spec::F32(params.correction_tolerance)),
             ("NEARBY_SEEDS", Spec::U32(params.seed_samples)),
             ("NEARBY_LOOKUP", Spec::U32(nearby_lookup_constant(params.nearby_lookup))),
+            // No rectangle: the lookups are compiled out, R and T2 see the environment.
+            ("NEARBY", Spec::U32(u32::from(!nearby.is_empty()))),
+            ("DISPERSION", Spec::U32(u32::from(has_dispersion(scene)))),
             (
                 "D_T_STEP",
                 Spec::U32(match params.d_t_step {

@@ -23,6 +23,7 @@
 
 use crate::gpu::{Buffer, Spec};
 use crate::graph::Frame;
+use crate::technique::baseline::specular_single::has_dispersion;
 use crate::scene::techniques::{BackSurface, WymanOracle, WymanParams};
 use crate::scene::{Material, Scene};
 use crate::technique::{
@@ -141,9 +142,13 @@ impl WymanPass {
         let slots = Buffer::storage(ctx, "refraction_wyman_slots", &refractor_slots(scene, s.gpu))?;
         let (b, f) = (&layers.layers[0], &layers.layers[1]);
         let tracer = oracle.as_ref().map(|o| o.buffers(s.gpu)).unwrap_or_default();
-        let (fragment_shader, specialization) = match &oracle {
-            None => ("refraction/wyman.frag", vec![]),
-            Some(_) => ("refraction/wyman_oracle.frag", vec![("ORACLE", Spec::U32(params.oracle.bits()))]),
+        let mut specialization = vec![("DISPERSION", Spec::U32(u32::from(has_dispersion(scene))))];
+        let fragment_shader = match &oracle {
+            None => "refraction/wyman.frag",
+            Some(_) => {
+                specialization.push(("ORACLE", Spec::U32(params.oracle.bits())));
+                "refraction/wyman_oracle.frag"
+            }
         };
         let shade = ShadePass::new(
             ctx,
