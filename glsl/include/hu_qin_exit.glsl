@@ -40,9 +40,11 @@ bool hu_qin_exit_is_front(vec3 V, vec2 p1, vec3 P1, vec3 T1, float probe, float 
     vec2 pe = hu_qin_dividing_pixel(p1, normalize(t1), span);
     vec3 Pe = exit_back_point(pe);
     vec3 chord = Pe - P1;
-    float theta_1 = acos(clamp(dot(V, T1), -1.0, 1.0));
-    float theta_2 = dot(chord, chord) > 0.0 ? acos(clamp(dot(V, normalize(chord)), -1.0, 1.0)) : PI;
-    return theta_1 > theta_2;
+    // theta_1 > theta_2 compared as cosines (acos decreases): cos theta_2 = -1 (theta_2 = pi)
+    // where the chord has no length, which no theta_1 exceeds.
+    float cos_1 = clamp(dot(V, T1), -1.0, 1.0);
+    float cos_2 = dot(chord, chord) > 0.0 ? clamp(dot(V, normalize(chord)), -1.0, 1.0) : -1.0;
+    return cos_1 < cos_2;
 }
 
 // §2.1.3, Fig. 9: d_T by the iterative lookup, against the front (flag -1) or back (flag 1)
