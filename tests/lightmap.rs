@@ -259,3 +259,107 @@ fn box_receivers_catch_the_caustic_on_their_faces() {
 fn total_radiance(hdr: &[f32]) -> f64 {
     common::total(hdr)
 }
+
+/// The apply pass reaches every pixel of its receiver: a floor lit, through a tall mirror, by
+/// the reflection of a directional light that covers all of it (the caustic is the mirror's
+/// reflected beam, E cos 45 deg), seen by a camera that the floor extends behind (so its
+/// chart's rectangle crosses the camera's plane and is clipped). Every pixel whose centre ray
+/// meets the floor, away from its edges, gains radiance from the caustic; a pass that drew
+/// less than each chart (a rectangle short of the chart's edge, or one dropped where it
+/// crosses the camera's plane) leaves such pixels without.
+#[test]
+fn the_apply_pass_covers_its_whole_receiver() {
+    if !common::in_own_process() {
+        return;
+    }
+    let ctx = common::context(false);
+    let text = r#"
+name = "mirrored_floor"
+[camera]
+position = [0, 1.5, 2.5]
+target = [0, 0, -1.5]
+up = [0, 1, 0]
+vfov_deg = 70
+width = 96
+height = 96
+[environment]
+type = "constant"
+radiance = 0
+[[lights]]
+type = "directional"
+direction = [1, -1, 0]
+irradiance = 2
+[materials.floor]
+type = "diffuse"
+albedo = 0.8
+[materials.mirror]
+type = "mirror"
+reflectance = 1
+[[objects]]
+name = "floor"
+material = "floor"
+shape = "quad"
+center = [0, 0, 0]
+size = [8, 8]
+normal = [0, 1, 0]
+[[objects]]
+name = "mirror"
+material = "mirror"
+shape = "quad"
+center = [5, 5, 0]
+size = [10, 12]
+normal = [-1, 0, 0]
+"#;
+    let path = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("lightmap_mirrored_floor.toml");
+    std::fs::write(&path, text).unwrap();
+    let mut o: Vec<String> = prism::scene::BASELINE.iter().map(|s| s.to_string()).collect();
+    let without = common::render_on(&ctx, &prism::scene::load(&path, &o).unwrap());
+    // Photons dense enough for a smooth beam: 512^2 over the mirror, gathered into 64^2
+    // light-map texels of 12.5 cm (the default 128^2 photons in 256^2 texels leave a dotted
+    // pattern, one splat per photon).
+    o.extend(
+        [
+            "render.caustics=impostor_lightmap",
+            "render.impostor_lightmap.caustic_map_size=512",
+            "render.impostor_lightmap.lightmap_size=64",
+        ]
+        .map(String::from),
+    );
+    let s = prism::scene::load(&path, &o).unwrap();
+    let with = common::render_on(&ctx, &s);
+    common::assert_no_validation_errors(&ctx);
+    assert_eq!(non_finite_count(&with.hdr), 0);
+    // The mirror's beam on the floor: irradiance 2 W/m^2 across the beam, arriving at 45 deg
+    // (E = 2 cos 45 on the floor), times albedo / pi.
+    let expected = 2.0 * std::f64::consts::FRAC_1_SQRT_2 * 0.8 / std::f64::consts::PI;
+    let (w, h) = (s.camera.width as usize, s.camera.height as usize);
+    let (mut floor, mut dark) = (0, Vec::new());
+    let mut sum = 0.0;
+    for y in 0..h {
+        for x in 0..w {
+            // The pixel's centre ray against the floor (y = 0), kept 0.2 m inside its edges.
+            let (o, d) = s.camera.primary_ray(x as u32, y as u32);
+            if d.y >= 0.0 {
+                continue;
+            }
+            let p = o + d * (-o.y / d.y);
+            if p.x.abs() > 3.8 || p.z.abs() > 3.8 {
+                continue;
+            }
+            floor += 1;
+            let i = 4 * (y * w + x) + 1;
+            let added = f64::from(with.hdr[i] - without.hdr[i]);
+            sum += added;
+            if added < 0.5 * expected {
+                dark.push((x, y, added));
+            }
+        }
+    }
+    eprintln!(
+        "floor pixels {floor}, mean caustic radiance {:.4} (expected {expected:.4}), below half: {}",
+        sum / floor as f64,
+        dark.len()
+    );
+    assert!(floor > w * h / 3, "the camera sees too little of the floor ({floor} pixels)");
+    assert!(dark.is_empty(), "{} floor pixels without the caustic, e.g. {:?}", dark.len(), &dark[..dark.len().min(5)]);
+}

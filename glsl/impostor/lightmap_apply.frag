@@ -1,19 +1,21 @@
 #version 450
 // Light-map caustics (Szirmay-Kalos et al. 2005, §5): each receiver reads its light map at
 // its own (u, v) during deferred shading and adds the caustic irradiance times its diffuse
-// BRDF (albedo / pi), blended additively onto the deferred result. One draw per receiver:
-// its pixels are those of its object index (G-buffer albedo.a); (u, v) follows from the
-// world position through the receiver's planar chart, the same chart its uv-map texels hold.
+// BRDF (albedo / pi), blended additively onto the deferred result. One draw per receiver
+// chart, of the chart's rectangle (impostor/lightmap_apply.vert): its pixels are those of its
+// object index (G-buffer albedo.a); (u, v) follows from the world position through the
+// receiver's planar chart, the same chart its uv-map texels hold.
 #include "frame.glsl"
 layout(set = 1, binding = BINDING_GBUF_NORMAL) uniform sampler2D gbuf_normal;
 layout(set = 1, binding = BINDING_GBUF_ALBEDO) uniform sampler2D gbuf_albedo;
 layout(set = 1, binding = BINDING_GBUF_DEPTH) uniform sampler2D gbuf_depth;
 layout(set = 1, binding = BINDING_LIGHTMAPS) uniform sampler2DArray lightmaps;
 layout(push_constant) uniform LightmapApplyPushBlock { LightmapApplyPush pc; };
-layout(location = 0) in vec2 in_uv;
 layout(location = 0) out vec4 out_radiance;
 void main() {
     ivec2 px = ivec2(gl_FragCoord.xy);
+    // uv = (0, 0) at the top-left pixel corner, as the full-screen passes' in_uv.
+    vec2 in_uv = gl_FragCoord.xy / frame.viewport.xy;
     float depth = texelFetch(gbuf_depth, px, 0).r;
     if (depth <= 0.0) discard;
     vec4 albedo = texelFetch(gbuf_albedo, px, 0);

@@ -26,7 +26,8 @@
 //!    over the texels it covers ([`splat_weights`]), so the light map holds irradiance in
 //!    W/m^2, comparable with the reference.
 //! 5. `impostor_lightmap_apply` (right after deferred shading): every receiver pixel adds
-//!    light-map irradiance x albedo / pi.
+//!    light-map irradiance x albedo / pi; each chart draws its own rectangle, so a pixel
+//!    runs the pass only for the charts that can be seen there.
 //!
 //! Light maps: one layer of a 2D array per chart (`lightmap_size`^2 each). Receivers: the
 //! diffuse quads and boxes ([`lightmap_receivers`]); a quad's unique chart is the planar
@@ -411,6 +412,7 @@ impl ImpostorLightmap {
             ctx,
             &GraphicsPipelineDesc {
                 blend: &[Blend::Additive],
+                vertex_shader: "impostor/lightmap_apply.vert",
                 ..GraphicsPipelineDesc::fullscreen(IMPOSTOR_LIGHTMAP_APPLY, "impostor/lightmap_apply.frag")
             },
             &[frame_layout, apply_set.layout()],
@@ -600,7 +602,8 @@ impl ImpostorLightmap {
                             edge_v: c.edge_v.extend(0.0).to_array(),
                         };
                         cmd.push_graphics(&self.apply_pipeline, &push);
-                        cmd.draw(3, 1);
+                        // The chart's rectangle: two triangles (impostor/lightmap_apply.vert).
+                        cmd.draw(6, 1);
                     }
                 });
             });
