@@ -198,7 +198,7 @@ fn gpu_particles_follow_the_equal_time_ray_equation() {
         let steps = 96;
         sim.run_steps(&ctx, steps).expect("steps");
         let dt = (params.light_dt * volume.voxel_size().min_element()) as f64;
-        let patches = sim.sim.patches();
+        let patches = sim.patches(&ctx).unwrap();
         let voxel = volume.voxel_size().x as f64;
         let (mut worst, mut worst_other): (f64, f64) = (0.0, 0.0);
         let other = match integrator {
@@ -277,7 +277,7 @@ fn luneburg_gpu_wavefront_focuses_on_the_far_surface() {
         if sim.run_steps(&ctx, 1).expect("step") == 0 {
             break;
         }
-        for p in sim.sim.patches() {
+        for p in sim.patches(&ctx).unwrap() {
             for c in 0..4 {
                 if p.x[c][3] < 0.0 {
                     continue;
@@ -333,7 +333,7 @@ fn energy_balance_of_the_wavefront() {
     let mut tessellated = 0;
     for step in 0..2000 {
         let next = sim.run_steps(&ctx, 1).expect("step") as usize;
-        let (patches, classes) = sim.sim.last_step(count);
+        let (patches, classes) = sim.last_step(&ctx, count).unwrap();
         for (p, &c) in patches.iter().zip(&classes) {
             let flux = p.flux().as_dvec3().element_sum();
             if c == 0 {
@@ -347,7 +347,7 @@ fn energy_balance_of_the_wavefront() {
             }
             tessellated += usize::from(c == 4);
         }
-        let in_flight = flux_sum(&sim.sim.patches());
+        let in_flight = flux_sum(&sim.patches(&ctx).unwrap());
         let balance = (in_flight + left + terminated - initial) / initial;
         worst = worst.max(balance.abs());
         if step % 50 == 0 || next == 0 {
@@ -482,7 +482,7 @@ fn non_finite_patches_deposit_nothing_and_spare_their_neighbours() {
             }
         }
         let current = sim.sim.run;
-        sim.sim.begin(current);
+        sim.begin(&ctx, current).unwrap();
         sim.run(&ctx).unwrap();
         LightVolumes::read(&mut sim, &ctx)
     };

@@ -396,6 +396,18 @@ impl<'a> Cmd<'a> {
         };
     }
 
+    /// Copy the first `bytes` of `src` to the start of `dst` (the caller ordered both).
+    pub fn copy_buffer(&self, src: &Buffer, dst: &Buffer, bytes: u64) {
+        if bytes == 0 {
+            return;
+        }
+        self.note_work();
+        let region = vk::BufferCopy { src_offset: 0, dst_offset: 0, size: bytes };
+        // SAFETY: both buffers are at least `bytes` long (the callers size them), src has
+        // TRANSFER_SRC and dst TRANSFER_DST usage, and the caller recorded the barriers.
+        unsafe { self.dev().cmd_copy_buffer(self.raw, src.raw, dst.raw, &[region]) };
+    }
+
     /// Copy every layer of `image` (in TRANSFER_SRC_OPTIMAL) tightly into `buffer`.
     pub fn copy_image_to_buffer(&self, image: &Image, buffer: &Buffer) {
         let region = whole_image_region(image);

@@ -343,6 +343,54 @@ impl FrameGraph {
         })
     }
 
+    /// Write `bytes` to the start of the device-local `buffer` (registered as `id`) through a
+    /// host-visible staging buffer: one submission that waits for the GPU, ordered after the
+    /// buffer's last use. For uploads between frames (a light simulation's initial patches),
+    /// never inside a frame.
+    pub fn upload_buffer(
+        &mut self,
+        ctx: &Arc<GpuContext>,
+        buffer: &Buffer,
+        id: BufferId,
+        bytes: &[u8],
+    ) -> GpuResult<()> {
+        if bytes.is_empty() {
+            return Ok(());
+        }
+        let usage = vk::BufferUsageFlags::TRANSFER_SRC;
+        let mut staging = Buffer::new(ctx, "upload_staging", bytes.len() as u64, usage, MemoryLocation::CpuToGpu)?;
+        // Host-coherent, written before the submission: visible to the copy.
+        staging.write(0, bytes);
+        ctx.one_shot(|cmd| {
+            self.access_now(cmd, &[], &[(id, Access::TransferWrite)]);
+            cmd.copy_buffer(&staging, buffer, bytes.len() as u64);
+        })
+    }
+
+    /// The first `bytes` of `buffer` (registered as `id`, device-local) in host memory,
+    /// through a staging buffer: one submission that waits for the GPU. For tests and
+    /// readbacks between frames, never inside a frame.
+    pub fn read_back_buffer(
+        &mut self,
+        ctx: &Arc<GpuContext>,
+        buffer: &Buffer,
+        id: BufferId,
+        bytes: u64,
+    ) -> GpuResult<Vec<u8>> {
+        if bytes == 0 {
+            return Ok(Vec::new());
+        }
+        let usage = vk::BufferUsageFlags::TRANSFER_DST;
+        let staging = Buffer::new(ctx, "readback_staging", bytes, usage, MemoryLocation::GpuToCpu)?;
+        let staging_id = self.register_buffer(&staging);
+        ctx.one_shot(|cmd| {
+            self.access_now(cmd, &[], &[(id, Access::TransferRead), (staging_id, Access::TransferWrite)]);
+            cmd.copy_buffer(buffer, &staging, bytes);
+            self.access_now(cmd, &[], &[(staging_id, Access::HostRead)]);
+        })?;
+        Ok(staging.read()[..bytes as usize].to_vec())
+    }
+
     /// Image `id` copied by `copy` into a host-visible buffer of `bytes`, between the barriers
     /// that make the copy see the image and the host see the copy; the image is left in
     /// `after`'s layout. One submission that waits for the GPU.

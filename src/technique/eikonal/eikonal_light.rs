@@ -717,14 +717,21 @@ impl LightSim {
             spill: None,
         });
 
-        let storage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
+        // Device-local: every step reads one list and writes the other (144 bytes a patch,
+        // 75 MB a step at the default capacity), which in host memory would cross a discrete
+        // GPU's bus each step. The host writes a run's initial patches and reads the spill
+        // (and tests the lists) through staging copies (FrameGraph::upload_buffer,
+        // read_back_buffer).
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::TRANSFER_DST
+            | vk::BufferUsageFlags::TRANSFER_SRC;
         let list_bytes = (capacity as u64) * std::mem::size_of::<Patch>() as u64;
         let lists = [
-            Buffer::new(ctx, "eikonal_patches_0", list_bytes, storage, MemoryLocation::GpuToCpu)?,
-            Buffer::new(ctx, "eikonal_patches_1", list_bytes, storage, MemoryLocation::GpuToCpu)?,
+            Buffer::new(ctx, "eikonal_patches_0", list_bytes, storage, MemoryLocation::GpuOnly)?,
+            Buffer::new(ctx, "eikonal_patches_1", list_bytes, storage, MemoryLocation::GpuOnly)?,
         ];
         let spill_bytes = (hp.spill_capacity as u64) * std::mem::size_of::<Patch>() as u64;
-        let spill = Buffer::new(ctx, "eikonal_spill", spill_bytes, storage, MemoryLocation::GpuToCpu)?;
+        let spill = Buffer::new(ctx, "eikonal_spill", spill_bytes, storage, MemoryLocation::GpuOnly)?;
         // TRANSFER_SRC: tests read the volumes back.
         let usage = vk::ImageUsageFlags::STORAGE
             | vk::ImageUsageFlags::SAMPLED
@@ -864,12 +871,12 @@ impl LightSim {
             progress: None,
             finished: None,
         };
-        sim.begin(run);
+        sim.begin(ctx, graph, run)?;
         Ok(sim)
     }
 
     /// Upload `run`'s initial patches into list 0 and reset the bookkeeping (device idle).
-    pub fn begin(&mut self, run: LightRun) {
+    pub fn begin(&mut self, ctx: &Arc<GpuContext>, graph: &mut FrameGraph, run: LightRun) -> GpuResult<()> {
         let source = match run.spill {
             Some(k) => self.spilled.get(k),
             None => self.wavefronts.get(run.light),
@@ -889,7 +896,7 @@ impl LightSim {
         let largest = self.largest.get(run.light).map_or(0.0, |m| run.channel.map_or(m.max_element(), |c| m[c]));
         self.min_flux = self.threshold * largest;
         let count = patches.len() as u32;
-        self.lists[0].write(0, bytemuck::cast_slice(&patches));
+        graph.upload_buffer(ctx, &self.lists[0], self.list_ids[0], bytemuck::cast_slice(&patches))?;
         self.hp.state.write(0, bytemuck::bytes_of(&initial_state(count)));
         self.current = 0;
         self.steps_taken = 0;
@@ -898,6 +905,7 @@ impl LightSim {
         self.run = run;
         self.run_gpu_ms = 0.0;
         self.run_count = count;
+        Ok(())
     }
 
     fn push(&self, substep: u32) -> RunPush {
@@ -968,12 +976,8 @@ impl LightSim {
             // More steps than the pool was sized for (a caller's long batch) go untimed.
             let pool = self.timestamps.as_ref().filter(|_| steps <= LIGHT_BATCH);
             let queries = frame.execute(cmd, pool);
-            let host: Vec<_> =
-                [self.hp.state_id, self.hp.classes_id, self.list_ids[0], self.list_ids[1], self.spill_id]
-                    .into_iter()
-                    .map(|id| (id, Access::HostRead))
-                    .collect();
-            graph.access_now(cmd, &[], &host);
+            // The host reads the counts next (the lists stay on the device).
+            graph.access_now(cmd, &[], &[(self.hp.state_id, Access::HostRead)]);
             queries
         })?;
         if let Some(pool) = self.timestamps.as_ref().filter(|_| steps <= LIGHT_BATCH) {
@@ -1032,7 +1036,7 @@ impl LightSim {
             let start = Instant::now();
             self.run_count = self.run_steps(ctx, graph, n)?;
             self.seconds_per_step = Some(start.elapsed().as_secs_f64() / n as f64);
-            self.drain_spill();
+            self.drain_spill(ctx, graph)?;
             progress(n, self.run_count);
             // At least one batch per call, so that every call advances.
             let running = self.run_count > 0 && self.steps_taken < self.max_steps;
@@ -1069,16 +1073,18 @@ impl LightSim {
 
     /// Move the patches the last batch spilled to `pending` and empty the spill list (device
     /// idle).
-    fn drain_spill(&mut self) {
+    fn drain_spill(&mut self, ctx: &Arc<GpuContext>, graph: &mut FrameGraph) -> GpuResult<()> {
         let mut state = self.hp.read_state();
         if state.spilled == 0 {
-            return;
+            return Ok(());
         }
-        let all: &[Patch] = bytemuck::cast_slice(self.spill.read());
-        self.pending.extend_from_slice(&all[..state.spilled as usize]);
+        let bytes = state.spilled as u64 * std::mem::size_of::<Patch>() as u64;
+        let spilled = graph.read_back_buffer(ctx, &self.spill, self.spill_id, bytes)?;
+        self.pending.extend_from_slice(&bytemuck::pod_collect_to_vec::<u8, Patch>(&spilled));
         state.spilled = 0;
         state.spill_new = 0;
         self.hp.state.write(0, bytemuck::bytes_of(&state));
+        Ok(())
     }
 
     /// Simulate every run (lights, channels, tiles) to its end, splitting the tiles that
@@ -1203,7 +1209,7 @@ impl LightSim {
             }
             stats.runs.push(run_stats);
             match self.queue.pop_front() {
-                Some(next) => self.begin(next),
+                Some(next) => self.begin(ctx, graph, next)?,
                 None => break,
             }
         }
@@ -1219,19 +1225,28 @@ impl LightSim {
         Ok(Some(stats))
     }
 
-    /// The current patch list (after the last step's compaction/expansion).
-    pub fn patches(&self) -> Vec<Patch> {
-        let n = self.hp.read_state().count as usize;
-        let all: &[Patch] = bytemuck::cast_slice(self.lists[self.current].read());
-        all[..n].to_vec()
+    /// The current patch list (after the last step's compaction/expansion), read back.
+    pub fn patches(&self, ctx: &Arc<GpuContext>, graph: &mut FrameGraph) -> GpuResult<Vec<Patch>> {
+        let n = self.hp.read_state().count as u64;
+        let i = self.current;
+        let bytes =
+            graph.read_back_buffer(ctx, &self.lists[i], self.list_ids[i], n * std::mem::size_of::<Patch>() as u64)?;
+        Ok(bytemuck::pod_collect_to_vec(&bytes))
     }
 
     /// The last step's first `count` patches before compaction (advanced, absorbed, in
     /// the list the step read) and their classes; `count` is the list length before it.
-    pub fn last_step(&self, count: usize) -> (Vec<Patch>, Vec<u32>) {
-        let all: &[Patch] = bytemuck::cast_slice(self.lists[1 - self.current].read());
-        let classes: &[u32] = bytemuck::cast_slice(self.hp.classes.read());
-        (all[..count].to_vec(), classes[..count].to_vec())
+    pub fn last_step(
+        &self,
+        ctx: &Arc<GpuContext>,
+        graph: &mut FrameGraph,
+        count: usize,
+    ) -> GpuResult<(Vec<Patch>, Vec<u32>)> {
+        let i = 1 - self.current;
+        let bytes = (count * std::mem::size_of::<Patch>()) as u64;
+        let patches = graph.read_back_buffer(ctx, &self.lists[i], self.list_ids[i], bytes)?;
+        let classes = graph.read_back_buffer(ctx, &self.hp.classes, self.hp.classes_id, 4 * count as u64)?;
+        Ok((bytemuck::pod_collect_to_vec(&patches), bytemuck::pod_collect_to_vec(&classes)))
     }
 }
 
@@ -1269,6 +1284,21 @@ impl StandaloneLight {
 
     pub fn run_steps(&mut self, ctx: &Arc<GpuContext>, steps: u32) -> GpuResult<u32> {
         self.sim.run_steps(ctx, &mut self.graph, steps)
+    }
+
+    /// [`LightSim::begin`]: start `run` over (its initial patches uploaded again).
+    pub fn begin(&mut self, ctx: &Arc<GpuContext>, run: LightRun) -> GpuResult<()> {
+        self.sim.begin(ctx, &mut self.graph, run)
+    }
+
+    /// [`LightSim::patches`].
+    pub fn patches(&mut self, ctx: &Arc<GpuContext>) -> GpuResult<Vec<Patch>> {
+        self.sim.patches(ctx, &mut self.graph)
+    }
+
+    /// [`LightSim::last_step`].
+    pub fn last_step(&mut self, ctx: &Arc<GpuContext>, count: usize) -> GpuResult<(Vec<Patch>, Vec<u32>)> {
+        self.sim.last_step(ctx, &mut self.graph, count)
     }
 
     /// [`LightSim::advance`]: continue the simulation until `deadline` (one batch at least).

@@ -143,7 +143,12 @@ impl HistoPyramid {
         let top = (lens.len() - 1) as u32;
         assert!(top <= crate::HP_MAX_LEVELS, "a HistoPyramid of {capacity} entries has more than HP_MAX_LEVELS levels");
         let level_words: u64 = lens[1..].iter().map(|&n| n as u64).sum();
-        let storage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::TRANSFER_DST
+            | vk::BufferUsageFlags::TRANSFER_SRC;
+        // The per-entry buffers are written and read by every step on the device (tests copy
+        // them through staging buffers); the host reads only the state and the history.
+        let device = MemoryLocation::GpuOnly;
         let host = MemoryLocation::GpuToCpu;
         let state = Buffer::new(
             ctx,
@@ -152,9 +157,9 @@ impl HistoPyramid {
             storage | vk::BufferUsageFlags::INDIRECT_BUFFER,
             MemoryLocation::CpuToGpu,
         )?;
-        let classes = Buffer::new(ctx, "histopyramid_classes", 4 * capacity as u64, storage, host)?;
+        let classes = Buffer::new(ctx, "histopyramid_classes", 4 * capacity as u64, storage, device)?;
         let levels = Buffer::new(ctx, "histopyramid_levels", 4 * level_words, storage, MemoryLocation::GpuOnly)?;
-        let pairs = Buffer::new(ctx, "histopyramid_pairs", 8 * (capacity + spill_capacity) as u64, storage, host)?;
+        let pairs = Buffer::new(ctx, "histopyramid_pairs", 8 * (capacity + spill_capacity) as u64, storage, device)?;
         let history = Buffer::new(ctx, "histopyramid_history", 4 * history_len as u64, storage, host)?;
         let set = Bindings::new(vk::ShaderStageFlags::COMPUTE)
             .storage(LIGHT_BINDING_STATE, &state)
@@ -288,15 +293,16 @@ pub fn gpu_expand(
     let mut words = vec![0xdead_beefu32; hp.capacity as usize];
     words[..classes.len().min(hp.capacity as usize)]
         .copy_from_slice(&classes[..classes.len().min(hp.capacity as usize)]);
-    hp.classes.write(0, bytemuck::cast_slice(&words));
+    graph.upload_buffer(ctx, &hp.classes, hp.classes_id, bytemuck::cast_slice(&words))?;
     hp.reset(n as u32);
     ctx.one_shot(|cmd| {
         let mut frame = graph.frame();
         hp.record(&mut frame);
         frame.execute(cmd, None);
-        graph.access_now(cmd, &[], &[(hp.state_id, Access::HostRead), (hp.pairs_id, Access::HostRead)]);
+        graph.access_now(cmd, &[], &[(hp.state_id, Access::HostRead)]);
     })?;
     let state = hp.read_state();
-    let all: &[[u32; 2]] = bytemuck::cast_slice(hp.pairs.read());
+    let pairs = graph.read_back_buffer(ctx, &hp.pairs, hp.pairs_id, 8 * state.next as u64)?;
+    let all: Vec<[u32; 2]> = bytemuck::pod_collect_to_vec(&pairs);
     Ok((all[..state.next as usize].iter().map(|p| (p[0], p[1])).collect(), state.requested))
 }
