@@ -407,3 +407,49 @@ fn hardware_filtering_stays_within_the_march_error() {
         assert!(filtering < step, "{name}: the filtering's change {filtering} exceeds the step's {step}");
     }
 }
+
+/// A furnace: a glass ball (a constant index of 1.5 with its Fresnel band) in an environment
+/// of radiance 1 everywhere, no light. Each Fresnel event at the band reflects F of the
+/// transmittance T it meets towards the environment and carries T (1 - F) on, so the
+/// reflected light and the light leaving the box sum to T = 1 on every ray, whatever the
+/// march's discretisation: every pixel is 1 up to f32 rounding (bound 1e-4). Without the
+/// reflected rays' light the ball would be darker by F per crossing (0.04 at normal
+/// incidence, more towards the rim).
+#[test]
+fn a_glass_volume_in_a_uniform_environment_disappears() {
+    if !common::in_own_process() {
+        return;
+    }
+    let ctx = common::context(false);
+    let text = r#"
+name = "furnace_ball"
+[camera]
+position = [0, 0, 4]
+target = [0, 0, 0]
+up = [0, 1, 0]
+vfov_deg = 40
+width = 48
+height = 48
+[environment]
+type = "constant"
+radiance = 1
+[volume]
+name = "ball"
+bounds = { min = [-1.05, -1.05, -1.05], max = [1.05, 1.05, 1.05] }
+resolution = [48, 48, 48]
+index = { type = "constant", n = 1.5, center = [0, 0, 0], radius = 1 }
+"#;
+    let path = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("eikonal_furnace_ball.toml");
+    std::fs::write(&path, text).unwrap();
+    let s = prism::scene::load(&path, &[]).unwrap();
+    let r = common::render_on(&ctx, &s);
+    no_nan("furnace", &r.hdr);
+    let (lo, hi) = r
+        .hdr
+        .chunks(4)
+        .flat_map(|p| p[..3].iter().copied())
+        .fold((f32::MAX, f32::MIN), |(a, b), v| (a.min(v), b.max(v)));
+    eprintln!("furnace ball: pixel radiance from {lo} to {hi}");
+    assert!((lo - 1.0).abs() <= 1e-4 && (hi - 1.0).abs() <= 1e-4, "the ball is visible: radiance {lo} to {hi}, not 1");
+    common::assert_clean_teardown(ctx);
+}

@@ -195,6 +195,30 @@ struct Run {
     bool turned;
 };
 
+// What the march's rays meet outside the box is shaded after the march, not where it is
+// found: a CPU device (lavapipe) runs the code of every branch of the loop's body in every
+// step with the lanes that do not take it masked, and exit_radiance (the triangles, the
+// impostors, the receiver's light) inside the loop cost two evaluations per step of every
+// ray, 3x the whole march on eikonal_sphere (docs/BENCHMARKS.md). The reflected rays of the
+// Fresnel events (at most MAX_REFLECTIONS per march: a ray with more loses the later ones'
+// reflected light; at 96^2 the bundled scenes' rays have at most 33 to 64, on
+// eikonal_dispersion_cube, and the images are the same as with the events shaded where they
+// are found), then the exit ray or the receiver that the march hit inside the box.
+const uint MAX_REFLECTIONS = 64u;
+vec3 reflection_origin[MAX_REFLECTIONS];
+vec3 reflection_dir[MAX_REFLECTIONS];
+vec3 reflection_weight[MAX_REFLECTIONS];
+uint reflections;
+
+void add_reflection(vec3 x, vec3 dir, vec3 weight) {
+    if (reflections < MAX_REFLECTIONS) {
+        reflection_origin[reflections] = x;
+        reflection_dir[reflections] = dir;
+        reflection_weight[reflections] = weight;
+        reflections += 1u;
+    }
+}
+
 void run_start(inout Run r, float n, vec3 v, vec3 T) {
     r.n_a = n;
     r.n_peak = n;
@@ -205,8 +229,9 @@ void run_start(inout Run r, float n, vec3 v, vec3 T) {
 }
 
 // The Fresnel event at the end of run r; v is the ray's current optical direction, x its
-// position (where the reflected ray starts towards the nearby geometry).
-void run_end(inout Run r, vec3 x, vec3 v, inout vec3 L, inout vec3 T) {
+// position (where the reflected ray starts towards the nearby geometry, shaded after the
+// march: add_reflection).
+void run_end(inout Run r, vec3 x, vec3 v, inout vec3 T) {
     vec3 N = dot(r.grad_sum, r.grad_sum) > 1e-20 ? normalize(r.grad_sum) : -r.d_a;
     bool crossed = dot(normalize(v), N) * dot(r.d_a, N) > 0.0;
     if (!crossed || r.turned) {
@@ -215,7 +240,7 @@ void run_end(inout Run r, vec3 x, vec3 v, inout vec3 L, inout vec3 T) {
     }
     float F = r.rho * fresnel_dielectric(abs(dot(r.d_a, N)), r.n_a / max(r.n_peak, 1e-3));
     F = clamp(F, 0.0, 1.0);
-    L += r.T_a * F * exit_radiance(x, reflect(r.d_a, N), 0.0);
+    add_reflection(x, reflect(r.d_a, N), r.T_a * F);
     T *= 1.0 - F;
 }
 
@@ -236,6 +261,13 @@ vec3 march(vec3 o, vec3 d, float t_enter, int c, inout bool touched) {
     float margin = STEP;
     // The last point inside the box proper, where the exit ray starts.
     vec3 x_in = x;
+    reflections = 0u;
+    // A receiver inside the box that the march hit: triangle k at o + t dir, barycentrics b.
+    bool hit = false;
+    uint hit_k = 0u;
+    vec3 hit_o = vec3(0.0), hit_dir = vec3(0.0);
+    float hit_t = 0.0;
+    vec2 hit_b = vec2(0.0);
     for (uint i = 0u; i <= MAX_STEPS; ++i) {
         bool inside = i < MAX_STEPS && in_box(x, margin);
         bool band = inside && MATERIALS != 0u && in_band(x);
@@ -243,7 +275,7 @@ vec3 march(vec3 o, vec3 d, float t_enter, int c, inout bool touched) {
             // Leaving the band (into the air beyond the box when outside it).
             if (!inside && abs(1.0 - r.n_a) > abs(r.n_peak - r.n_a)) r.n_peak = 1.0;
             banded = false;
-            run_end(r, x, v, L, T);
+            run_end(r, x, v, T);
             r.turned = false;
         }
         if (!inside) break;
@@ -270,7 +302,13 @@ vec3 march(vec3 o, vec3 d, float t_enter, int c, inout bool touched) {
                     uint k;
                     vec2 b;
                     if (eik_triangle_hit(x0, dir, 0.0, leap, t_hit, k, b)) {
-                        return L + T * eik_triangle_radiance(k, x0, dir, t_hit, b);
+                        hit = true;
+                        hit_k = k;
+                        hit_o = x0;
+                        hit_dir = dir;
+                        hit_t = t_hit;
+                        hit_b = b;
+                        break;
                     }
                 }
                 // A constant index other than the air's bends the ray where it enters.
@@ -310,7 +348,13 @@ vec3 march(vec3 o, vec3 d, float t_enter, int c, inout bool touched) {
             uint k;
             vec2 b;
             if (len > 0.0 && eik_triangle_hit(x0, seg / len, 0.0, len, t_hit, k, b)) {
-                return L + T * eik_triangle_radiance(k, x0, seg / len, t_hit, b);
+                hit = true;
+                hit_k = k;
+                hit_o = x0;
+                hit_dir = seg / len;
+                hit_t = t_hit;
+                hit_b = b;
+                break;
             }
         }
         if (in_box(x, 0.0)) x_in = x;
@@ -319,7 +363,7 @@ vec3 march(vec3 o, vec3 d, float t_enter, int c, inout bool touched) {
             float up = r.n_peak - r.n_a;
             if (up * (n_cur - r.n_peak) < 0.0 && abs(n_cur - r.n_peak) > 0.02 * abs(up) + 1e-4) {
                 // The index turns back: the run ends at its peak, a new one begins.
-                run_end(r, x, v, L, T);
+                run_end(r, x, v, T);
                 float peak = r.n_peak;
                 run_start(r, peak, v, T);
             }
@@ -358,6 +402,10 @@ vec3 march(vec3 o, vec3 d, float t_enter, int c, inout bool touched) {
             }
         }
     }
+    for (uint k = 0u; k < reflections; ++k) {
+        L += reflection_weight[k] * exit_radiance(reflection_origin[k], reflection_dir[k], 0.0);
+    }
+    if (hit) return L + T * eik_triangle_radiance(hit_k, hit_o, hit_dir, hit_t, hit_b);
     // A degenerate momentum (never for n > 0) keeps the incoming direction.
     vec3 exit_dir = dot(v, v) > 1e-20 ? normalize(v) : d;
     // The exit ray from the last point inside the box meets the nearby geometry
