@@ -24,9 +24,9 @@
 
 use crate::gpu::Spec;
 use crate::graph::Frame;
-use crate::technique::baseline::specular_single::has_dispersion;
 use crate::scene::techniques::{DTStep, HuQinOracle, HuQinParams, RecursiveExit};
 use crate::scene::{Material, Scene};
+use crate::technique::baseline::specular_single::has_dispersion;
 use crate::technique::{
     in_stage, list, params, refracting_objects, registration, FrameInputs, PlannedPass, Registration, RenderError,
     Setup, Stage, Technique,

@@ -23,9 +23,9 @@
 
 use crate::gpu::{Buffer, Spec};
 use crate::graph::Frame;
-use crate::technique::baseline::specular_single::has_dispersion;
 use crate::scene::techniques::{BackSurface, WymanOracle, WymanParams};
 use crate::scene::{Material, Scene};
+use crate::technique::baseline::specular_single::has_dispersion;
 use crate::technique::{
     in_stage, list, params, refracting_objects, registration, FrameInputs, PlannedPass, Registration, RenderError,
     Setup, Stage, Technique,
