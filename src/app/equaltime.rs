@@ -115,9 +115,9 @@ impl ExactSource {
         match self {
             ExactSource::Raytrace => "raytrace (exact, deterministic splitting) at increasing max_depth",
             ExactSource::RaytracePhotons => {
-                "raytrace with its caustics (refraction, reflection and caustics traced, one frame's \
-                 photons gathered within a radius that shrinks as the budget grows) at increasing photons \
-                 per frame"
+                "raytrace with its caustics (refraction, reflection and caustics traced, photons \
+                 gathered within half a pixel's footprint) at increasing photon budgets, one frame each up \
+                 to 4 photons per pixel, the mean of frames beyond"
             }
             ExactSource::Reference => "the reference at increasing samples per pixel",
         }

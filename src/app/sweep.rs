@@ -378,9 +378,9 @@ pub fn technique_names(scenes: &[&Scene]) -> Vec<String> {
 /// The exact curve as a plot draws it, in `metric` with the reference's noise band.
 pub fn plot_exact(exact: &Exact, metric: &str) -> Result<PlotExact> {
     // A photon curve names its budgets: its points' labels are not drawn.
-    let budgets: Vec<u32> = exact.curve.points.iter().filter_map(|p| p.photons.map(|b| b.photons_per_frame)).collect();
+    let budgets: Vec<u64> = exact.curve.points.iter().filter_map(|p| p.photons.map(|b| b.photons)).collect();
     let name = match (budgets.first(), budgets.last()) {
-        (Some(a), Some(b)) => format!("{}, {a} to {b} photons/frame", exact.curve.source.name()),
+        (Some(a), Some(b)) => format!("{}, {a} to {b} photons", exact.curve.source.name()),
         _ => exact.curve.source.name().to_string(),
     };
     let points = exact
