@@ -7,12 +7,15 @@
 //!   centre ray per pixel with deterministic splitting, so more samples per pixel would give
 //!   the same image: its cost knob is `max_depth`, the specular interactions per branch, and
 //!   its curve runs over `--exact-depths`;
-//! - the reference itself (src/reference) at increasing samples per pixel where `raytrace`
-//!   cannot ([`source_for`]): when the setting renders caustics, which a frame of `raytrace`
-//!   only estimates from its photons (docs/raytrace.md: noise and blur of one frame's photons),
-//!   or a graded-index volume, which `raytrace` does not draw. Its time is the wall-clock time
-//!   of its iterations alone (setup excluded; each submission waits on its fence), which on
-//!   lavapipe is the same CPU time the GPU timestamps measure.
+//! - the `raytrace` technique with its caustics (refraction, reflection and caustics traced)
+//!   where the setting renders caustics: its cost knob is the photon budget, its curve runs
+//!   over `--exact-photons` ([`photon_frames`]: one frame, or the mean of frames above 4
+//!   photons per pixel);
+//! - the reference itself (src/reference) at increasing samples per pixel where the setting
+//!   renders a graded-index volume, which `raytrace` draws with a stochastic choice at its
+//!   boundary ([`source_for`]), or with `--exact-source reference`. Its time is the
+//!   wall-clock time of its iterations alone (setup excluded; each submission waits on its
+//!   fence), which on lavapipe is the same CPU time the GPU timestamps measure.
 //!
 //! The exact points are timed interleaved with the settings, in one run
 //! ([`measure_interleaved`], the round-robin of `prism bench --versus`,
@@ -47,14 +50,27 @@ use super::SceneArgs;
 
 #[derive(Args, Debug, Clone)]
 pub struct ExactArgs {
-    /// `max_depth` values of the `raytrace` technique for the exact tracer's time/error curve.
+    /// `max_depth` values of the `raytrace` technique for the exact tracer's time/error curve
+    /// of settings that render no caustics and no volume.
     #[arg(long, value_delimiter = ',', default_value = "1,2,4,16")]
     pub exact_depths: Vec<u32>,
-    /// Samples per pixel of the reference's curve, used instead of `raytrace` when the setting
-    /// renders caustics (which a frame of `raytrace` only estimates from its photons) or a
-    /// volume (which `raytrace` does not draw).
+    /// Photon budgets of the `raytrace` points (refraction, reflection and caustics traced)
+    /// that make the exact curve of settings rendering caustics without a volume: one frame
+    /// of that many photons, or, above 4 photons per pixel, the mean of as many frames of at
+    /// most 4 per pixel as the budget needs, timed as their sum (src/app/equaltime.rs,
+    /// `photon_frames`).
+    #[arg(long, value_delimiter = ',', default_value = "4096,16384,65536,262144")]
+    pub exact_photons: Vec<u64>,
+    /// Samples per pixel of the reference's curve: the exact curve of settings that render a
+    /// graded-index volume (which `raytrace` draws with a stochastic choice at its boundary),
+    /// or of every setting with `--exact-source reference`.
     #[arg(long, value_delimiter = ',', default_value = "1,2,4,8")]
     pub exact_spp: Vec<u32>,
+    /// Which exact tracer draws the curve: `auto` (`raytrace` over `--exact-depths` without
+    /// caustics, over `--exact-photons` with them, the reference with a volume) or
+    /// `reference` (the reference over `--exact-spp` for every setting).
+    #[arg(long, value_enum, default_value_t = ExactChoice::Auto)]
+    pub exact_source: ExactChoice,
     /// Frames timed per point of the exact curve (after one warm-up frame). A raytraced
     /// frame costs seconds on lavapipe, where the spread between frames is a few percent.
     #[arg(long, default_value_t = 3)]
@@ -64,24 +80,49 @@ pub struct ExactArgs {
     pub no_exact: bool,
 }
 
-/// Which exact tracer a curve measures.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+/// `--exact-source`: the exact tracer chosen from the settings, or the reference forced.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum ExactChoice {
+    /// [`source_for_all`].
+    Auto,
+    /// The reference over `--exact-spp`.
+    Reference,
+}
+
+/// Which exact tracer a curve measures, in the order [`source_for_all`] escalates: a later
+/// one renders everything an earlier one does.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum ExactSource {
-    /// The `raytrace` technique at increasing `max_depth`.
+    /// The `raytrace` technique at increasing `max_depth`, photons off.
     Raytrace,
-    /// The reference at increasing samples per pixel (the setting renders caustics or a
-    /// graded-index volume).
+    /// The `raytrace` technique with its caustics (refraction, reflection and caustics
+    /// traced, default `max_depth`) at increasing photons per frame.
+    RaytracePhotons,
+    /// The reference at increasing samples per pixel (the setting renders a graded-index
+    /// volume, or `--exact-source reference`).
     Reference,
 }
 
 impl ExactSource {
+    /// Its name in the CSV's rows and on the plot.
+    pub fn name(self) -> &'static str {
+        match self {
+            ExactSource::Raytrace => "raytrace",
+            ExactSource::RaytracePhotons => "raytrace_photons",
+            ExactSource::Reference => "reference",
+        }
+    }
+
     pub fn describe(self) -> &'static str {
         match self {
             ExactSource::Raytrace => "raytrace (exact, deterministic splitting) at increasing max_depth",
-            ExactSource::Reference => {
-                "the reference at increasing samples per pixel (the setting renders caustics or a volume)"
+            ExactSource::RaytracePhotons => {
+                "raytrace with its caustics (refraction, reflection and caustics traced, photons \
+                 gathered within half a pixel's footprint) at increasing photon budgets, one frame each up \
+                 to 4 photons per pixel, the mean of frames beyond"
             }
+            ExactSource::Reference => "the reference at increasing samples per pixel",
         }
     }
 }
@@ -99,12 +140,44 @@ pub struct ExactPoint {
     /// [`Measurement::frame_starts_ms`] (none for the reference, timed on the host).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub frame_starts_ms: Vec<f64>,
+    /// A `raytrace` point with photons: its photons per frame and gather radius (pixel
+    /// footprints).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub photons: Option<PhotonBudget>,
+}
+
+/// The photon budget of one point of a [`ExactSource::RaytracePhotons`] curve: `frames`
+/// frames of `photons_per_frame` photons, averaged (`render.raytrace.accumulate`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+pub struct PhotonBudget {
+    pub photons: u64,
+    pub photons_per_frame: u32,
+    pub frames: u32,
+}
+
+impl PhotonBudget {
+    pub fn label(&self) -> String {
+        if self.frames == 1 {
+            format!("{} photons", self.photons)
+        } else {
+            format!("{} photons ({} frames of {})", self.photons, self.frames, self.photons_per_frame)
+        }
+    }
 }
 
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct ExactCurve {
     pub source: ExactSource,
     pub points: Vec<ExactPoint>,
+}
+
+impl ExactCurve {
+    /// The tracer and its points' budgets, for the report text and the commands' output:
+    /// "raytrace with its caustics ... per frame: 4096 photons/frame r=1.00, ...".
+    pub fn describe(&self) -> String {
+        let labels: Vec<&str> = self.points.iter().map(|p| p.label.as_str()).collect();
+        format!("{}: {}", self.source.describe(), labels.join(", "))
+    }
 }
 
 /// The reference's own noise: the metrics of a second reference (another seed, same samples)
@@ -157,26 +230,30 @@ pub fn reference_noise(
     Ok(Noise { between_references: m })
 }
 
-/// Whether a setting's techniques can be replaced by `raytrace` with its photons off: it
-/// renders no caustics and no graded-index volume. `raytrace` traces the pixels the G-buffer
-/// gives to specular objects, and a `[volume]` is drawn over pixels that are not (with its
-/// caustic on the floor); `render.volume = "raytrace"` traces them, but makes the reference's
-/// stochastic Fresnel choice at the volume's boundary, so its curve over `max_depth` is not
-/// its error curve: the reference's over samples is.
+/// The exact tracer of one setting: `raytrace` with its photons off where it renders no
+/// caustics and no graded-index volume; `raytrace` with its caustics where it renders
+/// caustics but no volume (photons gathered within a disk of half a pixel's footprint, the
+/// caustic's pixel average as the budget grows: [`photon_frames`]); the reference where it renders a `[volume]`. `raytrace` traces
+/// the pixels the G-buffer gives to specular objects, and a `[volume]` is drawn over pixels
+/// that are not (with its caustic on the floor); `render.volume = "raytrace"` traces them, but
+/// makes the reference's stochastic Fresnel choice at the volume's boundary, so its curve over
+/// its budget is not its error curve: the reference's over samples is.
 pub fn source_for(scene: &Scene) -> ExactSource {
-    if scene.render.caustics == "none" && scene.volume.is_none() {
-        ExactSource::Raytrace
-    } else {
+    if scene.volume.is_some() {
         ExactSource::Reference
+    } else if scene.render.caustics != "none" {
+        ExactSource::RaytracePhotons
+    } else {
+        ExactSource::Raytrace
     }
 }
 
-/// The exact tracer's points, loaded and checked before any GPU work: the `raytrace`
-/// scenes, one per `--exact-depths` value, or the reference's settings and its stops.
+/// The exact points, loaded and checked before any GPU work: the `raytrace` scenes, one per
+/// `--exact-depths` or `--exact-photons` value, or the reference's settings and its stops.
 pub struct CurveSpec {
     source: ExactSource,
-    /// (label, scene) of each `raytrace` point.
-    raytrace: Vec<(String, Scene)>,
+    /// (label, scene, photon budget) of each `raytrace` point.
+    raytrace: Vec<(String, Scene, Option<PhotonBudget>)>,
     /// The scene the reference traces, its settings (every stop's photons) and its stops in
     /// samples per pixel, ascending.
     reference: Option<(Scene, ReferenceSettings, Vec<u32>)>,
@@ -184,20 +261,56 @@ pub struct CurveSpec {
 }
 
 /// The source of one exact curve for every setting of `settings` (a sweep's, a report
-/// entry's): the reference as soon as one of them renders what a frame of `raytrace`
-/// cannot, since the curve is drawn against each setting (a sweep from `caustics = none` to
-/// `caustics_map` must be weighed against an exact image with the caustic).
+/// entry's): the first in [`ExactSource`]'s order that renders what each of them does, since
+/// the curve is drawn against each setting (a sweep from `caustics = none` to `caustics_map`
+/// must be weighed against an exact image with the caustic).
 pub fn source_for_all<'a>(settings: impl IntoIterator<Item = &'a Scene>) -> ExactSource {
-    if settings.into_iter().any(|s| source_for(s) == ExactSource::Reference) {
-        ExactSource::Reference
-    } else {
-        ExactSource::Raytrace
+    settings.into_iter().map(source_for).max().unwrap_or(ExactSource::Raytrace)
+}
+
+/// Photons per pixel a frame of the exact curve traces at most. Under caustic_sphere's
+/// focus a pixel's gather walks the photons within its disk, and above this lavapipe's loop
+/// limit (docs/raytrace.md) cuts the walk: one frame of 16 photons per pixel gave RMSE 0.187
+/// at 128^2 against 0.120 for 4, and 64 per pixel 0.720 (the focus dark), at 256^2 in 12.7 s
+/// a frame instead of 1.1 s for 4 per pixel.
+pub const MAX_PHOTONS_PER_PIXEL: u64 = 4;
+
+/// How an exact point spends `photons` on a `width` x `height` image: one frame while that
+/// is at most [`MAX_PHOTONS_PER_PIXEL`] photons per pixel, else the mean of the fewest
+/// frames of at most that many (`render.raytrace.accumulate`), each of `photons / frames`
+/// rounded up, timed as the sum of the frames.
+///
+/// One frame rather than the mean of frames wherever it fits: the same photons give the same
+/// caustic noise (1/sqrt of their number) either way, and every frame pays the camera's rays
+/// again. On caustic_sphere (`prism sweep`, lavapipe, 64-spp 8M-photon reference), 128^2:
+/// 65 536 photons in one frame 224 to 372 ms (two runs), RMSE 0.120 to 0.130, FLIP 0.033;
+/// 4 frames of 16 384, 4 x 123 to 183 ms, RMSE 0.125, FLIP 0.033; 16 frames of 4096,
+/// 16 x 143 ms, RMSE 0.114, FLIP 0.032. 256^2: 262 144 in one frame 1111 ms, RMSE 0.137,
+/// FLIP 0.032; 4 frames of 65 536, 4 x 425 ms, RMSE 0.135, FLIP 0.032.
+///
+/// The gathering disk stays `raytrace`'s default, half a pixel's footprint, at every budget,
+/// so that the points converge as the budget grows to the caustic's average over each
+/// pixel's inscribed disk (a consistent estimate of the pixel's average the reference
+/// converges to). A wider disk for fewer photons, as the reference's SPPM shrinks its radius
+/// (r ~ N^(-1/6)), was measured at 128^2 and not kept: radii of 0.5, 1 and 2 footprints gave
+/// RMSE 0.191, 0.207, 0.267 at 4096 photons and 0.120, 0.193, 0.258 at 65 536 (the focus
+/// blurred), FLIP 0.0463, 0.0464, 0.0482 and 0.0332, 0.0308, 0.0323.
+pub fn photon_frames(photons: u64, width: u32, height: u32) -> PhotonBudget {
+    // At most the photons a frame holds (`photons_per_frame`'s range) on a large image.
+    let cap = (MAX_PHOTONS_PER_PIXEL * u64::from(width) * u64::from(height)).clamp(1, 1 << 20);
+    let frames = photons.div_ceil(cap).max(1);
+    let per_frame = photons.div_ceil(frames);
+    PhotonBudget {
+        photons: per_frame * frames,
+        photons_per_frame: u32::try_from(per_frame).unwrap_or(u32::MAX),
+        frames: u32::try_from(frames).unwrap_or(u32::MAX),
     }
 }
 
 /// The exact curve of the scene that `scene_args` loads (the same scene as the techniques,
-/// with `raytrace` selected for refraction and reflection, or the reference), drawn for the
-/// `settings` it is compared with ([`source_for_all`]).
+/// with `raytrace` selected for refraction and reflection, and caustics where they are
+/// rendered, or the reference), drawn for the `settings` it is compared with
+/// ([`source_for_all`], or `--exact-source`).
 pub fn curve_spec<'a>(
     scene_args: &SceneArgs,
     measure_args: &MeasureArgs,
@@ -205,27 +318,48 @@ pub fn curve_spec<'a>(
     settings: impl IntoIterator<Item = &'a Scene>,
 ) -> Result<CurveSpec> {
     let base = scene_args.load()?;
-    let source = match source_for(&base) {
-        ExactSource::Raytrace => source_for_all(settings),
-        reference => reference,
+    let source = match exact.exact_source {
+        ExactChoice::Reference => ExactSource::Reference,
+        ExactChoice::Auto => source_for(&base).max(source_for_all(settings)),
     };
     let mut spec = CurveSpec { source, raytrace: Vec::new(), reference: None, frames: exact.exact_frames.max(1) };
+    let raytrace = |set: &[String], what: &str| {
+        let mut sa = scene_args.clone();
+        sa.set.extend(["render.refraction=raytrace".to_string(), "render.reflection=raytrace".to_string()]);
+        sa.set.extend_from_slice(set);
+        sa.load().with_context(|| format!("exact curve, raytrace {what}"))
+    };
     match source {
         ExactSource::Raytrace => {
             if exact.exact_depths.is_empty() {
                 bail!("--exact-depths: no values");
             }
             for &d in &exact.exact_depths {
-                let mut sa = scene_args.clone();
-                sa.set.extend([
-                    "render.refraction=raytrace".to_string(),
-                    "render.reflection=raytrace".to_string(),
-                    format!("render.raytrace.max_depth={d}"),
-                    // The setting renders no caustics: neither does its exact counterpart.
-                    "render.raytrace.photons_per_frame=0".to_string(),
-                ]);
-                let scene = sa.load().with_context(|| format!("exact curve, raytrace max_depth={d}"))?;
-                spec.raytrace.push((format!("max_depth={d}"), scene));
+                // The settings render no caustics: neither does their exact counterpart.
+                let set = [format!("render.raytrace.max_depth={d}"), "render.raytrace.photons_per_frame=0".to_string()];
+                let scene = raytrace(&set, &format!("max_depth={d}"))?;
+                spec.raytrace.push((format!("max_depth={d}"), scene, None));
+            }
+        }
+        ExactSource::RaytracePhotons => {
+            let mut budgets: Vec<u64> = exact.exact_photons.iter().copied().filter(|&p| p > 0).collect();
+            budgets.sort_unstable();
+            budgets.dedup();
+            if budgets.is_empty() {
+                bail!("--exact-photons: no positive values");
+            }
+            for p in budgets {
+                let b = photon_frames(p, base.camera.width, base.camera.height);
+                // The caustics on the diffuse surfaces seen directly too, so that the whole
+                // frame is traced; the image scored is the mean of the budget's frames
+                // (`Timing` keeps a named `accumulate`, src/app/compare.rs).
+                let set = [
+                    "render.caustics=raytrace".to_string(),
+                    format!("render.raytrace.photons_per_frame={}", b.photons_per_frame),
+                    format!("render.raytrace.accumulate={}", b.frames),
+                ];
+                let scene = raytrace(&set, &format!("{p} photons"))?;
+                spec.raytrace.push((b.label(), scene, Some(b)));
             }
         }
         ExactSource::Reference => {
@@ -286,7 +420,14 @@ impl ReferenceCurve<'_> {
                 ErrorMetrics::between_with_mask(&img, reference, &ldr, &self.ref_ldr, w, h, mask);
             eprintln!("exact: reference {n} spp");
             let (label, time_ms) = (format!("{n} spp"), self.elapsed_ms);
-            self.points.push(ExactPoint { label, time_ms, errors, errors_mask, frame_starts_ms: Vec::new() });
+            self.points.push(ExactPoint {
+                label,
+                time_ms,
+                errors,
+                errors_mask,
+                frame_starts_ms: Vec::new(),
+                photons: None,
+            });
         }
         Ok(())
     }
@@ -323,8 +464,12 @@ pub fn measure_interleaved(
         )?)));
     }
     if let Some((spec, reference)) = exact {
-        for (_, scene) in &spec.raytrace {
-            parts.push(Part::Setting(Box::new(Timing::new(ctx, scene, 1, spec.frames, reference)?)));
+        for (_, scene, photons) in &spec.raytrace {
+            // A point that averages N frames renders at least N (the warm-up among them), so
+            // that its image is their mean.
+            let accumulated = photons.map_or(1, |b| b.frames);
+            let frames = spec.frames.max(accumulated.saturating_sub(1));
+            parts.push(Part::Setting(Box::new(Timing::new(ctx, scene, 1, frames, reference)?)));
         }
         if let Some((scene, s, stops)) = &spec.reference {
             let tracer = Reference::new(ctx, scene, s).context("exact curve: cannot set up the reference")?;
@@ -364,13 +509,21 @@ pub fn measure_interleaved(
             Part::Setting(t) if i < settings.len() => measured.push(t.finish()?),
             Part::Setting(t) => {
                 let m = t.finish()?;
-                let label = exact.map(|(spec, _)| spec.raytrace[i - settings.len()].0.clone()).unwrap_or_default();
+                let (label, photons) = exact
+                    .map(|(spec, _)| {
+                        let (label, _, photons) = &spec.raytrace[i - settings.len()];
+                        (label.clone(), *photons)
+                    })
+                    .unwrap_or_default();
+                // An averaged point's time is the sum of its frames.
+                let frames = photons.map_or(1, |b| b.frames);
                 points.push(ExactPoint {
                     label,
-                    time_ms: m.frame.median_ms,
+                    time_ms: m.frame.median_ms * f64::from(frames),
                     errors: m.errors,
                     errors_mask: m.mask.errors_mask,
                     frame_starts_ms: m.frame_starts_ms,
+                    photons,
                 });
             }
             Part::Reference(r) => points.extend(r.points),
@@ -516,6 +669,7 @@ mod tests {
                     errors: ErrorMetrics { rmse: e, ..Default::default() },
                     errors_mask: None,
                     frame_starts_ms: Vec::new(),
+                    photons: None,
                 })
                 .collect(),
         }
@@ -546,28 +700,118 @@ mod tests {
         assert!((at - expect).abs() < 1e-12, "{at} vs {expect}");
     }
 
-    /// The bundled scenes' exact tracer: `raytrace` only where it renders everything the
-    /// techniques do (no caustics and no graded-index volume).
+    fn load(name: &str, set: &[&str]) -> Scene {
+        let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
+        crate::scene::load(&crate::scene::benchmark_scene_path(name), &set).unwrap()
+    }
+
+    /// The bundled scenes' exact tracer: `raytrace` with its photons off where the setting
+    /// renders no caustics and no graded-index volume, with them where it renders caustics,
+    /// the reference where it renders a volume.
     #[test]
-    fn the_reference_is_the_exact_tracer_of_caustics_and_volumes() {
-        let load = |name: &str, set: &[&str]| {
-            let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
-            crate::scene::load(&crate::scene::benchmark_scene_path(name), &set).unwrap()
-        };
+    fn the_exact_tracer_follows_what_the_setting_renders() {
         assert_eq!(source_for(&load("sphere_env", &[])), ExactSource::Raytrace);
         assert_eq!(source_for(&load("room_mirror", &["render.caustics=none"])), ExactSource::Raytrace);
-        assert_eq!(source_for(&load("caustic_sphere", &["render.caustics=caustics_map"])), ExactSource::Reference);
+        for caustics in ["caustics_map", "photon_buffer", "impostor_lightmap", "raytrace"] {
+            let scene = load("caustic_sphere", &[&format!("render.caustics={caustics}")]);
+            assert_eq!(source_for(&scene), ExactSource::RaytracePhotons, "{caustics}");
+        }
         for volume in ["eikonal_sphere", "eikonal_amber_bunny"] {
             assert_eq!(source_for(&load(volume, &["render.caustics=none"])), ExactSource::Reference, "{volume}");
+            // A volume's caustic on the floor does not make `raytrace` its exact tracer.
+            assert_eq!(source_for(&load(volume, &[])), ExactSource::Reference, "{volume}");
         }
         // A sweep over caustic techniques whose first setting renders none: one curve for
-        // all, with the caustic.
+        // all, with the caustic; and a volume among them makes it the reference's.
         let sweep = [
             load("caustic_sphere", &["render.caustics=none"]),
             load("caustic_sphere", &["render.caustics=photon_buffer"]),
         ];
-        assert_eq!(source_for_all(&sweep), ExactSource::Reference);
+        assert_eq!(source_for_all(&sweep), ExactSource::RaytracePhotons);
         assert_eq!(source_for_all(&sweep[..1]), ExactSource::Raytrace);
+        let mixed = [sweep[1].clone(), load("eikonal_sphere", &["render.caustics=none"])];
+        assert_eq!(source_for_all(&mixed), ExactSource::Reference);
+    }
+
+    fn spec(name: &str, set: &[&str], exact_args: &[&str]) -> CurveSpec {
+        #[derive(clap::Parser)]
+        struct Cli {
+            #[command(flatten)]
+            scene: SceneArgs,
+            #[command(flatten)]
+            measure: MeasureArgs,
+            #[command(flatten)]
+            exact: ExactArgs,
+        }
+        use clap::Parser;
+        let mut argv = vec!["prism".to_string(), name.to_string()];
+        for s in set {
+            argv.extend(["--set".to_string(), s.to_string()]);
+        }
+        argv.extend(exact_args.iter().map(|s| s.to_string()));
+        let cli = Cli::try_parse_from(argv).unwrap();
+        let scene = cli.scene.load().unwrap();
+        curve_spec(&cli.scene, &cli.measure, &cli.exact, [&scene]).unwrap()
+    }
+
+    /// A caustic setting's curve is `raytrace` with refraction, reflection and caustics
+    /// traced, one point per photon budget: a single frame up to 4 photons per pixel, the mean
+    /// of frames beyond; `--exact-source reference` brings back the reference's curve.
+    #[test]
+    fn a_caustic_settings_curve_is_raytrace_with_photons_unless_the_reference_is_asked_for() {
+        let size = ["--width", "64", "--height", "64"];
+        let photons = [&size[..], &["--exact-photons", "65536,1024,16384,1024"]].concat();
+        let s = spec("caustic_sphere", &["render.caustics=caustics_map"], &photons);
+        assert_eq!(s.source, ExactSource::RaytracePhotons);
+        assert!(s.reference.is_none());
+        let labels: Vec<&str> = s.raytrace.iter().map(|(l, _, _)| l.as_str()).collect();
+        assert_eq!(labels, ["1024 photons", "16384 photons", "65536 photons (4 frames of 16384)"]);
+        for (label, scene, budget) in &s.raytrace {
+            let r = &scene.render;
+            assert_eq!((&r.refraction[..], &r.reflection[..], &r.caustics[..]), ("raytrace", "raytrace", "raytrace"));
+            let p = crate::scene::techniques::RaytraceParams::from_settings(r).unwrap();
+            let b = budget.unwrap();
+            assert_eq!((p.photons_per_frame, p.accumulate), (b.photons_per_frame, b.frames), "{label}");
+            assert_eq!(u64::from(p.photons_per_frame) * u64::from(p.accumulate), b.photons, "{label}");
+            // The default depth and gathering disk: the points differ by their photons only.
+            let default = crate::scene::techniques::RaytraceParams::from_settings(
+                &load("caustic_sphere", &["render.refraction=raytrace"]).render,
+            )
+            .unwrap();
+            assert_eq!((p.max_depth, p.gather_radius), (default.max_depth, default.gather_radius), "{label}");
+        }
+        // At 256^2 the cap is 262144 photons a frame.
+        assert_eq!(
+            photon_frames(262_144, 256, 256),
+            PhotonBudget { photons: 262_144, photons_per_frame: 262_144, frames: 1 }
+        );
+        assert_eq!(
+            photon_frames(1 << 20, 256, 256),
+            PhotonBudget { photons: 1 << 20, photons_per_frame: 262_144, frames: 4 }
+        );
+        assert_eq!(
+            photon_frames(100_000, 128, 128),
+            PhotonBudget { photons: 100_000, photons_per_frame: 50_000, frames: 2 }
+        );
+        // On a large image a frame holds at most `photons_per_frame`'s largest value.
+        let large = photon_frames(3 << 20, 1024, 1024);
+        assert_eq!((large.photons_per_frame, large.frames), (1 << 20, 3));
+
+        let reference = [&size[..], &["--exact-source", "reference", "--exact-spp", "2,1"]].concat();
+        let s = spec("caustic_sphere", &["render.caustics=caustics_map"], &reference);
+        assert_eq!(s.source, ExactSource::Reference);
+        assert!(s.raytrace.is_empty());
+        assert_eq!(s.reference.as_ref().map(|r| r.2.clone()), Some(vec![1, 2]));
+        // Without caustics the curve stays over depth, photons off.
+        let s = spec("caustic_sphere", &["render.caustics=none"], &size);
+        assert_eq!(s.source, ExactSource::Raytrace);
+        assert!(s.raytrace.iter().all(|(l, sc, b)| l.starts_with("max_depth=")
+            && b.is_none()
+            && sc.render.caustics == "none"
+            && crate::scene::techniques::RaytraceParams::from_settings(&sc.render).unwrap().photons_per_frame == 0));
+        // A volume keeps the reference.
+        let s = spec("eikonal_sphere", &[], &size);
+        assert_eq!(s.source, ExactSource::Reference);
     }
 
     #[test]

@@ -634,6 +634,7 @@ mod tests {
             errors: ErrorMetrics { flip_mean: flip, ..Default::default() },
             errors_mask: None,
             frame_starts_ms: Vec::new(),
+            photons: None,
         };
         Exact {
             curve: ExactCurve { source: ExactSource::Raytrace, points: vec![point(10.0, 0.2), point(100.0, 0.02)] },

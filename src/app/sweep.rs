@@ -8,9 +8,7 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 
 use super::compare::{cached_reference, print_measurement, MeasureArgs, Measurement};
-use super::equaltime::{
-    curve_spec, measure_interleaved, metric_value, reference_noise, Exact, ExactArgs, ExactSource, Setting,
-};
+use super::equaltime::{curve_spec, measure_interleaved, metric_value, reference_noise, Exact, ExactArgs, Setting};
 use super::output::{self, Outputs};
 use super::{check_validation, GpuArgs, SceneArgs};
 use crate::metrics::image::ErrorMetrics;
@@ -379,9 +377,11 @@ pub fn technique_names(scenes: &[&Scene]) -> Vec<String> {
 
 /// The exact curve as a plot draws it, in `metric` with the reference's noise band.
 pub fn plot_exact(exact: &Exact, metric: &str) -> Result<PlotExact> {
-    let name = match exact.curve.source {
-        ExactSource::Raytrace => "raytrace",
-        ExactSource::Reference => "reference",
+    // A photon curve names its budgets: its points' labels are not drawn.
+    let budgets: Vec<u64> = exact.curve.points.iter().filter_map(|p| p.photons.map(|b| b.photons)).collect();
+    let name = match (budgets.first(), budgets.last()) {
+        (Some(a), Some(b)) => format!("{}, {a} to {b} photons", exact.curve.source.name()),
+        _ => exact.curve.source.name().to_string(),
     };
     let points = exact
         .curve
@@ -392,7 +392,7 @@ pub fn plot_exact(exact: &Exact, metric: &str) -> Result<PlotExact> {
             Ok((p.time_ms, v, exact.noise.interval(metric, v).0))
         })
         .collect::<Result<_>>()?;
-    Ok(PlotExact { name: name.into(), points })
+    Ok(PlotExact { name, points })
 }
 
 fn quote(s: &str) -> String {
@@ -479,10 +479,7 @@ pub fn csv(params: &[(String, Vec<String>)], rows: &[SweepRow], metric: &str, ex
         csv.push_str(&hdr(&r.measurement.errors, r.measurement.mask.errors_mask.as_ref()));
     }
     if let Some(x) = exact {
-        let name = match x.curve.source {
-            ExactSource::Raytrace => "raytrace",
-            ExactSource::Reference => "reference",
-        };
+        let name = x.curve.source.name();
         for p in &x.curve.points {
             csv.push_str(&format!(",exact,{}", quote(&format!("{name} {}", p.label))));
             csv.push_str(&",".repeat(params.len() + passes.len()));
@@ -555,7 +552,7 @@ pub fn run(args: SweepArgs) -> Result<()> {
     }
     check_validation(&ctx)?;
     if let Some(x) = &exact {
-        println!("exact tracer: {}", x.curve.source.describe());
+        println!("exact tracer: {}", x.curve.describe());
         for (i, r) in rows.iter().enumerate() {
             let eq = x.equal_time(&args.metric, &r.measurement)?;
             let at = eq.exact.map(|a| format!("{:.4}", a.error)).unwrap_or_else(|| "-".into());
@@ -639,7 +636,7 @@ mod tests {
     /// draws the exact curve with its band, and turns to log axes over more than a decade.
     #[test]
     fn csv_and_plot_structure_with_an_exact_curve() {
-        use crate::app::equaltime::{ExactCurve, ExactPoint, Noise};
+        use crate::app::equaltime::{ExactCurve, ExactPoint, ExactSource, Noise};
         use crate::metrics::image::ErrorMetrics;
         let params = parse_params(&["render.refraction=single,wyman,hu_qin".into()]).unwrap();
         let mut rows = [
@@ -666,6 +663,7 @@ mod tests {
             errors: ErrorMetrics { flip_mean: flip, ..Default::default() },
             errors_mask: (t > 100.0).then_some(ErrorMetrics { rmse: 0.25, ..Default::default() }),
             frame_starts_ms: Vec::new(),
+            photons: None,
         };
         let exact = Exact {
             curve: ExactCurve {
