@@ -121,6 +121,8 @@ pub struct MemoryUsage {
 pub(crate) enum Garbage {
     Buffer(vk::Buffer, gpu_allocator::vulkan::Allocation),
     Image(vk::Image, Vec<vk::ImageView>, gpu_allocator::vulkan::Allocation),
+    /// The fence of a submission whose wait timed out (it may still be running).
+    Fence(vk::Fence),
 }
 
 /// Everything that outlives single resources. Shared through `Arc` by every wrapper so that
@@ -643,6 +645,7 @@ impl GpuContext {
                         let _ = alloc.free(a);
                     }
                 }
+                Garbage::Fence(f) => self.device.destroy_fence(f, None),
             }
         }
     }
@@ -682,13 +685,23 @@ impl GpuContext {
             Ok(_) => self.wait_for_fence(fence, "a one-shot submission (upload, readback or setup)", ONE_SHOT_TIMEOUT),
             Err(_) => Ok(()),
         };
-        // SAFETY: the submission has completed (or failed), so the buffer and fence are idle.
+        if let (Ok(_), Err(e)) = (&serial, waited) {
+            // The wait timed out (or the device was lost) with the submission possibly still
+            // running: its fence and command buffer must outlive it. The fence goes with the
+            // garbage of this submission (destroyed once a later wait proves the queue past
+            // it, or at teardown after the device is idle), the command buffer with the pool
+            // (destroying either while in use is undefined; lavapipe crashes).
+            drop(pool);
+            self.defer_destroy(Garbage::Fence(fence));
+            return Err(e);
+        }
+        // SAFETY: the submission has completed (or failed to submit), so the buffer and
+        // fence are idle.
         unsafe {
             self.device.destroy_fence(fence, None);
             self.device.free_command_buffers(*pool, &[raw]);
         }
         drop(pool);
-        waited?;
         self.mark_completed(serial?);
         Ok(result)
     }
