@@ -679,8 +679,12 @@ impl CommandPool {
 impl Drop for CommandPool {
     fn drop(&mut self) {
         // SAFETY: wait for every slot, then destroy; nothing else references these objects.
+        // Past the timeout the work may still run (a stopped process, a slow device): wait
+        // for the device rather than destroy objects in use.
         unsafe {
-            let _ = self.ctx.raw().wait_for_fences(&self.fences, true, timeout_nanos(FRAME_TIMEOUT));
+            if self.ctx.raw().wait_for_fences(&self.fences, true, timeout_nanos(FRAME_TIMEOUT)).is_err() {
+                let _ = self.ctx.raw().device_wait_idle();
+            }
             for &f in &self.fences {
                 self.ctx.raw().destroy_fence(f, None);
             }
