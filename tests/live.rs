@@ -218,6 +218,39 @@ fn the_eikonal_light_simulation_survives_a_resize_and_moves_elsewhere() {
     common::assert_clean_teardown(ctx);
 }
 
+/// The other side of the cache key: a change of any setting the light simulation depends on
+/// runs it again (a key without one of them would keep the old light under the new setting).
+#[test]
+fn every_setting_of_the_light_simulation_runs_it_again() {
+    if !common::in_own_process() {
+        return;
+    }
+    let ctx = common::context(false);
+    let mut after = vec!["volume.resolution=[16,16,16]"];
+    let mut running = Renderer::new(&ctx, &common::scene("eikonal_sphere", SIZE, &after)).unwrap();
+    frame(&mut running);
+    let mut seconds = running.light_stats().unwrap().seconds;
+    for change in [
+        "render.eikonal.skip_air=false",
+        "render.eikonal.keep_crossed=false",
+        "render.eikonal.light_dt=1.0",
+        "render.eikonal.light_integrator=\"euler\"",
+        "render.eikonal.light_substeps=2",
+        "render.eikonal.energy_threshold=0.001",
+        "render.eikonal.float_atomics=false",
+        "render.eikonal.sigma=0.5",
+    ] {
+        after.push(change);
+        running.update(&common::scene("eikonal_sphere", SIZE, &after)).unwrap();
+        frame(&mut running);
+        let now = running.light_stats().unwrap().seconds;
+        assert_ne!(now, seconds, "{change}: the light simulation was not run again");
+        seconds = now;
+    }
+    drop(running);
+    common::assert_clean_teardown(ctx);
+}
+
 #[test]
 fn the_water_animates_on_the_gpu() {
     if !common::in_own_process() {

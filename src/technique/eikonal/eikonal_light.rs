@@ -1378,7 +1378,7 @@ fn simulation_settings(p: &EikonalParams) -> impl std::fmt::Debug {
         p.energy_threshold,
         p.light_dt,
         (p.light_integrator, p.light_substeps),
-        (p.max_patches, p.tile_patches, p.keep_crossed),
+        (p.max_patches, p.tile_patches, p.keep_crossed, p.skip_air),
         (p.light_patches, p.light_below, p.light_side),
         p.float_atomics,
     )
