@@ -1411,3 +1411,42 @@ fn skipped_air_patches_equal_their_simulation() {
     assert!(worst_layer < 0.01, "the flux through a layer differs by {worst_layer}");
     common::assert_no_validation_errors(&ctx);
 }
+
+/// The simulation's GPU time is its work, whatever ran before it in the process. Three runs
+/// of one simulation (24^3, 32^2 initial patches): the first compiles the pipelines, the second
+/// runs before any frame, the third after a rendered frame. The second and third do the same
+/// work on the same device, so their kernel times agree up to the machine's scheduling noise
+/// (within a factor of 2), and no run's kernels take longer than the run's wall clock, which
+/// waited for them. On llvmpipe a framebuffer once set made the timestamps around each
+/// dispatch read the clock together after it (the third run timed at 0.05x the second).
+#[test]
+fn a_light_simulation_after_a_frame_is_timed_as_before_it() {
+    if !common::in_own_process() {
+        return;
+    }
+    let ctx = common::context(true);
+    let volume = lens_volume(24, &[]);
+    let params = EikonalParams { light_patches: 32, ..EikonalParams::default() };
+    let light = directional(Vec3::new(0.2, -1.0, 0.1));
+    let mut simulate = |when: &str| {
+        let mut sim = StandaloneLight::new(&ctx, &params, &volume, &light).unwrap();
+        let stats = sim.run(&ctx).unwrap();
+        eprintln!("{when}: kernels {:.1} ms, wall {:.1} ms", stats.gpu_ms, stats.seconds * 1e3);
+        assert!(
+            stats.gpu_ms > 0.0 && stats.gpu_ms <= stats.seconds * 1e3,
+            "{when}: kernels {} ms in {} s",
+            stats.gpu_ms,
+            stats.seconds
+        );
+        stats.gpu_ms
+    };
+    simulate("compiling");
+    let before = simulate("before a frame");
+    common::render_on(&ctx, &common::scene("caustic_sphere", 32, &[]));
+    let after = simulate("after a frame");
+    assert!(
+        after > 0.5 * before && after < 2.0 * before,
+        "the same simulation timed {after:.1} ms after a frame, {before:.1} ms before it"
+    );
+    common::assert_no_validation_errors(&ctx);
+}

@@ -332,6 +332,22 @@ impl<'a> Cmd<'a> {
     pub fn write_timestamp(&self, pool: &TimestampPool, query: u32, stage: vk::PipelineStageFlags) {
         // SAFETY: query < pool size; the pool was reset this frame.
         unsafe { self.dev().cmd_write_timestamp(self.raw, stage, pool.raw, query) };
+        if pool.clock_on_flush {
+            // An empty execution dependency orders nothing, but lavapipe flushes on every
+            // barrier, which reads the clock for the timestamp just written.
+            // SAFETY: recording outside a render pass (the graph times whole passes).
+            unsafe {
+                self.dev().cmd_pipeline_barrier(
+                    self.raw,
+                    vk::PipelineStageFlags::TOP_OF_PIPE,
+                    vk::PipelineStageFlags::BOTTOM_OF_PIPE,
+                    vk::DependencyFlags::empty(),
+                    &[],
+                    &[],
+                    &[],
+                )
+            };
+        }
     }
 
     pub fn reset_queries(&self, pool: &TimestampPool) {
