@@ -1428,7 +1428,7 @@ fn a_light_simulation_after_a_frame_is_timed_as_before_it() {
     let volume = lens_volume(24, &[]);
     let params = EikonalParams { light_patches: 32, ..EikonalParams::default() };
     let light = directional(Vec3::new(0.2, -1.0, 0.1));
-    let mut simulate = |when: &str| {
+    let simulate = |when: &str| {
         let mut sim = StandaloneLight::new(&ctx, &params, &volume, &light).unwrap();
         let stats = sim.run(&ctx).unwrap();
         eprintln!("{when}: kernels {:.1} ms, wall {:.1} ms", stats.gpu_ms, stats.seconds * 1e3);
