@@ -113,6 +113,16 @@ fn equals_the_converged_reference_on_bunny_env() {
 }
 
 #[test]
+fn equals_the_converged_reference_on_bubble_env() {
+    if !common::in_own_process() {
+        return;
+    }
+    // An air bubble in water (ior 0.75, total internal reflection towards its rim); max_depth 1:
+    // no light leaves the bubble.
+    matches_reference(&common::context(false), "bubble_env", "refraction", 0.75, 256, "render.raytrace.max_depth=1");
+}
+
+#[test]
 fn equals_the_reference_on_room_mirror() {
     if !common::in_own_process() {
         return;
