@@ -288,57 +288,43 @@ vec3 march(vec3 o, vec3 d, float t_enter, int c, inout bool touched) {
         // moves x by STEP v / n and leaves v as it is: m steps at once are one leap of
         // m STEP v / n, as many whole steps as stay inside the uniform cube. The march
         // goes on from the point where the full march would be, with the same step count.
+        // A leap and a step share the end sample and the receiver test below: a CPU device
+        // runs both branches' code in every iteration, so each is written once.
+        vec3 x0 = x;
+        float n_before = n_cur;
+        bool leapt = false;
         if (LEAPS != 0u && !banded) {
             float n_leap = max(n_cur, 1e-3);
             float per_step = STEP * length(v) / n_leap;
             float m = min(floor(leap_length(x, normalize(v)) / per_step), float(MAX_STEPS - i));
             if (m >= 1.0) {
-                vec3 x0 = x, dir = normalize(v);
-                float leap = m * per_step;
                 x += (m * STEP / n_leap) * v;
                 i += uint(m) - 1u;
-                if (TRIANGLES_IN_BOX != 0u) {
-                    float t_hit;
-                    uint k;
-                    vec2 b;
-                    if (eik_triangle_hit(x0, dir, 0.0, leap, t_hit, k, b)) {
-                        hit = true;
-                        hit_k = k;
-                        hit_o = x0;
-                        hit_dir = dir;
-                        hit_t = t_hit;
-                        hit_b = b;
-                        break;
-                    }
-                }
-                // A constant index other than the air's bends the ray where it enters.
-                touched = touched || abs(n_cur - 1.0) > 1e-4;
-                s = sample_field(x, c);
-                n_cur = 1.0 + s.w;
-                if (in_box(x, 0.0)) x_in = x;
-                continue;
+                leapt = true;
             }
         }
-        vec3 x0 = x;
-        float h = STEP;
-        if (INTEGRATOR == EIKONAL_RK4) {
-            vec3 k1x, k1v, k2x, k2v, k3x, k3v, k4x, k4v;
-            rhs_at(s, v, k1x, k1v);
-            rhs(x + 0.5 * h * k1x, v + 0.5 * h * k1v, c, k2x, k2v);
-            rhs(x + 0.5 * h * k2x, v + 0.5 * h * k2v, c, k3x, k3v);
-            rhs(x + h * k3x, v + h * k3v, c, k4x, k4v);
-            x += h / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x);
-            v += h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
-        } else {
-            // Eqs. 11-12.
-            vec3 dx, dv;
-            rhs_at(s, v, dx, dv);
-            x += h * dx;
-            v += h * dv;
+        if (!leapt) {
+            float h = STEP;
+            if (INTEGRATOR == EIKONAL_RK4) {
+                vec3 k1x, k1v, k2x, k2v, k3x, k3v, k4x, k4v;
+                rhs_at(s, v, k1x, k1v);
+                rhs(x + 0.5 * h * k1x, v + 0.5 * h * k1v, c, k2x, k2v);
+                rhs(x + 0.5 * h * k2x, v + 0.5 * h * k2v, c, k3x, k3v);
+                rhs(x + h * k3x, v + h * k3v, c, k4x, k4v);
+                x += h / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x);
+                v += h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
+            } else {
+                // Eqs. 11-12.
+                vec3 dx, dv;
+                rhs_at(s, v, dx, dv);
+                x += h * dx;
+                v += h * dv;
+            }
         }
         s = sample_field(x, c);
         n_cur = 1.0 + s.w;
-        touched = touched || abs(s.w) > 1e-4;
+        // A constant index other than the air's bends the ray where a leap entered it.
+        touched = touched || (leapt ? abs(n_before - 1.0) > 1e-4 : abs(s.w) > 1e-4);
         // ---- a receiver inside (or touching) the box ends the path where the
         // step's chord crosses it (e.g. the table a wine glass stands on).
         if (TRIANGLES_IN_BOX != 0u) {
@@ -372,7 +358,7 @@ vec3 march(vec3 o, vec3 d, float t_enter, int c, inout bool touched) {
             // Only band voxels carry their surface's factor (the step may have left the band).
             if (in_band(x)) r.rho = max(r.rho, band_reflectance(x));
         }
-        if (EXTINCTION != 0u || EMISSION != 0u) {
+        if ((EXTINCTION != 0u || EMISSION != 0u) && !leapt) {
             vec3 mid = 0.5 * (x0 + x);
             if (in_box(mid, 0.0)) {
                 // Eq. 1 over one segment of length len with constant extinction sigma and
