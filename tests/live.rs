@@ -61,6 +61,19 @@ fn a_material_value_rewrites_the_materials_buffer_only() {
     assert_eq!((u.rebuilt, u.recreated.len(), u.materials), (false, 0, true), "{u:?}");
 }
 
+/// Hu & Qin's exit search assumes a back-facing exit (§4) only where every dielectric is
+/// denser than air (`assume_back_facing = "auto"`): an ior taken below 1 in the window must
+/// bring back §2.1.2's decision, which a rewrite of the materials buffer alone would not.
+#[test]
+fn an_ior_taken_below_one_brings_back_hu_qin_s_exit_decision() {
+    if !common::in_own_process() {
+        return;
+    }
+    let u =
+        live("sphere_env", &["render.refraction=hu_qin"], &["render.refraction=hu_qin", "materials.glass.ior=0.75"]);
+    assert!(u.rebuilt, "{u:?}");
+}
+
 #[test]
 fn switching_a_technique_creates_the_new_one_and_drops_the_old() {
     if !common::in_own_process() {

@@ -212,7 +212,8 @@ fn hu_qin_exit_matches_the_analytic_sphere() {
     if !common::in_own_process() {
         return;
     }
-    let e = exit_errors("hu_qin", 64, &[]);
+    // The full search: "auto" would take section 4's shortcut on this glass ball.
+    let e = exit_errors("hu_qin", 64, &["render.hu_qin.assume_back_facing=false"]);
     eprintln!(
         "hu_qin: {} pixels, P2 error max {:.3} / median {:.3} px, T2 error max {:.3} / median {:.3} deg",
         e.pixels, e.max_p2_pixels, e.median_p2_pixels, e.max_t2_deg, e.median_t2_deg
@@ -553,9 +554,11 @@ fn hu_qin_front_facing_exits_match_traced_exits() {
         return;
     }
     let ctx = context(false);
-    let hu_qin = ["render.refraction=hu_qin", "render.hu_qin.debug=true"];
+    // The decision of §2.1.2 everywhere ("auto" skips it where every dielectric is denser
+    // than air, as on sphere_env).
+    let hu_qin = ["render.refraction=hu_qin", "render.hu_qin.debug=true", "render.hu_qin.assume_back_facing=false"];
     let steps = |n: u32| format!("render.hu_qin.search_steps={n}");
-    let bubble = |n: u32| scene("bubble_env", 256, &[hu_qin[0], hu_qin[1], &steps(n)]);
+    let bubble = |n: u32| scene("bubble_env", 256, &[hu_qin[0], hu_qin[1], hu_qin[2], &steps(n)]);
     let d = hu_qin_decisions(&bubble(8), &ctx);
     eprintln!("bubble_env, 8 steps (the default): {d:?}");
     let torus = hu_qin_decisions(&torus_scene(256, 0.75, &[]), &ctx);
@@ -573,7 +576,7 @@ fn hu_qin_front_facing_exits_match_traced_exits() {
     eprintln!("bubble_env, 2 steps: {coarse:?}");
     assert!(coarse.back_found < d.back_found, "2 steps: {coarse:?}, 8 steps: {d:?}");
     for n in [2, 16] {
-        let s = scene("sphere_env", 96, &[hu_qin[0], hu_qin[1], &steps(n)]);
+        let s = scene("sphere_env", 96, &[hu_qin[0], hu_qin[1], hu_qin[2], &steps(n)]);
         let e = hu_qin_decisions(&s, &ctx);
         eprintln!("sphere_env, {n} steps: {e:?}");
         assert!(e.front == 0 && e.back_found == e.back, "sphere_env, {n} steps: {e:?}");
@@ -826,4 +829,39 @@ fn wyman_back_surfaces_are_the_refractors_own() {
         assert!(median < 5.0, "{surface}: T2 median error {median} degrees");
     }
     common::assert_no_validation_errors(&ctx);
+}
+
+/// `render.hu_qin.assume_back_facing = "auto"` takes section 4's shortcut where every
+/// dielectric is at least as dense as air and §2.1.2's decision elsewhere: sphere_env's glass
+/// (1.5, and 1.0 exactly) assumes it, bubble_env's air bubble (0.75) and a dispersive glass
+/// with a channel below 1 do not; on bubble_env the image is the one of `false`, which differs
+/// from the one of `true` (so the comparison can tell them apart).
+#[test]
+fn auto_assumes_a_back_facing_exit_where_every_dielectric_is_denser_than_air() {
+    use prism::scene::techniques::HuQinParams;
+    use prism::technique::refraction::refraction_hu_qin::assumes_back_facing;
+    if !common::in_own_process() {
+        return;
+    }
+    let auto = |name: &str, set: &[&str]| {
+        let s = scene(name, 64, set);
+        assumes_back_facing(&HuQinParams::from_settings(&s.render).unwrap(), &s)
+    };
+    assert!(auto("sphere_env", &[]));
+    assert!(auto("sphere_env", &["materials.glass.ior=1.0"]));
+    assert!(!auto("bubble_env", &[]));
+    assert!(!auto("sphere_env", &["materials.glass.ior=[0.98, 1.5, 1.6]"]));
+    assert!(!auto("sphere_env", &["render.hu_qin.assume_back_facing=false"]));
+    assert!(auto("bubble_env", &["render.hu_qin.assume_back_facing=true"]));
+
+    let ctx = context(false);
+    let image = |set: &str| render_on(&ctx, &scene("bubble_env", 64, &["render.refraction=hu_qin", set])).hdr;
+    let (automatic, search, assume) = (
+        image("render.hu_qin.assume_back_facing=\"auto\""),
+        image("render.hu_qin.assume_back_facing=false"),
+        image("render.hu_qin.assume_back_facing=true"),
+    );
+    let differing = |a: &[f32], b: &[f32]| a.chunks(4).zip(b.chunks(4)).filter(|(p, q)| p != q).count();
+    assert_eq!(differing(&automatic, &search), 0);
+    assert!(differing(&search, &assume) > 0, "bubble_env: section 4 gives §2.1.2's image");
 }

@@ -6,8 +6,9 @@
 //   constants SEARCH_STEPS (Fig. 7's halvings) and MAX_ITERATIONS (Fig. 9's steps);
 //   bool exit_covered(bool front, vec2 uv): the front (true) or back (false) layer holds a
 //     surface at uv (the back layer's coverage is the refractor's silhouette);
-//   float exit_layer_depth(bool front, vec2 uv): that layer's depth at uv, a distance that
-//     grows away from the eye along the view direction;
+//   bool exit_layer(bool front, vec2 uv, out float depth): exit_covered, and where covered
+//     that layer's depth at uv, a distance that grows away from the eye along the view
+//     direction, from the one texel both read;
 //   float exit_point_depth(vec3 P): P's depth in the same measure;
 //   vec3 exit_depth_axis(): the direction in which that depth grows by one per unit length;
 //   constant D_T_STEP: D_T_STEP_PAPER or D_T_STEP_NEWTON (hu_qin_search_d_t);
@@ -69,15 +70,14 @@ bool hu_qin_search_d_t(bool front, vec3 P1, vec3 T1, float tol, float step0, out
     for (uint i = 0; i < MAX_ITERATIONS; ++i) {
         float next = max(d_T + step, 0.0);
         vec3 P2 = P1 + next * T1;
-        vec2 uv = exit_project(P2);
-        if (!exit_covered(front, uv)) {
+        float z;
+        if (!exit_layer(front, exit_project(P2), z)) {
             stayed = false;
             step *= 0.5;
             continue;
         }
         d_T = next;
         found = true;
-        float z = exit_layer_depth(front, uv);
         step = flag * (z - exit_point_depth(P2));
         if (abs(step) < tol) break;
         if (D_T_STEP == D_T_STEP_NEWTON) step /= max(abs(dot(T1, exit_depth_axis())), 0.1);

@@ -85,6 +85,11 @@ bool exit_covered(bool front, vec2 uv) {
 float exit_layer_depth(bool front, vec2 uv) {
     return exit_texel(front, uv).w;
 }
+bool exit_layer(bool front, vec2 uv, out float depth) {
+    vec4 t = exit_texel(front, uv);
+    depth = t.w;
+    return dot(t.xyz, t.xyz) > 0.25;
+}
 // The back layer's point at uv: the projection's rays are parallel to the axis, so any point
 // that projects to uv, moved along the axis to the layer's axial depth.
 vec3 exit_back_point(vec2 uv) {

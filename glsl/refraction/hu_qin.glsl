@@ -128,8 +128,12 @@ layout(location = 2) out vec4 out_t2;
 bool exit_covered(bool front, vec2 uv) {
     return front ? layer_depth_covered(front_depth, uv) : layer_depth_covered(back_depth, uv);
 }
-float exit_layer_depth(bool front, vec2 uv) {
-    return front ? layer_view_depth(front_depth, uv) : layer_view_depth(back_depth, uv);
+bool exit_layer(bool front, vec2 uv, out float depth) {
+    float d = 0.0;
+    if (on_screen(uv)) d = front ? texelFetch(front_depth, texel_of(uv), 0).r : texelFetch(back_depth, texel_of(uv), 0).r;
+    // As layer_view_depth (reversed Z: near / depth).
+    depth = frame.clip.x / max(d, 1e-30);
+    return d > 0.0;
 }
 float exit_point_depth(vec3 P) {
     return view_depth(P);

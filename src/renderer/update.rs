@@ -127,11 +127,13 @@ pub(super) fn shared_fingerprint(scene: &Scene, recipe: &Recipe) -> u64 {
     for l in &scene.lights {
         std::mem::discriminant(l).hash(&mut h);
     }
-    // Material kinds, and dispersion: caustics mapping draws one grid per channel for it.
+    // Material kinds, and dispersion: caustics mapping draws one grid per channel for it;
+    // an ior below 1 decides Hu & Qin's exit search (refraction_hu_qin::assumes_back_facing).
     for m in &scene.materials {
         m.kind_name().hash(&mut h);
         if let Material::Dielectric { ior, .. } = m {
             (ior.x != ior.y || ior.y != ior.z).hash(&mut h);
+            (ior.min_element() < 1.0).hash(&mut h);
         }
     }
     // What the environment file holds (the file text only names it).

@@ -24,7 +24,7 @@
 
 use crate::gpu::Spec;
 use crate::graph::Frame;
-use crate::scene::techniques::{DTStep, HuQinOracle, HuQinParams, RecursiveExit};
+use crate::scene::techniques::{BackFacing, DTStep, HuQinOracle, HuQinParams, RecursiveExit};
 use crate::scene::{Material, Scene};
 use crate::technique::baseline::specular_single::has_dispersion;
 use crate::technique::{
@@ -52,6 +52,18 @@ pub const REFRACTION_HU_QIN_NEARBY: &str = "refraction_hu_qin_nearby";
 
 /// `render.refraction = "hu_qin"`, parameters `[render.hu_qin]`.
 pub const TECHNIQUE: Registration = registration!("refraction = \"hu_qin\"", plan, HuQinPass, ["hu_qin"]);
+
+/// Whether the exit search assumes a back-facing exit (§4) for `scene`: `"auto"` does where
+/// every dielectric is at least as dense as air in every channel ([`BackFacing::Auto`]).
+pub fn assumes_back_facing(params: &HuQinParams, scene: &Scene) -> bool {
+    match params.assume_back_facing {
+        BackFacing::True => true,
+        BackFacing::False => false,
+        BackFacing::Auto => {
+            scene.materials.iter().all(|m| !matches!(m, Material::Dielectric { ior, .. } if ior.min_element() < 1.0))
+        }
+    }
+}
 
 fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
     let Some(dielectric) = refracting_objects(scene, "hu_qin") else {
@@ -223,7 +235,7 @@ impl HuQinPass {
             ("SEARCH_STEPS", Spec::U32(params.search_steps)),
             ("TOLERANCE", Spec::F32(params.tolerance)),
             ("MAX_ITERATIONS", Spec::U32(params.max_iterations)),
-            ("ASSUME_BACK_FACING", Spec::U32(u32::from(params.assume_back_facing))),
+            ("ASSUME_BACK_FACING", Spec::U32(u32::from(assumes_back_facing(&params, scene)))),
             ("NEARBY_ITERATIONS", Spec::U32(params.correction_iterations)),
             ("NEARBY_TOLERANCE", Spec::F32(params.correction_tolerance)),
             ("NEARBY_SEEDS", Spec::U32(params.seed_samples)),
