@@ -709,9 +709,9 @@ choice! {
         /// most cases" (§4) leaves through the back faces; where it does not, P2 leaves the
         /// silhouette and §4 takes the front layer. docs/ACCURACY.md ("the section 4
         /// acceleration") measures both: on sphere_env (n 1.5) and bunny_env (n 1.2) the same
-        /// errors to four digits with §4's shading pass 0.92x and 0.91x (256^2; 0.82x on
-        /// bunny_env at 512^2); on bubble_env (n 0.75, Fig. 2's n_t < n_i, where front-facing
-        /// exits are common) §4 raises the RMSE from 0.172 to 0.199.
+        /// errors to four digits with §4's shading pass 0.92x and 0.91x (256^2); on bubble_env
+        /// (n 0.75, Fig. 2's n_t < n_i, where front-facing exits are common) §4 raises the
+        /// RMSE from 0.172 to 0.199.
         Auto = "auto",
         /// §4: assume a back-facing exit.
         True = "true",
