@@ -280,6 +280,13 @@ shared_bindings! {
         EIKONAL_BINDING_SRC = 0;
         EIKONAL_BINDING_DST = 1;
     }
+    // The probe of the device's linear filter (glsl/eikonal/filter_probe.comp;
+    // src/technique/eikonal/eikonal_view.rs `filters_in_full_precision`): two texels and
+    // the error of each sample between them.
+    FILTER_PROBE_BINDINGS {
+        BINDING_FILTER_PROBE_TEXELS = 0;
+        BINDING_FILTER_PROBE_ERRORS = 1;
+    }
     // Set 1 of eikonal_view, besides BINDING_GBUF_DEPTH: the field (grad n, n - 1), the
     // material volumes of src/scene/volume_sources.rs ((extinction RGB, HG g), (albedo RGB,
     // reflectance), (emission RGB, boundary band)) and the triangles of the exactly

@@ -408,6 +408,37 @@ fn hardware_filtering_stays_within_the_march_error() {
     }
 }
 
+/// `hardware_filtering = "auto"` uses the device's filter where a probe finds it exact. The
+/// probe (glsl/eikonal/filter_probe.comp) tells filters apart: a nearest sampler, the coarsest
+/// weights there are, is off by up to half the texels' difference (bound 0.25; its 256
+/// samples come within 1/256 of the worst 0.5), llvmpipe's linear filter, which weighs in
+/// f32, by rounding only (bound 1e-5, the probe's own). Where the probe finds the filter exact,
+/// "auto" renders the `true` image bit for bit, elsewhere the `false` one.
+#[test]
+fn auto_filters_in_hardware_where_a_probe_finds_the_filter_exact() {
+    use prism::gpu::SamplerDesc;
+    use prism::technique::eikonal::eikonal_view::{filter_error, filters_in_full_precision};
+    if !common::in_own_process() {
+        return;
+    }
+    let ctx = common::context(false);
+    let nearest = filter_error(&ctx, SamplerDesc::NEAREST_CLAMP).unwrap();
+    let linear = filter_error(&ctx, SamplerDesc::LINEAR_CLAMP).unwrap();
+    eprintln!("{}: the filter probe's largest error: nearest {nearest:.3e}, linear {linear:.3e}", ctx.info.driver_name);
+    assert!(nearest > 0.25, "the probe does not see a nearest sampler's steps: {nearest}");
+    if ctx.info.driver_name == "llvmpipe" {
+        assert!(linear < 1e-5, "llvmpipe's f32 filter off by {linear}");
+    }
+    let exact = filters_in_full_precision(&ctx).unwrap();
+    assert_eq!(exact, linear < 1e-5);
+    let at = |value: &str| view_scene("eikonal_sphere", 32, &[&format!("render.eikonal.hardware_filtering={value}")]);
+    let r = common::render_each(&ctx, &[at("\"auto\""), at("true"), at("false")]);
+    let expected = if exact { &r[1].hdr } else { &r[2].hdr };
+    assert!(r[0].hdr == *expected, "\"auto\" is neither the filtered nor the f32 image it should be (exact: {exact})");
+    assert!(r[1].hdr != r[2].hdr, "the filtered and the f32 images are the same: the comparison proves nothing");
+    common::assert_no_validation_errors(&ctx);
+}
+
 /// A furnace: a glass ball (a constant index of 1.5 with its Fresnel band) in an environment
 /// of radiance 1 everywhere, no light. Each Fresnel event at the band reflects F of the
 /// transmittance T it meets towards the environment and carries T (1 - F) on, so the

@@ -721,6 +721,22 @@ choice! {
 }
 
 choice! {
+    /// Whether eikonal_view samples its field with the device's trilinear filter.
+    HardwareFilter, hint "\"auto\" (where a probe finds the device's filter exact), true or false" {
+        /// Where a probe at setup finds that the device's filter interpolates in full
+        /// precision (src/technique/eikonal/eikonal_view.rs `filters_in_full_precision`): the
+        /// same image as the f32 path to rounding, one fetch instead of eight (lavapipe:
+        /// RMS 5.6e-7, the view pass 0.63x; docs/BENCHMARKS.md). Not on a device whose
+        /// weights are coarser.
+        Auto = "auto",
+        /// Always the device's filter, whatever its precision.
+        True = "true",
+        /// Always eight fetches interpolated in f32.
+        False = "false",
+    }
+}
+
+choice! {
     /// How eikonal_view integrates the ray equation (Ihrke et al. 2007, section 4.1).
     Integrator, hint "Euler of Eqs. 11-12 (Ihrke et al. 2007) or fourth-order Runge-Kutta" {
         /// Forward Euler, Eqs. 11-12 (the paper's view renderer).
@@ -1023,7 +1039,7 @@ params! {
         /// docs/BENCHMARKS.md has the time and the image difference. Used where the device
         /// filters RGBA32F linearly and the index has one channel (a dispersive volume's
         /// three slabs would blend into each other); elsewhere the f32 path runs.
-        hardware_filtering: bool = false;
+        hardware_filtering: HardwareFilter = HardwareFilter::Auto;
         // --- light simulator (section 5.2; src/technique/eikonal/eikonal_light.rs) ---
         /// Run the light simulator (§4.2, §5.2) when the scene has a light: every light's
         /// wavefront (per channel for a per-channel index) is traced through the volume into an

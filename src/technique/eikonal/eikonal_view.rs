@@ -13,9 +13,13 @@
 //!   and smoothed/differentiated slab by slab (dispersion: one march per channel), and the
 //!   materials go to three RGBA16F volumes ([`VolumeTextures`]) for RGB extinction, emission
 //!   and Fresnel reflection at the boundary indicator's band.
-use crate::gpu::{vk, GpuResult, Sampler, SamplerDesc, Spec};
-use crate::graph::Frame;
-use crate::scene::techniques::{EikonalParams, Integrator};
+use std::sync::Arc;
+
+use crate::gpu::{
+    vk, Access, Buffer, ComputePipeline, GpuContext, GpuResult, Image, ImageDesc, Sampler, SamplerDesc, Spec,
+};
+use crate::graph::{Bindings, Frame, FrameGraph};
+use crate::scene::techniques::{EikonalParams, HardwareFilter, Integrator};
 use crate::scene::{Scene, Volume};
 use crate::technique::{
     describe_lights, list, params, registration, FrameInputs, PlannedPass, Registration, RenderError, Setup, Stage,
@@ -23,7 +27,7 @@ use crate::technique::{
 };
 use crate::{
     BINDING_EIKONAL_ALBEDO, BINDING_EIKONAL_EMISSION, BINDING_EIKONAL_EXTINCTION, BINDING_EIKONAL_FIELD,
-    BINDING_GBUF_DEPTH, EIKONAL_EULER, EIKONAL_RK4,
+    BINDING_FILTER_PROBE_ERRORS, BINDING_FILTER_PROBE_TEXELS, BINDING_GBUF_DEPTH, EIKONAL_EULER, EIKONAL_RK4,
 };
 
 use super::eikonal_light::EIKONAL_LIGHT;
@@ -39,6 +43,50 @@ pub const EIKONAL_NEARBY: &str = "eikonal_nearby";
 
 /// Every scene with a `[volume]`; parameters `[render.eikonal]`.
 pub const TECHNIQUE: Registration = registration!("[volume]", plan, EikonalPass, ["eikonal"]);
+
+/// Whether the device's linear filter interpolates RGBA32F texels in full precision, so that
+/// one filtered lookup of the field equals the f32 interpolation of its eight voxels: every
+/// sample of [`filter_error`] within 1e-5 (f32 weights round to about 1e-7; 8-bit weights are
+/// off by up to 2e-3).
+pub fn filters_in_full_precision(ctx: &Arc<GpuContext>) -> GpuResult<bool> {
+    Ok(filter_error(ctx, SamplerDesc::LINEAR_CLAMP)? < 1e-5)
+}
+
+/// The largest error of `sampler` over 256 samples between a texel holding 0 and one holding
+/// 1, each against its fraction of the way between their centres
+/// (glsl/eikonal/filter_probe.comp). Its own images and graph; waits for the device.
+pub fn filter_error(ctx: &Arc<GpuContext>, sampler: SamplerDesc) -> GpuResult<f32> {
+    const SAMPLES: usize = 256;
+    let mut graph = FrameGraph::new();
+    let usage = vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST;
+    let image =
+        Image::new(ctx, &ImageDesc::d3("filter_probe_texels", vk::Format::R32G32B32A32_SFLOAT, [2, 1, 1], usage))?;
+    let texels = [0.0f32, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0];
+    let staging = Buffer::with_data(ctx, "filter_probe_upload", &texels, vk::BufferUsageFlags::TRANSFER_SRC)?;
+    let errors = Buffer::storage(ctx, "filter_probe_errors", &[0.0f32; SAMPLES])?;
+    let sampler = Sampler::new(ctx, "filter_probe", sampler)?;
+    let (image_id, errors_id) = (graph.register_image(&image), graph.register_buffer(&errors));
+    let set = Bindings::new(vk::ShaderStageFlags::COMPUTE)
+        .sampled(BINDING_FILTER_PROBE_TEXELS, &image, &sampler)
+        .read(image_id)
+        .storage(BINDING_FILTER_PROBE_ERRORS, &errors)
+        .build(ctx, "filter_probe")?;
+    let pipeline = ComputePipeline::new(ctx, "filter_probe", "eikonal/filter_probe.comp", &[set.layout()], 0, &[])?;
+    ctx.one_shot(|cmd| {
+        graph.access_now(cmd, &[(image_id, Access::TransferWrite)], &[]);
+        cmd.copy_buffer_to_image(&staging, &image);
+        let mut frame = graph.frame();
+        frame.pass("filter_probe").uses(&set).write(errors_id, Access::ComputeWrite).record(|cmd| {
+            cmd.bind_compute(&pipeline, &[set.set()]);
+            cmd.dispatch((SAMPLES as u32).div_ceil(64), 1, 1);
+        });
+        frame.execute(cmd, None);
+        graph.access_now(cmd, &[], &[(errors_id, Access::HostRead)]);
+    })?;
+    ctx.wait_idle()?;
+    let measured: &[f32] = bytemuck::cast_slice(errors.read());
+    Ok(measured.iter().fold(0.0, |m, &e| if e.is_nan() { f32::INFINITY } else { m.max(e) }))
+}
 
 fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
     let Some(v) = scene.volume.as_ref().filter(|_| scene.render.volume == "eikonal") else {
@@ -266,10 +314,14 @@ impl EikonalPass {
         };
         // The device's trilinear filtering of the field: one slab only, and a format the device
         // filters linearly (else the f32 interpolation of eight fetches).
-        let hardware_filter = params.hardware_filtering
-            && textures.channels == 1
+        let hardware_filter = textures.channels == 1
             && ctx
-                .supports_format(vk::Format::R32G32B32A32_SFLOAT, vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR);
+                .supports_format(vk::Format::R32G32B32A32_SFLOAT, vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR)
+            && match params.hardware_filtering {
+                HardwareFilter::True => true,
+                HardwareFilter::False => false,
+                HardwareFilter::Auto => filters_in_full_precision(ctx)?,
+            };
         let field_sampler = Sampler::new(
             ctx,
             "eikonal_field",
