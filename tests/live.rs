@@ -252,6 +252,7 @@ fn every_setting_of_the_light_simulation_runs_it_again() {
         "render.eikonal.energy_threshold=0.001",
         "render.eikonal.float_atomics=false",
         "render.eikonal.sigma=0.5",
+        "render.eikonal.voxelization=\"highest_energy\"",
     ] {
         after.push(change);
         running.update(&common::scene("eikonal_sphere", SIZE, &after)).unwrap();

@@ -17,7 +17,10 @@ layout(set = 1, binding = LIGHT_BINDING_EXTINCTION) uniform sampler3D extinction
 // irradiance R, G, B (W/m^2), 3..5 the vector irradiance sum_j (E_r + E_g + E_b)_j l_j.
 // light_resolve.glsl turns it into the two volumes below. With ACCUM_FLOAT_ATOMICS an
 // R32_SFLOAT image added to by float atomics; without, the f32 bits in an R32_UINT image
-// added to by a compare-and-swap loop (`accum_add`).
+// added to by a compare-and-swap loop (`accum_add`). With HIGHEST_ENERGY (always R32_UINT)
+// the slabs hold one ray per voxel instead: 0..2 its dE R, G, B, 3..5 its unit direction,
+// and a seventh slab, 6, its energy dE_r + dE_g + dE_b as f32 bits, which order like the
+// values for positive floats, so that imageAtomicMax keeps the highest (`voxel_sample`).
 #ifdef ACCUM_FLOAT_ATOMICS
 layout(set = 1, binding = LIGHT_BINDING_ACCUM, r32f) uniform image3D accum;
 #else
@@ -55,6 +58,7 @@ layout(constant_id = 16) const uint MATERIALS = 0u;        // 0: no extinction a
 layout(constant_id = 17) const uint KEEP_CROSSED = 0u;     // 1: keep patches past a singularity
 layout(constant_id = 18) const uint INTEGRATOR = EIKONAL_EULER;
 layout(constant_id = 20) const uint AIR_FACES = 0u;        // wavefront faces with skipped patches
+layout(constant_id = 21) const uint HIGHEST_ENERGY = 0u;   // 1: the paper's voxelization (below)
 
 const vec3 VOL_MIN = vec3(VOL_MIN_X, VOL_MIN_Y, VOL_MIN_Z);
 const vec3 VOL_MAX = vec3(VOL_MAX_X, VOL_MAX_Y, VOL_MAX_Z);
@@ -122,6 +126,26 @@ vec3 patch_dir(Patch p) {
 
 bool in_light_box(vec3 x) {
     return all(greaterThanEqual(x, LIGHT_MIN)) && all(lessThan(x, LIGHT_MAX));
+}
+
+// The paper's voxel sample of a patch (section 5.2.2: "we ... equate wavefront patches with
+// their midpoints, storing the differential irradiance and directional information as a
+// single voxel sample"): the voxel q holding its midpoint, its differential irradiance
+// dE = flux / area (Eq. 17) and the key of its energy (slab 6, see `accum`). False outside
+// the irradiance volume, and for a patch of no area (a focus: infinite dE) or no flux.
+bool voxel_sample(Patch p, out ivec3 q, out vec3 dE, out uint key) {
+    vec3 mid = patch_mid(p);
+    dE = vec3(0.0);
+    q = ivec3(0);
+    key = 0u;
+    if (!in_light_box(mid)) return false;
+    dE = p.flux.rgb / length(patch_normal(p));
+    float e = dE.r + dE.g + dE.b;
+    if (!(e > 0.0) || isinf(e) || any(isnan(dE)) || any(isinf(dE))) return false;
+    ivec3 size = imageSize(irradiance);
+    q = clamp(ivec3((mid - LIGHT_MIN) / (LIGHT_MAX - LIGHT_MIN) * vec3(size)), ivec3(0), size - 1);
+    key = floatBitsToUint(e);
+    return true;
 }
 
 // Component `comp` (slab) of voxel q of the accumulator.

@@ -13,6 +13,11 @@
 // between skipped and simulated patches received part of its light from each: the closed
 // form is weighted by the tent's mean of the skip flags over the voxel's footprint, which is
 // what the skipped patches' deposits would have summed to.
+//
+// With HIGHEST_ENERGY (the paper's voxelization, light_step.glsl) the slabs hold one ray per
+// voxel, and a skipped beam's ray, dE = the closed form, takes the voxel where the voxel's
+// centre lies in a skipped patch's beam (the paper's midpoint sample) and its energy is the
+// higher: the same criterion.
 #include "light_common.glsl"
 layout(local_size_x = EIKONAL_GROUP, local_size_y = EIKONAL_GROUP, local_size_z = EIKONAL_GROUP) in;
 
@@ -75,19 +80,29 @@ void main() {
     // Rounding of a take-back (run.sign = -1) can leave tiny negative sums: clamp.
     vec3 e = max(vec3(slab_value(q, 0), slab_value(q, 1), slab_value(q, 2)), vec3(0.0));
     vec3 d = vec3(slab_value(q, 3), slab_value(q, 4), slab_value(q, 5));
+    // One ray: its unit direction weighted like the sums' (E_r + E_g + E_b).
+    if (HIGHEST_ENERGY != 0u) d *= e.r + e.g + e.b;
     vec3 voxel = (LIGHT_MAX - LIGHT_MIN) / vec3(size);
     vec3 x = LIGHT_MIN + (vec3(q) + 0.5) * voxel;
     for (uint i = 0u; i < AIR_FACES; ++i) {
         AirFace f = air_faces[i];
-        float share = skipped_share(f, x, voxel);
+        float share = HIGHEST_ENERGY != 0u ? float(flags_at(f, x) & 1u) : skipped_share(f, x, voxel);
         if (share == 0.0) continue;
         bool point = f.origin.w == 0.0;
         vec3 r = x - f.origin.xyz;
         // Not nearer than the patches start (a light inside the box starts them at r0).
         vec3 light = point ? f.power.rgb / max(dot(r, r), f.power.w * f.power.w) : f.power.rgb;
         vec3 l = point ? normalize(r) : f.axis.xyz;
+        float energy = light.r + light.g + light.b;
+        if (HIGHEST_ENERGY != 0u) {
+            if (energy > e.r + e.g + e.b) {
+                e = light;
+                d = l * energy;
+            }
+            continue;
+        }
         e += share * light;
-        d += share * l * (light.r + light.g + light.b);
+        d += share * l * energy;
     }
     float s = e.r + e.g + e.b;
     imageStore(irradiance, q, vec4(e, s > 0.0 ? 1.0 : 0.0));

@@ -17,7 +17,14 @@
 //   splatted trilinearly (tent of two voxels) at the midpoint of the step's segment, since
 //   neighbouring midpoints of patches up to a voxel wide are up to a voxel apart. Every
 //   ray's irradiance is summed (Eqs. 6-7 sum over the incoming rays j), and so are the
-//   lights, tiles and channels of src/technique/eikonal/eikonal_light.rs, whose runs all add here;
+//   lights, tiles and channels of src/technique/eikonal/eikonal_light.rs, whose runs all add here.
+//   With HIGHEST_ENERGY the paper's rule instead (render.eikonal.voxelization =
+//   "highest_energy"): the patch's midpoint voxel keeps the ray of the highest dE = flux /
+//   area seen there (`voxel_sample`). This kernel raises the voxel's key by an atomic max;
+//   which ray won is only known once every patch of the dispatch has, so light_commit.comp,
+//   dispatched next, writes the winner's dE and direction. A patch marks the substep it took
+//   part in (v[0].w = substep + 1) for it. The maximum is idempotent, so a take-back is not
+//   needed: a split tile's rerun writes the same rays again;
 // - section 5.2.3: classify it 0 (eliminate: below the energy threshold, leaving the volume,
 //   or its orientation flipped against its direction = it crossed a wavefront singularity,
 //   unless KEEP_CROSSED), 1 (retain) or 4 (tessellate: its corners span more than one voxel
@@ -142,7 +149,21 @@ void main() {
     }
     p.flux.w += 1.0;
     classes[i] = cls;
-    src[i] = p;
     atomicAdd(state.advanced, 1u);
-    if (!singular) deposit(mid0, mid, p.flux.rgb, normalize(dir));
+    if (HIGHEST_ENERGY != 0u) {
+        p.v[0].w = 0.0;
+#ifndef ACCUM_FLOAT_ATOMICS
+        ivec3 q;
+        vec3 dE;
+        uint key;
+        if (!singular && voxel_sample(p, q, dE, key)) {
+            imageAtomicMax(accum, accum_texel(q, 6), key);
+            p.v[0].w = float(run.substep + 1u);
+        }
+#endif
+        src[i] = p;
+    } else {
+        src[i] = p;
+        if (!singular) deposit(mid0, mid, p.flux.rgb, normalize(dir));
+    }
 }

@@ -223,11 +223,22 @@ pub fn reference_noise(
     reference: &[f32],
     policy: ReferencePolicy,
 ) -> Result<Noise> {
-    let second = ReferenceSettings { seed: settings.seed.wrapping_add(1), ..settings.clone() };
-    let other = cached_reference(ctx, scene, &second, policy)?.image;
+    let other = second_reference(ctx, scene, settings, policy)?;
     let (a, b) = (output::tonemap_scene(&other, &scene.render), output::tonemap_scene(reference, &scene.render));
     let (m, _) = ErrorMetrics::between(&other, reference, &a, &b, scene.camera.width, scene.camera.height);
     Ok(Noise { between_references: m })
+}
+
+/// The second reference of [`reference_noise`] (the next seed; cached like the first, so a
+/// second call loads it): src/metrics/paired.rs ranks settings with it.
+pub fn second_reference(
+    ctx: &Arc<GpuContext>,
+    scene: &Scene,
+    settings: &ReferenceSettings,
+    policy: ReferencePolicy,
+) -> Result<Vec<f32>> {
+    let second = ReferenceSettings { seed: settings.seed.wrapping_add(1), ..settings.clone() };
+    Ok(cached_reference(ctx, scene, &second, policy)?.image)
 }
 
 /// The exact tracer of one setting: `raytrace` with its photons off where it renders no

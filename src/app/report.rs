@@ -9,12 +9,16 @@ use anyhow::{Context, Result};
 use clap::Args;
 
 use super::compare::{cached_reference, MeasureArgs};
-use super::equaltime::{curve_spec, measure_interleaved, reference_noise, Exact, ExactArgs, Setting};
+use super::equaltime::{curve_spec, measure_interleaved, reference_noise, second_reference, Exact, ExactArgs, Setting};
 use super::output::{self, Outputs};
 use super::sweep::{
     cartesian, metric_of, parse_params, plot_exact, plot_svg, short_label, technique_names, Plot, PlotPoint,
 };
 use super::{check_validation, GpuArgs, SceneArgs};
+use crate::app::compare::Measurement;
+use crate::metrics::image::flip_values;
+use crate::metrics::paired::{flip_difference, mse_difference, FlipMaps, Paired, SEPARATION};
+use crate::scene::Scene;
 
 #[derive(Args, Debug)]
 pub struct ReportArgs {
@@ -121,13 +125,15 @@ pub fn run(args: ReportArgs) -> Result<()> {
             width: Some(args.size),
             height: Some(args.size),
         };
-        let (curve_spec, noise) = if args.exact.no_exact {
-            (None, None)
+        let (curve_spec, noise, second) = if args.exact.no_exact {
+            (None, None, None)
         } else {
             let (scene, reference) = (&loaded[0].1, &loaded[0].2);
-            let noise = reference_noise(&ctx, scene, &settings, reference, args.measure.reference_policy())?;
+            let policy = args.measure.reference_policy();
+            let noise = reference_noise(&ctx, scene, &settings, reference, policy)?;
+            let second = second_reference(&ctx, scene, &settings, policy)?;
             let settings = loaded.iter().map(|(_, scene, _)| scene);
-            (Some(curve_spec(&sa0, &args.measure, &args.exact, settings)?), Some(noise))
+            (Some(curve_spec(&sa0, &args.measure, &args.exact, settings)?), Some(noise), Some(second))
         };
         // The entry's settings and the exact points timed interleaved (src/app/equaltime.rs).
         let timed: Vec<Setting> = loaded.iter().map(|(_, scene, reference)| Setting { scene, reference }).collect();
@@ -155,7 +161,15 @@ pub fn run(args: ReportArgs) -> Result<()> {
         )?;
         let measured: Vec<_> = rows.iter().map(|(setting, _, m, _)| (setting.as_slice(), m)).collect();
         section_table(&mut md, &measured, exact.as_ref())?;
-        if let Some(summary) = summary_row(e, &measured, &techniques, exact.as_ref())? {
+        let ranking = second.as_deref().and_then(|second| {
+            let against: Vec<_> =
+                rows.iter().map(|(_, scene, m, reference)| (scene, m, reference.as_slice())).collect();
+            Ranking::of(&against, second)
+        });
+        if let Some(r) = &ranking {
+            r.write(&mut md, &measured)?;
+        }
+        if let Some(summary) = summary_row(e, &measured, &techniques, exact.as_ref(), ranking.as_ref())? {
             summaries.push(summary);
         }
         let points: Vec<PlotPoint> = rows
@@ -321,8 +335,9 @@ fn section_table(
         writeln!(
             md,
             "Reference noise (a second reference, next seed): RMSE {:.4}, FLIP mean {:.4}, HDR-FLIP \
-             mean {:.4}; an error in parentheses is the range of the true error it allows, and two \
-             errors whose ranges overlap are within noise, not ranked. Exact tracer: {}:",
+             mean {:.4}; an error in parentheses is the range of the true error it allows (the settings \
+             are ranked against each other by their paired differences, below, which the noise \
+             moves far less). Exact tracer: {}:",
             floor("rmse"),
             floor("flip_mean"),
             floor("hdr_flip_mean"),
@@ -348,6 +363,106 @@ fn section_table(
         writeln!(md, "{}.\n", pts.join("; "))?;
     }
     Ok(())
+}
+
+/// Every setting of a section against the best by FLIP mean, each difference paired against
+/// the one reference they share (src/metrics/paired.rs), so that the reference's noise counts
+/// only where the two settings differ.
+struct Ranking {
+    best: usize,
+    /// Per setting: its FLIP mean's and its MSE's difference from the best's; None for the
+    /// best and for a setting measured against another reference.
+    pairs: Vec<Option<(Paired, Paired)>>,
+}
+
+impl Ranking {
+    /// `rows`: each setting's scene, measurement and reference; `second` the second reference
+    /// of the first setting's (`second_reference`), which the rows that share the first
+    /// setting's reference are paired with. None when the best does not share it.
+    fn of(rows: &[(&Scene, &Measurement, &[f32])], second: &[f32]) -> Option<Ranking> {
+        let first = rows.first()?.2;
+        let best =
+            (0..rows.len()).min_by(|&a, &b| rows[a].1.errors.flip_mean.total_cmp(&rows[b].1.errors.flip_mean))?;
+        let shared = |i: usize| rows[i].2 == first;
+        if !shared(best) {
+            return None;
+        }
+        let (w, h) = (rows[best].0.camera.width, rows[best].0.camera.height);
+        // FLIP against either reference and their mean, tone-mapped as the setting's own
+        // errors were.
+        let mean: Vec<f32> = first.iter().zip(second).map(|(a, b)| 0.5 * (a + b)).collect();
+        let maps = |i: usize| {
+            let (scene, m, _) = rows[i];
+            let flip = |r: &[f32]| flip_values(&m.ldr, &output::tonemap_scene(r, &scene.render), w, h);
+            FlipMaps { r1: flip(first), r2: flip(second), mean: flip(&mean) }
+        };
+        let best_maps = maps(best);
+        let pairs = (0..rows.len())
+            .map(|i| {
+                (i != best && shared(i)).then(|| {
+                    let flip = flip_difference(&maps(i), &best_maps, w, h);
+                    let mse = mse_difference(&rows[i].1.hdr, &rows[best].1.hdr, first, second, w, h);
+                    (flip, mse)
+                })
+            })
+            .collect();
+        Some(Ranking { best, pairs })
+    }
+
+    /// The section's ranking table: each setting's differences from the best with their
+    /// standard errors, and whether they are ranked.
+    fn write(&self, md: &mut String, rows: &[(&[String], &Measurement)]) -> Result<()> {
+        let label = |i: usize| {
+            let s = rows[i].0;
+            if s.is_empty() {
+                "default".to_string()
+            } else {
+                format!("`{}`", s.join(" "))
+            }
+        };
+        writeln!(
+            md,
+            "Ranking against the best by FLIP mean, #{} {}: each setting's difference from it, the \
+             standard error that the reference's noise leaves the difference (settings measured \
+             against one reference share its noise, which cancels in their difference except where \
+             they differ; estimated with the second reference: src/metrics/paired.rs) and, for \
+             FLIP, the bias it may leave (from the difference against the mean of the two \
+             references); ranked where the difference exceeds {} standard errors plus the bias. \
+             RMSE's error is the MSE difference's over the sum of the two RMSEs; its bias is 0.\n",
+            self.best + 1,
+            label(self.best),
+            SEPARATION
+        )?;
+        writeln!(
+            md,
+            "| # | setting | FLIP mean − best | ± standard error | bias | RMSE − best | ± standard error | ranked |\n\
+             |---:|---|---:|---:|---:|---:|---:|---|"
+        )?;
+        for (i, pair) in self.pairs.iter().enumerate() {
+            let Some((flip, mse)) = pair else { continue };
+            let (a, b) = (rows[i].1.errors.rmse, rows[self.best].1.errors.rmse);
+            let rmse_error = mse.standard_error / (a + b).max(1e-12);
+            let ranked = match (flip.separated(), mse.separated()) {
+                (true, true) => "by FLIP and RMSE",
+                (true, false) => "by FLIP",
+                (false, true) => "by RMSE",
+                (false, false) => "within noise",
+            };
+            writeln!(
+                md,
+                "| {} | {} | {:+.5} | {:.5} | {:+.5} | {:+.4} | {:.4} | {ranked} |",
+                i + 1,
+                label(i),
+                flip.difference,
+                flip.standard_error,
+                flip.bias,
+                a - b,
+                rmse_error
+            )?;
+        }
+        writeln!(md)?;
+        Ok(())
+    }
 }
 
 /// What a table's time columns include: frame ms the steady frame, per change ms the costs
@@ -399,6 +514,7 @@ fn summary_row(
     rows: &[(&[String], &crate::app::compare::Measurement)],
     techniques: &[String],
     exact: Option<&Exact>,
+    ranking: Option<&Ranking>,
 ) -> Result<Option<SummaryRow>> {
     let Some(effect) = entry_effect(e) else { return Ok(None) };
     let Some(best) = (0..rows.len()).min_by(|&a, &b| rows[a].1.errors.flip_mean.total_cmp(&rows[b].1.errors.flip_mean))
@@ -416,10 +532,13 @@ fn summary_row(
     let m = rows[best].1;
     let interval = |v: f64| exact.map(|x| x.noise.interval("flip_mean", v)).unwrap_or((v, v));
     let (lo, hi) = interval(m.errors.flip_mean);
-    let ties: Vec<String> = (0..rows.len())
-        .filter(|&i| i != best && interval(rows[i].1.errors.flip_mean).0 <= hi && lo <= rows[i].1.errors.flip_mean)
-        .map(name)
-        .collect();
+    // Against the same reference the paired difference decides (src/metrics/paired.rs);
+    // elsewhere two errors whose intervals overlap are within noise.
+    let within_noise = |i: usize| match ranking.and_then(|r| r.pairs[i].as_ref().filter(|_| r.best == best)) {
+        Some((flip, _)) => !flip.separated(),
+        None => interval(rows[i].1.errors.flip_mean).0 <= hi && lo <= rows[i].1.errors.flip_mean,
+    };
+    let ties: Vec<String> = (0..rows.len()).filter(|&i| i != best && within_noise(i)).map(name).collect();
     let mut technique = format!("`{}`", name(best));
     if !ties.is_empty() {
         technique.push_str(&format!(
@@ -448,7 +567,8 @@ fn summary_table(rows: &[SummaryRow]) -> String {
     let mut t = format!(
         "{SUMMARY_HEADING}\n\n\
          One row per scene and effect, from the sections below that compare techniques at their \
-         defaults: the best by FLIP mean (others within the reference's noise of it named), its \
+         defaults: the best by FLIP mean (others named whose paired difference from it is within \
+         the reference's noise: the section's ranking table), its \
          frame time and FLIP with the range the reference's noise allows, the exact tracer's FLIP \
          at the same GPU time (interpolated on its curve, measured in the same run; each \
          section names the tracer), and the verdict: *dominated* (exact ray tracing is better \
@@ -611,6 +731,7 @@ mod tests {
     use crate::app::compare::Measurement;
     use crate::app::equaltime::{Exact, ExactCurve, ExactPoint, ExactSource, Noise};
     use crate::metrics::image::ErrorMetrics;
+    use crate::metrics::paired::Paired;
     use crate::metrics::timing::Stats;
 
     fn measurement(time_ms: f64, flip: f64) -> Measurement {
@@ -664,14 +785,26 @@ mod tests {
         let rows: Vec<_> = settings.iter().map(|s| s.as_slice()).zip(ms.iter()).collect();
         let techniques: Vec<String> = vec!["a".into(), "b".into(), "c".into()];
         let x = exact(0.005);
-        let r = super::summary_row(&e, &rows, &techniques, Some(&x)).unwrap().unwrap();
+        let r = super::summary_row(&e, &rows, &techniques, Some(&x), None).unwrap().unwrap();
         assert_eq!(
             r.line,
             "| sphere_env | refraction | `hu_qin` (within noise: `wyman`) | 50.00 | 0.00 | 0.1000 (0.0950–0.1000) | 0.0400 | dominated |"
         );
+        // Paired against the reference they share, wyman's 0.001 more is 10 standard errors:
+        // ranked, though the intervals overlap; single's is within its (large) standard error.
+        let paired = |difference: f64, standard_error: f64| {
+            let p = Paired { difference, standard_error, bias: 0.0 };
+            Some((p, p))
+        };
+        let ranking = super::Ranking { best: 2, pairs: vec![paired(0.2, 0.1), paired(0.001, 0.0001), None] };
+        let r = super::summary_row(&e, &rows, &techniques, Some(&x), Some(&ranking)).unwrap().unwrap();
+        assert_eq!(
+            r.line,
+            "| sphere_env | refraction | `hu_qin` (within noise: `single`) | 50.00 | 0.00 | 0.1000 (0.0950–0.1000) | 0.0400 | dominated |"
+        );
         // An entry that sweeps a parameter has no summary row.
         let sweep = super::Entry { params: vec!["render.hu_qin.search_steps=2,4".into()], ..e };
-        assert!(super::summary_row(&sweep, &rows, &techniques, Some(&x)).unwrap().is_none());
+        assert!(super::summary_row(&sweep, &rows, &techniques, Some(&x), None).unwrap().is_none());
         // `--only` keeps the rows of entries it does not measure.
         let text = format!("# A\n\n{}## sphere_env: t\n\nbody\n", super::summary_table(&[r]));
         let p = Previous::parse(&text);

@@ -143,6 +143,11 @@ fn flip_map(test: &[u8], reference: &[u8], width: u32, height: u32) -> nv_flip::
     nv_flip::flip(r, t, nv_flip::DEFAULT_PIXELS_PER_DEGREE)
 }
 
+/// The per-pixel FLIP values between two RGBA8 sRGB images, row-major.
+pub fn flip_values(test: &[u8], reference: &[u8], width: u32, height: u32) -> Vec<f32> {
+    flip_map(test, reference, width, height).to_vec()
+}
+
 /// Mean and 95th percentile of a FLIP map, by FLIP's own pool (its histogram percentile).
 fn flip_stats(map: &nv_flip::FlipImageFloat) -> (f64, f64) {
     let mut pool = nv_flip::FlipPool::from_image(map);

@@ -759,6 +759,21 @@ choice! {
 }
 
 choice! {
+    /// How the eikonal light simulator records each step of a wavefront patch in the
+    /// irradiance and direction volumes (Ihrke et al. 2007, section 5.2.2).
+    LightVoxelization, hint "prism's additive track-length estimate or the paper's highest-energy ray per voxel (§5.2.2)" {
+        /// Every ray's flux x track length / voxel volume, splatted trilinearly and summed
+        /// (glsl/eikonal/light_step.glsl): finite at a focus and the voxel's mean there.
+        TrackLength = "track_length",
+        /// The paper's: the patch's midpoint writes its differential irradiance dE = flux /
+        /// area (Eq. 17) and its direction into the voxel holding it, where it is the highest
+        /// energy yet ("we limit ourselves to storing only one incoming light direction,
+        /// corresponding to the highest energy ray passing a particular voxel").
+        HighestEnergy = "highest_energy",
+    }
+}
+
+choice! {
     /// What exit and reflected view rays of the eikonal volume meet besides the environment
     /// (src/technique/eikonal/eikonal_nearby.rs).
     EikonalNearby,
@@ -1059,6 +1074,11 @@ params! {
         /// view rays' `integrator`. RK4, the default, is the scheme of every light simulation
         /// measured in docs/ACCURACY.md and docs/BENCHMARKS.md; "euler" is the paper's.
         light_integrator: LightIntegrator = LightIntegrator::Rk4;
+        /// How each step of a patch is recorded in the irradiance and direction volumes
+        /// (section 5.2.2): "track_length", the default, sums every ray's flux x track length
+        /// / voxel volume, splatted trilinearly; "highest_energy" is the paper's, one ray per
+        /// voxel, the one of highest dE = flux / area (Eq. 17). docs/ACCURACY.md compares them.
+        voxelization: LightVoxelization = LightVoxelization::TrackLength;
         /// Steps of the patch list between two compactions (the HistoPyramid and the output
         /// generator, section 5.2.3; glsl/eikonal/light_step.glsl): after the first, a patch
         /// steps on only while it is retained, so every patch takes the same steps as with a

@@ -16,7 +16,9 @@
 //!   trilinearly, summed over all rays: glsl/eikonal/light_step.glsl says why not the
 //!   paper's highest-energy dE = flux / area, which made the floor caustic's peak several
 //!   times too bright), into an additive accumulator that light_resolve.glsl turns into the
-//!   irradiance and (vector) direction volumes.
+//!   irradiance and (vector) direction volumes. The paper's rule is one setting away
+//!   (`render.eikonal.voxelization = "highest_energy"`: an atomic max on each voxel's energy in
+//!   the step kernel, then glsl/eikonal/light_commit.comp writes the winning ray).
 //! - Section 5.2.3: each patch is classified 0/1/4 and the list is compacted and expanded by
 //!   the HistoPyramid (src/technique/eikonal/histopyramid.rs) and glsl/eikonal/light_expand.comp.
 //!
@@ -53,7 +55,7 @@ use crate::gpu::{
     Progress, Sampler, Spec, TimestampPool, TimestampQuery,
 };
 use crate::graph::{Bindings, BoundSet, BufferId, Frame, FrameGraph, ImageId};
-use crate::scene::techniques::{EikonalParams, LightIntegrator};
+use crate::scene::techniques::{EikonalParams, LightIntegrator, LightVoxelization};
 use crate::scene::{IndexProfile, Light, Volume};
 use crate::{
     EIKONAL_EULER, EIKONAL_GROUP, EIKONAL_RK4, LIGHT_BINDING_ACCUM, LIGHT_BINDING_DIRECTION, LIGHT_BINDING_DST,
@@ -149,6 +151,7 @@ pub struct KernelTime {
     /// The frame-graph pass name: `eikonal_light_step` (Eqs. 14-15 advance, Eq. 18
     /// absorption, the §5.2.2 deposit and the §5.2.3 classification, one kernel),
     /// `histopyramid_reduce` (one dispatch per pyramid level), `histopyramid_total`,
+    /// `eikonal_light_commit` (the paper's voxelization only: the winning rays' writes),
     /// `histopyramid_traverse` (the compaction/expansion descent), `eikonal_light_expand`
     /// (the output generator) and `eikonal_light_resolve` (accumulator to volumes, once).
     pub name: String,
@@ -547,6 +550,9 @@ pub struct LightSim {
     /// List 0 -> 1 and list 1 -> 0.
     sets: BoundSet,
     step: ComputePipeline,
+    /// The paper's voxelization only: writes each voxel's highest-energy ray after a step
+    /// (glsl/eikonal/light_commit.comp).
+    commit: Option<ComputePipeline>,
     expand: ComputePipeline,
     resolve: ComputePipeline,
     field_id: ImageId,
@@ -741,9 +747,13 @@ impl LightSim {
             Image::new(ctx, &ImageDesc::d3("eikonal_irradiance", vk::Format::R32G32B32A32_SFLOAT, resolution, usage))?;
         let direction =
             Image::new(ctx, &ImageDesc::d3("eikonal_light_dir", vk::Format::R32G32B32A32_SFLOAT, resolution, usage))?;
-        let accum_extent = [resolution[0], 6 * resolution[1], resolution[2]];
+        // The paper's voxelization keeps one ray per voxel by an atomic max on its energy's
+        // bits (light_common.glsl `accum`): a seventh slab, and integer atomics.
+        let highest = params.voxelization == LightVoxelization::HighestEnergy;
+        let slabs = if highest { 7 } else { 6 };
+        let accum_extent = [resolution[0], slabs * resolution[1], resolution[2]];
         let accum_usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_DST;
-        let float_atomics = params.float_atomics && float_atomics_supported(ctx);
+        let float_atomics = params.float_atomics && float_atomics_supported(ctx) && !highest;
         let accum_format = if float_atomics { vk::Format::R32_SFLOAT } else { vk::Format::R32_UINT };
         let accum = Image::new(ctx, &ImageDesc::d3("eikonal_light_accum", accum_format, accum_extent, accum_usage))?;
 
@@ -780,6 +790,7 @@ impl LightSim {
             ("KEEP_CROSSED", Spec::U32(u32::from(params.keep_crossed))),
             ("INTEGRATOR", Spec::U32(integrator)),
             ("AIR_FACES", Spec::U32(air_count)),
+            ("HIGHEST_ENERGY", Spec::U32(u32::from(highest))),
         ]
         .into_iter()
         .chain(box_specs(volume_names, volume.min, volume.max))
@@ -787,7 +798,8 @@ impl LightSim {
         .collect();
         // Two timestamps per pass of a batch: each step is the step kernel, one reduction
         // per pyramid level above the classes, the total, the traversal and the expansion.
-        let passes_per_step = level_lengths(capacity).len() as u32 - 1 + 3 + params.light_substeps;
+        let step_passes = if highest { 2 } else { 1 } * params.light_substeps;
+        let passes_per_step = level_lengths(capacity).len() as u32 - 1 + 3 + step_passes;
         let timestamps = if ctx.info.timestamp_valid_bits > 0 {
             Some(TimestampPool::new(ctx, "eikonal_light_timestamps", 2 * LIGHT_BATCH * passes_per_step)?)
         } else {
@@ -803,6 +815,7 @@ impl LightSim {
         };
         let step = pipeline("eikonal_light_step", step_shader)?;
         let expand = pipeline("eikonal_light_expand", "eikonal/light_expand.comp")?;
+        let commit = highest.then(|| pipeline("eikonal_light_commit", "eikonal/light_commit.comp")).transpose()?;
         let resolve = pipeline("eikonal_light_resolve", resolve_shader)?;
 
         let list_ids = [graph.register_buffer(&lists[0]), graph.register_buffer(&lists[1])];
@@ -844,6 +857,7 @@ impl LightSim {
             direction_id,
             sets,
             step,
+            commit,
             expand,
             resolve,
             field_id: textures.field_id,
@@ -944,6 +958,17 @@ impl LightSim {
                 .record(move |cmd| {
                     cmd.compute_indirect(step, &[set0, set1], &push, state, 0);
                 });
+            if let Some(commit) = &self.commit {
+                frame
+                    .pass("eikonal_light_commit")
+                    .read(hp.state_id, Access::IndirectArgs)
+                    .read(src, Access::ComputeRead)
+                    .read(self.irradiance_id, Access::ComputeRead)
+                    .write(self.accum_id, Access::ComputeWrite)
+                    .record(move |cmd| {
+                        cmd.compute_indirect(commit, &[set0, set1], &push, state, 0);
+                    });
+            }
         }
         hp.record(frame);
         frame
@@ -1176,7 +1201,8 @@ impl LightSim {
                 stats.overflow_ms += run_stats.gpu_ms;
                 // Take the run's deposits back (the same patches, the same drops: the
                 // simulation is deterministic up to the order of the float additions),
-                // then simulate its four quarters.
+                // then simulate its four quarters. The paper's voxelization keeps a maximum,
+                // which the quarters' rerun of the same rays leaves as it is: no take-back.
                 stats.split_tiles += 1;
                 let len = r.end - r.start;
                 let quarter = len.div_ceil(4);
@@ -1190,7 +1216,9 @@ impl LightSim {
                 for p in parts.into_iter().rev() {
                     self.queue.push_front(p);
                 }
-                self.queue.push_front(LightRun { sign: -1.0, ..r });
+                if self.commit.is_none() {
+                    self.queue.push_front(LightRun { sign: -1.0, ..r });
+                }
             } else if r.sign > 0.0 {
                 stats.dropped_patches += run_stats.dropped_patches;
                 if !self.pending.is_empty() {
@@ -1378,7 +1406,7 @@ fn simulation_settings(p: &EikonalParams) -> impl std::fmt::Debug {
         p.energy_threshold,
         p.light_dt,
         (p.light_integrator, p.light_substeps),
-        (p.max_patches, p.tile_patches, p.keep_crossed, p.skip_air),
+        (p.max_patches, p.tile_patches, p.keep_crossed, p.skip_air, p.voxelization),
         (p.light_patches, p.light_below, p.light_side),
         p.float_atomics,
     )
