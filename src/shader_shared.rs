@@ -317,7 +317,8 @@ shared_bindings! {
     // Eikonal light simulator (Ihrke et al. 2007 section 5.2; src/technique/eikonal/eikonal_light.rs,
     // src/technique/eikonal/histopyramid.rs): set 0 of every HistoPyramid kernel (STATE to
     // HISTORY) and set 1 of the light kernels; the accumulator is the additive irradiance
-    // accumulator (r32ui 3D image, six slabs along y).
+    // accumulator (r32ui 3D image, six slabs along y); BAND and REFLECTANCE the view renderer's
+    // boundary band and reflectance factor, for the Fresnel loss.
     LIGHT_BINDINGS {
         LIGHT_BINDING_STATE = 0;
         LIGHT_BINDING_CLASSES = 1;
@@ -334,6 +335,8 @@ shared_bindings! {
         LIGHT_BINDING_SPILL = 13;
         LIGHT_BINDING_AIR_FACES = 14;
         LIGHT_BINDING_AIR_SKIP = 15;
+        LIGHT_BINDING_BAND = 16;
+        LIGHT_BINDING_REFLECTANCE = 17;
     }
     // The window's water animation (glsl/common/heightfield.comp; src/frame/heightfield.rs):
     // one set 0.

@@ -925,7 +925,11 @@ fn two_lights_add_up() {
 /// 0.5 m slab is four voxels thick, and its smoothed edges' refraction outweighs the
 /// faces': the blue centroid landed beside the red one on the wrong side).
 fn slab_scene(n: &str) -> prism::scene::Scene {
-    let text = format!(
+    prism::scene::load_str(&slab_scene_text(n), std::path::Path::new("slab.toml"), &[]).expect("slab scene")
+}
+
+fn slab_scene_text(n: &str) -> String {
+    format!(
         r#"
 name = "slab"
 [camera]
@@ -955,8 +959,7 @@ n = {n}
 [render.eikonal]
 light_below = 0.5
 "#
-    );
-    prism::scene::load_str(&text, std::path::Path::new("slab.toml"), &[]).expect("slab scene")
+    )
 }
 
 /// Item 3, dispersion: a volume with a per-channel index is simulated once per channel
@@ -1516,4 +1519,67 @@ fn the_paper_s_voxelization_keeps_the_highest_energy_ray() {
     // up to a voxel wide sample each voxel's tracks unevenly.
     assert_eq!(summed, inner, "track-length sums near 2.5 in {summed} of {inner}");
     common::assert_no_validation_errors(&ctx);
+}
+
+/// `render.eikonal.light_fresnel`: a patch crossing a boundary band keeps 1 - rho F of its
+/// flux (Eq. 5's tau on the light's side). A glass slab (n = 1.5, 0.5 m = 6 voxels thick, so
+/// that the bands of its two faces merge into one that the index crosses up and then down)
+/// spanning the box, lit straight down and at 36.87 degrees: a patch that crossed both faces
+/// away from the box's walls (where the slab is cut) keeps (1 - F(theta))^2 of the flux it has
+/// without the loss, F the exact Fresnel reflectance (0.04 straight down, 0.0439 obliquely;
+/// the exit face sees the refracted angle, where F is the same). The two simulations take the
+/// same steps and splits, so their lists match patch for patch. Bound: 1e-3, the index at a
+/// run's end is the smoothed field's, 1.5 within 1e-4 on the slab's plateau (the Gaussian's
+/// tail 3 voxels from a face) and 1 at the band's ends, which moves F by under 1e-4; the rest
+/// is f32.
+#[test]
+fn fresnel_loss_transmits_the_closed_form_share_through_a_slab() {
+    if !common::in_own_process() {
+        return;
+    }
+    let ctx = common::context(false);
+    // (light direction, x range of the patches measured, under the slab's middle)
+    for (direction, (x0, x1)) in [([0.0f32, -1.0, 0.0], (-0.6, 0.6)), ([0.6, -0.8, 0.0], (0.0, 0.6))] {
+        let light = Vec3::from(direction).normalize();
+        // A patch past the slab (below its bottom face's band, 0.25 m + 4 voxels = 0.58 m) that crossed
+        // its two parallel faces, so that it leaves as it came: those that met the box's
+        // walls, where the slab is cut, leave deflected (or stay trapped inside).
+        let measured = |p: &Patch| {
+            let d = (0..4).map(|c| p.direction(c)).sum::<Vec3>().normalize();
+            p.mid().y < -0.7 && (x0..x1).contains(&p.mid().x) && p.mid().z.abs() < 0.6 && d.dot(light) > 0.9999
+        };
+        let patches = |fresnel: bool| {
+            let text = slab_scene_text("1.5")
+                .replace("direction = [0.6, -0.8, 0]", &format!("direction = {direction:?}"))
+                .replace("size = [1.6, 0.5, 1.6]", "size = [2.4, 0.5, 2.4]");
+            let scene = prism::scene::load_str(&text, std::path::Path::new("slab.toml"), &[]).expect("slab scene");
+            let mut params = EikonalParams::from_settings(&scene.render).unwrap();
+            params.light_fresnel = fresnel;
+            // No energy threshold: the loss would eliminate other patches, and the lists differ.
+            params.energy_threshold = 0.0;
+            let mut sim =
+                StandaloneLight::new(&ctx, &params, scene.volume.as_ref().unwrap(), &scene.lights[0]).unwrap();
+            for _ in 0..400 {
+                sim.run_steps(&ctx, 1).expect("step");
+                let p = sim.patches(&ctx).expect("readback");
+                if p.iter().filter(|p| measured(p)).count() >= 100 {
+                    return p;
+                }
+            }
+            panic!("{direction:?}: no patches past the slab after 400 steps");
+        };
+        let (with, without) = (patches(true), patches(false));
+        assert_eq!(with.len(), without.len(), "the same steps and splits");
+        let ratios: Vec<f32> =
+            with.iter().zip(&without).filter(|(p, _)| measured(p)).map(|(p, q)| p.flux[0] / q.flux[0]).collect();
+        let (lo, hi) = ratios.iter().fold((f32::MAX, f32::MIN), |(l, h), &r| (l.min(r), h.max(r)));
+        let cos_i = -direction[1] as f64;
+        let expected = (1.0 - prism::frame::gpu_scene::fresnel_dielectric(cos_i, 1.0 / 1.5)).powi(2) as f32;
+        eprintln!(
+            "{direction:?}: {} patches, with / without Fresnel {lo:.5}..{hi:.5}, closed form {expected:.5}",
+            ratios.len()
+        );
+        assert!((lo - expected).abs() < 1e-3 && (hi - expected).abs() < 1e-3, "{lo}..{hi} vs {expected}");
+    }
+    common::assert_clean_teardown(ctx);
 }

@@ -253,6 +253,7 @@ fn every_setting_of_the_light_simulation_runs_it_again() {
         "render.eikonal.float_atomics=false",
         "render.eikonal.sigma=0.5",
         "render.eikonal.voxelization=\"highest_energy\"",
+        "render.eikonal.light_fresnel=true",
     ] {
         after.push(change);
         running.update(&common::scene("eikonal_sphere", SIZE, &after)).unwrap();

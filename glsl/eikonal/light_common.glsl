@@ -12,6 +12,10 @@ layout(std430, set = 1, binding = LIGHT_BINDING_SPILL) buffer Spill { Patch spil
 layout(set = 1, binding = LIGHT_BINDING_FIELD) uniform sampler3D field;
 // (sigma_a + sigma_s RGB per metre, HG g) of src/scene/volume_sources.rs, over the VOLUME's box.
 layout(set = 1, binding = LIGHT_BINDING_EXTINCTION) uniform sampler3D extinction_map;
+// The view renderer's boundary band (alpha of its emission volume) and the reflectance
+// factor (alpha of its albedo volume), over the VOLUME's box: the Fresnel loss (light_step.glsl).
+layout(set = 1, binding = LIGHT_BINDING_BAND) uniform sampler3D band_map;
+layout(set = 1, binding = LIGHT_BINDING_REFLECTANCE) uniform sampler3D reflectance_map;
 // The additive accumulator of the track-length irradiance estimate (light_step.glsl): per
 // voxel of the irradiance volume six f32 sums, in six slabs along y: 0..2 the scalar
 // irradiance R, G, B (W/m^2), 3..5 the vector irradiance sum_j (E_r + E_g + E_b)_j l_j.
@@ -59,6 +63,7 @@ layout(constant_id = 17) const uint KEEP_CROSSED = 0u;     // 1: keep patches pa
 layout(constant_id = 18) const uint INTEGRATOR = EIKONAL_EULER;
 layout(constant_id = 20) const uint AIR_FACES = 0u;        // wavefront faces with skipped patches
 layout(constant_id = 21) const uint HIGHEST_ENERGY = 0u;   // 1: the paper's voxelization (below)
+layout(constant_id = 22) const uint FRESNEL = 0u;          // 1: Fresnel loss at boundary bands
 
 const vec3 VOL_MIN = vec3(VOL_MIN_X, VOL_MIN_Y, VOL_MIN_Z);
 const vec3 VOL_MAX = vec3(VOL_MAX_X, VOL_MAX_Y, VOL_MAX_Z);

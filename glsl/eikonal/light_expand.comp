@@ -70,7 +70,8 @@ void main() {
         int idx[4] = int[4](b, b + 1, b + 4, b + 3);
         for (int c = 0; c < 4; ++c) {
             q[k].x[c] = vec4(gx[idx[c]], gw[idx[c]]);
-            q[k].v[c] = vec4(gv[idx[c]], 0.0);
+            // w: the Fresnel run in progress (light_step.glsl), by slot: the quarters continue it.
+            q[k].v[c] = vec4(gv[idx[c]], p.v[c].w);
         }
     }
     uint k = min(pair.y, 3u);

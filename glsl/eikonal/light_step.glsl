@@ -28,8 +28,11 @@
 // - section 5.2.3: classify it 0 (eliminate: below the energy threshold, leaving the volume,
 //   or its orientation flipped against its direction = it crossed a wavefront singularity,
 //   unless KEEP_CROSSED), 1 (retain) or 4 (tessellate: its corners span more than one voxel
-//   along an axis).
+//   along an axis);
+// - with FRESNEL (render.eikonal.light_fresnel), the Fresnel transmission factor tau of
+//   Eq. 5's T(t) on the light's side (`fresnel_loss`).
 #include "light_common.glsl"
+#include "fresnel.glsl"
 layout(local_size_x = LIGHT_GROUP) in;
 
 void rhs(vec3 x, vec3 v, out vec3 dx, out vec3 dv) {
@@ -64,6 +67,64 @@ bool heads_into_box(vec3 o, vec3 d) {
     vec3 lo = min(t0, t1), hi = max(t0, t1);
     float near = max(max(lo.x, lo.y), lo.z), far = min(min(hi.x, hi.y), hi.z);
     return near <= far && far > 0.0;
+}
+
+// The boundary band at x (nearest voxel): where the smoothed index crosses a jump.
+bool in_band(vec3 x) {
+    ivec3 size = textureSize(band_map, 0);
+    vec3 u = (x - VOL_MIN) / (VOL_MAX - VOL_MIN) * vec3(size);
+    if (any(lessThan(u, vec3(0.0))) || any(greaterThanEqual(u, vec3(size)))) return false;
+    return texelFetch(band_map, ivec3(u), 0).a > 0.5;
+}
+
+float band_reflectance(vec3 x) {
+    ivec3 size = textureSize(reflectance_map, 0);
+    ivec3 q = clamp(ivec3((x - VOL_MIN) / (VOL_MAX - VOL_MIN) * vec3(size)), ivec3(0), size - 1);
+    return texelFetch(reflectance_map, q, 0).a;
+}
+
+// The flux a patch keeps at the end of a run inside a band: the run began with the mean
+// optical direction va (|va| = n_a) and ends with vb. Across the run n dx/ds keeps its
+// component along the boundary (Snell), so vb - va is along the boundary's normal; if the
+// patch crossed (it moves the same way along the normal at both ends) it keeps
+// 1 - rho F(theta_a, n_a / n_b); if the ray equation turned it back (total internal
+// reflection) nothing is lost.
+float fresnel_transmission(vec3 va, vec3 vb, float rho) {
+    vec3 N = vb - va;
+    if (dot(N, N) < 1e-12) return 1.0;
+    N = normalize(N);
+    if (!(dot(va, N) * dot(vb, N) > 0.0)) return 1.0;
+    float na = length(va), nb = length(vb);
+    float F = rho * fresnel_dielectric(abs(dot(va, N)) / na, na / max(nb, 1e-3));
+    return 1.0 - clamp(F, 0.0, 1.0);
+}
+
+// The Fresnel loss of one step from mid0 (mean optical direction v0) to mid (v1), as the view
+// renderer's march splits a band into monotone runs of the index (glsl/eikonal/view.frag:
+// a thin wall, or two faces whose bands merge, is two runs, up then down). The run in
+// progress is the optical direction where it began, in v[1..3].w (0: none); its direction of
+// change is the sign of n(mid0) - n_a. A run ends where the band does (at mid) or where the
+// index turns (at mid0, where the next run begins), unless the index has changed by less
+// than MIN_JUMP over it: on the plateau inside a region the field's rounding wobbles, and the
+// normal vb - va of such a run is noise, which at a grazing angle would give F near 1.
+const float MIN_JUMP = 1e-3;
+void fresnel_loss(inout Patch p, vec3 mid0, vec3 v0, vec3 mid, vec3 v1) {
+    vec3 va = vec3(p.v[1].w, p.v[2].w, p.v[3].w);
+    bool band = in_band(mid);
+    if (dot(va, va) == 0.0) {
+        if (band) va = v0;
+    } else {
+        float n0 = length(v0), n1 = length(v1), na = length(va);
+        bool turned = (n0 - na) * (n1 - n0) < 0.0;
+        vec3 vb = turned ? v0 : v1;
+        if (!band || (turned && abs(length(vb) - na) >= MIN_JUMP)) {
+            if (abs(length(vb) - na) >= MIN_JUMP) p.flux.rgb *= fresnel_transmission(va, vb, band_reflectance(mid0));
+            va = band ? v0 : vec3(0.0);
+        }
+    }
+    p.v[1].w = va.x;
+    p.v[2].w = va.y;
+    p.v[3].w = va.z;
 }
 
 // Track-length deposit of `flux` (W) over the segment a -> b (section 5.2.2, see the top).
@@ -115,6 +176,7 @@ void main() {
         return;
     }
     vec3 mid0 = patch_mid(p);
+    vec3 v0 = 0.25 * (p.v[0].xyz + p.v[1].xyz + p.v[2].xyz + p.v[3].xyz);
     for (int c = 0; c < 4; ++c) {
         vec3 x = p.x[c].xyz, v = p.v[c].xyz;
         advance(x, v);
@@ -122,6 +184,12 @@ void main() {
         p.v[c].xyz = v;
     }
     vec3 mid = patch_mid(p);
+    if (FRESNEL != 0u) {
+        // The mean direction of travel with the field's index at the midpoint as its length
+        // (the integrator keeps |v| = n only to its order).
+        vec3 v1 = p.v[0].xyz + p.v[1].xyz + p.v[2].xyz + p.v[3].xyz;
+        fresnel_loss(p, mid0, normalize(v0) * index_at(mid0), mid, normalize(v1) * index_at(mid));
+    }
     // Eq. 18 with the extinction volume (sigma_r = sigma_a + sigma_s, Eq. 5).
     vec3 sigma = extinction_at(mid);
     if (any(greaterThan(sigma, vec3(0.0)))) {

@@ -1079,6 +1079,14 @@ params! {
         /// / voxel volume, splatted trilinearly; "highest_energy" is the paper's, one ray per
         /// voxel, the one of highest dE = flux / area (Eq. 17). docs/ACCURACY.md compares them.
         voxelization: LightVoxelization = LightVoxelization::TrackLength;
+        /// Fresnel loss in the light transport: a patch crossing a boundary band (the view
+        /// renderer's, where the smoothed index crosses a jump) keeps the transmitted share
+        /// 1 - rho F of its flux, F the exact Fresnel reflectance for unpolarised light between
+        /// the indices at the band's ends and rho the region's reflectance factor: the
+        /// factor tau of Eq. 5's T(t) (section 4.1) on the light's side. false, the default,
+        /// transmits everything, as the paper's light simulator does (sections 4.2, 5.2 leave
+        /// the wavefront's flux to absorption alone). docs/ACCURACY.md compares them.
+        light_fresnel: bool = false;
         /// Steps of the patch list between two compactions (the HistoPyramid and the output
         /// generator, section 5.2.3; glsl/eikonal/light_step.glsl): after the first, a patch
         /// steps on only while it is retained, so every patch takes the same steps as with a

@@ -557,6 +557,8 @@ pub struct LightSim {
     resolve: ComputePipeline,
     field_id: ImageId,
     extinction_id: ImageId,
+    /// The boundary band and its reflectance factor (the Fresnel loss).
+    band_ids: [ImageId; 2],
     /// Which list holds the current patches.
     current: usize,
     /// Steps of the current run.
@@ -769,6 +771,8 @@ impl LightSim {
                 .storage_image(LIGHT_BINDING_DIRECTION, &direction)
                 .storage(crate::LIGHT_BINDING_AIR_FACES, &air_faces)
                 .storage(crate::LIGHT_BINDING_AIR_SKIP, &air_skip)
+                .sampled(crate::LIGHT_BINDING_BAND, &textures.emission, sampler)
+                .sampled(crate::LIGHT_BINDING_REFLECTANCE, &textures.albedo, sampler)
         };
         let sets = Bindings::build_each(ctx, "eikonal_light", vec![set(0), set(1)])?;
 
@@ -791,6 +795,8 @@ impl LightSim {
             ("INTEGRATOR", Spec::U32(integrator)),
             ("AIR_FACES", Spec::U32(air_count)),
             ("HIGHEST_ENERGY", Spec::U32(u32::from(highest))),
+            // Only where the volume has a boundary band (real material volumes).
+            ("FRESNEL", Spec::U32(u32::from(params.light_fresnel && textures.materials))),
         ]
         .into_iter()
         .chain(box_specs(volume_names, volume.min, volume.max))
@@ -862,6 +868,7 @@ impl LightSim {
             resolve,
             field_id: textures.field_id,
             extinction_id: textures.extinction_id,
+            band_ids: [textures.emission_id, textures.albedo_id],
             current: 0,
             steps_taken: 0,
             max_steps,
@@ -950,6 +957,8 @@ impl LightSim {
                 .write(hp.state_id, Access::ComputeWrite)
                 .read(self.field_id, Access::ComputeSampled)
                 .read(self.extinction_id, Access::ComputeSampled)
+                .read(self.band_ids[0], Access::ComputeSampled)
+                .read(self.band_ids[1], Access::ComputeSampled)
                 .read(self.irradiance_id, Access::ComputeRead)
                 .write(src, Access::ComputeWrite)
                 // Read too: later substeps step only the patches still retained.
@@ -1407,6 +1416,7 @@ fn simulation_settings(p: &EikonalParams) -> impl std::fmt::Debug {
         p.light_dt,
         (p.light_integrator, p.light_substeps),
         (p.max_patches, p.tile_patches, p.keep_crossed, p.skip_air, p.voxelization),
+        p.light_fresnel,
         (p.light_patches, p.light_below, p.light_side),
         p.float_atomics,
     )
