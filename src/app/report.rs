@@ -450,18 +450,30 @@ impl Ranking {
             };
             writeln!(
                 md,
-                "| {} | {} | {:+.5} | {:.5} | {:+.5} | {:+.4} | {:.4} | {ranked} |",
+                "| {} | {} | {} | {} | {} | {} | {} | {ranked} |",
                 i + 1,
                 label(i),
-                flip.difference,
-                flip.standard_error,
-                flip.bias,
-                a - b,
-                rmse_error
+                digits(flip.difference, 5, true),
+                digits(flip.standard_error, 5, false),
+                digits(flip.bias, 5, true),
+                digits(a - b, 4, true),
+                digits(rmse_error, 4, false)
             )?;
         }
         writeln!(md)?;
         Ok(())
+    }
+}
+
+/// `v` with `decimals` decimals, or with two significant digits where those would show none
+/// of it (a ranked difference of 3e-6 must not read as 0).
+fn digits(v: f64, decimals: usize, signed: bool) -> String {
+    let shown = v.abs() >= 0.5 * 10f64.powi(-(decimals as i32)) || v == 0.0;
+    match (shown, signed) {
+        (true, true) => format!("{v:+.decimals$}"),
+        (true, false) => format!("{v:.decimals$}"),
+        (false, true) => format!("{v:+.1e}"),
+        (false, false) => format!("{v:.1e}"),
     }
 }
 
@@ -817,6 +829,15 @@ mod tests {
             p.summary_line("a", "refraction").unwrap(),
             "| a | refraction | `wyman` | 20.00 | – | 0.1000 (0.0950–0.1000) | 0.0400 | dominated |"
         );
+    }
+
+    /// Differences too small for the table's decimals keep two significant digits.
+    #[test]
+    fn small_differences_keep_their_digits() {
+        assert_eq!(super::digits(0.0504, 4, true), "+0.0504");
+        assert_eq!(super::digits(-0.00003, 4, true), "-3.0e-5");
+        assert_eq!(super::digits(0.000004, 5, false), "4.0e-6");
+        assert_eq!(super::digits(0.0, 4, false), "0.0000");
     }
 
     /// A kept section gains the file's provenance line; a placeholder never does (it was not
