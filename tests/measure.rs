@@ -442,9 +442,21 @@ fn report_on_a_tiny_spec_writes_the_summary_and_equal_time_columns() {
     let head = md.lines().find(|l| l.starts_with("| # | setting | frame ms |")).expect(&md);
     assert!(head.ends_with("| verdict | HDR-FLIP mean | HDR-FLIP p95 | mask HDR-FLIP mean |"), "{head}");
     let cells = |l: &str| l.matches(" |").count();
-    let rows: Vec<&str> = md.lines().filter(|l| l.starts_with("| 1 | ") || l.starts_with("| 2 | ")).collect();
+    // The rows of the table under `head`: up to the first line that is not a row.
+    let table = |head: &str| -> Vec<String> {
+        md.lines().skip_while(|l| *l != head).skip(2).take_while(|l| l.starts_with("| ")).map(String::from).collect()
+    };
+    let rows = table(head);
     assert_eq!(rows.len(), 2, "{md}");
     assert!(rows.iter().all(|r| cells(r) == cells(head)), "{head}\n{rows:?}");
+    // The ranking: the other setting against the best by FLIP mean, paired against the shared
+    // reference (src/metrics/paired.rs), one row as wide as its header.
+    assert!(md.contains("Ranking against the best by FLIP mean, #"), "{md}");
+    let ranking = md.lines().find(|l| l.starts_with("| # | setting | FLIP mean − best |")).expect(&md);
+    let ranked = table(ranking);
+    assert_eq!(ranked.len(), 1, "{md}");
+    assert!(cells(&ranked[0]) == cells(ranking), "{ranking}\n{ranked:?}");
+    assert!(["by FLIP and RMSE |", "by FLIP |", "by RMSE |", "within noise |"].iter().any(|v| ranked[0].ends_with(v)));
     // The time columns and the caption that says what each includes.
     assert!(
         md.contains("| frame ms | per change ms |")
