@@ -248,6 +248,10 @@ pub fn run(args: ReportArgs) -> Result<()> {
             }
         }
     }
+    // In the spec's order, whichever entries were measured now.
+    summaries.sort_by_key(|s| {
+        spec.entry.iter().position(|e| e.scene == s.scene && entry_effect(e) == Some(s.effect.as_str()))
+    });
     head.push_str(&summary_table(&summaries));
     if let Some(block) = existing.as_deref().and_then(hand_written) {
         writeln!(head, "{block}\n")?;
