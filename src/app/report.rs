@@ -206,7 +206,7 @@ pub fn run(args: ReportArgs) -> Result<()> {
             }
         }
         let name = format!("{stem}-images.png");
-        written.push(output::write_png(outputs.prepare(&assets.join(&name))?, 3 * w, h, &strip)?);
+        written.push(output::write_png_rgb(outputs.prepare(&assets.join(&name))?, 3 * w, h, &strip)?);
         writeln!(
             md,
             "![{}](accuracy/{name})\n\n*Left to right: the technique, the reference, the FLIP error map.*\n",
