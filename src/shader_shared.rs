@@ -19,6 +19,19 @@ shared_constants! {
     MAX_LIGHTS: u32 = 4;
     SHADOW_LAYERS_PER_LIGHT: u32 = 6;
 
+    // The scene's environment and lights as the shading passes' specialisation constants
+    // ENVIRONMENT, LIGHT_COUNT and LIGHT_KINDS (glsl/include/common.glsl; set from the scene by
+    // src/technique/mod.rs `scene_specialization`). The *_ANY values, the shaders' defaults,
+    // decide per lookup from the frame's data.
+    ENVIRONMENT_ANY: u32 = 0;
+    ENVIRONMENT_CONSTANT: u32 = 1;
+    ENVIRONMENT_GRID: u32 = 2;
+    ENVIRONMENT_MAP: u32 = 3;
+    LIGHT_COUNT_ANY: u32 = 255;
+    LIGHT_KINDS_POINT: u32 = 1;
+    LIGHT_KINDS_DIRECTIONAL: u32 = 2;
+    LIGHT_KINDS_ANY: u32 = 3;
+
     // The adaptive tone map's reduction kernels (glsl/tonemap/*.comp; src/technique/baseline/tonemap.rs).
     // A workgroup of TONEMAP_GROUP^2 invocations, each summing a TONEMAP_BLOCK^2
     // block of pixels in a loop: a tile of (TONEMAP_GROUP TONEMAP_BLOCK)^2 pixels. Few

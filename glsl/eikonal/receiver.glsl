@@ -13,7 +13,7 @@
 #define EIKONAL_RECEIVER_GLSL
 
 bool eikonal_receives(vec3 p, vec3 lo, vec3 hi) {
-    return all(greaterThanEqual(p, lo)) && all(lessThan(p, hi)) && frame.info.x != 0u;
+    return all(greaterThanEqual(p, lo)) && all(lessThan(p, hi)) && light_count() != 0u;
 }
 
 // n: unit normal turned towards the viewer. Outside the irradiance volume: deferred shading.
@@ -25,10 +25,10 @@ vec3 eikonal_receiver(vec3 p, vec3 n, vec3 albedo, vec3 lo, vec3 hi) {
     // light, a weighted mean of the lights' visibilities with several).
     vec3 direct = vec3(0.0);
     vec3 direct_visible = vec3(0.0);
-    for (uint i = 0u; i < frame.info.x; ++i) {
+    for (uint i = 0u; i < light_count(); ++i) {
         GpuLight l = frame.lights[i];
         vec3 wi, e;
-        if (uint(l.position.w + 0.5) == LIGHT_POINT) {
+        if (is_point_light(l)) {
             vec3 d = l.position.xyz - p;
             float r2 = max(dot(d, d), 1e-30);
             wi = d * inversesqrt(r2);

@@ -33,9 +33,9 @@ void main() {
     // though the chart, and so the light map, is the same for both sides of a surface.
     vec3 n = dot(nm.xyz, camera_ray(in_uv)) > 0.0 ? -nm.xyz : nm.xyz;
     bool lit_side = false;
-    for (uint i = 0u; i < frame.info.x; ++i) {
+    for (uint i = 0u; i < light_count(); ++i) {
         GpuLight l = frame.lights[i];
-        vec3 wi = uint(l.position.w + 0.5) == LIGHT_POINT ? l.position.xyz - p : -l.position.xyz;
+        vec3 wi = is_point_light(l) ? l.position.xyz - p : -l.position.xyz;
         lit_side = lit_side || dot(n, wi) > 0.0;
     }
     if (!lit_side) discard;

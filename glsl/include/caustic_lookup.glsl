@@ -24,7 +24,7 @@ vec3 caustic_irradiance(uint i, vec3 p, vec3 n) {
     int k = int(CAUSTIC_FILTER);
     float taps = float((2 * k + 1) * (2 * k + 1));
     vec3 flux = vec3(0.0);
-    if (uint(l.position.w + 0.5) == LIGHT_POINT) {
+    if (is_point_light(l)) {
         vec3 d = p - l.position.xyz;
         float r2 = dot(d, d);
         vec3 a = abs(d);
@@ -101,7 +101,7 @@ vec3 caustic_radiance(vec3 p, vec3 n, uint object, vec3 albedo) {
     if (CAUSTICS != 0u) {
         // Caustics mapping (Shah et al. 2007): the caustic map's irradiance, Lambertian.
         vec3 caustic = vec3(0.0);
-        for (uint i = 0u; i < frame.info.x; ++i) caustic += caustic_irradiance(i, p, n);
+        for (uint i = 0u; i < light_count(); ++i) caustic += caustic_irradiance(i, p, n);
         radiance += albedo / PI * caustic;
     }
     if (PHOTON_RECTS != 0u) {

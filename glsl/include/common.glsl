@@ -3,6 +3,17 @@
 #define PRISM_COMMON_GLSL
 #include "prism_shared.glsl"
 
+// The scene's environment kind, light count and light kinds (src/technique/mod.rs
+// `scene_specialization` sets them for the shading passes). A CPU device (lavapipe) runs both
+// sides of every branch with lanes masked, and a loop's body at least once, so a lookup that
+// chose the environment kind or the light kind per call paid for every kind, and a scene
+// without lights paid for one light's shadow lookups: on sphere_nearby (one point light, a
+// constant environment) deferred shading took 2.5x its specialised time (docs/BENCHMARKS.md).
+// The defaults (*_ANY) decide from the frame's data, for the pipelines that do not set them.
+layout(constant_id = 200) const uint ENVIRONMENT = ENVIRONMENT_ANY;
+layout(constant_id = 201) const uint LIGHT_COUNT = LIGHT_COUNT_ANY;
+layout(constant_id = 202) const uint LIGHT_KINDS = LIGHT_KINDS_ANY;
+
 const float PI = 3.14159265358979323846;
 
 
@@ -49,10 +60,13 @@ vec3 grid_radiance(vec3 d) {
 }
 
 // Radiance from direction d: the lat-long map, or the grid's formula when the map is the 1x1
-// stand-in whose alpha is ENVIRONMENT_GRID_ALPHA (src/frame/gpu_scene.rs).
+// stand-in whose alpha is ENVIRONMENT_GRID_ALPHA (src/frame/gpu_scene.rs), or the 1x1 map's
+// texel (a constant environment).
 vec3 environment_lookup(sampler2D map, vec3 d) {
     d = normalize(d);
-    if (textureSize(map, 0) == ivec2(1)) {
+    if (ENVIRONMENT == ENVIRONMENT_CONSTANT) return texelFetch(map, ivec2(0), 0).rgb;
+    if (ENVIRONMENT == ENVIRONMENT_GRID) return grid_radiance(d);
+    if (ENVIRONMENT == ENVIRONMENT_ANY && textureSize(map, 0) == ivec2(1)) {
         vec4 c = texelFetch(map, ivec2(0), 0);
         return c.a == ENVIRONMENT_GRID_ALPHA ? grid_radiance(d) : c.rgb;
     }

@@ -29,6 +29,15 @@ layout(set = 0, binding = BINDING_PHOTON_RECTS, std430) readonly buffer PhotonRe
 
 uint material_kind(uint m) { return kind_of(materials[m]); }
 
+// The number of lights, and whether light l is a point light, from the specialisation
+// constants where they are set (common.glsl), else from the frame's data.
+uint light_count() { return LIGHT_COUNT == LIGHT_COUNT_ANY ? frame.info.x : LIGHT_COUNT; }
+bool is_point_light(GpuLight l) {
+    if (LIGHT_KINDS == LIGHT_KINDS_POINT) return true;
+    if (LIGHT_KINDS == LIGHT_KINDS_DIRECTIONAL) return false;
+    return uint(l.position.w + 0.5) == LIGHT_POINT;
+}
+
 // View-space direction through uv with z = -1 (pixel centre ((i+0.5)/W, (j+0.5)/H), j = 0
 // the top row). Built from the projection's diagonal rather than by unprojecting a point:
 // the near plane sits 1e-5 scene extents from the eye, and unprojecting a point there in

@@ -14,7 +14,7 @@
 float visibility(uint i, vec3 p, vec3 n) {
     GpuLight l = frame.lights[i];
     float layer = l.intensity.w;
-    if (uint(l.position.w + 0.5) == LIGHT_POINT) {
+    if (is_point_light(l)) {
         vec3 d = p - l.position.xyz;
         float dist = length(d);
         vec3 q = p + n * (l.shadow.z * dist);
@@ -35,11 +35,11 @@ float visibility(uint i, vec3 p, vec3 n) {
 // light's, with its shadow map.
 vec3 lit_irradiance(vec3 p, vec3 n, vec3 ambient) {
     vec3 irradiance = ambient;
-    for (uint i = 0u; i < frame.info.x; ++i) {
+    for (uint i = 0u; i < light_count(); ++i) {
         GpuLight l = frame.lights[i];
         vec3 wi;
         vec3 e;
-        if (uint(l.position.w + 0.5) == LIGHT_POINT) {
+        if (is_point_light(l)) {
             vec3 d = l.position.xyz - p;
             float r2 = max(dot(d, d), 1e-30);
             wi = d * inversesqrt(r2);

@@ -29,9 +29,9 @@ use glam::Vec3;
 
 use crate::frame::gpu_scene::GpuScene;
 use crate::frame::targets::Targets;
-use crate::gpu::{DescriptorSet, DescriptorSetLayout, GpuContext, Sampler};
+use crate::gpu::{DescriptorSet, DescriptorSetLayout, GpuContext, Sampler, Spec};
 use crate::graph::{Frame, FrameGraph, ImageId};
-use crate::scene::{Light, Material, Scene};
+use crate::scene::{Environment, Light, Material, Scene};
 
 pub mod baseline;
 pub mod caustics;
@@ -489,6 +489,40 @@ pub fn has(plan: &[PlannedPass], name: &str) -> bool {
 }
 
 pub use crate::frame::RenderError;
+
+/// The specialisation constants that describe the scene's environment and lights
+/// (glsl/include/common.glsl: ENVIRONMENT, LIGHT_COUNT, LIGHT_KINDS), for every pass that looks
+/// up the environment or lights diffuse surfaces. Compiled in, the lookups keep only the
+/// environment kind and the light kinds the scene has, and the light loop its exact count: a
+/// CPU device runs every side of a branch, and on sphere_nearby deferred shading took 2.5x its
+/// specialised time choosing among them per pixel (docs/BENCHMARKS.md). The environment, the
+/// number of lights and their kinds are all in the renderer's shared fingerprint
+/// (src/renderer/update.rs), so a change to any of them re-creates every pass with new values.
+pub fn scene_specialization(scene: &Scene) -> [(&'static str, Spec); 3] {
+    use crate::{
+        ENVIRONMENT_CONSTANT, ENVIRONMENT_GRID, ENVIRONMENT_MAP, LIGHT_KINDS_ANY, LIGHT_KINDS_DIRECTIONAL,
+        LIGHT_KINDS_POINT,
+    };
+    let environment = match &scene.environment {
+        Environment::Constant(_) => ENVIRONMENT_CONSTANT,
+        Environment::Grid => ENVIRONMENT_GRID,
+        // A 1x1 image is the constant its one texel holds (the lookup's texel fetch).
+        Environment::Image { width: 1, height: 1, .. } => ENVIRONMENT_CONSTANT,
+        Environment::Image { .. } => ENVIRONMENT_MAP,
+    };
+    let kinds = scene.lights.iter().fold(0, |k, l| {
+        k | match l {
+            Light::Point { .. } => LIGHT_KINDS_POINT,
+            Light::Directional { .. } => LIGHT_KINDS_DIRECTIONAL,
+        }
+    });
+    [
+        ("ENVIRONMENT", Spec::U32(environment)),
+        ("LIGHT_COUNT", Spec::U32(scene.lights.len() as u32)),
+        // Without lights the loop never runs; either kind compiles.
+        ("LIGHT_KINDS", Spec::U32(if kinds == 0 { LIGHT_KINDS_ANY } else { kinds })),
+    ]
+}
 
 /// `[render.<technique>]` parsed into its typed parameters, as a [`RenderError`].
 pub fn params<T>(

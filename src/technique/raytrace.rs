@@ -83,6 +83,7 @@ use crate::shader_structs::AccumulatePush;
 use crate::shader_structs::RefPush;
 use crate::shader_structs::RefUniforms;
 use crate::technique::baseline::fullscreen::{fragment_set, FullscreenDesc, FullscreenPass};
+use crate::technique::scene_specialization;
 use crate::technique::{
     cache_key, dielectric_names, diffuse_names, list, metal_names, params, specular_names, tables_and_placement,
     FrameInputs, Inputs, PlannedPass, Registration, RenderError, Setup, Stage, Technique,
@@ -387,12 +388,13 @@ fn create(s: &mut Setup<'_>, effect: Effect) -> Result<Box<dyn Technique>, Rende
     let refraction = [("MODE", Spec::U32(SPECULAR_MODE_REFRACTION))];
     let reflection = [("MODE", Spec::U32(SPECULAR_MODE_REFLECTION))];
     let frame = [("MODE", Spec::U32(RAYTRACE_MODE_FRAME))];
-    let (shader, spec): (_, &[_]) = match effect {
+    let (shader, mode): (_, &[_]) = match effect {
         Effect::Refraction => ("raytrace/raytrace.frag", &refraction),
         Effect::Reflection => ("raytrace/raytrace.frag", &reflection),
         Effect::Caustics => ("raytrace/caustics.frag", &[]),
         Effect::Volume => ("raytrace/raytrace.frag", &frame),
     };
+    let spec = &[mode, &scene_specialization(scene)[..]].concat();
     let mut uniforms = geometry.uniforms(scene, s.gpu, p.max_depth).with_cutoff(p.cutoff);
     let count = if has_caustics(scene) { p.photons_per_frame } else { 0 };
     // The reference's photon map for `count` photons (src/reference/mod.rs, Reference::new):

@@ -8,8 +8,8 @@ use crate::graph::{Frame, ImageId};
 use crate::scene::techniques::CausticsMapParams;
 use crate::scene::Scene;
 use crate::technique::{
-    diffuse_names, list, params, tables, FrameInputs, Inputs, PlannedPass, Registration, RenderError, Setup, Stage,
-    Technique,
+    diffuse_names, list, params, scene_specialization, tables, FrameInputs, Inputs, PlannedPass, Registration,
+    RenderError, Setup, Stage, Technique,
 };
 
 use super::fullscreen::{fragment_set, FullscreenDesc, FullscreenPass};
@@ -49,7 +49,16 @@ fn create(s: &mut Setup<'_>) -> Result<Box<dyn Technique>, RenderError> {
     // Whether any object is diffuse is part of the shared fingerprint (the materials' kinds):
     // a change re-creates the renderer, and this pass with it.
     let diffuse = !diffuse_names(s.scene).is_empty();
-    Ok(Box::new(DeferredShadingPass::new(s.ctx, s.frame_layout, s.targets, s.nearest, shadowed, caustics, diffuse)?))
+    Ok(Box::new(DeferredShadingPass::new(
+        s.ctx,
+        s.frame_layout,
+        s.targets,
+        s.nearest,
+        shadowed,
+        caustics,
+        diffuse,
+        scene_specialization(s.scene),
+    )?))
 }
 
 /// The caustic textures a pass shading diffuse receivers reads (glsl/include/caustic_lookup.glsl),
@@ -128,9 +137,11 @@ impl DeferredShadingPass {
         shadowed: bool,
         caustics: CausticReads,
         diffuse: bool,
+        scene_specs: [(&'static str, Spec); 3],
     ) -> GpuResult<Self> {
         let mut specialization = caustics.specialization().to_vec();
         specialization.push(("DIFFUSE", Spec::U32(u32::from(diffuse))));
+        specialization.extend(scene_specs);
         let pass = FullscreenPass::new(
             ctx,
             &FullscreenDesc {

@@ -7,6 +7,7 @@
 use crate::gpu::{GpuResult, Spec};
 use crate::graph::Frame;
 use crate::scene::{Material, Scene};
+use crate::technique::scene_specialization;
 use crate::technique::{
     dielectric_names, list, metal_names, no_inputs, FrameInputs, Inputs, PlannedPass, Registration, Setup, Stage,
     Technique,
@@ -104,7 +105,11 @@ impl SpecularSinglePass {
                 name,
                 "specular/single.frag",
                 s.targets,
-                &[("MODE", Spec::U32(spec)), ("DISPERSION", Spec::U32(u32::from(has_dispersion(s.scene))))],
+                &[
+                    &[("MODE", Spec::U32(spec)), ("DISPERSION", Spec::U32(u32::from(has_dispersion(s.scene))))],
+                    &scene_specialization(s.scene)[..],
+                ]
+                .concat(),
             ),
             s.targets.gbuffer(fragment_set(), s.nearest, false),
             s.frame_layout,

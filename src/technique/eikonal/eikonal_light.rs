@@ -57,6 +57,7 @@ use crate::gpu::{
 use crate::graph::{Bindings, BoundSet, BufferId, Frame, FrameGraph, ImageId};
 use crate::scene::techniques::{EikonalParams, LightIntegrator, LightVoxelization};
 use crate::scene::{IndexProfile, Light, Volume};
+use crate::technique::scene_specialization;
 use crate::{
     EIKONAL_EULER, EIKONAL_GROUP, EIKONAL_RK4, LIGHT_BINDING_ACCUM, LIGHT_BINDING_DIRECTION, LIGHT_BINDING_DST,
     LIGHT_BINDING_FIELD, LIGHT_BINDING_IRRADIANCE, LIGHT_BINDING_SRC,
@@ -1470,7 +1471,7 @@ impl EikonalLight {
                 EIKONAL_LIGHT,
                 "eikonal/light_receiver.frag",
                 targets,
-                &box_specs(LIGHT_BOX, lo, hi),
+                &[&box_specs(LIGHT_BOX, lo, hi)[..], &scene_specialization(s.scene)[..]].concat(),
             ),
             set,
             s.frame_layout,

@@ -21,6 +21,7 @@ use crate::gpu::{
 use crate::graph::{Bindings, Frame, FrameGraph};
 use crate::scene::techniques::{EikonalParams, HardwareFilter, Integrator};
 use crate::scene::{Scene, Volume};
+use crate::technique::scene_specialization;
 use crate::technique::{
     describe_lights, list, params, registration, FrameInputs, PlannedPass, Registration, RenderError, Setup, Stage,
     Technique,
@@ -310,7 +311,8 @@ impl EikonalPass {
                 None => None,
             };
             let rects = NearbyRects::around(origin, &kept, scene);
-            NearbyImpostors::build(ctx, EIKONAL_NEARBY, &desc, rects, graph, frame_layout, shading)?
+            let scene_specs = scene_specialization(scene);
+            NearbyImpostors::build(ctx, EIKONAL_NEARBY, &desc, rects, graph, frame_layout, shading, &scene_specs)?
         };
         // The device's trilinear filtering of the field: one slab only, and a format the device
         // filters linearly (else the f32 interpolation of eight fetches).
@@ -354,6 +356,7 @@ impl EikonalPass {
         .into_iter()
         .chain(box_specs(box_names, volume.min, volume.max))
         .chain(box_specs(LIGHT_BOX, light_min, light_max))
+        .chain(scene_specialization(scene))
         .collect();
         let set = fragment_set()
             .sampled(BINDING_GBUF_DEPTH, &targets.depth, nearest)

@@ -49,6 +49,7 @@ use crate::scene::techniques::{ImpostorFresnel, ImpostorMaps, ImpostorOracle, Im
 use crate::scene::{Analytic, Material, Scene};
 use crate::shader_structs::{ImpostorProbePush, MapPush, ShadePush};
 use crate::technique::refraction::oracle::Oracle;
+use crate::technique::scene_specialization;
 use crate::technique::{
     in_stage, list, params, reflecting_objects, refracting_objects, registration, FrameInputs, OnceCost, PlannedPass,
     Registration, RenderError, Setup, Stage, Technique,
@@ -270,11 +271,14 @@ impl ImpostorMap {
             (MapContent::LightmapUv, _) => "impostor/uv_map.frag",
         };
         let blend = vec![Blend::Off; colors.len()];
+        let scene_specs = scene_specialization(scene);
         let pipeline = GraphicsPipeline::new(
             ctx,
             &GraphicsPipelineDesc {
                 // Quads are one-sided and the reference point may sit on either side.
                 blend: &blend,
+                // The environment and lights of the shading in the environment maps.
+                specialization: if content == MapContent::Environment { &scene_specs } else { &[] },
                 ..GraphicsPipelineDesc::mesh(name, "impostor/map.vert", fragment_shader, DepthState::LESS)
             },
             &[frame_layout],
@@ -538,6 +542,7 @@ impl ShadePass {
         oracle: Option<&Oracle>,
     ) -> GpuResult<Self> {
         let (ctx, targets) = (s.ctx, s.targets);
+        let scene_specs = scene_specialization(s.scene);
         let target = RenderTarget::new(ctx, name, &[&targets.hdr], None, false)?;
         // Cube maps are filtered: bilinear distances follow planar walls between texels
         // (§2.1 assumes the surface planar between samples); the G-buffer is fetched per texel.
@@ -585,6 +590,9 @@ impl ShadePass {
                     ("ITERATIONS", Spec::U32(params.iterations)),
                     ("DISTANCE_CHANNEL", Spec::U32(channel)),
                     ("FRESNEL_EXACT", Spec::U32(u32::from(params.fresnel == ImpostorFresnel::Exact))),
+                    scene_specs[0],
+                    scene_specs[1],
+                    scene_specs[2],
                 ],
                 ..GraphicsPipelineDesc::fullscreen(name, &fragment_shader)
             },

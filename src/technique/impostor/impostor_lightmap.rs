@@ -53,6 +53,7 @@ use crate::scene::techniques::{ImpostorLightmapParams, ImpostorParams};
 use crate::scene::{Light, Material, Scene};
 use crate::shader_structs::{CausticPush, LightmapApplyPush, LightmapSplatPush};
 use crate::technique::impostor::distance_impostor::{object_bounds, record_maps, ImpostorMap, MapContent, MapDesc};
+use crate::technique::scene_specialization;
 use crate::technique::{
     dielectric_names, in_stage, list, params, record_kept, registration, specular_names, FrameInputs, PlannedPass,
     Regeneration, Registration, RenderError, Setup, Stage, Technique,
@@ -413,6 +414,7 @@ impl ImpostorLightmap {
             &GraphicsPipelineDesc {
                 blend: &[Blend::Additive],
                 vertex_shader: "impostor/lightmap_apply.vert",
+                specialization: &scene_specialization(scene),
                 ..GraphicsPipelineDesc::fullscreen(IMPOSTOR_LIGHTMAP_APPLY, "impostor/lightmap_apply.frag")
             },
             &[frame_layout, apply_set.layout()],

@@ -49,6 +49,7 @@
 //!
 //! The photon-buffer caustics (Hu & Qin §3) use [`NearbyRect`], [`receiver_objects`] and
 //! [`rect_for`] with their own O_R: keep those stable.
+use crate::technique::scene_specialization;
 use crate::technique::{record_kept, FrameInputs, Regeneration};
 use std::sync::Arc;
 
@@ -556,7 +557,7 @@ impl NearbyImpostors {
         // dielectric's TEX_k shows it refracting the environment only.
         let see_through = layout.rects.iter().map(|r| layout.levels == 0 && is_dielectric(scene, r.object)).collect();
         let rects = NearbyRects { layout, specular, lookup_set, back, see_through };
-        Self::build(ctx, name, desc, rects, graph, frame_layout, None)
+        Self::build(ctx, name, desc, rects, graph, frame_layout, None, &scene_specialization(scene))
     }
 
     /// No rectangles: a cleared 1x1 stand-in texture and an empty rectangle buffer, for
@@ -579,7 +580,7 @@ impl NearbyImpostors {
             search_steps: 8,
             max_iterations: 32,
         };
-        Self::build(ctx, name, &desc, NearbyRects::none(), graph, frame_layout, None)
+        Self::build(ctx, name, &desc, NearbyRects::none(), graph, frame_layout, None, &[])
     }
 
     /// Whether any rectangle exists (otherwise [`Self::record`] must not be called).
@@ -597,6 +598,7 @@ impl NearbyImpostors {
         graph: &mut FrameGraph,
         frame_layout: &DescriptorSetLayout,
         shading: Option<ImpostorShading<'_>>,
+        scene_specs: Specs<'_>,
     ) -> GpuResult<Self> {
         let NearbyRects { layout: nearby, specular, lookup_set, back: back_rects, see_through } = rects;
         let (rects, levels) = (&nearby.rects, nearby.levels);
@@ -683,8 +685,12 @@ impl NearbyImpostors {
             ("SEARCH_STEPS", Spec::U32(desc.search_steps)),
             ("MAX_ITERATIONS", Spec::U32(desc.max_iterations)),
         ];
-        let shading_spec: Vec<_> =
-            spec.iter().chain(shading.as_ref().map_or(&[][..], |sh| sh.specialization)).copied().collect();
+        let shading_spec: Vec<_> = spec
+            .iter()
+            .chain(shading.as_ref().map_or(&[][..], |sh| sh.specialization))
+            .chain(scene_specs)
+            .copied()
+            .collect();
         let mut layouts = vec![frame_layout, sets.layout()];
         layouts.extend(shading.as_ref().map(|sh| sh.set.layout()));
         let level_pipeline = |fragment_shader, specialization| {

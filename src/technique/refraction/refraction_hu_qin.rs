@@ -27,6 +27,7 @@ use crate::graph::Frame;
 use crate::scene::techniques::{BackFacing, DTStep, HuQinOracle, HuQinParams, RecursiveExit};
 use crate::scene::{Material, Scene};
 use crate::technique::baseline::specular_single::has_dispersion;
+use crate::technique::scene_specialization;
 use crate::technique::{
     in_stage, list, params, refracting_objects, registration, FrameInputs, PlannedPass, Registration, RenderError,
     Setup, Stage, Technique,
@@ -251,6 +252,7 @@ impl HuQinPass {
                 }),
             ),
         ];
+        specialization.extend(scene_specialization(scene));
         let fragment_shader = match &oracle {
             None => "refraction/hu_qin.frag",
             Some(_) => {

@@ -37,6 +37,7 @@ use crate::reference::TraceGeometry;
 use crate::scene::{Environment, Material, Scene};
 use crate::technique::baseline::deferred_shading::CausticReads;
 use crate::technique::baseline::fullscreen::{fragment_set, FullscreenDesc, FullscreenPass};
+use crate::technique::scene_specialization;
 use crate::technique::{
     dielectric_names, list, FrameInputs, Inputs, PlannedPass, Registration, RenderError, Setup, Stage, Technique,
 };
@@ -105,7 +106,12 @@ fn create(s: &mut Setup<'_>) -> Result<Box<dyn Technique>, RenderError> {
     let pass = FullscreenPass::new(
         ctx,
         // Overwrites only the pixels of the dielectrics.
-        &FullscreenDesc::over_hdr(REFRACTION_WATER, "refraction/water.frag", targets, &caustics.specialization()),
+        &FullscreenDesc::over_hdr(
+            REFRACTION_WATER,
+            "refraction/water.frag",
+            targets,
+            &[&caustics.specialization()[..], &scene_specialization(s.scene)[..]].concat(),
+        ),
         set,
         s.frame_layout,
     )?;

@@ -26,6 +26,7 @@ use crate::graph::Frame;
 use crate::scene::techniques::{BackSurface, WymanOracle, WymanParams};
 use crate::scene::{Material, Scene};
 use crate::technique::baseline::specular_single::has_dispersion;
+use crate::technique::scene_specialization;
 use crate::technique::{
     in_stage, list, params, refracting_objects, registration, FrameInputs, PlannedPass, Registration, RenderError,
     Setup, Stage, Technique,
@@ -143,6 +144,7 @@ impl WymanPass {
         let (b, f) = (&layers.layers[0], &layers.layers[1]);
         let tracer = oracle.as_ref().map(|o| o.buffers(s.gpu)).unwrap_or_default();
         let mut specialization = vec![("DISPERSION", Spec::U32(u32::from(has_dispersion(scene))))];
+        specialization.extend(scene_specialization(scene));
         let fragment_shader = match &oracle {
             None => "refraction/wyman.frag",
             Some(_) => {
