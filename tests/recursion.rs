@@ -268,7 +268,11 @@ fn recursion_against_the_reference_over_ball_a() {
 /// A must show through B what lies behind B, as if B were not there. Lit by the environment
 /// only (radiance 1, the light off), so that B casts no shadow and the scene with B moved away
 /// is the exact answer. At level 0 B's texture shows the environment (1) through B; at level 1
-/// the floor, wall and box of B's own rectangle set.
+/// the floor, wall and box of B's own rectangle set. The floor and wall have one albedo (0.3)
+/// here, not their checker: the checker's edges fall a texel differently in B's 256^2 texture
+/// than in the camera's pixels, an error of the texture's resolution that grows with the
+/// checker's contrast (0.148 RMSE over the changed pixels with the environment's irradiance
+/// at 0.59 pi on the floor, 0.377 at its exact pi), and is not what this test asks about.
 #[test]
 fn ior_one_ball_b_shows_what_lies_behind_it_at_level_one() {
     if !common::in_own_process() {
@@ -280,6 +284,8 @@ fn ior_one_ball_b_shows_what_lies_behind_it_at_level_one() {
         "lights.0.intensity=0",
         "materials.clear={type=\"dielectric\", ior=1.0}",
         "objects.4.material=\"clear\"",
+        "materials.checker.checker.a=0.3",
+        "materials.checker.checker.b=0.3",
     ];
     let render = |extra: &str| {
         let mut o = base.to_vec();
@@ -303,8 +309,10 @@ fn ior_one_ball_b_shows_what_lies_behind_it_at_level_one() {
     let n = changed.iter().filter(|&&m| m).count();
     let (c0, c1) = (masked_rmse(&d0, &without_b, &changed), masked_rmse(&d1, &without_b, &changed));
     eprintln!("B of ior 1, A's pixels vs the scene without B: RMSE depth 0 {e0:.4}, depth 1 {e1:.4}; over the {n} pixels that changed: {c0:.4}, {c1:.4}");
-    // Threshold: measured at 96^2 (lavapipe). See the eprintln; a recursion that does not
-    // reach B's texture changes no pixel (n = 0) or leaves the level-0 error.
+    // A recursion that does not reach B's texture changes no pixel (n = 0) or leaves the
+    // level-0 error (measured 0.63). With one albedo, what level 1 shows through B is what
+    // lies behind it, to rounding (measured 0.0000 over 76 pixels at 96^2, lavapipe); half of
+    // level 0's error would still pass a level that shows B's own texture half-way.
     assert!(n >= 20, "the recursion changed only {n} of A's pixels");
     assert!(c1 < 0.5 * c0, "level 1 should show what lies behind B: {c0} -> {c1}");
     assert!(e1 < e0, "{e0} -> {e1}");
