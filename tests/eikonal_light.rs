@@ -5,12 +5,13 @@
 mod common;
 
 use glam::{DVec3, Vec2, Vec3};
-use prism::scene::techniques::EikonalParams;
 use prism::scene::techniques::LightIntegrator;
+use prism::scene::techniques::{EikonalParams, HardwareFilter};
 use prism::scene::{IndexProfile, Light};
 use prism::technique::eikonal::eikonal_light::{
     float_atomics_supported, light_rk4_step, light_step, optical_path, Patch, StandaloneLight,
 };
+use prism::technique::eikonal::eikonal_view::filters_in_full_precision;
 use prism::technique::eikonal::histopyramid::{cpu_expand, gpu_expand};
 use prism::technique::eikonal::volume::{rk4_step, RayState};
 
@@ -1119,6 +1120,39 @@ fn float_atomic_deposits_equal_the_compare_and_swap_loop() {
     assert_eq!(float_stats.patch_steps, cas_stats.patch_steps, "the same simulation");
     assert!(rgb(&cas.e).iter().any(|&e| e > 0.0), "no light deposited: nothing compared");
     same_volumes("float-atomic", &float, &cas);
+    common::assert_no_validation_errors(&ctx);
+}
+
+/// The field through the device's trilinear filter (`hardware_filtering`, one fetch per
+/// sample) against the f32 interpolation of its eight voxels, where the device filters in full
+/// precision (the "auto" probe, eikonal_view::filters_in_full_precision: every weight within
+/// 1e-5, as f32 weights round to about 1e-7). Both integrate the same rays to rounding, so the
+/// volumes agree as two orders of the float additions do (1e-5 of the largest value) unless a
+/// patch's rounding moves its classification; the test asserts the same number of patch steps
+/// within 1e-5 and says which path it compared. On a device whose filter is coarser both runs
+/// take the f32 path.
+#[test]
+fn the_device_s_trilinear_filter_gives_the_f32_simulation() {
+    if !common::in_own_process() {
+        return;
+    }
+    let ctx = common::context(true);
+    let volume = lens_volume(32, &[]);
+    let light = directional(Vec3::new(0.2, -1.0, 0.1));
+    let run = |hardware_filtering: HardwareFilter| {
+        let params = EikonalParams { hardware_filtering, ..EikonalParams::default() };
+        let mut sim = StandaloneLight::new(&ctx, &params, &volume, &light).unwrap();
+        let stats = sim.run(&ctx).unwrap();
+        (stats, LightVolumes::read(&mut sim, &ctx))
+    };
+    let full = filters_in_full_precision(&ctx).unwrap();
+    eprintln!("the device's filter is {}in full precision", if full { "" } else { "not " });
+    let ((f32_stats, f32_path), (auto_stats, auto)) = (run(HardwareFilter::False), run(HardwareFilter::Auto));
+    let steps = |s: &prism::technique::eikonal::eikonal_light::LightStats| s.patch_steps as f64;
+    eprintln!("patch steps: f32 {} filtered {}", f32_stats.patch_steps, auto_stats.patch_steps);
+    assert!((steps(&auto_stats) - steps(&f32_stats)).abs() <= 1e-5 * steps(&f32_stats), "not the same simulation");
+    assert!(rgb(&f32_path.e).iter().any(|&e| e > 0.0), "no light deposited: nothing compared");
+    same_volumes("filtered", &auto, &f32_path);
     common::assert_no_validation_errors(&ctx);
 }
 

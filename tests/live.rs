@@ -254,6 +254,7 @@ fn every_setting_of_the_light_simulation_runs_it_again() {
         "render.eikonal.sigma=0.5",
         "render.eikonal.voxelization=\"highest_energy\"",
         "render.eikonal.light_fresnel=true",
+        "render.eikonal.hardware_filtering=\"false\"",
     ] {
         after.push(change);
         running.update(&common::scene("eikonal_sphere", SIZE, &after)).unwrap();

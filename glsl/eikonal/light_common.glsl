@@ -64,6 +64,7 @@ layout(constant_id = 18) const uint INTEGRATOR = EIKONAL_EULER;
 layout(constant_id = 20) const uint AIR_FACES = 0u;        // wavefront faces with skipped patches
 layout(constant_id = 21) const uint HIGHEST_ENERGY = 0u;   // 1: the paper's voxelization (below)
 layout(constant_id = 22) const uint FRESNEL = 0u;          // 1: Fresnel loss at boundary bands
+layout(constant_id = 23) const uint HARDWARE_FILTER = 0u;  // 1: the device's trilinear field lookup
 
 const vec3 VOL_MIN = vec3(VOL_MIN_X, VOL_MIN_Y, VOL_MIN_Z);
 const vec3 VOL_MAX = vec3(VOL_MAX_X, VOL_MAX_Y, VOL_MAX_Z);
@@ -80,8 +81,11 @@ vec4 field_voxel(ivec3 q, ivec3 size) {
 }
 
 // (grad n, n - 1) by trilinear interpolation in full precision, as eikonal_view samples it;
-// n = 1 and no gradient beyond the volume's box.
+// n = 1 and no gradient beyond the volume's box. With HARDWARE_FILTER the device's filtering,
+// as the view renderer's (render.eikonal.hardware_filtering: one slab, a linear sampler whose
+// border is zero, as `field_voxel` beyond the box): one fetch instead of eight.
 vec4 sample_field(vec3 x) {
+    if (HARDWARE_FILTER != 0u) return textureLod(field, (x - VOL_MIN) / (VOL_MAX - VOL_MIN), 0.0);
     ivec3 size = textureSize(field, 0);
     size.z /= int(CHANNELS);
     vec3 u = (x - VOL_MIN) / (VOL_MAX - VOL_MIN) * vec3(size) - 0.5;

@@ -1049,7 +1049,7 @@ params! {
         leaps: bool = true;
         /// Sample the smoothed index field with the device's trilinear filtering (one
         /// filtered fetch, zero beyond the box by a transparent-black border) instead of eight
-        /// fetches interpolated in f32. GPUs interpolate with reduced-precision weights (8
+        /// fetches interpolated in f32, in the view renderer and in the light simulator. GPUs interpolate with reduced-precision weights (8
         /// fractional bits on many), which perturbs the gradient the rays follow;
         /// docs/BENCHMARKS.md has the time and the image difference. Used where the device
         /// filters RGBA32F linearly and the index has one channel (a dispersive volume's

@@ -52,7 +52,7 @@ use glam::{DVec3, Vec3};
 
 use crate::gpu::{
     vk, Access, Buffer, ComputePipeline, DescriptorSet, GpuContext, GpuResult, Image, ImageDesc, MemoryLocation,
-    Progress, Sampler, Spec, TimestampPool, TimestampQuery,
+    Progress, Sampler, SamplerDesc, Spec, TimestampPool, TimestampQuery,
 };
 use crate::graph::{Bindings, BoundSet, BufferId, Frame, FrameGraph, ImageId};
 use crate::scene::techniques::{EikonalParams, LightIntegrator, LightVoxelization};
@@ -557,6 +557,8 @@ pub struct LightSim {
     expand: ComputePipeline,
     resolve: ComputePipeline,
     field_id: ImageId,
+    /// Nearest, or the device's trilinear filter ([`super::eikonal_view::filters_field`]).
+    _field_sampler: Sampler,
     extinction_id: ImageId,
     /// The boundary band and its reflectance factor (the Fresnel loss).
     band_ids: [ImageId; 2],
@@ -760,12 +762,21 @@ impl LightSim {
         let accum_format = if float_atomics { vk::Format::R32_SFLOAT } else { vk::Format::R32_UINT };
         let accum = Image::new(ctx, &ImageDesc::d3("eikonal_light_accum", accum_format, accum_extent, accum_usage))?;
 
+        // The field through the device's trilinear filter where the view renderer samples it so
+        // (eikonal_view::filters_field): a quarter of the step kernel's work is its 128 fetches
+        // of RK4's sixteen field samples (docs/BENCHMARKS.md).
+        let hardware_filter = super::eikonal_view::filters_field(ctx, params, textures.channels)?;
+        let field_sampler = Sampler::new(
+            ctx,
+            "eikonal_light_field",
+            if hardware_filter { SamplerDesc::LINEAR_BORDER } else { SamplerDesc::NEAREST_CLAMP },
+        )?;
         let set = |src: usize| {
             Bindings::new(vk::ShaderStageFlags::COMPUTE)
                 .storage(LIGHT_BINDING_SRC, &lists[src])
                 .storage(LIGHT_BINDING_DST, &lists[1 - src])
                 .storage(crate::LIGHT_BINDING_SPILL, &spill)
-                .sampled(LIGHT_BINDING_FIELD, &textures.field, sampler)
+                .sampled(LIGHT_BINDING_FIELD, &textures.field, &field_sampler)
                 .sampled(crate::LIGHT_BINDING_EXTINCTION, &textures.extinction, sampler)
                 .storage_image(LIGHT_BINDING_ACCUM, &accum)
                 .storage_image(LIGHT_BINDING_IRRADIANCE, &irradiance)
@@ -798,6 +809,7 @@ impl LightSim {
             ("HIGHEST_ENERGY", Spec::U32(u32::from(highest))),
             // Only where the volume has a boundary band (real material volumes).
             ("FRESNEL", Spec::U32(u32::from(params.light_fresnel && textures.materials))),
+            ("HARDWARE_FILTER", Spec::U32(u32::from(hardware_filter))),
         ]
         .into_iter()
         .chain(box_specs(volume_names, volume.min, volume.max))
@@ -868,6 +880,7 @@ impl LightSim {
             expand,
             resolve,
             field_id: textures.field_id,
+            _field_sampler: field_sampler,
             extinction_id: textures.extinction_id,
             band_ids: [textures.emission_id, textures.albedo_id],
             current: 0,
@@ -1418,6 +1431,7 @@ fn simulation_settings(p: &EikonalParams) -> impl std::fmt::Debug {
         (p.light_integrator, p.light_substeps),
         (p.max_patches, p.tile_patches, p.keep_crossed, p.skip_air, p.voxelization),
         p.light_fresnel,
+        p.hardware_filtering,
         (p.light_patches, p.light_below, p.light_side),
         p.float_atomics,
     )

@@ -45,6 +45,20 @@ pub const EIKONAL_NEARBY: &str = "eikonal_nearby";
 /// Every scene with a `[volume]`; parameters `[render.eikonal]`.
 pub const TECHNIQUE: Registration = registration!("[volume]", plan, EikonalPass, ["eikonal"]);
 
+/// Whether the view renderer and the light simulator sample the field through the device's
+/// trilinear filter (`render.eikonal.hardware_filtering`): one slab only (a dispersive
+/// volume's three would blend into each other), and a format the device filters linearly;
+/// else the f32 interpolation of eight fetches.
+pub fn filters_field(ctx: &Arc<GpuContext>, params: &EikonalParams, channels: u32) -> GpuResult<bool> {
+    Ok(channels == 1
+        && ctx.supports_format(vk::Format::R32G32B32A32_SFLOAT, vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR)
+        && match params.hardware_filtering {
+            HardwareFilter::True => true,
+            HardwareFilter::False => false,
+            HardwareFilter::Auto => filters_in_full_precision(ctx)?,
+        })
+}
+
 /// Whether the device's linear filter interpolates RGBA32F texels in full precision, so that
 /// one filtered lookup of the field equals the f32 interpolation of its eight voxels: every
 /// sample of [`filter_error`] within 1e-5 (f32 weights round to about 1e-7; 8-bit weights are
@@ -314,16 +328,7 @@ impl EikonalPass {
             let scene_specs = scene_specialization(scene);
             NearbyImpostors::build(ctx, EIKONAL_NEARBY, &desc, rects, graph, frame_layout, shading, &scene_specs)?
         };
-        // The device's trilinear filtering of the field: one slab only, and a format the device
-        // filters linearly (else the f32 interpolation of eight fetches).
-        let hardware_filter = textures.channels == 1
-            && ctx
-                .supports_format(vk::Format::R32G32B32A32_SFLOAT, vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR)
-            && match params.hardware_filtering {
-                HardwareFilter::True => true,
-                HardwareFilter::False => false,
-                HardwareFilter::Auto => filters_in_full_precision(ctx)?,
-            };
+        let hardware_filter = filters_field(ctx, &params, textures.channels)?;
         let field_sampler = Sampler::new(
             ctx,
             "eikonal_field",
