@@ -1156,6 +1156,33 @@ fn the_device_s_trilinear_filter_gives_the_f32_simulation() {
     common::assert_no_validation_errors(&ctx);
 }
 
+/// A grey light through a colourless medium deposits one channel sum for three (`GRAY`,
+/// light_common.glsl): its volumes equal those of a light whose blue differs by one part in
+/// 10^6, which takes the three sums, within 1e-5 of the largest value (the two orders of f32
+/// additions, as same_volumes, and the 1e-6 itself).
+#[test]
+fn a_grey_light_s_one_channel_sum_equals_the_three() {
+    if !common::in_own_process() {
+        return;
+    }
+    let ctx = common::context(true);
+    let volume = lens_volume(32, &[]);
+    let direction = Vec3::new(0.2, -1.0, 0.1).normalize();
+    let run = |irradiance: Vec3| {
+        let light = Light::Directional { direction, irradiance };
+        let mut sim = StandaloneLight::new(&ctx, &EikonalParams::default(), &volume, &light).unwrap();
+        let stats = sim.run(&ctx).unwrap();
+        (stats, LightVolumes::read(&mut sim, &ctx))
+    };
+    let (grey_stats, grey) = run(Vec3::splat(2.0));
+    let (rgb_stats, rgb3) = run(Vec3::new(2.0, 2.0, 2.0 * (1.0 + 1e-6)));
+    assert!(grey_stats.gray && !rgb_stats.gray, "the grey light takes one sum, the other three");
+    assert_eq!(grey_stats.patch_steps, rgb_stats.patch_steps, "the same simulation");
+    assert!(rgb(&grey.e).iter().any(|&e| e > 0.0), "no light deposited: nothing compared");
+    same_volumes("grey", &grey, &rgb3);
+    common::assert_no_validation_errors(&ctx);
+}
+
 /// The window spreads the simulation over frames: `advance` with a deadline that has
 /// already passed runs one batch of steps per call and resolves the volumes from the deposits
 /// so far. Continued to its end, it takes the very same patch steps as one uninterrupted run,

@@ -65,6 +65,10 @@ layout(constant_id = 20) const uint AIR_FACES = 0u;        // wavefront faces wi
 layout(constant_id = 21) const uint HIGHEST_ENERGY = 0u;   // 1: the paper's voxelization (below)
 layout(constant_id = 22) const uint FRESNEL = 0u;          // 1: Fresnel loss at boundary bands
 layout(constant_id = 23) const uint HARDWARE_FILTER = 0u;  // 1: the device's trilinear field lookup
+// 1: every light is grey (R = G = B) and nothing along the way colours it (one index slab,
+// no extinction), so every deposit's three channel sums are equal: slab 0 holds them and
+// slabs 1 and 2 are never added to (`deposit`, light_resolve.glsl).
+layout(constant_id = 24) const uint GRAY = 0u;
 
 const vec3 VOL_MIN = vec3(VOL_MIN_X, VOL_MIN_Y, VOL_MIN_Z);
 const vec3 VOL_MAX = vec3(VOL_MAX_X, VOL_MAX_Y, VOL_MAX_Z);

@@ -78,7 +78,7 @@ void main() {
     ivec3 q = ivec3(gl_GlobalInvocationID);
     if (any(greaterThanEqual(q, size))) return;
     // Rounding of a take-back (run.sign = -1) can leave tiny negative sums: clamp.
-    vec3 e = max(vec3(slab_value(q, 0), slab_value(q, 1), slab_value(q, 2)), vec3(0.0));
+    vec3 e = max(GRAY != 0u ? vec3(slab_value(q, 0)) : vec3(slab_value(q, 0), slab_value(q, 1), slab_value(q, 2)), vec3(0.0));
     vec3 d = vec3(slab_value(q, 3), slab_value(q, 4), slab_value(q, 5));
     // One ray: its unit direction weighted like the sums' (E_r + E_g + E_b).
     if (HIGHEST_ENERGY != 0u) d *= e.r + e.g + e.b;

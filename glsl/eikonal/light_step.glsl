@@ -149,10 +149,11 @@ void deposit(vec3 a, vec3 b, vec3 flux, vec3 dir) {
         vec3 w3 = mix(1.0 - f, f, vec3(o));
         float w = w3.x * w3.y * w3.z;
         if (!(w > 0.0)) continue;
-        // Zero channels (one channel's run of a dispersive volume) cost no atomics.
+        // Zero channels (one channel's run of a dispersive volume) cost no atomics, nor do
+        // a grey light's equal ones.
         if (e.r != 0.0) accum_add(q, 0, w * e.r);
-        if (e.g != 0.0) accum_add(q, 1, w * e.g);
-        if (e.b != 0.0) accum_add(q, 2, w * e.b);
+        if (GRAY == 0u && e.g != 0.0) accum_add(q, 1, w * e.g);
+        if (GRAY == 0u && e.b != 0.0) accum_add(q, 2, w * e.b);
         accum_add(q, 3, w * d.x);
         accum_add(q, 4, w * d.y);
         accum_add(q, 5, w * d.z);

@@ -197,6 +197,8 @@ pub struct LightStats {
     pub overflow_ms: f64,
     /// Whether the deposits were added by float atomics (else a compare-and-swap loop).
     pub float_atomics: bool,
+    /// Whether every deposit added one channel sum for the three of a grey light (`GRAY`).
+    pub gray: bool,
 }
 
 impl LightStats {
@@ -538,6 +540,8 @@ pub struct LightSim {
     _accum: Image,
     /// Whether the deposits are added by float atomics (else a compare-and-swap loop).
     pub float_atomics: bool,
+    /// Whether the lights are grey and the medium colourless: one channel sum per deposit.
+    gray: bool,
     /// Dispatches of the step kernel between two compactions (`light_substeps`).
     substeps: u32,
     accum_id: ImageId,
@@ -755,6 +759,17 @@ impl LightSim {
         // The paper's voxelization keeps one ray per voxel by an atomic max on its energy's
         // bits (light_common.glsl `accum`): a seventh slab, and integer atomics.
         let highest = params.voxelization == LightVoxelization::HighestEnergy;
+        // Grey light through a colourless medium deposits one channel sum for three, a third
+        // of the step kernel's atomics (docs/BENCHMARKS.md). The paper's voxelization keeps
+        // each ray's own three channels.
+        let grey = |c: Vec3| c.x == c.y && c.y == c.z;
+        let gray = !highest
+            && textures.channels == 1
+            && !textures.extinction_any
+            && lights.iter().all(|l| match l {
+                Light::Point { intensity, .. } => grey(*intensity),
+                Light::Directional { irradiance, .. } => grey(*irradiance),
+            });
         let slabs = if highest { 7 } else { 6 };
         let accum_extent = [resolution[0], slabs * resolution[1], resolution[2]];
         let accum_usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_DST;
@@ -810,6 +825,7 @@ impl LightSim {
             // Only where the volume has a boundary band (real material volumes).
             ("FRESNEL", Spec::U32(u32::from(params.light_fresnel && textures.materials))),
             ("HARDWARE_FILTER", Spec::U32(u32::from(hardware_filter))),
+            ("GRAY", Spec::U32(u32::from(gray))),
         ]
         .into_iter()
         .chain(box_specs(volume_names, volume.min, volume.max))
@@ -868,6 +884,7 @@ impl LightSim {
             tile: tile as usize,
             _accum: accum,
             float_atomics,
+            gray,
             substeps: params.light_substeps,
             accum_id,
             irradiance: Rc::new(irradiance),
@@ -1171,11 +1188,11 @@ impl LightSim {
         let lights = self.wavefronts.len();
         let skipped_patches = self.skipped;
         let initial_patches = self.wavefronts.iter().map(|w| w.len() as u32).sum::<u32>() + skipped_patches;
-        let float_atomics = self.float_atomics;
+        let (float_atomics, gray) = (self.float_atomics, self.gray);
         let sofar = self.progress.get_or_insert_with(|| SimProgress {
             start: Instant::now(),
             done_runs: 0,
-            stats: LightStats { initial_patches, skipped_patches, float_atomics, ..LightStats::default() },
+            stats: LightStats { initial_patches, skipped_patches, float_atomics, gray, ..LightStats::default() },
         });
         let (mut done_runs, started) = (sofar.done_runs, sofar.start);
         loop {
