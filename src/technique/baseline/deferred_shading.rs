@@ -3,7 +3,7 @@
 use std::sync::Arc;
 
 use crate::frame::targets::Targets;
-use crate::gpu::{DescriptorSetLayout, GpuContext, GpuResult, Sampler, Spec};
+use crate::gpu::{DescriptorSetLayout, GpuContext, GpuResult, Sampler, Spec, Specs};
 use crate::graph::{Frame, ImageId};
 use crate::scene::techniques::CausticsMapParams;
 use crate::scene::Scene;
@@ -49,16 +49,9 @@ fn create(s: &mut Setup<'_>) -> Result<Box<dyn Technique>, RenderError> {
     // Whether any object is diffuse is part of the shared fingerprint (the materials' kinds):
     // a change re-creates the renderer, and this pass with it.
     let diffuse = !diffuse_names(s.scene).is_empty();
-    Ok(Box::new(DeferredShadingPass::new(
-        s.ctx,
-        s.frame_layout,
-        s.targets,
-        s.nearest,
-        shadowed,
-        caustics,
-        diffuse,
-        scene_specialization(s.scene),
-    )?))
+    let mut scene = vec![("DIFFUSE", Spec::U32(u32::from(diffuse)))];
+    scene.extend(scene_specialization(s.scene));
+    Ok(Box::new(DeferredShadingPass::new(s.ctx, s.frame_layout, s.targets, s.nearest, shadowed, caustics, &scene)?))
 }
 
 /// The caustic textures a pass shading diffuse receivers reads (glsl/include/caustic_lookup.glsl),
@@ -136,12 +129,10 @@ impl DeferredShadingPass {
         nearest: &Sampler,
         shadowed: bool,
         caustics: CausticReads,
-        diffuse: bool,
-        scene_specs: [(&'static str, Spec); 3],
+        scene: Specs<'_>,
     ) -> GpuResult<Self> {
         let mut specialization = caustics.specialization().to_vec();
-        specialization.push(("DIFFUSE", Spec::U32(u32::from(diffuse))));
-        specialization.extend(scene_specs);
+        specialization.extend_from_slice(scene);
         let pass = FullscreenPass::new(
             ctx,
             &FullscreenDesc {

@@ -589,7 +589,9 @@ impl NearbyImpostors {
     }
 
     /// The impostors of `rects` (their textures, passes and buffers), shaded by `shading`
-    /// when given.
+    /// when given; `scene_specs`: the scene's environment and lights for level 0's shading
+    /// ([`crate::technique::scene_specialization`]).
+    #[allow(clippy::too_many_arguments)] // The textures' resources and their two specialisations.
     pub fn build(
         ctx: &Arc<GpuContext>,
         name: &'static str,
