@@ -204,19 +204,33 @@ struct Run {
 // reflected light; at 96^2 the bundled scenes' rays have at most 33 to 64, on
 // eikonal_dispersion_cube, and the images are the same as with the events shaded where they
 // are found), then the exit ray or the receiver that the march hit inside the box.
+// The lanes of a SIMD group store at different indices, which a CPU device does lane by
+// lane, in every step: so a step holds its event (at most one) in `pending` and stores it
+// at one place, the end of the step.
 const uint MAX_REFLECTIONS = 64u;
 vec3 reflection_origin[MAX_REFLECTIONS];
 vec3 reflection_dir[MAX_REFLECTIONS];
 vec3 reflection_weight[MAX_REFLECTIONS];
 uint reflections;
 
+struct Reflection {
+    bool pending;
+    vec3 origin, dir, weight;
+};
+Reflection pending;
+
 void add_reflection(vec3 x, vec3 dir, vec3 weight) {
-    if (reflections < MAX_REFLECTIONS) {
-        reflection_origin[reflections] = x;
-        reflection_dir[reflections] = dir;
-        reflection_weight[reflections] = weight;
+    pending = Reflection(true, x, dir, weight);
+}
+
+void store_pending() {
+    if (pending.pending && reflections < MAX_REFLECTIONS) {
+        reflection_origin[reflections] = pending.origin;
+        reflection_dir[reflections] = pending.dir;
+        reflection_weight[reflections] = pending.weight;
         reflections += 1u;
     }
+    pending.pending = false;
 }
 
 void run_start(inout Run r, float n, vec3 v, vec3 T) {
@@ -262,6 +276,7 @@ vec3 march(vec3 o, vec3 d, float t_enter, int c, inout bool touched) {
     // The last point inside the box proper, where the exit ray starts.
     vec3 x_in = x;
     reflections = 0u;
+    pending.pending = false;
     // A receiver inside the box that the march hit: triangle k at o + t dir, barycentrics b.
     bool hit = false;
     uint hit_k = 0u;
@@ -387,7 +402,12 @@ vec3 march(vec3 o, vec3 d, float t_enter, int c, inout bool touched) {
                 T *= trans;
             }
         }
+        // A step's one event: where it leaves a band (the top) or where the index turns
+        // (above), never both, since leaving the band ends the banded part of the step.
+        store_pending();
     }
+    // The event of the step that left the box or hit a receiver.
+    store_pending();
     for (uint k = 0u; k < reflections; ++k) {
         L += reflection_weight[k] * exit_radiance(reflection_origin[k], reflection_dir[k], 0.0);
     }
