@@ -268,7 +268,9 @@ vec3 march(vec3 o, vec3 d, float t_enter, int c, inout bool touched) {
     // A ray that enters the box inside a band comes from the air (n = 1).
     Run r;
     r.turned = false;
-    bool banded = MATERIALS != 0u && in_band(x);
+    // Whether x is in a band: read once per step, at its end, for this step and the next.
+    bool x_band = MATERIALS != 0u && in_band(x);
+    bool banded = x_band;
     run_start(r, 1.0, d, T);
     if (banded) r.rho = band_reflectance(x);
     // Rays that leave the box stop one step past its face at most.
@@ -285,7 +287,7 @@ vec3 march(vec3 o, vec3 d, float t_enter, int c, inout bool touched) {
     vec2 hit_b = vec2(0.0);
     for (uint i = 0u; i <= MAX_STEPS; ++i) {
         bool inside = i < MAX_STEPS && in_box(x, margin);
-        bool band = inside && MATERIALS != 0u && in_band(x);
+        bool band = inside && x_band;
         if (banded && !band) {
             // Leaving the band (into the air beyond the box when outside it).
             if (!inside && abs(1.0 - r.n_a) > abs(r.n_peak - r.n_a)) r.n_peak = 1.0;
@@ -338,6 +340,7 @@ vec3 march(vec3 o, vec3 d, float t_enter, int c, inout bool touched) {
         }
         s = sample_field(x, c);
         n_cur = 1.0 + s.w;
+        x_band = MATERIALS != 0u && in_band(x);
         // A constant index other than the air's bends the ray where a leap entered it.
         touched = touched || (leapt ? abs(n_before - 1.0) > 1e-4 : abs(s.w) > 1e-4);
         // ---- a receiver inside (or touching) the box ends the path where the
@@ -371,7 +374,7 @@ vec3 march(vec3 o, vec3 d, float t_enter, int c, inout bool touched) {
             if (abs(n_cur - r.n_a) > abs(r.n_peak - r.n_a)) r.n_peak = n_cur;
             r.grad_sum += s.xyz;
             // Only band voxels carry their surface's factor (the step may have left the band).
-            if (in_band(x)) r.rho = max(r.rho, band_reflectance(x));
+            if (x_band) r.rho = max(r.rho, band_reflectance(x));
         }
         if ((EXTINCTION != 0u || EMISSION != 0u) && !leapt) {
             vec3 mid = 0.5 * (x0 + x);
