@@ -44,38 +44,33 @@ void main() {
         emit(j, p);
         return;
     }
-    // The 3x3 grid of points of the split, (a, b) in halves: corners 0..3 are (0,0), (2,0),
-    // (2,2), (0,2).
-    // gw: the particles' numbers (x.w), -1 for the ones created here.
-    vec3 gx[9], gv[9];
-    float gw[9] = float[9](p.x[0].w, -1.0, p.x[1].w, -1.0, -1.0, -1.0, p.x[3].w, -1.0, p.x[2].w);
-    gx[0] = p.x[0].xyz; gv[0] = p.v[0].xyz;
-    gx[2] = p.x[1].xyz; gv[2] = p.v[1].xyz;
-    gx[8] = p.x[2].xyz; gv[8] = p.v[2].xyz;
-    gx[6] = p.x[3].xyz; gv[6] = p.v[3].xyz;
-    wavefront_midpoint(gx[0], gv[0], gx[2], gv[2], gx[1], gv[1]);
-    wavefront_midpoint(gx[2], gv[2], gx[8], gv[8], gx[5], gv[5]);
-    wavefront_midpoint(gx[6], gv[6], gx[8], gv[8], gx[7], gv[7]);
-    wavefront_midpoint(gx[0], gv[0], gx[6], gv[6], gx[3], gv[3]);
-    vec3 xa, va, xb, vb;
-    wavefront_midpoint(gx[0], gv[0], gx[8], gv[8], xa, va);
-    wavefront_midpoint(gx[2], gv[2], gx[6], gv[6], xb, vb);
-    gx[4] = 0.5 * (xa + xb);
-    gv[4] = normalize(va + vb) * index_at(gx[4]);
-    // Quarter k's corners in the parent's order: lower-left grid index and its 3 others.
-    const int base[4] = int[4](0, 1, 4, 3);
-    Patch q[4];
-    for (int k = 0; k < 4; ++k) {
-        int b = base[k];
-        int idx[4] = int[4](b, b + 1, b + 4, b + 3);
-        for (int c = 0; c < 4; ++c) {
-            q[k].x[c] = vec4(gx[idx[c]], gw[idx[c]]);
-            // w: the Fresnel run in progress (light_step.glsl), by slot: the quarters continue it.
-            q[k].v[c] = vec4(gv[idx[c]], p.v[c].w);
-        }
-    }
+    // Quarter k of the bilinear split (a 3x3 grid of points in halves of the parent's
+    // parameter square) has the parent's corner k, the wavefront points halfway to its two
+    // neighbouring corners, and the centre; in the parent's order its corner k is the
+    // parent's. Only this output's quarter is computed: four of the split's six wavefront
+    // midpoints (a CPU device computes every lane's, so one quarter per lane is what all
+    // four would cost a group).
     uint k = min(pair.y, 3u);
-    Patch out_patch = q[k];
+    uint next = (k + 1u) & 3u, prev = (k + 3u) & 3u;
+    vec3 xe0, ve0, xe1, ve1;
+    wavefront_midpoint(p.x[k].xyz, p.v[k].xyz, p.x[next].xyz, p.v[next].xyz, xe0, ve0);
+    wavefront_midpoint(p.x[k].xyz, p.v[k].xyz, p.x[prev].xyz, p.v[prev].xyz, xe1, ve1);
+    vec3 xa, va, xb, vb;
+    wavefront_midpoint(p.x[0].xyz, p.v[0].xyz, p.x[2].xyz, p.v[2].xyz, xa, va);
+    wavefront_midpoint(p.x[1].xyz, p.v[1].xyz, p.x[3].xyz, p.v[3].xyz, xb, vb);
+    vec3 xc = 0.5 * (xa + xb);
+    vec3 vc = normalize(va + vb) * index_at(xc);
+    // Output corner (k + j) & 3 is the j-th of (corner k, towards next, centre, towards
+    // prev); w: the particles' numbers, -1 for the ones created here; v.w: the Fresnel run
+    // in progress (light_step.glsl), by slot: the quarters continue it.
+    Patch out_patch;
+    vec3 qx[4] = vec3[4](p.x[k].xyz, xe0, xc, xe1);
+    vec3 qv[4] = vec3[4](p.v[k].xyz, ve0, vc, ve1);
+    for (uint j = 0u; j < 4u; ++j) {
+        uint c = (k + j) & 3u;
+        out_patch.x[c] = vec4(qx[j], j == 0u ? p.x[k].w : -1.0);
+        out_patch.v[c] = vec4(qv[j], p.v[c].w);
+    }
     // Each quarter is the stream tube (Fig. 3) of a quarter of the parent's particles'
     // parameter square, which carried a quarter of its flux at birth (uniform irradiance
     // over a patch of at most a voxel): flux / 4. Splitting by the quarters' current areas
