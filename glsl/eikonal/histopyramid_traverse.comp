@@ -7,38 +7,42 @@
 #include "histopyramid.glsl"
 layout(local_size_x = LIGHT_GROUP) in;
 
+// The child of `node` whose outputs hold output `rest` of the node, given the four
+// children's counts; `rest` becomes the output's index within that child. A live node's live
+// children come first and `rest` is below their sum, so the descent stops before any stale
+// entry past them.
+uint descend(uint node, uvec4 counts, inout uint rest) {
+    uint child = 4u * node;
+    for (uint c = 0u; c < 4u; ++c) {
+        child = 4u * node + c;
+        if (rest < counts[c]) break;
+        rest -= counts[c];
+    }
+    return child;
+}
+
 void main() {
     uint j = gl_GlobalInvocationID.x;
     if (j >= state.next + state.spill_new) return;
     uint node = 0u;
     uint rest = j;
     // The levels above the classes, then the classes (level 0) apart: a CPU device loads
-    // both arrays in every iteration of a loop that chooses between them per level.
+    // both arrays for every child where one loop chooses between them per level.
     for (uint k = hp_top(); k >= 2u; --k) {
         uint len = hp_level_len(k - 1u), offset = hp_level_offset(k - 1u);
-        uint child = 4u * node;
+        uvec4 counts;
         for (uint c = 0u; c < 4u; ++c) {
-            // A live node's children that are live come first, and `rest` is below their
-            // sum, so stale entries past them are never reached.
             uint i = 4u * node + c;
-            uint v = i < len ? levels[offset + i] : 0u;
-            child = i;
-            if (rest < v) break;
-            rest -= v;
+            counts[c] = i < len ? levels[offset + i] : 0u;
         }
-        node = child;
+        node = descend(node, counts, rest);
     }
-    uint child = 4u * node;
+    // Level 0 unmasked: `count` is already the output count here.
+    uvec4 counts;
     for (uint c = 0u; c < 4u; ++c) {
-        // Level 0 unmasked: `count` is already the output count here, and the valid
-        // children come first, so the descent stops before any stale entry (rest is below
-        // the sum of the valid ones).
         uint i = 4u * node + c;
-        uint v = i < CAPACITY ? classes[i] : 0u;
-        child = i;
-        if (rest < v) break;
-        rest -= v;
+        counts[c] = i < CAPACITY ? classes[i] : 0u;
     }
-    node = child;
+    node = descend(node, counts, rest);
     pairs[j] = uvec2(node, rest);
 }
