@@ -231,6 +231,55 @@ fn absorption_darkens_the_volume() {
     assert!((ratio - (-4.0f32).exp()).abs() < 0.01, "blue transmittance {ratio}, expected e^-4");
 }
 
+/// `render.eikonal.min_transmittance` stops a view ray once its transmittance is below the
+/// threshold in every channel. In a uniform environment of radiance 1, with absorption and
+/// no emission or reflection, a pixel's radiance is its ray's transmittance where it leaves
+/// the volume: a ray that stops gives 0 where the full march gives less than the threshold,
+/// and a ray that never falls below it is marched exactly as before.
+#[test]
+fn early_termination_drops_less_than_the_transmittance_threshold() {
+    if !common::in_own_process() {
+        return;
+    }
+    let ctx = common::context(false);
+    let threshold = 1e-3f32;
+    // The central ray crosses 2 m of the lens: T = e^-8 = 3.4e-4 at its exit, below the
+    // threshold after ln(1000) / 4 = 1.73 m.
+    let at = |t: f32| {
+        common::scene(
+            "eikonal_luneburg",
+            48,
+            &[
+                "environment.type=\"constant\"",
+                "environment.radiance=1",
+                "volume.attenuation=[4, 4, 4]",
+                &format!("render.eikonal.min_transmittance={t}"),
+            ],
+        )
+    };
+    let r = common::render_each(&ctx, &[at(0.0), at(threshold)]);
+    let (full, cut) = (&r[0].hdr, &r[1].hdr);
+    no_nan("early termination", cut);
+    let (mut stopped, mut worst, mut worst_kept) = (0, 0.0f32, 0.0f32);
+    for (p, q) in full.chunks(4).zip(cut.chunks(4)) {
+        for c in 0..3 {
+            let change = (p[c] - q[c]).abs();
+            worst = worst.max(change);
+            if p[c] > 1.01 * threshold {
+                worst_kept = worst_kept.max(change);
+            }
+        }
+        if q[0] == 0.0 && p[0] > 0.0 {
+            stopped += 1;
+        }
+    }
+    eprintln!("{stopped} rays stopped; largest change {worst:.3e}, {worst_kept:.3e} where T stays above the threshold");
+    assert!(stopped > 20, "only {stopped} rays stopped early");
+    assert!(worst < threshold, "stopping changed a pixel by {worst}, more than the threshold {threshold}");
+    // The same march up to the stop: rounding only.
+    assert!(worst_kept < 1e-6, "a ray that never fell below the threshold changed by {worst_kept}");
+}
+
 fn load_error(volume: &str, render: &str) -> String {
     let text = format!(
         "[camera]\nposition = [0, 0, 4]\ntarget = [0, 0, 0]\n[environment]\ntype = \"grid\"\n{volume}\n[render]\n{render}\n"

@@ -56,6 +56,9 @@ layout(constant_id = 23) const uint EMISSION = 1u;
 layout(constant_id = 24) const uint LEAPS = 0u;
 layout(constant_id = 25) const uint BRICK = 4u;
 layout(constant_id = 26) const uint HARDWARE_FILTER = 0u;  // the device's trilinear field lookup
+// A ray whose transmittance falls below this in every channel it carries stops there
+// (render.eikonal.min_transmittance; 0: never).
+layout(constant_id = 27) const float MIN_TRANSMITTANCE = 0.0;
 layout(set = 1, binding = BINDING_GBUF_DEPTH) uniform sampler2D gbuf_depth;
 // xyz: grad n per metre, w: n - 1, at the voxel centres; CHANNELS slabs stacked along z.
 layout(set = 1, binding = BINDING_EIKONAL_FIELD) uniform sampler3D field;
@@ -281,6 +284,8 @@ vec3 march(vec3 o, vec3 d, float t_enter, int c, inout bool touched) {
     pending.pending = false;
     // A receiver inside the box that the march hit: triangle k at o + t dir, barycentrics b.
     bool hit = false;
+    // Stopped by MIN_TRANSMITTANCE: nothing beyond the last step is added.
+    bool opaque = false;
     uint hit_k = 0u;
     vec3 hit_o = vec3(0.0), hit_dir = vec3(0.0);
     float hit_t = 0.0;
@@ -408,12 +413,20 @@ vec3 march(vec3 o, vec3 d, float t_enter, int c, inout bool touched) {
         // A step's one event: where it leaves a band (the top) or where the index turns
         // (above), never both, since leaving the band ends the banded part of the step.
         store_pending();
+        // Early ray termination: whatever lies beyond adds at most MIN_TRANSMITTANCE of its
+        // radiance. A dispersive march carries only its own channel.
+        float T_carried = CHANNELS == 3u ? T[c] : max(T.r, max(T.g, T.b));
+        if (T_carried < MIN_TRANSMITTANCE) {
+            opaque = true;
+            break;
+        }
     }
     // The event of the step that left the box or hit a receiver.
     store_pending();
     for (uint k = 0u; k < reflections; ++k) {
         L += reflection_weight[k] * exit_radiance(reflection_origin[k], reflection_dir[k], 0.0);
     }
+    if (opaque) return L;
     if (hit) return L + T * eik_triangle_radiance(hit_k, hit_o, hit_dir, hit_t, hit_b);
     // A degenerate momentum (never for n > 0) keeps the incoming direction.
     vec3 exit_dir = dot(v, v) > 1e-20 ? normalize(v) : d;

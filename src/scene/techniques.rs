@@ -1047,6 +1047,11 @@ params! {
         /// straight ray exactly (bricks of 4^3 voxels, src/technique/eikonal/volume.rs). false
         /// marches at `step` everywhere, as the paper does.
         leaps: bool = true;
+        /// Stop a view ray once its transmittance (Eq. 5's T, after extinction and Fresnel
+        /// reflection) is below this in every channel it carries: what lies beyond would add at
+        /// most this fraction of its radiance. 0 marches every ray to the end, as the paper does.
+        // 1 would stop every ray at its first step, before any light reached it.
+        min_transmittance: f32 = 1e-4, 0.0..=0.5;
         /// Sample the smoothed index field with the device's trilinear filtering (one
         /// filtered fetch, zero beyond the box by a transparent-black border) instead of eight
         /// fetches interpolated in f32, in the view renderer and in the light simulator. GPUs interpolate with reduced-precision weights (8

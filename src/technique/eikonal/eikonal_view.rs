@@ -347,6 +347,7 @@ impl EikonalPass {
             ("EMISSION", Spec::U32(textures.emission_any as u32)),
             // Straight leaps through uniform bricks (volume.rs, `uniform_reach`).
             ("LEAPS", Spec::U32(params.leaps as u32)),
+            ("MIN_TRANSMITTANCE", Spec::F32(params.min_transmittance)),
             ("HARDWARE_FILTER", Spec::U32(u32::from(hardware_filter))),
             ("BRICK", Spec::U32(super::volume::BRICK)),
             // Single scattering (glsl/eikonal/scatter.glsl) with the
