@@ -355,19 +355,24 @@ shared_structs! {
     }
 
     /// One wavefront patch (Ihrke et al. 2007 section 5.2: "patches ... hold the four
-    /// corners' positions, their propagation directions and a RGB energy value"). Corners
-    /// 0..3 go around the patch so that cross(x2 - x0, x3 - x1) points along the propagation
-    /// direction at birth. `flux` is the patch's energy dE * A of Eq. 17 (W), constant unless
-    /// absorbed (Eq. 18).
+    /// corners' positions, their propagation directions and a RGB energy value"), 128 bytes:
+    /// every step reads and writes it, and the output generator copies it. Corners 0..3 go
+    /// around the patch so that cross(x2 - x0, x3 - x1) points along the propagation
+    /// direction at birth. The four w components carry the rest (accessors in
+    /// src/technique/eikonal/eikonal_light.rs and glsl/eikonal/light_common.glsl):
+    /// x[0..3].w the flux R, G, B, the energy dE * A of Eq. 17 (W), constant unless absorbed
+    /// (Eq. 18); x[3].w the initial particles among the corners, for tests that follow them
+    /// (P * 8 + code: code 4, corner c is particle 4P + c; code k < 4, corner k is particle
+    /// 4P + k and the others were created by tessellation; 5, none); v[0].w the steps taken
+    /// in its run (its parent's before it was tessellated) times 128 plus the substep mark of
+    /// the paper's voxelization; v[1..3].w the Fresnel run in progress (light_step.glsl).
+    /// All are integers below 2^24 where they are counts, so exact in f32.
     #[derive(Default, PartialEq)]
     buffer struct Patch {
-        /// corner positions (w unused)
+        /// corner positions; w: see above
         x: [vec4; 4],
-        /// corner optical directions v = n dx/ds, |v| = n (w unused)
+        /// corner optical directions v = n dx/ds, |v| = n; w: see above
         v: [vec4; 4],
-        /// rgb: flux (W); w: the steps it has taken in its run (its parent's before it was
-        /// tessellated)
-        flux: vec4,
     }
 
     /// One face of a light's initial wavefront whose patches that only cross air were not
@@ -400,7 +405,7 @@ shared_structs! {
         sign: float,
         /// energy threshold in W (section 5.2.3, patch termination)
         min_flux: float,
-        /// steps a patch may take in the run (its step count is `Patch::flux.w`)
+        /// steps a patch may take in the run (its step count is in `Patch::v[0].w`)
         max_steps: uint,
         /// which of the step kernel's dispatches between two compactions this is (0: the
         /// first, which steps every patch of the list)

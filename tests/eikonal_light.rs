@@ -163,7 +163,11 @@ fn directional(d: Vec3) -> Light {
 /// The uploaded initial particles by their numbers (x.w): with `skip_air` the patches that
 /// only cross air are not in the list, so a particle's number is not its place in it.
 fn initial_particles(sim: &StandaloneLight) -> std::collections::HashMap<u32, Vec3> {
-    sim.sim.initial.iter().flat_map(|p| (0..4).map(move |c| (p.x[c][3] as u32, p.corner(c)))).collect()
+    sim.sim
+        .initial
+        .iter()
+        .flat_map(|p| (0..4).map(move |c| (p.particle(c).expect("an initial particle"), p.corner(c))))
+        .collect()
 }
 
 fn lens_volume(resolution: u32, overrides: &[&str]) -> prism::scene::Volume {
@@ -208,13 +212,12 @@ fn gpu_particles_follow_the_equal_time_ray_equation() {
         };
         let mut checked = 0;
         for p in &patches {
-            assert_eq!(p.flux[3], steps as f32, "a patch's step count (flux.w)");
+            assert_eq!(p.steps(), steps, "a patch's step count");
             for c in 0..4 {
-                let id = p.x[c][3];
-                if id < 0.0 {
+                let Some(id) = p.particle(c) else {
                     continue;
-                }
-                let start = RayState { x: initial[&(id as u32)].as_dvec3(), v: DVec3::Z };
+                };
+                let start = RayState { x: initial[&id].as_dvec3(), v: DVec3::Z };
                 let (mut s, mut o) = (start, start);
                 for _ in 0..steps {
                     s = light_step(&LENS, integrator, s, dt);
@@ -280,10 +283,9 @@ fn luneburg_gpu_wavefront_focuses_on_the_far_surface() {
         }
         for p in sim.patches(&ctx).unwrap() {
             for c in 0..4 {
-                if p.x[c][3] < 0.0 {
+                let Some(id) = p.particle(c) else {
                     continue;
-                }
-                let id = p.x[c][3] as u32;
+                };
                 let x = p.corner(c);
                 if let Some(&before) = previous.get(&id) {
                     if before.length() < 1.0 && x.length() >= 1.0 && before.z > 0.0 && impact(id) <= 0.9 {
@@ -475,11 +477,11 @@ fn non_finite_patches_deposit_nothing_and_spare_their_neighbours() {
         for &k in &poisoned {
             let p = &mut wavefront[k];
             if !poison {
-                p.flux = [0.0; 4];
+                p.set_flux(Vec3::ZERO);
             } else if k == 136 {
                 p.x[0][0] = f32::NAN;
             } else {
-                p.flux = [f32::MAX, f32::MAX, f32::MAX, 0.0];
+                p.set_flux(Vec3::splat(f32::MAX));
             }
         }
         let current = sim.sim.run;
@@ -1632,7 +1634,7 @@ fn fresnel_loss_transmits_the_closed_form_share_through_a_slab() {
         let (with, without) = (patches(true), patches(false));
         assert_eq!(with.len(), without.len(), "the same steps and splits");
         let ratios: Vec<f32> =
-            with.iter().zip(&without).filter(|(p, _)| measured(p)).map(|(p, q)| p.flux[0] / q.flux[0]).collect();
+            with.iter().zip(&without).filter(|(p, _)| measured(p)).map(|(p, q)| p.flux().x / q.flux().x).collect();
         let (lo, hi) = ratios.iter().fold((f32::MAX, f32::MIN), |(l, h), &r| (l.min(r), h.max(r)));
         let cos_i = -direction[1] as f64;
         let expected = (1.0 - prism::frame::gpu_scene::fresnel_dielectric(cos_i, 1.0 / 1.5)).powi(2) as f32;

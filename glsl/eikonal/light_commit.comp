@@ -13,7 +13,7 @@ void main() {
     uint i = gl_GlobalInvocationID.x;
     if (i >= state.count) return;
     Patch p = src[i];
-    if (p.v[0].w != float(run.substep + 1u)) return;
+    if (patch_mark(p) != run.substep + 1u) return;
     ivec3 q;
     vec3 dE;
     uint key;

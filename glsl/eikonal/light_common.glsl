@@ -123,6 +123,32 @@ float index_at(vec3 x) {
     return max(1.0 + sample_field(x).w, 1e-3);
 }
 
+// The fields a patch keeps in its corners' w (src/shader_structs.rs `Patch`).
+vec3 patch_flux(Patch p) {
+    return vec3(p.x[0].w, p.x[1].w, p.x[2].w);
+}
+
+void set_patch_flux(inout Patch p, vec3 flux) {
+    p.x[0].w = flux.r;
+    p.x[1].w = flux.g;
+    p.x[2].w = flux.b;
+}
+
+// v[0].w: steps * MARK_SCALE + the substep mark of HIGHEST_ENERGY (at most 64 substeps).
+const uint MARK_SCALE = 128u;
+
+uint patch_steps(Patch p) {
+    return uint(p.v[0].w) / MARK_SCALE;
+}
+
+uint patch_mark(Patch p) {
+    return uint(p.v[0].w) % MARK_SCALE;
+}
+
+void set_patch_steps(inout Patch p, uint steps, uint mark) {
+    p.v[0].w = float(steps * MARK_SCALE + mark);
+}
+
 // The vector area of the quad (half the cross product of its diagonals): its length is the
 // area A of Eq. 17, its direction the patch orientation of section 5.2.3.
 vec3 patch_normal(Patch p) {
@@ -152,7 +178,7 @@ bool voxel_sample(Patch p, out ivec3 q, out vec3 dE, out uint key) {
     q = ivec3(0);
     key = 0u;
     if (!in_light_box(mid)) return false;
-    dE = p.flux.rgb / length(patch_normal(p));
+    dE = patch_flux(p) / length(patch_normal(p));
     float e = dE.r + dE.g + dE.b;
     if (!(e > 0.0) || isinf(e) || any(isnan(dE)) || any(isinf(dE))) return false;
     ivec3 size = imageSize(irradiance);

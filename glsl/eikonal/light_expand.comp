@@ -35,6 +35,15 @@ void emit(uint j, Patch q) {
     }
 }
 
+// The initial particles among quarter k's corners (x[3].w, src/shader_structs.rs `Patch`):
+// its corner k is the parent's corner k, the others are new.
+float quarter_particles(float parent, uint k) {
+    uint w = uint(parent), first = w / 8u, code = w % 8u;
+    if (code == 4u) return float(first * 8u + k);
+    if (code == k) return parent;
+    return 5.0;
+}
+
 void main() {
     uint j = gl_GlobalInvocationID.x;
     if (j >= state.next + state.spill_new) return;
@@ -60,23 +69,23 @@ void main() {
     wavefront_midpoint(p.x[1].xyz, p.v[1].xyz, p.x[3].xyz, p.v[3].xyz, xb, vb);
     vec3 xc = 0.5 * (xa + xb);
     vec3 vc = normalize(va + vb) * index_at(xc);
-    // Output corner (k + j) & 3 is the j-th of (corner k, towards next, centre, towards
-    // prev); w: the particles' numbers, -1 for the ones created here; v.w: the Fresnel run
-    // in progress (light_step.glsl), by slot: the quarters continue it.
+    // Output corner c is the ((c - k) & 3)-th of (corner k, towards next, centre, towards
+    // prev), chosen by selects: a CPU device writes an array at a per-lane index lane by
+    // lane. v.w by slot: the step count and the Fresnel run in progress (light_step.glsl),
+    // which the quarters continue.
     Patch out_patch;
-    vec3 qx[4] = vec3[4](p.x[k].xyz, xe0, xc, xe1);
-    vec3 qv[4] = vec3[4](p.v[k].xyz, ve0, vc, ve1);
-    for (uint j = 0u; j < 4u; ++j) {
-        uint c = (k + j) & 3u;
-        out_patch.x[c] = vec4(qx[j], j == 0u ? p.x[k].w : -1.0);
-        out_patch.v[c] = vec4(qv[j], p.v[c].w);
+    vec3 xk = p.x[k].xyz, vk = p.v[k].xyz;
+    for (uint c = 0u; c < 4u; ++c) {
+        uint j = (c + 4u - k) & 3u;
+        out_patch.x[c] = vec4(j == 0u ? xk : j == 1u ? xe0 : j == 2u ? xc : xe1, 0.0);
+        out_patch.v[c] = vec4(j == 0u ? vk : j == 1u ? ve0 : j == 2u ? vc : ve1, p.v[c].w);
     }
     // Each quarter is the stream tube (Fig. 3) of a quarter of the parent's particles'
     // parameter square, which carried a quarter of its flux at birth (uniform irradiance
     // over a patch of at most a voxel): flux / 4. Splitting by the quarters' current areas
     // instead moved flux towards the stretched side of patches sheared across the ball's
     // rim (a dark band beside eikonal_sphere's shadow, and as much extra in its caustic).
-    // w: the parent's step count (light_step.glsl), which the quarters continue from.
-    out_patch.flux = vec4(p.flux.rgb * 0.25, p.flux.w);
+    set_patch_flux(out_patch, patch_flux(p) * 0.25);
+    out_patch.x[3].w = quarter_particles(p.x[3].w, k);
     emit(j, out_patch);
 }

@@ -23,7 +23,7 @@
 //   area seen there (`voxel_sample`). This kernel raises the voxel's key by an atomic max;
 //   which ray won is only known once every patch of the dispatch has, so light_commit.comp,
 //   dispatched next, writes the winner's dE and direction. A patch marks the substep it took
-//   part in (v[0].w = substep + 1) for it. The maximum is idempotent, so a take-back is not
+//   part in (its mark, `patch_mark`, = substep + 1) for it. The maximum is idempotent, so a take-back is not
 //   needed: a split tile's rerun writes the same rays again;
 // - section 5.2.3: classify it 0 (eliminate: below the energy threshold, leaving the volume,
 //   or its orientation flipped against its direction = it crossed a wavefront singularity,
@@ -118,7 +118,7 @@ void fresnel_loss(inout Patch p, vec3 mid0, vec3 v0, vec3 mid, vec3 v1) {
         bool turned = (n0 - na) * (n1 - n0) < 0.0;
         vec3 vb = turned ? v0 : v1;
         if (!band || (turned && abs(length(vb) - na) >= MIN_JUMP)) {
-            if (abs(length(vb) - na) >= MIN_JUMP) p.flux.rgb *= fresnel_transmission(va, vb, band_reflectance(mid0));
+            if (abs(length(vb) - na) >= MIN_JUMP) set_patch_flux(p, patch_flux(p) * fresnel_transmission(va, vb, band_reflectance(mid0)));
             va = band ? v0 : vec3(0.0);
         }
     }
@@ -165,14 +165,15 @@ void deposit(vec3 a, vec3 b, vec3 flux, vec3 dir) {
 // (run.substep > 0) a patch steps on only while it is retained, so every patch takes the
 // steps, deposits and classes of one compaction per step; only the order of the float
 // additions changes. Patches of one list are then at different times, so each carries its
-// own step count (flux.w) and is eliminated at the run's step budget. (A loop over the
+// own step count (`patch_steps`) and is eliminated at the run's step budget. (A loop over the
 // substeps inside one invocation cost lavapipe half again the step's time.)
 void main() {
     uint i = gl_GlobalInvocationID.x;
     if (i >= state.count) return;
     if (run.substep > 0u && classes[i] != 1u) return;
     Patch p = src[i];
-    if (p.flux.w >= float(run.max_steps)) {
+    uint steps = patch_steps(p);
+    if (steps >= run.max_steps) {
         classes[i] = 0u;
         return;
     }
@@ -194,7 +195,7 @@ void main() {
     // Eq. 18 with the extinction volume (sigma_r = sigma_a + sigma_s, Eq. 5).
     vec3 sigma = extinction_at(mid);
     if (any(greaterThan(sigma, vec3(0.0)))) {
-        p.flux.rgb *= exp(-sigma * DT / index_at(mid));
+        set_patch_flux(p, patch_flux(p) * exp(-sigma * DT / index_at(mid)));
     }
     vec3 normal = patch_normal(p);
     vec3 dir = patch_dir(p);
@@ -209,30 +210,32 @@ void main() {
     vec3 margin = max(voxel, vec3(max(hi.x - lo.x, max(hi.y - lo.y, hi.z - lo.z))));
     bool near_box = all(greaterThanEqual(hi, LIGHT_MIN - margin)) && all(lessThanEqual(lo, LIGHT_MAX + margin));
     uint cls = 1u;
-    if (singular || max(p.flux.r, max(p.flux.g, p.flux.b)) < run.min_flux) {
+    vec3 flux = patch_flux(p);
+    if (singular || max(flux.r, max(flux.g, flux.b)) < run.min_flux) {
         cls = 0u;
     } else if (!near_box && !heads_into_box(mid, dir)) {
         cls = 0u;   // left the simulation volume (and will not re-enter: straight in air)
     } else if (near_box && any(greaterThan(hi - lo, voxel))) {
         cls = 4u;   // tessellate; outside the box rays are straight and need no resolution
     }
-    p.flux.w += 1.0;
     classes[i] = cls;
     atomicAdd(state.advanced, 1u);
     if (HIGHEST_ENERGY != 0u) {
-        p.v[0].w = 0.0;
+        uint mark = 0u;
 #ifndef ACCUM_FLOAT_ATOMICS
         ivec3 q;
         vec3 dE;
         uint key;
         if (!singular && voxel_sample(p, q, dE, key)) {
             imageAtomicMax(accum, accum_texel(q, 6), key);
-            p.v[0].w = float(run.substep + 1u);
+            mark = run.substep + 1u;
         }
 #endif
+        set_patch_steps(p, steps + 1u, mark);
         src[i] = p;
     } else {
+        set_patch_steps(p, steps + 1u, 0u);
         src[i] = p;
-        if (!singular) deposit(mid0, mid, p.flux.rgb, normalize(dir));
+        if (!singular) deposit(mid0, mid, flux, normalize(dir));
     }
 }

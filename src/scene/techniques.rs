@@ -1106,7 +1106,7 @@ params! {
         /// deposits) and split into four, so nothing is dropped unless a tile of a single patch
         /// overflows; that count is reported (`prism render` prints it, bench JSON
         /// `light_simulation.dropped_patches`, `spilled_patches`, `split_tiles`, `runs`).
-        // A list of 900 000 patches of 144 bytes is 124 MiB: one storage-buffer
+        // A list of 900 000 patches of 128 bytes is 110 MiB: one storage-buffer
         // binding may span at most 128 MiB (lavapipe's maxStorageBufferRange).
         max_patches: u32 = 1 << 19, 4..=900_000;
         /// Initial patches per tile of the wavefront, at most `max_patches` (an error above

@@ -78,12 +78,16 @@ pub const LIGHT_BATCH: u32 = 16;
 /// The task name of the simulation's [`Progress`] reports.
 pub const LIGHT_SIMULATION: &str = "light simulation";
 
-/// Most patches of an initial wavefront: a list of them (144 bytes each) fits one 128 MiB
+/// Most patches of an initial wavefront: a list of them (128 bytes each) fits one 128 MiB
 /// storage-buffer binding (lavapipe's maxStorageBufferRange), like `max_patches`.
 pub const MAX_INITIAL_PATCHES: u32 = 900_000;
 
 /// Most steps of one simulation (a wavefront trapped by total internal reflection stops here).
 pub const MAX_LIGHT_STEPS: u32 = 1 << 16;
+
+/// A patch's v[0].w is its step count times this plus a substep mark (glsl/eikonal/
+/// light_common.glsl `MARK_SCALE`): at most 2^16 * 128 = 2^23, exact in f32.
+const STEP_MARK_SCALE: u32 = 128;
 
 impl Patch {
     pub fn corner(&self, c: usize) -> Vec3 {
@@ -92,8 +96,25 @@ impl Patch {
     pub fn direction(&self, c: usize) -> Vec3 {
         Vec3::from_slice(&self.v[c][..3])
     }
+    /// The flux R, G, B (W), in the corners' x.w (src/shader_structs.rs `Patch`).
     pub fn flux(&self) -> Vec3 {
-        Vec3::from_slice(&self.flux[..3])
+        Vec3::new(self.x[0][3], self.x[1][3], self.x[2][3])
+    }
+    pub fn set_flux(&mut self, flux: Vec3) {
+        for c in 0..3 {
+            self.x[c][3] = flux[c];
+        }
+    }
+    /// The steps taken in its run (its parent's before it was tessellated).
+    pub fn steps(&self) -> u32 {
+        self.v[0][3] as u32 / STEP_MARK_SCALE
+    }
+    /// The number of the initial particle at corner `c`, None for a particle created by
+    /// tessellation (x[3].w: P * 8 + code, see `Patch`).
+    pub fn particle(&self, c: usize) -> Option<u32> {
+        let w = self.x[3][3] as u32;
+        let (first, code) = (w / 8, w % 8);
+        (code == 4 || code == c as u32).then_some(4 * first + c as u32)
     }
     /// The patch's vector area (half the cross product of its diagonals), as the shaders.
     pub fn normal(&self) -> Vec3 {
@@ -422,16 +443,17 @@ pub fn initial_wavefront(volume: &Volume, faces: &[WavefrontFace]) -> Vec<Patch>
             for i in 0..face.k {
                 let corners =
                     [face.corner(i, j), face.corner(i + 1, j), face.corner(i + 1, j + 1), face.corner(i, j + 1)];
-                // x[c].w numbers the initial particles (4 per patch; exact in f32 below 2^24)
-                // so that tests can follow them; particles created by tessellation get -1.
+                // x[3].w numbers the initial particles, 4 per patch (`Patch::particle`), so
+                // that tests can follow them; exact in f32 below 2^21 patches.
                 let id = patches.len();
                 let mut p = Patch::default();
                 for (c, &(x, d)) in corners.iter().enumerate() {
-                    p.x[c] = x.extend((4 * id + c) as f32).to_array();
+                    p.x[c] = x.extend(0.0).to_array();
                     p.v[c] = (d * n_at(x)).extend(0.0).to_array();
                 }
+                p.x[3][3] = (8 * id + 4) as f32;
                 let area = p.normal().length();
-                p.flux = (e * area).extend(0.0).to_array();
+                p.set_flux(e * area);
                 patches.push(p);
             }
         }
@@ -628,7 +650,7 @@ pub fn plan_runs(wavefronts: &[Vec<Patch>], channels: u32, tile: usize) -> VecDe
         for (slab, channel) in per_channel {
             // A channel the light does not emit deposits nothing.
             if let Some(c) = channel {
-                if w.iter().all(|p| p.flux[c] <= 0.0) {
+                if w.iter().all(|p| p.flux()[c] <= 0.0) {
                     continue;
                 }
             }
@@ -732,7 +754,7 @@ impl LightSim {
             spill: None,
         });
 
-        // Device-local: every step reads one list and writes the other (144 bytes a patch,
+        // Device-local: every step reads one list and writes the other (128 bytes a patch,
         // 75 MB a step at the default capacity), which in host memory would cross a discrete
         // GPU's bus each step. The host writes a run's initial patches and reads the spill
         // (and tests the lists) through staging copies (FrameGraph::upload_buffer,
@@ -936,11 +958,9 @@ impl LightSim {
         let mut patches: Vec<Patch> = source.map_or(&[][..], |w| &w[run.start..run.end]).to_vec();
         if let Some(c) = run.channel {
             for p in &mut patches {
-                for k in 0..3 {
-                    if k != c {
-                        p.flux[k] = 0.0;
-                    }
-                }
+                let mut flux = Vec3::ZERO;
+                flux[c] = p.flux()[c];
+                p.set_flux(flux);
             }
         }
         // The threshold is relative to the largest initial patch of this light and channel
