@@ -791,8 +791,19 @@ fn floor_flux_matches_the_ball_closed_form() {
     let caustic_rings = 7; // r < 0.35 m
     let exact_caustic: f64 = exact[..caustic_rings].iter().sum();
     eprintln!("CPU ball: {exact_caustic:.4} W of the cone's {cone:.4} W land within r < 0.35 m");
-    for keep in [false, true] {
-        let params = EikonalParams { keep_crossed: keep, ..EikonalParams::from_settings(&scene.render).unwrap() };
+    // The paper's discarding of crossed patches; the default; and two steps' chords per
+    // splat, with the air patches simulated so that all the floor's light comes from those
+    // splats and the flux bounds below check them (a lost or doubled chord would halve or
+    // double it). The one-voxel spacing of its splats leaves a ripple in the straight light
+    // (measured up to 1.6% at the four points below, against 0.6% with a splat every step), so
+    // only the default's unobstructed light is held to 1%.
+    for (keep, every, skip_air) in [(false, 1, true), (true, 1, true), (true, 2, false)] {
+        let params = EikonalParams {
+            keep_crossed: keep,
+            light_deposit_every: every,
+            skip_air,
+            ..EikonalParams::from_settings(&scene.render).unwrap()
+        };
         let mut sim = StandaloneLight::new(&ctx, &params, &volume, &light).expect("light");
         let stats = sim.run(&ctx).expect("run");
         let v = LightVolumes::read(&mut sim, &ctx);
@@ -805,7 +816,10 @@ fn floor_flux_matches_the_ball_closed_form() {
             let got = v.floor(x).y;
             eprintln!("  unobstructed light at {x}: simulated {got:.4} W/m^2, analytic {analytic:.4} W/m^2");
             // Straight light is exact up to the f32 sums: measured within 0.1%.
-            assert!(!keep || (got / analytic - 1.0).abs() < 0.01, "unobstructed light at {x}: {got} vs {analytic}");
+            assert!(
+                !keep || every != 1 || (got / analytic - 1.0).abs() < 0.01,
+                "unobstructed light at {x}: {got} vs {analytic}"
+            );
         }
         // Integrate the floor irradiance (green) over rings on a grid of 1/4 voxel.
         let h = volume.voxel_size().x / 4.0;
@@ -826,7 +840,7 @@ fn floor_flux_matches_the_ball_closed_form() {
         let total: f64 = sim_rings.iter().sum();
         let caustic: f64 = sim_rings[..caustic_rings].iter().sum();
         eprintln!(
-            "keep_crossed = {keep}: {} runs, {} steps; floor flux within 1.6 m {total:.3} W (I x solid angle {disc:.3} W); caustic (r < 0.35 m) {caustic:.3} W (exact {exact_caustic:.3} W of the ball's cone {cone:.3} W, with Fresnel {fresnel:.3} W); peak floor irradiance {peak:.2} W/m^2",
+            "keep_crossed = {keep}, light_deposit_every = {every}, skip_air = {skip_air}: {} runs, {} steps; floor flux within 1.6 m {total:.3} W (I x solid angle {disc:.3} W); caustic (r < 0.35 m) {caustic:.3} W (exact {exact_caustic:.3} W of the ball's cone {cone:.3} W, with Fresnel {fresnel:.3} W); peak floor irradiance {peak:.2} W/m^2",
             stats.runs.len(),
             stats.steps,
         );

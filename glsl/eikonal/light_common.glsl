@@ -69,6 +69,9 @@ layout(constant_id = 23) const uint HARDWARE_FILTER = 0u;  // 1: the device's tr
 // no extinction), so every deposit's three channel sums are equal: slab 0 holds them and
 // slabs 1 and 2 are never added to (`deposit`, light_resolve.glsl).
 layout(constant_id = 24) const uint GRAY = 0u;
+// Steps per track-length deposit of a retained patch: 1, every step; 2, every other step
+// (render.eikonal.light_deposit_every).
+layout(constant_id = 25) const uint DEPOSIT_EVERY = 1u;
 
 const vec3 VOL_MIN = vec3(VOL_MIN_X, VOL_MIN_Y, VOL_MIN_Z);
 const vec3 VOL_MAX = vec3(VOL_MAX_X, VOL_MAX_Y, VOL_MAX_Z);
@@ -134,7 +137,9 @@ void set_patch_flux(inout Patch p, vec3 flux) {
     p.x[2].w = flux.b;
 }
 
-// v[0].w: steps * MARK_SCALE + the substep mark of HIGHEST_ENERGY (at most 64 substeps).
+// v[0].w: steps * MARK_SCALE + a mark: with HIGHEST_ENERGY the substep mark (at most 64
+// substeps), with the track-length deposit 1 where the step's deposit waits for the next
+// step's (light_step.glsl, DEPOSIT_EVERY).
 const uint MARK_SCALE = 128u;
 
 uint patch_steps(Patch p) {

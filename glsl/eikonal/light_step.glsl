@@ -127,16 +127,16 @@ void fresnel_loss(inout Patch p, vec3 mid0, vec3 v0, vec3 mid, vec3 v1) {
     p.v[3].w = va.z;
 }
 
-// Track-length deposit of `flux` (W) over the segment a -> b (section 5.2.2, see the top).
-void deposit(vec3 a, vec3 b, vec3 flux, vec3 dir) {
-    float len = distance(a, b);
-    vec3 at = 0.5 * (a + b);
+// Track-length deposit at `at` of `flux_len`, flux (W) times track length (m), of a segment
+// centred there (section 5.2.2, see the top).
+void deposit(vec3 at, vec3 flux_len, vec3 dir) {
     ivec3 size = imageSize(irradiance);
     vec3 voxel = (LIGHT_MAX - LIGHT_MIN) / vec3(size);
     // Up to a voxel outside the box the splat still reaches the boundary voxels (without
     // it they would miss half their deposits).
-    if (!(len > 0.0) || any(lessThan(at, LIGHT_MIN - voxel)) || any(greaterThan(at, LIGHT_MAX + voxel))) return;
-    vec3 e = run.sign * flux * (len / (voxel.x * voxel.y * voxel.z));
+    if (!(max(flux_len.r, max(flux_len.g, flux_len.b)) > 0.0) || any(lessThan(at, LIGHT_MIN - voxel))
+        || any(greaterThan(at, LIGHT_MAX + voxel))) return;
+    vec3 e = run.sign * flux_len / (voxel.x * voxel.y * voxel.z);
     if (any(isnan(e)) || any(isinf(e))) return;
     vec3 d = dir * (e.r + e.g + e.b);
     vec3 u = (at - LIGHT_MIN) / voxel - 0.5;
@@ -178,6 +178,7 @@ void main() {
         return;
     }
     vec3 mid0 = patch_mid(p);
+    vec3 flux0 = patch_flux(p);
     vec3 v0 = 0.25 * (p.v[0].xyz + p.v[1].xyz + p.v[2].xyz + p.v[3].xyz);
     for (int c = 0; c < 4; ++c) {
         vec3 x = p.x[c].xyz, v = p.v[c].xyz;
@@ -234,8 +235,26 @@ void main() {
         set_patch_steps(p, steps + 1u, mark);
         src[i] = p;
     } else {
-        set_patch_steps(p, steps + 1u, 0u);
+        // With DEPOSIT_EVERY = 2 a retained patch adds every other step's chord together
+        // with the next one's: one splat per voxel of travel instead of two at the default
+        // half-voxel step (the trilinear tent, two voxels wide, still sums to a constant
+        // along a straight track), and half the atomics. The chord it waited on is taken as
+        // long as this one (exact for straight travel at constant speed) and carried the
+        // flux it had at the end of it.
+        vec3 chord = mid - mid0;
+        float len = length(chord);
+        bool deferred = patch_mark(p) != 0u;
+        bool defer = DEPOSIT_EVERY == 2u && !deferred && cls == 1u && steps + 1u < run.max_steps;
+        set_patch_steps(p, steps + 1u, defer ? 1u : 0u);
         src[i] = p;
-        if (!singular) deposit(mid0, mid, flux, normalize(dir));
+        // One call: a CPU device runs every call site's atomics, masked or not.
+        vec3 at = mid0 + 0.5 * chord;
+        vec3 flux_len = flux * len;
+        if (deferred) {
+            // Both chords, centred where they meet; a singular patch only the one before.
+            at = singular ? mid0 - 0.5 * chord : mid0;
+            flux_len = singular ? flux0 * len : (flux0 + flux) * len;
+        }
+        if (deferred ? finite_patch : !singular && !defer) deposit(at, flux_len, normalize(dir));
     }
 }

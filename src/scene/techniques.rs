@@ -1084,6 +1084,13 @@ params! {
         /// / voxel volume, splatted trilinearly; "highest_energy" is the paper's, one ray per
         /// voxel, the one of highest dE = flux / area (Eq. 17). docs/ACCURACY.md compares them.
         voxelization: LightVoxelization = LightVoxelization::TrackLength;
+        /// Steps per track-length deposit of a patch that travels on: 1 deposits every step's
+        /// chord; 2 adds every other step's chord together with the next one's, one trilinear
+        /// splat per voxel of travel at `light_dt` = 0.5 and half the deposits' atomics:
+        /// 0.74-0.79x the simulation's time, images within the reference's noise of the
+        /// default's, straight light with a ripple of up to 1.6% (docs/BENCHMARKS.md,
+        /// docs/ACCURACY.md).
+        light_deposit_every: u32 = 1, 1..=2;
         /// Fresnel loss in the light transport: a patch crossing a boundary band (the view
         /// renderer's, where the smoothed index crosses a jump) keeps the transmitted share
         /// 1 - rho F of its flux, F the exact Fresnel reflectance for unpolarised light between

@@ -848,6 +848,7 @@ impl LightSim {
             ("FRESNEL", Spec::U32(u32::from(params.light_fresnel && textures.materials))),
             ("HARDWARE_FILTER", Spec::U32(u32::from(hardware_filter))),
             ("GRAY", Spec::U32(u32::from(gray))),
+            ("DEPOSIT_EVERY", Spec::U32(params.light_deposit_every)),
         ]
         .into_iter()
         .chain(box_specs(volume_names, volume.min, volume.max))
@@ -1466,7 +1467,7 @@ fn simulation_settings(p: &EikonalParams) -> impl std::fmt::Debug {
         p.energy_threshold,
         p.light_dt,
         (p.light_integrator, p.light_substeps),
-        (p.max_patches, p.tile_patches, p.keep_crossed, p.skip_air, p.voxelization),
+        (p.max_patches, p.tile_patches, p.keep_crossed, p.skip_air, p.voxelization, p.light_deposit_every),
         p.light_fresnel,
         p.hardware_filtering,
         (p.light_patches, p.light_below, p.light_side),
