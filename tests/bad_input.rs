@@ -384,6 +384,10 @@ fn outputs_that_are_not_regular_files_or_named_twice_are_refused() {
         assert_eq!(code, Some(1), "{e}");
         assert!(e.contains(&format!("{exr}: named twice as an output of this command (also as x.png)")), "{e}");
     }
+    // A PNG output named as another format (a PNG in x.exr would pass for linear radiance).
+    let (code, e) = prism(&c.dir, &["render", "scene.toml", "-o", "x.exr"]);
+    assert_eq!(code, Some(1), "{e}");
+    assert!(e.contains("x.exr: `-o` writes a tone-mapped PNG, not a .exr file") && e.contains("--exr"), "{e}");
     // compare's heat map and image pair colliding.
     let args =
         ["compare", "scene.toml", "--heatmap", "p-technique.png", "--images", "p", "--spp", "1", "--frames", "1"];

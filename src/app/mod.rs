@@ -117,8 +117,8 @@ pub struct GpuArgs {
 pub struct RenderArgs {
     #[command(flatten)]
     pub scene: SceneArgs,
-    /// Output PNG (tone-mapped sRGB: render.tonemap = "clamp" (default) or "adaptive").
-    /// Output paths must be new or regular files (a symlink to one is followed), each named
+    /// Output PNG (tone-mapped sRGB: render.tonemap = "clamp" (default) or "adaptive"), named
+    /// *.png or without an extension (`--exr` writes linear radiance). Output paths must be new or regular files (a symlink to one is followed), each named
     /// once; every output of a command is written in full before any is moved into place.
     #[arg(short, long, default_value = "prism.png")]
     pub output: PathBuf,
@@ -245,6 +245,14 @@ pub fn run(cli: Cli) -> Result<()> {
 fn render(args: RenderArgs) -> Result<()> {
     let scene = args.scene.load()?;
     // Check the output paths before any work so that a bad path fails fast and leaves nothing.
+    if let Some(ext) = args.output.extension().filter(|e| !e.eq_ignore_ascii_case("png")) {
+        anyhow::bail!(
+            "{}: `-o` writes a tone-mapped PNG, not a .{} file\n  \
+             hint: name it *.png; for linear radiance add `--exr FILE.exr`",
+            args.output.display(),
+            ext.to_string_lossy()
+        );
+    }
     let mut outputs = Outputs::default();
     let png = outputs.prepare(&args.output)?;
     let exr = outputs.prepare_opt(args.exr.as_deref())?;
