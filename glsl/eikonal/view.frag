@@ -414,9 +414,12 @@ vec3 march(vec3 o, vec3 d, float t_enter, int c, inout bool touched) {
         // (above), never both, since leaving the band ends the banded part of the step.
         store_pending();
         // Early ray termination: whatever lies beyond adds at most MIN_TRANSMITTANCE of its
-        // radiance. A dispersive march carries only its own channel.
+        // radiance. A dispersive march carries only its own channel. Not inside a Fresnel
+        // run: its reflection is weighted by the transmittance where the run began, and is
+        // only recorded where the run ends (a dense glass reflects F of what reaches it
+        // however quickly it absorbs what enters).
         float T_carried = CHANNELS == 3u ? T[c] : max(T.r, max(T.g, T.b));
-        if (T_carried < MIN_TRANSMITTANCE) {
+        if (T_carried < MIN_TRANSMITTANCE && !banded) {
             opaque = true;
             break;
         }
