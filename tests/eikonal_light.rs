@@ -6,7 +6,7 @@ mod common;
 
 use glam::{DVec3, Vec2, Vec3};
 use prism::scene::techniques::LightIntegrator;
-use prism::scene::techniques::{EikonalParams, HardwareFilter};
+use prism::scene::techniques::{EikonalParams, HardwareFilter, LightDirectionSplat};
 use prism::scene::{IndexProfile, Light};
 use prism::technique::eikonal::eikonal_light::{
     float_atomics_supported, light_rk4_step, light_step, optical_path, Patch, StandaloneLight,
@@ -922,7 +922,17 @@ fn two_lights_add_up() {
     // voxel; 1e-5 of the largest value covers that (measured here: 2e-6).
     volumes_close("irradiance", &rgb(&vab.e), &rgb(&sum(&va.e, &vb.e)), 1e-5);
     volumes_close("vector irradiance", &vab.d, &sum(&va.d, &vb.d), 1e-5);
-    // The floor as rendered (deferred shading + the eikonal_light receivers).
+    // The floor as rendered (deferred shading + the eikonal_light receivers). A receiver
+    // takes its mean cosine from the direction volume's vector sum over its weight sum and
+    // scales the irradiance by it; with the trilinear direction splat the weight is the
+    // irradiance's own sum, so the product is the vector sum's projection, linear in the
+    // lights. The default nearest splat's weights are binned apart from the irradiance, so
+    // there the product is a ratio of sums and only its volumes add exactly (above).
+    let scene = common::scene(
+        "eikonal_sphere",
+        24,
+        &["volume.resolution=[16, 16, 16]", "render.eikonal.light_dt=1", "render.eikonal.direction_splat=trilinear"],
+    );
     let render = |lights: Vec<Light>| {
         let mut s = scene.clone();
         s.lights = lights;
@@ -1155,8 +1165,14 @@ fn the_device_s_trilinear_filter_gives_the_f32_simulation() {
     let ctx = common::context(true);
     let volume = lens_volume(32, &[]);
     let light = directional(Vec3::new(0.2, -1.0, 0.1));
+    // The trilinear direction splat: the nearest one moves a deposit whose centre lies on a
+    // voxel boundary whole to the next voxel on a rounding difference.
     let run = |hardware_filtering: HardwareFilter| {
-        let params = EikonalParams { hardware_filtering, ..EikonalParams::default() };
+        let params = EikonalParams {
+            hardware_filtering,
+            direction_splat: LightDirectionSplat::Trilinear,
+            ..EikonalParams::default()
+        };
         let mut sim = StandaloneLight::new(&ctx, &params, &volume, &light).unwrap();
         let stats = sim.run(&ctx).unwrap();
         (stats, LightVolumes::read(&mut sim, &ctx))

@@ -18,8 +18,10 @@ layout(set = 1, binding = LIGHT_BINDING_BAND) uniform sampler3D band_map;
 layout(set = 1, binding = LIGHT_BINDING_REFLECTANCE) uniform sampler3D reflectance_map;
 // The additive accumulator of the track-length irradiance estimate (light_step.glsl): per
 // voxel of the irradiance volume six f32 sums, in six slabs along y: 0..2 the scalar
-// irradiance R, G, B (W/m^2), 3..5 the vector irradiance sum_j (E_r + E_g + E_b)_j l_j.
-// light_resolve.glsl turns it into the two volumes below. With ACCUM_FLOAT_ATOMICS an
+// irradiance R, G, B (W/m^2), 3..5 the vector irradiance sum_j (E_r + E_g + E_b)_j l_j;
+// with DIRECTION_NEAREST the vector sum of the deposits centred in the voxel, and a seventh
+// slab, 6, their weight sum_j (E_r + E_g + E_b)_j. light_resolve.glsl turns it into the two
+// volumes below. With ACCUM_FLOAT_ATOMICS an
 // R32_SFLOAT image added to by float atomics; without, the f32 bits in an R32_UINT image
 // added to by a compare-and-swap loop (`accum_add`). With HIGHEST_ENERGY (always R32_UINT)
 // the slabs hold one ray per voxel instead: 0..2 its dE R, G, B, 3..5 its unit direction,
@@ -37,7 +39,10 @@ layout(set = 1, binding = LIGHT_BINDING_IRRADIANCE, rgba32f) uniform image3D irr
 // travel); w: sum_j (E_r + E_g + E_b)_j. xyz / w is the mean direction of the light (its
 // length the mean cosine between the rays), and for a Lambertian receiver with normal n,
 // -dot(n, xyz) / w * E is Eq. 7's sum_j cos(theta_j) dE_omega,j exactly (per channel where
-// the rays at the voxel share one colour ratio).
+// the rays at the voxel share one colour ratio). With DIRECTION_NEAREST both sums are of the
+// deposits centred in the voxel, so xyz / w is their mean direction and the product above
+// weighs it by the trilinear irradiance: the same in the limit, 4 atomics a deposit instead
+// of 24, and no longer linear in the lights (docs/BENCHMARKS.md).
 layout(set = 1, binding = LIGHT_BINDING_DIRECTION, rgba32f) uniform image3D direction;
 
 // Per run of the simulator (one light, one index channel, one tile of the initial
@@ -72,6 +77,10 @@ layout(constant_id = 24) const uint GRAY = 0u;
 // Steps per track-length deposit of a retained patch: 1, every step; 2, every other step
 // (render.eikonal.light_deposit_every).
 layout(constant_id = 25) const uint DEPOSIT_EVERY = 1u;
+// 1: a track-length deposit adds its direction to the voxel holding its centre and its
+// weight to slab 6 (render.eikonal.direction_splat = "nearest"); 0: trilinearly, like its
+// irradiance, whose sum is the weight.
+layout(constant_id = 26) const uint DIRECTION_NEAREST = 0u;
 
 const vec3 VOL_MIN = vec3(VOL_MIN_X, VOL_MIN_Y, VOL_MIN_Z);
 const vec3 VOL_MAX = vec3(VOL_MAX_X, VOL_MAX_Y, VOL_MAX_Z);

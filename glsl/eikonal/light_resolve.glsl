@@ -80,6 +80,7 @@ void main() {
     // Rounding of a take-back (run.sign = -1) can leave tiny negative sums: clamp.
     vec3 e = max(GRAY != 0u ? vec3(slab_value(q, 0)) : vec3(slab_value(q, 0), slab_value(q, 1), slab_value(q, 2)), vec3(0.0));
     vec3 d = vec3(slab_value(q, 3), slab_value(q, 4), slab_value(q, 5));
+    float weight = DIRECTION_NEAREST != 0u ? max(slab_value(q, 6), 0.0) : 0.0;
     // One ray: its unit direction weighted like the sums' (E_r + E_g + E_b).
     if (HIGHEST_ENERGY != 0u) d *= e.r + e.g + e.b;
     vec3 voxel = (LIGHT_MAX - LIGHT_MIN) / vec3(size);
@@ -103,8 +104,10 @@ void main() {
         }
         e += share * light;
         d += share * l * energy;
+        weight += share * energy;
     }
     float s = e.r + e.g + e.b;
+    if (DIRECTION_NEAREST == 0u) weight = s;
     imageStore(irradiance, q, vec4(e, s > 0.0 ? 1.0 : 0.0));
-    imageStore(direction, q, s > 0.0 ? vec4(d, s) : vec4(0.0));
+    imageStore(direction, q, weight > 0.0 ? vec4(d, weight) : vec4(0.0));
 }

@@ -154,9 +154,20 @@ void deposit(vec3 at, vec3 flux_len, vec3 dir) {
         if (e.r != 0.0) accum_add(q, 0, w * e.r);
         if (GRAY == 0u && e.g != 0.0) accum_add(q, 1, w * e.g);
         if (GRAY == 0u && e.b != 0.0) accum_add(q, 2, w * e.b);
-        accum_add(q, 3, w * d.x);
-        accum_add(q, 4, w * d.y);
-        accum_add(q, 5, w * d.z);
+        if (DIRECTION_NEAREST == 0u) {
+            accum_add(q, 3, w * d.x);
+            accum_add(q, 4, w * d.y);
+            accum_add(q, 5, w * d.z);
+        }
+    }
+    if (DIRECTION_NEAREST != 0u) {
+        ivec3 q = ivec3(floor(u + 0.5));
+        if (all(greaterThanEqual(q, ivec3(0))) && all(lessThan(q, size))) {
+            accum_add(q, 3, d.x);
+            accum_add(q, 4, d.y);
+            accum_add(q, 5, d.z);
+            accum_add(q, 6, e.r + e.g + e.b);
+        }
     }
 }
 

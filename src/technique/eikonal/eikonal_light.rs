@@ -55,7 +55,7 @@ use crate::gpu::{
     Progress, Sampler, SamplerDesc, Spec, TimestampPool, TimestampQuery,
 };
 use crate::graph::{Bindings, BoundSet, BufferId, Frame, FrameGraph, ImageId};
-use crate::scene::techniques::{EikonalParams, LightIntegrator, LightVoxelization};
+use crate::scene::techniques::{EikonalParams, LightDirectionSplat, LightIntegrator, LightVoxelization};
 use crate::scene::{IndexProfile, Light, Volume};
 use crate::technique::scene_specialization;
 use crate::{
@@ -557,8 +557,9 @@ pub struct LightSim {
     /// Initial patches per run (`tile_patches`), also of the runs that continue spills.
     tile: usize,
     /// Six f32 sums per voxel in six slabs along y: irradiance R, G, B and the vector
-    /// irradiance (light_common.glsl `accum`): R32_SFLOAT with float atomics, else the bits
-    /// in R32_UINT.
+    /// irradiance, and a seventh: the vector's weight with the nearest direction splat, the
+    /// ray's energy with the paper's voxelization (light_common.glsl `accum`): R32_SFLOAT with
+    /// float atomics, else the bits in R32_UINT.
     _accum: Image,
     /// Whether the deposits are added by float atomics (else a compare-and-swap loop).
     pub float_atomics: bool,
@@ -792,7 +793,9 @@ impl LightSim {
                 Light::Point { intensity, .. } => grey(*intensity),
                 Light::Directional { irradiance, .. } => grey(*irradiance),
             });
-        let slabs = if highest { 7 } else { 6 };
+        // The nearest direction splat sums its weights in a slab of their own.
+        let nearest_direction = !highest && params.direction_splat == LightDirectionSplat::Nearest;
+        let slabs = if highest || nearest_direction { 7 } else { 6 };
         let accum_extent = [resolution[0], slabs * resolution[1], resolution[2]];
         let accum_usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_DST;
         let float_atomics = params.float_atomics && float_atomics_supported(ctx) && !highest;
@@ -849,6 +852,7 @@ impl LightSim {
             ("HARDWARE_FILTER", Spec::U32(u32::from(hardware_filter))),
             ("GRAY", Spec::U32(u32::from(gray))),
             ("DEPOSIT_EVERY", Spec::U32(params.light_deposit_every)),
+            ("DIRECTION_NEAREST", Spec::U32(u32::from(nearest_direction))),
         ]
         .into_iter()
         .chain(box_specs(volume_names, volume.min, volume.max))
@@ -1467,7 +1471,15 @@ fn simulation_settings(p: &EikonalParams) -> impl std::fmt::Debug {
         p.energy_threshold,
         p.light_dt,
         (p.light_integrator, p.light_substeps),
-        (p.max_patches, p.tile_patches, p.keep_crossed, p.skip_air, p.voxelization, p.light_deposit_every),
+        (
+            p.max_patches,
+            p.tile_patches,
+            p.keep_crossed,
+            p.skip_air,
+            p.voxelization,
+            p.light_deposit_every,
+            p.direction_splat,
+        ),
         p.light_fresnel,
         p.hardware_filtering,
         (p.light_patches, p.light_below, p.light_side),
