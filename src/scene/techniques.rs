@@ -1101,9 +1101,9 @@ params! {
         /// Steps per track-length deposit of a patch that travels on: 1 deposits every step's
         /// chord; 2 adds every other step's chord together with the next one's, one trilinear
         /// splat per voxel of travel at `light_dt` = 0.5 and half the deposits' atomics:
-        /// 0.74-0.79x the simulation's time, images within the reference's noise of the
-        /// default's, straight light with a ripple of up to 1.6% (docs/BENCHMARKS.md,
-        /// docs/ACCURACY.md).
+        /// 0.86-0.90x the simulation's time with the default `direction_splat` (0.74-0.79x
+        /// with "trilinear"), images within the reference's noise of every = 1's, straight
+        /// light with a ripple of up to 1.6% (docs/BENCHMARKS.md, docs/ACCURACY.md).
         light_deposit_every: u32 = 1, 1..=2;
         /// How a track-length deposit's direction of travel enters the direction volume:
         /// "nearest", the default, the voxel holding its centre with its weight beside it (4
