@@ -906,7 +906,8 @@ fn two_lights_add_up() {
     // 16^3, 24^2 pixels and a step of one voxel: additivity does not depend on the
     // resolution or the step, and the light simulation's cost grows as the resolution cubed
     // over the step (fewer deposits per voxel also mean less rounding, below).
-    let scene = common::scene("eikonal_sphere", 24, &["volume.resolution=[16, 16, 16]", "render.eikonal.light_dt=1"]);
+    let small = ["volume.resolution=[16, 16, 16]", "render.eikonal.light_dt=1"];
+    let scene = common::scene("eikonal_sphere", 24, &small);
     let volume = scene.volume.clone().unwrap();
     let params = EikonalParams::from_settings(&scene.render).unwrap();
     let read = |lights: &[Light]| {
@@ -928,11 +929,8 @@ fn two_lights_add_up() {
     // irradiance's own sum, so the product is the vector sum's projection, linear in the
     // lights. The default nearest splat's weights are binned apart from the irradiance, so
     // there the product is a ratio of sums and only its volumes add exactly (above).
-    let scene = common::scene(
-        "eikonal_sphere",
-        24,
-        &["volume.resolution=[16, 16, 16]", "render.eikonal.light_dt=1", "render.eikonal.direction_splat=trilinear"],
-    );
+    let scene =
+        common::scene("eikonal_sphere", 24, &[&small[..], &["render.eikonal.direction_splat=trilinear"]].concat());
     let render = |lights: Vec<Light>| {
         let mut s = scene.clone();
         s.lights = lights;
