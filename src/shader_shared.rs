@@ -122,9 +122,11 @@ shared_constants! {
     // normalised filter, or the paper's s * (filtered photon count).
     PHOTON_PHYSICAL: u32 = 0;
     PHOTON_PAPER: u32 = 1;
-    // render.eikonal.integrator: Euler (Eqs. 11-12) or classical Runge-Kutta of Eqs. 9-10.
+    // render.eikonal.integrator: Euler (Eqs. 11-12) or classical Runge-Kutta of Eqs. 9-10;
+    // render.eikonal.light_integrator also the explicit midpoint rule.
     EIKONAL_EULER: u32 = 0;
     EIKONAL_RK4: u32 = 1;
+    EIKONAL_MIDPOINT: u32 = 2;
     // Compute workgroup edge of the eikonal volume passes (4^3 invocations).
     EIKONAL_GROUP: u32 = 4;
     // At most MAX_NEARBY_RECTS impostor rectangles of Hu & Qin 2007 §2.2 (the nearest

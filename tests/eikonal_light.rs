@@ -121,7 +121,7 @@ fn appendix_constant_spatial_and_temporal_steps() {
 /// step divides the error by 2^p, against a 2^14-step RK4 solution (its own error, some
 /// (64 / 2^14)^4 = 2e-10 of the 64-step RK4 error, is at f64 rounding). A particle inside the Luneburg lens, where n is smooth (at the rim grad n
 /// jumps and every scheme loses its order), over an optical path of 0.6. The bounds are
-/// the view test's (tests/eikonal.rs): the leading-order ratio 2 or 16 up to the next term
+/// the view test's (tests/eikonal.rs): the leading-order ratio 2, 4 or 16 up to the next term
 /// of the error expansion, about 15% at 8 to 64 steps.
 #[test]
 fn light_integrators_converge_at_their_order() {
@@ -143,7 +143,11 @@ fn light_integrators_converge_at_their_order() {
         }
         (s.x - exact.x).length() + (s.v - exact.v).length()
     };
-    for (integrator, order, bounds) in [(LightIntegrator::Euler, 1, 1.7..2.3), (LightIntegrator::Rk4, 4, 13.0..19.0)] {
+    for (integrator, order, bounds) in [
+        (LightIntegrator::Euler, 1, 1.7..2.3),
+        (LightIntegrator::Midpoint, 2, 3.4..4.6),
+        (LightIntegrator::Rk4, 4, 13.0..19.0),
+    ] {
         for n in [8, 16, 32] {
             let (coarse, fine) = (error(integrator, n), error(integrator, 2 * n));
             let ratio = coarse / fine;
@@ -189,7 +193,7 @@ fn gpu_particles_follow_the_equal_time_ray_equation() {
     // HistoPyramid levels, ping-pong lists).
     let ctx = common::context(true);
     let volume = lens_volume(64, &[]);
-    for integrator in [LightIntegrator::Rk4, LightIntegrator::Euler] {
+    for integrator in [LightIntegrator::Rk4, LightIntegrator::Midpoint, LightIntegrator::Euler] {
         // A compaction per step: after 96 steps every particle has taken 96 steps.
         let params = EikonalParams {
             light_integrator: integrator,
@@ -206,8 +210,9 @@ fn gpu_particles_follow_the_equal_time_ray_equation() {
         let patches = sim.patches(&ctx).unwrap();
         let voxel = volume.voxel_size().x as f64;
         let (mut worst, mut worst_other): (f64, f64) = (0.0, 0.0);
+        // The other scheme is the one farthest from this one at 96 steps.
         let other = match integrator {
-            LightIntegrator::Rk4 => LightIntegrator::Euler,
+            LightIntegrator::Rk4 | LightIntegrator::Midpoint => LightIntegrator::Euler,
             LightIntegrator::Euler => LightIntegrator::Rk4,
         };
         let mut checked = 0;

@@ -1,6 +1,7 @@
 // One step of the eikonal light simulator for every patch (Ihrke et al. 2007):
 // - section 5.2.1: advance the four corners by the equal-time ray equation, Eqs. 14-15
-//   (dx/dt = v / n^2, dv/dt = grad n / n; forward Euler like the paper, or RK4), so that all
+//   (dx/dt = v / n^2, dv/dt = grad n / n; forward Euler like the paper, the midpoint rule or
+//   RK4), so that all
 //   particles stay on one wavefront (Appendix, Eqs. 23-24: dS/dt = 1);
 // - Eq. 18: the flux dE * A loses exp(-sigma_r dt / n) (ds = dt / n, Eq. 24); without
 //   absorption it is constant (the intensity law, Eqs. 16-17);
@@ -52,6 +53,13 @@ void advance(inout vec3 x, inout vec3 v) {
         rhs(x + h * k3x, v + h * k3v, k4x, k4v);
         x += h / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x);
         v += h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
+    } else if (INTEGRATOR == EIKONAL_MIDPOINT) {
+        // Second order with two field samples: the slope at the half step's Euler estimate.
+        vec3 k1x, k1v, k2x, k2v;
+        rhs(x, v, k1x, k1v);
+        rhs(x + 0.5 * h * k1x, v + 0.5 * h * k1v, k2x, k2v);
+        x += h * k2x;
+        v += h * k2v;
     } else {
         vec3 dx, dv;
         rhs(x, v, dx, dv);
