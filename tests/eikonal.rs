@@ -6,7 +6,7 @@ mod common;
 use glam::DVec3;
 use prism::scene::techniques::Integrator;
 use prism::scene::{self, IndexProfile};
-use prism::technique::eikonal::volume::{euler_step, rk4_step, sphere_crossing, trace, RayState};
+use prism::technique::eikonal::volume::{euler_step, midpoint_step, rk4_step, sphere_crossing, trace, RayState};
 
 const LENS: IndexProfile = IndexProfile::Luneburg { center: glam::Vec3::ZERO, radius: 1.0 };
 
@@ -23,7 +23,7 @@ fn rays_in_a_homogeneous_volume_are_straight() {
     }
     let field = IndexProfile::Constant { n: 1.33, sphere: None };
     let d = DVec3::new(0.3, -0.5, 0.8).normalize();
-    for integrator in [Integrator::Euler, Integrator::Rk4] {
+    for integrator in [Integrator::Euler, Integrator::Midpoint, Integrator::Rk4] {
         let start = RayState::new(&field, DVec3::new(0.1, 0.2, -0.3), d);
         let path = trace(&field, integrator, start, 0.01, 200, |_| true);
         let end = path.last().unwrap();
@@ -88,7 +88,7 @@ fn error(
 }
 
 #[test]
-fn rk4_converges_at_fourth_order_and_euler_at_first() {
+fn rk4_converges_at_fourth_order_the_midpoint_rule_at_second_and_euler_at_first() {
     if !common::in_own_process() {
         return;
     }
@@ -103,12 +103,15 @@ fn rk4_converges_at_fourth_order_and_euler_at_first() {
     assert!(exact.x.length() < 0.95, "the test ray must stay inside the lens");
     let rk = |n| error(rk4_step, start, s, n, exact);
     let eu = |n| error(euler_step, start, s, n, exact);
+    let mid = |n| error(midpoint_step, start, s, n, exact);
     for n in [8, 16, 32] {
         let ratio = rk(n) / rk(2 * n);
         eprintln!("RK4 {n} -> {} steps: error {:.3e} -> {:.3e}, ratio {ratio:.2}", 2 * n, rk(n), rk(2 * n));
         assert!((13.0..19.0).contains(&ratio), "RK4 error ratio {ratio} when halving the step ({n} steps)");
         let ratio = eu(n) / eu(2 * n);
         assert!((1.7..2.3).contains(&ratio), "Euler error ratio {ratio} ({n} steps)");
+        let ratio = mid(n) / mid(2 * n);
+        assert!((3.4..4.6).contains(&ratio), "midpoint error ratio {ratio} ({n} steps)");
     }
 }
 
@@ -168,7 +171,7 @@ fn the_view_renderer_renders_the_volume_scenes() {
     }
     let ctx = common::context(true);
     for name in ["eikonal_luneburg", "eikonal_sphere"] {
-        for integrator in ["euler", "rk4"] {
+        for integrator in ["euler", "midpoint", "rk4"] {
             let s = view_scene(name, 64, &[&format!("render.eikonal.integrator=\"{integrator}\"")]);
             let r = common::render_on(&ctx, &s);
             no_nan(name, &r.hdr);
@@ -310,7 +313,7 @@ fn invalid_volumes_and_parameters_give_clear_errors() {
         (format!("{GOOD}index = {{ type = \"constant\", n = 1.5, n0 = 1 }}"), "", "n0"),
         (format!("{GOOD}index = {{ type = \"linear\", n0 = 1, gradient = [0, 2, 0] }}"), "", "refractive index"),
         (format!("{GOOD}{lens}\nattenuation = [-1, 0, 0]"), "", "attenuation"),
-        (format!("{GOOD}{lens}"), "[render.eikonal]\nintegrator = \"midpoint\"", "integrator"),
+        (format!("{GOOD}{lens}"), "[render.eikonal]\nintegrator = \"rk2\"", "integrator"),
         (format!("{GOOD}{lens}"), "[render.eikonal]\nstep = 0", "step"),
         (format!("{GOOD}{lens}"), "[render.eikonal]\nsigma = -1", "sigma"),
         (format!("{GOOD}{lens}"), "[render.eikonal]\nsteps = 1", "unknown parameter `steps`"),

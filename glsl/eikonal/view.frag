@@ -2,7 +2,8 @@
 // Eikonal view renderer (Ihrke et al. 2007, sections 4.1 and 5.3): the camera ray enters
 // the volume's proxy box (ray-box intersection; section 5.1's "suitable proxy geometry to
 // start the ray casting"), is marched through the smoothed index field with the ray
-// equation dx/ds = v/n, dv/ds = grad n (Eqs. 9-10; Euler Eqs. 11-12 or classical RK4), and
+// equation dx/ds = v/n, dv/ds = grad n (Eqs. 9-10; Euler Eqs. 11-12, the midpoint rule or
+// classical RK4), and
 // its exit direction looks up the environment (the background radiance L_bg of Eq. 1).
 // No explicit ray-surface intersection: the bending comes from grad n alone.
 // Along the path (the material volumes of src/scene/volume_sources.rs):
@@ -335,6 +336,13 @@ vec3 march(vec3 o, vec3 d, float t_enter, int c, inout bool touched) {
                 rhs(x + h * k3x, v + h * k3v, c, k4x, k4v);
                 x += h / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x);
                 v += h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
+            } else if (INTEGRATOR == EIKONAL_MIDPOINT) {
+                // Second order: the slope at the half step's Euler estimate.
+                vec3 k1x, k1v, k2x, k2v;
+                rhs_at(s, v, k1x, k1v);
+                rhs(x + 0.5 * h * k1x, v + 0.5 * h * k1v, c, k2x, k2v);
+                x += h * k2x;
+                v += h * k2v;
             } else {
                 // Eqs. 11-12.
                 vec3 dx, dv;

@@ -738,9 +738,12 @@ choice! {
 
 choice! {
     /// How eikonal_view integrates the ray equation (Ihrke et al. 2007, section 4.1).
-    Integrator, hint "Euler of Eqs. 11-12 (Ihrke et al. 2007) or fourth-order Runge-Kutta" {
+    Integrator, hint "Euler of Eqs. 11-12 (Ihrke et al. 2007), the midpoint rule or fourth-order Runge-Kutta" {
         /// Forward Euler, Eqs. 11-12 (the paper's view renderer).
         Euler = "euler",
+        /// The explicit midpoint rule of Eqs. 9-10, second order: one field sample per step
+        /// besides the step's end sample, which the next step starts from.
+        Midpoint = "midpoint",
         /// Classical fourth-order Runge-Kutta of Eqs. 9-10.
         Rk4 = "rk4",
     }

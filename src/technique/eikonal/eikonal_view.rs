@@ -28,7 +28,8 @@ use crate::technique::{
 };
 use crate::{
     BINDING_EIKONAL_ALBEDO, BINDING_EIKONAL_EMISSION, BINDING_EIKONAL_EXTINCTION, BINDING_EIKONAL_FIELD,
-    BINDING_FILTER_PROBE_ERRORS, BINDING_FILTER_PROBE_TEXELS, BINDING_GBUF_DEPTH, EIKONAL_EULER, EIKONAL_RK4,
+    BINDING_FILTER_PROBE_ERRORS, BINDING_FILTER_PROBE_TEXELS, BINDING_GBUF_DEPTH, EIKONAL_EULER, EIKONAL_MIDPOINT,
+    EIKONAL_RK4,
 };
 
 use super::eikonal_light::EIKONAL_LIGHT;
@@ -269,6 +270,7 @@ impl EikonalPass {
         let steps = (4.0 * (volume.max - volume.min).length() / h).ceil().min(MAX_VIEW_STEPS as f32) as u32;
         let integrator = match params.integrator {
             Integrator::Euler => EIKONAL_EULER,
+            Integrator::Midpoint => EIKONAL_MIDPOINT,
             Integrator::Rk4 => EIKONAL_RK4,
         };
         let (light_min, light_max) = light.as_ref().map_or((glam::Vec3::ZERO, glam::Vec3::ONE), |l| l.light_box());

@@ -72,10 +72,18 @@ pub fn rk4_step(field: &impl IndexField, s: RayState, h: f64) -> RayState {
     }
 }
 
+/// One explicit midpoint step of arc length `h` of Eqs. 9-10 (second order).
+pub fn midpoint_step(field: &impl IndexField, s: RayState, h: f64) -> RayState {
+    let k1 = rhs(field, s);
+    let k2 = rhs(field, RayState { x: s.x + 0.5 * h * k1.0, v: s.v + 0.5 * h * k1.1 });
+    RayState { x: s.x + h * k2.0, v: s.v + h * k2.1 }
+}
+
 /// One step with `integrator`.
 pub fn step(field: &impl IndexField, integrator: Integrator, s: RayState, h: f64) -> RayState {
     match integrator {
         Integrator::Euler => euler_step(field, s, h),
+        Integrator::Midpoint => midpoint_step(field, s, h),
         Integrator::Rk4 => rk4_step(field, s, h),
     }
 }
