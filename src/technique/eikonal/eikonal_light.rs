@@ -1427,8 +1427,14 @@ impl StandaloneLight {
 /// One equal-time step of Eqs. 14-15 by forward Euler in f64 on an analytic field (§5.2.1 as
 /// the paper has it): the CPU version of light_step.glsl's `LightIntegrator::Euler`.
 pub fn light_euler_step(field: &impl IndexField, s: RayState, h: f64) -> RayState {
-    let n = field.n(s.x);
-    RayState { x: s.x + h * s.v / (n * n), v: s.v + h * field.gradient(s.x) / n }
+    let (dx, dv) = light_rhs(field, s.x, s.v);
+    RayState { x: s.x + h * dx, v: s.v + h * dv }
+}
+
+/// The right-hand side of Eqs. 14-15: (dx/dt, dv/dt) = (v / n^2, grad n / n).
+fn light_rhs(field: &impl IndexField, x: DVec3, v: DVec3) -> (DVec3, DVec3) {
+    let n = field.n(x);
+    (v / (n * n), field.gradient(x) / n)
 }
 
 /// One equal-time step of Eqs. 14-15 with `integrator`, as light_step.glsl.
@@ -1443,22 +1449,15 @@ pub fn light_step(field: &impl IndexField, integrator: LightIntegrator, s: RaySt
 /// One equal-time step of Eqs. 14-15 by the explicit midpoint rule in f64 on an analytic
 /// field: the CPU version of light_step.glsl's `LightIntegrator::Midpoint`.
 pub fn light_midpoint_step(field: &impl IndexField, s: RayState, h: f64) -> RayState {
-    let rhs = |x: DVec3, v: DVec3| {
-        let n = field.n(x);
-        (v / (n * n), field.gradient(x) / n)
-    };
+    let rhs = |x, v| light_rhs(field, x, v);
     let k1 = rhs(s.x, s.v);
     let k2 = rhs(s.x + 0.5 * h * k1.0, s.v + 0.5 * h * k1.1);
     RayState { x: s.x + h * k2.0, v: s.v + h * k2.1 }
 }
 
-/// One equal-time step of Eqs. 14-15 (dx/dt = v / n^2, dv/dt = grad n / n) by classical
-/// RK4 in f64 on an analytic field: the CPU version of light_step.glsl's particle update.
+/// One equal-time step of Eqs. 14-15 by classical RK4 in f64 on an analytic field: the CPU version of light_step.glsl's particle update.
 pub fn light_rk4_step(field: &impl IndexField, s: RayState, h: f64) -> RayState {
-    let rhs = |x: DVec3, v: DVec3| {
-        let n = field.n(x);
-        (v / (n * n), field.gradient(x) / n)
-    };
+    let rhs = |x, v| light_rhs(field, x, v);
     let k1 = rhs(s.x, s.v);
     let k2 = rhs(s.x + 0.5 * h * k1.0, s.v + 0.5 * h * k1.1);
     let k3 = rhs(s.x + 0.5 * h * k2.0, s.v + 0.5 * h * k2.1);
