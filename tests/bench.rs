@@ -166,6 +166,51 @@ fn bench_versus_interleaves_settings_and_divides_frame_by_frame() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// `--versus` also reports what each setting pays once per change (here the eikonal light
+/// simulation, which the settings run with different integrators), with its work and its
+/// ratio to the first setting's, beside the per-frame costs.
+#[test]
+fn bench_versus_reports_each_setting_s_cost_per_change() {
+    let dir = std::env::temp_dir().join(format!("prism-bench-versus-once-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let json = dir.join("versus.json");
+    let stdout = bench(&[
+        "eikonal_sphere",
+        "--width",
+        "32",
+        "--height",
+        "32",
+        "--frames",
+        "2",
+        "--warmup",
+        "1",
+        "--set",
+        "volume.resolution=[16,16,16]",
+        "--versus",
+        "render.eikonal.light_integrator=rk4",
+        "--versus",
+        "render.eikonal.light_integrator=midpoint",
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert!(stdout.contains("Paid once per change"), "{stdout}");
+    let report: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    let versus = report["versus"].as_array().unwrap();
+    for (i, v) in versus.iter().enumerate() {
+        let costs = v["per_change_costs"].as_array().unwrap();
+        let sim = costs.iter().find(|c| c["name"] == "eikonal_light_simulation").expect("the light simulation's cost");
+        assert!(sim["ms"].as_f64().unwrap() > 0.0, "{sim}");
+        let sum: f64 = costs.iter().map(|c| c["ms"].as_f64().unwrap()).sum();
+        assert!((v["per_change_ms"].as_f64().unwrap() - sum).abs() < 1e-9, "setting {i}: the total is the costs' sum");
+        assert!(v["light_simulation"]["patch_steps"].as_u64().unwrap() > 0, "setting {i}: {}", v["light_simulation"]);
+    }
+    assert!(versus[0].get("per_change_ratio").is_none(), "the first setting is the one divided by");
+    let ratio = versus[1]["per_change_ratio"].as_f64().unwrap();
+    let expected = versus[1]["per_change_ms"].as_f64().unwrap() / versus[0]["per_change_ms"].as_f64().unwrap();
+    assert!((ratio - expected).abs() < 1e-9 * expected, "{ratio} vs {expected}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// `--diff` reads two bench JSON files and says which passes moved beyond the noise, from
 /// the samples each file keeps.
 #[test]

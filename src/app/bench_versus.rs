@@ -20,7 +20,9 @@ use super::bench::{
     PassStats,
 };
 use super::check_validation;
+use super::compare::PerChange;
 use super::output::{self, Outputs};
+use crate::technique::eikonal::eikonal_light::LightStats;
 
 /// The order in which frames of several participants (renderers, or the reference's
 /// iterations) are rendered when they are timed against each other in one process: in
@@ -112,6 +114,17 @@ pub struct VersusSetting {
     pub passes: Vec<PassStats>,
     /// Device memory each technique created, and the shared resources' ("frame").
     pub memory: Vec<TechniqueMemory>,
+    /// What the setting pays once per change instead of every frame (an eikonal light
+    /// simulation, static impostor textures and caustic maps): measured while its renderer
+    /// was set up and in its first frame, the settings one after another, not interleaved.
+    #[serde(flatten)]
+    pub per_change: PerChange,
+    /// `per_change_ms` over the first setting's (absent for the first, or where it paid nothing).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub per_change_ratio: Option<f64>,
+    /// The eikonal light simulation's work (patch-steps, kernels), where the setting runs one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub light_simulation: Option<LightStats>,
 }
 
 #[derive(Serialize, Debug)]
@@ -191,10 +204,14 @@ pub fn run(args: BenchArgs) -> Result<()> {
     bar.finish_and_clear();
     check_validation(&ctx)?;
     let host = host.after();
-    let timings: Vec<Vec<FrameTiming>> = renderers
-        .iter_mut()
-        .map(|r| r.take_timings().into_iter().filter(|f| f.frame >= u64::from(args.warmup)).collect())
-        .collect();
+    let mut per_change = Vec::new();
+    let mut timings: Vec<Vec<FrameTiming>> = Vec::new();
+    for r in renderers.iter_mut() {
+        let all = r.take_timings();
+        per_change.push(PerChange::of(&all, r.once_costs()));
+        timings.push(all.into_iter().filter(|f| f.frame >= u64::from(args.warmup)).collect());
+    }
+    let first_change_ms = per_change[0].ms;
 
     // Technique and frame time per frame number, per setting.
     let per_frame = |i: usize| -> (BTreeMap<u64, f64>, BTreeMap<u64, f64>) {
@@ -222,6 +239,9 @@ pub fn run(args: BenchArgs) -> Result<()> {
                 frame_ratio: if i == 0 { None } else { RatioStats::of(ratios(w, w0)) },
                 passes,
                 memory: renderers[i].technique_memory().to_vec(),
+                per_change_ratio: (i > 0 && first_change_ms > 0.0).then(|| per_change[i].ms / first_change_ms),
+                per_change: per_change[i].clone(),
+                light_simulation: renderers[i].light_stats().cloned(),
             }
         })
         .collect();
@@ -239,6 +259,19 @@ pub fn run(args: BenchArgs) -> Result<()> {
         ctx.info.driver_info
     );
     print_summary(&results);
+    if results.iter().any(|r| !r.per_change.costs.is_empty()) {
+        println!("\nPaid once per change (at setup and in the first frame, the settings one after another):");
+        for (i, r) in results.iter().enumerate() {
+            let ratio = r.per_change_ratio.map_or_else(String::new, |x| format!(", {x:.3}x the first setting's"));
+            println!("#{} {}: {:.3} ms{ratio}: {}", i + 1, r.setting, r.per_change.ms, r.per_change.describe());
+            if let Some(l) = &r.light_simulation {
+                println!(
+                    "   light simulation: {} patch-steps, {} step dispatches, {} dropped",
+                    l.patch_steps, l.steps, l.dropped_patches
+                );
+            }
+        }
+    }
     for (i, r) in results.iter().enumerate() {
         println!("\n#{} {}", i + 1, r.setting);
         print_pass_table(&r.passes, &r.frame);
