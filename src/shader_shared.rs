@@ -122,8 +122,8 @@ shared_constants! {
     // normalised filter, or the paper's s * (filtered photon count).
     PHOTON_PHYSICAL: u32 = 0;
     PHOTON_PAPER: u32 = 1;
-    // render.eikonal.integrator: Euler (Eqs. 11-12) or classical Runge-Kutta of Eqs. 9-10;
-    // render.eikonal.light_integrator also the explicit midpoint rule.
+    // render.eikonal.integrator and light_integrator: forward Euler (Eqs. 11-12, 14-15),
+    // classical Runge-Kutta or the explicit midpoint rule.
     EIKONAL_EULER: u32 = 0;
     EIKONAL_RK4: u32 = 1;
     EIKONAL_MIDPOINT: u32 = 2;

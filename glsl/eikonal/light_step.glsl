@@ -1,8 +1,7 @@
 // One step of the eikonal light simulator for every patch (Ihrke et al. 2007):
 // - section 5.2.1: advance the four corners by the equal-time ray equation, Eqs. 14-15
 //   (dx/dt = v / n^2, dv/dt = grad n / n; forward Euler like the paper, the midpoint rule or
-//   RK4), so that all
-//   particles stay on one wavefront (Appendix, Eqs. 23-24: dS/dt = 1);
+//   RK4), so that all particles stay on one wavefront (Appendix, Eqs. 23-24: dS/dt = 1);
 // - Eq. 18: the flux dE * A loses exp(-sigma_r dt / n) (ds = dt / n, Eq. 24); without
 //   absorption it is constant (the intensity law, Eqs. 16-17);
 // - section 5.2.2: voxelize the patch into the irradiance volume. Not the paper's "highest

@@ -3,8 +3,8 @@
 // the volume's proxy box (ray-box intersection; section 5.1's "suitable proxy geometry to
 // start the ray casting"), is marched through the smoothed index field with the ray
 // equation dx/ds = v/n, dv/ds = grad n (Eqs. 9-10; Euler Eqs. 11-12, the midpoint rule or
-// classical RK4), and
-// its exit direction looks up the environment (the background radiance L_bg of Eq. 1).
+// classical RK4), and its exit direction looks up the environment (the background radiance
+// L_bg of Eq. 1).
 // No explicit ray-surface intersection: the bending comes from grad n alone.
 // Along the path (the material volumes of src/scene/volume_sources.rs):
 // RGB extinction (Eq. 5), emission (L_e of Eq. 2, integrated with Eq. 1), Fresnel reflection
