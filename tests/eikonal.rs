@@ -87,6 +87,9 @@ fn error(
     (state.x - exact.x).length() + (state.v - exact.v).length()
 }
 
+/// Halving the step divides a scheme of order p's error by 2^p: 16, 4 and 2. The bounds are
+/// that leading-order ratio up to the next term of the error expansion, about 15% at 8 to 64
+/// steps (measured: RK4 16.00-16.01, the midpoint rule 3.96-3.99).
 #[test]
 fn rk4_converges_at_fourth_order_the_midpoint_rule_at_second_and_euler_at_first() {
     if !common::in_own_process() {
@@ -111,6 +114,7 @@ fn rk4_converges_at_fourth_order_the_midpoint_rule_at_second_and_euler_at_first(
         let ratio = eu(n) / eu(2 * n);
         assert!((1.7..2.3).contains(&ratio), "Euler error ratio {ratio} ({n} steps)");
         let ratio = mid(n) / mid(2 * n);
+        eprintln!("midpoint {n} -> {} steps: ratio {ratio:.2}", 2 * n);
         assert!((3.4..4.6).contains(&ratio), "midpoint error ratio {ratio} ({n} steps)");
     }
 }
@@ -313,6 +317,7 @@ fn invalid_volumes_and_parameters_give_clear_errors() {
         (format!("{GOOD}index = {{ type = \"constant\", n = 1.5, n0 = 1 }}"), "", "n0"),
         (format!("{GOOD}index = {{ type = \"linear\", n0 = 1, gradient = [0, 2, 0] }}"), "", "refractive index"),
         (format!("{GOOD}{lens}\nattenuation = [-1, 0, 0]"), "", "attenuation"),
+        // An integrator prism does not offer ("midpoint" is one of its choices).
         (format!("{GOOD}{lens}"), "[render.eikonal]\nintegrator = \"rk2\"", "integrator"),
         (format!("{GOOD}{lens}"), "[render.eikonal]\nstep = 0", "step"),
         (format!("{GOOD}{lens}"), "[render.eikonal]\nsigma = -1", "sigma"),
