@@ -255,8 +255,7 @@ shared_structs! {
 
     /// Push constants of glsl/caustics/splat.vert.
     push struct CausticDrawPush {
-        /// x: the caustic-atlas layer drawn, y: its light's first splat record, z: map size
-        /// (texels), w: unused
+        /// x: map size (texels), yzw: unused
         dest: uvec4,
     }
 

@@ -89,6 +89,38 @@ fn caustic_flux_is_conserved_and_independent_of_the_grid() {
     assert!(b[0] > b[1] && b[1] > b[2] && b[2] > 0.0, "caustic_bunny flux {b:?}");
 }
 
+/// Each frame lists every splat under the caustic-map layer it lands in, and clears only the
+/// layers that get splats now or got them when last drawn (src/technique/caustics/
+/// caustics_map.rs, `SplatRoutes`). A layer whose caustic goes away must still be cleared:
+/// caustic_sphere's ball, moved out of the light's grid (fitted to where the ball was: a
+/// cone 2.0 m wide at the ball's depth), leaves no splat anywhere, so every layer of the map
+/// must hold exactly 0, where before the move the floor's cube face held the ball's 9.2 W.
+#[test]
+fn a_caustic_that_leaves_a_layer_is_cleared_from_it() {
+    if !common::in_own_process() {
+        return;
+    }
+    let ctx = common::context(false);
+    let s = common::scene("caustic_sphere", 64, &common::refs(&caustics(&["render.update=\"every_frame\""])));
+    let mut r = Renderer::new(&ctx, &s).expect("renderer");
+    let layer_flux = |r: &mut Renderer| -> Vec<f64> {
+        let (map, size) = r.read_caustic_map().expect("readback").expect("a caustic map");
+        map.chunks((size * size) as usize).map(|layer| layer.iter().map(|t| f64::from(t[1])).sum()).collect()
+    };
+    r.render_frame().expect("frame");
+    let before = layer_flux(&mut r);
+    eprintln!("flux per layer before the move: {before:?}");
+    // The point light looks down: the floor is in the -y face, layer 3 (cube_face_views).
+    assert!((before[3] - 9.2).abs() < 0.2, "the floor's face holds {} W, expected 9.2 W", before[3]);
+    assert!(r.move_object("ball", glam::Vec3::new(4.5, 1.2, 0.0)).unwrap());
+    r.render_frame().expect("frame");
+    let after = layer_flux(&mut r);
+    eprintln!("flux per layer after the move: {after:?}");
+    assert!(after.iter().all(|&f| f == 0.0), "a layer kept the caustic that left it: {after:?}");
+    drop(r);
+    common::assert_no_validation_errors(&ctx);
+}
+
 /// Eq. 6 with V from an occlusion query (`flux = "occlusion_query"`): the total caustic flux
 /// does not depend on the grid (within 5% from 64^2 to 256^2), and it is the solid-angle
 /// flux times the mean N . L over the ball's projected disk (Eq. 6's extra cosine: 2/3 for a

@@ -284,6 +284,15 @@ impl<'a> Cmd<'a> {
         unsafe { self.dev().cmd_draw(self.raw, vertices, instances, 0, 0) };
     }
 
+    /// One draw whose vertex count and first vertex the GPU wrote: a VkDrawIndirectCommand
+    /// at byte `offset` of `buffer`.
+    pub fn draw_indirect(&self, buffer: &Buffer, offset: u64) {
+        self.note_work();
+        // SAFETY: recording inside a render pass with a bound graphics pipeline; the buffer
+        // has INDIRECT_BUFFER usage and holds a VkDrawIndirectCommand at `offset`.
+        unsafe { self.dev().cmd_draw_indirect(self.raw, buffer.raw, offset, 1, 0) };
+    }
+
     pub fn draw_indexed(&self, index_count: u32, first_index: u32, vertex_offset: i32) {
         self.note_work();
         // SAFETY: as draw, with bound index/vertex buffers.

@@ -28,7 +28,11 @@
 //!    light ("environment caustic map"), the orthographic map for a directional light. The
 //!    paper draws its grid once per map; computing each vertex's path once and routing it,
 //!    instead of running the whole grid for every cube face and keeping the sixth that lands
-//!    there, gives the same map for a sixth of the light-path work.
+//!    there, gives the same map for a sixth of the light-path work. The hits pass also lists
+//!    each record under its layer ([`SplatRoutes`]), so a layer's draw visits only its own
+//!    records, and a layer that no record reaches (now, or when it was last drawn) is not
+//!    cleared: on caustic_sphere the five faces the caustic misses cost three times the
+//!    splats themselves (docs/BENCHMARKS.md).
 //!
 //! Units: the map holds flux per texel (W). Deferred shading divides by the receiver area a
 //! texel covers (glsl/shading/deferred.frag, `caustic_irradiance`), giving irradiance in
@@ -55,12 +59,14 @@ use crate::technique::{
     Registration, RenderError, Setup, Stage, Technique,
 };
 use crate::{
-    CAUSTIC_BINDING_BACK_NORMAL, CAUSTIC_BINDING_BACK_POSITION, CAUSTIC_BINDING_DESTINATIONS, CAUSTIC_BINDING_DN,
-    CAUSTIC_BINDING_FACES, CAUSTIC_BINDING_FRONT_NORMAL, CAUSTIC_BINDING_FRONT_POSITION, CAUSTIC_BINDING_MATERIALS,
-    CAUSTIC_BINDING_RECEIVER_2D, CAUSTIC_BINDING_RECEIVER_CUBE, CAUSTIC_BINDING_SPLATS, CAUSTIC_BINDING_VISIBLE,
-    CAUSTIC_EXIT_MARCH, CAUSTIC_EXIT_WYMAN, CAUSTIC_FACE_ORTHOGRAPHIC, CAUSTIC_FACE_PERSPECTIVE, CAUSTIC_LAYER_BACK,
-    CAUSTIC_LAYER_FRONT, FLUX_OCCLUSION_QUERY, FLUX_SOLID_ANGLE, LIGHT_DIRECTIONAL, LIGHT_POINT, NEWTON_APPROXIMATE,
-    NEWTON_TRUE, SHADOW_LAYERS_PER_LIGHT, SPLAT_FIXED, SPLAT_FOOTPRINT,
+    CAUSTIC_BINDING_BACK_NORMAL, CAUSTIC_BINDING_BACK_POSITION, CAUSTIC_BINDING_CLEAR_DRAWS, CAUSTIC_BINDING_COUNTS,
+    CAUSTIC_BINDING_DESTINATIONS, CAUSTIC_BINDING_DN, CAUSTIC_BINDING_FACES, CAUSTIC_BINDING_FIRSTS,
+    CAUSTIC_BINDING_FRONT_NORMAL, CAUSTIC_BINDING_FRONT_POSITION, CAUSTIC_BINDING_MATERIALS, CAUSTIC_BINDING_ORDER,
+    CAUSTIC_BINDING_RECEIVER_2D, CAUSTIC_BINDING_RECEIVER_CUBE, CAUSTIC_BINDING_SEEN, CAUSTIC_BINDING_SPLATS,
+    CAUSTIC_BINDING_SPLAT_DRAWS, CAUSTIC_BINDING_VISIBLE, CAUSTIC_EXIT_MARCH, CAUSTIC_EXIT_WYMAN,
+    CAUSTIC_FACE_ORTHOGRAPHIC, CAUSTIC_FACE_PERSPECTIVE, CAUSTIC_LAYER_BACK, CAUSTIC_LAYER_FRONT, FLUX_OCCLUSION_QUERY,
+    FLUX_SOLID_ANGLE, LIGHT_DIRECTIONAL, LIGHT_POINT, NEWTON_APPROXIMATE, NEWTON_TRUE, SHADOW_LAYERS_PER_LIGHT,
+    SPLAT_FIXED, SPLAT_FOOTPRINT,
 };
 
 pub const CAUSTICS_MAP_RECEIVERS: &str = "caustics_map_receivers";
@@ -145,21 +151,38 @@ impl Technique for CausticsMapPass {
         if let Some((_, tracer)) = &self.oracle {
             hits = hits.uses(tracer);
         }
-        hits.record(move |cmd| {
+        let routes = &self.routes;
+        hits.uses(&routes.set).record(move |cmd| {
             let mut sets = vec![self.hits_set.set()];
             sets.extend(self.oracle.as_ref().map(|(_, t)| t.set()));
+            // The counts are this pass's own: after the previous frame's read, zeroed, counted
+            // by the hits kernel, read by the layers kernel.
+            cmd.buffer_barrier(&routes.counts, Access::ComputeRead, Access::TransferWrite);
+            cmd.fill_buffer(&routes.counts, 0);
+            cmd.buffer_barrier(&routes.counts, Access::TransferWrite, Access::ComputeWrite);
             cmd.compute(&self.hits_pipeline, &sets, &self.hits_push, self.hits_groups);
+            cmd.buffer_barrier(&routes.counts, Access::ComputeWrite, Access::ComputeRead);
+            cmd.bind_compute(&routes.pipeline, &[routes.set.set()]);
+            cmd.dispatch(routes.groups, 1, 1);
         });
-        let pass = frame.pass(CAUSTICS_MAP).uses(&self.splat_set);
-        pass.write(targets.caustic.flux_id, Access::ColorAttachment).record(move |cmd| {
-            for d in &self.destinations {
-                cmd.in_target(&self.splat_target, d.push.dest[0] as usize, &[Clear::Color([0.0; 4])], |cmd| {
-                    cmd.bind_graphics(&self.splat_pipeline, &[self.splat_set.set()]);
-                    cmd.push_graphics(&self.splat_pipeline, &d.push);
-                    cmd.draw(d.records, 1);
-                });
-            }
-        });
+        frame
+            .pass(CAUSTICS_MAP)
+            .uses(&self.splat_set)
+            .read(routes.splat_draws_id, Access::IndirectArgs)
+            .read(routes.clear_draws_id, Access::IndirectArgs)
+            .write(targets.caustic.flux_id, Access::ColorAttachment)
+            .record(move |cmd| {
+                for &layer in &routes.layers {
+                    let offset = u64::from(layer) * 16;
+                    cmd.in_target(&self.splat_target, layer as usize, &[Clear::None], |cmd| {
+                        cmd.bind_graphics(&self.clear_pipeline, &[]);
+                        cmd.draw_indirect(&routes.clear_draws, offset);
+                        cmd.bind_graphics(&self.splat_pipeline, &[self.splat_set.set()]);
+                        cmd.push_graphics(&self.splat_pipeline, &self.splat_push);
+                        cmd.draw_indirect(&routes.splat_draws, offset);
+                    });
+                }
+            });
     }
 
     fn kept(&mut self) -> Option<&mut Regeneration> {
@@ -175,11 +198,82 @@ const LAYER_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 /// radius (or inside it) sees them over too wide an angle for one frustum: six cube faces.
 const FITTED_FRUSTUM_LIMIT: f32 = 0.9;
 
-/// A layer of the caustic atlas, drawn from its light's splat records.
-struct Destination {
-    push: CausticDrawPush,
-    /// The light's records (the draw's vertex count).
-    records: u32,
+/// The splat records listed per caustic-atlas layer, and the draws that the GPU sizes from
+/// the lists (glsl/caustics/splat_layers.comp): each layer's splat draw visits its own records
+/// only, and a layer that no record reached, now or when it was last drawn, is neither cleared
+/// nor drawn.
+struct SplatRoutes {
+    /// The layers drawn: a point light's six cube faces, a directional light's first layer.
+    layers: Vec<u32>,
+    /// Per atlas layer: records counted into it this frame (u32).
+    counts: Buffer,
+    /// Per atlas layer: the splat draw and the clear draw (VkDrawIndirectCommand each).
+    splat_draws: Buffer,
+    splat_draws_id: BufferId,
+    clear_draws: Buffer,
+    clear_draws_id: BufferId,
+    /// The kernel that writes the draws, its set (counts, firsts, draws, seen) and groups.
+    pipeline: ComputePipeline,
+    set: BoundSet,
+    groups: u32,
+    /// Per atlas layer: where its list begins in `order` (u32).
+    firsts: Buffer,
+    /// The lists: indices of splat records (u32).
+    order: Buffer,
+    order_id: BufferId,
+    /// Per atlas layer: the count its last drawn frame had (u32; 1 at first, so that the
+    /// first frame clears every layer).
+    _seen: Buffer,
+}
+
+impl SplatRoutes {
+    /// The layers `drawn`, each layer's list beginning at `firsts[layer]` of `listed` entries.
+    fn new(s: &mut Setup<'_>, drawn: Vec<u32>, firsts: &[u32], listed: u32) -> GpuResult<Self> {
+        use vk::BufferUsageFlags as U;
+        let ctx = s.ctx;
+        let layers = firsts.len() as u64;
+        let gpu_buffer = |name: &str, bytes: u64, usage| Buffer::new(ctx, name, bytes, usage, MemoryLocation::GpuOnly);
+        let counts = gpu_buffer("caustic_layer_counts", 4 * layers, U::STORAGE_BUFFER | U::TRANSFER_DST)?;
+        let order = gpu_buffer("caustic_layer_order", 4 * u64::from(listed.max(1)), U::STORAGE_BUFFER)?;
+        let draws = |name| gpu_buffer(name, 16 * layers, U::STORAGE_BUFFER | U::INDIRECT_BUFFER);
+        let (splat_draws, clear_draws) = (draws("caustic_splat_draws")?, draws("caustic_clear_draws")?);
+        let firsts = Buffer::storage(ctx, "caustic_layer_firsts", firsts)?;
+        let seen = Buffer::storage(ctx, "caustic_layer_seen", &vec![1u32; layers as usize])?;
+        let graph = &mut *s.graph;
+        let (splat_draws_id, clear_draws_id) =
+            (graph.register_buffer(&splat_draws), graph.register_buffer(&clear_draws));
+        let (order_id, seen_id) = (graph.register_buffer(&order), graph.register_buffer(&seen));
+        // The counts are ordered by the hits pass's own barriers; the firsts are host-written
+        // once at creation.
+        let set = Bindings::new(vk::ShaderStageFlags::COMPUTE)
+            .storage(CAUSTIC_BINDING_COUNTS, &counts)
+            .storage(CAUSTIC_BINDING_FIRSTS, &firsts)
+            .storage(CAUSTIC_BINDING_SPLAT_DRAWS, &splat_draws)
+            .access(splat_draws_id, Access::ComputeWrite)
+            .storage(CAUSTIC_BINDING_CLEAR_DRAWS, &clear_draws)
+            .access(clear_draws_id, Access::ComputeWrite)
+            .storage(CAUSTIC_BINDING_SEEN, &seen)
+            .access(seen_id, Access::ComputeWrite)
+            .build(ctx, "caustics_map_layers")?;
+        let pipeline =
+            ComputePipeline::new(ctx, "caustics_map_layers", "caustics/splat_layers.comp", &[set.layout()], 0, &[])?;
+        let groups = (layers as u32).div_ceil(crate::REF_WORKGROUP);
+        Ok(SplatRoutes {
+            layers: drawn,
+            counts,
+            splat_draws,
+            splat_draws_id,
+            clear_draws,
+            clear_draws_id,
+            pipeline,
+            set,
+            groups,
+            firsts,
+            order,
+            order_id,
+            _seen: seen,
+        })
+    }
 }
 
 /// A face of the receivers' distance atlas.
@@ -287,7 +381,10 @@ pub struct CausticsMapPass {
     splat_target: RenderTarget,
     splat_set: BoundSet,
     splat_pipeline: GraphicsPipeline,
-    destinations: Vec<Destination>,
+    splat_push: CausticDrawPush,
+    /// A full-screen triangle writing zero flux: a layer's clear.
+    clear_pipeline: GraphicsPipeline,
+    routes: SplatRoutes,
     _faces: Buffer,
     _layer_matrices: Buffer,
     _splats: Buffer,
@@ -394,11 +491,15 @@ impl CausticsMapPass {
 
         // Each atlas layer's world -> clip matrix: a point light's shadow-cube faces, a
         // directional light's orthographic map; zero (nothing drawn) for the others.
+        // Each drawn layer's list of records has room for all of its light's records (at most
+        // six lists a light: 3/4 of the records' own bytes, so the range check above covers it).
         let mut layer_matrices = vec![[[0.0f32; 4]; 4]; layers as usize];
-        let mut destinations = Vec::new();
+        let mut drawn = Vec::new();
+        let mut firsts = vec![0u32; layers as usize];
+        let mut listed = 0u32;
         for (i, l) in scene.lights.iter().enumerate() {
             let base = i as u32 * SHADOW_LAYERS_PER_LIGHT;
-            let (first, count) = light_sources[i];
+            let (_, count) = light_sources[i];
             let dest: Vec<(u32, Mat4)> = match l {
                 Light::Point { .. } => gpu
                     .shadow_faces
@@ -410,12 +511,12 @@ impl CausticsMapPass {
             };
             for (layer, view_proj) in dest {
                 layer_matrices[layer as usize] = view_proj.to_cols_array_2d();
-                destinations.push(Destination {
-                    push: CausticDrawPush { dest: [layer, first * per_face * channels, size, 0] },
-                    records: count * per_face * channels,
-                });
+                drawn.push(layer);
+                firsts[layer as usize] = listed;
+                listed += count * per_face * channels;
             }
         }
+        let routes = SplatRoutes::new(s, drawn, &firsts, listed)?;
         let layer_matrices = Buffer::storage(ctx, "caustic_layer_matrices", &layer_matrices)?;
 
         // Linear filtering of the receivers' distances makes f(d) (Eq. 3) piecewise linear
@@ -439,6 +540,10 @@ impl CausticsMapPass {
             .storage(CAUSTIC_BINDING_DESTINATIONS, &layer_matrices)
             .storage(CAUSTIC_BINDING_SPLATS, &splats)
             .access(splats_id, Access::ComputeWrite)
+            .storage(CAUSTIC_BINDING_COUNTS, &routes.counts)
+            .storage(CAUSTIC_BINDING_FIRSTS, &routes.firsts)
+            .storage(CAUSTIC_BINDING_ORDER, &routes.order)
+            .access(routes.order_id, Access::ComputeWrite)
             .build(ctx, CAUSTICS_MAP_HITS)?;
         let oracle = match oracle {
             // Host-written once at creation: visible at submission.
@@ -494,13 +599,16 @@ impl CausticsMapPass {
         let splat_set = Bindings::new(vk::ShaderStageFlags::VERTEX)
             .storage(CAUSTIC_BINDING_SPLATS, &splats)
             .read(splats_id)
+            .storage(CAUSTIC_BINDING_ORDER, &routes.order)
+            .read(routes.order_id)
             .build(ctx, CAUSTICS_MAP)?;
+        // Each layer is cleared by its clear draw, where the layers kernel asks for it.
         let splat_target = RenderTarget::layered(
             ctx,
             CAUSTICS_MAP,
             &[&targets.caustic.flux],
             None,
-            true,
+            false,
             targets.caustic.flux.layers(),
         )?;
         let splat_pipeline = GraphicsPipeline::new(
@@ -513,6 +621,16 @@ impl CausticsMapPass {
             },
             &[splat_set.layout()],
             std::mem::size_of::<CausticDrawPush>() as u32,
+            &splat_target.pass,
+        )?;
+        let clear_pipeline = GraphicsPipeline::new(
+            ctx,
+            &GraphicsPipelineDesc {
+                blend: &[Blend::Off],
+                ..GraphicsPipelineDesc::fullscreen(&format!("{CAUSTICS_MAP}_clear"), "caustics/splat_clear.frag")
+            },
+            &[],
+            0,
             &splat_target.pass,
         )?;
 
@@ -534,7 +652,9 @@ impl CausticsMapPass {
             splat_target,
             splat_set,
             splat_pipeline,
-            destinations,
+            splat_push: CausticDrawPush { dest: [size, 0, 0, 0] },
+            clear_pipeline,
+            routes,
             _faces: faces_buffer,
             _layer_matrices: layer_matrices,
             _splats: splats,
