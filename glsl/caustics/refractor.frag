@@ -8,8 +8,9 @@
 // light (open shapes such as the ring and the water have no back to rely on).
 // CAUSTIC_LAYER_BACK keeps the nearest surface facing away from the light: the exit
 // surface of double-surface refraction ("rasterizing the back-faces of the object", §III.E),
-// with its outward normal. Facing is decided by the interpolated normal, so no winding
-// convention of the light's projections is assumed.
+// with its outward normal. Facing is decided by the interpolated normal, which holds for
+// open meshes too; for a closed mesh with outward normals the pass also culls the faces the
+// layer cannot keep (src/technique/caustics/caustics_map.rs, `RefractorLayers`).
 #include "prism_shared.glsl"
 layout(constant_id = 0) const uint MODE = CAUSTIC_LAYER_FRONT;
 layout(push_constant) uniform RefractorPushBlock { RefractorPush pc; };

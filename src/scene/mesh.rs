@@ -34,6 +34,57 @@ impl Mesh {
         self.indices.len() / 3
     }
 
+    /// Whether the mesh bounds a solid with its front faces outside: every edge (vertices
+    /// welded within 1e-6 of the mesh's size, as a seam's rounded sines leave them;
+    /// degenerate triangles left out) is shared by exactly two triangles that run it in
+    /// opposite directions, and the enclosed volume is positive. Seen from anywhere outside,
+    /// the nearest surface of such a mesh is then a front face and a ray's exit a back face,
+    /// so passes looking for either can cull the other.
+    pub fn is_closed_outward(&self) -> bool {
+        use std::collections::HashMap;
+        let (lo, hi) = self.bounds();
+        let eps = 1e-6 * (hi - lo).length().max(f32::MIN_POSITIVE);
+        // Cells of side eps: a point's twin within eps is in one of the 27 around it.
+        let mut cells: HashMap<[i64; 3], Vec<(Vec3, u32)>> = HashMap::new();
+        let mut next = 0u32;
+        let mut ids = Vec::with_capacity(self.positions.len());
+        for &p in &self.positions {
+            let cell = ((p - lo) / eps).floor().as_i64vec3().to_array();
+            let near = (0..27).find_map(|k| {
+                let c = [cell[0] + k % 3 - 1, cell[1] + k / 3 % 3 - 1, cell[2] + k / 9 - 1];
+                cells.get(&c)?.iter().find(|(q, _)| (*q - p).length() <= eps).map(|&(_, id)| id)
+            });
+            let id = near.unwrap_or_else(|| {
+                cells.entry(cell).or_default().push((p, next));
+                next += 1;
+                next - 1
+            });
+            ids.push(id);
+        }
+        // Per undirected edge (low id, high id): the runs low -> high minus the runs back.
+        let mut edges: HashMap<(u32, u32), (u32, u32)> = HashMap::new();
+        let mut volume = 0.0f64;
+        for tri in self.indices.chunks_exact(3) {
+            let Some(v) = tri.iter().map(|&i| ids.get(i as usize).copied()).collect::<Option<Vec<u32>>>() else {
+                return false;
+            };
+            if v[0] == v[1] || v[1] == v[2] || v[2] == v[0] {
+                continue;
+            }
+            for (a, b) in [(v[0], v[1]), (v[1], v[2]), (v[2], v[0])] {
+                let e = edges.entry((a.min(b), a.max(b))).or_default();
+                if a < b {
+                    e.0 += 1;
+                } else {
+                    e.1 += 1;
+                }
+            }
+            let [p0, p1, p2] = [0, 1, 2].map(|k| self.positions[tri[k] as usize].as_dvec3());
+            volume += p0.dot(p1.cross(p2)) / 6.0;
+        }
+        !edges.is_empty() && edges.values().all(|&runs| runs == (1, 1)) && volume > 0.0
+    }
+
     /// Appends `other`, offsetting its indices.
     pub fn append(&mut self, other: &Mesh) {
         let base = self.positions.len() as u32;
@@ -295,6 +346,26 @@ fn prescan(text: &str) -> Result<(), ObjError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn closed_outward_meshes_are_told_from_open_or_inside_out_ones() {
+        use crate::scene::shapes;
+        let c = Vec3::new(0.5, 1.0, -2.0);
+        let sphere = shapes::sphere(c, 1.0, 64);
+        assert!(sphere.is_closed_outward(), "a sphere (seam and poles welded by position)");
+        assert!(shapes::cuboid(c, Vec3::new(1.0, 2.0, 3.0)).is_closed_outward(), "a box with hard edges");
+        assert!(shapes::torus(c, 1.0, 0.3, 32).is_closed_outward(), "a torus");
+        assert!(!shapes::quad(c, Vec2::ONE, Vec3::Y).is_closed_outward(), "a quad has a boundary");
+        assert!(!shapes::open_cylinder(c, 1.0, 0.5, 32).is_closed_outward(), "an open cylinder");
+        let mut inside_out = sphere.clone();
+        for t in inside_out.indices.chunks_exact_mut(3) {
+            t.swap(1, 2);
+        }
+        assert!(!inside_out.is_closed_outward(), "clockwise from outside: negative volume");
+        let mut holed = sphere.clone();
+        holed.indices.truncate(holed.indices.len() - 3);
+        assert!(!holed.is_closed_outward(), "one triangle missing");
+    }
 
     #[test]
     fn degenerate_triangles_give_finite_unit_normals() {

@@ -682,12 +682,22 @@ pub struct RefractorLayers {
     /// Per source face: the front layers' framebuffer, then the back layers'.
     front: RenderTarget,
     back: RenderTarget,
-    front_pipeline: GraphicsPipeline,
-    back_pipeline: GraphicsPipeline,
+    /// Per layer (front, back): the pipeline for any mesh, and the one for a closed mesh
+    /// with outward normals, which culls the faces the layer cannot keep: the back faces in
+    /// the front layer (never the nearest surface: the same layer), the front faces in the
+    /// back layer (the paper's "rasterizing the back-faces", §III.E; the same layer but at
+    /// silhouettes, where a front face's interpolated normal may turn away from the light).
+    /// The light's projections are not y-flipped like the camera's, so a front face is
+    /// clockwise in their images. On a CPU device the triangles culled before setup halve
+    /// the pass (docs/BENCHMARKS.md).
+    front_pipelines: [GraphicsPipeline; 2],
+    back_pipelines: [GraphicsPipeline; 2],
     /// front position, front normal, back position, back normal, front depth, back depth.
     pub layers: Vec<(Image, ImageId)>,
     sources: Vec<SourceFace>,
-    specular_draws: Vec<Draw>,
+    /// The specular objects' draws, each with whether its mesh is closed and outward
+    /// ([`crate::scene::Mesh::is_closed_outward`]).
+    specular_draws: Vec<(Draw, bool)>,
     /// Shah et al. 2007 Eq. 6's V: one occlusion query per source face around the front
     /// surface's draws (samples that pass the depth test), copied on the GPU into `visible`
     /// (one u32 per face), which the splat pass reads in the same frame.
@@ -774,11 +784,12 @@ impl RefractorLayers {
         let l = |i: usize| &layer_images[i].0;
         let front = RenderTarget::layered(ctx, &format!("{name}_front"), &[l(0), l(1)], Some(l(4)), true, n_faces)?;
         let back = RenderTarget::layered(ctx, &format!("{name}_back"), &[l(2), l(3)], Some(l(5)), true, n_faces)?;
-        let refractor_pipeline = |mode: u32, name: &str| {
+        let refractor_pipeline = |mode: u32, name: &str, cull| {
             GraphicsPipeline::new(
                 ctx,
                 &GraphicsPipelineDesc {
                     blend: &[Blend::Off, Blend::Off],
+                    cull,
                     specialization: &[("MODE", Spec::U32(mode))],
                     ..GraphicsPipelineDesc::mesh(
                         name,
@@ -792,14 +803,28 @@ impl RefractorLayers {
                 &front.pass,
             )
         };
-        let front_pipeline = refractor_pipeline(CAUSTIC_LAYER_FRONT, &format!("{name}_front"))?;
-        let back_pipeline = refractor_pipeline(CAUSTIC_LAYER_BACK, &format!("{name}_back"))?;
+        use vk::CullModeFlags as Cull;
+        let (front_name, back_name) = (format!("{name}_front"), format!("{name}_back"));
+        let front_pipelines = [
+            refractor_pipeline(CAUSTIC_LAYER_FRONT, &front_name, Cull::NONE)?,
+            refractor_pipeline(CAUSTIC_LAYER_FRONT, &front_name, Cull::FRONT)?,
+        ];
+        let back_pipelines = [
+            refractor_pipeline(CAUSTIC_LAYER_BACK, &back_name, Cull::NONE)?,
+            refractor_pipeline(CAUSTIC_LAYER_BACK, &back_name, Cull::BACK)?,
+        ];
         let sources = faces
             .iter()
             .map(|f| SourceFace { view_proj: Mat4::from_cols_array_2d(&f.view_proj), light: f.light })
             .collect();
-        let specular_draws =
-            gpu.draws.iter().filter(|d| is_specular(&scene.materials[d.material as usize])).copied().collect();
+        // gpu.draws[i] is object i.
+        let specular_draws = gpu
+            .draws
+            .iter()
+            .zip(&scene.objects)
+            .filter(|(d, _)| is_specular(&scene.materials[d.material as usize]))
+            .map(|(d, o)| (*d, o.mesh.is_closed_outward()))
+            .collect();
         let queries = if occlusion_queries {
             Some(OcclusionQueryPool::new(ctx, &format!("{name}_visible"), n_faces)?)
         } else {
@@ -824,8 +849,8 @@ impl RefractorLayers {
             name,
             front,
             back,
-            front_pipeline,
-            back_pipeline,
+            front_pipelines,
+            back_pipelines,
             layers: layer_images,
             sources,
             specular_draws,
@@ -846,8 +871,8 @@ impl RefractorLayers {
                 cmd.reset_occlusion_queries(q);
             }
             for (face, s) in self.sources.iter().enumerate() {
-                let layers = [(&self.front, &self.front_pipeline), (&self.back, &self.back_pipeline)];
-                for (layer, (target, pipeline)) in layers.into_iter().enumerate() {
+                let layers = [(&self.front, &self.front_pipelines), (&self.back, &self.back_pipelines)];
+                for (layer, (target, pipelines)) in layers.into_iter().enumerate() {
                     cmd.in_target(
                         target,
                         face,
@@ -858,9 +883,10 @@ impl RefractorLayers {
                             if let Some(q) = query {
                                 cmd.begin_occlusion_query(q, face as u32);
                             }
-                            cmd.bind_graphics(pipeline, &[self.dn_set.set()]);
                             cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
-                            for d in &self.specular_draws {
+                            for &(d, closed) in &self.specular_draws {
+                                let pipeline = &pipelines[usize::from(closed)];
+                                cmd.bind_graphics(pipeline, &[self.dn_set.set()]);
                                 let push = RefractorPush {
                                     view_proj: s.view_proj.to_cols_array_2d(),
                                     light: s.light,

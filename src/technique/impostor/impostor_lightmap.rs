@@ -250,7 +250,15 @@ pub struct ImpostorLightmap {
     /// A framebuffer per light.
     caustic_target: RenderTarget,
     caustic_set: BoundSet,
-    caustic_pipeline: GraphicsPipeline,
+    /// The caustic map's pipeline for any mesh, and the one for a closed mesh with outward
+    /// normals ([`crate::scene::Mesh::is_closed_outward`]), whose back faces are never the
+    /// surface nearest the light and are culled (front faces are clockwise in the light's
+    /// image, which is not y-flipped like the camera's): the same map, without shading the
+    /// back faces' fragments, each a Hit() search (on a CPU device, which shades them all
+    /// before the depth test, a ball's caustic map takes half the time; docs/BENCHMARKS.md).
+    caustic_pipelines: [GraphicsPipeline; 2],
+    /// Per object: whether its mesh is closed and outward.
+    closed: Vec<bool>,
     /// One layer per receiver (`charts[i]` in layer i): irradiance in W/m^2.
     pub lightmaps: Image,
     lightmaps_id: ImageId,
@@ -344,22 +352,28 @@ impl ImpostorLightmap {
             None => caustic_set,
         };
         let caustic_set = caustic_set.build(ctx, IMPOSTOR_LIGHTMAP_CAUSTIC_MAP)?;
-        let caustic_pipeline = GraphicsPipeline::new(
-            ctx,
-            &GraphicsPipelineDesc {
-                blend: &[Blend::Off, Blend::Off],
-                specialization: &[("ITERATIONS", Spec::U32(params.iterations))],
-                ..GraphicsPipelineDesc::mesh(
-                    IMPOSTOR_LIGHTMAP_CAUSTIC_MAP,
-                    "impostor/lightmap_caustic.vert",
-                    "impostor/lightmap_caustic.frag",
-                    DepthState::LESS,
-                )
-            },
-            &[frame_layout, caustic_set.layout()],
-            std::mem::size_of::<CausticPush>() as u32,
-            &caustic_target.pass,
-        )?;
+        let caustic_pipeline = |cull| {
+            GraphicsPipeline::new(
+                ctx,
+                &GraphicsPipelineDesc {
+                    blend: &[Blend::Off, Blend::Off],
+                    cull,
+                    specialization: &[("ITERATIONS", Spec::U32(params.iterations))],
+                    ..GraphicsPipelineDesc::mesh(
+                        IMPOSTOR_LIGHTMAP_CAUSTIC_MAP,
+                        "impostor/lightmap_caustic.vert",
+                        "impostor/lightmap_caustic.frag",
+                        DepthState::LESS,
+                    )
+                },
+                &[frame_layout, caustic_set.layout()],
+                std::mem::size_of::<CausticPush>() as u32,
+                &caustic_target.pass,
+            )
+        };
+        let caustic_pipelines =
+            [caustic_pipeline(vk::CullModeFlags::NONE)?, caustic_pipeline(vk::CullModeFlags::FRONT)?];
+        let closed = scene.objects.iter().map(|o| o.mesh.is_closed_outward()).collect();
 
         // The light maps and the splat pass: a framebuffer per chart, a set per light.
         let n = params.lightmap_size;
@@ -434,7 +448,8 @@ impl ImpostorLightmap {
             maps,
             caustic_target,
             caustic_set,
-            caustic_pipeline,
+            caustic_pipelines,
+            closed,
             lightmaps,
             lightmaps_id,
             splat_target,
@@ -551,13 +566,14 @@ impl ImpostorLightmap {
             for (i, (push, objects)) in pushes.into_iter().enumerate() {
                 let clears = [Clear::Color([0.0, 0.0, 0.0, -1.0]), Clear::Color([0.0; 4]), Clear::Depth(1.0)];
                 cmd.in_target(&self.caustic_target, i, &clears, |cmd| {
-                    cmd.bind_graphics(&self.caustic_pipeline, &[frame_set, self.caustic_set.set()]);
                     cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
                     for i in objects {
                         let Some(d) = scene.draws.get(i) else { continue };
+                        let pipeline = &self.caustic_pipelines[usize::from(self.closed[i])];
+                        cmd.bind_graphics(pipeline, &[frame_set, self.caustic_set.set()]);
                         let mut p = push;
                         p.intensity[3] = d.material as f32;
-                        cmd.push_graphics(&self.caustic_pipeline, &p);
+                        cmd.push_graphics(pipeline, &p);
                         cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
                     }
                 });
