@@ -7,8 +7,8 @@
 // over exactly the texels the fragment shader keeps (centres within `radius`), so each photon
 // deposits all of its power (src/technique/impostor/impostor_lightmap.rs, `splat_weights`, checks the same
 // sum on the CPU). The Gaussian is separable, exp(-(dx^2 + dy^2) / 2 sigma^2) = e(dx) e(dy):
-// one exp per column and per row of the splat's square (2 (2r + 3)) instead of one per texel
-// ((2r + 3)^2, 49 at the default radius); the disc still decides which texels count.
+// one exp per column and per row of the splat's square (2 (2r + 1), r = ceil(radius)) instead
+// of one per texel ((2r + 1)^2, 25 at the default radius); the disc decides which texels count.
 #include "common.glsl"
 layout(set = 0, binding = LIGHTMAP_BINDING_PHOTON_HIT) uniform sampler2D photon_hit;
 layout(set = 0, binding = LIGHTMAP_BINDING_PHOTON_POWER) uniform sampler2D photon_power;
@@ -35,19 +35,21 @@ void main() {
     float sigma = radius * 0.5;
     float sum = 0.0;
     int r = int(ceil(radius));
-    ivec2 base = ivec2(floor(center));
-    // filter_radius <= 16 (src/scene/techniques.rs): at most 2 * 16 + 3 columns and rows.
-    float ex[35];
-    float ey[35];
-    int span = 2 * r + 3;
+    // The texels k whose centres k + 0.5 are within `radius` of the centre along an axis
+    // start at `lo`; there are at most 2 ceil(radius) + 1 of them.
+    ivec2 lo = ivec2(ceil(center - radius - 0.5));
+    // filter_radius <= 16 (src/scene/techniques.rs): at most 2 * 16 + 1 columns and rows.
+    float ex[33];
+    float ey[33];
+    int span = 2 * r + 1;
     for (int k = 0; k < span; ++k) {
-        vec2 d = vec2(base + ivec2(k - r - 1)) + 0.5 - center;
+        vec2 d = vec2(lo + ivec2(k)) + 0.5 - center;
         ex[k] = exp(-d.x * d.x / (2.0 * sigma * sigma));
         ey[k] = exp(-d.y * d.y / (2.0 * sigma * sigma));
     }
     for (int y = 0; y < span; ++y) {
         for (int x = 0; x < span; ++x) {
-            vec2 d = vec2(base + ivec2(x, y) - r - 1) + 0.5 - center;
+            vec2 d = vec2(lo + ivec2(x, y)) + 0.5 - center;
             if (dot(d, d) <= radius * radius) sum += ex[x] * ey[y];
         }
     }
@@ -55,5 +57,6 @@ void main() {
     out_irradiance = power * pc.params.z / sum;
     out_center = center;
     gl_Position = vec4(hit.rg * 2.0 - 1.0, 0.0, 1.0);
-    gl_PointSize = 2.0 * float(r) + 3.0;
+    // Pixel centres up to r + 1/2 from the centre along each axis: the whole disc.
+    gl_PointSize = 2.0 * float(r) + 1.0;
 }

@@ -654,6 +654,14 @@ mod tests {
                 let max = w.iter().map(|w| w.1).fold(0.0, f32::max);
                 let own = w.iter().find(|w| w.0 == [cx.floor() as i32, cy.floor() as i32]).map(|w| w.1);
                 assert_eq!(own, Some(max), "radius {radius} at ({cx}, {cy})");
+                // glsl/impostor/lightmap_splat.vert sums, and its point covers, the 2 ceil(r) + 1
+                // texels from ceil(c - r - 1/2) on along each axis: every weighted texel is there.
+                let span = 2 * radius.ceil() as i32 + 1;
+                let lo = [(cx - radius - 0.5).ceil() as i32, (cy - radius - 0.5).ceil() as i32];
+                for (p, _) in &w {
+                    let inside = (0..2).all(|a| p[a] >= lo[a] && p[a] < lo[a] + span);
+                    assert!(inside, "radius {radius} at ({cx}, {cy}): texel {p:?} outside {lo:?} + {span}");
+                }
             }
         }
     }
