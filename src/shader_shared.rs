@@ -276,13 +276,16 @@ shared_bindings! {
     // Light-map caustics with distance impostors (Szirmay-Kalos et al. 2005 §5;
     // src/technique/impostor/impostor_lightmap.rs). Set 1 of the caustic-map pass: the uv
     // cube map, filtered (its distance, for Hit()) and unfiltered (uv and receiver id), and
-    // the refractor map; set 0 of the splat pass: the caustic map's two targets.
+    // the refractor map, and the specular surfaces seen from the light (position and
+    // material + 1, normal); set 0 of the splat pass: the caustic map's two targets.
     LIGHTMAP_BINDINGS {
         LIGHTMAP_BINDING_UV_LINEAR = 0;
         LIGHTMAP_BINDING_UV_NEAREST = 1;
         LIGHTMAP_BINDING_REFRACTOR = 2;
         LIGHTMAP_BINDING_PHOTON_HIT = 3;
         LIGHTMAP_BINDING_PHOTON_POWER = 4;
+        LIGHTMAP_BINDING_SURFACE_POSITION = 5;
+        LIGHTMAP_BINDING_SURFACE_NORMAL = 6;
     }
     // The light maps in set 1 of the apply pass (besides BINDING_GBUF_*).
     LIGHTMAP_APPLY_BINDINGS {

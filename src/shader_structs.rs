@@ -179,7 +179,8 @@ shared_structs! {
         view_proj: mat4,
         /// xyz: point light position or unit direction of travel; w: LIGHT_*
         light: vec4,
-        /// rgb: I (W/sr, point) or E (W/m^2, directional); w: material index
+        /// rgb: I (W/sr, point) or E (W/m^2, directional); w: the material index of the object
+        /// drawn (glsl/impostor/lightmap_surface.frag)
         intensity: vec4,
         /// xyz: reference point o of the uv map; w: tan(half angle) or half side (m)
         reference: vec4,

@@ -203,6 +203,7 @@ fn impostor_lightmap_passes_only_with_light_specular_object_and_quad_receiver() 
             "shadow_map",
             "impostor_lightmap_uv_map",
             "impostor_lightmap_refractor_map",
+            "impostor_lightmap_caustic_surfaces",
             "impostor_lightmap_caustic_map",
             "impostor_lightmap_splat",
             "gbuffer",

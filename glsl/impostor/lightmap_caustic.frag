@@ -9,8 +9,13 @@
 // the light source and the solid angle subtended by the caustic map pixel" (a point light:
 // intensity x solid angle; a directional light: irradiance x texel area), times the Fresnel
 // factors. The paper stores the power's luminance; here RGB power goes to a second target.
-// Texels without a hit keep the cleared alpha -1 ("we initialize the caustic map with -1
-// alpha values"; the splat pass drops them).
+// Texels without a hit get alpha -1 ("we initialize the caustic map with -1 alpha values";
+// the splat pass drops them).
+//
+// A full-screen pass over the caustic map: the surfaces the light sees were rasterized first
+// (lightmap_surface.frag), so each texel runs the two Hit() searches once. Shaded while
+// rasterizing, they ran for every fragment of every small triangle that a CPU device shades
+// in blocks of pixels, several times per texel on a tessellated ball.
 #include "frame.glsl"
 #include "fresnel.glsl"
 #include "impostor.glsl"
@@ -20,8 +25,9 @@ layout(constant_id = 0) const uint ITERATIONS = 4;
 layout(set = 1, binding = LIGHTMAP_BINDING_UV_LINEAR) uniform samplerCube uv_linear;
 layout(set = 1, binding = LIGHTMAP_BINDING_UV_NEAREST) uniform samplerCube uv_nearest;
 layout(set = 1, binding = LIGHTMAP_BINDING_REFRACTOR) uniform samplerCube refractor_map;
-layout(location = 0) in vec3 in_position;
-layout(location = 1) in vec3 in_normal;
+// xyz world position, w material index + 1 (0: no specular surface); xyz normal.
+layout(set = 1, binding = LIGHTMAP_BINDING_SURFACE_POSITION) uniform sampler2D surface_position;
+layout(set = 1, binding = LIGHTMAP_BINDING_SURFACE_NORMAL) uniform sampler2D surface_normal;
 // RT0: (u, v, light-map slot, 1) or alpha -1 (no hit); RT1: rgb photon power (W).
 layout(location = 0) out vec4 out_hit;
 layout(location = 1) out vec4 out_power;
@@ -32,14 +38,17 @@ void no_hit() {
 }
 
 void main() {
-    GpuMaterial m = materials[uint(pc.intensity.w + 0.5)];
+    ivec2 at = ivec2(gl_FragCoord.xy);
+    vec4 surface = texelFetch(surface_position, at, 0);
+    if (!(surface.w > 0.5)) { no_hit(); return; }
+    GpuMaterial m = materials[uint(surface.w - 0.5)];
     uint kind = kind_of(m);
-    vec3 p = in_position;
+    vec3 p = surface.xyz;
     bool point_light = uint(pc.light.w + 0.5) == LIGHT_POINT;
     vec3 L = point_light ? p - pc.light.xyz : pc.light.xyz;
     if (!(dot(L, L) > 0.0)) { no_hit(); return; }
     L = normalize(L);
-    vec3 N = in_normal;
+    vec3 N = texelFetch(surface_normal, at, 0).xyz;
     if (!(dot(N, N) > 1e-20)) { no_hit(); return; }
     N = normalize(N);
     if (dot(N, L) > 0.0) N = -N;   // the side the light sees

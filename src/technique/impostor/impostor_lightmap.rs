@@ -11,10 +11,13 @@
 //!    reference point (for Hit(), §3, in the same cube: alpha). An [`ImpostorMap`] with
 //!    [`MapContent::LightmapUv`], regenerated like the environment impostors (§6).
 //! 2. `impostor_lightmap_refractor_map` (dielectrics only): the refractor map of §4.
-//! 3. `impostor_lightmap_caustic_map`: the *caustic map*, the specular objects seen from the
-//!    light through a frustum fitted to their bounding sphere (a point light) or an
-//!    orthographic box (a directional light), `caustic_map_size`^2 texels. Per texel where a
-//!    specular object is visible (glsl/impostor/lightmap_caustic.frag): the light direction
+//! 3. `impostor_lightmap_caustic_surfaces`: the specular objects seen from the light through a
+//!    frustum fitted to their bounding sphere (a point light) or an orthographic box (a
+//!    directional light), `caustic_map_size`^2 texels: position, material and normal of the
+//!    nearest surface (glsl/impostor/lightmap_surface.frag).
+//!    `impostor_lightmap_caustic_map`: the *caustic map*, a full-screen pass over those texels.
+//!    Per texel where a specular object is visible (glsl/impostor/lightmap_caustic.frag,
+//!    the paper's pixel shader, run once per texel): the light direction
 //!    refracted through two surfaces (the second from the refractor map) or reflected,
 //!    `l = Hit(x, R, uv map)`, the hit's (u, v, slot) from the uv map, and the photon's power
 //!    (intensity x texel solid angle, or irradiance x texel area, times Fresnel and
@@ -60,12 +63,14 @@ use crate::technique::{
 };
 use crate::{
     BINDING_GBUF_ALBEDO, BINDING_GBUF_DEPTH, BINDING_GBUF_NORMAL, BINDING_LIGHTMAPS, LIGHTMAP_BINDING_PHOTON_HIT,
-    LIGHTMAP_BINDING_PHOTON_POWER, LIGHTMAP_BINDING_REFRACTOR, LIGHTMAP_BINDING_UV_LINEAR, LIGHTMAP_BINDING_UV_NEAREST,
-    LIGHT_DIRECTIONAL, LIGHT_POINT,
+    LIGHTMAP_BINDING_PHOTON_POWER, LIGHTMAP_BINDING_REFRACTOR, LIGHTMAP_BINDING_SURFACE_NORMAL,
+    LIGHTMAP_BINDING_SURFACE_POSITION, LIGHTMAP_BINDING_UV_LINEAR, LIGHTMAP_BINDING_UV_NEAREST, LIGHT_DIRECTIONAL,
+    LIGHT_POINT,
 };
 
 pub const IMPOSTOR_LIGHTMAP_UV_MAP: &str = "impostor_lightmap_uv_map";
 pub const IMPOSTOR_LIGHTMAP_REFRACTOR_MAP: &str = "impostor_lightmap_refractor_map";
+pub const IMPOSTOR_LIGHTMAP_CAUSTIC_SURFACES: &str = "impostor_lightmap_caustic_surfaces";
 pub const IMPOSTOR_LIGHTMAP_CAUSTIC_MAP: &str = "impostor_lightmap_caustic_map";
 pub const IMPOSTOR_LIGHTMAP_SPLAT: &str = "impostor_lightmap_splat";
 pub const IMPOSTOR_LIGHTMAP_APPLY: &str = "impostor_lightmap_apply";
@@ -107,6 +112,10 @@ fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
         ));
     }
     passes.extend([
+        PlannedPass::new(
+            IMPOSTOR_LIGHTMAP_CAUSTIC_SURFACES,
+            format!("{specular} seen from {} light(s): positions and normals", scene.lights.len()),
+        ),
         PlannedPass::new(
             IMPOSTOR_LIGHTMAP_CAUSTIC_MAP,
             format!("caustic map of {specular} from {} light(s): Hit() into the uv map", scene.lights.len()),
@@ -229,6 +238,11 @@ struct CausticMap {
     hit_id: ImageId,
     power: Image,
     power_id: ImageId,
+    /// The surfaces seen from the light: xyz position, w material index + 1; xyz normal.
+    surface_position: Image,
+    surface_position_id: ImageId,
+    surface_normal: Image,
+    surface_normal_id: ImageId,
     _depth: Image,
     depth_id: ImageId,
     light: Light,
@@ -247,16 +261,17 @@ pub struct ImpostorLightmap {
     bounds: Vec<(Vec3, f32)>,
     pub charts: Vec<Chart>,
     maps: Vec<CausticMap>,
-    /// A framebuffer per light.
+    /// The surfaces seen from the light: a framebuffer per light, and the pipeline for any
+    /// mesh and the one for a closed mesh with outward normals
+    /// ([`crate::scene::Mesh::is_closed_outward`]), whose back faces are never the surface
+    /// nearest the light and are culled (front faces are clockwise in the light's image,
+    /// which is not y-flipped like the camera's).
+    surface_target: RenderTarget,
+    surface_pipelines: [GraphicsPipeline; 2],
+    /// The caustic map: a framebuffer and a set per light, and its full-screen pipeline.
     caustic_target: RenderTarget,
-    caustic_set: BoundSet,
-    /// The caustic map's pipeline for any mesh, and the one for a closed mesh with outward
-    /// normals ([`crate::scene::Mesh::is_closed_outward`]), whose back faces are never the
-    /// surface nearest the light and are culled (front faces are clockwise in the light's
-    /// image, which is not y-flipped like the camera's): the same map, without shading the
-    /// back faces' fragments, each a Hit() search (on a CPU device, which shades them all
-    /// before the depth test, a ball's caustic map takes half the time; docs/BENCHMARKS.md).
-    caustic_pipelines: [GraphicsPipeline; 2],
+    caustic_sets: BoundSet,
+    caustic_pipeline: GraphicsPipeline,
     /// Per object: whether its mesh is closed and outward.
     closed: Vec<bool>,
     /// One layer per receiver (`charts[i]` in layer i): irradiance in W/m^2.
@@ -335,45 +350,81 @@ impl ImpostorLightmap {
             };
             let (hit, hit_id) = image("hit", MAP_FORMAT, U::COLOR_ATTACHMENT | U::SAMPLED)?;
             let (power, power_id) = image("power", MAP_FORMAT, U::COLOR_ATTACHMENT | U::SAMPLED)?;
+            let (surface_position, surface_position_id) =
+                image("surface_position", MAP_FORMAT, U::COLOR_ATTACHMENT | U::SAMPLED)?;
+            let (surface_normal, surface_normal_id) =
+                image("surface_normal", MAP_FORMAT, U::COLOR_ATTACHMENT | U::SAMPLED)?;
             let (depth, depth_id) = image("depth", DEPTH_FORMAT, U::DEPTH_STENCIL_ATTACHMENT)?;
-            maps.push(CausticMap { hit, hit_id, power, power_id, _depth: depth, depth_id, light: *light });
+            maps.push(CausticMap {
+                hit,
+                hit_id,
+                power,
+                power_id,
+                surface_position,
+                surface_position_id,
+                surface_normal,
+                surface_normal_id,
+                _depth: depth,
+                depth_id,
+                light: *light,
+            });
         }
-        let attachments: Vec<_> = maps.iter().map(|m| (vec![&m.hit, &m.power], Some(&m._depth))).collect();
-        let caustic_target = RenderTarget::each(ctx, IMPOSTOR_LIGHTMAP_CAUSTIC_MAP, &attachments, true)?;
-        // Without dielectrics the refractor map is never read: the uv map stands in.
-        let refractor_cube = refractor.as_ref().unwrap_or(&uv_map);
-        let caustic_set = Bindings::new(vk::ShaderStageFlags::FRAGMENT)
-            .sampled(LIGHTMAP_BINDING_UV_LINEAR, &uv_map.cube, &linear)
-            .read(uv_map.cube_id)
-            .sampled(LIGHTMAP_BINDING_UV_NEAREST, &uv_map.cube, &nearest)
-            .sampled(LIGHTMAP_BINDING_REFRACTOR, &refractor_cube.cube, &linear);
-        let caustic_set = match &refractor {
-            Some(r) => caustic_set.read(r.cube_id),
-            None => caustic_set,
-        };
-        let caustic_set = caustic_set.build(ctx, IMPOSTOR_LIGHTMAP_CAUSTIC_MAP)?;
-        let caustic_pipeline = |cull| {
+        let surfaces: Vec<_> =
+            maps.iter().map(|m| (vec![&m.surface_position, &m.surface_normal], Some(&m._depth))).collect();
+        let surface_target = RenderTarget::each(ctx, IMPOSTOR_LIGHTMAP_CAUSTIC_SURFACES, &surfaces, true)?;
+        let surface_pipeline = |cull| {
             GraphicsPipeline::new(
                 ctx,
                 &GraphicsPipelineDesc {
                     blend: &[Blend::Off, Blend::Off],
                     cull,
-                    specialization: &[("ITERATIONS", Spec::U32(params.iterations))],
                     ..GraphicsPipelineDesc::mesh(
-                        IMPOSTOR_LIGHTMAP_CAUSTIC_MAP,
+                        IMPOSTOR_LIGHTMAP_CAUSTIC_SURFACES,
                         "impostor/lightmap_caustic.vert",
-                        "impostor/lightmap_caustic.frag",
+                        "impostor/lightmap_surface.frag",
                         DepthState::LESS,
                     )
                 },
-                &[frame_layout, caustic_set.layout()],
+                &[],
                 std::mem::size_of::<CausticPush>() as u32,
-                &caustic_target.pass,
+                &surface_target.pass,
             )
         };
-        let caustic_pipelines =
-            [caustic_pipeline(vk::CullModeFlags::NONE)?, caustic_pipeline(vk::CullModeFlags::FRONT)?];
+        let surface_pipelines =
+            [surface_pipeline(vk::CullModeFlags::NONE)?, surface_pipeline(vk::CullModeFlags::FRONT)?];
         let closed = scene.objects.iter().map(|o| o.mesh.is_closed_outward()).collect();
+
+        let maps_out: Vec<_> = maps.iter().map(|m| (vec![&m.hit, &m.power], None)).collect();
+        let caustic_target = RenderTarget::each(ctx, IMPOSTOR_LIGHTMAP_CAUSTIC_MAP, &maps_out, true)?;
+        // Without dielectrics the refractor map is never read: the uv map stands in.
+        let refractor_cube = refractor.as_ref().unwrap_or(&uv_map);
+        let caustic_sets = maps.iter().map(|m| {
+            let set = Bindings::new(vk::ShaderStageFlags::FRAGMENT)
+                .sampled(LIGHTMAP_BINDING_UV_LINEAR, &uv_map.cube, &linear)
+                .read(uv_map.cube_id)
+                .sampled(LIGHTMAP_BINDING_UV_NEAREST, &uv_map.cube, &nearest)
+                .sampled(LIGHTMAP_BINDING_REFRACTOR, &refractor_cube.cube, &linear)
+                .sampled(LIGHTMAP_BINDING_SURFACE_POSITION, &m.surface_position, &nearest)
+                .read(m.surface_position_id)
+                .sampled(LIGHTMAP_BINDING_SURFACE_NORMAL, &m.surface_normal, &nearest)
+                .read(m.surface_normal_id);
+            match &refractor {
+                Some(r) => set.read(r.cube_id),
+                None => set,
+            }
+        });
+        let caustic_sets = Bindings::build_each(ctx, IMPOSTOR_LIGHTMAP_CAUSTIC_MAP, caustic_sets.collect())?;
+        let caustic_pipeline = GraphicsPipeline::new(
+            ctx,
+            &GraphicsPipelineDesc {
+                blend: &[Blend::Off, Blend::Off],
+                specialization: &[("ITERATIONS", Spec::U32(params.iterations))],
+                ..GraphicsPipelineDesc::fullscreen(IMPOSTOR_LIGHTMAP_CAUSTIC_MAP, "impostor/lightmap_caustic.frag")
+            },
+            &[frame_layout, caustic_sets.layout()],
+            std::mem::size_of::<CausticPush>() as u32,
+            &caustic_target.pass,
+        )?;
 
         // The light maps and the splat pass: a framebuffer per chart, a set per light.
         let n = params.lightmap_size;
@@ -446,10 +497,12 @@ impl ImpostorLightmap {
             bounds,
             charts,
             maps,
-            caustic_target,
-            caustic_set,
-            caustic_pipelines,
+            surface_target,
+            surface_pipelines,
             closed,
+            caustic_target,
+            caustic_sets,
+            caustic_pipeline,
             lightmaps,
             lightmaps_id,
             splat_target,
@@ -537,14 +590,10 @@ impl ImpostorLightmap {
             record_maps(frame, IMPOSTOR_LIGHTMAP_REFRACTOR_MAP, vec![r], scene, frame_set, None);
         }
         if !self.regeneration.rendering() {
-            return record_kept(frame, &[IMPOSTOR_LIGHTMAP_CAUSTIC_MAP, IMPOSTOR_LIGHTMAP_SPLAT]);
-        }
-        let mut pass = frame.pass(IMPOSTOR_LIGHTMAP_CAUSTIC_MAP).uses(&self.caustic_set);
-        for m in &self.maps {
-            pass = pass
-                .write(m.hit_id, Access::ColorAttachment)
-                .write(m.power_id, Access::ColorAttachment)
-                .write(m.depth_id, Access::DepthAttachment);
+            return record_kept(
+                frame,
+                &[IMPOSTOR_LIGHTMAP_CAUSTIC_SURFACES, IMPOSTOR_LIGHTMAP_CAUSTIC_MAP, IMPOSTOR_LIGHTMAP_SPLAT],
+            );
         }
         let size = self.params.caustic_map_size as f32;
         let pushes: Vec<(CausticPush, Vec<usize>)> = self
@@ -562,20 +611,42 @@ impl ImpostorLightmap {
                 (push, self.specular.clone())
             })
             .collect();
+        let mut pass = frame.pass(IMPOSTOR_LIGHTMAP_CAUSTIC_SURFACES);
+        for m in &self.maps {
+            pass = pass
+                .write(m.surface_position_id, Access::ColorAttachment)
+                .write(m.surface_normal_id, Access::ColorAttachment)
+                .write(m.depth_id, Access::DepthAttachment);
+        }
+        let surface_pushes = pushes.clone();
         pass.record(move |cmd| {
-            for (i, (push, objects)) in pushes.into_iter().enumerate() {
-                let clears = [Clear::Color([0.0, 0.0, 0.0, -1.0]), Clear::Color([0.0; 4]), Clear::Depth(1.0)];
-                cmd.in_target(&self.caustic_target, i, &clears, |cmd| {
+            for (i, (push, objects)) in surface_pushes.into_iter().enumerate() {
+                let clears = [Clear::Color([0.0; 4]), Clear::Color([0.0; 4]), Clear::Depth(1.0)];
+                cmd.in_target(&self.surface_target, i, &clears, |cmd| {
                     cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
                     for i in objects {
                         let Some(d) = scene.draws.get(i) else { continue };
-                        let pipeline = &self.caustic_pipelines[usize::from(self.closed[i])];
-                        cmd.bind_graphics(pipeline, &[frame_set, self.caustic_set.set()]);
+                        let pipeline = &self.surface_pipelines[usize::from(self.closed[i])];
+                        cmd.bind_graphics(pipeline, &[]);
                         let mut p = push;
                         p.intensity[3] = d.material as f32;
                         cmd.push_graphics(pipeline, &p);
                         cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
                     }
+                });
+            }
+        });
+        let mut pass = frame.pass(IMPOSTOR_LIGHTMAP_CAUSTIC_MAP).uses(&self.caustic_sets);
+        for m in &self.maps {
+            pass = pass.write(m.hit_id, Access::ColorAttachment).write(m.power_id, Access::ColorAttachment);
+        }
+        pass.record(move |cmd| {
+            for (i, ((push, _), &set)) in pushes.into_iter().zip(self.caustic_sets.sets()).enumerate() {
+                let clears = [Clear::Color([0.0, 0.0, 0.0, -1.0]), Clear::Color([0.0; 4])];
+                cmd.in_target(&self.caustic_target, i, &clears, |cmd| {
+                    cmd.bind_graphics(&self.caustic_pipeline, &[frame_set, set]);
+                    cmd.push_graphics(&self.caustic_pipeline, &push);
+                    cmd.draw(3, 1);
                 });
             }
         });
