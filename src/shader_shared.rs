@@ -286,10 +286,15 @@ shared_bindings! {
         LIGHTMAP_BINDING_PHOTON_POWER = 4;
         LIGHTMAP_BINDING_SURFACE_POSITION = 5;
         LIGHTMAP_BINDING_SURFACE_NORMAL = 6;
+        // Per light map: the texels its splats and their bilinear lookup can reach (u32 x 4:
+        // lowest column, lowest row, u32::MAX - highest column, u32::MAX - highest row).
+        LIGHTMAP_BINDING_REACH = 7;
     }
     // The light maps in set 1 of the apply pass (besides BINDING_GBUF_*).
     LIGHTMAP_APPLY_BINDINGS {
         BINDING_LIGHTMAPS = 14;
+        // The light maps' reach (LIGHTMAP_BINDING_REACH), read by the vertex shader.
+        BINDING_LIGHTMAP_REACH = 15;
     }
     // Hu & Qin 2007 §2.2 nearby geometry (src/technique/refraction/nearby_impostors.rs): the
     // impostor rectangles (storage buffer) and TEX_i / TEX_DEPTH_i (2D array: rgb radiance, a

@@ -42,6 +42,62 @@ fn lightmap_flux(ctx: &std::sync::Arc<prism::gpu::GpuContext>, name: &str, extra
     (flux, peak, at)
 }
 
+/// The apply pass draws only the part of each receiver's chart that its light map's photons
+/// can reach (src/technique/impostor/impostor_lightmap.rs, `reach`), since the light map is
+/// exactly 0 elsewhere. It must draw every pixel whose bilinear lookup touches a non-zero
+/// texel k: those with u n in (k - 1/2, k + 3/2), so the drawn texels must run from k - 1 to
+/// k + 1 (clamped to the map, whose edges the drawn rectangle then overhangs). On
+/// caustic_sphere the caustic is a small part of the floor (the pass draws 0.138 of its light
+/// map, metal_ring 0.302), which is what makes the pass cheaper; a quarter bounds it there.
+#[test]
+fn the_apply_pass_draws_every_texel_the_light_map_lights() {
+    if !common::in_own_process() {
+        return;
+    }
+    let ctx = common::context(false);
+    for (name, extra) in [
+        ("caustic_sphere", &[][..]),
+        ("metal_ring", &[][..]),
+        ("caustic_sphere", &["render.impostor_lightmap.filter_radius=5.5"][..]),
+    ] {
+        let s = common::scene(name, 64, &common::refs(&lightmap(extra)));
+        let mut r = Renderer::new(&ctx, &s).expect("renderer");
+        r.render_frame().expect("frame");
+        let (texels, charts) = r.read_lightmaps().expect("readback").expect("light maps");
+        let reach = r.read_lightmap_reach().expect("readback").expect("light maps");
+        drop(r);
+        let per_layer = texels.len() / charts.len();
+        let n = (per_layer as f64).sqrt() as u32;
+        for (layer, [x0, y0, x1, y1]) in reach.iter().copied().enumerate() {
+            let lit: Vec<(u32, u32)> = (0..per_layer as u32)
+                .filter(|i| texels[layer * per_layer + *i as usize][..3].iter().any(|&v| v != 0.0))
+                .map(|i| (i % n, i / n))
+                .collect();
+            for &(x, y) in &lit {
+                let inside = x0 <= x.saturating_sub(1)
+                    && y0 <= y.saturating_sub(1)
+                    && x1 >= (x + 1).min(n - 1)
+                    && y1 >= (y + 1).min(n - 1);
+                assert!(
+                    inside,
+                    "{name} {extra:?} layer {layer}: lit texel ({x}, {y}) beyond the drawn [{x0}, {x1}] x [{y0}, {y1}]"
+                );
+            }
+            let drawn = if x0 > x1 || y0 > y1 { 0 } else { (x1 - x0 + 1) * (y1 - y0 + 1) };
+            let share = f64::from(drawn) / f64::from(n * n);
+            eprintln!(
+                "{name} {extra:?} layer {layer}: {} lit texels, the apply pass draws {share:.3} of the light map",
+                lit.len()
+            );
+            assert!(!lit.is_empty(), "{name}: no caustic on layer {layer}");
+            if name == "caustic_sphere" && extra.is_empty() {
+                assert!(share < 0.25, "caustic_sphere: the apply pass draws {share:.3} of the floor's light map");
+            }
+        }
+    }
+    common::assert_no_validation_errors(&ctx);
+}
+
 #[test]
 fn caustic_scenes_render_with_impostor_lightmap() {
     if !common::in_own_process() {

@@ -20,14 +20,35 @@
 #include "fresnel.glsl"
 #include "impostor.glsl"
 #include "lightmap_push.glsl"
-// 0: Hit() iterations (`render.impostor_lightmap.iterations`).
+// 0: Hit() iterations (`render.impostor_lightmap.iterations`); 1, 2: the light maps' size
+// and the splats' radius in their texels (`lightmap_size`, `filter_radius`).
 layout(constant_id = 0) const uint ITERATIONS = 4;
+layout(constant_id = 1) const uint LIGHTMAP_SIZE = 256;
+layout(constant_id = 2) const float FILTER_RADIUS = 2.0;
 layout(set = 1, binding = LIGHTMAP_BINDING_UV_LINEAR) uniform samplerCube uv_linear;
 layout(set = 1, binding = LIGHTMAP_BINDING_UV_NEAREST) uniform samplerCube uv_nearest;
 layout(set = 1, binding = LIGHTMAP_BINDING_REFRACTOR) uniform samplerCube refractor_map;
 // xyz world position, w material index + 1 (0: no specular surface); xyz normal.
 layout(set = 1, binding = LIGHTMAP_BINDING_SURFACE_POSITION) uniform sampler2D surface_position;
 layout(set = 1, binding = LIGHTMAP_BINDING_SURFACE_NORMAL) uniform sampler2D surface_normal;
+// Per light map, the texels the photons can reach (see `reach`); reset to u32::MAX each time
+// the caustic maps are rendered.
+layout(set = 1, binding = LIGHTMAP_BINDING_REACH, std430) buffer Reach { uint reach[]; };
+
+// The texels of light map `slot` that this photon's splat (texels within FILTER_RADIUS of
+// its centre, lightmap_splat.vert) and the apply pass's bilinear lookup next to them can
+// reach, with a texel to spare: outside every photon's reach a light map holds exactly 0,
+// and lightmap_apply.vert leaves those pixels out.
+void extend_reach(uint slot, vec2 uv) {
+    vec2 c = uv * float(LIGHTMAP_SIZE);
+    int last = int(LIGHTMAP_SIZE) - 1;
+    ivec2 lo = clamp(ivec2(floor(c - FILTER_RADIUS)) - 2, ivec2(0), ivec2(last));
+    ivec2 hi = clamp(ivec2(ceil(c + FILTER_RADIUS)) + 2, ivec2(0), ivec2(last));
+    atomicMin(reach[4u * slot], uint(lo.x));
+    atomicMin(reach[4u * slot + 1u], uint(lo.y));
+    atomicMin(reach[4u * slot + 2u], 0xFFFFFFFFu - uint(hi.x));
+    atomicMin(reach[4u * slot + 3u], 0xFFFFFFFFu - uint(hi.y));
+}
 // RT0: (u, v, light-map slot, 1) or alpha -1 (no hit); RT1: rgb photon power (W).
 layout(location = 0) out vec4 out_hit;
 layout(location = 1) out vec4 out_power;
@@ -108,4 +129,5 @@ void main() {
     if (any(isnan(power)) || any(isinf(power)) || any(isnan(uv.rg))) { no_hit(); return; }
     out_hit = vec4(uv.rg, uv.b - 1.0, 1.0);
     out_power = vec4(power, 0.0);
+    extend_reach(uint(uv.b - 0.5), uv.rg);
 }

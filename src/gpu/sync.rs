@@ -27,6 +27,8 @@ pub enum Access {
     VertexStorageRead,
     /// Read as a storage buffer in a fragment shader.
     FragmentStorageRead,
+    /// Written (or read and written, atomics) as a storage buffer in a fragment shader.
+    FragmentStorageWrite,
     /// Indirect draw/dispatch arguments (HistoPyramid output counts).
     IndirectArgs,
     /// The scene's vertices as every pass reads them: vertex attributes, and storage reads
@@ -86,6 +88,7 @@ impl Access {
             Access::ComputeWrite => (S::COMPUTE_SHADER, A::SHADER_READ | A::SHADER_WRITE, L::GENERAL, true),
             Access::VertexStorageRead => (S::VERTEX_SHADER, A::SHADER_READ, L::GENERAL, false),
             Access::FragmentStorageRead => (S::FRAGMENT_SHADER, A::SHADER_READ, L::GENERAL, false),
+            Access::FragmentStorageWrite => (S::FRAGMENT_SHADER, A::SHADER_READ | A::SHADER_WRITE, L::GENERAL, true),
             Access::IndirectArgs => (S::DRAW_INDIRECT, A::INDIRECT_COMMAND_READ, L::UNDEFINED, false),
             Access::VertexData => (
                 S::VERTEX_INPUT | S::VERTEX_SHADER | S::FRAGMENT_SHADER | S::COMPUTE_SHADER,

@@ -728,6 +728,15 @@ impl Renderer {
         Ok(Some((bytemuck::pod_collect_to_vec(&bytes), atlas.desc.width)))
     }
 
+    /// Per light map of `render.caustics = "impostor_lightmap"`, the texels its photons can
+    /// reach and the apply pass draws: (lowest column, lowest row, highest column, highest row);
+    /// `None` without that technique.
+    pub fn read_lightmap_reach(&mut self) -> Result<Option<Vec<[u32; 4]>>, RenderError> {
+        self.finish()?;
+        let Some(p) = technique::<ImpostorLightmap>(&self.techniques) else { return Ok(None) };
+        Ok(Some(p.read_reach(&self.ctx, &mut self.graph)?))
+    }
+
     /// The light maps of `render.caustics = "impostor_lightmap"` (irradiance in W/m^2, RGBA f32,
     /// one layer per receiver in the order of the charts) and each receiver's (object index,
     /// area in m^2); `None` without that technique.

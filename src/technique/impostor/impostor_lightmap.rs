@@ -30,7 +30,9 @@
 //!    W/m^2, comparable with the reference.
 //! 5. `impostor_lightmap_apply` (right after deferred shading): every receiver pixel adds
 //!    light-map irradiance x albedo / pi; each chart draws its own rectangle, so a pixel
-//!    runs the pass only for the charts that can be seen there.
+//!    runs the pass only for the charts that can be seen there, and of the rectangle only the
+//!    texels its photons can reach (found while rendering the caustic maps), outside which
+//!    the light map is exactly 0.
 //!
 //! Light maps: one layer of a 2D array per chart (`lightmap_size`^2 each). Receivers: the
 //! diffuse quads and boxes ([`lightmap_receivers`]); a quad's unique chart is the planar
@@ -48,10 +50,10 @@ use glam::{Mat4, Vec3};
 use crate::frame::gpu_scene::GpuScene;
 use crate::frame::targets::{Targets, DEPTH_FORMAT};
 use crate::gpu::{
-    vk, Access, Blend, Clear, DepthState, DescriptorSet, GpuContext, GpuResult, GraphicsPipeline, GraphicsPipelineDesc,
-    Image, ImageDesc, ImageViewKind, RenderTarget, Sampler, SamplerDesc, Spec,
+    vk, Access, Blend, Buffer, Clear, DepthState, DescriptorSet, GpuContext, GpuResult, GraphicsPipeline,
+    GraphicsPipelineDesc, Image, ImageDesc, ImageViewKind, MemoryLocation, RenderTarget, Sampler, SamplerDesc, Spec,
 };
-use crate::graph::{Bindings, BoundSet, Frame, FrameGraph, ImageId};
+use crate::graph::{Bindings, BoundSet, BufferId, Frame, FrameGraph, ImageId};
 use crate::scene::techniques::{ImpostorLightmapParams, ImpostorParams};
 use crate::scene::{Light, Material, Scene};
 use crate::shader_structs::{CausticPush, LightmapApplyPush, LightmapSplatPush};
@@ -62,10 +64,10 @@ use crate::technique::{
     Regeneration, Registration, RenderError, Setup, Stage, Technique,
 };
 use crate::{
-    BINDING_GBUF_ALBEDO, BINDING_GBUF_DEPTH, BINDING_GBUF_NORMAL, BINDING_LIGHTMAPS, LIGHTMAP_BINDING_PHOTON_HIT,
-    LIGHTMAP_BINDING_PHOTON_POWER, LIGHTMAP_BINDING_REFRACTOR, LIGHTMAP_BINDING_SURFACE_NORMAL,
-    LIGHTMAP_BINDING_SURFACE_POSITION, LIGHTMAP_BINDING_UV_LINEAR, LIGHTMAP_BINDING_UV_NEAREST, LIGHT_DIRECTIONAL,
-    LIGHT_POINT,
+    BINDING_GBUF_ALBEDO, BINDING_GBUF_DEPTH, BINDING_GBUF_NORMAL, BINDING_LIGHTMAPS, BINDING_LIGHTMAP_REACH,
+    LIGHTMAP_BINDING_PHOTON_HIT, LIGHTMAP_BINDING_PHOTON_POWER, LIGHTMAP_BINDING_REACH, LIGHTMAP_BINDING_REFRACTOR,
+    LIGHTMAP_BINDING_SURFACE_NORMAL, LIGHTMAP_BINDING_SURFACE_POSITION, LIGHTMAP_BINDING_UV_LINEAR,
+    LIGHTMAP_BINDING_UV_NEAREST, LIGHT_DIRECTIONAL, LIGHT_POINT,
 };
 
 pub const IMPOSTOR_LIGHTMAP_UV_MAP: &str = "impostor_lightmap_uv_map";
@@ -272,6 +274,10 @@ pub struct ImpostorLightmap {
     caustic_target: RenderTarget,
     caustic_sets: BoundSet,
     caustic_pipeline: GraphicsPipeline,
+    /// Per light map, the texels its photons can reach (glsl/impostor/lightmap_caustic.frag,
+    /// `extend_reach`): the apply pass draws only that part of the chart.
+    reach: Buffer,
+    reach_id: BufferId,
     /// Per object: whether its mesh is closed and outward.
     closed: Vec<bool>,
     /// One layer per receiver (`charts[i]` in layer i): irradiance in W/m^2.
@@ -394,6 +400,16 @@ impl ImpostorLightmap {
             [surface_pipeline(vk::CullModeFlags::NONE)?, surface_pipeline(vk::CullModeFlags::FRONT)?];
         let closed = scene.objects.iter().map(|o| o.mesh.is_closed_outward()).collect();
 
+        let reach = Buffer::new(
+            ctx,
+            "impostor_lightmap_reach",
+            16 * charts.len().max(1) as u64,
+            vk::BufferUsageFlags::STORAGE_BUFFER
+                | vk::BufferUsageFlags::TRANSFER_DST
+                | vk::BufferUsageFlags::TRANSFER_SRC,
+            MemoryLocation::GpuOnly,
+        )?;
+        let reach_id = graph.register_buffer(&reach);
         let maps_out: Vec<_> = maps.iter().map(|m| (vec![&m.hit, &m.power], None)).collect();
         let caustic_target = RenderTarget::each(ctx, IMPOSTOR_LIGHTMAP_CAUSTIC_MAP, &maps_out, true)?;
         // Without dielectrics the refractor map is never read: the uv map stands in.
@@ -403,22 +419,29 @@ impl ImpostorLightmap {
                 .sampled(LIGHTMAP_BINDING_UV_LINEAR, &uv_map.cube, &linear)
                 .read(uv_map.cube_id)
                 .sampled(LIGHTMAP_BINDING_UV_NEAREST, &uv_map.cube, &nearest)
-                .sampled(LIGHTMAP_BINDING_REFRACTOR, &refractor_cube.cube, &linear)
-                .sampled(LIGHTMAP_BINDING_SURFACE_POSITION, &m.surface_position, &nearest)
-                .read(m.surface_position_id)
-                .sampled(LIGHTMAP_BINDING_SURFACE_NORMAL, &m.surface_normal, &nearest)
-                .read(m.surface_normal_id);
-            match &refractor {
+                .sampled(LIGHTMAP_BINDING_REFRACTOR, &refractor_cube.cube, &linear);
+            // read() tracks the resource declared just before it.
+            let set = match &refractor {
                 Some(r) => set.read(r.cube_id),
                 None => set,
-            }
+            };
+            set.sampled(LIGHTMAP_BINDING_SURFACE_POSITION, &m.surface_position, &nearest)
+                .read(m.surface_position_id)
+                .sampled(LIGHTMAP_BINDING_SURFACE_NORMAL, &m.surface_normal, &nearest)
+                .read(m.surface_normal_id)
+                .storage(LIGHTMAP_BINDING_REACH, &reach)
+                .access(reach_id, Access::FragmentStorageWrite)
         });
         let caustic_sets = Bindings::build_each(ctx, IMPOSTOR_LIGHTMAP_CAUSTIC_MAP, caustic_sets.collect())?;
         let caustic_pipeline = GraphicsPipeline::new(
             ctx,
             &GraphicsPipelineDesc {
                 blend: &[Blend::Off, Blend::Off],
-                specialization: &[("ITERATIONS", Spec::U32(params.iterations))],
+                specialization: &[
+                    ("ITERATIONS", Spec::U32(params.iterations)),
+                    ("LIGHTMAP_SIZE", Spec::U32(params.lightmap_size)),
+                    ("FILTER_RADIUS", Spec::F32(params.filter_radius)),
+                ],
                 ..GraphicsPipelineDesc::fullscreen(IMPOSTOR_LIGHTMAP_CAUSTIC_MAP, "impostor/lightmap_caustic.frag")
             },
             &[frame_layout, caustic_sets.layout()],
@@ -473,13 +496,18 @@ impl ImpostorLightmap {
             .read(targets.depth_id)
             .sampled(BINDING_LIGHTMAPS, &lightmaps, &linear)
             .read(lightmaps_id)
+            .stages(vk::ShaderStageFlags::VERTEX)
+            .storage(BINDING_LIGHTMAP_REACH, &reach)
+            .read(reach_id)
             .build(ctx, IMPOSTOR_LIGHTMAP_APPLY)?;
+        let mut apply_specialization = scene_specialization(scene).to_vec();
+        apply_specialization.push(("LIGHTMAP_SIZE", Spec::U32(n)));
         let apply_pipeline = GraphicsPipeline::new(
             ctx,
             &GraphicsPipelineDesc {
                 blend: &[Blend::Additive],
                 vertex_shader: "impostor/lightmap_apply.vert",
-                specialization: &scene_specialization(scene),
+                specialization: &apply_specialization,
                 ..GraphicsPipelineDesc::fullscreen(IMPOSTOR_LIGHTMAP_APPLY, "impostor/lightmap_apply.frag")
             },
             &[frame_layout, apply_set.layout()],
@@ -503,6 +531,8 @@ impl ImpostorLightmap {
             caustic_target,
             caustic_sets,
             caustic_pipeline,
+            reach,
+            reach_id,
             lightmaps,
             lightmaps_id,
             splat_target,
@@ -611,7 +641,7 @@ impl ImpostorLightmap {
                 (push, self.specular.clone())
             })
             .collect();
-        let mut pass = frame.pass(IMPOSTOR_LIGHTMAP_CAUSTIC_SURFACES);
+        let mut pass = frame.pass(IMPOSTOR_LIGHTMAP_CAUSTIC_SURFACES).write(self.reach_id, Access::TransferWrite);
         for m in &self.maps {
             pass = pass
                 .write(m.surface_position_id, Access::ColorAttachment)
@@ -620,6 +650,9 @@ impl ImpostorLightmap {
         }
         let surface_pushes = pushes.clone();
         pass.record(move |cmd| {
+            // Every light map's reach empty (lowest texels u32::MAX, highest 0) until the
+            // caustic maps' photons extend it.
+            cmd.fill_buffer(&self.reach, u32::MAX);
             for (i, (push, objects)) in surface_pushes.into_iter().enumerate() {
                 let clears = [Clear::Color([0.0; 4]), Clear::Color([0.0; 4]), Clear::Depth(1.0)];
                 cmd.in_target(&self.surface_target, i, &clears, |cmd| {
@@ -703,6 +736,15 @@ impl ImpostorLightmap {
     pub fn read_lightmaps(&self, ctx: &Arc<GpuContext>, graph: &mut FrameGraph) -> GpuResult<Vec<[f32; 4]>> {
         let bytes = graph.read_back(ctx, &self.lightmaps, self.lightmaps_id, 16, Access::FragmentSampled)?;
         Ok(bytemuck::pod_collect_to_vec(&bytes))
+    }
+
+    /// Per light map (`charts[i]`), the texels the apply pass draws: (lowest column, lowest
+    /// row, highest column, highest row), lowest above highest where no photon landed. For
+    /// tests; waits for the GPU.
+    pub fn read_reach(&self, ctx: &Arc<GpuContext>, graph: &mut FrameGraph) -> GpuResult<Vec<[u32; 4]>> {
+        let bytes = graph.read_back_buffer(ctx, &self.reach, self.reach_id, 16 * self.charts.len() as u64)?;
+        let raw: Vec<[u32; 4]> = bytemuck::pod_collect_to_vec(&bytes);
+        Ok(raw.into_iter().map(|[a, b, c, d]| [a, b, u32::MAX - c, u32::MAX - d]).collect())
     }
 }
 
