@@ -253,14 +253,13 @@ shared_bindings! {
         // drawn), and the splat record of every grid vertex (GpuCausticSplat).
         CAUSTIC_BINDING_DESTINATIONS = 12;
         CAUSTIC_BINDING_SPLATS = 13;
-        // The records routed to their layers (src/technique/caustics/caustics_map.rs,
-        // `SplatRoutes`): per atlas layer the records counted into it this frame (u32) and
-        // where its list begins (u32); the lists of record indices (u32); and, written by
+        // Which layers the records reach (src/technique/caustics/caustics_map.rs,
+        // `SplatLayers`): per atlas layer the records counted into it this frame (u32) and its
+        // light's records (uvec2: first, count); and, written by
         // glsl/caustics/splat_layers.comp, per layer the splat draw's and the clear draw's
         // VkDrawIndirectCommand (uvec4) and the count its last drawn frame had (u32).
         CAUSTIC_BINDING_COUNTS = 14;
-        CAUSTIC_BINDING_FIRSTS = 15;
-        CAUSTIC_BINDING_ORDER = 16;
+        CAUSTIC_BINDING_SPANS = 15;
         CAUSTIC_BINDING_SPLAT_DRAWS = 17;
         CAUSTIC_BINDING_CLEAR_DRAWS = 18;
         CAUSTIC_BINDING_SEEN = 19;

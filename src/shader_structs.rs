@@ -256,7 +256,7 @@ shared_structs! {
 
     /// Push constants of glsl/caustics/splat.vert.
     push struct CausticDrawPush {
-        /// x: map size (texels), yzw: unused
+        /// x: the caustic-atlas layer drawn, y: unused, z: map size (texels), w: unused
         dest: uvec4,
     }
 

@@ -31,12 +31,9 @@ layout(set = 0, binding = CAUSTIC_BINDING_VISIBLE, std430) readonly buffer Visib
 // Each atlas layer's world -> clip matrix (zero for a layer that is not drawn).
 layout(set = 0, binding = CAUSTIC_BINDING_DESTINATIONS, std430) readonly buffer Destinations { mat4 destinations[]; };
 layout(set = 0, binding = CAUSTIC_BINDING_SPLATS, std430) writeonly buffer Splats { GpuCausticSplat splats[]; };
-// Each record that lands is also listed under its layer, so that the splat pass draws a
-// layer's records alone (and no layer's draw visits the others') and leaves a layer that no
-// record reached, and none reached when it was last drawn, uncleared.
+// Each record that lands is counted in its layer, so that the splat pass neither draws nor
+// clears a layer that no record reached, now or when it was last drawn.
 layout(set = 0, binding = CAUSTIC_BINDING_COUNTS, std430) buffer Counts { uint counts[]; };
-layout(set = 0, binding = CAUSTIC_BINDING_FIRSTS, std430) readonly buffer Firsts { uint firsts[]; };
-layout(set = 0, binding = CAUSTIC_BINDING_ORDER, std430) writeonly buffer Order { uint order[]; };
 layout(constant_id = 0) const uint FLUX = FLUX_SOLID_ANGLE;
 // render.caustics_map.exit: CAUSTIC_EXIT_WYMAN (the paper's, §IV) or CAUSTIC_EXIT_MARCH.
 layout(constant_id = 1) const uint EXIT = CAUSTIC_EXIT_MARCH;
@@ -286,5 +283,5 @@ void main() {
     }
     splats[index].position = vec4(ndc, float(dest));
     splats[index].flux = vec4(flux / max(sum.x * sum.y, 1e-12), sigma);
-    order[firsts[dest] + atomicAdd(counts[dest], 1u)] = index;
+    atomicAdd(counts[dest], 1u);
 }

@@ -28,11 +28,11 @@
 //!    light ("environment caustic map"), the orthographic map for a directional light. The
 //!    paper draws its grid once per map; computing each vertex's path once and routing it,
 //!    instead of running the whole grid for every cube face and keeping the sixth that lands
-//!    there, gives the same map for a sixth of the light-path work. The hits pass also lists
-//!    each record under its layer ([`SplatRoutes`]), so a layer's draw visits only its own
-//!    records, and a layer that no record reaches (now, or when it was last drawn) is not
-//!    cleared: on caustic_sphere the five faces the caustic misses cost three times the
-//!    splats themselves (docs/BENCHMARKS.md).
+//!    there, gives the same map for a sixth of the light-path work. The hits pass also counts
+//!    the records landing in each layer ([`SplatLayers`]), so that a layer no record reaches
+//!    (now, or when it was last drawn) is neither drawn nor cleared: on caustic_sphere the
+//!    clears of the five faces the caustic misses cost more than the splats themselves
+//!    (docs/BENCHMARKS.md).
 //!
 //! Units: the map holds flux per texel (W). Deferred shading divides by the receiver area a
 //! texel covers (glsl/shading/deferred.frag, `caustic_irradiance`), giving irradiance in
@@ -60,9 +60,9 @@ use crate::technique::{
 };
 use crate::{
     CAUSTIC_BINDING_BACK_NORMAL, CAUSTIC_BINDING_BACK_POSITION, CAUSTIC_BINDING_CLEAR_DRAWS, CAUSTIC_BINDING_COUNTS,
-    CAUSTIC_BINDING_DESTINATIONS, CAUSTIC_BINDING_DN, CAUSTIC_BINDING_FACES, CAUSTIC_BINDING_FIRSTS,
-    CAUSTIC_BINDING_FRONT_NORMAL, CAUSTIC_BINDING_FRONT_POSITION, CAUSTIC_BINDING_MATERIALS, CAUSTIC_BINDING_ORDER,
-    CAUSTIC_BINDING_RECEIVER_2D, CAUSTIC_BINDING_RECEIVER_CUBE, CAUSTIC_BINDING_SEEN, CAUSTIC_BINDING_SPLATS,
+    CAUSTIC_BINDING_DESTINATIONS, CAUSTIC_BINDING_DN, CAUSTIC_BINDING_FACES, CAUSTIC_BINDING_FRONT_NORMAL,
+    CAUSTIC_BINDING_FRONT_POSITION, CAUSTIC_BINDING_MATERIALS, CAUSTIC_BINDING_RECEIVER_2D,
+    CAUSTIC_BINDING_RECEIVER_CUBE, CAUSTIC_BINDING_SEEN, CAUSTIC_BINDING_SPANS, CAUSTIC_BINDING_SPLATS,
     CAUSTIC_BINDING_SPLAT_DRAWS, CAUSTIC_BINDING_VISIBLE, CAUSTIC_EXIT_MARCH, CAUSTIC_EXIT_WYMAN,
     CAUSTIC_FACE_ORTHOGRAPHIC, CAUSTIC_FACE_PERSPECTIVE, CAUSTIC_LAYER_BACK, CAUSTIC_LAYER_FRONT, FLUX_OCCLUSION_QUERY,
     FLUX_SOLID_ANGLE, LIGHT_DIRECTIONAL, LIGHT_POINT, NEWTON_APPROXIMATE, NEWTON_TRUE, SHADOW_LAYERS_PER_LIGHT,
@@ -151,35 +151,36 @@ impl Technique for CausticsMapPass {
         if let Some((_, tracer)) = &self.oracle {
             hits = hits.uses(tracer);
         }
-        let routes = &self.routes;
-        hits.uses(&routes.set).record(move |cmd| {
+        let splat_layers = &self.splat_layers;
+        hits.uses(&splat_layers.set).record(move |cmd| {
             let mut sets = vec![self.hits_set.set()];
             sets.extend(self.oracle.as_ref().map(|(_, t)| t.set()));
             // The counts are this pass's own: after the previous frame's read, zeroed, counted
             // by the hits kernel, read by the layers kernel.
-            cmd.buffer_barrier(&routes.counts, Access::ComputeRead, Access::TransferWrite);
-            cmd.fill_buffer(&routes.counts, 0);
-            cmd.buffer_barrier(&routes.counts, Access::TransferWrite, Access::ComputeWrite);
+            cmd.buffer_barrier(&splat_layers.counts, Access::ComputeRead, Access::TransferWrite);
+            cmd.fill_buffer(&splat_layers.counts, 0);
+            cmd.buffer_barrier(&splat_layers.counts, Access::TransferWrite, Access::ComputeWrite);
             cmd.compute(&self.hits_pipeline, &sets, &self.hits_push, self.hits_groups);
-            cmd.buffer_barrier(&routes.counts, Access::ComputeWrite, Access::ComputeRead);
-            cmd.bind_compute(&routes.pipeline, &[routes.set.set()]);
-            cmd.dispatch(routes.groups, 1, 1);
+            cmd.buffer_barrier(&splat_layers.counts, Access::ComputeWrite, Access::ComputeRead);
+            cmd.bind_compute(&splat_layers.pipeline, &[splat_layers.set.set()]);
+            cmd.dispatch(splat_layers.groups, 1, 1);
         });
         frame
             .pass(CAUSTICS_MAP)
             .uses(&self.splat_set)
-            .read(routes.splat_draws_id, Access::IndirectArgs)
-            .read(routes.clear_draws_id, Access::IndirectArgs)
+            .read(splat_layers.splat_draws_id, Access::IndirectArgs)
+            .read(splat_layers.clear_draws_id, Access::IndirectArgs)
             .write(targets.caustic.flux_id, Access::ColorAttachment)
             .record(move |cmd| {
-                for &layer in &routes.layers {
+                for &layer in &splat_layers.layers {
                     let offset = u64::from(layer) * 16;
                     cmd.in_target(&self.splat_target, layer as usize, &[Clear::None], |cmd| {
                         cmd.bind_graphics(&self.clear_pipeline, &[]);
-                        cmd.draw_indirect(&routes.clear_draws, offset);
+                        cmd.draw_indirect(&splat_layers.clear_draws, offset);
                         cmd.bind_graphics(&self.splat_pipeline, &[self.splat_set.set()]);
-                        cmd.push_graphics(&self.splat_pipeline, &self.splat_push);
-                        cmd.draw_indirect(&routes.splat_draws, offset);
+                        let push = CausticDrawPush { dest: [layer, 0, self.params.map_size, 0] };
+                        cmd.push_graphics(&self.splat_pipeline, &push);
+                        cmd.draw_indirect(&splat_layers.splat_draws, offset);
                     });
                 }
             });
@@ -198,11 +199,11 @@ const LAYER_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 /// radius (or inside it) sees them over too wide an angle for one frustum: six cube faces.
 const FITTED_FRUSTUM_LIMIT: f32 = 0.9;
 
-/// The splat records listed per caustic-atlas layer, and the draws that the GPU sizes from
-/// the lists (glsl/caustics/splat_layers.comp): each layer's splat draw visits its own records
-/// only, and a layer that no record reached, now or when it was last drawn, is neither cleared
-/// nor drawn.
-struct SplatRoutes {
+/// Which caustic-atlas layers the splat records reach, and the draws the GPU sizes from that
+/// (glsl/caustics/splat_layers.comp): a layer that no record reaches, now or when it was last
+/// drawn, is neither cleared nor drawn; a layer that records reach draws its light's records in
+/// their order, as before, so its additions are the same from run to run.
+struct SplatLayers {
     /// The layers drawn: a point light's six cube faces, a directional light's first layer.
     layers: Vec<u32>,
     /// Per atlas layer: records counted into it this frame (u32).
@@ -212,42 +213,37 @@ struct SplatRoutes {
     splat_draws_id: BufferId,
     clear_draws: Buffer,
     clear_draws_id: BufferId,
-    /// The kernel that writes the draws, its set (counts, firsts, draws, seen) and groups.
+    /// The kernel that writes the draws, its set (counts, spans, draws, seen) and groups.
     pipeline: ComputePipeline,
     set: BoundSet,
     groups: u32,
-    /// Per atlas layer: where its list begins in `order` (u32).
-    firsts: Buffer,
-    /// The lists: indices of splat records (u32).
-    order: Buffer,
-    order_id: BufferId,
+    /// Per atlas layer: its light's records (first, count); host-written once.
+    _spans: Buffer,
     /// Per atlas layer: the count its last drawn frame had (u32; 1 at first, so that the
     /// first frame clears every layer).
     _seen: Buffer,
 }
 
-impl SplatRoutes {
-    /// The layers `drawn`, each layer's list beginning at `firsts[layer]` of `listed` entries.
-    fn new(s: &mut Setup<'_>, drawn: Vec<u32>, firsts: &[u32], listed: u32) -> GpuResult<Self> {
+impl SplatLayers {
+    /// The layers `drawn`, and per atlas layer its light's records (first, count).
+    fn new(s: &mut Setup<'_>, drawn: Vec<u32>, spans: &[[u32; 2]]) -> GpuResult<Self> {
         use vk::BufferUsageFlags as U;
         let ctx = s.ctx;
-        let layers = firsts.len() as u64;
+        let layers = spans.len() as u64;
         let gpu_buffer = |name: &str, bytes: u64, usage| Buffer::new(ctx, name, bytes, usage, MemoryLocation::GpuOnly);
         let counts = gpu_buffer("caustic_layer_counts", 4 * layers, U::STORAGE_BUFFER | U::TRANSFER_DST)?;
-        let order = gpu_buffer("caustic_layer_order", 4 * u64::from(listed.max(1)), U::STORAGE_BUFFER)?;
         let draws = |name| gpu_buffer(name, 16 * layers, U::STORAGE_BUFFER | U::INDIRECT_BUFFER);
         let (splat_draws, clear_draws) = (draws("caustic_splat_draws")?, draws("caustic_clear_draws")?);
-        let firsts = Buffer::storage(ctx, "caustic_layer_firsts", firsts)?;
+        let spans = Buffer::storage(ctx, "caustic_layer_spans", spans)?;
         let seen = Buffer::storage(ctx, "caustic_layer_seen", &vec![1u32; layers as usize])?;
         let graph = &mut *s.graph;
         let (splat_draws_id, clear_draws_id) =
             (graph.register_buffer(&splat_draws), graph.register_buffer(&clear_draws));
-        let (order_id, seen_id) = (graph.register_buffer(&order), graph.register_buffer(&seen));
-        // The counts are ordered by the hits pass's own barriers; the firsts are host-written
-        // once at creation.
+        let seen_id = graph.register_buffer(&seen);
+        // The counts are ordered by the hits pass's own barriers.
         let set = Bindings::new(vk::ShaderStageFlags::COMPUTE)
             .storage(CAUSTIC_BINDING_COUNTS, &counts)
-            .storage(CAUSTIC_BINDING_FIRSTS, &firsts)
+            .storage(CAUSTIC_BINDING_SPANS, &spans)
             .storage(CAUSTIC_BINDING_SPLAT_DRAWS, &splat_draws)
             .access(splat_draws_id, Access::ComputeWrite)
             .storage(CAUSTIC_BINDING_CLEAR_DRAWS, &clear_draws)
@@ -258,7 +254,7 @@ impl SplatRoutes {
         let pipeline =
             ComputePipeline::new(ctx, "caustics_map_layers", "caustics/splat_layers.comp", &[set.layout()], 0, &[])?;
         let groups = (layers as u32).div_ceil(crate::REF_WORKGROUP);
-        Ok(SplatRoutes {
+        Ok(SplatLayers {
             layers: drawn,
             counts,
             splat_draws,
@@ -268,9 +264,7 @@ impl SplatRoutes {
             pipeline,
             set,
             groups,
-            firsts,
-            order,
-            order_id,
+            _spans: spans,
             _seen: seen,
         })
     }
@@ -381,10 +375,9 @@ pub struct CausticsMapPass {
     splat_target: RenderTarget,
     splat_set: BoundSet,
     splat_pipeline: GraphicsPipeline,
-    splat_push: CausticDrawPush,
     /// A full-screen triangle writing zero flux: a layer's clear.
     clear_pipeline: GraphicsPipeline,
-    routes: SplatRoutes,
+    splat_layers: SplatLayers,
     _faces: Buffer,
     _layer_matrices: Buffer,
     _splats: Buffer,
@@ -491,15 +484,12 @@ impl CausticsMapPass {
 
         // Each atlas layer's world -> clip matrix: a point light's shadow-cube faces, a
         // directional light's orthographic map; zero (nothing drawn) for the others.
-        // Each drawn layer's list of records has room for all of its light's records (at most
-        // six lists a light: 3/4 of the records' own bytes, so the range check above covers it).
         let mut layer_matrices = vec![[[0.0f32; 4]; 4]; layers as usize];
         let mut drawn = Vec::new();
-        let mut firsts = vec![0u32; layers as usize];
-        let mut listed = 0u32;
+        let mut spans = vec![[0u32; 2]; layers as usize];
         for (i, l) in scene.lights.iter().enumerate() {
             let base = i as u32 * SHADOW_LAYERS_PER_LIGHT;
-            let (_, count) = light_sources[i];
+            let (first, count) = light_sources[i];
             let dest: Vec<(u32, Mat4)> = match l {
                 Light::Point { .. } => gpu
                     .shadow_faces
@@ -512,11 +502,10 @@ impl CausticsMapPass {
             for (layer, view_proj) in dest {
                 layer_matrices[layer as usize] = view_proj.to_cols_array_2d();
                 drawn.push(layer);
-                firsts[layer as usize] = listed;
-                listed += count * per_face * channels;
+                spans[layer as usize] = [first * per_face * channels, count * per_face * channels];
             }
         }
-        let routes = SplatRoutes::new(s, drawn, &firsts, listed)?;
+        let splat_layers = SplatLayers::new(s, drawn, &spans)?;
         let layer_matrices = Buffer::storage(ctx, "caustic_layer_matrices", &layer_matrices)?;
 
         // Linear filtering of the receivers' distances makes f(d) (Eq. 3) piecewise linear
@@ -540,10 +529,7 @@ impl CausticsMapPass {
             .storage(CAUSTIC_BINDING_DESTINATIONS, &layer_matrices)
             .storage(CAUSTIC_BINDING_SPLATS, &splats)
             .access(splats_id, Access::ComputeWrite)
-            .storage(CAUSTIC_BINDING_COUNTS, &routes.counts)
-            .storage(CAUSTIC_BINDING_FIRSTS, &routes.firsts)
-            .storage(CAUSTIC_BINDING_ORDER, &routes.order)
-            .access(routes.order_id, Access::ComputeWrite)
+            .storage(CAUSTIC_BINDING_COUNTS, &splat_layers.counts)
             .build(ctx, CAUSTICS_MAP_HITS)?;
         let oracle = match oracle {
             // Host-written once at creation: visible at submission.
@@ -599,8 +585,6 @@ impl CausticsMapPass {
         let splat_set = Bindings::new(vk::ShaderStageFlags::VERTEX)
             .storage(CAUSTIC_BINDING_SPLATS, &splats)
             .read(splats_id)
-            .storage(CAUSTIC_BINDING_ORDER, &routes.order)
-            .read(routes.order_id)
             .build(ctx, CAUSTICS_MAP)?;
         // Each layer is cleared by its clear draw, where the layers kernel asks for it.
         let splat_target = RenderTarget::layered(
@@ -652,9 +636,8 @@ impl CausticsMapPass {
             splat_target,
             splat_set,
             splat_pipeline,
-            splat_push: CausticDrawPush { dest: [size, 0, 0, 0] },
             clear_pipeline,
-            routes,
+            splat_layers,
             _faces: faces_buffer,
             _layer_matrices: layer_matrices,
             _splats: splats,
