@@ -260,9 +260,9 @@ shared_bindings! {
         // VkDrawIndirectCommand (uvec4) and the count its last drawn frame had (u32).
         CAUSTIC_BINDING_COUNTS = 14;
         CAUSTIC_BINDING_SPANS = 15;
-        CAUSTIC_BINDING_SPLAT_DRAWS = 17;
-        CAUSTIC_BINDING_CLEAR_DRAWS = 18;
-        CAUSTIC_BINDING_SEEN = 19;
+        CAUSTIC_BINDING_SPLAT_DRAWS = 16;
+        CAUSTIC_BINDING_CLEAR_DRAWS = 17;
+        CAUSTIC_BINDING_SEEN = 18;
     }
     // Photon buffer (Hu & Qin 2007 §3.1): the receiver rectangles, besides the caustic
     // bindings (faces, materials, refractor layers).

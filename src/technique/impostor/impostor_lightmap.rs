@@ -411,7 +411,8 @@ impl ImpostorLightmap {
         )?;
         let reach_id = graph.register_buffer(&reach);
         let maps_out: Vec<_> = maps.iter().map(|m| (vec![&m.hit, &m.power], None)).collect();
-        let caustic_target = RenderTarget::each(ctx, IMPOSTOR_LIGHTMAP_CAUSTIC_MAP, &maps_out, true)?;
+        // The full-screen pass writes every texel: nothing to clear.
+        let caustic_target = RenderTarget::each(ctx, IMPOSTOR_LIGHTMAP_CAUSTIC_MAP, &maps_out, false)?;
         // Without dielectrics the refractor map is never read: the uv map stands in.
         let refractor_cube = refractor.as_ref().unwrap_or(&uv_map);
         let caustic_sets = maps.iter().map(|m| {
@@ -675,8 +676,7 @@ impl ImpostorLightmap {
         }
         pass.record(move |cmd| {
             for (i, ((push, _), &set)) in pushes.into_iter().zip(self.caustic_sets.sets()).enumerate() {
-                let clears = [Clear::Color([0.0, 0.0, 0.0, -1.0]), Clear::Color([0.0; 4])];
-                cmd.in_target(&self.caustic_target, i, &clears, |cmd| {
+                cmd.in_target(&self.caustic_target, i, &[Clear::None, Clear::None], |cmd| {
                     cmd.bind_graphics(&self.caustic_pipeline, &[frame_set, set]);
                     cmd.push_graphics(&self.caustic_pipeline, &push);
                     cmd.draw(3, 1);
