@@ -10,7 +10,7 @@
 //   volume (glsl/include/nearby.glsl: Fig. 13's rectangle hit, Figs. 16-17's lookup);
 // the nearer hit wins; the environment where neither is hit.
 // The including shader declares before this file: NEARBY_ITERATIONS, NEARBY_TOLERANCE,
-// NEARBY_SEEDS, SCATTER and LIGHT_{MIN,MAX}_{X,Y,Z}, and includes frame.glsl, lighting.glsl,
+// NEARBY_SEEDS, IMPOSTORS, SCATTER and LIGHT_{MIN,MAX}_{X,Y,Z}, and includes frame.glsl, lighting.glsl,
 // scatter.glsl and receiver.glsl.
 #ifndef EIKONAL_NEARBY_EXIT_GLSL
 #define EIKONAL_NEARBY_EXIT_GLSL
@@ -78,6 +78,9 @@ vec3 eik_triangle_radiance(uint k, vec3 o, vec3 d, float t, vec2 b) {
 // is empty), returning the distance of the surface found instead of falling back to the
 // environment.
 bool eik_impostor_hit(vec3 P, vec3 Ray, out vec3 color, out float dist) {
+    color = vec3(0.0);
+    dist = 1e30;
+    if (IMPOSTORS == 0u) return false;
     // The one rectangle set around the volume (NearbyImpostors::around); none: no impostors.
     nearby_set = nearby_header.info.y == 0u ? NEARBY_NO_SET : 0u;
     return nearby_hit(P, Ray, color, dist);

@@ -48,6 +48,9 @@ layout(constant_id = 21) const uint NEARBY_SEEDS = 8u;
 const uint NEARBY_LOOKUP = NEARBY_LOOKUP_PAPER;
 #include "lighting.glsl"
 #include "receiver.glsl"
+// 0: the scene keeps no nearby object for impostor rectangles, and the exit rays' lookup of
+// them (nearby_exit.glsl) is compiled out.
+layout(constant_id = 28) const uint IMPOSTORS = 1u;
 #include "nearby_exit.glsl"
 // ---- end of the nearby geometry ----
 // Which material volumes hold anything: one that is all zero is never sampled.

@@ -360,6 +360,7 @@ impl EikonalPass {
             ("NEARBY_ITERATIONS", Spec::U32(params.nearby_iterations)),
             ("NEARBY_TOLERANCE", Spec::F32(NEARBY_TOLERANCE)),
             ("NEARBY_SEEDS", Spec::U32(NEARBY_SEEDS)),
+            ("IMPOSTORS", Spec::U32(u32::from(!kept.is_empty()))),
         ]
         .into_iter()
         .chain(box_specs(box_names, volume.min, volume.max))
