@@ -322,7 +322,7 @@ shared_bindings! {
     }
     // Set 1 of eikonal_view, besides BINDING_GBUF_DEPTH: the field (grad n, n - 1), the
     // material volumes of src/scene/volume_sources.rs ((extinction RGB, HG g), (albedo RGB,
-    // reflectance), (emission RGB, boundary band)) and the triangles of the exactly
+    // reflectance), (emission RGB, the boundary band's reflectance, -1 outside it)) and the triangles of the exactly
     // intersected flat receivers (§6, Fig. 7; src/technique/eikonal/eikonal_nearby.rs).
     EIKONAL_VIEW_BINDINGS {
         BINDING_EIKONAL_FIELD = 13;

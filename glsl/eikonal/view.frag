@@ -69,7 +69,7 @@ layout(set = 1, binding = BINDING_EIKONAL_FIELD) uniform sampler3D field;
 // ---- material volumes ----
 layout(set = 1, binding = BINDING_EIKONAL_EXTINCTION) uniform sampler3D extinction_map;  // sigma_a + sigma_s, g
 layout(set = 1, binding = BINDING_EIKONAL_ALBEDO) uniform sampler3D albedo_map;          // albedo, reflectance
-layout(set = 1, binding = BINDING_EIKONAL_EMISSION) uniform sampler3D emission_map;      // emission, boundary band
+layout(set = 1, binding = BINDING_EIKONAL_EMISSION) uniform sampler3D emission_map;      // emission, band factor
 // Per brick, the Chebyshev distance in bricks to the nearest brick that is not uniform
 // (src/technique/eikonal/volume.rs, `uniform_reach`).
 layout(std430, set = 1, binding = BINDING_EIKONAL_BRICKS) readonly buffer Bricks { uint brick_reach[]; };
@@ -155,20 +155,15 @@ vec4 sample_material(sampler3D map, vec3 x) {
     return mix(mix(c00, c10, f.y), mix(c01, c11, f.y), f.z);
 }
 
-// The boundary band (nearest voxel): inside it the smoothed index crosses a jump.
-bool in_band(vec3 x) {
+// The boundary band at x (nearest voxel), where the smoothed index crosses a jump: its
+// reflectance factor (the CPU spreads each surface's factor over its band), or -1 outside
+// the band and the box. One fetch per step: each texel fetch is about a tenth of the march
+// on lavapipe (docs/BENCHMARKS.md).
+float band_factor(vec3 x) {
     ivec3 size = textureSize(emission_map, 0);
     vec3 u = (x - BOX_MIN) / (BOX_MAX - BOX_MIN) * vec3(size);
-    if (any(lessThan(u, vec3(0.0))) || any(greaterThanEqual(u, vec3(size)))) return false;
-    return texelFetch(emission_map, ivec3(u), 0).a > 0.5;
-}
-
-// The reflectance factor of the band at x (nearest voxel; the CPU spreads each surface's
-// factor over its band).
-float band_reflectance(vec3 x) {
-    ivec3 size = textureSize(albedo_map, 0);
-    ivec3 q = clamp(ivec3((x - BOX_MIN) / (BOX_MAX - BOX_MIN) * vec3(size)), ivec3(0), size - 1);
-    return texelFetch(albedo_map, q, 0).a;
+    if (MATERIALS == 0u || any(lessThan(u, vec3(0.0))) || any(greaterThanEqual(u, vec3(size)))) return -1.0;
+    return texelFetch(emission_map, ivec3(u), 0).a;
 }
 // ---- end of the material volumes ----
 
@@ -275,11 +270,13 @@ vec3 march(vec3 o, vec3 d, float t_enter, int c, inout bool touched) {
     // A ray that enters the box inside a band comes from the air (n = 1).
     Run r;
     r.turned = false;
-    // Whether x is in a band: read once per step, at its end, for this step and the next.
-    bool x_band = MATERIALS != 0u && in_band(x);
+    // The band at x (its factor, -1 outside): read once per step, at its end, for this step
+    // and the next.
+    float x_factor = band_factor(x);
+    bool x_band = x_factor >= 0.0;
     bool banded = x_band;
     run_start(r, 1.0, d, T);
-    if (banded) r.rho = band_reflectance(x);
+    if (banded) r.rho = x_factor;
     // Rays that leave the box stop one step past its face at most.
     float margin = STEP;
     // The last point inside the box proper, where the exit ray starts.
@@ -356,7 +353,8 @@ vec3 march(vec3 o, vec3 d, float t_enter, int c, inout bool touched) {
         }
         s = sample_field(x, c);
         n_cur = 1.0 + s.w;
-        x_band = MATERIALS != 0u && in_band(x);
+        x_factor = band_factor(x);
+        x_band = x_factor >= 0.0;
         // A constant index other than the air's bends the ray where a leap entered it.
         touched = touched || (leapt ? abs(n_before - 1.0) > 1e-4 : abs(s.w) > 1e-4);
         // ---- a receiver inside (or touching) the box ends the path where the
@@ -390,7 +388,7 @@ vec3 march(vec3 o, vec3 d, float t_enter, int c, inout bool touched) {
             if (abs(n_cur - r.n_a) > abs(r.n_peak - r.n_a)) r.n_peak = n_cur;
             r.grad_sum += s.xyz;
             // Only band voxels carry their surface's factor (the step may have left the band).
-            if (x_band) r.rho = max(r.rho, band_reflectance(x));
+            if (x_band) r.rho = max(r.rho, x_factor);
         }
         if ((EXTINCTION != 0u || EMISSION != 0u) && !leapt) {
             vec3 mid = 0.5 * (x0 + x);

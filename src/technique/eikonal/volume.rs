@@ -126,7 +126,7 @@ pub fn sphere_crossing(a: DVec3, b: DVec3, center: DVec3, radius: f64) -> DVec3 
 ///
 /// Bytes per voxel: 24 per index slab (R32F raw + R32F scratch + RGBA32F field), so 24 or
 /// 72, plus 24 for the materials (3 x RGBA16F: extinction + g, albedo + reflectance,
-/// emission + boundary band), or a 1x1x1 stand-in of each when the volume has no material
+/// emission + the boundary band's reflectance factor), or a 1x1x1 stand-in of each when the volume has no material
 /// (no extinction, emission or index jump anywhere).
 pub struct VolumeTextures {
     _raw: Image,
@@ -139,7 +139,8 @@ pub struct VolumeTextures {
     /// (sigma_s / extinction RGB, surface reflectance factor).
     pub albedo: Image,
     pub albedo_id: ImageId,
-    /// (emission RGB per metre, boundary band 0/1).
+    /// (emission RGB per metre, the boundary band's reflectance factor, -1 outside the band:
+    /// the view renderer's march reads both in one fetch per step).
     pub emission: Image,
     pub emission_id: ImageId,
     /// Index slabs in `field` (3: a per-channel index, dispersion).
@@ -268,7 +269,8 @@ pub(crate) fn prepare_volume(
     };
     let ext_data = pack(&mut fields.extinction.iter().copied());
     let alb_data = pack(&mut fields.albedo.iter().zip(&band_reflectance).map(|(a, &r)| [a[0], a[1], a[2], r]));
-    let emi_data = pack(&mut fields.emission.iter().zip(&band).map(|(e, &b)| [e[0], e[1], e[2], b]));
+    let band_factor = band.iter().zip(&band_reflectance).map(|(&b, &r)| if b > 0.5 { r } else { -1.0 });
+    let emi_data = pack(&mut fields.emission.iter().zip(band_factor).map(|(e, b)| [e[0], e[1], e[2], b]));
 
     // The blur ping-pongs raw -> scratch -> raw -> scratch; the gradient reads scratch.
     let passes = [(&raw, &scratch), (&scratch, &raw), (&raw, &scratch), (&scratch, &field)];
