@@ -322,7 +322,7 @@ shared_bindings! {
     }
     // Set 1 of eikonal_view, besides BINDING_GBUF_DEPTH: the field (grad n, n - 1), the
     // material volumes of src/scene/volume_sources.rs ((extinction RGB, HG g), (albedo RGB,
-    // reflectance), (emission RGB, the boundary band's reflectance, -1 outside it)) and the triangles of the exactly
+    // reflectance), (emission RGB, boundary band)) and the triangles of the exactly
     // intersected flat receivers (§6, Fig. 7; src/technique/eikonal/eikonal_nearby.rs).
     EIKONAL_VIEW_BINDINGS {
         BINDING_EIKONAL_FIELD = 13;
@@ -332,6 +332,9 @@ shared_bindings! {
         BINDING_EIKONAL_TRIANGLES = 25;
         // The uniform-region map of the leaps (u32 per brick; src/technique/eikonal/volume.rs).
         BINDING_EIKONAL_BRICKS = 26;
+        // The boundary band's reflectance factor per voxel, -1 outside the band (f32, x
+        // fastest; src/technique/eikonal/volume.rs).
+        BINDING_EIKONAL_BAND = 27;
     }
     // Set 1 of refraction_water, besides the tracer's REF_BINDINGS and BINDING_GBUF_ALBEDO /
     // _DEPTH: the environment's SH coefficients as seen from under the water

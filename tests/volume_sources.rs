@@ -277,6 +277,29 @@ fn fresnel_reflection_at_normal_incidence() {
     }
 }
 
+/// The march reads each voxel's band where the CPU put it: the slab of
+/// `fresnel_reflection_at_normal_incidence`, off the box's centre on every axis, in a volume of
+/// a different resolution on each axis, reflects the same closed-form F at the image centre.
+/// A band read at transposed or wrongly strided voxels lies elsewhere along the centre ray,
+/// and the reflection vanishes (checked by swapping y and z in view.frag's `band_factor`: 0).
+#[test]
+fn the_fresnel_band_follows_the_voxel_layout() {
+    if !common::in_own_process() {
+        return;
+    }
+    let ctx = common::context(false);
+    let n = 1.5f32;
+    let slab = format!(
+        "{BOX}resolution = [40, 48, 56]\n[[volume.region]]\nshape = \"box\"\ncenter = [0.3, -0.2, 0.35]\n\
+         size = [1.0, 1.0, 0.3]\nn = {n}\nsigma_a = 1000\n"
+    );
+    let l = render_volume(&ctx, &slab, 1.0, &[]).radiance(16, 16);
+    let f = ((n - 1.0) / (n + 1.0)).powi(2);
+    for c in l {
+        assert!((c - f).abs() < 0.002, "reflected {c}, expected {f}");
+    }
+}
+
 /// Emission (Eq. 1 with L_e of Eq. 2): a non-absorbing, non-refracting box of emission E
 /// and depth 0.5 m along the view adds E x 0.5 to the environment (0 here); with
 /// extinction sigma the closed form is E (1 - e^{-sigma d}) / sigma. Tolerance 1 %: the

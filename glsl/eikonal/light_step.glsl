@@ -81,7 +81,7 @@ bool in_band(vec3 x) {
     ivec3 size = textureSize(band_map, 0);
     vec3 u = (x - VOL_MIN) / (VOL_MAX - VOL_MIN) * vec3(size);
     if (any(lessThan(u, vec3(0.0))) || any(greaterThanEqual(u, vec3(size)))) return false;
-    return texelFetch(band_map, ivec3(u), 0).a >= 0.0;
+    return texelFetch(band_map, ivec3(u), 0).a > 0.5;
 }
 
 float band_reflectance(vec3 x) {

@@ -385,7 +385,8 @@ impl EikonalPass {
             .read(nearby.texture_id)
             .storage(crate::BINDING_NEARBY_RECTS, &nearby.rect_buffer)
             .storage(crate::BINDING_EIKONAL_TRIANGLES, &triangles)
-            .storage(crate::BINDING_EIKONAL_BRICKS, &textures.bricks);
+            .storage(crate::BINDING_EIKONAL_BRICKS, &textures.bricks)
+            .storage(crate::BINDING_EIKONAL_BAND, &textures.band);
         let view = FullscreenPass::new(
             ctx,
             // Overwrites the pixels whose ray enters the box.

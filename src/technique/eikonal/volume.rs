@@ -125,9 +125,9 @@ pub fn sphere_crossing(a: DVec3, b: DVec3, center: DVec3, radius: f64) -> DVec3 
 /// volumes of src/scene/volume_sources.rs.
 ///
 /// Bytes per voxel: 24 per index slab (R32F raw + R32F scratch + RGBA32F field), so 24 or
-/// 72, plus 24 for the materials (3 x RGBA16F: extinction + g, albedo + reflectance,
-/// emission + the boundary band's reflectance factor), or a 1x1x1 stand-in of each when the volume has no material
-/// (no extinction, emission or index jump anywhere).
+/// 72, plus 28 for the materials (3 x RGBA16F: extinction + g, albedo + reflectance,
+/// emission + boundary band; and the band's factor, an f32 buffer), or a 1x1x1 stand-in of
+/// each when the volume has no material (no extinction, emission or index jump anywhere).
 pub struct VolumeTextures {
     _raw: Image,
     _scratch: Image,
@@ -139,8 +139,7 @@ pub struct VolumeTextures {
     /// (sigma_s / extinction RGB, surface reflectance factor).
     pub albedo: Image,
     pub albedo_id: ImageId,
-    /// (emission RGB per metre, the boundary band's reflectance factor, -1 outside the band:
-    /// the view renderer's march reads both in one fetch per step).
+    /// (emission RGB per metre, boundary band 0/1).
     pub emission: Image,
     pub emission_id: ImageId,
     /// Index slabs in `field` (3: a per-channel index, dispersion).
@@ -153,6 +152,10 @@ pub struct VolumeTextures {
     pub emission_any: bool,
     /// The uniform-region map of the view rays' leaps ([`uniform_reach`]).
     pub bricks: crate::gpu::Buffer,
+    /// The boundary band's reflectance factor per voxel (f32, x fastest), -1 outside the
+    /// band: the view renderer's march reads it every step, and a storage buffer load costs
+    /// lavapipe less than a texel fetch (docs/BENCHMARKS.md).
+    pub band: crate::gpu::Buffer,
     /// Where the light can be anything but straight ([`medium_bricks`]).
     pub medium: Vec<(glam::Vec3, glam::Vec3)>,
 }
@@ -269,8 +272,14 @@ pub(crate) fn prepare_volume(
     };
     let ext_data = pack(&mut fields.extinction.iter().copied());
     let alb_data = pack(&mut fields.albedo.iter().zip(&band_reflectance).map(|(a, &r)| [a[0], a[1], a[2], r]));
-    let band_factor = band.iter().zip(&band_reflectance).map(|(&b, &r)| if b > 0.5 { r } else { -1.0 });
-    let emi_data = pack(&mut fields.emission.iter().zip(band_factor).map(|(e, b)| [e[0], e[1], e[2], b]));
+    // The view's band factor (`VolumeTextures::band`), one stand-in value without materials.
+    let band_factor: Vec<f32> = if materials {
+        band.iter().zip(&band_reflectance).map(|(&b, &r)| if b > 0.5 { r } else { -1.0 }).collect()
+    } else {
+        vec![-1.0]
+    };
+    let band_buffer = crate::gpu::Buffer::storage(ctx, "eikonal_band", &band_factor)?;
+    let emi_data = pack(&mut fields.emission.iter().zip(&band).map(|(e, &b)| [e[0], e[1], e[2], b]));
 
     // The blur ping-pongs raw -> scratch -> raw -> scratch; the gradient reads scratch.
     let passes = [(&raw, &scratch), (&scratch, &raw), (&raw, &scratch), (&scratch, &field)];
@@ -360,6 +369,7 @@ pub(crate) fn prepare_volume(
         extinction_any,
         emission_any,
         bricks,
+        band: band_buffer,
         medium,
     })
 }
