@@ -68,8 +68,8 @@ layout(set = 1, binding = BINDING_GBUF_DEPTH) uniform sampler2D gbuf_depth;
 layout(set = 1, binding = BINDING_EIKONAL_FIELD) uniform sampler3D field;
 // ---- material volumes ----
 layout(set = 1, binding = BINDING_EIKONAL_EXTINCTION) uniform sampler3D extinction_map;  // sigma_a + sigma_s, g
-layout(set = 1, binding = BINDING_EIKONAL_ALBEDO) uniform sampler3D albedo_map;          // albedo, reflectance
-layout(set = 1, binding = BINDING_EIKONAL_EMISSION) uniform sampler3D emission_map;      // emission, boundary band
+layout(set = 1, binding = BINDING_EIKONAL_ALBEDO) uniform sampler3D albedo_map;          // albedo (rgb)
+layout(set = 1, binding = BINDING_EIKONAL_EMISSION) uniform sampler3D emission_map;      // emission (rgb)
 // Per brick, the Chebyshev distance in bricks to the nearest brick that is not uniform
 // (src/technique/eikonal/volume.rs, `uniform_reach`).
 layout(std430, set = 1, binding = BINDING_EIKONAL_BRICKS) readonly buffer Bricks { uint brick_reach[]; };
