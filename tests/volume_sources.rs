@@ -282,6 +282,7 @@ fn fresnel_reflection_at_normal_incidence() {
 /// a different resolution on each axis, reflects the same closed-form F at the image centre.
 /// A band read at transposed or wrongly strided voxels lies elsewhere along the centre ray,
 /// and the reflection vanishes (checked by swapping y and z in view.frag's `band_factor`: 0).
+/// Tolerance that of `fresnel_reflection_at_normal_incidence`.
 #[test]
 fn the_fresnel_band_follows_the_voxel_layout() {
     if !common::in_own_process() {

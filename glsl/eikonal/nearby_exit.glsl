@@ -10,8 +10,8 @@
 //   volume (glsl/include/nearby.glsl: Fig. 13's rectangle hit, Figs. 16-17's lookup);
 // the nearer hit wins; the environment where neither is hit.
 // The including shader declares before this file: NEARBY_ITERATIONS, NEARBY_TOLERANCE,
-// NEARBY_SEEDS, IMPOSTORS, SCATTER and LIGHT_{MIN,MAX}_{X,Y,Z}, and includes frame.glsl, lighting.glsl,
-// scatter.glsl and receiver.glsl.
+// NEARBY_SEEDS, IMPOSTORS (0: no rectangles), SCATTER and LIGHT_{MIN,MAX}_{X,Y,Z}, and
+// includes frame.glsl, lighting.glsl, scatter.glsl and receiver.glsl.
 #ifndef EIKONAL_NEARBY_EXIT_GLSL
 #define EIKONAL_NEARBY_EXIT_GLSL
 
