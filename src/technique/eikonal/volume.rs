@@ -153,8 +153,8 @@ pub struct VolumeTextures {
     /// The uniform-region map of the view rays' leaps ([`uniform_reach`]).
     pub bricks: crate::gpu::Buffer,
     /// The boundary band's reflectance factor per voxel (f32, x fastest), -1 outside the
-    /// band: the view renderer's march reads it every step, and a storage buffer load costs
-    /// lavapipe less than a texel fetch (docs/BENCHMARKS.md).
+    /// band, device-local: the view renderer's march reads it every step, and a storage
+    /// buffer load costs lavapipe less than a texel fetch (docs/BENCHMARKS.md).
     pub band: crate::gpu::Buffer,
     /// Where the light can be anything but straight ([`medium_bricks`]).
     pub medium: Vec<(glam::Vec3, glam::Vec3)>,
@@ -278,7 +278,13 @@ pub(crate) fn prepare_volume(
     } else {
         vec![-1.0]
     };
-    let band_buffer = crate::gpu::Buffer::storage(ctx, "eikonal_band", &band_factor)?;
+    // Device-local (on a discrete GPU every step of every view ray reads it), filled by a
+    // copy below.
+    let band_bytes = std::mem::size_of_val(band_factor.as_slice()) as u64;
+    let band_usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
+    let band_buffer =
+        crate::gpu::Buffer::new(ctx, "eikonal_band", band_bytes, band_usage, crate::gpu::MemoryLocation::GpuOnly)?;
+    let band_id = graph.register_buffer(&band_buffer);
     let emi_data = pack(&mut fields.emission.iter().zip(&band).map(|(e, &b)| [e[0], e[1], e[2], b]));
 
     // The blur ping-pongs raw -> scratch -> raw -> scratch; the gradient reads scratch.
@@ -324,6 +330,7 @@ pub(crate) fn prepare_volume(
         upload("eikonal_albedo_upload", bytemuck::cast_slice(&alb_data))?,
         upload("eikonal_emission_upload", bytemuck::cast_slice(&emi_data))?,
     ];
+    let band_staging = upload("eikonal_band_upload", bytemuck::cast_slice(&band_factor))?;
     let groups = extent.map(|n| n.div_ceil(EIKONAL_GROUP));
     let ids = [(raw_id, scratch_id), (scratch_id, raw_id), (raw_id, scratch_id), (scratch_id, field_id)];
     let names = ["eikonal_smooth_x", "eikonal_smooth_y", "eikonal_smooth_z", "eikonal_gradient"];
@@ -336,12 +343,15 @@ pub(crate) fn prepare_volume(
                 (albedo_id, Access::TransferWrite),
                 (emission_id, Access::TransferWrite),
             ],
-            &[],
+            &[(band_id, Access::TransferWrite)],
         );
         cmd.copy_buffer_to_image(&staging, &raw);
         for (buffer, image) in staging_materials.iter().zip([&extinction, &albedo, &emission]) {
             cmd.copy_buffer_to_image(buffer, image);
         }
+        cmd.copy_buffer(&band_staging, &band_buffer, band_bytes);
+        // Only eikonal_view's fragments read it, in every later frame.
+        graph.access_now(cmd, &[], &[(band_id, Access::FragmentStorageRead)]);
         let mut frame = graph.frame();
         for (i, &(src, dst)) in ids.iter().enumerate() {
             let pipeline = if i < 3 { &smooth[i] } else { &gradient };
