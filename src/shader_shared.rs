@@ -373,6 +373,9 @@ shared_bindings! {
         LIGHT_BINDING_AIR_SKIP = 15;
         LIGHT_BINDING_BAND = 16;
         LIGHT_BINDING_REFLECTANCE = 17;
+        // The view renderer's uniform-region map (u32 per brick; src/technique/eikonal/volume.rs),
+        // for the straight steps of glsl/eikonal/light_step.glsl.
+        LIGHT_BINDING_BRICKS = 18;
     }
     // The window's water animation (glsl/common/heightfield.comp; src/frame/heightfield.rs):
     // one set 0.

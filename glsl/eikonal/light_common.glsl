@@ -81,6 +81,12 @@ layout(constant_id = 25) const uint DEPOSIT_EVERY = 1u;
 // weight to slab 6 (render.eikonal.direction_splat = "nearest"); 0: trilinearly, like its
 // irradiance, whose sum is the weight.
 layout(constant_id = 26) const uint DIRECTION_NEAREST = 0u;
+// At most this many straight steps after a patch's integrated step in one dispatch, while
+// every corner stays in a uniform region (light_step.glsl; render.eikonal.light_leaps); 0: none.
+layout(constant_id = 27) const uint LEAP_STEPS = 0u;
+layout(constant_id = 28) const uint BRICK = 4u;
+layout(std430, set = 1, binding = LIGHT_BINDING_BRICKS) readonly buffer Bricks { uint brick_reach[]; };
+#include "bricks.glsl"
 
 const vec3 VOL_MIN = vec3(VOL_MIN_X, VOL_MIN_Y, VOL_MIN_Z);
 const vec3 VOL_MAX = vec3(VOL_MAX_X, VOL_MAX_Y, VOL_MAX_Z);

@@ -35,36 +35,67 @@
 #include "fresnel.glsl"
 layout(local_size_x = LIGHT_GROUP) in;
 
-void rhs(vec3 x, vec3 v, out vec3 dx, out vec3 dv) {
+// Eqs. 14-15 at (x, v); n: the index there.
+void rhs(vec3 x, vec3 v, out vec3 dx, out vec3 dv, out float n) {
     vec4 f = sample_field(x);
-    float n = max(1.0 + f.w, 1e-3);
+    n = max(1.0 + f.w, 1e-3);
     dx = v / (n * n);   // Eq. 14
     dv = f.xyz / n;     // Eq. 15
 }
 
-void advance(inout vec3 x, inout vec3 v) {
-    float h = DT;
+// One step of Eqs. 14-15 from (x, v); n0: the index where it began.
+void advance(inout vec3 x, inout vec3 v, out float n0) {
+    float h = DT, n;
     if (INTEGRATOR == EIKONAL_RK4) {
         vec3 k1x, k1v, k2x, k2v, k3x, k3v, k4x, k4v;
-        rhs(x, v, k1x, k1v);
-        rhs(x + 0.5 * h * k1x, v + 0.5 * h * k1v, k2x, k2v);
-        rhs(x + 0.5 * h * k2x, v + 0.5 * h * k2v, k3x, k3v);
-        rhs(x + h * k3x, v + h * k3v, k4x, k4v);
+        rhs(x, v, k1x, k1v, n0);
+        rhs(x + 0.5 * h * k1x, v + 0.5 * h * k1v, k2x, k2v, n);
+        rhs(x + 0.5 * h * k2x, v + 0.5 * h * k2v, k3x, k3v, n);
+        rhs(x + h * k3x, v + h * k3v, k4x, k4v, n);
         x += h / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x);
         v += h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
     } else if (INTEGRATOR == EIKONAL_MIDPOINT) {
         // Second order with two field samples: the slope at the half step's Euler estimate.
         vec3 k1x, k1v, k2x, k2v;
-        rhs(x, v, k1x, k1v);
-        rhs(x + 0.5 * h * k1x, v + 0.5 * h * k1v, k2x, k2v);
+        rhs(x, v, k1x, k1v, n0);
+        rhs(x + 0.5 * h * k1x, v + 0.5 * h * k1v, k2x, k2v, n);
         x += h * k2x;
         v += h * k2v;
     } else {
         vec3 dx, dv;
-        rhs(x, v, dx, dv);
+        rhs(x, v, dx, dv, n0);
         x += h * dx;
         v += h * dv;
     }
+}
+
+// `advance` where the field is uniform, index n: every stage sees grad n = 0 and the same n,
+// so v stays and x moves by DT v / n^2, computed with the integrator's own arithmetic so
+// that the result is the same to the bit.
+void straight_step(inout vec3 x, vec3 v, float n) {
+    vec3 k = v / (n * n);
+    if (INTEGRATOR == EIKONAL_RK4) {
+        x += DT / 6.0 * (k + 2.0 * k + 2.0 * k + k);
+    } else {
+        x += DT * k;
+    }
+}
+
+// How far a particle at x moving along unit d may go in a straight line: through uniform
+// bricks inside the field's box (bricks.glsl), and outside it up to the box widened by a
+// voxel (within which the trilinear lookup still reads the boundary voxels); unbounded on a
+// line that never meets that box.
+float straight_reach(vec3 x, vec3 d) {
+    ivec3 size = textureSize(field, 0);
+    size.z /= int(CHANNELS);
+    vec3 voxel = (VOL_MAX - VOL_MIN) / vec3(size);
+    vec3 lo = VOL_MIN - voxel, hi = VOL_MAX + voxel;
+    if (all(greaterThanEqual(x, lo)) && all(lessThanEqual(x, hi))) return uniform_leap(x, d, VOL_MIN, VOL_MAX, size);
+    vec3 inv = 1.0 / mix(vec3(1e-30), d, greaterThan(abs(d), vec3(1e-30)));
+    vec3 t0 = (lo - x) * inv, t1 = (hi - x) * inv;
+    vec3 tl = min(t0, t1), th = max(t0, t1);
+    float near = max(max(tl.x, tl.y), tl.z), far = min(min(th.x, th.y), th.z);
+    return near <= far && far > 0.0 ? max(near, 0.0) : 1e30;
 }
 
 // Does the straight ray (outside the medium n = 1) from o along d still reach the box?
@@ -185,6 +216,16 @@ void deposit(vec3 at, vec3 flux_len, vec3 dir) {
 // additions changes. Patches of one list are then at different times, so each carries its
 // own step count (`patch_steps`) and is eliminated at the run's step budget. (A loop over the
 // substeps inside one invocation cost lavapipe half again the step's time.)
+//
+// Straight steps (LEAP_STEPS > 0, render.eikonal.light_leaps): where the integrated step began
+// with every corner inside a uniform region (no gradient for any lookup to read: bricks.glsl,
+// or beyond the field's box), Eqs. 14-15 keep v and move x by DT v / n^2 per step, n the
+// index the step began at; a patch then takes up to LEAP_STEPS more steps in the same
+// dispatch, as many as keep each corner inside its region, each classified and deposited
+// exactly as a step of its own, stopping at the first that is not retained. The wavefront
+// is the same to the bit (`straight_step`), in fewer dispatches: a patch crossing the uniform inside of a
+// glass ball or the air below it is in the list a fraction of the times. The loop holds the
+// classification and the one deposit call: a CPU device runs every call site's atomics.
 void main() {
     uint i = gl_GlobalInvocationID.x;
     if (i >= state.count) return;
@@ -198,12 +239,22 @@ void main() {
     vec3 mid0 = patch_mid(p);
     vec3 flux0 = patch_flux(p);
     vec3 v0 = 0.25 * (p.v[0].xyz + p.v[1].xyz + p.v[2].xyz + p.v[3].xyz);
+    // Straight steps each corner's region allows after this one (see above).
+    float leaps = float(LEAP_STEPS);
+    float n_start[4];
     for (int c = 0; c < 4; ++c) {
         vec3 x = p.x[c].xyz, v = p.v[c].xyz;
-        advance(x, v);
+        float n0;
+        advance(x, v, n0);
+        if (LEAP_STEPS > 0u) {
+            float per_step = DT * length(p.v[c].xyz) / (n0 * n0);
+            n_start[c] = n0;
+            leaps = min(leaps, floor(straight_reach(p.x[c].xyz, normalize(p.v[c].xyz)) / per_step) - 1.0);
+        }
         p.x[c].xyz = x;
         p.v[c].xyz = v;
     }
+    leaps = min(leaps, float(run.max_steps - steps - 1u));
     vec3 mid = patch_mid(p);
     if (FRESNEL != 0u) {
         // The mean direction of travel with the field's index at the midpoint as its length
@@ -211,68 +262,84 @@ void main() {
         vec3 v1 = p.v[0].xyz + p.v[1].xyz + p.v[2].xyz + p.v[3].xyz;
         fresnel_loss(p, mid0, normalize(v0) * index_at(mid0), mid, normalize(v1) * index_at(mid));
     }
-    // Eq. 18 with the extinction volume (sigma_r = sigma_a + sigma_s, Eq. 5).
+    // Eq. 18 with the extinction volume (sigma_r = sigma_a + sigma_s, Eq. 5); none in a
+    // uniform region, so only for the integrated step.
     vec3 sigma = extinction_at(mid);
     if (any(greaterThan(sigma, vec3(0.0)))) {
         set_patch_flux(p, patch_flux(p) * exp(-sigma * DT / index_at(mid)));
     }
-    vec3 normal = patch_normal(p);
-    vec3 dir = patch_dir(p);
-    bool finite_patch = !any(isnan(normal)) && !any(isinf(normal)) && dot(dir, dir) > 0.0;
-    bool singular = !finite_patch || (KEEP_CROSSED == 0u && !(dot(normal, dir) > 0.0));
     vec3 voxel = (LIGHT_MAX - LIGHT_MIN) / vec3(imageSize(irradiance));
-    vec3 lo = min(min(p.x[0].xyz, p.x[1].xyz), min(p.x[2].xyz, p.x[3].xyz));
-    vec3 hi = max(max(p.x[0].xyz, p.x[1].xyz), max(p.x[2].xyz, p.x[3].xyz));
-    // Within its own size of the box a patch is split already: each step halves it while
-    // moving half a voxel, so it is down to a voxel when it enters (a patch of many voxels
-    // deposited at its midpoint would leave holes in the first layers).
-    vec3 margin = max(voxel, vec3(max(hi.x - lo.x, max(hi.y - lo.y, hi.z - lo.z))));
-    bool near_box = all(greaterThanEqual(hi, LIGHT_MIN - margin)) && all(lessThanEqual(lo, LIGHT_MAX + margin));
-    uint cls = 1u;
-    vec3 flux = patch_flux(p);
-    if (singular || max(flux.r, max(flux.g, flux.b)) < run.min_flux) {
-        cls = 0u;
-    } else if (!near_box && !heads_into_box(mid, dir)) {
-        cls = 0u;   // left the simulation volume (and will not re-enter: straight in air)
-    } else if (near_box && any(greaterThan(hi - lo, voxel))) {
-        cls = 4u;   // tessellate; outside the box rays are straight and need no resolution
-    }
-    classes[i] = cls;
-    atomicAdd(state.advanced, 1u);
-    if (HIGHEST_ENERGY != 0u) {
-        uint mark = 0u;
+    uint cls = 1u, taken = 0u;
+    for (uint s = 0u;; ++s) {
+        if (s > 0u) {
+            for (int c = 0; c < 4; ++c) {
+                vec3 x = p.x[c].xyz;
+                straight_step(x, p.v[c].xyz, n_start[c]);
+                p.x[c].xyz = x;
+            }
+            mid0 = mid;
+            flux0 = patch_flux(p);
+            mid = patch_mid(p);
+        }
+        vec3 normal = patch_normal(p);
+        vec3 dir = patch_dir(p);
+        bool finite_patch = !any(isnan(normal)) && !any(isinf(normal)) && dot(dir, dir) > 0.0;
+        bool singular = !finite_patch || (KEEP_CROSSED == 0u && !(dot(normal, dir) > 0.0));
+        vec3 lo = min(min(p.x[0].xyz, p.x[1].xyz), min(p.x[2].xyz, p.x[3].xyz));
+        vec3 hi = max(max(p.x[0].xyz, p.x[1].xyz), max(p.x[2].xyz, p.x[3].xyz));
+        // Within its own size of the box a patch is split already: each step halves it while
+        // moving half a voxel, so it is down to a voxel when it enters (a patch of many voxels
+        // deposited at its midpoint would leave holes in the first layers).
+        vec3 margin = max(voxel, vec3(max(hi.x - lo.x, max(hi.y - lo.y, hi.z - lo.z))));
+        bool near_box = all(greaterThanEqual(hi, LIGHT_MIN - margin)) && all(lessThanEqual(lo, LIGHT_MAX + margin));
+        cls = 1u;
+        vec3 flux = patch_flux(p);
+        if (singular || max(flux.r, max(flux.g, flux.b)) < run.min_flux) {
+            cls = 0u;
+        } else if (!near_box && !heads_into_box(mid, dir)) {
+            cls = 0u;   // left the simulation volume (and will not re-enter: straight in air)
+        } else if (near_box && any(greaterThan(hi - lo, voxel))) {
+            cls = 4u;   // tessellate; outside the box rays are straight and need no resolution
+        }
+        uint step_now = steps + s;
+        taken = s + 1u;
+        if (HIGHEST_ENERGY != 0u) {
+            uint mark = 0u;
 #ifndef ACCUM_FLOAT_ATOMICS
-        ivec3 q;
-        vec3 dE;
-        uint key;
-        if (!singular && voxel_sample(p, q, dE, key)) {
-            imageAtomicMax(accum, accum_texel(q, 6), key);
-            mark = run.substep + 1u;
-        }
+            ivec3 q;
+            vec3 dE;
+            uint key;
+            if (!singular && voxel_sample(p, q, dE, key)) {
+                imageAtomicMax(accum, accum_texel(q, 6), key);
+                mark = run.substep + 1u;
+            }
 #endif
-        set_patch_steps(p, steps + 1u, mark);
-        src[i] = p;
-    } else {
-        // With DEPOSIT_EVERY = 2 a retained patch adds every other step's chord together
-        // with the next one's: one splat per voxel of travel instead of two at the default
-        // half-voxel step (the trilinear tent, two voxels wide, still sums to a constant
-        // along a straight track), and half the atomics. The chord it waited on is taken as
-        // long as this one (exact for straight travel at constant speed) and carried the
-        // flux it had at the end of it.
-        vec3 chord = mid - mid0;
-        float len = length(chord);
-        bool deferred = patch_mark(p) != 0u;
-        bool defer = DEPOSIT_EVERY == 2u && !deferred && cls == 1u && steps + 1u < run.max_steps;
-        set_patch_steps(p, steps + 1u, defer ? 1u : 0u);
-        src[i] = p;
-        // One call: a CPU device runs every call site's atomics, masked or not.
-        vec3 at = mid0 + 0.5 * chord;
-        vec3 flux_len = flux * len;
-        if (deferred) {
-            // Both chords, centred where they meet; a singular patch only the one before.
-            at = singular ? mid0 - 0.5 * chord : mid0;
-            flux_len = singular ? flux0 * len : (flux0 + flux) * len;
+            set_patch_steps(p, step_now + 1u, mark);
+        } else {
+            // With DEPOSIT_EVERY = 2 a retained patch adds every other step's chord together
+            // with the next one's: one splat per voxel of travel instead of two at the default
+            // half-voxel step (the trilinear tent, two voxels wide, still sums to a constant
+            // along a straight track), and half the atomics. The chord it waited on is taken as
+            // long as this one (exact for straight travel at constant speed) and carried the
+            // flux it had at the end of it.
+            vec3 chord = mid - mid0;
+            float len = length(chord);
+            bool deferred = patch_mark(p) != 0u;
+            bool defer = DEPOSIT_EVERY == 2u && !deferred && cls == 1u && step_now + 1u < run.max_steps;
+            set_patch_steps(p, step_now + 1u, defer ? 1u : 0u);
+            // One call: a CPU device runs every call site's atomics, masked or not.
+            vec3 at = mid0 + 0.5 * chord;
+            vec3 flux_len = flux * len;
+            if (deferred) {
+                // Both chords, centred where they meet; a singular patch only the one before.
+                at = singular ? mid0 - 0.5 * chord : mid0;
+                flux_len = singular ? flux0 * len : (flux0 + flux) * len;
+            }
+            if (deferred ? finite_patch : !singular && !defer) deposit(at, flux_len, normalize(dir));
         }
-        if (deferred ? finite_patch : !singular && !defer) deposit(at, flux_len, normalize(dir));
+        if (!(cls == 1u && float(s) < leaps)) break;
     }
+    src[i] = p;
+    classes[i] = cls;
+    atomicAdd(state.advanced, taken);
 }

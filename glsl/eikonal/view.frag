@@ -123,24 +123,11 @@ void rhs(vec3 x, vec3 v, int c, out vec3 dx, out vec3 dv) {
     rhs_at(sample_field(x, c), v, dx, dv);
 }
 
-// How far the ray at x with unit direction d may go straight: to the edge of the cube of
-// uniform bricks around x (its brick's distance k: 2k - 1 bricks a side), where grad n = 0
-// and there is nothing to absorb, emit or reflect, so Eqs. 9-10 give a straight line
-// exactly; 0 where x's brick is not uniform or outside the box.
+#include "bricks.glsl"
+
+// How far the ray at x with unit direction d may go straight in the volume (bricks.glsl).
 float leap_length(vec3 x, vec3 d) {
-    ivec3 size = slab_size();
-    ivec3 nb = (size + int(BRICK) - 1) / int(BRICK);
-    vec3 voxel = (BOX_MAX - BOX_MIN) / vec3(size);
-    vec3 brick = voxel * float(BRICK);
-    ivec3 b = ivec3(floor((x - BOX_MIN) / brick));
-    if (any(lessThan(b, ivec3(0))) || any(greaterThanEqual(b, nb))) return 0.0;
-    int k = int(brick_reach[b.x + nb.x * (b.y + nb.y * b.z)]);
-    if (k == 0) return 0.0;
-    vec3 lo = max(BOX_MIN + vec3(b - (k - 1)) * brick, BOX_MIN);
-    vec3 hi = min(BOX_MIN + vec3(b + k) * brick, BOX_MAX);
-    vec3 inv = 1.0 / mix(vec3(1e-30), d, greaterThan(abs(d), vec3(1e-30)));
-    vec3 t = max((lo - x) * inv, (hi - x) * inv);
-    return max(min(min(t.x, t.y), t.z), 0.0);
+    return uniform_leap(x, d, BOX_MIN, BOX_MAX, slab_size());
 }
 
 // ---- material lookups ----

@@ -1133,6 +1133,15 @@ params! {
         /// is rebuilt less often. docs/BENCHMARKS.md has the times.
         // Beyond 64 nearly every patch has stopped long before the compaction.
         light_substeps: u32 = 4, 1..=64;
+        /// Straight steps a patch may take after its integrated step in one dispatch of the
+        /// step kernel, while each corner stays in a region where the smoothed index is
+        /// constant (the view renderer's brick map, or beyond the field's box), where Eqs.
+        /// 14-15 move it in a straight line exactly: each is classified and deposited as a step
+        /// of its own, so the wavefront is the same to rounding in fewer dispatches
+        /// (glsl/eikonal/light_step.glsl). 0: every step integrated, as the paper does. Only
+        /// with the track-length voxelization, `light_deposit_every` = 1 and no
+        /// `light_fresnel`; otherwise 0. docs/BENCHMARKS.md has the times.
+        light_leaps: u32 = 16, 0..=1024;
         /// Capacity of the patch list (one storage-buffer binding; a spill list of the same
         /// size beside it). The initial wavefront is simulated in tiles (`tile_patches`); the
         /// patches a step produces past the list are spilled and continued by a later run, and

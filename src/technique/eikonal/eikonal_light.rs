@@ -825,6 +825,7 @@ impl LightSim {
                 .storage(crate::LIGHT_BINDING_AIR_SKIP, &air_skip)
                 .sampled(crate::LIGHT_BINDING_BAND, &textures.emission, sampler)
                 .sampled(crate::LIGHT_BINDING_REFLECTANCE, &textures.albedo, sampler)
+                .storage(crate::LIGHT_BINDING_BRICKS, &textures.bricks)
         };
         let sets = Bindings::build_each(ctx, "eikonal_light", vec![set(0), set(1)])?;
 
@@ -854,6 +855,17 @@ impl LightSim {
             ("GRAY", Spec::U32(u32::from(gray))),
             ("DEPOSIT_EVERY", Spec::U32(params.light_deposit_every)),
             ("DIRECTION_NEAREST", Spec::U32(u32::from(nearest_direction))),
+            // Straight steps in uniform regions (light_step.glsl), where a step is one
+            // track-length deposit that carries no Fresnel state.
+            (
+                "LEAP_STEPS",
+                Spec::U32(if highest || params.light_deposit_every != 1 || params.light_fresnel {
+                    0
+                } else {
+                    params.light_leaps
+                }),
+            ),
+            ("BRICK", Spec::U32(super::volume::BRICK)),
         ]
         .into_iter()
         .chain(box_specs(volume_names, volume.min, volume.max))
@@ -1483,7 +1495,7 @@ fn simulation_settings(p: &EikonalParams) -> impl std::fmt::Debug {
         p.sigma,
         p.energy_threshold,
         p.light_dt,
-        (p.light_integrator, p.light_substeps),
+        (p.light_integrator, p.light_substeps, p.light_leaps),
         (
             p.max_patches,
             p.tile_patches,
