@@ -223,9 +223,10 @@ void deposit(vec3 at, vec3 flux_len, vec3 dir) {
 // index the step began at; a patch then takes up to LEAP_STEPS more steps in the same
 // dispatch, as many as keep each corner inside its region, each classified and deposited
 // exactly as a step of its own, stopping at the first that is not retained. The wavefront
-// is the same to the bit (`straight_step`), in fewer dispatches: a patch crossing the uniform inside of a
-// glass ball or the air below it is in the list a fraction of the times. The loop holds the
-// classification and the one deposit call: a CPU device runs every call site's atomics.
+// is the same to the bit (`straight_step`), in fewer dispatches: a patch crossing the uniform
+// inside of a glass ball or the air below it is in the list a fraction of the times. The
+// loop holds the classification and the one deposit call: a CPU device runs every call
+// site's atomics.
 void main() {
     uint i = gl_GlobalInvocationID.x;
     if (i >= state.count) return;
