@@ -470,6 +470,12 @@ fn report_on_a_tiny_spec_writes_the_summary_and_equal_time_columns() {
         .find(|p| p.extension().is_some_and(|x| x == "svg"))
         .unwrap();
     assert!(std::fs::read_to_string(svg).unwrap().contains("exact: raytrace"));
+    // The image strips only with --images: a run's output, not the repository's.
+    let pngs = std::fs::read_dir(d.0.join("docs/accuracy"))
+        .unwrap()
+        .filter(|e| e.as_ref().unwrap().path().extension().is_some_and(|x| x == "png"));
+    assert_eq!(pngs.count(), 0, "image strips written without --images");
+    assert!(!md.contains("Left to right"), "{md}");
 }
 
 /// A sanity check of the measurement itself: the single-interface baseline's error

@@ -256,8 +256,8 @@ pub fn write_png(out: OutputFile, width: u32, height: u32, rgba: &[u8]) -> Resul
     out.write(&encode_png(width, height, rgba)?)
 }
 
-/// Encode opaque RGBA8 pixels as an RGB PNG into `out`: half the size of RGBA for figures
-/// kept in the repository (docs/accuracy/), the alpha being 255 everywhere.
+/// Encode opaque RGBA8 pixels as an RGB PNG into `out`: three quarters of RGBA's size for
+/// the report's image strips (`prism report --images`), the alpha being 255 everywhere.
 pub fn write_png_rgb(out: OutputFile, width: u32, height: u32, rgba: &[u8]) -> Result<Written> {
     let rgb: Vec<u8> = rgba.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect();
     let img = image::RgbImage::from_raw(width, height, rgb).context("image buffer has the wrong size")?;

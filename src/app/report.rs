@@ -25,9 +25,15 @@ pub struct ReportArgs {
     /// The report's entries (scenes and parameter sweeps).
     #[arg(long, default_value = "docs/report.toml")]
     pub spec: PathBuf,
-    /// The Markdown file to write; plots and images go to a folder beside it (accuracy/).
+    /// The Markdown file to write; plots (and with --images the image strips) go to a folder
+    /// beside it (accuracy/).
     #[arg(short, long, default_value = "docs/ACCURACY.md")]
     pub out: PathBuf,
+    /// Also write each section's images (the technique, the reference and the FLIP map side
+    /// by side, one PNG of 100-400 KB per section) beside the report and show them in it.
+    /// Off by default: they are a run's output, not something to keep in the repository.
+    #[arg(long)]
+    pub images: bool,
     /// Image size for every scene.
     #[arg(long, default_value_t = 256)]
     pub size: u32,
@@ -194,24 +200,26 @@ pub fn run(args: ReportArgs) -> Result<()> {
             writeln!(md, "![{name}](accuracy/{name}.svg)\n")?;
         }
         // Images of the last (usually most accurate) setting: technique | reference | FLIP.
-        let (_, scene, m, reference) = rows.last().unwrap();
-        let (w, h) = (scene.camera.width, scene.camera.height);
-        let mut strip = vec![0u8; (3 * w * h * 4) as usize];
-        let ref_ldr = output::tonemap_scene(reference, &scene.render);
-        for (k, img) in [&m.ldr, &ref_ldr, &m.heatmap].iter().enumerate() {
-            for y in 0..h as usize {
-                let src = &img[y * w as usize * 4..(y + 1) * w as usize * 4];
-                let dst = (y * 3 * w as usize + k * w as usize) * 4;
-                strip[dst..dst + src.len()].copy_from_slice(src);
+        if args.images {
+            let (_, scene, m, reference) = rows.last().unwrap();
+            let (w, h) = (scene.camera.width, scene.camera.height);
+            let mut strip = vec![0u8; (3 * w * h * 4) as usize];
+            let ref_ldr = output::tonemap_scene(reference, &scene.render);
+            for (k, img) in [&m.ldr, &ref_ldr, &m.heatmap].iter().enumerate() {
+                for y in 0..h as usize {
+                    let src = &img[y * w as usize * 4..(y + 1) * w as usize * 4];
+                    let dst = (y * 3 * w as usize + k * w as usize) * 4;
+                    strip[dst..dst + src.len()].copy_from_slice(src);
+                }
             }
+            let name = format!("{stem}-images.png");
+            written.push(output::write_png_rgb(outputs.prepare(&assets.join(&name))?, 3 * w, h, &strip)?);
+            writeln!(
+                md,
+                "![{}](accuracy/{name})\n\n*Left to right: the technique, the reference, the FLIP error map.*\n",
+                e.scene
+            )?;
         }
-        let name = format!("{stem}-images.png");
-        written.push(output::write_png_rgb(outputs.prepare(&assets.join(&name))?, 3 * w, h, &strip)?);
-        writeln!(
-            md,
-            "![{}](accuracy/{name})\n\n*Left to right: the technique, the reference, the FLIP error map.*\n",
-            e.scene
-        )?;
         writeln!(md, "{provenance}")?;
     }
     let mut head = header(args.measure.frames, args.measure.warmup, &md);
