@@ -1723,3 +1723,45 @@ fn straight_steps_in_uniform_regions_equal_full_integration() {
     same_volumes("straight steps", &leapt, &full);
     common::assert_no_validation_errors(&ctx);
 }
+
+/// Once the list is full, a wavefront whose straight steps through uniform regions carry it
+/// several steps per dispatch can spill more in a batch of 16 dispatches than the spill list
+/// holds, which would take its tile back and simulate it again. The batches shorten to what
+/// the spill list holds at the growth the last batch showed (`spill_safe_batch`): the lens at
+/// 48^3 with a list of 8000 patches (its peak whole is larger: it spills) and the default
+/// tiles splits no tile and takes exactly the patch steps of the run with room for every
+/// patch, and its volumes equal that run's up to the order of the float additions (1e-5 of
+/// the largest value, as same_volumes). With batches of 16 throughout, a tile is split
+/// (3 626 108 patch steps against 2 247 464).
+#[test]
+fn batches_shorten_so_that_the_spill_list_holds_their_overflow() {
+    if !common::in_own_process() {
+        return;
+    }
+    let ctx = common::context(true);
+    let volume = lens_volume(48, &[]);
+    let light = directional(Vec3::new(0.2, -1.0, 0.1));
+    let base = EikonalParams::default();
+    let mut whole = StandaloneLight::new(&ctx, &base, &volume, &light).unwrap();
+    let whole_stats = whole.run(&ctx).unwrap();
+    let small = EikonalParams { max_patches: 8000, ..base };
+    let mut spilled = StandaloneLight::new(&ctx, &small, &volume, &light).unwrap();
+    let stats = spilled.run(&ctx).unwrap();
+    eprintln!(
+        "whole: {} run(s), peak {}, {} patch steps; list of 8000: {} runs, {} spilled, {} split, {} patch steps",
+        whole_stats.runs.len(),
+        whole_stats.peak_patches,
+        whole_stats.patch_steps,
+        stats.runs.len(),
+        stats.spilled_patches,
+        stats.split_tiles,
+        stats.patch_steps
+    );
+    assert_eq!((whole_stats.runs.len(), whole_stats.dropped_patches), (1, 0));
+    assert!(stats.spilled_patches > 0, "nothing spilled: the batches are not tested");
+    assert_eq!((stats.split_tiles, stats.dropped_patches), (0, 0));
+    assert_eq!(stats.patch_steps, whole_stats.patch_steps, "patches simulated twice");
+    let (a, b) = (LightVolumes::read(&mut whole, &ctx), LightVolumes::read(&mut spilled, &ctx));
+    same_volumes("spilled", &b, &a);
+    common::assert_no_validation_errors(&ctx);
+}

@@ -81,6 +81,16 @@ void straight_step(inout vec3 x, vec3 v, float n) {
     }
 }
 
+// Where the line o + t d enters and leaves the box lo..hi (slab test): near > far where it
+// misses.
+void box_span(vec3 o, vec3 d, vec3 lo, vec3 hi, out float near, out float far) {
+    vec3 inv = 1.0 / mix(vec3(1e-30), d, greaterThan(abs(d), vec3(1e-30)));
+    vec3 t0 = (lo - o) * inv, t1 = (hi - o) * inv;
+    vec3 tl = min(t0, t1), th = max(t0, t1);
+    near = max(max(tl.x, tl.y), tl.z);
+    far = min(min(th.x, th.y), th.z);
+}
+
 // How far a particle at x moving along unit d may go in a straight line: through uniform
 // bricks inside the field's box (bricks.glsl), and outside it up to the box widened by a
 // voxel (within which the trilinear lookup still reads the boundary voxels); unbounded on a
@@ -91,19 +101,15 @@ float straight_reach(vec3 x, vec3 d) {
     vec3 voxel = (VOL_MAX - VOL_MIN) / vec3(size);
     vec3 lo = VOL_MIN - voxel, hi = VOL_MAX + voxel;
     if (all(greaterThanEqual(x, lo)) && all(lessThanEqual(x, hi))) return uniform_leap(x, d, VOL_MIN, VOL_MAX, size);
-    vec3 inv = 1.0 / mix(vec3(1e-30), d, greaterThan(abs(d), vec3(1e-30)));
-    vec3 t0 = (lo - x) * inv, t1 = (hi - x) * inv;
-    vec3 tl = min(t0, t1), th = max(t0, t1);
-    float near = max(max(tl.x, tl.y), tl.z), far = min(min(th.x, th.y), th.z);
+    float near, far;
+    box_span(x, d, lo, hi, near, far);
     return near <= far && far > 0.0 ? max(near, 0.0) : 1e30;
 }
 
 // Does the straight ray (outside the medium n = 1) from o along d still reach the box?
 bool heads_into_box(vec3 o, vec3 d) {
-    vec3 inv = 1.0 / mix(vec3(1e-30), d, greaterThan(abs(d), vec3(1e-30)));
-    vec3 t0 = (LIGHT_MIN - o) * inv, t1 = (LIGHT_MAX - o) * inv;
-    vec3 lo = min(t0, t1), hi = max(t0, t1);
-    float near = max(max(lo.x, lo.y), lo.z), far = min(min(hi.x, hi.y), hi.z);
+    float near, far;
+    box_span(o, d, LIGHT_MIN, LIGHT_MAX, near, far);
     return near <= far && far > 0.0;
 }
 

@@ -1144,8 +1144,9 @@ params! {
         light_leaps: u32 = 16, 0..=1024;
         /// Capacity of the patch list (one storage-buffer binding; a spill list of the same
         /// size beside it). The initial wavefront is simulated in tiles (`tile_patches`); the
-        /// patches a step produces past the list are spilled and continued by a later run, and
-        /// only a run whose spill list overflows too is taken back (rerun with negative
+        /// patches a step produces past the list are spilled and continued by a later run (the
+        /// steps between two readbacks are as many as the spill list can hold at the growth
+        /// observed), and only a run whose spill list overflows too is taken back (rerun with negative
         /// deposits) and split into four, so nothing is dropped unless a tile of a single patch
         /// overflows; that count is reported (`prism render` prints it, bench JSON
         /// `light_simulation.dropped_patches`, `spilled_patches`, `split_tiles`, `runs`).

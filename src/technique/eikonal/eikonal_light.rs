@@ -44,8 +44,10 @@
 //! that extension, and deferred shading reads the irradiance at the floor (Lambert's cosine
 //! with the stored direction) in place of the light's unoccluded direct term.
 //!
-//! Steps run in batches of [`LIGHT_BATCH`] per command buffer with indirect dispatches sized
-//! by the device; only after a batch is the patch count read back to decide whether to go on.
+//! Steps run in batches of up to [`LIGHT_BATCH`] per command buffer with indirect dispatches
+//! sized by the device; only after a batch is the patch count read back to decide whether to
+//! go on, and the spill list emptied. A batch is shortened to what the spill list can hold at
+//! the growth the previous batch showed ([`spill_safe_batch`]).
 use std::cell::RefCell;
 use std::collections::VecDeque;
 use std::rc::Rc;
@@ -77,7 +79,8 @@ use crate::technique::baseline::fullscreen::{fragment_set, FullscreenDesc, Fulls
 /// inside its irradiance volume: the pass name.
 pub const EIKONAL_LIGHT: &str = "eikonal_light";
 
-/// Simulation steps recorded per command buffer between two patch-count readbacks.
+/// Simulation steps recorded per command buffer between two patch-count readbacks, at most
+/// (fewer where the spill list could not hold a longer batch's overflow: [`spill_safe_batch`]).
 pub const LIGHT_BATCH: u32 = 16;
 /// The task name of the simulation's [`Progress`] reports.
 pub const LIGHT_SIMULATION: &str = "light simulation";
@@ -630,6 +633,9 @@ pub struct LightSim {
     run_count: u32,
     /// Wall time per step of the last batch, to fit batches into a deadline.
     seconds_per_step: Option<f64>,
+    /// Dispatches the next batch may take so that the spill list holds its overflow
+    /// ([`spill_safe_batch`] of the last batch).
+    spill_batch: u32,
     /// The simulation so far, while it is in progress ([`LightSim::advance`]).
     progress: Option<SimProgress>,
     /// Its statistics once finished.
@@ -642,6 +648,51 @@ struct SimProgress {
     /// Runs finished so far.
     done_runs: u64,
     stats: LightStats,
+}
+
+/// The longest batch, at most [`LIGHT_BATCH`] dispatches and at least one, whose outputs past
+/// a list of `capacity` patches are expected to fit half of the spill list (emptied after
+/// every batch), given the last batch: `counts`, the list's length before and after each of
+/// its dispatches, and `spilled`, the patches it spilled. A wavefront grows by a factor per
+/// dispatch that changes slowly (tessellation proceeds with the spread of the rays), so the
+/// next batch is predicted with the largest factor the last one showed: between two lengths
+/// under the capacity, their ratio; over the dispatches that filled the list, their outputs
+/// (the list and the spill) over their inputs. The half left free is for growth that speeds up
+/// within the batch. Without this, a wavefront that grows by more than 1/16 of the list per
+/// dispatch once the list is full (straight steps through uniform regions advance a patch
+/// up to 17 steps per dispatch) overflows the spill list within one batch of 16, and its
+/// tile is taken back and simulated again.
+pub fn spill_safe_batch(counts: &[u32], spilled: u32, capacity: u32, spill_capacity: u32) -> u32 {
+    let capacity = capacity.max(1) as f64;
+    let mut growth: f64 = 1.0;
+    // Over the dispatches that filled the list: what they were given and what they made of
+    // it (the list's length and their share of the spill).
+    let (mut full_inputs, mut full_outputs) = (0.0, spilled as f64);
+    for w in counts.windows(2) {
+        if (w[1] as f64) < capacity {
+            if w[0] > 0 {
+                growth = growth.max(w[1] as f64 / w[0] as f64);
+            }
+        } else {
+            full_inputs += w[0] as f64;
+            full_outputs += capacity;
+        }
+    }
+    if full_inputs > 0.0 {
+        growth = growth.max(full_outputs / full_inputs);
+    }
+    let room = 0.5 * spill_capacity as f64;
+    let mut count = counts.last().copied().unwrap_or(0) as f64;
+    let mut overflow = 0.0;
+    for n in 1..=LIGHT_BATCH {
+        let next = count * growth;
+        overflow += (next - capacity).max(0.0);
+        count = next.min(capacity);
+        if overflow > room {
+            return (n - 1).max(1);
+        }
+    }
+    LIGHT_BATCH
 }
 
 /// The runs for `wavefronts` (one per light) through a field of `channels` index slabs, in
@@ -964,6 +1015,7 @@ impl LightSim {
             run_gpu_ms: 0.0,
             run_count: 0,
             seconds_per_step: None,
+            spill_batch: LIGHT_BATCH,
             progress: None,
             finished: None,
         };
@@ -999,6 +1051,7 @@ impl LightSim {
         self.run = run;
         self.run_gpu_ms = 0.0;
         self.run_count = count;
+        self.spill_batch = LIGHT_BATCH;
         Ok(())
     }
 
@@ -1133,7 +1186,7 @@ impl LightSim {
         mut progress: impl FnMut(u32, u32),
     ) -> GpuResult<Option<(RunStats, Vec<u32>)>> {
         while self.run_count > 0 && self.steps_taken < self.max_steps {
-            let mut n = LIGHT_BATCH.min(self.max_steps - self.steps_taken);
+            let mut n = self.spill_batch.min(self.max_steps - self.steps_taken);
             if let (Some(d), Some(per_step)) = (deadline, self.seconds_per_step) {
                 // A batch that fits the time left at the last batch's pace (a step of a large
                 // wavefront can take a second on a CPU device), one step at least.
@@ -1143,6 +1196,14 @@ impl LightSim {
             let start = Instant::now();
             self.run_count = self.run_steps(ctx, graph, n)?;
             self.seconds_per_step = Some(start.elapsed().as_secs_f64() / n as f64);
+            let counts = self.hp.read_history(self.steps_taken as usize);
+            let before = self.steps_taken as usize - n as usize;
+            let first =
+                if before == 0 { self.initial.len() as u32 } else { counts.get(before - 1).copied().unwrap_or(0) };
+            let mut batch = vec![first];
+            batch.extend_from_slice(counts.get(before..).unwrap_or(&[]));
+            let spilled = self.hp.read_state().spilled;
+            self.spill_batch = spill_safe_batch(&batch, spilled, self.hp.capacity, self.hp.spill_capacity);
             self.drain_spill(ctx, graph)?;
             progress(n, self.run_count);
             // At least one batch per call, so that every call advances.
@@ -1612,5 +1673,52 @@ impl EikonalLight {
         frame_set: DescriptorSet,
     ) {
         self.receiver.record(frame, frame_set, &[scene.environment_id, targets.shadow_atlas_id]);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{spill_safe_batch, LIGHT_BATCH};
+
+    /// A batch of `n` dispatches from a list of `count` patches growing by `growth` per
+    /// dispatch: the list's lengths before and after each dispatch and what it spilled.
+    fn batch(count: f64, growth: f64, n: u32, capacity: u32) -> (Vec<u32>, f64) {
+        let (mut c, mut spilled, mut counts) = (count, 0.0, vec![count as u32]);
+        for _ in 0..n {
+            let next = c * growth;
+            spilled += (next - capacity as f64).max(0.0);
+            c = next.min(capacity as f64);
+            counts.push(c as u32);
+        }
+        (counts, spilled)
+    }
+
+    /// For wavefronts that grow at a constant rate, whatever the list's fill, the next batch
+    /// spills at most half the spill list (or is a single dispatch), and a wavefront that
+    /// does not grow keeps whole batches.
+    #[test]
+    fn batches_fit_their_overflow_into_the_spill_list() {
+        let capacity = 524_288;
+        for growth in [0.9, 1.0, 1.01, 1.05, 1.147, 1.3, 2.0, 4.0] {
+            for fill in [0.01, 0.3, 0.9, 1.0] {
+                let (counts, spilled) = batch(fill * capacity as f64, growth, 4, capacity);
+                let n = spill_safe_batch(&counts, spilled as u32, capacity, capacity);
+                assert!((1..=LIGHT_BATCH).contains(&n), "growth {growth}, fill {fill}: {n}");
+                let last = *counts.last().unwrap() as f64;
+                let (_, next_spilled) = batch(last, growth, n, capacity);
+                assert!(
+                    n == 1 || next_spilled <= 0.5 * capacity as f64 + 1.0,
+                    "growth {growth}, fill {fill}: {n} dispatches spill {next_spilled}"
+                );
+                if growth <= 1.0 {
+                    assert_eq!(n, LIGHT_BATCH, "growth {growth}, fill {fill}");
+                }
+            }
+        }
+        // The 256^3 eikonal_sphere's first tile (straight steps on): 1.147x per dispatch as
+        // the list fills. A whole batch would spill more than the spill list holds.
+        let (counts, spilled) = batch(379_436.0, 1.147, 2, capacity);
+        assert!(batch(*counts.last().unwrap() as f64, 1.147, LIGHT_BATCH, capacity).1 > capacity as f64);
+        assert_eq!(spill_safe_batch(&counts, spilled as u32, capacity, capacity), 3);
     }
 }
