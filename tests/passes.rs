@@ -160,8 +160,13 @@ fn photon_buffer_passes_only_with_light_specular_object_and_receiver() {
     if !common::in_own_process() {
         return;
     }
-    const PHOTON: [&str; 4] =
-        ["photon_buffer_refractors", "photon_buffer_receivers", "photon_buffer", "photon_buffer_scatter"];
+    const PHOTON: [&str; 5] = [
+        "photon_buffer_refractors",
+        "photon_buffer_receivers",
+        "photon_buffer",
+        "photon_buffer_bin",
+        "photon_buffer_scatter",
+    ];
     let on = "render.caustics=photon_buffer";
     assert_eq!(
         names("caustic_sphere", &[on]),
@@ -170,6 +175,7 @@ fn photon_buffer_passes_only_with_light_specular_object_and_receiver() {
             "photon_buffer_refractors",
             "photon_buffer_receivers",
             "photon_buffer",
+            "photon_buffer_bin",
             "photon_buffer_scatter",
             "gbuffer",
             "deferred_shading",
@@ -178,6 +184,8 @@ fn photon_buffer_passes_only_with_light_specular_object_and_receiver() {
         ]
     );
     assert!(names("metal_ring", &[on]).contains(&"photon_buffer"));
+    // The per-texel sums only with merge_texels.
+    assert!(!names("caustic_sphere", &[on, "render.photon_buffer.merge_texels=false"]).contains(&"photon_buffer_bin"));
     let absent = |scene: &str, o: &[&str]| {
         let n = names(scene, o);
         assert!(!n.iter().any(|p| PHOTON.contains(p)), "{scene} {o:?}: {n:?}");

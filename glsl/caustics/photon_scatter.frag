@@ -18,10 +18,11 @@ float kernel(ivec2 o, int k) {
 void main() {
     int k = int(pc.info.w);
     float w = kernel(ivec2(gl_FragCoord.xy) - in_texel, k);
+    // in_photon.a: the photons counted (1, or a texel's count with MERGED).
     if (uint(pc.params.w + 0.5) == PHOTON_PAPER) {
-        out_caustic = vec4(vec3(pc.params.x * w), pc.params.x * w);
+        out_caustic = vec4(pc.params.x * w * in_photon.a);
         return;
     }
     float weights = pc.params.y;
-    out_caustic = vec4(in_photon.rgb * w / (weights * pc.params.x), w / weights);
+    out_caustic = vec4(in_photon.rgb * w / (weights * pc.params.x), w / weights * in_photon.a);
 }

@@ -73,6 +73,9 @@ pub struct DeviceInfo {
     /// Whether shaders may add floats atomically to R32_SFLOAT storage images
     /// (VK_EXT_shader_atomic_float `shaderImageFloat32AtomicAdd`, enabled when present).
     pub image_float_atomic_add: bool,
+    /// Whether vertex shaders may store to storage images and buffers
+    /// (`vertexPipelineStoresAndAtomics`).
+    pub vertex_stores: bool,
 }
 
 /// Device memory of live buffers, images (2D, arrays, cubes) and volumes (3D images), in
@@ -456,6 +459,7 @@ impl GpuContext {
             occlusion_query_precise: supported.occlusion_query_precise == vk::TRUE,
             pipeline_statistics: supported.pipeline_statistics_query == vk::TRUE,
             image_float_atomic_add,
+            vertex_stores: supported.vertex_pipeline_stores_and_atomics == vk::TRUE,
         };
 
         let pool_info = vk::CommandPoolCreateInfo::default()

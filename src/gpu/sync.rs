@@ -25,6 +25,9 @@ pub enum Access {
     ComputeWrite,
     /// Read as a storage buffer in a vertex shader.
     VertexStorageRead,
+    /// Written (or read and written) as a storage image/buffer in a vertex shader
+    /// (`vertexPipelineStoresAndAtomics`).
+    VertexStorageWrite,
     /// Read as a storage buffer in a fragment shader.
     FragmentStorageRead,
     /// Written (or read and written, atomics) as a storage buffer in a fragment shader.
@@ -87,6 +90,7 @@ impl Access {
             Access::ComputeRead => (S::COMPUTE_SHADER, A::SHADER_READ, L::GENERAL, false),
             Access::ComputeWrite => (S::COMPUTE_SHADER, A::SHADER_READ | A::SHADER_WRITE, L::GENERAL, true),
             Access::VertexStorageRead => (S::VERTEX_SHADER, A::SHADER_READ, L::GENERAL, false),
+            Access::VertexStorageWrite => (S::VERTEX_SHADER, A::SHADER_READ | A::SHADER_WRITE, L::GENERAL, true),
             Access::FragmentStorageRead => (S::FRAGMENT_SHADER, A::SHADER_READ, L::GENERAL, false),
             Access::FragmentStorageWrite => (S::FRAGMENT_SHADER, A::SHADER_READ | A::SHADER_WRITE, L::GENERAL, true),
             Access::IndirectArgs => (S::DRAW_INDIRECT, A::INDIRECT_COMMAND_READ, L::UNDEFINED, false),

@@ -1047,6 +1047,14 @@ params! {
         // "two or three iteration steps" (§2.2.2), as render.hu_qin.correction_iterations;
         // beyond 64 it only burns time.
         correction_iterations: u32 = 3, 0..=64;
+        /// Sum the photons that land in one caustic texel before the filter, and draw one
+        /// kernel per texel reached instead of one per photon (§3.2's filter is linear in the
+        /// counts, so the texture is the same up to the order of the float additions).
+        /// Where a lens focuses light many photons share a texel: caustic_sphere's 12 156
+        /// photons land in 672 texels. Needs float atomics on images
+        /// (`shaderImageFloat32AtomicAdd`) and vertex-shader stores; a device without
+        /// either draws one kernel per photon, as `false` does.
+        merge_texels: bool = true;
     }
 
     /// `[render.eikonal]`: eikonal rendering of a `[volume]` (Ihrke et al. 2007,

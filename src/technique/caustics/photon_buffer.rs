@@ -2,7 +2,7 @@
 //! Reflections, Refractions, and Caustics", section 3
 //! (../shared/papers/hu-qin2007-reflections-refractions-caustics.md).
 //!
-//! Five graph passes, each timed under its own name:
+//! Five graph passes (six with `merge_texels`), each timed under its own name:
 //!
 //! 1. `photon_buffer_refractors`: the specular objects seen from each light, front and back
 //!    surfaces with positions and normals (the refractor layers caustics mapping renders too,
@@ -30,8 +30,15 @@
 //!    one point of (2k + 1)^2 texels is drawn per photon-buffer pixel, its vertex shader
 //!    fetches (u, v, k) (vertex texture fetch) and centres the point on texel (u, v) of
 //!    layer k - 1, and additive blending sums each photon's kernel
-//!    (glsl/caustics/photon_scatter.vert): the filter is linear in the counts, so this is the
+//!    (glsl/caustics/photon_scatter.glsl): the filter is linear in the counts, so this is the
 //!    same c, for work in proportion to the photons instead of to every texel.
+//!    With `merge_texels` (the default), `photon_buffer_bin` first sums the photons of each
+//!    texel (glsl/caustics/photon_bin.comp, float atomics) and the scatter pass draws one point
+//!    per texel reached, with the sum: a photon's kernel depends only on its texel, so this is
+//!    the same c again, for work in proportion to the texels the photons reach. A CPU device
+//!    pays about 0.6 us to set up each point whatever its size, and a lens focuses many
+//!    photons into one texel (caustic_sphere: 12 156 photons, 672 texels): the scatter went
+//!    from 8.9 ms to 1.6 ms plus 0.8 ms of binning at 512^2 (docs/BENCHMARKS.md).
 //!
 //! Deferred shading then looks the caustic up (§3.3, Fig. 23): the receiver's position is
 //! projected with its rectangle's parallel projection into TEX_CAUSTICS_i
@@ -58,8 +65,8 @@ use bytemuck::Zeroable;
 use crate::frame::gpu_scene::Draw;
 use crate::frame::targets::DEPTH_FORMAT;
 use crate::gpu::{
-    vk, Access, Blend, Buffer, Clear, DepthState, GpuContext, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, Image,
-    ImageDesc, ImageViewKind, RenderTarget, Sampler, SamplerDesc,
+    vk, Access, Blend, Buffer, Clear, ComputePipeline, DepthState, GpuContext, GpuResult, GraphicsPipeline,
+    GraphicsPipelineDesc, Image, ImageDesc, ImageViewKind, RenderTarget, Sampler, SamplerDesc,
 };
 use crate::graph::{Bindings, BoundSet, Frame, FrameGraph, ImageId};
 use crate::scene::techniques::{PhotonBufferParams, PhotonNormalization};
@@ -85,6 +92,7 @@ pub const PHOTON_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 pub const PHOTON_BUFFER_REFRACTORS: &str = "photon_buffer_refractors";
 pub const PHOTON_BUFFER_RECEIVERS: &str = "photon_buffer_receivers";
 pub const PHOTON_BUFFER: &str = "photon_buffer";
+pub const PHOTON_BUFFER_BIN: &str = "photon_buffer_bin";
 pub const PHOTON_BUFFER_SCATTER: &str = "photon_buffer_scatter";
 
 /// `render.caustics = "photon_buffer"`, parameters `[render.photon_buffer]`.
@@ -95,37 +103,49 @@ fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
     let Some((diffuse, specular)) = caustic_objects(scene, "photon_buffer") else {
         return Vec::new();
     };
-    in_stage(
-        Stage::Caustics,
-        [
-            PlannedPass::new(
-                PHOTON_BUFFER_REFRACTORS,
-                format!("positions and normals of the specular {} seen from the light(s)", list(&specular)),
+    let merged = PhotonBufferParams::from_settings(&scene.render).is_ok_and(|p| p.merge_texels);
+    let bin = merged.then(|| {
+        PlannedPass::new(
+            PHOTON_BUFFER_BIN,
+            "photons summed per caustic texel before the filter (render.photon_buffer.merge_texels; empty on a \
+             device without image float atomics or vertex-shader stores)",
+        )
+    });
+    let passes = [
+        PlannedPass::new(
+            PHOTON_BUFFER_REFRACTORS,
+            format!("positions and normals of the specular {} seen from the light(s)", list(&specular)),
+        ),
+        PlannedPass::new(
+            PHOTON_BUFFER_RECEIVERS,
+            format!("depth of the receivers {} along their rectangles' projections (§2.2.2)", list(&diffuse)),
+        ),
+        PlannedPass::new(
+            PHOTON_BUFFER,
+            format!(
+                "photons through {} onto the rectangles of the receivers {} (render.caustics = \"photon_buffer\")",
+                list(&specular),
+                list(&diffuse)
             ),
-            PlannedPass::new(
-                PHOTON_BUFFER_RECEIVERS,
-                format!("depth of the receivers {} along their rectangles' projections (§2.2.2)", list(&diffuse)),
-            ),
-            PlannedPass::new(
-                PHOTON_BUFFER,
-                format!(
-                    "photons through {} onto the rectangles of the receivers {} (render.caustics = \"photon_buffer\")",
-                    list(&specular),
-                    list(&diffuse)
-                ),
-            ),
-            PlannedPass::new(
-                PHOTON_BUFFER_SCATTER,
-                format!("photons filtered (Hu & Qin 2007 §3.2) into the caustic textures of {}", list(&diffuse)),
-            ),
-        ],
-    )
+        ),
+    ]
+    .into_iter()
+    .chain(bin)
+    .chain([PlannedPass::new(
+        PHOTON_BUFFER_SCATTER,
+        format!("photons filtered (Hu & Qin 2007 §3.2) into the caustic textures of {}", list(&diffuse)),
+    )]);
+    in_stage(Stage::Caustics, passes)
 }
 
 impl Technique for PhotonBufferPass {
     fn record<'a>(&'a self, _: Stage, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>) {
         if !self.regeneration.rendering() {
-            let passes = [PHOTON_BUFFER_REFRACTORS, PHOTON_BUFFER_RECEIVERS, PHOTON_BUFFER, PHOTON_BUFFER_SCATTER];
+            let mut passes = vec![PHOTON_BUFFER_REFRACTORS, PHOTON_BUFFER_RECEIVERS, PHOTON_BUFFER];
+            if self.params.merge_texels {
+                passes.push(PHOTON_BUFFER_BIN);
+            }
+            passes.push(PHOTON_BUFFER_SCATTER);
             return record_kept(frame, &passes);
         }
         let (scene, caustics) = (inputs.scene, inputs.photon_caustics);
@@ -171,6 +191,15 @@ impl Technique for PhotonBufferPass {
                 }
             });
 
+        if self.params.merge_texels {
+            // Planned with the setting; empty where the device cannot merge (see `bins`).
+            match (&self.bins, self.scatter_pushes.first()) {
+                (Some(b), Some(push)) => frame.pass(PHOTON_BUFFER_BIN).uses(&b.set).record(move |cmd| {
+                    cmd.compute(&b.pipeline, &[b.set.set()], push, [b.groups, 1, 1]);
+                }),
+                _ => frame.pass(PHOTON_BUFFER_BIN).record(|_| {}),
+            }
+        }
         frame.pass(PHOTON_BUFFER_SCATTER).uses(&self.scatter_set).write(caustics.id, Access::ColorAttachment).record(
             move |cmd| {
                 for (i, push) in self.scatter_pushes.iter().enumerate() {
@@ -327,6 +356,8 @@ pub struct PhotonBufferPass {
     scatter_set: BoundSet,
     scatter_pipeline: GraphicsPipeline,
     scatter_pushes: Vec<PhotonScatterPush>,
+    /// The photons summed per texel before the filter (`merge_texels` on a device that can).
+    bins: Option<TexelSums>,
     _faces: Buffer,
     _sampler: Sampler,
 }
@@ -436,20 +467,35 @@ impl PhotonBufferPass {
             &photon_target.pass,
         )?;
 
-        // 2. Counting and the filter: each photon's kernel into the caustic textures,
-        // additively.
+        // 2. Counting and the filter: each photon's kernel (or each texel's, its photons
+        // summed first) into the caustic textures, additively.
+        let can_merge = ctx.info.image_float_atomic_add && ctx.info.vertex_stores && n_rects > 0;
+        let bins = if params.merge_texels && can_merge {
+            Some(TexelSums::new(ctx, graph, (&photons, &flux), &sampler, t, n_rects, size * size * n_faces)?)
+        } else {
+            None
+        };
         let scatter_target =
             RenderTarget::layered(ctx, PHOTON_BUFFER_SCATTER, &[&caustics.textures], None, true, n_rects)?;
-        let scatter_set = Bindings::new(vk::ShaderStageFlags::VERTEX)
+        let mut scatter_set = Bindings::new(vk::ShaderStageFlags::VERTEX)
             .sampled(0, &photons.0, &sampler)
             .read(photons.1)
             .sampled(1, &flux.0, &sampler)
-            .read(flux.1)
-            .build(ctx, PHOTON_BUFFER_SCATTER)?;
+            .read(flux.1);
+        if let Some(b) = &bins {
+            scatter_set = scatter_set
+                .storage_image(2, &b.sums.0)
+                .access(b.sums.1, Access::VertexStorageWrite)
+                .storage_image(3, &b.owner.0)
+                .access(b.owner.1, Access::VertexStorageWrite);
+        }
+        let scatter_set = scatter_set.build(ctx, PHOTON_BUFFER_SCATTER)?;
+        let vertex_shader =
+            if bins.is_some() { "caustics/photon_scatter_merged.vert" } else { "caustics/photon_scatter.vert" };
         let scatter_pipeline = GraphicsPipeline::new(
             ctx,
             &GraphicsPipelineDesc {
-                vertex_shader: "caustics/photon_scatter.vert",
+                vertex_shader,
                 topology: vk::PrimitiveTopology::POINT_LIST,
                 blend: &[Blend::Additive],
                 ..GraphicsPipelineDesc::fullscreen(PHOTON_BUFFER_SCATTER, "caustics/photon_scatter.frag")
@@ -496,6 +542,7 @@ impl PhotonBufferPass {
             scatter_set,
             scatter_pipeline,
             scatter_pushes,
+            bins,
             _faces: faces_buffer,
             _sampler: sampler,
         })
@@ -503,5 +550,62 @@ impl PhotonBufferPass {
 
     pub fn params(&self) -> &PhotonBufferParams {
         &self.params
+    }
+}
+
+/// `merge_texels`: per caustic texel, the sum of its photons' power and count (R32F, layer
+/// 4 (k - 1) + channel) and its first photon's mark (R32UI), filled by
+/// glsl/caustics/photon_bin.comp and read and emptied again by the texel's point
+/// (glsl/caustics/photon_scatter.glsl), so they are zero between frames.
+struct TexelSums {
+    sums: (Image, ImageId),
+    owner: (Image, ImageId),
+    set: BoundSet,
+    pipeline: ComputePipeline,
+    groups: u32,
+}
+
+impl TexelSums {
+    /// For `rects` caustic textures of `texels`^2 and `photons` photon-buffer pixels.
+    fn new(
+        ctx: &Arc<GpuContext>,
+        graph: &mut FrameGraph,
+        (photons, flux): (&(Image, ImageId), &(Image, ImageId)),
+        sampler: &Sampler,
+        texels: u32,
+        rects: u32,
+        photons_per_frame: u32,
+    ) -> GpuResult<Self> {
+        use vk::ImageUsageFlags as U;
+        let usage = U::STORAGE | U::TRANSFER_DST | U::TRANSFER_SRC;
+        let square =
+            |name: &str, format, layers| ImageDesc::square(name, format, texels, layers, ImageViewKind::D2Array, usage);
+        let sums = graph.image(ctx, &square("photon_texel_sums", vk::Format::R32_SFLOAT, 4 * rects))?;
+        let owner = graph.image(ctx, &square("photon_texel_owner", vk::Format::R32_UINT, rects))?;
+        ctx.one_shot(|cmd| {
+            graph.access_now(cmd, &[(sums.1, Access::TransferWrite), (owner.1, Access::TransferWrite)], &[]);
+            // The bits of 0.0: the sums start at zero, and no texel has a photon.
+            cmd.clear_color_image(&sums.0, [0.0; 4]);
+            cmd.clear_color_image(&owner.0, [0.0; 4]);
+        })?;
+        let set = Bindings::new(vk::ShaderStageFlags::COMPUTE)
+            .sampled(0, &photons.0, sampler)
+            .read(photons.1)
+            .sampled(1, &flux.0, sampler)
+            .read(flux.1)
+            .storage_image(2, &sums.0)
+            .access(sums.1, Access::ComputeWrite)
+            .storage_image(3, &owner.0)
+            .access(owner.1, Access::ComputeWrite)
+            .build(ctx, PHOTON_BUFFER_BIN)?;
+        let pipeline = ComputePipeline::new(
+            ctx,
+            PHOTON_BUFFER_BIN,
+            "caustics/photon_bin.comp",
+            &[set.layout()],
+            std::mem::size_of::<PhotonScatterPush>() as u32,
+            &[],
+        )?;
+        Ok(TexelSums { sums, owner, set, pipeline, groups: photons_per_frame.div_ceil(64) })
     }
 }
