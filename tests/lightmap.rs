@@ -42,6 +42,78 @@ fn lightmap_flux(ctx: &std::sync::Arc<prism::gpu::GpuContext>, name: &str, extra
     (flux, peak, at)
 }
 
+/// `block_splats`: the photons of a 2 x 2 block of caustic-map texels whose centres lie within
+/// 2 ceil(radius) light-map texels of each other are drawn as one sprite, the others one by
+/// one. The splat pass's points that survive clipping (the others are placed outside the clip
+/// volume) are exactly that count, taken on the CPU from the caustic map's hits with the
+/// shaders' rule (glsl/impostor/lightmap_splat.glsl, `block_fits`), and without the blocks
+/// exactly the photons; the light maps agree within 1e-5 of their largest value (f32 sums in
+/// another order). On caustic_sphere most blocks fit: fewer than half the sprites remain.
+#[test]
+fn block_splats_draw_one_sprite_per_close_block() {
+    if !common::in_own_process() {
+        return;
+    }
+    let ctx = common::context(false);
+    let splat = |blocks: bool| {
+        let o = [format!("render.impostor_lightmap.block_splats={blocks}")];
+        let s = common::scene("caustic_sphere", 64, &common::refs(&lightmap(&common::refs(&o))));
+        let mut r = Renderer::new(&ctx, &s).expect("renderer");
+        assert!(r.count_pipeline_stats().expect("statistics"), "the device counts no pipeline statistics");
+        r.render_frame().expect("frame");
+        r.finish().expect("finish");
+        let timing = r.take_timings().pop().expect("a timed frame");
+        let pass = timing.passes.iter().find(|p| p.name == "impostor_lightmap_splat").expect("splat pass");
+        let points = pass.counts.expect("counts").clipping_primitives;
+        let image = r.frame_images().into_iter().find(|i| i.name == "impostor_lightmap_hit_0").expect("hit map");
+        let hits = r.read_frame_image(&image).expect("readback").expect("a readable hit map");
+        let (maps, charts) = r.read_lightmaps().expect("readback").expect("light maps");
+        drop(r);
+        (points, hits, image.width as usize, maps, charts.len())
+    };
+    let (blocked, hits, size, blocked_maps, charts) = splat(true);
+    let (single, _, _, single_maps, _) = splat(false);
+    assert_eq!(charts, 1, "caustic_sphere's floor is the one receiver");
+    let defaults = prism::scene::techniques::ImpostorLightmapParams::default();
+    let n = defaults.lightmap_size as f32;
+    let r = defaults.filter_radius.ceil();
+    let reach = (2.0 * r).min(63.0 - 2.0 * r);
+    // The photon of caustic-map texel (x, y) on light map 0: its centre in light-map texels.
+    let photon = |x: usize, y: usize| -> Option<[f32; 2]> {
+        if x >= size || y >= size {
+            return None;
+        }
+        let h = &hits[4 * (y * size + x)..4 * (y * size + x) + 4];
+        (h[3] > 0.0 && (h[2] + 0.5) as u32 == 0).then(|| [h[0] * n, h[1] * n])
+    };
+    let photons = (0..size * size).filter(|i| photon(i % size, i / size).is_some()).count() as u64;
+    let mut expected = 0u64;
+    for by in 0..size.div_ceil(2) {
+        for bx in 0..size.div_ceil(2) {
+            let block: Vec<[f32; 2]> = (0..4).filter_map(|i| photon(2 * bx + (i & 1), 2 * by + (i >> 1))).collect();
+            let extent = |a: usize| {
+                let (lo, hi) = block.iter().fold((f32::MAX, f32::MIN), |(lo, hi), c| (lo.min(c[a]), hi.max(c[a])));
+                hi - lo
+            };
+            if block.is_empty() {
+                continue;
+            }
+            expected += if extent(0) <= reach && extent(1) <= reach { 1 } else { block.len() as u64 };
+        }
+    }
+    eprintln!("{photons} photons: {blocked} sprites with blocks (expected {expected}), {single} without");
+    assert_eq!(single, photons, "one sprite per photon without blocks");
+    assert_eq!(blocked, expected, "one sprite per close block, one per photon elsewhere");
+    assert!(2 * blocked < single, "caustic_sphere's blocks should mostly fit: {blocked} of {single}");
+    let scale = single_maps.iter().flat_map(|t| t.iter()).fold(0f32, |m, v| m.max(v.abs()));
+    for (a, b) in blocked_maps.iter().zip(&single_maps) {
+        for c in 0..4 {
+            assert!((a[c] - b[c]).abs() <= 1e-5 * scale, "light maps differ: {a:?} against {b:?} (largest {scale})");
+        }
+    }
+    common::assert_no_validation_errors(&ctx);
+}
+
 /// The apply pass draws only the part of each receiver's chart that its light map's photons
 /// can reach (src/technique/impostor/impostor_lightmap.rs, `reach`), since the light map is
 /// exactly 0 elsewhere. It must draw every pixel whose bilinear lookup touches a non-zero

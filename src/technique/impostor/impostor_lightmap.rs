@@ -27,7 +27,13 @@
 //!    or another receiver), Gaussian weight in the fragment shader, additive blending. Each
 //!    splat deposits power / (light-map texel area) spread by weights that sum to exactly 1
 //!    over the texels it covers ([`splat_weights`]), so the light map holds irradiance in
-//!    W/m^2, comparable with the reference.
+//!    W/m^2, comparable with the reference. With `block_splats` (the default), the photons of
+//!    a 2 x 2 block of caustic-map texels whose centres land within 2 ceil(radius) light-map
+//!    texels of each other are one sprite whose fragments add the four Gaussians
+//!    (glsl/impostor/lightmap_splat_block.vert, drawn first), and the others are drawn one by
+//!    one: the same sums for a quarter of the sprites where the photons are coherent, which
+//!    matters on a CPU device that sets up each sprite at a fixed cost (caustic_sphere: 12 336
+//!    sprites -> 3 544, the splat 9.2 -> 5.8 ms at 512^2, docs/BENCHMARKS.md).
 //! 5. `impostor_lightmap_apply` (right after deferred shading): every receiver pixel adds
 //!    light-map irradiance x albedo / pi; each chart draws its own rectangle, so a pixel
 //!    runs the pass only for the charts that can be seen there, and of the rectangle only the
@@ -169,7 +175,7 @@ const INSIDE_TAN_HALF: f32 = 1.732_050_8;
 /// The Gaussian weights of a splat centred at `center` (light-map pixels; pixel (i, j) has its
 /// centre at (i + 0.5, j + 0.5)) with support `radius`: sigma = radius / 2, every pixel whose
 /// centre lies within `radius`, normalized to sum 1. The CPU twin of
-/// glsl/impostor/lightmap_splat.vert (normalization) and .frag (weights).
+/// glsl/impostor/lightmap_splat.glsl (normalization) and lightmap_splat.frag (weights).
 pub fn splat_weights(center: [f32; 2], radius: f32) -> Vec<([i32; 2], f32)> {
     let sigma = radius * 0.5;
     let r = radius.ceil() as i32;
@@ -288,6 +294,8 @@ pub struct ImpostorLightmap {
     /// A set per light.
     splat_sets: BoundSet,
     splat_pipeline: GraphicsPipeline,
+    /// One sprite per 2 x 2 block of photons that lie close on the light map (`block_splats`).
+    block_pipeline: Option<GraphicsPipeline>,
     apply_target: RenderTarget,
     apply_set: BoundSet,
     apply_pipeline: GraphicsPipeline,
@@ -473,18 +481,28 @@ impl ImpostorLightmap {
                 .read(m.power_id)
         });
         let splat_sets = Bindings::build_each(ctx, IMPOSTOR_LIGHTMAP_SPLAT, splat_sets.collect())?;
-        let splat_pipeline = GraphicsPipeline::new(
-            ctx,
-            &GraphicsPipelineDesc {
-                vertex_shader: "impostor/lightmap_splat.vert",
-                topology: vk::PrimitiveTopology::POINT_LIST,
-                blend: &[Blend::Additive],
-                ..GraphicsPipelineDesc::fullscreen(IMPOSTOR_LIGHTMAP_SPLAT, "impostor/lightmap_splat.frag")
-            },
-            &[splat_sets.layout()],
-            std::mem::size_of::<LightmapSplatPush>() as u32,
-            &splat_target.pass,
-        )?;
+        let splat_pipeline = |vertex_shader, fragment_shader, specialization: &[(&str, Spec)]| {
+            GraphicsPipeline::new(
+                ctx,
+                &GraphicsPipelineDesc {
+                    vertex_shader,
+                    topology: vk::PrimitiveTopology::POINT_LIST,
+                    blend: &[Blend::Additive],
+                    specialization,
+                    ..GraphicsPipelineDesc::fullscreen(IMPOSTOR_LIGHTMAP_SPLAT, fragment_shader)
+                },
+                &[splat_sets.layout()],
+                std::mem::size_of::<LightmapSplatPush>() as u32,
+                &splat_target.pass,
+            )
+        };
+        let blocks = [("BLOCKS", Spec::U32(u32::from(params.block_splats)))];
+        let block_pipeline = if params.block_splats {
+            Some(splat_pipeline("impostor/lightmap_splat_block.vert", "impostor/lightmap_splat_block.frag", &[])?)
+        } else {
+            None
+        };
+        let splat_pipeline = splat_pipeline("impostor/lightmap_splat.vert", "impostor/lightmap_splat.frag", &blocks)?;
 
         // The apply pass: additive onto the deferred result.
         let apply_target = RenderTarget::new(ctx, IMPOSTOR_LIGHTMAP_APPLY, &[&targets.hdr], None, false)?;
@@ -539,6 +557,7 @@ impl ImpostorLightmap {
             splat_target,
             splat_sets,
             splat_pipeline,
+            block_pipeline,
             apply_target,
             apply_set,
             apply_pipeline,
@@ -690,6 +709,7 @@ impl ImpostorLightmap {
             .uses(&self.splat_sets);
         let n = self.params.lightmap_size;
         let photons = self.params.caustic_map_size * self.params.caustic_map_size;
+        let blocks = self.params.caustic_map_size.div_ceil(2);
         pass.record(move |cmd| {
             for (slot, chart) in self.charts.iter().enumerate() {
                 cmd.in_target(&self.splat_target, slot, &[Clear::Color([0.0; 4])], |cmd| {
@@ -699,6 +719,12 @@ impl ImpostorLightmap {
                         info: [slot as u32, self.params.caustic_map_size, 0, 0],
                     };
                     for &set in self.splat_sets.sets() {
+                        // The blocks drawn as one sprite first, then every other photon.
+                        if let Some(block) = &self.block_pipeline {
+                            cmd.bind_graphics(block, &[set]);
+                            cmd.push_graphics(block, &push);
+                            cmd.draw(blocks * blocks, 1);
+                        }
                         cmd.bind_graphics(&self.splat_pipeline, &[set]);
                         cmd.push_graphics(&self.splat_pipeline, &push);
                         cmd.draw(photons, 1);
@@ -767,7 +793,7 @@ mod tests {
                 let max = w.iter().map(|w| w.1).fold(0.0, f32::max);
                 let own = w.iter().find(|w| w.0 == [cx.floor() as i32, cy.floor() as i32]).map(|w| w.1);
                 assert_eq!(own, Some(max), "radius {radius} at ({cx}, {cy})");
-                // glsl/impostor/lightmap_splat.vert sums, and its point covers, the 2 ceil(r) + 1
+                // glsl/impostor/lightmap_splat.glsl sums, and its point covers, the 2 ceil(r) + 1
                 // texels from ceil(c - r - 1/2) on along each axis: every weighted texel is there.
                 let span = 2 * radius.ceil() as i32 + 1;
                 let lo = [(cx - radius - 0.5).ceil() as i32, (cy - radius - 0.5).ceil() as i32];
