@@ -58,13 +58,8 @@ fn block_splats_draw_one_sprite_per_close_block() {
     let splat = |blocks: bool| {
         let o = [format!("render.impostor_lightmap.block_splats={blocks}")];
         let s = common::scene("caustic_sphere", 64, &common::refs(&lightmap(&common::refs(&o))));
-        let mut r = Renderer::new(&ctx, &s).expect("renderer");
-        assert!(r.count_pipeline_stats().expect("statistics"), "the device counts no pipeline statistics");
-        r.render_frame().expect("frame");
-        r.finish().expect("finish");
-        let timing = r.take_timings().pop().expect("a timed frame");
-        let pass = timing.passes.iter().find(|p| p.name == "impostor_lightmap_splat").expect("splat pass");
-        let points = pass.counts.expect("counts").clipping_primitives;
+        let (mut r, counts) = common::render_counting(&ctx, &s, 1, "impostor_lightmap_splat");
+        let points = counts.clipping_primitives;
         let image = r.frame_images().into_iter().find(|i| i.name == "impostor_lightmap_hit_0").expect("hit map");
         let hits = r.read_frame_image(&image).expect("readback").expect("a readable hit map");
         let (maps, charts) = r.read_lightmaps().expect("readback").expect("light maps");

@@ -204,16 +204,9 @@ fn merged_texels_draw_one_kernel_per_texel_reached() {
     let scatter_points = |merge: bool| {
         let o = [format!("render.photon_buffer.merge_texels={merge}"), "render.update=\"every_frame\"".into()];
         let s = common::scene("caustic_sphere", 64, &common::refs(&photon(&common::refs(&o))));
-        let mut r = Renderer::new(&ctx, &s).expect("renderer");
-        assert!(r.count_pipeline_stats().expect("statistics"), "the device counts no pipeline statistics");
         // Three frames that each filter the photons again: the sums must start from zero.
-        for _ in 0..3 {
-            r.render_frame().expect("frame");
-        }
-        r.finish().expect("finish");
-        let timing = r.take_timings().pop().expect("a timed frame");
-        let scatter = timing.passes.iter().find(|p| p.name == "photon_buffer_scatter").expect("scatter pass");
-        let points = scatter.counts.expect("counts").clipping_primitives;
+        let (mut r, counts) = common::render_counting(&ctx, &s, 3, "photon_buffer_scatter");
+        let points = counts.clipping_primitives;
         let im = r.photon_buffer_images().expect("readback").expect("a photon buffer");
         let hdr = r.read_hdr().expect("hdr");
         drop(r);

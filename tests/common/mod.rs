@@ -462,3 +462,24 @@ pub fn disk_crosses_border(selected: impl Fn(i64, i64) -> bool, x: f32, y: f32, 
         })
     })
 }
+
+/// Render `frames` frames of `scene` counting pipeline statistics and return the renderer and
+/// the last frame's counts for the pass `pass` (which must exist): what a pass drew, for tests
+/// that check a technique's work, not only its image.
+pub fn render_counting(
+    ctx: &Arc<GpuContext>,
+    scene: &Scene,
+    frames: u32,
+    pass: &str,
+) -> (Renderer, prism::gpu::PassCounts) {
+    let mut r = Renderer::new(ctx, scene).expect("renderer");
+    assert!(r.count_pipeline_stats().expect("statistics"), "the device counts no pipeline statistics");
+    for _ in 0..frames {
+        r.render_frame().expect("frame");
+    }
+    r.finish().expect("finish");
+    let timing = r.take_timings().pop().expect("a timed frame");
+    let p = timing.passes.iter().find(|p| p.name == pass).unwrap_or_else(|| panic!("no pass {pass}"));
+    let counts = p.counts.unwrap_or_else(|| panic!("{pass}: no counts"));
+    (r, counts)
+}
