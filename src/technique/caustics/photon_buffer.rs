@@ -32,7 +32,8 @@
 //!    layer k - 1, and additive blending sums each photon's kernel
 //!    (glsl/caustics/photon_scatter.glsl): the filter is linear in the counts, so this is the
 //!    same c, for work in proportion to the photons instead of to every texel.
-//!    With `merge_texels` (the default), `photon_buffer_bin` first sums the photons of each
+//!    With `merge_texels` (opt-in: its float atomics make the last bits of the textures
+//!    change from run to run), `photon_buffer_bin` first sums the photons of each
 //!    texel (glsl/caustics/photon_bin.comp, float atomics) and the scatter pass draws one point
 //!    per texel reached, with the sum: a photon's kernel depends only on its texel, so this is
 //!    the same c again, for work in proportion to the texels the photons reach. A CPU device
