@@ -292,6 +292,9 @@ shared_structs! {
         /// kernel's weight sum W, z: caustic texture size (texels), w: PHOTON_PHYSICAL or
         /// PHOTON_PAPER
         params: vec4,
+        /// x: with `merge_texels`, the power of one step of the texel sums' 64-bit fixed
+        /// point (W; glsl/caustics/photon_bin.comp); yzw unused
+        sum_unit: vec4,
     }
 
     // ---- Hu & Qin 2007 nearby impostors (src/technique/refraction/nearby_impostors.rs) ---

@@ -333,3 +333,16 @@ fn kept_results_follow_a_material_value() {
         assert_eq!((u.rebuilt, u.recreated.len(), u.materials), (false, 0, true), "{caustics}: {u:?}");
     }
 }
+
+/// The photon buffer's texel sums keep one channel while every photon is grey
+/// (`merge_texels`): a material value that colours the photons, the glass's absorption,
+/// re-creates the technique with three, and the image is that of a renderer made for it.
+#[test]
+fn colouring_the_photons_re_creates_the_photon_buffer() {
+    if !common::in_own_process() {
+        return;
+    }
+    let c = "render.caustics=photon_buffer";
+    let u = live("caustic_sphere", &[c], &[c, "materials.glass.absorption=[0.5, 2.0, 4.0]"]);
+    assert_eq!((u.rebuilt, u.recreated.as_slice()), (false, &["caustics = \"photon_buffer\""][..]), "{u:?}");
+}

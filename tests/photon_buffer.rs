@@ -146,16 +146,20 @@ fn assert_close(what: &str, gpu: &[[f32; 4]], cpu: &[[f32; 4]]) {
 /// The GPU's filtered counts (each photon's kernel, or each texel's with its photons summed
 /// first, added by a point with additive blending) against the paper's count-then-filter on
 /// the CPU on a tiny input (a 24^2 photon buffer into 32^2 textures), for k = 0..3, both
-/// normalisations and both `merge_texels`; the normalised filter conserves energy:
-/// sum c(u, v) A = the photons' total power.
+/// normalisations and both `merge_texels`, with caustic_sphere's white light (the texel sums
+/// keep one channel for grey photons) and a coloured one (three); the normalised filter
+/// conserves energy: sum c(u, v) A = the photons' total power.
 #[test]
 fn counting_and_filter_match_the_cpu_and_conserve_energy() {
     if !common::in_own_process() {
         return;
     }
     let ctx = common::context(false);
-    let cases = [(2, false), (0, false), (1, false), (3, false), (2, true)];
-    for ((k, paper), merge) in cases.into_iter().flat_map(|c| [(c, true), (c, false)]) {
+    let white = "lights.0.intensity=50";
+    let coloured = "lights.0.intensity=[50, 30, 10]";
+    let cases = [(2, false, white), (0, false, white), (1, false, white), (3, false, white), (2, true, white)];
+    let cases = cases.into_iter().chain([(2, false, coloured)]);
+    for ((k, paper, light), merge) in cases.flat_map(|c| [(c, true), (c, false)]) {
         let norm = if paper { "paper" } else { "physical" };
         let im = images(
             &ctx,
@@ -168,12 +172,13 @@ fn counting_and_filter_match_the_cpu_and_conserve_energy() {
                 "render.photon_buffer.filter_s=0.5",
                 &format!("render.photon_buffer.normalization=\"{norm}\""),
                 &format!("render.photon_buffer.merge_texels={merge}"),
+                light,
             ],
         );
         let (n, power) = photons_landed(&im);
         assert!(n > 50, "only {n} photons");
         let filtered = cpu_filter(&im, k, 0.5, paper);
-        assert_close(&format!("filter k={k} {norm} merge_texels={merge}"), &im.caustics, &filtered);
+        assert_close(&format!("filter k={k} {norm} merge_texels={merge} {light}"), &im.caustics, &filtered);
         if !paper {
             // Alpha holds each photon's kernel over its sum W: every photon counted once.
             let counted: f64 = im.caustics.iter().map(|c| c[3] as f64).sum();

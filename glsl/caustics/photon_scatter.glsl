@@ -11,15 +11,15 @@
 // One draw per rectangle (array layer): a photon of another rectangle is dropped.
 //
 // With MERGED (photon_scatter_merged.vert, render.photon_buffer.merge_texels),
-// glsl/caustics/photon_bin.comp has summed the photons of each texel; only a texel's first
-// photon draws, carrying the sum (its power and count), and empties the texel's sums for the
-// next frame.
+// glsl/caustics/photon_bin.comp has summed the photons of each texel (in fixed point, so the
+// same photons give the same sums to the bit); only a texel's first photon draws, carrying
+// the sum (its power and count), and empties the texel's sums for the next frame.
 #include "prism_shared.glsl"
 layout(set = 0, binding = 0) uniform sampler2DArray photons;
 layout(set = 0, binding = 1) uniform sampler2DArray photon_flux;
 #ifdef MERGED
-layout(set = 0, binding = 2, r32f) uniform image2DArray sums;
-layout(set = 0, binding = 3, r32ui) uniform uimage2DArray owner;
+#include "photon_sums.glsl"
+layout(set = 0, binding = 2, r32ui) uniform uimage2DArray sums;
 #endif
 layout(push_constant) uniform PhotonScatterPushBlock { PhotonScatterPush pc; };
 layout(location = 0) flat out vec4 out_photon;
@@ -48,17 +48,22 @@ void main() {
 #ifdef MERGED
     // Only the texel's first photon draws (another one reads that photon's mark, or the 0 it
     // left after reading the sums: it never finds its own).
-    ivec3 o = ivec3(t, int(pc.info.z) - 1);
-    if (imageLoad(owner, o).r != ~uint(gl_VertexIndex)) {
+    int base = SUM_LAYERS * (int(pc.info.z) - 1);
+    if (imageLoad(sums, ivec3(t, base + SUM_OWNER)).r != ~uint(gl_VertexIndex)) {
         gl_Position = vec4(2.0, 2.0, 2.0, 1.0);
         return;
     }
-    for (int c = 0; c < 4; ++c) {
-        ivec3 q = ivec3(t, 4 * o.z + c);
-        photon[c] = imageLoad(sums, q).r;
-        imageStore(sums, q, vec4(0.0));
+    // The power from its 64-bit fixed point (photon_bin.comp), the count as it is.
+    for (int c = 0; c < 3; ++c) {
+        int at = base + 2 * min(c, SUM_CHANNELS - 1);
+        float low = float(imageLoad(sums, ivec3(t, at)).r);
+        float high = float(imageLoad(sums, ivec3(t, at + 1)).r);
+        photon[c] = (high * 4294967296.0 + low) * pc.sum_unit.x;
     }
-    imageStore(owner, o, uvec4(0u));
+    photon.a = float(imageLoad(sums, ivec3(t, base + SUM_COUNT)).r);
+    for (int l = 0; l < SUM_LAYERS; ++l) {
+        imageStore(sums, ivec3(t, base + l), uvec4(0u));
+    }
 #else
     photon = vec4(texelFetch(photon_flux, at, 0).rgb, 1.0);
 #endif

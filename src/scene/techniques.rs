@@ -1056,15 +1056,14 @@ params! {
         correction_iterations: u32 = 3, 0..=64;
         /// Sum the photons that land in one caustic texel before the filter, and draw one
         /// kernel per texel reached instead of one per photon (§3.2's filter is linear in the
-        /// counts, so the texture is the same up to the order of the float additions).
+        /// counts, so the texture is the same up to the rounding of the float additions).
         /// Where a lens focuses light many photons share a texel: caustic_sphere's 12 156
-        /// photons land in 672 texels (the scatter 9.2 -> 1.5 ms at 512^2 on lavapipe). Off by
-        /// default: the float atomics add a texel's photons in an order that changes from run
-        /// to run, so the textures differ in their last bits between two runs and an update
-        /// no longer gives the image of a rebuild bit for bit. Needs float atomics on images
-        /// (`shaderImageFloat32AtomicAdd`) and vertex-shader stores; a device without either
-        /// draws one kernel per photon, as `false` does.
-        merge_texels: bool = false;
+        /// photons land in 672 texels (the scatter 9.2 -> 1.5 ms at 512^2 on lavapipe). The
+        /// power is summed in 64-bit fixed point, so the same photons give the same texture
+        /// to the bit on every run. Needs vertex-shader stores
+        /// (`vertexPipelineStoresAndAtomics`); a device without them draws one kernel per
+        /// photon, as `false` does, the paper's order of work.
+        merge_texels: bool = true;
     }
 
     /// `[render.eikonal]`: eikonal rendering of a `[volume]` (Ihrke et al. 2007,

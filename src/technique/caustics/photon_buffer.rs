@@ -32,9 +32,9 @@
 //!    layer k - 1, and additive blending sums each photon's kernel
 //!    (glsl/caustics/photon_scatter.glsl): the filter is linear in the counts, so this is the
 //!    same c, for work in proportion to the photons instead of to every texel.
-//!    With `merge_texels` (opt-in: its float atomics make the last bits of the textures
-//!    change from run to run), `photon_buffer_bin` first sums the photons of each
-//!    texel (glsl/caustics/photon_bin.comp, float atomics) and the scatter pass draws one point
+//!    With `merge_texels` (the default), `photon_buffer_bin` first sums the photons of each
+//!    texel (glsl/caustics/photon_bin.comp, in fixed point by integer atomics, so that the
+//!    sums do not depend on the order the device adds them in) and the scatter pass draws one point
 //!    per texel reached, with the sum: a photon's kernel depends only on its texel, so this is
 //!    the same c again, for work in proportion to the texels the photons reach. A CPU device
 //!    pays about 0.6 us to set up each point whatever its size, and a lens focuses many
@@ -67,19 +67,19 @@ use crate::frame::gpu_scene::Draw;
 use crate::frame::targets::DEPTH_FORMAT;
 use crate::gpu::{
     vk, Access, Blend, Buffer, Clear, ComputePipeline, DepthState, GpuContext, GpuResult, GraphicsPipeline,
-    GraphicsPipelineDesc, Image, ImageDesc, ImageViewKind, RenderTarget, Sampler, SamplerDesc,
+    GraphicsPipelineDesc, Image, ImageDesc, ImageViewKind, RenderTarget, Sampler, SamplerDesc, Spec,
 };
 use crate::graph::{Bindings, BoundSet, Frame, FrameGraph, ImageId};
 use crate::scene::techniques::{PhotonBufferParams, PhotonNormalization};
-use crate::scene::Scene;
+use crate::scene::{Light, Material, Scene};
 pub use crate::shader_structs::GpuPhotonRect;
-use crate::shader_structs::{PhotonBufferPush, PhotonScatterPush, ShadowPush};
+use crate::shader_structs::{GpuCausticFace, PhotonBufferPush, PhotonScatterPush, ShadowPush};
 use crate::technique::baseline::shadow_map::FAR_DISTANCE;
 use crate::technique::caustics::caustics_map::{is_specular, refractor_bindings, RefractorLayers};
 use crate::technique::refraction::nearby_impostors::{receiver_objects, rect_for};
 use crate::technique::{
-    caustic_objects, in_stage, list, params, record_kept, registration, FrameInputs, PlannedPass, Regeneration,
-    Registration, RenderError, Setup, Stage, Technique,
+    caustic_objects, in_stage, list, params, record_kept, tables_and_placement, FrameInputs, Inputs, PlannedPass,
+    Regeneration, Registration, RenderError, Setup, Stage, Technique,
 };
 use crate::{
     CAUSTIC_BINDING_FACES, CAUSTIC_BINDING_MATERIALS, LIGHT_DIRECTIONAL, PHOTON_BINDING_RECEIVER_DEPTH,
@@ -97,8 +97,17 @@ pub const PHOTON_BUFFER_BIN: &str = "photon_buffer_bin";
 pub const PHOTON_BUFFER_SCATTER: &str = "photon_buffer_scatter";
 
 /// `render.caustics = "photon_buffer"`, parameters `[render.photon_buffer]`.
-pub const TECHNIQUE: Registration =
-    registration!("caustics = \"photon_buffer\"", plan, PhotonBufferPass, ["photon_buffer"]);
+/// Built from its settings, from where things are, and, for the texel sums' channels, from
+/// whether the photons are grey (a material value can change that without a rebuild).
+pub const TECHNIQUE: Registration = Registration {
+    key: "caustics = \"photon_buffer\"",
+    plan,
+    create: |s| Ok(Box::new(PhotonBufferPass::new(s)?)),
+    inputs: |scene| {
+        let inputs = tables_and_placement(scene, &["photon_buffer"]);
+        Inputs { settings: format!("{} grey photons {}", inputs.settings, grey_photons(scene)), ..inputs }
+    },
+};
 
 fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
     let Some((diffuse, specular)) = caustic_objects(scene, "photon_buffer") else {
@@ -109,7 +118,7 @@ fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
         PlannedPass::new(
             PHOTON_BUFFER_BIN,
             "photons summed per caustic texel before the filter (render.photon_buffer.merge_texels; empty on a \
-             device without image float atomics or vertex-shader stores)",
+             device without vertex-shader stores)",
         )
     });
     let passes = [
@@ -470,9 +479,11 @@ impl PhotonBufferPass {
 
         // 2. Counting and the filter: each photon's kernel (or each texel's, its photons
         // summed first) into the caustic textures, additively.
-        let can_merge = ctx.info.image_float_atomic_add && ctx.info.vertex_stores && n_rects > 0;
+        let can_merge = ctx.info.vertex_stores && n_rects > 0;
         let bins = if params.merge_texels && can_merge {
-            Some(TexelSums::new(ctx, graph, (&photons, &flux), &sampler, t, n_rects, size * size * n_faces)?)
+            let photons_per_frame = size * size * n_faces;
+            let grey = grey_photons(scene);
+            Some(TexelSums::new(ctx, graph, (&photons, &flux), &sampler, t, n_rects, photons_per_frame, grey)?)
         } else {
             None
         };
@@ -484,19 +495,17 @@ impl PhotonBufferPass {
             .sampled(1, &flux.0, &sampler)
             .read(flux.1);
         if let Some(b) = &bins {
-            scatter_set = scatter_set
-                .storage_image(2, &b.sums.0)
-                .access(b.sums.1, Access::VertexStorageWrite)
-                .storage_image(3, &b.owner.0)
-                .access(b.owner.1, Access::VertexStorageWrite);
+            scatter_set = scatter_set.storage_image(2, &b.sums.0).access(b.sums.1, Access::VertexStorageWrite);
         }
         let scatter_set = scatter_set.build(ctx, PHOTON_BUFFER_SCATTER)?;
         let vertex_shader =
             if bins.is_some() { "caustics/photon_scatter_merged.vert" } else { "caustics/photon_scatter.vert" };
+        let grey = [("GREY", Spec::U32(bins.as_ref().map_or(0, |b| u32::from(b.grey))))];
         let scatter_pipeline = GraphicsPipeline::new(
             ctx,
             &GraphicsPipelineDesc {
                 vertex_shader,
+                specialization: if bins.is_some() { &grey } else { &[] },
                 topology: vk::PrimitiveTopology::POINT_LIST,
                 blend: &[Blend::Additive],
                 ..GraphicsPipelineDesc::fullscreen(PHOTON_BUFFER_SCATTER, "caustics/photon_scatter.frag")
@@ -509,6 +518,7 @@ impl PhotonBufferPass {
         let k = params.filter_k as i32;
         let weights: f32 =
             (-k..=k).flat_map(|j| (-k..=k).map(move |i| ((1 + 2 * k * k - (i * i + j * j)) as f32).sqrt())).sum();
+        let step = fixed_point_step(&faces);
         let scatter_pushes = caustics
             .rectangles()
             .iter()
@@ -520,6 +530,7 @@ impl PhotonBufferPass {
                 PhotonScatterPush {
                     info: [size, n_faces, i as u32 + 1, params.filter_k],
                     params: [scale, weights, t as f32, caustics.mode as f32],
+                    sum_unit: [step, 0.0, 0.0, 0.0],
                 }
             })
             .collect();
@@ -554,13 +565,54 @@ impl PhotonBufferPass {
     }
 }
 
-/// `merge_texels`: per caustic texel, the sum of its photons' power and count (R32F, layer
-/// 4 (k - 1) + channel) and its first photon's mark (R32UI), filled by
-/// glsl/caustics/photon_bin.comp and read and emptied again by the texel's point
-/// (glsl/caustics/photon_scatter.glsl), so they are zero between frames.
+/// The power of one step of the texel sums' 64-bit fixed point (glsl/caustics/photon_bin.comp):
+/// the brightest photon the faces can send, over 2^32. A photon's power is its light's
+/// intensity times its texel's measure (glsl/caustics/light_path.glsl `texel_measure`, largest
+/// at the face's centre: (2 t / G)^2) times weights of at most 1 (Fresnel, absorption,
+/// reflectance). So a photon keeps a float's precision down to 2^-8 of that bound, a texel
+/// holds 2^32 photons at it, and a photon up to 2^32 times brighter still fits.
+fn fixed_point_step(faces: &[GpuCausticFace]) -> f32 {
+    let brightest = faces
+        .iter()
+        .map(|f| {
+            let texel = 2.0 * f.measure[1] / f.measure[2];
+            f.intensity[..3].iter().fold(0f32, |m, &i| m.max(i)) * texel * texel
+        })
+        .fold(0f32, f32::max);
+    let step = brightest * 2f32.powi(-32);
+    if step.is_finite() && step >= f32::MIN_POSITIVE {
+        step
+    } else {
+        1.0
+    }
+}
+
+/// Whether every photon carries the same power in red, green and blue: every light is grey and
+/// no specular object filters colour (a dielectric's absorption, a mirror's reflectance, a
+/// conductor's eta and k equal in every channel; a dielectric's ior is taken at green,
+/// glsl/caustics/photon_buffer.frag). The texel sums then keep one channel.
+fn grey_photons(scene: &Scene) -> bool {
+    let grey = |v: glam::Vec3| v.x == v.y && v.y == v.z;
+    let lights = scene.lights.iter().all(|l| match l {
+        Light::Point { intensity, .. } => grey(*intensity),
+        Light::Directional { irradiance, .. } => grey(*irradiance),
+    });
+    lights
+        && scene.materials.iter().all(|m| match m {
+            Material::Diffuse { .. } => true,
+            Material::Mirror { reflectance } => grey(*reflectance),
+            Material::Conductor { eta, k } => grey(*eta) && grey(*k),
+            Material::Dielectric { absorption, .. } => grey(*absorption),
+        })
+}
+
+/// `merge_texels`: per caustic texel, the sum of its photons' power (64-bit fixed point, two
+/// R32UI words a channel, one channel for grey photons) and count, and its first photon's mark
+/// (glsl/caustics/photon_sums.glsl), filled by the bin pass and read and emptied again by the
+/// texel's point (glsl/caustics/photon_scatter.glsl), so they are zero between frames.
 struct TexelSums {
+    grey: bool,
     sums: (Image, ImageId),
-    owner: (Image, ImageId),
     set: BoundSet,
     pipeline: ComputePipeline,
     groups: u32,
@@ -576,18 +628,25 @@ impl TexelSums {
         texels: u32,
         rects: u32,
         photons_per_frame: u32,
+        grey: bool,
     ) -> GpuResult<Self> {
+        // photon_sums.glsl's SUM_LAYERS: two words per channel, the count, the first photon.
+        let layers = if grey { 4 } else { 8 };
         use vk::ImageUsageFlags as U;
         let usage = U::STORAGE | U::TRANSFER_DST | U::TRANSFER_SRC;
-        let square =
-            |name: &str, format, layers| ImageDesc::square(name, format, texels, layers, ImageViewKind::D2Array, usage);
-        let sums = graph.image(ctx, &square("photon_texel_sums", vk::Format::R32_SFLOAT, 4 * rects))?;
-        let owner = graph.image(ctx, &square("photon_texel_owner", vk::Format::R32_UINT, rects))?;
+        let desc = ImageDesc::square(
+            "photon_texel_sums",
+            vk::Format::R32_UINT,
+            texels,
+            layers * rects,
+            ImageViewKind::D2Array,
+            usage,
+        );
+        let sums = graph.image(ctx, &desc)?;
         ctx.one_shot(|cmd| {
-            graph.access_now(cmd, &[(sums.1, Access::TransferWrite), (owner.1, Access::TransferWrite)], &[]);
-            // The bits of 0.0: the sums start at zero, and no texel has a photon.
+            graph.access_now(cmd, &[(sums.1, Access::TransferWrite)], &[]);
+            // The sums start at zero, and no texel has a photon.
             cmd.clear_color_image(&sums.0, [0.0; 4]);
-            cmd.clear_color_image(&owner.0, [0.0; 4]);
         })?;
         let set = Bindings::new(vk::ShaderStageFlags::COMPUTE)
             .sampled(0, &photons.0, sampler)
@@ -596,8 +655,6 @@ impl TexelSums {
             .read(flux.1)
             .storage_image(2, &sums.0)
             .access(sums.1, Access::ComputeWrite)
-            .storage_image(3, &owner.0)
-            .access(owner.1, Access::ComputeWrite)
             .build(ctx, PHOTON_BUFFER_BIN)?;
         let pipeline = ComputePipeline::new(
             ctx,
@@ -605,8 +662,8 @@ impl TexelSums {
             "caustics/photon_bin.comp",
             &[set.layout()],
             std::mem::size_of::<PhotonScatterPush>() as u32,
-            &[],
+            &[("GREY", Spec::U32(u32::from(grey)))],
         )?;
-        Ok(TexelSums { sums, owner, set, pipeline, groups: photons_per_frame.div_ceil(64) })
+        Ok(TexelSums { grey, sums, set, pipeline, groups: photons_per_frame.div_ceil(64) })
     }
 }
