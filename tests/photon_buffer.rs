@@ -240,6 +240,39 @@ fn merged_texels_draw_one_kernel_per_texel_reached() {
     common::assert_no_validation_errors(&ctx);
 }
 
+/// The texel sums' fixed point (`merge_texels`) at extreme light powers: a light so dim that
+/// 2^-32 of its brightest photon is below the smallest normal float (the step is then that
+/// float), and one 10^52 times brighter. The merged caustic textures equal the CPU's
+/// count-then-filter within 1e-5 of their largest value, in the colour channels alone (about
+/// 1e-28 and 1e24 W/m^2; the count in alpha is the same at both).
+#[test]
+fn merged_sums_hold_at_extreme_light_powers() {
+    if !common::in_own_process() {
+        return;
+    }
+    let ctx = common::context(false);
+    for light in ["lights.0.intensity=1e-26", "lights.0.intensity=1e26"] {
+        let im = images(
+            &ctx,
+            "caustic_sphere",
+            32,
+            &[
+                "render.photon_buffer.size=24",
+                "render.photon_buffer.texture_size=32",
+                "render.photon_buffer.filter_k=2",
+                "render.photon_buffer.merge_texels=true",
+                light,
+            ],
+        );
+        let (n, _) = photons_landed(&im);
+        assert!(n > 50, "{light}: only {n} photons");
+        let colour = |v: &[[f32; 4]]| v.iter().map(|c| [c[0], c[1], c[2], 0.0]).collect::<Vec<_>>();
+        let filtered = cpu_filter(&im, 2, 0.5, false);
+        assert_close(&format!("merged sums, {light}"), &colour(&im.caustics), &colour(&filtered));
+    }
+    common::assert_no_validation_errors(&ctx);
+}
+
 /// The physical normalisation: the caustic textures hold the light's flux through the ball
 /// times both surfaces' Fresnel transmittance, independently of the photon buffer's size.
 /// Tolerance 2%: measured 9.107 / 9.199 / 9.218 / 9.230 W at 32 / 64 / 128 / 256 against the

@@ -568,9 +568,12 @@ impl PhotonBufferPass {
 /// The power of one step of the texel sums' 64-bit fixed point (glsl/caustics/photon_bin.comp):
 /// the brightest photon the faces can send, over 2^32. A photon's power is its light's
 /// intensity times its texel's measure (glsl/caustics/light_path.glsl `texel_measure`, largest
-/// at the face's centre: (2 t / G)^2) times weights of at most 1 (Fresnel, absorption,
-/// reflectance). So a photon keeps a float's precision down to 2^-8 of that bound, a texel
-/// holds 2^32 photons at it, and a photon up to 2^32 times brighter still fits.
+/// at the face's centre: (2 t / G)^2) times weights that are at most 1 for physical materials
+/// (Fresnel, absorption, reflectance). So a photon keeps a float's precision down to 2^-8 of
+/// that bound, a texel holds 2^32 photons at it, and a photon up to 2^32 times brighter (a
+/// mirror given a reflectance above 1) still fits. The step stays a normal float: for a light so
+/// dim that the bound's 2^-32 would be subnormal it is the smallest normal float, and where the
+/// bound overflows, every finite photon still fits in 2^32 steps.
 fn fixed_point_step(faces: &[GpuCausticFace]) -> f32 {
     let brightest = faces
         .iter()
@@ -579,12 +582,8 @@ fn fixed_point_step(faces: &[GpuCausticFace]) -> f32 {
             f.intensity[..3].iter().fold(0f32, |m, &i| m.max(i)) * texel * texel
         })
         .fold(0f32, f32::max);
-    let step = brightest * 2f32.powi(-32);
-    if step.is_finite() && step >= f32::MIN_POSITIVE {
-        step
-    } else {
-        1.0
-    }
+    let word = 2f32.powi(-32);
+    (brightest * word).clamp(f32::MIN_POSITIVE, f32::MAX * word)
 }
 
 /// Whether every photon carries the same power in red, green and blue: every light is grey and
