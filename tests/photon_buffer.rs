@@ -28,6 +28,14 @@ fn images(ctx: &std::sync::Arc<prism::gpu::GpuContext>, name: &str, size: u32, e
 }
 
 /// Photons with k > 0 in the photon buffer, and their total power (W, green).
+/// caustic_sphere's photons from a 24^2 photon buffer into 32^2 caustic textures: few enough
+/// for the CPU's count-then-filter.
+fn tiny_images(ctx: &std::sync::Arc<prism::gpu::GpuContext>, extra: &[&str]) -> PhotonBufferImages {
+    let mut o = vec!["render.photon_buffer.size=24", "render.photon_buffer.texture_size=32"];
+    o.extend_from_slice(extra);
+    images(ctx, "caustic_sphere", 32, &o)
+}
+
 fn photons_landed(im: &PhotonBufferImages) -> (usize, f64) {
     let mut n = 0;
     let mut power = 0.0;
@@ -161,13 +169,9 @@ fn counting_and_filter_match_the_cpu_and_conserve_energy() {
     let cases = cases.into_iter().chain([(2, false, coloured)]);
     for ((k, paper, light), merge) in cases.flat_map(|c| [(c, true), (c, false)]) {
         let norm = if paper { "paper" } else { "physical" };
-        let im = images(
+        let im = tiny_images(
             &ctx,
-            "caustic_sphere",
-            32,
             &[
-                "render.photon_buffer.size=24",
-                "render.photon_buffer.texture_size=32",
                 &format!("render.photon_buffer.filter_k={k}"),
                 "render.photon_buffer.filter_s=0.5",
                 &format!("render.photon_buffer.normalization=\"{norm}\""),
@@ -252,18 +256,8 @@ fn merged_sums_hold_at_extreme_light_powers() {
     }
     let ctx = common::context(false);
     for light in ["lights.0.intensity=1e-26", "lights.0.intensity=1e26"] {
-        let im = images(
-            &ctx,
-            "caustic_sphere",
-            32,
-            &[
-                "render.photon_buffer.size=24",
-                "render.photon_buffer.texture_size=32",
-                "render.photon_buffer.filter_k=2",
-                "render.photon_buffer.merge_texels=true",
-                light,
-            ],
-        );
+        let im =
+            tiny_images(&ctx, &["render.photon_buffer.filter_k=2", "render.photon_buffer.merge_texels=true", light]);
         let (n, _) = photons_landed(&im);
         assert!(n > 50, "{light}: only {n} photons");
         let colour = |v: &[[f32; 4]]| v.iter().map(|c| [c[0], c[1], c[2], 0.0]).collect::<Vec<_>>();
