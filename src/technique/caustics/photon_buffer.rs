@@ -481,9 +481,7 @@ impl PhotonBufferPass {
         // summed first) into the caustic textures, additively.
         let can_merge = ctx.info.vertex_stores && n_rects > 0;
         let bins = if params.merge_texels && can_merge {
-            let photons_per_frame = size * size * n_faces;
-            let grey = grey_photons(scene);
-            Some(TexelSums::new(ctx, graph, (&photons, &flux), &sampler, t, n_rects, photons_per_frame, grey)?)
+            Some(TexelSums::new(ctx, graph, (&photons, &flux), &sampler, t, n_rects, grey_photons(scene))?)
         } else {
             None
         };
@@ -618,7 +616,7 @@ struct TexelSums {
 }
 
 impl TexelSums {
-    /// For `rects` caustic textures of `texels`^2 and `photons` photon-buffer pixels.
+    /// For `rects` caustic textures of `texels`^2, binning every pixel of the photon buffer.
     fn new(
         ctx: &Arc<GpuContext>,
         graph: &mut FrameGraph,
@@ -626,9 +624,10 @@ impl TexelSums {
         sampler: &Sampler,
         texels: u32,
         rects: u32,
-        photons_per_frame: u32,
         grey: bool,
     ) -> GpuResult<Self> {
+        let d = &photons.0.desc;
+        let photons_per_frame = d.width * d.height * d.layers;
         // photon_sums.glsl's SUM_LAYERS: two words per channel, the count, the first photon.
         let layers = if grey { 4 } else { 8 };
         use vk::ImageUsageFlags as U;
