@@ -208,6 +208,21 @@ pub enum Light {
     Directional { direction: Vec3, irradiance: Vec3 },
 }
 
+/// Equal in red, green and blue.
+pub fn is_grey(c: Vec3) -> bool {
+    c.x == c.y && c.y == c.z
+}
+
+impl Light {
+    /// Whether it sends the same power in red, green and blue.
+    pub fn is_grey(&self) -> bool {
+        match self {
+            Light::Point { intensity, .. } => is_grey(*intensity),
+            Light::Directional { irradiance, .. } => is_grey(*irradiance),
+        }
+    }
+}
+
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Material {
     Diffuse {

@@ -71,7 +71,7 @@ use crate::gpu::{
 };
 use crate::graph::{Bindings, BoundSet, Frame, FrameGraph, ImageId};
 use crate::scene::techniques::{PhotonBufferParams, PhotonNormalization};
-use crate::scene::{Light, Material, Scene};
+use crate::scene::{is_grey, Light, Material, Scene};
 pub use crate::shader_structs::GpuPhotonRect;
 use crate::shader_structs::{GpuCausticFace, PhotonBufferPush, PhotonScatterPush, ShadowPush};
 use crate::technique::baseline::shadow_map::FAR_DISTANCE;
@@ -589,17 +589,12 @@ fn fixed_point_step(faces: &[GpuCausticFace]) -> f32 {
 /// conductor's eta and k equal in every channel; a dielectric's ior is taken at green,
 /// glsl/caustics/photon_buffer.frag). The texel sums then keep one channel.
 fn grey_photons(scene: &Scene) -> bool {
-    let grey = |v: glam::Vec3| v.x == v.y && v.y == v.z;
-    let lights = scene.lights.iter().all(|l| match l {
-        Light::Point { intensity, .. } => grey(*intensity),
-        Light::Directional { irradiance, .. } => grey(*irradiance),
-    });
-    lights
+    scene.lights.iter().all(Light::is_grey)
         && scene.materials.iter().all(|m| match m {
             Material::Diffuse { .. } => true,
-            Material::Mirror { reflectance } => grey(*reflectance),
-            Material::Conductor { eta, k } => grey(*eta) && grey(*k),
-            Material::Dielectric { absorption, .. } => grey(*absorption),
+            Material::Mirror { reflectance } => is_grey(*reflectance),
+            Material::Conductor { eta, k } => is_grey(*eta) && is_grey(*k),
+            Material::Dielectric { absorption, .. } => is_grey(*absorption),
         })
 }
 

@@ -840,14 +840,7 @@ impl LightSim {
         // Grey light through a colourless medium deposits one channel sum for three, a third
         // of the step kernel's atomics (docs/BENCHMARKS.md). The paper's voxelization keeps
         // each ray's own three channels.
-        let grey = |c: Vec3| c.x == c.y && c.y == c.z;
-        let gray = !highest
-            && textures.channels == 1
-            && !textures.extinction_any
-            && lights.iter().all(|l| match l {
-                Light::Point { intensity, .. } => grey(*intensity),
-                Light::Directional { irradiance, .. } => grey(*irradiance),
-            });
+        let gray = !highest && textures.channels == 1 && !textures.extinction_any && lights.iter().all(Light::is_grey);
         // The nearest direction splat sums its weights in a slab of their own.
         let nearest_direction = !highest && params.direction_splat == LightDirectionSplat::Nearest;
         let slabs = if highest || nearest_direction { 7 } else { 6 };
