@@ -376,6 +376,9 @@ shared_bindings! {
         // The view renderer's uniform-region map (u32 per brick; src/technique/eikonal/volume.rs),
         // for the straight steps of glsl/eikonal/light_step.glsl.
         LIGHT_BINDING_BRICKS = 18;
+        // Where the volumes are read: one bit per voxel of the irradiance volume
+        // (src/technique/eikonal/read_mask.rs).
+        LIGHT_BINDING_READ_MASK = 19;
     }
     // The window's water animation (glsl/common/heightfield.comp; src/frame/heightfield.rs):
     // one set 0.

@@ -1765,3 +1765,60 @@ fn batches_shorten_so_that_the_spill_list_holds_their_overflow() {
     same_volumes("spilled", &b, &a);
     common::assert_no_validation_errors(&ctx);
 }
+
+/// Deposits only where the light volumes are read (`light_deposits = "read"`, the default;
+/// src/technique/eikonal/read_mask.rs): eikonal_sphere's floor, the one surface in its light
+/// box, receives the light of deposits everywhere up to the order of the float additions
+/// (1e-5 of the largest value, as same_volumes), at every point of it that the receivers
+/// look up; the ball's inside, which nothing reads, receives none; and the rendered image
+/// (the floor seen directly and through the ball) is that of deposits everywhere within the
+/// same rounding. Fails when the mask reaches one voxel around a receiver instead of two: a
+/// deposit centred a voxel and a half from the floor then misses voxels the floor reads.
+#[test]
+fn deposits_where_read_give_the_light_of_deposits_everywhere() {
+    if !common::in_own_process() {
+        return;
+    }
+    use prism::scene::techniques::LightDeposits;
+    use prism::technique::eikonal::eikonal_light::{light_grid, LitVolume};
+    use prism::technique::eikonal::read_mask::{read_mask, ReadSites};
+    let ctx = common::context(true);
+    let overrides = ["volume.resolution=[32, 32, 32]"];
+    let scene = common::scene("eikonal_sphere", 32, &overrides);
+    let volume = scene.volume.clone().unwrap();
+    let base = EikonalParams::from_settings(&scene.render).unwrap();
+    let (lo, hi, resolution) = light_grid(&volume, base.light_below, base.light_side);
+    let sites = ReadSites::of_scene(&scene, &volume, false, lo, hi);
+    assert_eq!(sites.triangles.len(), 2, "the floor quad");
+    let reads = read_mask(&sites, lo, hi, resolution);
+    let run = |light_deposits| {
+        let params = EikonalParams { light_deposits, ..base };
+        let lit = LitVolume { params: &params, volume: &volume, lights: &scene.lights, reads: Some(&reads) };
+        let mut sim = StandaloneLight::with_reads(&ctx, lit).unwrap();
+        sim.run(&ctx).unwrap();
+        LightVolumes::read(&mut sim, &ctx)
+    };
+    let (read, all) = (run(LightDeposits::Read), run(LightDeposits::Everywhere));
+    // The floor (y = 0) where the receivers look it up, on a grid finer than the voxels.
+    let (mut floor_read, mut floor_all) = (Vec::new(), Vec::new());
+    for i in 0..=200 {
+        for k in 0..=200 {
+            let x = Vec3::new(lo.x + (hi.x - lo.x) * i as f32 / 200.0, 0.0, lo.z + (hi.z - lo.z) * k as f32 / 200.0);
+            floor_read.extend(read.floor(x).to_array());
+            floor_all.extend(all.floor(x).to_array());
+        }
+    }
+    assert!(floor_all.iter().any(|&e| e > 0.0), "no light on the floor: nothing compared");
+    volumes_close("the floor's irradiance", &floor_read, &floor_all, 1e-5);
+    let centre = Vec3::new(0.0, 1.2, 0.0);
+    let (inside_read, inside_all) =
+        (read.at(centre).map_or(Vec3::ZERO, |l| l.0), all.at(centre).map_or(Vec3::ZERO, |l| l.0));
+    eprintln!("irradiance at the ball's centre: {inside_read} deposited where read, {inside_all} everywhere");
+    assert!(inside_all.max_element() > 0.0 && inside_read == Vec3::ZERO, "{inside_read} / {inside_all}");
+    // The renderer builds its mask from the scene itself.
+    let everywhere =
+        common::scene("eikonal_sphere", 32, &[overrides[0], "render.eikonal.light_deposits=\"everywhere\""]);
+    let images = common::render_each(&ctx, &[scene.clone(), everywhere]);
+    volumes_close("the image", &images[0].hdr, &images[1].hdr, 1e-5);
+    common::assert_no_validation_errors(&ctx);
+}

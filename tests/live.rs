@@ -200,9 +200,10 @@ fn the_eikonal_light_simulation_survives_a_resize_and_moves_elsewhere() {
     if !common::in_own_process() {
         return;
     }
-    // The simulation depends on the volume, the lights and its settings; a resize, a moved
-    // floor or a setting of the view renderer alone (what exit rays meet) re-creates the
-    // technique around it, not the simulation.
+    // The simulation depends on the volume, the lights, its settings and the voxels whose
+    // light is read; a resize, a floor moved within its own plane (the same voxels read) or
+    // a setting of the view renderer alone (what exit rays meet) re-creates the technique
+    // around it, not the simulation.
     let ctx = common::context(false);
     let base = ["volume.resolution=[16,16,16]"];
     let mut running = Renderer::new(&ctx, &common::scene("eikonal_sphere", SIZE, &base)).unwrap();
@@ -244,6 +245,10 @@ fn every_setting_of_the_light_simulation_runs_it_again() {
     frame(&mut running);
     let mut seconds = running.light_stats().unwrap().seconds;
     for change in [
+        // The floor moved up by most of a voxel (0.13 m at 16^3): its light is read from other
+        // voxels (render.eikonal.light_deposits = "read").
+        "objects.0.center=[0, 0.1, 0]",
+        "render.eikonal.light_deposits=\"everywhere\"",
         "render.eikonal.skip_air=false",
         "render.eikonal.keep_crossed=false",
         "render.eikonal.light_dt=1.0",

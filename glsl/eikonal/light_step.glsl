@@ -18,6 +18,8 @@
 //   neighbouring midpoints of patches up to a voxel wide are up to a voxel apart. Every
 //   ray's irradiance is summed (Eqs. 6-7 sum over the incoming rays j), and so are the
 //   lights, tiles and channels of src/technique/eikonal/eikonal_light.rs, whose runs all add here.
+//   With READ_MASK only where something looks the volumes up (a surface near the voxel, or
+//   a scattering volume: src/technique/eikonal/read_mask.rs); the rest is never read;
 //   With HIGHEST_ENERGY the paper's rule instead (render.eikonal.voxelization =
 //   "highest_energy"): the patch's midpoint voxel keeps the ray of the highest dE = flux /
 //   area seen there (`voxel_sample`). This kernel raises the voxel's key by an atomic max;
@@ -180,10 +182,13 @@ void deposit(vec3 at, vec3 flux_len, vec3 dir) {
     // it they would miss half their deposits).
     if (!(max(flux_len.r, max(flux_len.g, flux_len.b)) > 0.0) || any(lessThan(at, LIGHT_MIN - voxel))
         || any(greaterThan(at, LIGHT_MAX + voxel))) return;
+    vec3 u = (at - LIGHT_MIN) / voxel - 0.5;
+    // The eight voxels it adds to are within one of the voxel that holds its centre (clamped
+    // into the volume: those outside are not added to).
+    if (!marked_read(clamp(ivec3(floor(u + 0.5)), ivec3(0), size - 1), size)) return;
     vec3 e = run.sign * flux_len / (voxel.x * voxel.y * voxel.z);
     if (any(isnan(e)) || any(isinf(e))) return;
     vec3 d = dir * (e.r + e.g + e.b);
-    vec3 u = (at - LIGHT_MIN) / voxel - 0.5;
     ivec3 i0 = ivec3(floor(u));
     vec3 f = u - vec3(i0);
     for (int c = 0; c < 8; ++c) {

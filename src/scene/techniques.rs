@@ -794,6 +794,18 @@ choice! {
 }
 
 choice! {
+    /// Which voxels of the irradiance and direction volumes the eikonal light simulator
+    /// deposits into (src/technique/eikonal/read_mask.rs).
+    LightDeposits, hint "only the voxels that receivers and scattering read, or every voxel the light crosses" {
+        /// The voxels near a surface that can receive the light and, in a scattering volume,
+        /// the volume's box: everything the renderer looks up, the same values there.
+        Read = "read",
+        /// Every voxel a patch crosses, as the paper's volumes hold them.
+        Everywhere = "everywhere",
+    }
+}
+
+choice! {
     /// What exit and reflected view rays of the eikonal volume meet besides the environment
     /// (src/technique/eikonal/eikonal_nearby.rs).
     EikonalNearby,
@@ -1135,6 +1147,13 @@ params! {
         /// BENCHMARKS.md and docs/ACCURACY.md), or "trilinear" like its irradiance, whose
         /// receivers' light is then exactly linear in the lights.
         direction_splat: LightDirectionSplat = LightDirectionSplat::Nearest;
+        /// Which voxels the light simulator deposits into: "read", the default, only those
+        /// that the renderer looks the light up in (within two voxels of a surface that is
+        /// not clear glass, and a scattering volume's box), where they hold the same light as
+        /// with "everywhere", which deposits into every voxel the light crosses, as the paper
+        /// does. Air and the inside of a clear object are read by nothing; their deposits are
+        /// most of the step kernel's atomics (docs/BENCHMARKS.md).
+        light_deposits: LightDeposits = LightDeposits::Read;
         /// Fresnel loss in the light transport: a patch crossing a boundary band (the view
         /// renderer's, where the smoothed index crosses a jump) keeps the transmitted share
         /// 1 - rho F of its flux, F the exact Fresnel reflectance for unpolarised light between

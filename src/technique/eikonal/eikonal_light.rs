@@ -22,7 +22,10 @@
 //!   times too bright), into an additive accumulator that light_resolve.glsl turns into the
 //!   irradiance and (vector) direction volumes. The paper's rule is one setting away
 //!   (`render.eikonal.voxelization = "highest_energy"`: an atomic max on each voxel's energy in
-//!   the step kernel, then glsl/eikonal/light_commit.comp writes the winning ray).
+//!   the step kernel, then glsl/eikonal/light_commit.comp writes the winning ray). The
+//!   track-length deposits go only to the voxels that the renderer reads (near a surface, or
+//!   in a scattering volume: src/technique/eikonal/read_mask.rs), unless
+//!   `render.eikonal.light_deposits = "everywhere"`.
 //! - Section 5.2.3: each patch is classified 0/1/4 and the list is compacted and expanded by
 //!   the HistoPyramid (src/technique/eikonal/histopyramid.rs) and glsl/eikonal/light_expand.comp.
 //!
@@ -61,7 +64,7 @@ use crate::gpu::{
     Progress, Sampler, SamplerDesc, Spec, TimestampPool, TimestampQuery,
 };
 use crate::graph::{Bindings, BoundSet, BufferId, Frame, FrameGraph, ImageId};
-use crate::scene::techniques::{EikonalParams, LightDirectionSplat, LightIntegrator, LightVoxelization};
+use crate::scene::techniques::{EikonalParams, LightDeposits, LightDirectionSplat, LightIntegrator, LightVoxelization};
 use crate::scene::{IndexProfile, Light, Volume};
 use crate::technique::scene_specialization;
 use crate::{
@@ -286,6 +289,12 @@ pub fn light_grid(volume: &Volume, below: f32, side: f32) -> (Vec3, Vec3, [u32; 
     let hi = Vec3::new(ex as f32 * voxel.x, 0.0, ez as f32 * voxel.z);
     let [rx, ry, rz] = volume.resolution;
     (volume.min - lo, volume.max + hi, [rx + 2 * ex, ry + ey, rz + 2 * ez])
+}
+
+/// Whether the simulation deposits only where its volumes are read (`light_deposits`):
+/// only the track-length voxelization, which sums; the paper's keeps one ray per voxel.
+pub fn deposits_where_read(params: &EikonalParams) -> bool {
+    params.light_deposits == LightDeposits::Read && params.voxelization == LightVoxelization::TrackLength
 }
 
 /// Whether the device can add floats atomically to an R32_SFLOAT storage image: the
@@ -612,7 +621,8 @@ pub struct LightSim {
     skipped: u32,
     /// The faces of every light's wavefront and their skip flags, which the resolve kernel
     /// reads to add the skipped patches' light.
-    _air: [Buffer; 2],
+    /// The air faces, the skipped patches' flags and the read mask.
+    _buffers: [Buffer; 3],
     /// The run in progress and the runs still to do.
     pub run: LightRun,
     pub queue: VecDeque<LightRun>,
@@ -728,6 +738,10 @@ pub struct LitVolume<'a> {
     pub params: &'a EikonalParams,
     pub volume: &'a Volume,
     pub lights: &'a [Light],
+    /// Where the volumes are read: the bits of [`super::read_mask::read_mask`] over the
+    /// irradiance volume's grid ([`light_grid`]); None: the simulation deposits everywhere,
+    /// whatever `params.light_deposits` says.
+    pub reads: Option<&'a [u32]>,
 }
 
 impl LightSim {
@@ -740,8 +754,11 @@ impl LightSim {
         sampler: &Sampler,
         graph: &mut FrameGraph,
     ) -> GpuResult<Self> {
-        let LitVolume { params, volume, lights } = lit;
+        let LitVolume { params, volume, lights, reads } = lit;
         let (light_min, light_max, resolution) = light_grid(volume, params.light_below, params.light_side);
+        // Deposits only where the renderer reads the volumes (`light_deposits`); the
+        // paper's voxelization keeps its one ray per voxel everywhere.
+        let mask = reads.filter(|_| deposits_where_read(params));
         let per_side = if params.light_patches > 0 {
             params.light_patches
         } else {
@@ -784,6 +801,7 @@ impl LightSim {
         air_skip.resize(air_skip.len().max(1), 0);
         let air_faces = Buffer::storage(ctx, "eikonal_air_faces", &air_faces)?;
         let air_skip = Buffer::storage(ctx, "eikonal_air_skip", &air_skip)?;
+        let read_bits = Buffer::storage(ctx, "eikonal_read_mask", mask.unwrap_or(&[0]))?;
         let voxel = volume.voxel_size().min_element();
         let dt = params.light_dt * voxel;
         // Enough time for the optical path of two box diagonals at the largest index, plus
@@ -874,6 +892,7 @@ impl LightSim {
                 .sampled(crate::LIGHT_BINDING_BAND, &textures.emission, sampler)
                 .sampled(crate::LIGHT_BINDING_REFLECTANCE, &textures.albedo, sampler)
                 .storage(crate::LIGHT_BINDING_BRICKS, &textures.bricks)
+                .storage(crate::LIGHT_BINDING_READ_MASK, &read_bits)
         };
         let sets = Bindings::build_each(ctx, "eikonal_light", vec![set(0), set(1)])?;
 
@@ -914,6 +933,7 @@ impl LightSim {
                 }),
             ),
             ("BRICK", Spec::U32(super::volume::BRICK)),
+            ("READ_MASK", Spec::U32(u32::from(mask.is_some()))),
         ]
         .into_iter()
         .chain(box_specs(volume_names, volume.min, volume.max))
@@ -995,7 +1015,7 @@ impl LightSim {
             wavefronts,
             largest,
             skipped,
-            _air: [air_faces, air_skip],
+            _buffers: [air_faces, air_skip, read_bits],
             run,
             queue,
             light_min,
@@ -1428,17 +1448,23 @@ impl StandaloneLight {
         Self::with_lights(ctx, params, volume, std::slice::from_ref(light))
     }
 
-    /// All of `lights` deposit into one pair of volumes.
+    /// All of `lights` deposit into one pair of volumes, everywhere.
     pub fn with_lights(
         ctx: &Arc<GpuContext>,
         params: &EikonalParams,
         volume: &Volume,
         lights: &[Light],
     ) -> GpuResult<Self> {
+        Self::with_reads(ctx, LitVolume { params, volume, lights, reads: None })
+    }
+
+    /// The simulation of `lit`, which deposits only where `lit.reads` says the volumes are
+    /// read when its `light_deposits` is "read".
+    pub fn with_reads(ctx: &Arc<GpuContext>, lit: LitVolume<'_>) -> GpuResult<Self> {
         let mut graph = FrameGraph::new();
-        let textures = prepare_volume(ctx, *params, volume, &mut graph)?;
+        let textures = prepare_volume(ctx, *lit.params, lit.volume, &mut graph)?;
         let sampler = Sampler::new(ctx, "eikonal_light_field", crate::gpu::SamplerDesc::NEAREST_CLAMP)?;
-        let sim = LightSim::new(ctx, LitVolume { params, volume, lights }, &textures, &sampler, &mut graph)?;
+        let sim = LightSim::new(ctx, lit, &textures, &sampler, &mut graph)?;
         Ok(StandaloneLight { sim, graph, _volume: textures, _sampler: sampler })
     }
 
@@ -1562,6 +1588,7 @@ fn simulation_settings(p: &EikonalParams) -> impl std::fmt::Debug {
             p.voxelization,
             p.light_deposit_every,
             p.direction_splat,
+            p.light_deposits,
         ),
         p.light_fresnel,
         p.hardware_filtering,
@@ -1593,7 +1620,14 @@ impl EikonalLight {
     pub fn new(s: &mut crate::technique::Setup<'_>, lit: LitVolume<'_>, textures: &VolumeTextures) -> GpuResult<Self> {
         let (ctx, targets, nearest) = (s.ctx, s.targets, s.nearest);
         // Dropped patches are reported by the caller from `stats.dropped_patches`.
-        let key = crate::technique::cache_key(&(simulation_settings(lit.params), lit.volume, lit.lights));
+        // The voxels read, not the surfaces: a floor moved within its plane reads the same.
+        let reads = lit.reads.map(|bits| {
+            use std::hash::{Hash, Hasher};
+            let mut h = std::collections::hash_map::DefaultHasher::new();
+            bits.hash(&mut h);
+            h.finish()
+        });
+        let key = crate::technique::cache_key(&(simulation_settings(lit.params), lit.volume, lit.lights, reads));
         let graph = &mut *s.graph;
         let sim = s.cache.get_or_try_insert(key, || -> GpuResult<RefCell<LightSim>> {
             Ok(RefCell::new(LightSim::new(ctx, lit, textures, nearest, graph)?))

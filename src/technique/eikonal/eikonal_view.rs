@@ -34,6 +34,7 @@ use crate::{
 
 use super::eikonal_light::EIKONAL_LIGHT;
 use super::eikonal_nearby;
+use super::read_mask::{read_mask, ReadSites};
 use super::volume::{box_specs, prepare_volume, VolumeTextures, LIGHT_BOX};
 use crate::technique::baseline::fullscreen::{fragment_set, FullscreenDesc, FullscreenPass};
 use crate::technique::refraction::nearby_impostors::{ImpostorShading, NearbyDesc, NearbyImpostors, NearbyRects};
@@ -255,7 +256,12 @@ impl EikonalPass {
         // Every light of the scene: their runs add into one pair of volumes.
         let light = match lights {
             [_, ..] if params.light => {
-                let lit = super::eikonal_light::LitVolume { params: &params, volume, lights };
+                let (light_min, light_max, resolution) =
+                    super::eikonal_light::light_grid(volume, params.light_below, params.light_side);
+                let sites = ReadSites::of_scene(s.scene, volume, textures.scatters, light_min, light_max);
+                let reads = read_mask(&sites, light_min, light_max, resolution);
+                let reads = super::eikonal_light::deposits_where_read(&params).then_some(&reads[..]);
+                let lit = super::eikonal_light::LitVolume { params: &params, volume, lights, reads };
                 Some(super::eikonal_light::EikonalLight::new(s, lit, textures)?)
             }
             _ => None,

@@ -5,4 +5,5 @@ pub mod eikonal_light;
 pub mod eikonal_nearby;
 pub mod eikonal_view;
 pub mod histopyramid;
+pub mod read_mask;
 pub mod volume;

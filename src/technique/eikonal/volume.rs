@@ -150,6 +150,9 @@ pub struct VolumeTextures {
     /// samples neither volume where it is all zero).
     pub extinction_any: bool,
     pub emission_any: bool,
+    /// Whether any voxel scatters (sigma_s = albedo x extinction > 0 in a channel): only
+    /// then do view rays read the light volumes inside the volume (Eq. 6).
+    pub scatters: bool,
     /// The uniform-region map of the view rays' leaps ([`uniform_reach`]).
     pub bricks: crate::gpu::Buffer,
     /// The boundary band's reflectance factor per voxel (f32, x fastest), -1 outside the
@@ -241,6 +244,7 @@ pub(crate) fn prepare_volume(
     let rgb_any = |v: &[[f32; 4]]| v.iter().any(|e| e[0] > 0.0 || e[1] > 0.0 || e[2] > 0.0);
     let (extinction_any, emission_any) = (rgb_any(&fields.extinction), rgb_any(&fields.emission));
     let materials = band.iter().any(|&b| b > 0.0) || extinction_any || emission_any;
+    let scatters = fields.extinction.iter().zip(&fields.albedo).any(|(e, a)| (0..3).any(|c| e[c] * a[c] > 0.0));
     // Where a view ray may leap: nothing but a constant index within reach of the smoothing
     // (ceil(3 sigma), as smooth.comp), the central differences and the trilinear lookup.
     let material_at: Vec<bool> = (0..fields.voxels())
@@ -377,6 +381,7 @@ pub(crate) fn prepare_volume(
         channels,
         materials,
         extinction_any,
+        scatters,
         emission_any,
         bricks,
         band: band_buffer,
