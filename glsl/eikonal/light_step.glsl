@@ -18,8 +18,8 @@
 //   neighbouring midpoints of patches up to a voxel wide are up to a voxel apart. Every
 //   ray's irradiance is summed (Eqs. 6-7 sum over the incoming rays j), and so are the
 //   lights, tiles and channels of src/technique/eikonal/eikonal_light.rs, whose runs all add here.
-//   With READ_MASK only where something looks the volumes up (a surface near the voxel, or
-//   a scattering volume: src/technique/eikonal/read_mask.rs); the rest is never read;
+//   With READ_MASK only into the voxels that something looks up (near a surface, or in a
+//   scattering volume: src/technique/eikonal/read_mask.rs), since no other voxel is read.
 //   With HIGHEST_ENERGY the paper's rule instead (render.eikonal.voxelization =
 //   "highest_energy"): the patch's midpoint voxel keeps the ray of the highest dE = flux /
 //   area seen there (`voxel_sample`). This kernel raises the voxel's key by an atomic max;

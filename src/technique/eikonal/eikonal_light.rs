@@ -620,8 +620,8 @@ pub struct LightSim {
     /// Initial patches not simulated: only air on their way (`skip_air`).
     skipped: u32,
     /// The faces of every light's wavefront and their skip flags, which the resolve kernel
-    /// reads to add the skipped patches' light.
-    /// The air faces, the skipped patches' flags and the read mask.
+    /// reads to add the skipped patches' light, and the read mask of the step kernel's
+    /// deposits.
     _buffers: [Buffer; 3],
     /// The run in progress and the runs still to do.
     pub run: LightRun,
