@@ -12,7 +12,8 @@
 // deposits each segment with a trilinear tent two voxels wide, so a voxel near the edge
 // between skipped and simulated patches received part of its light from each: the closed
 // form is weighted by the tent's mean of the skip flags over the voxel's footprint, which is
-// what the skipped patches' deposits would have summed to.
+// what the skipped patches' deposits would have summed to. Only where the volumes are read
+// (READ_MASK, light_common.glsl), as the step kernel's deposits.
 //
 // With HIGHEST_ENERGY (the paper's voxelization, light_step.glsl) the slabs hold one ray per
 // voxel, and a skipped beam's ray, dE = the closed form, takes the voxel where the voxel's
@@ -77,6 +78,8 @@ void main() {
     ivec3 size = imageSize(irradiance);
     ivec3 q = ivec3(gl_GlobalInvocationID);
     if (any(greaterThanEqual(q, size))) return;
+    // A voxel that nothing reads (READ_MASK) keeps the zero the volumes were cleared to.
+    if (!marked_read(q, size)) return;
     // Rounding of a take-back (run.sign = -1) can leave tiny negative sums: clamp.
     vec3 e = max(GRAY != 0u ? vec3(slab_value(q, 0)) : vec3(slab_value(q, 0), slab_value(q, 1), slab_value(q, 2)), vec3(0.0));
     vec3 d = vec3(slab_value(q, 3), slab_value(q, 4), slab_value(q, 5));
