@@ -220,16 +220,15 @@ fn default_scenes_report_no_cut() {
 
 /// A fresh directory for the CLI runs (DIR/work, the reference cache in DIR/cache), removed
 /// at the end.
-struct Dir(std::path::PathBuf);
+struct Dir(common::ScratchDir);
 impl Dir {
     fn new(name: &str) -> Dir {
-        let d = std::env::temp_dir().join(format!("prism-loop-limit-{name}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&d);
-        std::fs::create_dir_all(d.join("work")).unwrap();
+        let d = common::ScratchDir::new(&format!("prism-loop-limit-{name}"));
+        std::fs::create_dir_all(d.path().join("work")).unwrap();
         Dir(d)
     }
     fn work(&self) -> std::path::PathBuf {
-        self.0.join("work")
+        self.0.path().join("work")
     }
     fn listing(&self) -> Vec<String> {
         let mut v: Vec<_> = std::fs::read_dir(self.work())
@@ -240,18 +239,13 @@ impl Dir {
         v
     }
 }
-impl Drop for Dir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
 
 /// Run prism in `dir` with its own reference cache; (exit code, stderr).
 fn prism(dir: &Dir, args: &[&str]) -> (Option<i32>, String) {
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_prism"))
         .args(args)
         .current_dir(dir.work())
-        .env("PRISM_CACHE_DIR", dir.0.join("cache"))
+        .env("PRISM_CACHE_DIR", dir.0.path().join("cache"))
         .output()
         .unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr).to_string();

@@ -2,33 +2,26 @@
 //! baseline's error is clearly above the reference's own noise floor.
 mod common;
 
-use std::path::PathBuf;
 use std::process::Command;
 
-struct Dir(PathBuf);
+struct Dir(common::ScratchDir);
 impl Dir {
     fn new(name: &str) -> Dir {
-        let d = std::env::temp_dir().join(format!("prism-measure-{name}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&d);
-        std::fs::create_dir_all(&d).unwrap();
-        Dir(d)
+        Dir(common::ScratchDir::new(&format!("prism-measure-{name}")))
+    }
+    fn path(&self) -> &std::path::Path {
+        self.0.path()
     }
     fn prism(&self, args: &[&str]) -> (bool, String, String) {
         let out = Command::new(env!("CARGO_BIN_EXE_prism"))
             .args(args)
-            .current_dir(&self.0)
-            .env("PRISM_CACHE_DIR", self.0.join("cache"))
+            .current_dir(self.path())
+            .env("PRISM_CACHE_DIR", self.path().join("cache"))
             .output()
             .unwrap();
         (out.status.success(), String::from_utf8_lossy(&out.stdout).into(), String::from_utf8_lossy(&out.stderr).into())
     }
 }
-impl Drop for Dir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
-
 const SMALL: &[&str] = &["--width", "32", "--height", "32", "--spp", "2", "--photons", "2000"];
 
 #[test]
@@ -41,11 +34,11 @@ fn reference_writes_exr_and_png() {
     args.extend_from_slice(SMALL);
     let (ok, _, err) = d.prism(&args);
     assert!(ok, "{err}");
-    let exr = image::open(d.0.join("ref.exr")).unwrap().to_rgb32f();
+    let exr = image::open(d.path().join("ref.exr")).unwrap().to_rgb32f();
     assert_eq!((exr.width(), exr.height()), (32, 32));
     // The corner sees the grid environment's sky, never black.
     assert!(exr.get_pixel(0, 0).0.iter().all(|&v| v > 0.1));
-    assert!(d.0.join("ref.png").exists());
+    assert!(d.path().join("ref.png").exists());
 }
 
 #[test]
@@ -81,7 +74,7 @@ fn compare_reports_errors_writes_a_heat_map_and_caches_the_reference() {
         "{out}"
     );
     assert!(!out.contains("from the cache"));
-    let json: serde_json::Value = serde_json::from_slice(&std::fs::read(d.0.join("c.json")).unwrap()).unwrap();
+    let json: serde_json::Value = serde_json::from_slice(&std::fs::read(d.path().join("c.json")).unwrap()).unwrap();
     for k in ["rmse", "psnr_db", "rel_mse", "flip_mean", "flip_p95", "hdr_flip_mean", "hdr_flip_p95"] {
         assert!(json["errors"][k].as_f64().is_some_and(|v| v.is_finite() && v >= 0.0), "{k}: {}", json["errors"]);
     }
@@ -96,11 +89,11 @@ fn compare_reports_errors_writes_a_heat_map_and_caches_the_reference() {
         let v = &json["errors_mask"][k];
         assert!(v.as_f64().is_some_and(|v| v.is_finite() && v >= 0.0), "{k}: {}", json["errors_mask"]);
     }
-    assert_eq!(image::open(d.0.join("heat.png")).unwrap().width(), 32);
+    assert_eq!(image::open(d.path().join("heat.png")).unwrap().width(), 32);
     // Second run: the reference comes from the cache and the numbers are the same.
     let (ok, out2, _) = d.prism(&args);
     assert!(ok && out2.contains("from the cache"), "{out2}");
-    let json2: serde_json::Value = serde_json::from_slice(&std::fs::read(d.0.join("c.json")).unwrap()).unwrap();
+    let json2: serde_json::Value = serde_json::from_slice(&std::fs::read(d.path().join("c.json")).unwrap()).unwrap();
     assert_eq!(json["errors"]["rmse"], json2["errors"]["rmse"]);
     // A different ior is a different reference.
     // With the exact curve (raytrace at two depths), compare prints the equal-time verdicts.
@@ -148,7 +141,7 @@ fn sweep_writes_csv_and_plots() {
     args.extend_from_slice(SMALL);
     let (ok, _, err) = d.prism(&args);
     assert!(ok, "{err}");
-    let csv = std::fs::read_to_string(d.0.join("s.csv")).unwrap();
+    let csv = std::fs::read_to_string(d.path().join("s.csv")).unwrap();
     let lines: Vec<_> = csv.lines().collect();
     // Four settings, then the exact curve's two points.
     assert_eq!(lines.len(), 1 + 4 + 2, "{csv}");
@@ -183,15 +176,15 @@ fn sweep_writes_csv_and_plots() {
     assert!(
         lines[5].starts_with(",exact,raytrace max_depth=1,") && lines[6].starts_with(",exact,raytrace max_depth=2,")
     );
-    let svg = std::fs::read_to_string(d.0.join("s.svg")).unwrap();
+    let svg = std::fs::read_to_string(d.path().join("s.svg")).unwrap();
     assert!(svg.contains("<svg") && svg.contains("Pareto front") && svg.contains("exact: raytrace"));
-    assert_eq!(image::open(d.0.join("s.png")).unwrap().width(), 900);
+    assert_eq!(image::open(d.path().join("s.png")).unwrap().width(), 900);
     // Bad parameters fail before any work, leaving nothing behind.
     let (ok, _, err) = d.prism(&["sweep", "sphere_env", "--param", "render.sphere_segments", "-o", "bad"]);
     assert!(!ok && err.contains("KEY=V1,V2"), "{err}");
     let (ok, _, err) = d.prism(&["sweep", "sphere_env", "--param", "render.nonsense=1,2", "-o", "bad"]);
     assert!(!ok && err.contains("nonsense"), "{err}");
-    assert!(!d.0.join("bad.csv").exists());
+    assert!(!d.path().join("bad.csv").exists());
 }
 
 /// A sweep over caustic techniques is weighed against `raytrace` with its caustics
@@ -233,7 +226,7 @@ fn sweep_with_caustics_measures_raytrace_with_photons_whose_error_falls_with_the
     let (ok, out, err) = d.prism(&args);
     assert!(ok, "{err}");
     assert!(out.contains("exact tracer: raytrace with its caustics") && out.contains("65536 photons"), "{out}");
-    let csv = std::fs::read_to_string(d.0.join("s.csv")).unwrap();
+    let csv = std::fs::read_to_string(d.path().join("s.csv")).unwrap();
     let lines: Vec<_> = csv.lines().collect();
     assert_eq!(lines.len(), 1 + 2 + 4, "{csv}");
     let head: Vec<&str> = lines[0].split(',').collect();
@@ -266,7 +259,7 @@ fn sweep_with_caustics_measures_raytrace_with_photons_whose_error_falls_with_the
         let verdict = l.split(',').nth(column("verdict")).unwrap();
         assert!(["dominated", "beats exact", "within noise", "faster than exact"].contains(&verdict), "{l}");
     }
-    let svg = std::fs::read_to_string(d.0.join("s.svg")).unwrap();
+    let svg = std::fs::read_to_string(d.path().join("s.svg")).unwrap();
     assert!(svg.contains("exact: raytrace_photons, 1024 to 65536 photons"), "the plot names the curve");
 }
 
@@ -301,7 +294,7 @@ fn per_change_cost_is_the_first_frames_cached_passes_and_the_setup() {
         args.extend_from_slice(SMALL);
         let (ok, out, err) = d.prism(&args);
         assert!(ok, "{err}");
-        let v: serde_json::Value = serde_json::from_slice(&std::fs::read(d.0.join(json)).unwrap()).unwrap();
+        let v: serde_json::Value = serde_json::from_slice(&std::fs::read(d.path().join(json)).unwrap()).unwrap();
         (out, v)
     };
     let names = |v: &serde_json::Value| -> Vec<String> {
@@ -377,7 +370,7 @@ fn exact_points_are_timed_between_the_settings_frames() {
     args.extend_from_slice(SMALL);
     let (ok, _, err) = d.prism(&args);
     assert!(ok, "{err}");
-    let json: serde_json::Value = serde_json::from_slice(&std::fs::read(d.0.join("c.json")).unwrap()).unwrap();
+    let json: serde_json::Value = serde_json::from_slice(&std::fs::read(d.path().join("c.json")).unwrap()).unwrap();
     let starts = |v: &serde_json::Value| -> Vec<f64> {
         v.as_array().unwrap_or_else(|| panic!("{json}")).iter().map(|t| t.as_f64().unwrap()).collect()
     };
@@ -403,12 +396,12 @@ fn report_on_a_tiny_spec_writes_the_summary_and_equal_time_columns() {
     }
     let d = Dir::new("report");
     std::fs::write(
-        d.0.join("spec.toml"),
+        d.path().join("spec.toml"),
         "set = [\"render.reflection=single\", \"render.caustics=none\"]\n\
          [[entry]]\nscene = \"sphere_env\"\ntitle = \"tiny\"\nparams = [\"render.refraction=single,hu_qin\"]\n",
     )
     .unwrap();
-    std::fs::create_dir_all(d.0.join("docs")).unwrap();
+    std::fs::create_dir_all(d.path().join("docs")).unwrap();
     let mut args = vec![
         "report",
         "--spec",
@@ -429,7 +422,7 @@ fn report_on_a_tiny_spec_writes_the_summary_and_equal_time_columns() {
     args.extend_from_slice(&SMALL[4..]);
     let (ok, _, err) = d.prism(&args);
     assert!(ok, "{err}");
-    let md = std::fs::read_to_string(d.0.join("docs/ACCURACY.md")).unwrap();
+    let md = std::fs::read_to_string(d.path().join("docs/ACCURACY.md")).unwrap();
     let summary = md.find("## Summary: the best approximation against exact ray tracing").expect(&md);
     assert!(summary < md.find("## sphere_env: tiny").unwrap(), "the summary comes first");
     let row = md.lines().find(|l| l.starts_with("| sphere_env | refraction | `")).expect(&md);
@@ -464,14 +457,14 @@ fn report_on_a_tiny_spec_writes_the_summary_and_equal_time_columns() {
         "{md}"
     );
     assert!(md.contains("Exact tracer: raytrace"), "{md}");
-    let svg = std::fs::read_dir(d.0.join("docs/accuracy"))
+    let svg = std::fs::read_dir(d.path().join("docs/accuracy"))
         .unwrap()
         .map(|e| e.unwrap().path())
         .find(|p| p.extension().is_some_and(|x| x == "svg"))
         .unwrap();
     assert!(std::fs::read_to_string(svg).unwrap().contains("exact: raytrace"));
     // The image strips only with --images: a run's output, not the repository's.
-    let pngs = std::fs::read_dir(d.0.join("docs/accuracy"))
+    let pngs = std::fs::read_dir(d.path().join("docs/accuracy"))
         .unwrap()
         .filter(|e| e.as_ref().unwrap().path().extension().is_some_and(|x| x == "png"));
     assert_eq!(pngs.count(), 0, "image strips written without --images");

@@ -185,13 +185,10 @@ fn mirror_bunny_scene(size: u32, overrides: &[&str]) -> prism::scene::Scene {
     let path = prism::scene::benchmark_scene_path("sphere_nearby");
     let meshes = path.parent().unwrap().join("../meshes/").canonicalize().unwrap();
     let text = std::fs::read_to_string(&path).unwrap().replace("../meshes/", &format!("{}/", meshes.display()));
-    // One file per call: tests run in parallel threads, and one rewriting a shared file
-    // while another loads it would hand the loader a truncated scene.
-    static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
-    let dir = std::env::temp_dir().join(format!("prism-nearby-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let call = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-    let file = dir.join(format!("mirror_bunny-{call}.toml"));
+    // One directory per call: tests run in parallel threads, and one rewriting a shared
+    // file while another loads it would hand the loader a truncated scene.
+    let dir = common::ScratchDir::new("prism-nearby");
+    let file = dir.path().join("mirror_bunny.toml");
     std::fs::write(&file, format!("{text}\n[materials.chrome]\ntype = \"mirror\"\nreflectance = 0.9\n")).unwrap();
     let mut o: Vec<String> = vec![
         format!("camera.width={size}"),

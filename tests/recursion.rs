@@ -87,16 +87,16 @@ fn b_replaced(tag: &str, b: &str, size: u32) -> impl Fn(&[&str]) -> prism::scene
     let ball_b =
         "name = \"ball_b\"\nmaterial = \"glass\"\nshape = \"sphere\"\ncenter = [0.5, -0.2, -1.2]\nradius = 0.8";
     assert!(text.contains(ball_b), "two_glass_balls.toml changed: update this test");
-    let dir = std::env::temp_dir().join(format!("prism-recursion-{tag}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let file = dir.join(format!("glass_{tag}.toml"));
-    std::fs::write(&file, text.replace(ball_b, b)).unwrap();
+    let dir = common::ScratchDir::new(&format!("prism-recursion-{tag}"));
+    let name = format!("glass_{tag}.toml");
+    std::fs::write(dir.path().join(&name), text.replace(ball_b, b)).unwrap();
+    // The closure owns the directory: the file lives as long as scenes are loaded from it.
     move |extra: &[&str]| {
         let mut o = vec![format!("camera.width={size}"), format!("camera.height={size}")];
         o.extend(["environment.radiance=1", "lights.0.intensity=0"].map(String::from));
         o.extend(PAPER_LOOKUP.map(String::from));
         o.extend(extra.iter().map(|s| s.to_string()));
-        prism::scene::load(&file, &o).unwrap()
+        prism::scene::load(&dir.path().join(&name), &o).unwrap()
     }
 }
 
@@ -394,9 +394,8 @@ fn many_dielectrics_keep_the_stated_limits() {
         );
     }
     toml += "[render]\nrefraction = \"hu_qin\"\n";
-    let dir = std::env::temp_dir().join(format!("prism-recursion-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let file = dir.join("ten_balls.toml");
+    let dir = common::ScratchDir::new("prism-recursion");
+    let file = dir.path().join("ten_balls.toml");
     std::fs::write(&file, toml).unwrap();
     let o = ["camera.width=32", "camera.height=32", "render.hu_qin.impostor_resolution=16"].map(String::from);
     let s = prism::scene::load(&file, &o).unwrap();

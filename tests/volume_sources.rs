@@ -24,11 +24,14 @@ fn fields(volume: &str) -> VolumeFields {
     volume_scene(volume, "", &[]).unwrap().volume.unwrap().fields()
 }
 
-/// A per-process scratch directory for generated OBJ files.
+thread_local! {
+    /// The running test's scratch directory, removed when its thread ends.
+    static SCRATCH: common::ScratchDir = common::ScratchDir::new("prism_volume_sources");
+}
+
+/// The running test's scratch directory for generated OBJ and EXR files.
 fn dir() -> PathBuf {
-    let d = std::env::temp_dir().join(format!("prism_volume_sources_{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    SCRATCH.with(|d| d.path().to_path_buf())
 }
 
 /// A UV sphere of `stacks` x `slices` as OBJ text (closed: poles are single vertices).

@@ -483,3 +483,29 @@ pub fn render_counting(
     let counts = p.counts.unwrap_or_else(|| panic!("{pass}: no counts"));
     (r, counts)
 }
+
+/// A scratch directory for the files a test writes, unique to this process and call, and
+/// removed with everything in it when dropped: a suite run leaves nothing behind in the
+/// system's temporary directory.
+pub struct ScratchDir(PathBuf);
+
+impl ScratchDir {
+    pub fn new(prefix: &str) -> Self {
+        static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+        let call = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let d = std::env::temp_dir().join(format!("{prefix}-{}-{call}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(&d).expect("scratch directory");
+        ScratchDir(d)
+    }
+
+    pub fn path(&self) -> &std::path::Path {
+        &self.0
+    }
+}
+
+impl Drop for ScratchDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
