@@ -87,6 +87,23 @@ fn switching_a_technique_creates_the_new_one_and_drops_the_old() {
     assert_eq!((u.rebuilt, u.recreated.as_slice()), (false, &["reflection = \"impostor\""][..]), "{u:?}");
 }
 
+/// The G-buffer carries Wyman's d_N on the refractors Wyman shades: choosing Wyman in the
+/// window re-creates it with d_N, leaving Wyman re-creates it without, and a ball that grows
+/// gets its new d_N (the live image equals a fresh renderer's, so a G-buffer left as it was
+/// would show in the image).
+#[test]
+fn wyman_s_d_n_in_the_g_buffer_follows_the_technique_and_the_mesh() {
+    if !common::in_own_process() {
+        return;
+    }
+    let u = live("sphere_env", &["render.refraction=single"], &["render.refraction=wyman"]);
+    assert_eq!((u.rebuilt, u.recreated.as_slice()), (false, &["gbuffer", "refraction = \"wyman\""][..]), "{u:?}");
+    let u = live("sphere_env", &["render.refraction=wyman"], &["render.refraction=single"]);
+    assert_eq!((u.rebuilt, u.recreated.as_slice()), (false, &["gbuffer", "refraction = \"single\""][..]), "{u:?}");
+    let u = live("sphere_env", &["render.refraction=wyman"], &["render.refraction=wyman", "objects.0.radius=1.2"]);
+    assert!(u.recreated.contains(&"gbuffer"), "{u:?}");
+}
+
 #[test]
 fn the_field_of_view_and_the_exposure_are_uniforms() {
     if !common::in_own_process() {

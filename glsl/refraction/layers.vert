@@ -1,19 +1,11 @@
 #version 450
-// Refractor layers (src/technique/refraction/refractor_layers.rs): world-space vertices, plus Wyman 2005's
-// per-vertex distance d_N along the inverted normal (§3.1), indexed by gl_VertexIndex (which
-// includes the draw's vertex offset, so it indexes the scene-wide vertex array).
+// Refractor layers (src/technique/refraction/refractor_layers.rs): world-space vertices.
 #include "frame.glsl"
-layout(constant_id = 1) const uint HAS_DN = 0;
-layout(set = 1, binding = BINDING_REFR_DN, std430) readonly buffer DistanceAlongNormal {
-    float d_n[];
-};
 layout(location = 0) in vec3 in_position;
 layout(location = 1) in vec3 in_normal;
 layout(location = 2) in vec2 in_checker_uv;
 layout(location = 0) out vec3 out_normal;
-layout(location = 1) out float out_d_n;
 void main() {
     out_normal = in_normal;
-    out_d_n = HAS_DN != 0 ? d_n[gl_VertexIndex] : 0.0;
     gl_Position = frame.view_proj * vec4(in_position, 1.0);
 }

@@ -2,7 +2,8 @@
 // of a distant environment through two interfaces (§3, and the fragment program of §4).
 //   T1 = Refract(V, N1)                            Snell's law at the G-buffer's P1 (§2)
 //   d_V = back-layer distance - front distance     along the view ray (§3.1, Fig. 3c)
-//   d_N = per-vertex distance along -N, interpolated (§3.1, precomputed on the CPU)
+//   d_N = per-vertex distance along -N, interpolated (§3.1, precomputed on the CPU; the
+//         G-buffer's front faces carry it, glsl/gbuffer/gbuffer.frag)
 //   d~ = (theta_t / theta_i) d_V + (1 - theta_t / theta_i) d_N   (§3.1, the equation for d~)
 //   P2~ = P1 + d~ T1, projected into the back-face normal layer for N2 (§3.2)
 //   T2 = Refract(T1, -N2), environment lookup; Fresnel reflection at P1 as the baseline.
@@ -38,8 +39,6 @@ layout(set = 1, binding = BINDING_REFR_BACK_DEPTH) uniform sampler2DArray back_d
 layout(set = 1, binding = BINDING_REFR_SLOTS, std430) readonly buffer RefractorSlots {
     uint slot_of_object[];
 };
-// The front layer: xyz normal, w = d_N interpolated from the vertices.
-layout(set = 1, binding = BINDING_REFR_FRONT_NORMAL) uniform sampler2D front_normal;
 layout(location = 0) in vec2 in_uv;
 layout(location = 0) out vec4 out_radiance;
 layout(location = 1) out vec4 out_p2;
@@ -48,15 +47,14 @@ layout(location = 2) out vec4 out_t2;
 // This pixel's refractor: its layer of the back-surface array.
 int slot;
 
-// As refraction.glsl's layer lookups, on this pixel's refractor's layer.
-bool back_covered(vec2 uv) {
-    if (!on_screen(uv)) return false;
-    vec3 n = texelFetch(back_normal, ivec3(texel_of(uv), slot), 0).xyz;
-    return dot(n, n) > 0.25;
+// As refraction.glsl's layer lookups, on this pixel's refractor's layer: the stored normal,
+// 0 off the screen or where the layer holds no surface.
+vec3 back_texel(vec2 uv) {
+    return on_screen(uv) ? texelFetch(back_normal, ivec3(texel_of(uv), slot), 0).xyz : vec3(0.0);
 }
 
-vec3 back_normal_at(vec2 uv) {
-    return normalize(texelFetch(back_normal, ivec3(texel_of(uv), slot), 0).xyz);
+bool covered(vec3 stored_normal) {
+    return dot(stored_normal, stored_normal) > 0.25;
 }
 
 void main() {
@@ -66,7 +64,9 @@ void main() {
     vec4 nm = texelFetch(gbuf_normal, px, 0);
     uint mat = uint(nm.w + 0.5);
     if (material_kind(mat) != MATERIAL_DIELECTRIC) discard;
-    uint object = uint(texelFetch(gbuf_albedo, px, 0).a + 0.5);
+    // A dielectric's albedo texel: rg = d_N as two halves, a = object index.
+    vec4 albedo = texelFetch(gbuf_albedo, px, 0);
+    uint object = uint(albedo.a + 0.5);
     if (object >= slot_of_object.length() || slot_of_object[object] == 0xffffffffu) discard;
     slot = int(slot_of_object[object]);
     GpuMaterial m = materials[mat];
@@ -85,10 +85,10 @@ void main() {
     vec3 L_reflected = environment(reflect(V, N1));
 
     // d_V: distance between the front and the back surface along the view ray (Fig. 3c).
-    bool back_here = back_covered(in_uv);
+    bool back_here = covered(back_texel(in_uv));
     float back_z = texelFetch(back_depth, ivec3(px, slot), 0).r;
     float d_V = back_here ? max(length(world_from_depth(in_uv, back_z) - P1), 0.0) : 0.0;
-    float d_N = texelFetch(front_normal, px, 0).w;
+    float d_N = albedo.r + albedo.g;
     if (d_N <= 0.0) d_N = d_V;   // open mesh: no far side along -N
     if (!back_here) d_V = d_N;
 
@@ -131,9 +131,10 @@ void main() {
             d = d_exact;
         }
 #endif
-        vec2 uv2 = project_uv(P2);
-        bool inside = back_covered(uv2);
-        vec3 N2 = inside ? back_normal_at(uv2) : silhouette_normal(T1);
+        // One fetch of P2's texel serves the coverage test and N2.
+        vec3 n2 = back_texel(project_uv(P2));
+        bool inside = covered(n2);
+        vec3 N2 = inside ? normalize(n2) : silhouette_normal(T1);
 #ifdef ORACLE_TRACE
         // §3.2: N2 from the back-normal layer at P2's texel (or §3.3's silhouette normal)
         // replaced by the exact normal at T1's exit.

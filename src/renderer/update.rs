@@ -189,8 +189,11 @@ pub(super) fn technique_fingerprint(scene: &Scene, recipe: &Recipe, index: usize
 /// For settings compared against each other (`prism bench --versus`), each one's own
 /// technique passes: the passes of every technique that is not the same in all of them,
 /// i.e. whose fingerprint (its steps, its inputs, the placement) differs between the scenes
-/// or which only some of them plan. What all of them share (the G-buffer, the shading, the
-/// tone map, unless a setting changes those) is left out. Pure CPU.
+/// or which only some of them plan. What all of them share (the shading and the tone map,
+/// unless a setting changes those) is left out, and so is the G-buffer: every setting
+/// rasterises the same surfaces, and what Wyman's technique adds to that pass (d_N, one
+/// vertex attribute) costs no measurable time (docs/BENCHMARKS.md, "Wyman's front faces
+/// drawn once"). Pure CPU.
 pub fn technique_passes(scenes: &[&Scene]) -> Vec<Vec<&'static str>> {
     let recipes: Vec<Recipe> = scenes.iter().map(|s| recipe(s)).collect();
     let prints: Vec<Vec<Option<u64>>> = scenes
@@ -201,7 +204,8 @@ pub fn technique_passes(scenes: &[&Scene]) -> Vec<Vec<&'static str>> {
             (0..TECHNIQUES.len()).map(|i| technique_fingerprint(s, r, i, placement)).collect()
         })
         .collect();
-    let varied = |i: usize| prints.iter().any(|p| p[i] != prints[0][i]);
+    let surfaces = |i: usize| TECHNIQUES[i].key == crate::technique::baseline::gbuffer::GBUFFER;
+    let varied = |i: usize| !surfaces(i) && prints.iter().any(|p| p[i] != prints[0][i]);
     recipes
         .iter()
         .map(|r| {

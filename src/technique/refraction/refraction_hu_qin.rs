@@ -228,7 +228,7 @@ impl HuQinPass {
             NearbyImpostors::stand_in(ctx, REFRACTION_HU_QIN_NEARBY, gpu, graph, frame_layout)?
         };
         let kinds = [(LayerKind::BackNearest, LayerScope::Shared), (LayerKind::Front, LayerScope::Shared)];
-        let layers = RefractorLayers::new(s, REFRACTION_HU_QIN_LAYERS, &kinds, None)?;
+        let layers = RefractorLayers::new(s, REFRACTION_HU_QIN_LAYERS, &kinds)?;
         let (graph, targets, nearest) = (&mut *s.graph, s.targets, s.nearest);
         let (b, f) = (&layers.layers[0], &layers.layers[1]);
         let tracer = oracle.as_ref().map(|o| o.buffers(gpu)).unwrap_or_default();

@@ -4,16 +4,18 @@
 //!
 //! - `refraction_wyman_layers`: the refractors' back surface, depth and normal (§3.1 Fig. 3a,
 //!   §3.2 Fig. 3d), either the furthest surface or the second one, "the first backfacing
-//!   surface" (§3.2, `back_surface`), and their front faces carrying d_N interpolated from
-//!   the vertices. The paper's object is one refractor: the back surface is kept per
-//!   refractor (one array layer each), so that a pixel's d_V and N2 come from its own
-//!   refractor, never from another one behind it or in front of it.
+//!   surface" (§3.2, `back_surface`). The paper's object is one refractor: the back surface
+//!   is kept per refractor (one array layer each), so that a pixel's d_V and N2 come from its
+//!   own refractor, never from another one behind it or in front of it.
+//! - The front faces, with d_N interpolated from the vertices, are the G-buffer's
+//!   (src/technique/baseline/gbuffer.rs): as in the paper, the front faces are drawn once.
 //! - `refraction_wyman`: glsl/refraction/wyman.frag, the fragment program of §4: T1 by
 //!   Snell's law at the G-buffer's P1, d_V from the two depths, d~ interpolated between d_V
 //!   and d_N (§3.1), P2~ = P1 + d~ T1 projected into the back normals for N2 (§3.2), T2, the
 //!   environment; TIR clamped to the critical angle and the silhouette fallback of §3.3.
 //!
-//! d_N is precomputed per vertex on the CPU ([`super::wyman_distance`]).
+//! d_N is precomputed per vertex on the CPU ([`super::wyman_distance`]) and reaches the
+//! shading through the G-buffer.
 //!
 //! `oracle` (an analysis tool, [`WymanOracle`]) replaces the exit point of §3.1 and/or the
 //! exit normal of §3.2 by the exact ones, traced through the reference's geometry
@@ -33,7 +35,7 @@ use crate::technique::{
 };
 use crate::{
     BINDING_GBUF_ALBEDO, BINDING_GBUF_DEPTH, BINDING_GBUF_NORMAL, BINDING_REFR_BACK_DEPTH, BINDING_REFR_BACK_NORMAL,
-    BINDING_REFR_FRONT_NORMAL, BINDING_REFR_SLOTS,
+    BINDING_REFR_SLOTS,
 };
 
 use super::oracle::Oracle;
@@ -55,9 +57,7 @@ fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
     let list = list(&dielectric);
     let layers = PlannedPass::new(
         REFRACTION_WYMAN_LAYERS,
-        format!(
-            "back surface (depth, normal) and front faces with d_N of dielectric {list} (render.refraction = \"wyman\")"
-        ),
+        format!("back surface (depth, normal) of dielectric {list} (render.refraction = \"wyman\")"),
     );
     let shade = PlannedPass::new(
         REFRACTION_WYMAN,
@@ -136,12 +136,12 @@ impl WymanPass {
             BackSurface::Furthest => LayerKind::BackFurthest,
             BackSurface::Second => LayerKind::BackNearest,
         };
-        let (d_n, d_n_ms) = scene_distance_along_normals_timed(scene);
-        // The front layer is the visible refractor's wherever the G-buffer sees one: shared.
-        let kinds = [(back, LayerScope::PerRefractor), (LayerKind::Front, LayerScope::Shared)];
-        let layers = RefractorLayers::new(s, REFRACTION_WYMAN_LAYERS, &kinds, Some(&d_n))?;
+        // The G-buffer carries d_N (it draws the front faces), computed there from the same
+        // per-mesh cache: this call only reads the time the computation took.
+        let d_n_ms = scene_distance_along_normals_timed(scene).1;
+        let layers = RefractorLayers::new(s, REFRACTION_WYMAN_LAYERS, &[(back, LayerScope::PerRefractor)])?;
         let slots = Buffer::storage(ctx, "refraction_wyman_slots", &refractor_slots(scene, s.gpu))?;
-        let (b, f) = (&layers.layers[0], &layers.layers[1]);
+        let b = &layers.layers[0];
         let tracer = oracle.as_ref().map(|o| o.buffers(s.gpu)).unwrap_or_default();
         let mut specialization = vec![("DISPERSION", Spec::U32(u32::from(has_dispersion(scene))))];
         specialization.extend(scene_specialization(scene));
@@ -163,7 +163,6 @@ impl WymanPass {
                     (BINDING_GBUF_ALBEDO, &targets.gbuf_albedo, targets.gbuf_albedo_id),
                     (BINDING_REFR_BACK_NORMAL, &b.normal, b.normal_id),
                     (BINDING_REFR_BACK_DEPTH, &b.depth, b.depth_id),
-                    (BINDING_REFR_FRONT_NORMAL, &f.normal, f.normal_id),
                 ],
                 buffers: &[(BINDING_REFR_SLOTS, &slots)],
                 tracer: &tracer,

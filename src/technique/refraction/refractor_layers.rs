@@ -30,9 +30,8 @@ use crate::graph::{Bindings, BoundSet, Frame, FrameGraph, ImageId};
 use crate::scene::{Material, Scene};
 use crate::technique::baseline::fullscreen::Cover;
 use crate::technique::{FrameInputs, Setup};
-use crate::BINDING_REFR_DN;
 
-/// Normal (and d_N) layers are 32-bit float like the radiance: P2's error should be the
+/// Normal layers are 32-bit float like the radiance: P2's error should be the
 /// technique's, not the storage's.
 pub const LAYER_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 
@@ -90,14 +89,10 @@ struct LayerPipeline {
 /// The refractors' layers, drawn in one graph pass named `name`.
 pub struct RefractorLayers {
     name: &'static str,
-    /// d_N.
-    set: BoundSet,
     pipelines: Vec<LayerPipeline>,
     pub layers: Vec<Layer>,
     /// The draws of dielectric objects.
     draws: Vec<Draw>,
-    /// Per scene vertex d_N (Wyman) or a one-float stand-in; bound at BINDING_REFR_DN.
-    _d_n: Buffer,
 }
 
 fn is_refractor(scene: &Scene, d: &Draw) -> bool {
@@ -128,20 +123,9 @@ pub fn refractor_slots(scene: &Scene, gpu: &GpuScene) -> Vec<u32> {
 }
 
 impl RefractorLayers {
-    /// `d_n`: one f32 per scene vertex (in GpuScene's order), written to the layers' w.
-    pub fn new(
-        s: &mut Setup<'_>,
-        name: &'static str,
-        kinds: &[(LayerKind, LayerScope)],
-        d_n: Option<&[f32]>,
-    ) -> GpuResult<Self> {
+    pub fn new(s: &mut Setup<'_>, name: &'static str, kinds: &[(LayerKind, LayerScope)]) -> GpuResult<Self> {
         let (ctx, scene, gpu, frame_layout, targets) = (s.ctx, s.scene, s.gpu, s.frame_layout, s.targets);
         let graph = &mut *s.graph;
-        // A one-float stand-in where the technique has no d_N (the shader never reads it).
-        let data: Vec<f32> = d_n.map(|d| d.to_vec()).filter(|d| !d.is_empty()).unwrap_or_else(|| vec![0.0]);
-        let d_n_buffer = Buffer::storage(ctx, &format!("{name}_d_n"), &data)?;
-        let set = Bindings::new(vk::ShaderStageFlags::VERTEX).storage(BINDING_REFR_DN, &d_n_buffer).build(ctx, name)?;
-        let has_d_n = u32::from(d_n.is_some());
         use vk::ImageUsageFlags as U;
         let mut layers = Vec::new();
         let mut pipelines = Vec::new();
@@ -174,7 +158,6 @@ impl RefractorLayers {
                 ctx,
                 &GraphicsPipelineDesc {
                     cull: kind.cull(),
-                    specialization: &[("HAS_DN", Spec::U32(has_d_n))],
                     ..GraphicsPipelineDesc::mesh(
                         &label,
                         "refraction/layers.vert",
@@ -182,14 +165,14 @@ impl RefractorLayers {
                         depth_state,
                     )
                 },
-                &[frame_layout, set.layout()],
+                &[frame_layout],
                 0,
                 &target.pass,
             )?;
             pipelines.push(LayerPipeline { pipeline, target, clear_depth, scope });
             layers.push(Layer { kind, scope, normal_id, depth_id, normal, depth });
         }
-        Ok(RefractorLayers { name, set, pipelines, layers, draws, _d_n: d_n_buffer })
+        Ok(RefractorLayers { name, pipelines, layers, draws })
     }
 
     pub fn layer(&self, kind: LayerKind) -> Option<&Layer> {
@@ -197,7 +180,7 @@ impl RefractorLayers {
     }
 
     pub fn record<'a>(&'a self, frame: &mut Frame<'_, 'a>, scene: &'a GpuScene, frame_set: DescriptorSet) {
-        let mut pass = frame.pass(self.name).uses(&self.set);
+        let mut pass = frame.pass(self.name);
         for l in &self.layers {
             pass = pass.write(l.normal_id, Access::ColorAttachment).write(l.depth_id, Access::DepthAttachment);
         }
@@ -205,7 +188,7 @@ impl RefractorLayers {
             for p in &self.pipelines {
                 let clears = [Clear::Color([0.0; 4]), Clear::Depth(p.clear_depth)];
                 let draw = |cmd: &crate::gpu::Cmd, draws: &[Draw]| {
-                    cmd.bind_graphics(&p.pipeline, &[frame_set, self.set.set()]);
+                    cmd.bind_graphics(&p.pipeline, &[frame_set]);
                     cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
                     for d in draws {
                         cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
