@@ -306,6 +306,27 @@ fn wyman_d_tilde_on_a_slab_is_the_closed_form() {
     assert!(max_err < 1e-5, "d~ off the closed form by {max_err}");
 }
 
+/// The G-buffer culls a closed mesh's back faces only while the camera is outside it: from
+/// inside the ball, what every pixel sees is a back face, and the ball must still bend the
+/// view (a G-buffer culling them would show the environment as if the ball were not there).
+#[test]
+fn from_inside_the_ball_its_back_faces_are_drawn() {
+    if !common::in_own_process() {
+        return;
+    }
+    let ctx = context(false);
+    for t in ["single", "wyman", "hu_qin"] {
+        let inside = render_on(&ctx, &scene("sphere_env", 64, &[&technique(t), "camera.position=[0, 0, 0.2]"]));
+        let without =
+            render_on(&ctx, &scene("sphere_env", 64, &["camera.position=[0, 0, 0.2]", "objects.0.radius=0.0001"]));
+        let rmse = prism::metrics::image::rmse_rgba(&inside.hdr, &without.hdr);
+        eprintln!("{t}: inside the ball against no ball, RMSE {rmse}");
+        // ior 1.5 from inside: every ray bends (and past the critical angle reflects), so the
+        // environment's grid moves across the whole image.
+        assert!(rmse > 0.1, "{t}: the ball is missing from inside: RMSE {rmse}");
+    }
+}
+
 fn assert_finite(what: &str, hdr: &[f32]) {
     let bad = hdr.iter().filter(|v| !v.is_finite()).count();
     assert_eq!(bad, 0, "{what}: {bad} non-finite HDR values");

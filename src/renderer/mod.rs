@@ -969,12 +969,18 @@ fn debug_targets(techniques: &[Option<Box<dyn Technique>>]) -> impl Iterator<Ite
     techniques.iter().flatten().flat_map(|t| t.debug_targets())
 }
 
+/// The camera's near-plane distance from `eye`: scaled to the scene, so that the tiny and the
+/// huge behave alike.
+pub fn near_plane(gpu_scene: &GpuScene, eye: Vec3) -> f32 {
+    let extent = gpu_scene.bounds_radius.max(eye.distance(gpu_scene.bounds_center));
+    (extent * 1e-5).max(1e-12)
+}
+
 /// View, projection and position uniforms for `cam`, with the near plane scaled to the
 /// scene so that the tiny and the huge behave alike.
 fn set_camera_uniforms(u: &mut FrameUniforms, cam: &Camera, exposure: f32, gpu_scene: &GpuScene) {
     let view = cam.view();
-    let extent = gpu_scene.bounds_radius.max(cam.position.distance(gpu_scene.bounds_center));
-    let near = (extent * 1e-5).max(1e-12);
+    let near = near_plane(gpu_scene, cam.position);
     let proj = camera_projection(cam.vfov_deg, cam.width as f32 / cam.height as f32, near);
     let view_proj = proj * view;
     u.view = view.to_cols_array_2d();
