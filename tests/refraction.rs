@@ -252,7 +252,7 @@ fn wyman_exit_is_near_the_analytic_sphere() {
 /// (thickness h along z, the camera on the z axis), d_V = h / cos(theta_i) and d_N = h at every
 /// vertex of that face, so d~ = r h / cos(theta_i) + (1 - r) h with r = theta_t / theta_i. d_N
 /// reaches the shading through the G-buffer; a d_N lost on the way (read as 0, so replaced by
-/// d_V) would move d~ by (1 - r)(d_V - h), up to about 0.005 here.
+/// d_V) would move d~ by (1 - r)(d_V - h), up to 0.013 here.
 #[test]
 fn wyman_d_tilde_on_a_slab_is_the_closed_form() {
     if !common::in_own_process() {
@@ -301,8 +301,9 @@ fn wyman_d_tilde_on_a_slab_is_the_closed_form() {
     eprintln!("{pixels} pixels: d~ off by at most {max_err:e}; a lost d_N would move it by up to {max_signal:e}");
     assert!(pixels > 1000 && max_signal > 3e-3, "{pixels} pixels, signal {max_signal}");
     // d_V comes from two points reconstructed from depth about 4 from the camera, each within a
-    // few float ulp (4.8e-7 at 4): 1e-5 is 20 of them. d_N kept as one half alone (the G-buffer's
-    // format) would be off by (1 - r) * 4.9e-5 (0.3 in half), up to 1.6e-5 here.
+    // few float ulp (4.8e-7 at 4): 1e-5 is 20 of them. d_N stored as one half (the G-buffer's
+    // format) instead of its float's bits would be off by (1 - r) * 4.9e-5 (0.3 in half), up
+    // to 1.6e-5 here.
     assert!(max_err < 1e-5, "d~ off the closed form by {max_err}");
 }
 

@@ -64,7 +64,7 @@ void main() {
     vec4 nm = texelFetch(gbuf_normal, px, 0);
     uint mat = uint(nm.w + 0.5);
     if (material_kind(mat) != MATERIAL_DIELECTRIC) discard;
-    // A dielectric's albedo texel: rg = d_N as two halves, a = object index.
+    // A dielectric's albedo texel: rgb = d_N's bits in three whole numbers, a = object index.
     vec4 albedo = texelFetch(gbuf_albedo, px, 0);
     uint object = uint(albedo.a + 0.5);
     if (object >= slot_of_object.length() || slot_of_object[object] == 0xffffffffu) discard;
@@ -88,7 +88,7 @@ void main() {
     bool back_here = covered(back_texel(in_uv));
     float back_z = texelFetch(back_depth, ivec3(px, slot), 0).r;
     float d_V = back_here ? max(length(world_from_depth(in_uv, back_z) - P1), 0.0) : 0.0;
-    float d_N = albedo.r + albedo.g;
+    float d_N = uintBitsToFloat(uint(albedo.r) | (uint(albedo.g) << 11) | (uint(albedo.b) << 22));
     if (d_N <= 0.0) d_N = d_V;   // open mesh: no far side along -N
     if (!back_here) d_V = d_N;
 
