@@ -95,6 +95,52 @@ fn deferred_lighting_matches_closed_form() {
     assert_eq!(r.radiance(i, j), [0.0; 3], "shadowed floor must be black");
 }
 
+/// A point light inside a closed diffuse box: every light ray leaves through one of the box's
+/// faces, which from inside are all back faces, so the floor outside lies in the box's shadow
+/// (black). The shadow map culls a closed mesh's back faces only from a light outside it:
+/// culled here, the box would cast nothing and the floor would be lit (checked once).
+#[test]
+fn a_light_inside_a_closed_box_shadows_everything_outside_it() {
+    if !common::in_own_process() {
+        return;
+    }
+    let text = r#"
+        [camera]
+        position = [0, 4, 6]
+        target = [0, 0, 0]
+        width = 64
+        height = 64
+        [environment]
+        type = "constant"
+        radiance = 0
+        [[lights]]
+        type = "point"
+        position = [0, 1, 0]
+        intensity = 50
+        [materials.white]
+        type = "diffuse"
+        albedo = 0.8
+        [[objects]]
+        material = "white"
+        shape = "quad"
+        center = [0, 0, 0]
+        size = [8, 8]
+        normal = [0, 1, 0]
+        [[objects]]
+        material = "white"
+        shape = "box"
+        center = [0, 1, 0]
+        size = [1, 1, 1]
+    "#;
+    let s = prism::scene::load_str(text, std::path::Path::new("boxed_light.toml"), &[]).unwrap();
+    assert!(s.objects[1].mesh.is_closed_outward(), "the box is a closed mesh");
+    let r = render(&s);
+    for p in [Vec3::new(2.0, 0.0, 0.0), Vec3::new(-1.5, 0.0, 1.5), Vec3::new(0.0, 0.0, 2.5)] {
+        let (i, j) = pixel_of(&s, p);
+        assert_eq!(r.radiance(i, j), [0.0; 3], "the floor at {p} outside the box must be in its shadow");
+    }
+}
+
 /// The background is the environment along the pixel's ray: a constant environment is
 /// reproduced exactly, and a refractor of ior 1 is invisible (sphere_env with ior 1 equals
 /// the environment seen without it, up to the Fresnel-free interface).

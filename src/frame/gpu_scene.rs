@@ -32,6 +32,9 @@ pub struct ShadowFace {
     pub view_proj: Mat4,
     pub light: [f32; 4],
     pub origin: [f32; 4],
+    /// The projection's near-plane distance from the light (0 for a directional light's box,
+    /// which begins before the scene's bounding sphere).
+    pub near: f32,
 }
 
 pub struct GpuScene {
@@ -261,6 +264,7 @@ fn lights(
                         view_proj: proj * *view,
                         light: v4(*position, LIGHT_POINT as f32),
                         origin: [0.0; 4],
+                        near,
                     });
                 }
                 lights.push(GpuLight {
@@ -285,6 +289,7 @@ fn lights(
                     view_proj,
                     light: v4(dir, LIGHT_DIRECTIONAL as f32),
                     origin: v4(origin, 0.0),
+                    near: 0.0,
                 });
                 lights.push(GpuLight {
                     position: v4(dir, LIGHT_DIRECTIONAL as f32),
