@@ -7,8 +7,8 @@ use std::process::Command;
 
 #[test]
 fn bench_writes_table_json_and_a_valid_chrome_trace() {
-    let dir = std::env::temp_dir().join(format!("prism-bench-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let scratch = common::ScratchDir::new("prism-bench");
+    let dir = scratch.path();
     let (json, trace) = (dir.join("bench.json"), dir.join("trace.json"));
     let out = Command::new(env!("CARGO_BIN_EXE_prism"))
         .args(["bench", "sphere_nearby"])
@@ -64,7 +64,6 @@ fn bench_writes_table_json_and_a_valid_chrome_trace() {
     for e in complete {
         assert!(e["pid"].is_number() && e["tid"].is_number() && e["name"].is_string());
     }
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// Runs `prism bench ARGS` and returns its stdout; fails the test with both streams on error.
@@ -80,8 +79,8 @@ fn bench(args: &[&str]) -> String {
 /// round.
 #[test]
 fn bench_versus_interleaves_settings_and_divides_frame_by_frame() {
-    let dir = std::env::temp_dir().join(format!("prism-bench-versus-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let scratch = common::ScratchDir::new("prism-bench-versus");
+    let dir = scratch.path();
     let (json, trace) = (dir.join("versus.json"), dir.join("trace.json"));
     let frames = 4;
     let stdout = bench(&[
@@ -164,7 +163,6 @@ fn bench_versus_interleaves_settings_and_divides_frame_by_frame() {
     for round in frames_in_time.chunks(2) {
         assert_ne!(round[0].1, round[1].1, "a round ran one setting twice: {frames_in_time:?}");
     }
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// `--versus` also reports what each setting pays once per change (here the eikonal light
@@ -172,8 +170,8 @@ fn bench_versus_interleaves_settings_and_divides_frame_by_frame() {
 /// ratio to the first setting's, beside the per-frame costs.
 #[test]
 fn bench_versus_reports_each_setting_s_cost_per_change() {
-    let dir = std::env::temp_dir().join(format!("prism-bench-versus-once-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let scratch = common::ScratchDir::new("prism-bench-versus-once");
+    let dir = scratch.path();
     let json = dir.join("versus.json");
     let stdout = bench(&[
         "eikonal_sphere",
@@ -209,15 +207,14 @@ fn bench_versus_reports_each_setting_s_cost_per_change() {
     let ratio = versus[1]["per_change_ratio"].as_f64().unwrap();
     let expected = versus[1]["per_change_ms"].as_f64().unwrap() / versus[0]["per_change_ms"].as_f64().unwrap();
     assert!((ratio - expected).abs() < 1e-9 * expected, "{ratio} vs {expected}");
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// `--diff` reads two bench JSON files and says which passes moved beyond the noise, from
 /// the samples each file keeps.
 #[test]
 fn bench_diff_flags_only_differences_beyond_the_noise() {
-    let dir = std::env::temp_dir().join(format!("prism-bench-diff-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let scratch = common::ScratchDir::new("prism-bench-diff");
+    let dir = scratch.path();
     // 20 samples alternating +-0.5 ms: stddev 0.51, standard error of the median 0.14 ms,
     // noise threshold 3 * sqrt(2) * 0.14 = 0.61 ms (src/app/bench_diff.rs).
     let series = |centre: f64| -> Vec<f64> { (0..20).map(|i| centre + if i % 2 == 0 { 0.5 } else { -0.5 }).collect() };
@@ -244,7 +241,6 @@ fn bench_diff_flags_only_differences_beyond_the_noise() {
     assert!(line("moved").ends_with("B slower, beyond noise"), "{stdout}");
     assert!(line("steady").ends_with("within noise"), "{stdout}");
     assert!(line("frame").ends_with("B slower, beyond noise"), "{stdout}");
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// `--pipeline-stats`: every pass's counters and each technique's memory, in the table and
@@ -252,8 +248,8 @@ fn bench_diff_flags_only_differences_beyond_the_noise() {
 /// frame's.
 #[test]
 fn bench_pipeline_stats_count_each_pass_and_the_refraction_pass_shades_only_the_ball() {
-    let dir = std::env::temp_dir().join(format!("prism-bench-stats-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let scratch = common::ScratchDir::new("prism-bench-stats");
+    let dir = scratch.path();
     let json = dir.join("stats.json");
     let size = 128u32;
     let s = size.to_string();
@@ -324,5 +320,4 @@ fn bench_pipeline_stats_count_each_pass_and_the_refraction_pass_shades_only_the_
         }
     }
     assert!(memory.iter().any(|m| m["technique"] == "tonemap"), "{memory:?}");
-    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -95,16 +95,15 @@ fn every_image_of_the_frame_is_one_part_of_the_targets_exr() {
     if !common::in_own_process() {
         return;
     }
-    let dir = std::env::temp_dir().join(format!("prism-targets-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let scratch = common::ScratchDir::new("prism-targets");
+    let dir = scratch.path();
     let size = SIZE.to_string();
     let sets: Vec<&str> = OVERRIDES.iter().flat_map(|s| ["--set", s]).collect();
     let out = Command::new(env!("CARGO_BIN_EXE_prism"))
         .args(["render", "caustic_sphere", "--width", &size, "--height", &size, "--validation"])
         .args(["-o", "out.png", "--exr", "out.exr", "--targets", "targets.exr"])
         .args(&sets)
-        .current_dir(&dir)
+        .current_dir(dir)
         .output()
         .unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);
@@ -229,5 +228,4 @@ fn every_image_of_the_frame_is_one_part_of_the_targets_exr() {
         let got = down[j * 64 + i];
         assert!((got - expected).abs() < 2e-3, "-Y face at ({i}, {j}): {got}, the ball's top at {expected}");
     }
-    std::fs::remove_dir_all(&dir).unwrap();
 }
