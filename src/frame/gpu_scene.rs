@@ -23,6 +23,10 @@ pub struct Draw {
     pub index_count: u32,
     pub vertex_offset: i32,
     pub material: u32,
+    /// The mesh is closed with outward normals ([`crate::scene::Mesh::is_closed_outward`]):
+    /// seen from outside, its nearest surface is always a front face, so passes keeping
+    /// the nearest surface may cull its back faces. Moves and uniform scaling keep it.
+    pub closed: bool,
 }
 
 /// A shadow-map face to render: which atlas layer, and the light-space transform.
@@ -220,6 +224,7 @@ fn geometry(scene: &Scene) -> (Vec<Vertex>, Vec<u32>, Vec<Draw>, Vec3, f32) {
             index_count: m.indices.len() as u32,
             vertex_offset: vertices.len() as i32,
             material: o.material as u32,
+            closed: m.is_closed_outward(),
         });
         for k in 0..m.positions.len() {
             let p = m.positions[k];

@@ -61,8 +61,8 @@ impl Technique for GBufferPass {
     fn record<'a>(&'a self, _: Stage, frame: &mut Frame<'_, 'a>, inputs: &FrameInputs<'a>) {
         let (scene, targets, frame_set) = (inputs.scene, inputs.targets, inputs.frame_set);
         let near = crate::renderer::near_plane(scene, inputs.eye);
-        let culled: Vec<bool> = (0..scene.draws.len())
-            .map(|i| self.closed[i] && beyond_near_plane(inputs.object_bounds[i], inputs.eye, inputs.forward, near))
+        let culled: Vec<bool> = (scene.draws.iter().zip(inputs.object_bounds))
+            .map(|(d, &b)| d.closed && beyond_near_plane(b, inputs.eye, inputs.forward, near))
             .collect();
         frame
             .pass(GBUFFER)
@@ -106,8 +106,6 @@ pub struct GBufferPass {
     target: RenderTarget,
     /// Unculled, and with back faces culled.
     pipelines: [GraphicsPipeline; 2],
-    /// Per object: whether its mesh is closed with outward normals.
-    closed: Vec<bool>,
     /// d_N of every scene vertex at BINDING_REFR_DN; a one-float stand-in without Wyman.
     set: BoundSet,
     _d_n: Buffer,
@@ -145,8 +143,7 @@ impl GBufferPass {
             )
         };
         let pipelines = [pipeline(vk::CullModeFlags::NONE)?, pipeline(vk::CullModeFlags::BACK)?];
-        let closed = s.scene.objects.iter().map(|o| o.mesh.is_closed_outward()).collect();
-        Ok(GBufferPass { target, pipelines, closed, set, _d_n: d_n })
+        Ok(GBufferPass { target, pipelines, set, _d_n: d_n })
     }
 }
 

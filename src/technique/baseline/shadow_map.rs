@@ -17,7 +17,6 @@ use crate::gpu::{
     vk, Access, Clear, DepthState, GpuContext, GpuResult, GraphicsPipeline, GraphicsPipelineDesc, RenderTarget,
 };
 use crate::graph::Frame;
-use crate::scene::Scene;
 use crate::shader_structs::ShadowPush;
 use crate::technique::{
     describe_lights, diffuse_names, list, placement, record_kept, FrameInputs, PlannedPass, Regeneration, Registration,
@@ -41,7 +40,7 @@ fn plan(scene: &crate::scene::Scene) -> Vec<(Stage, PlannedPass)> {
 }
 
 fn create(s: &mut Setup<'_>) -> Result<Box<dyn Technique>, RenderError> {
-    Ok(Box::new(ShadowMapPass::new(s.ctx, s.scene, s.gpu, s.targets)?))
+    Ok(Box::new(ShadowMapPass::new(s.ctx, s.gpu, s.targets)?))
 }
 
 impl Technique for ShadowMapPass {
@@ -54,7 +53,7 @@ impl Technique for ShadowMapPass {
         let culled: Vec<Vec<bool>> = self
             .faces
             .iter()
-            .map(|f| self.closed.iter().zip(inputs.object_bounds).map(|(&c, &b)| c && outside(f, b)).collect())
+            .map(|f| scene.draws.iter().zip(inputs.object_bounds).map(|(d, &b)| d.closed && outside(f, b)).collect())
             .collect();
         frame
             .pass(SHADOW_MAP)
@@ -113,14 +112,12 @@ pub struct ShadowMapPass {
     /// the camera's: a front face is clockwise in their images, so the back faces are the
     /// counter-clockwise ones, culled as `FRONT`.
     pipelines: [GraphicsPipeline; 2],
-    /// Per object: whether its mesh is closed with outward normals.
-    closed: Vec<bool>,
     faces: Vec<ShadowFace>,
     regeneration: Regeneration,
 }
 
 impl ShadowMapPass {
-    pub fn new(ctx: &Arc<GpuContext>, scene: &Scene, gpu: &GpuScene, targets: &Targets) -> GpuResult<Self> {
+    pub fn new(ctx: &Arc<GpuContext>, gpu: &GpuScene, targets: &Targets) -> GpuResult<Self> {
         let (atlas, depth) = (&targets.shadow_atlas, &targets.shadow_depth);
         let target = RenderTarget::layered(ctx, SHADOW_MAP, &[atlas], Some(depth), true, atlas.layers())?;
         let pipeline = |cull| {
@@ -131,14 +128,7 @@ impl ShadowMapPass {
             GraphicsPipeline::new(ctx, &desc, &[], std::mem::size_of::<ShadowPush>() as u32, &target.pass)
         };
         let pipelines = [pipeline(vk::CullModeFlags::NONE)?, pipeline(vk::CullModeFlags::FRONT)?];
-        let closed = scene.objects.iter().map(|o| o.mesh.is_closed_outward()).collect();
-        Ok(ShadowMapPass {
-            target,
-            pipelines,
-            closed,
-            faces: gpu.shadow_faces.clone(),
-            regeneration: Regeneration::default(),
-        })
+        Ok(ShadowMapPass { target, pipelines, faces: gpu.shadow_faces.clone(), regeneration: Regeneration::default() })
     }
 }
 

@@ -678,9 +678,8 @@ pub struct RefractorLayers {
     /// front position, front normal, back position, back normal, front depth, back depth.
     pub layers: Vec<(Image, ImageId)>,
     sources: Vec<SourceFace>,
-    /// The specular objects' draws, each with whether its mesh is closed and outward
-    /// ([`crate::scene::Mesh::is_closed_outward`]).
-    specular_draws: Vec<(Draw, bool)>,
+    /// The specular objects' draws.
+    specular_draws: Vec<Draw>,
     /// Shah et al. 2007 Eq. 6's V: one occlusion query per source face around the front
     /// surface's draws (samples that pass the depth test), copied on the GPU into `visible`
     /// (one u32 per face), which the splat pass reads in the same frame.
@@ -800,14 +799,8 @@ impl RefractorLayers {
             .iter()
             .map(|f| SourceFace { view_proj: Mat4::from_cols_array_2d(&f.view_proj), light: f.light })
             .collect();
-        // gpu.draws[i] is object i.
-        let specular_draws = gpu
-            .draws
-            .iter()
-            .zip(&scene.objects)
-            .filter(|(d, _)| is_specular(&scene.materials[d.material as usize]))
-            .map(|(d, o)| (*d, o.mesh.is_closed_outward()))
-            .collect();
+        let specular_draws =
+            gpu.draws.iter().filter(|d| is_specular(&scene.materials[d.material as usize])).copied().collect();
         let queries = if occlusion_queries {
             Some(OcclusionQueryPool::new(ctx, &format!("{name}_visible"), n_faces)?)
         } else {
@@ -867,8 +860,8 @@ impl RefractorLayers {
                                 cmd.begin_occlusion_query(q, face as u32);
                             }
                             cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
-                            for &(d, closed) in &self.specular_draws {
-                                let pipeline = &pipelines[usize::from(closed)];
+                            for d in &self.specular_draws {
+                                let pipeline = &pipelines[usize::from(d.closed)];
                                 cmd.bind_graphics(pipeline, &[self.dn_set.set()]);
                                 let push = RefractorPush {
                                     view_proj: s.view_proj.to_cols_array_2d(),

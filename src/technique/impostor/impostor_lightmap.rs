@@ -284,8 +284,6 @@ pub struct ImpostorLightmap {
     /// `extend_reach`): the apply pass draws only that part of the chart.
     reach: Buffer,
     reach_id: BufferId,
-    /// Per object: whether its mesh is closed and outward.
-    closed: Vec<bool>,
     /// One layer per receiver (`charts[i]` in layer i): irradiance in W/m^2.
     pub lightmaps: Image,
     lightmaps_id: ImageId,
@@ -406,7 +404,6 @@ impl ImpostorLightmap {
         };
         let surface_pipelines =
             [surface_pipeline(vk::CullModeFlags::NONE)?, surface_pipeline(vk::CullModeFlags::FRONT)?];
-        let closed = scene.objects.iter().map(|o| o.mesh.is_closed_outward()).collect();
 
         let reach = Buffer::new(
             ctx,
@@ -546,7 +543,6 @@ impl ImpostorLightmap {
             maps,
             surface_target,
             surface_pipelines,
-            closed,
             caustic_target,
             caustic_sets,
             caustic_pipeline,
@@ -679,7 +675,7 @@ impl ImpostorLightmap {
                     cmd.bind_mesh_buffers(&scene.vertices, &scene.indices);
                     for i in objects {
                         let Some(d) = scene.draws.get(i) else { continue };
-                        let pipeline = &self.surface_pipelines[usize::from(self.closed[i])];
+                        let pipeline = &self.surface_pipelines[usize::from(d.closed)];
                         cmd.bind_graphics(pipeline, &[]);
                         let mut p = push;
                         p.intensity[3] = d.material as f32;
