@@ -663,6 +663,78 @@ fn hu_qin_front_facing_exits_match_traced_exits() {
     }
 }
 
+/// Hu & Qin's front layer (Fig. 4's initial pass) is the G-buffer where every object is a
+/// closed refractor: the G-buffer rasterizes the same triangles through the same transform and
+/// keeps the nearest front face at every pixel, as the layer does. The concave glass torus at
+/// ior 0.75 with the §2.1.2 decision everywhere has front-facing exits (the test above), whose
+/// d_T search reads the front layer's depth at each step. A tiny diffuse box outside the view,
+/// within the scene's bounds (so that the near plane, and with it every depth, is the same),
+/// makes the scene need the layer of its own; the torus's pixels must not notice which one
+/// they read: P2 and the exit kind (from the depths) bitwise equal at every pixel, and the
+/// radiance and T2 bitwise equal wherever no front-facing exit reads the front normal. At a
+/// front-facing exit N2 is the G-buffer's RGBA16F normal instead of the layer's RGBA32F one
+/// (the precision N1 always had): T2 moves by that rounding, which refraction near the critical
+/// angle amplifies without a bound this test could state, so T2 is not compared there.
+#[test]
+fn hu_qin_reads_its_front_layer_from_the_g_buffer_where_every_object_is_a_closed_refractor() {
+    if !common::in_own_process() {
+        return;
+    }
+    let ctx = context(false);
+    let extra = ["render.hu_qin.assume_back_facing=false", "render.hu_qin.nearby=false"];
+    let alone = torus_scene(128, 0.75, &extra);
+    let torus = r#"name = "torus"
+        shape = "torus"
+        center = [0, 0, 0]
+        major_radius = 0.8
+        minor_radius = 0.35
+        segments = 96
+        [[objects]]
+        name = "off_screen"
+        material = "white"
+        shape = "box"
+        center = [1.0, 1.0, 3.3]
+        size = [0.05, 0.05, 0.05]
+        [materials.white]
+        type = "diffuse"
+        albedo = [0.5, 0.5, 0.5]"#;
+    let mut o = vec!["render.refraction=hu_qin", "render.hu_qin.debug=true"];
+    o.extend(extra);
+    let with_box = common::glass_scene(128, [0.0, 1.1, 3.4], 0.75, torus, &o);
+    let read = |s: &prism::scene::Scene| {
+        let mut r = Renderer::new(&ctx, s).unwrap();
+        r.render_frame().unwrap();
+        let images: Vec<String> = r.frame_images().into_iter().map(|i| i.name).collect();
+        let p2 = r.read_target("refraction_hu_qin_p2").unwrap().expect("debug P2 target");
+        let t2 = r.read_target("refraction_hu_qin_t2").unwrap().expect("debug T2 target");
+        let hdr = r.read_hdr().unwrap();
+        drop(r);
+        common::assert_no_validation_errors(&ctx);
+        (images, p2, t2, hdr)
+    };
+    let (images_g, p2_g, t2_g, hdr_g) = read(&alone);
+    let (images_l, p2_l, t2_l, hdr_l) = read(&with_box);
+    let front_layer = "refraction_hu_qin_layers_1_depth".to_string();
+    assert!(!images_g.contains(&front_layer), "the torus alone draws a front layer: {images_g:?}");
+    assert!(images_l.contains(&front_layer), "with the box, no front layer: {images_l:?}");
+
+    let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<u32>>();
+    assert!(bits(&p2_g) == bits(&p2_l), "P2 or the exit kind differs between the G-buffer and the layer");
+    let mut front = 0;
+    for k in 0..p2_g.len() / 4 {
+        let kind = p2_g[4 * k + 3];
+        if kind == 2.0 || kind == 4.0 {
+            front += 1;
+            continue;
+        }
+        let px = 4 * k..4 * k + 4;
+        assert_eq!(bits(&t2_g[px.clone()]), bits(&t2_l[px.clone()]), "T2 at pixel {k} (exit kind {kind})");
+        assert_eq!(bits(&hdr_g[px.clone()]), bits(&hdr_l[px]), "radiance at pixel {k} (exit kind {kind})");
+    }
+    eprintln!("{front} front-facing exits");
+    assert!(front >= 100, "only {front} front-facing exits: the front layer is hardly read");
+}
+
 /// How many times the camera ray of every pixel crosses the surface of object 0 (its depth
 /// complexity), traced on the CPU.
 fn depth_complexity(s: &prism::scene::Scene) -> Vec<u32> {

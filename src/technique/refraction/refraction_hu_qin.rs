@@ -8,7 +8,10 @@
 //!   dielectric (src/technique/refraction/nearby_impostors.rs), and `_r1`.. the §2.2.1 recursion levels;
 //!   before them `refraction_hu_qin_nearby_back`, the back faces of the dielectric impostors.
 //! - `refraction_hu_qin_layers`: depth and normal of the refractors' nearest back faces and
-//!   nearest front faces (Fig. 4, "initial pass").
+//!   nearest front faces (Fig. 4, "initial pass"). Where every object is a closed refractor,
+//!   the G-buffer already holds the front faces' depth and normal
+//!   ([`gbuffer_holds_front_layer`]): the pass then draws the back faces only, and the exit
+//!   search reads the G-buffer for the front layer, as Wyman's shading reads its front faces.
 //! - `refraction_hu_qin`: glsl/refraction/hu_qin.frag: T1, the binary search for the dividing
 //!   pixel p_e (Fig. 7, `search_steps`), the theta_1/theta_2 test for a front- or back-facing
 //!   exit (Fig. 5), the iterative d_T search (Fig. 9, `tolerance`, `max_iterations`), N2 from
@@ -43,7 +46,9 @@ use super::nearby_impostors::{
     COPY_PASS, RECURSION_PASSES,
 };
 use super::oracle::Oracle;
-use super::refractor_layers::{DebugTarget, LayerKind, LayerScope, RefractorLayers, ShadeDesc, ShadePass};
+use super::refractor_layers::{
+    gbuffer_holds_front_layer, DebugTarget, LayerKind, LayerScope, RefractorLayers, ShadeDesc, ShadePass,
+};
 
 pub const REFRACTION_HU_QIN_LAYERS: &str = "refraction_hu_qin_layers";
 pub const REFRACTION_HU_QIN: &str = "refraction_hu_qin";
@@ -71,13 +76,19 @@ fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
         return Vec::new();
     };
     let mut passes = nearby_plan(scene);
-    passes.push(PlannedPass::new(
-        REFRACTION_HU_QIN_LAYERS,
+    let layers = if gbuffer_holds_front_layer(scene) {
+        format!(
+            "back faces (depth, normal) of dielectric {} (render.refraction = \"hu_qin\"); their front faces are \
+             the G-buffer's: every object is a closed refractor",
+            list(&dielectric)
+        )
+    } else {
         format!(
             "back and front faces (depth, normal) of dielectric {} (render.refraction = \"hu_qin\")",
             list(&dielectric)
-        ),
-    ));
+        )
+    };
+    passes.push(PlannedPass::new(REFRACTION_HU_QIN_LAYERS, layers));
     passes.push(PlannedPass::new(
         REFRACTION_HU_QIN,
         format!("two-interface refraction of {} (binary search and iterative d_T, Hu & Qin 2007)", list(&dielectric)),
@@ -227,10 +238,20 @@ impl HuQinPass {
         } else {
             NearbyImpostors::stand_in(ctx, REFRACTION_HU_QIN_NEARBY, gpu, graph, frame_layout)?
         };
-        let kinds = [(LayerKind::BackNearest, LayerScope::Shared), (LayerKind::Front, LayerScope::Shared)];
+        let front_in_gbuffer = gbuffer_holds_front_layer(scene);
+        let mut kinds = vec![(LayerKind::BackNearest, LayerScope::Shared)];
+        if !front_in_gbuffer {
+            kinds.push((LayerKind::Front, LayerScope::Shared));
+        }
         let layers = RefractorLayers::new(s, REFRACTION_HU_QIN_LAYERS, &kinds)?;
         let (graph, targets, nearest) = (&mut *s.graph, s.targets, s.nearest);
-        let (b, f) = (&layers.layers[0], &layers.layers[1]);
+        let b = &layers.layers[0];
+        // The front layer's reversed-Z depth, cleared to 0 where no refractor is, and its
+        // normal in xyz (the G-buffer's w, the material, is not read as a layer's).
+        let front = match layers.layer(LayerKind::Front) {
+            Some(f) => [(&f.normal, f.normal_id), (&f.depth, f.depth_id)],
+            None => [(&targets.gbuf_normal, targets.gbuf_normal_id), (&targets.depth, targets.depth_id)],
+        };
         let tracer = oracle.as_ref().map(|o| o.buffers(gpu)).unwrap_or_default();
         let mut specialization = vec![
             ("SEARCH_STEPS", Spec::U32(params.search_steps)),
@@ -271,8 +292,8 @@ impl HuQinPass {
                     (BINDING_GBUF_ALBEDO, &targets.gbuf_albedo, targets.gbuf_albedo_id),
                     (BINDING_REFR_BACK_NORMAL, &b.normal, b.normal_id),
                     (BINDING_REFR_BACK_DEPTH, &b.depth, b.depth_id),
-                    (BINDING_REFR_FRONT_NORMAL, &f.normal, f.normal_id),
-                    (BINDING_REFR_FRONT_DEPTH, &f.depth, f.depth_id),
+                    (BINDING_REFR_FRONT_NORMAL, front[0].0, front[0].1),
+                    (BINDING_REFR_FRONT_DEPTH, front[1].0, front[1].1),
                     (BINDING_NEARBY_TEXTURE, &nearby.texture, nearby.texture_id),
                 ],
                 buffers: &[(BINDING_NEARBY_RECTS, &nearby.rect_buffer)],

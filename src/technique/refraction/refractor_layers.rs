@@ -99,6 +99,23 @@ fn is_refractor(scene: &Scene, d: &Draw) -> bool {
     matches!(scene.materials.get(d.material as usize), Some(Material::Dielectric { .. }))
 }
 
+/// Whether the G-buffer holds the refractors' [`LayerKind::Front`] layer: every object is a
+/// dielectric (so every G-buffer draw is a refractor's) whose mesh is closed with outward
+/// normals (so its nearest surface seen from outside is a front face). The G-buffer then
+/// rasterizes the same triangles through the same transform, and at each pixel keeps the
+/// nearest front face of the refractors, as the layer does. Where the near plane cuts a
+/// refractor, the G-buffer shows the inside of its far side there while the layer has nothing:
+/// the true front surface lies in front of the near plane, and neither holds it.
+/// Not a heightfield: its surface is displaced on the GPU each frame.
+pub fn gbuffer_holds_front_layer(scene: &Scene) -> bool {
+    !scene.objects.is_empty()
+        && scene.objects.iter().all(|o| {
+            matches!(scene.material_of(o), Material::Dielectric { .. })
+                && o.heightfield.is_none()
+                && o.mesh.is_closed_outward()
+        })
+}
+
 /// The draws whose material is a dielectric, in object order (a refractor's slot is its
 /// index here).
 pub fn refractor_draws(scene: &Scene, gpu: &GpuScene) -> Vec<Draw> {
