@@ -701,6 +701,23 @@ choice! {
 }
 
 choice! {
+    /// Where Hu & Qin's exit search reads the refractors' front faces (2007 §2.1, Fig. 4's
+    /// initial pass: "render normals and depths of the back-facing & front-facing surfaces").
+    FrontLayer, hint "\"auto\" (the G-buffer's where every object is a closed refractor) or \"own\" (the paper's pass)" {
+        /// The G-buffer's depth and normal where every object of the scene is a dielectric with
+        /// a closed outward mesh (src/technique/refraction/refractor_layers.rs
+        /// `gbuffer_holds_front_layer`): it holds the nearest front face at every pixel, as the
+        /// layer would, so the layers pass draws the back faces only. A front-facing exit's N2
+        /// is then the G-buffer's RGBA16F normal instead of the layer's RGBA32F one (N1's
+        /// precision): docs/ACCURACY.md ("the front layer") measures what that changes.
+        /// Elsewhere, the layer of its own.
+        Auto = "auto",
+        /// The paper's: the refractors' front faces drawn into a layer of their own.
+        Own = "own",
+    }
+}
+
+choice! {
     /// Whether Hu & Qin's exit search decides the exit's facing first (2007 §2.1.2, Fig. 5 with
     /// Fig. 7's binary search) or assumes a back-facing exit (§4's acceleration).
     BackFacing, hint "\"auto\" (section 4 where every dielectric is denser than air), true (section 4) or false (section 2.1.2)" {
@@ -861,6 +878,9 @@ params! {
         /// decide "front-facing" (the front-facing layer) only when P2 leaves the refractor's
         /// silhouette.
         assume_back_facing: BackFacing = BackFacing::Auto;
+        /// Where the exit search reads the refractors' front faces: the G-buffer's where it
+        /// holds them (every object a closed refractor), or a layer drawn for them alone.
+        front_layer: FrontLayer = FrontLayer::Auto;
         /// Also write P2 and T2 to the debug targets `refraction_hu_qin_p2` and
         /// `refraction_hu_qin_t2`, as for `wyman`.
         debug: bool = false;

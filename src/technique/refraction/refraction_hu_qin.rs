@@ -10,8 +10,9 @@
 //! - `refraction_hu_qin_layers`: depth and normal of the refractors' nearest back faces and
 //!   nearest front faces (Fig. 4, "initial pass"). Where every object is a closed refractor,
 //!   the G-buffer already holds the front faces' depth and normal
-//!   ([`gbuffer_holds_front_layer`]): the pass then draws the back faces only, and the exit
-//!   search reads the G-buffer for the front layer, as Wyman's shading reads its front faces.
+//!   ([`gbuffer_holds_front_layer`]): with `front_layer = "auto"` the pass then draws the back
+//!   faces only, and the exit search reads the G-buffer for the front layer, as Wyman's
+//!   shading reads its front faces.
 //! - `refraction_hu_qin`: glsl/refraction/hu_qin.frag: T1, the binary search for the dividing
 //!   pixel p_e (Fig. 7, `search_steps`), the theta_1/theta_2 test for a front- or back-facing
 //!   exit (Fig. 5), the iterative d_T search (Fig. 9, `tolerance`, `max_iterations`), N2 from
@@ -27,7 +28,7 @@
 
 use crate::gpu::Spec;
 use crate::graph::Frame;
-use crate::scene::techniques::{BackFacing, DTStep, HuQinOracle, HuQinParams, RecursiveExit};
+use crate::scene::techniques::{BackFacing, DTStep, FrontLayer, HuQinOracle, HuQinParams, RecursiveExit};
 use crate::scene::{Material, Scene};
 use crate::technique::baseline::specular_single::has_dispersion;
 use crate::technique::scene_specialization;
@@ -71,15 +72,22 @@ pub fn assumes_back_facing(params: &HuQinParams, scene: &Scene) -> bool {
     }
 }
 
+/// Whether the exit search reads the front faces from the G-buffer (`front_layer = "auto"`
+/// where it holds them) instead of a layer of their own.
+fn front_from_gbuffer(params: &HuQinParams, scene: &Scene) -> bool {
+    params.front_layer == FrontLayer::Auto && gbuffer_holds_front_layer(scene)
+}
+
 fn plan(scene: &Scene) -> Vec<(Stage, PlannedPass)> {
     let Some(dielectric) = refracting_objects(scene, "hu_qin") else {
         return Vec::new();
     };
     let mut passes = nearby_plan(scene);
-    let layers = if gbuffer_holds_front_layer(scene) {
+    let params = HuQinParams::from_settings(&scene.render).unwrap_or_default();
+    let layers = if front_from_gbuffer(&params, scene) {
         format!(
             "back faces (depth, normal) of dielectric {} (render.refraction = \"hu_qin\"); their front faces are \
-             the G-buffer's: every object is a closed refractor",
+             the G-buffer's: every object is a closed refractor (render.hu_qin.front_layer = \"auto\")",
             list(&dielectric)
         )
     } else {
@@ -238,7 +246,7 @@ impl HuQinPass {
         } else {
             NearbyImpostors::stand_in(ctx, REFRACTION_HU_QIN_NEARBY, gpu, graph, frame_layout)?
         };
-        let front_in_gbuffer = gbuffer_holds_front_layer(scene);
+        let front_in_gbuffer = front_from_gbuffer(&params, scene);
         let mut kinds = vec![(LayerKind::BackNearest, LayerScope::Shared)];
         if !front_in_gbuffer {
             kinds.push((LayerKind::Front, LayerScope::Shared));

@@ -375,3 +375,32 @@ impl ShadePass {
         });
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::gbuffer_holds_front_layer;
+
+    fn scene(objects: &str) -> crate::scene::Scene {
+        let text = format!(
+            "[camera]\nposition = [0, 0, 4]\ntarget = [0, 0, 0]\n[materials.glass]\ntype = \"dielectric\"\n\
+             ior = 1.5\n[materials.white]\ntype = \"diffuse\"\nalbedo = 0.5\n{objects}"
+        );
+        crate::scene::load_str(&text, std::path::Path::new("layers.toml"), &[]).unwrap()
+    }
+
+    const BALL: &str = "[[objects]]\nmaterial = \"glass\"\nshape = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\n";
+
+    /// The G-buffer holds the refractors' front layer only where it draws nothing but closed
+    /// refractors: another object may hide one, an open mesh may show its inside.
+    #[test]
+    fn the_g_buffer_holds_the_front_layer_where_every_object_is_a_closed_refractor() {
+        assert!(gbuffer_holds_front_layer(&scene(BALL)));
+        assert!(gbuffer_holds_front_layer(&scene(&format!("{BALL}{}", BALL.replace("[0, 0, 0]", "[3, 0, 0]")))));
+        assert!(!gbuffer_holds_front_layer(&scene("")), "no object");
+        let diffuse = BALL.replace("\"glass\"", "\"white\"").replace("[0, 0, 0]", "[0, -3, 0]");
+        assert!(!gbuffer_holds_front_layer(&scene(&format!("{BALL}{diffuse}"))), "a diffuse object besides");
+        let open = "[[objects]]\nmaterial = \"glass\"\nshape = \"open_cylinder\"\ncenter = [0, 0, 0]\n\
+                    radius = 1\nheight = 1\n";
+        assert!(!gbuffer_holds_front_layer(&scene(open)), "an open cylinder");
+    }
+}
