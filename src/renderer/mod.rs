@@ -26,7 +26,7 @@ use crate::technique::caustics::caustics_map::CausticsMapPass;
 use crate::technique::caustics::photon_buffer::{PhotonBufferPass, PhotonCaustics};
 use crate::technique::eikonal::eikonal_view::EikonalPass;
 use crate::technique::impostor::distance_impostor::{
-    object_bounds, ImpostorMap, ImpostorReflection, ImpostorRefraction,
+    object_bounds, tight_object_bounds, ImpostorMap, ImpostorReflection, ImpostorRefraction,
 };
 use crate::technique::impostor::impostor_lightmap::ImpostorLightmap;
 use crate::technique::refraction::refractor_layers::DebugTarget;
@@ -178,6 +178,9 @@ struct ObjectState {
     first_vertex: usize,
     vertex_count: usize,
     bounds: (Vec3, f32),
+    /// The radius about `bounds`' centre that holds every vertex ([`tight_object_bounds`]):
+    /// the frame's [`FrameInputs::object_bounds`].
+    tight_radius: f32,
 }
 
 /// Which effect's distance impostor [`Renderer::impostor_map`] and
@@ -254,6 +257,7 @@ impl Renderer {
                 first_vertex: gpu_scene.draws[i].vertex_offset as usize,
                 vertex_count: scene.objects[i].mesh.positions.len(),
                 bounds: object_bounds(scene, i),
+                tight_radius: tight_object_bounds(scene, i).1,
             })
             .collect();
         let mut cache = Cache::default();
@@ -586,7 +590,7 @@ impl Renderer {
         }
         let dt = if self.frame_index == 0 { None } else { self.tonemap_dt };
         self.bounds.clear();
-        self.bounds.extend(self.objects.iter().map(|o| o.bounds));
+        self.bounds.extend(self.objects.iter().map(|o| (o.bounds.0, o.tight_radius)));
         let eye = Vec3::from_slice(&self.uniforms.camera_position[..3]);
         // The view's -z axis in world space: the third column of the inverse view, negated.
         let forward = -Vec3::from_slice(&self.uniforms.inv_view[2][..3]).normalize_or_zero();

@@ -256,7 +256,9 @@ impl Renderer {
         if Some(placement) != self.placement {
             self.scene.update_placement(scene, scene.render.shadow_map_size);
             for (o, i) in self.objects.iter_mut().zip(0..) {
-                o.bounds = crate::technique::impostor::distance_impostor::object_bounds(scene, i);
+                use crate::technique::impostor::distance_impostor::{object_bounds, tight_object_bounds};
+                o.bounds = object_bounds(scene, i);
+                o.tight_radius = tight_object_bounds(scene, i).1;
             }
             for (i, l) in self.scene.lights.iter().enumerate() {
                 self.uniforms.lights[i] = *l;

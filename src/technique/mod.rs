@@ -320,7 +320,8 @@ pub struct FrameInputs<'a> {
     pub shadow_atlas: Option<ImageId>,
     /// Seconds since the last frame (the window's temporal adaptation); `None`: converged.
     pub dt: Option<f32>,
-    /// Every object's current (centre, bounding radius), in scene order.
+    /// Every object's current bounding sphere (centre, radius), in scene order: the tightest
+    /// about its box's centre ([`impostor::distance_impostor::tight_object_bounds`]).
     pub object_bounds: &'a [(Vec3, f32)],
     /// The camera's position and unit viewing direction this frame.
     pub eye: Vec3,

@@ -180,6 +180,24 @@ pub fn object_bounds(scene: &Scene, object: usize) -> (Vec3, f32) {
     ((lo + hi) * 0.5, (hi - lo).length() * 0.5)
 }
 
+/// The same centre as [`object_bounds`] with the smallest radius about it that holds every
+/// vertex: the farthest vertex's distance. The passes that skip work outside a sphere (the
+/// shading passes' covers, the G-buffer's and the shadow maps' culling) take this one: a
+/// box's corner is often empty (for bunny_env's bunny the radius is 1.34 against the box's
+/// 1.59). The distance impostors and light maps keep [`object_bounds`], the radius their
+/// maps and frusta were measured with. A heightfield keeps the box's radius too: the window
+/// displaces its vertices on the GPU, beyond the ones held here.
+pub fn tight_object_bounds(scene: &Scene, object: usize) -> (Vec3, f32) {
+    let o = &scene.objects[object];
+    let (centre, radius) = object_bounds(scene, object);
+    if o.analytic.is_some() || o.heightfield.is_some() || o.mesh.positions.is_empty() {
+        return (centre, radius);
+    }
+    let farthest = o.mesh.positions.iter().map(|p| p.distance(centre)).fold(0.0, f32::max);
+    // No tighter than the vertices allow, and never looser than the box's.
+    (centre, farthest.min(radius))
+}
+
 /// One light-mapped part of an object in the uv map: (first index within the object's
 /// indices, index count, light-map slot + 1, chart row a, chart row b).
 pub type UvChart = (u32, u32, u32, [f32; 4], [f32; 4]);
@@ -829,5 +847,27 @@ impl ImpostorRefraction {
             })
             .collect();
         self.shade.record(frame, targets, frame_set, scene.environment_id, pushes);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{object_bounds, tight_object_bounds};
+
+    /// The tight sphere holds every vertex, never exceeds the box's, and on bunny_env's bunny
+    /// is the farthest vertex's distance (1.34 against the box's half-diagonal, 1.59).
+    #[test]
+    fn the_tight_sphere_holds_every_vertex_within_the_boxs() {
+        let path = crate::scene::benchmark_scene_path("bunny_env");
+        let scene = crate::scene::load(&path, &[]).unwrap();
+        let (centre, radius) = tight_object_bounds(&scene, 0);
+        let (box_centre, box_radius) = object_bounds(&scene, 0);
+        assert_eq!(centre, box_centre);
+        let farthest = scene.objects[0].mesh.positions.iter().map(|p| p.distance(centre)).fold(0.0, f32::max);
+        assert_eq!(radius, farthest);
+        assert!(radius < 0.9 * box_radius, "{radius} against the box's {box_radius}");
+        // A sphere is its own bound.
+        let ball = crate::scene::load(&crate::scene::benchmark_scene_path("sphere_env"), &[]).unwrap();
+        assert_eq!(tight_object_bounds(&ball, 0), object_bounds(&ball, 0));
     }
 }
