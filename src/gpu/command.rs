@@ -222,6 +222,13 @@ impl<'a> Cmd<'a> {
         }
     }
 
+    /// Limit the following draws to `rect` (inside a render pass; [`Cmd::set_viewport`]
+    /// resets it to the whole target).
+    pub fn set_scissor(&self, rect: vk::Rect2D) {
+        // SAFETY: recording; dynamic state declared by every graphics pipeline.
+        unsafe { self.dev().cmd_set_scissor(self.raw, 0, &[rect]) };
+    }
+
     fn end_render_pass(&self) {
         // SAFETY: inside a render pass begun by begin_render_pass.
         unsafe { self.dev().cmd_end_render_pass(self.raw) };

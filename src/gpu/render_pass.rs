@@ -231,4 +231,9 @@ impl RenderTarget {
     pub fn framebuffers(&self) -> &[Framebuffer] {
         &self.framebuffers
     }
+
+    /// The size of its attachments (every layer's the same).
+    pub fn extent(&self) -> vk::Extent2D {
+        self.framebuffers[0].extent
+    }
 }

@@ -26,7 +26,7 @@ use crate::technique::caustics::caustics_map::CausticsMapPass;
 use crate::technique::caustics::photon_buffer::{PhotonBufferPass, PhotonCaustics};
 use crate::technique::eikonal::eikonal_view::EikonalPass;
 use crate::technique::impostor::distance_impostor::{
-    object_bounds, tight_object_bounds, ImpostorMap, ImpostorReflection, ImpostorRefraction,
+    object_bounds, object_box, tight_object_bounds, ImpostorMap, ImpostorReflection, ImpostorRefraction,
 };
 use crate::technique::impostor::impostor_lightmap::ImpostorLightmap;
 use crate::technique::refraction::refractor_layers::DebugTarget;
@@ -149,6 +149,8 @@ pub struct Renderer {
     objects: Vec<ObjectState>,
     /// The objects' (centre, bounding radius), copied from `objects` for each frame's inputs.
     bounds: Vec<(Vec3, f32)>,
+    /// The same for [`FrameInputs::object_boxes`].
+    boxes: Vec<(Vec3, Vec3)>,
     uniforms: FrameUniforms,
     /// (frame index, queries) of each slot's submitted but not yet read frame.
     pending: Vec<Option<(u64, Vec<TimestampQuery>)>>,
@@ -181,6 +183,8 @@ struct ObjectState {
     /// The radius about `bounds`' centre that holds every vertex ([`tight_object_bounds`]):
     /// the frame's [`FrameInputs::object_bounds`].
     tight_radius: f32,
+    /// Half the extents of its box about `bounds`' centre ([`object_box`]).
+    half_extent: Vec3,
 }
 
 /// Which effect's distance impostor [`Renderer::impostor_map`] and
@@ -258,6 +262,7 @@ impl Renderer {
                 vertex_count: scene.objects[i].mesh.positions.len(),
                 bounds: object_bounds(scene, i),
                 tight_radius: tight_object_bounds(scene, i).1,
+                half_extent: object_box(scene, i).1,
             })
             .collect();
         let mut cache = Cache::default();
@@ -338,6 +343,7 @@ impl Renderer {
             work_budget: None,
             objects,
             bounds: Vec::new(),
+            boxes: Vec::new(),
             uniforms,
             pending: vec![None; FRAMES_IN_FLIGHT],
             completed: Vec::new(),
@@ -591,6 +597,9 @@ impl Renderer {
         let dt = if self.frame_index == 0 { None } else { self.tonemap_dt };
         self.bounds.clear();
         self.bounds.extend(self.objects.iter().map(|o| (o.bounds.0, o.tight_radius)));
+        self.boxes.clear();
+        self.boxes.extend(self.objects.iter().map(|o| (o.bounds.0, o.half_extent)));
+        let view_proj = glam::Mat4::from_cols_array_2d(&self.uniforms.view_proj);
         let eye = Vec3::from_slice(&self.uniforms.camera_position[..3]);
         // The view's -z axis in world space: the third column of the inverse view, negated.
         let forward = -Vec3::from_slice(&self.uniforms.inv_view[2][..3]).normalize_or_zero();
@@ -606,6 +615,7 @@ impl Renderer {
             graph,
             recipe,
             bounds,
+            boxes,
             ..
         } = self;
         let shadowed = recipe.passes.iter().any(|p| p.name == crate::technique::baseline::shadow_map::SHADOW_MAP);
@@ -618,6 +628,8 @@ impl Renderer {
             shadow_atlas: shadowed.then_some(targets.shadow_atlas_id),
             dt,
             object_bounds: bounds,
+            object_boxes: boxes,
+            view_proj,
             eye,
             forward,
         };

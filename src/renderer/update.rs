@@ -256,9 +256,10 @@ impl Renderer {
         if Some(placement) != self.placement {
             self.scene.update_placement(scene, scene.render.shadow_map_size);
             for (o, i) in self.objects.iter_mut().zip(0..) {
-                use crate::technique::impostor::distance_impostor::{object_bounds, tight_object_bounds};
+                use crate::technique::impostor::distance_impostor::{object_bounds, object_box, tight_object_bounds};
                 o.bounds = object_bounds(scene, i);
                 o.tight_radius = tight_object_bounds(scene, i).1;
+                o.half_extent = object_box(scene, i).1;
             }
             for (i, l) in self.scene.lights.iter().enumerate() {
                 self.uniforms.lights[i] = *l;

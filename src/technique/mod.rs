@@ -323,6 +323,11 @@ pub struct FrameInputs<'a> {
     /// Every object's current bounding sphere (centre, radius), in scene order: the tightest
     /// about its box's centre ([`impostor::distance_impostor::tight_object_bounds`]).
     pub object_bounds: &'a [(Vec3, f32)],
+    /// Every object's current bounding box (centre, half extents), in scene order
+    /// ([`impostor::distance_impostor::object_box`]).
+    pub object_boxes: &'a [(Vec3, Vec3)],
+    /// The camera's view-projection this frame (the frame uniforms').
+    pub view_proj: glam::Mat4,
     /// The camera's position and unit viewing direction this frame.
     pub eye: Vec3,
     pub forward: Vec3,

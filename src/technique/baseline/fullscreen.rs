@@ -3,7 +3,7 @@
 //! specular baseline and the tone map are each this plus their own reads.
 use std::sync::Arc;
 
-use glam::Vec3;
+use glam::{Mat4, Vec2, Vec3};
 
 use crate::frame::targets::Targets;
 use crate::gpu::{
@@ -43,7 +43,9 @@ pub struct FullscreenPass {
 /// rasterizer shades whole 4x4 blocks of every triangle, so few large triangles waste least.
 /// When the eye is inside a bounding sphere, or a corner is behind the camera's plane (its
 /// clip position cannot be divided by w), the pass falls back to the full-screen triangle
-/// for that frame.
+/// for that frame. Each octagon is also scissored to the rectangle its object's bounding
+/// box projects into ([`box_scissor`]), which clips the octagon where the sphere holds much
+/// that the box does not (the corners of an elongated object's sphere).
 pub struct Cover {
     pipeline: GraphicsPipeline,
     objects: Vec<usize>,
@@ -85,20 +87,84 @@ impl Cover {
         Ok(Some(Cover { pipeline, objects }))
     }
 
-    /// Each object's octagon this frame, or `None` if one cannot be drawn (the eye inside
-    /// its bounding sphere, or a corner not in front of the camera).
-    pub fn octagons(&self, inputs: &FrameInputs<'_>) -> Option<Vec<CoverPush>> {
-        self.objects.iter().map(|&i| octagon(*inputs.object_bounds.get(i)?, inputs.eye, inputs.forward)).collect()
+    /// Each object's octagon this frame with its scissor, or `None` if one cannot be drawn
+    /// (the eye inside its bounding sphere, or a corner not in front of the camera).
+    pub fn octagons(&self, inputs: &FrameInputs<'_>) -> Option<Vec<CoverDraw>> {
+        let (width, height) = (inputs.targets.width, inputs.targets.height);
+        let full = vk::Rect2D { offset: vk::Offset2D::default(), extent: vk::Extent2D { width, height } };
+        let mut draws = Vec::new();
+        for &i in &self.objects {
+            let push = octagon(*inputs.object_bounds.get(i)?, inputs.eye, inputs.forward)?;
+            let scissor = match inputs.object_boxes.get(i) {
+                Some(&b) => match box_scissor(b, inputs.view_proj, width, height) {
+                    Some(Some(rect)) => rect,
+                    // Wholly outside the frame: no pixel to shade.
+                    Some(None) => continue,
+                    None => full,
+                },
+                None => full,
+            };
+            draws.push(CoverDraw { push, scissor });
+        }
+        Some(draws)
     }
 
-    /// Draw `octagons` with `sets` bound (inside the pass's render pass).
-    pub fn draw(&self, cmd: &Cmd, sets: &[DescriptorSet], octagons: &[CoverPush]) {
+    /// Draw `octagons` with `sets` bound (inside the pass's render pass); the scissor is the
+    /// whole target again afterwards.
+    pub fn draw(&self, cmd: &Cmd, sets: &[DescriptorSet], octagons: &[CoverDraw], extent: vk::Extent2D) {
         cmd.bind_graphics(&self.pipeline, sets);
         for o in octagons {
-            cmd.push_graphics(&self.pipeline, o);
+            cmd.set_scissor(o.scissor);
+            cmd.push_graphics(&self.pipeline, &o.push);
             cmd.draw(18, 1);
         }
+        cmd.set_scissor(vk::Rect2D { offset: vk::Offset2D::default(), extent });
     }
+}
+
+/// One object's octagon and the pixel rectangle its bounding box projects into: the octagon
+/// circumscribes the bounding sphere, which for an elongated or hollow-cornered object
+/// holds much that its box's image does not (bunny_env's bunny: the octagon covers 78% of
+/// the frame, both together 67%).
+pub struct CoverDraw {
+    push: CoverPush,
+    scissor: vk::Rect2D,
+}
+
+/// The pixels of a `width` x `height` target that the box (centre, half extents) projects
+/// into through `view_proj`: the rectangle around its eight corners' images, widened to
+/// whole pixels and by one more on every side for rounding. `Some(None)` when the rectangle
+/// misses the target; `None` when a corner is not in front of the camera (its clip position
+/// cannot be divided by w), where no rectangle is known. The convex hull of the corners'
+/// images holds the box's image, and so the object's.
+pub fn box_scissor(
+    (centre, half): (Vec3, Vec3),
+    view_proj: Mat4,
+    width: u32,
+    height: u32,
+) -> Option<Option<vk::Rect2D>> {
+    let (mut lo, mut hi) = (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY));
+    for k in 0..8 {
+        let sign = Vec3::new([-1.0, 1.0][k & 1], [-1.0, 1.0][(k >> 1) & 1], [-1.0, 1.0][k >> 2]);
+        let clip = view_proj * (centre + sign * half).extend(1.0);
+        // A margin for the rounding of w, as the octagon's (`octagon`).
+        if !(clip.w > 1e-6 * clip.truncate().length().max(1.0)) {
+            return None;
+        }
+        // uv = ndc / 2 + 1/2, (0, 0) at the top-left pixel corner (common/cover.vert).
+        let pixel = (Vec2::new(clip.x, clip.y) / clip.w * 0.5 + 0.5) * Vec2::new(width as f32, height as f32);
+        lo = lo.min(pixel);
+        hi = hi.max(pixel);
+    }
+    let size = Vec2::new(width as f32, height as f32);
+    let (lo, hi) = ((lo - 1.0).floor().max(Vec2::ZERO), (hi + 1.0).ceil().min(size));
+    if !(hi.x > lo.x && hi.y > lo.y) {
+        return Some(None);
+    }
+    Some(Some(vk::Rect2D {
+        offset: vk::Offset2D { x: lo.x as i32, y: lo.y as i32 },
+        extent: vk::Extent2D { width: (hi.x - lo.x) as u32, height: (hi.y - lo.y) as u32 },
+    }))
 }
 
 /// The octagon around the outline of the sphere `(centre, radius)` seen from `eye` (see
@@ -244,7 +310,7 @@ impl FullscreenPass {
         frame: &mut Frame<'_, 'a>,
         frame_set: DescriptorSet,
         reads: &[ImageId],
-        cover: Option<(&'a Cover, Vec<CoverPush>)>,
+        cover: Option<(&'a Cover, Vec<CoverDraw>)>,
     ) {
         let mut pass = frame.pass(self.name).uses(&self.set);
         for &id in reads {
@@ -253,7 +319,9 @@ impl FullscreenPass {
         pass.write(self.target_id, Access::ColorAttachment).record(move |cmd| {
             let clear = if self.clear { Clear::Color([0.0; 4]) } else { Clear::None };
             cmd.in_target(&self.target, 0, &[clear], |cmd| match cover {
-                Some((cover, octagons)) => cover.draw(cmd, &[frame_set, self.set.set()], &octagons),
+                Some((cover, octagons)) => {
+                    cover.draw(cmd, &[frame_set, self.set.set()], &octagons, self.target.extent())
+                }
                 None => {
                     cmd.bind_graphics(&self.pipeline, &[frame_set, self.set.set()]);
                     cmd.draw(3, 1);
@@ -289,5 +357,35 @@ mod tests {
         }
         assert!(octagon((centre, radius), centre + Vec3::X * 0.5 * radius, forward).is_none(), "eye inside");
         assert!(octagon((centre, radius), eye, -forward).is_none(), "behind the camera");
+    }
+
+    /// The scissor holds every corner's pixel (so the box's image and the object's), widened
+    /// by at most two pixels per side; a box beside the frame gives no rectangle to draw, one
+    /// with a corner behind the camera no rectangle at all (the octagon's alone then).
+    #[test]
+    fn the_scissor_holds_the_boxs_image() {
+        let (w, h) = (200, 150);
+        let eye = Vec3::new(0.0, 0.0, 4.0);
+        let view = Mat4::look_at_rh(eye, Vec3::ZERO, Vec3::Y);
+        let proj = crate::renderer::camera_projection(40.0, w as f32 / h as f32, 1e-3);
+        let view_proj = proj * view;
+        let b = (Vec3::new(0.4, -0.3, 0.2), Vec3::new(0.5, 0.3, 0.7));
+        let rect = box_scissor(b, view_proj, w, h).unwrap().unwrap();
+        let (x0, y0) = (rect.offset.x as f32, rect.offset.y as f32);
+        let (x1, y1) = (x0 + rect.extent.width as f32, y0 + rect.extent.height as f32);
+        let (mut lo, mut hi) = (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY));
+        for k in 0..8 {
+            let sign = Vec3::new([-1.0, 1.0][k & 1], [-1.0, 1.0][(k >> 1) & 1], [-1.0, 1.0][k >> 2]);
+            let clip = view_proj * (b.0 + sign * b.1).extend(1.0);
+            let p = (Vec2::new(clip.x, clip.y) / clip.w * 0.5 + 0.5) * Vec2::new(w as f32, h as f32);
+            assert!(p.x >= x0 && p.x <= x1 && p.y >= y0 && p.y <= y1, "corner {k} at {p} outside {rect:?}");
+            lo = lo.min(p);
+            hi = hi.max(p);
+        }
+        assert!(lo.x - x0 <= 2.0 && lo.y - y0 <= 2.0 && x1 - hi.x <= 2.0 && y1 - hi.y <= 2.0, "{rect:?}");
+        // Far to the side: nothing of it is in the frame.
+        assert_eq!(box_scissor((Vec3::new(40.0, 0.0, 0.0), Vec3::splat(0.5)), view_proj, w, h), Some(None));
+        // Around the eye: a corner behind the camera.
+        assert_eq!(box_scissor((eye, Vec3::splat(0.5)), view_proj, w, h), None);
     }
 }

@@ -180,6 +180,22 @@ pub fn object_bounds(scene: &Scene, object: usize) -> (Vec3, f32) {
     ((lo + hi) * 0.5, (hi - lo).length() * 0.5)
 }
 
+/// The box (centre, half extents) around an object, about [`object_bounds`]' centre: the
+/// exact sphere's, or its mesh's. A heightfield's is its bounding sphere's cube: the window
+/// displaces its vertices on the GPU, beyond the ones held here.
+pub fn object_box(scene: &Scene, object: usize) -> (Vec3, Vec3) {
+    let o = &scene.objects[object];
+    let (centre, radius) = object_bounds(scene, object);
+    if o.heightfield.is_some() || o.mesh.positions.is_empty() {
+        return (centre, Vec3::splat(radius));
+    }
+    if let Some(Analytic::Sphere { radius, .. }) = o.analytic {
+        return (centre, Vec3::splat(radius));
+    }
+    let (lo, hi) = o.mesh.bounds();
+    (centre, (hi - lo) * 0.5)
+}
+
 /// The same centre as [`object_bounds`] with the smallest radius about it that holds every
 /// vertex: the farthest vertex's distance. The passes that skip work outside a sphere (the
 /// shading passes' covers, the G-buffer's and the shadow maps' culling) take this one: a

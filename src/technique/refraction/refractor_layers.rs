@@ -366,7 +366,7 @@ impl ShadePass {
             let mut clears = vec![Clear::None];
             clears.extend(self.debug.iter().map(|_| Clear::Color([0.0; 4])));
             cmd.in_target(&self.target, 0, &clears, |cmd| match cover {
-                Some((cover, octagons)) => cover.draw(cmd, &sets, &octagons),
+                Some((cover, octagons)) => cover.draw(cmd, &sets, &octagons, self.target.extent()),
                 None => {
                     cmd.bind_graphics(&self.pipeline, &sets);
                     cmd.draw(3, 1);
