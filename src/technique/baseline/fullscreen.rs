@@ -148,7 +148,7 @@ pub fn box_scissor(
         let sign = Vec3::new([-1.0, 1.0][k & 1], [-1.0, 1.0][(k >> 1) & 1], [-1.0, 1.0][k >> 2]);
         let clip = view_proj * (centre + sign * half).extend(1.0);
         // A margin for the rounding of w, as the octagon's (`octagon`).
-        if !(clip.w > 1e-6 * clip.truncate().length().max(1.0)) {
+        if clip.w.is_nan() || clip.w <= 1e-6 * clip.truncate().length().max(1.0) {
             return None;
         }
         // uv = ndc / 2 + 1/2, (0, 0) at the top-left pixel corner (common/cover.vert).
