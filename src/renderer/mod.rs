@@ -147,7 +147,8 @@ pub struct Renderer {
     work_budget: Option<std::time::Duration>,
     /// Every object's vertex range and current (centre, bounding radius), for moving objects.
     objects: Vec<ObjectState>,
-    /// The objects' (centre, bounding radius), copied from `objects` for each frame's inputs.
+    /// The objects' (centre, tight radius), copied from `objects` for each frame's inputs
+    /// ([`FrameInputs::object_bounds`]).
     bounds: Vec<(Vec3, f32)>,
     /// The same for [`FrameInputs::object_boxes`].
     boxes: Vec<(Vec3, Vec3)>,
