@@ -64,3 +64,36 @@ fn newton_d_t_step_reaches_the_papers_exit_in_fewer_iterations() {
     eprintln!("pixels off the converged image after 4 iterations: paper {paper}, newton {newton}");
     assert!(newton < paper, "newton {newton} vs paper {paper}");
 }
+
+/// `render.hu_qin.d_t_bracket` (glsl/include/hu_qin_exit.glsl): where the back layer has no
+/// root along T1 (a grazing exit between two texels' depths, a fold of the bunny hiding its
+/// exit surface), Fig. 9's iteration oscillates across the layer's jump until
+/// `max_iterations`, so where it stops depends on the cap: on bunny_env at 128^2, 92 pixels
+/// differ between 25 and 1024 iterations. The bracketed search closes the interval of the
+/// sign change below the tolerance, in about log2(thickness / tolerance) halvings, so every
+/// pixel has stopped by 16 iterations and a higher cap changes nothing.
+#[test]
+fn bracketed_d_t_search_stops_before_its_cap_where_the_papers_oscillates() {
+    if !common::in_own_process() {
+        return;
+    }
+    let ctx = common::context(false);
+    let render = |bracket: bool, iterations: u32| {
+        let sets = [
+            "render.refraction=hu_qin".to_string(),
+            format!("render.hu_qin.d_t_bracket={bracket}"),
+            format!("render.hu_qin.max_iterations={iterations}"),
+        ];
+        common::render_on(&ctx, &common::scene("bunny_env", 128, &common::refs(&sets))).hdr
+    };
+    let differing = |a: &[f32], b: &[f32]| a.chunks(4).zip(b.chunks(4)).filter(|(p, q)| p != q).count();
+    // The scene has pixels where Fig. 9 does not converge, or this test would show nothing.
+    let paper = differing(&render(false, 25), &render(false, 1024));
+    assert!(paper > 0, "Fig. 9 converged everywhere: the scene no longer tests the bracket");
+    let bracketed = render(true, 1024);
+    for cap in [16, 25] {
+        let n = differing(&render(true, cap), &bracketed);
+        eprintln!("pixels changed by a cap of {cap} instead of 1024: bracketed {n}, Fig. 9 (cap 25) {paper}");
+        assert_eq!(n, 0, "the bracketed search still runs at {cap} iterations");
+    }
+}

@@ -36,8 +36,9 @@ layout(constant_id = 3) const uint NEARBY_EXIT = 2;
 // Fig. 7's halvings and Fig. 9's steps (render.hu_qin.search_steps, max_iterations).
 layout(constant_id = 4) const uint SEARCH_STEPS = 8;
 layout(constant_id = 5) const uint MAX_ITERATIONS = 32;
-// Fig. 9's own step in the impostor textures (glsl/include/hu_qin_exit.glsl).
+// Fig. 9's own step and stopping rule in the impostor textures (glsl/include/hu_qin_exit.glsl).
 const uint D_T_STEP = D_T_STEP_PAPER;
+const uint D_T_BRACKET = 0u;
 // The dielectrics' nearest back and front faces (BACK_PASS of src/technique/refraction/nearby_impostors.rs),
 // layer = the rectangle's: xyz outward normal (0: none), w axial depth.
 layout(set = 1, binding = BINDING_NEARBY_BACK) uniform sampler2DArray nearby_back;

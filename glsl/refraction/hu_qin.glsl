@@ -31,6 +31,9 @@ layout(constant_id = 6) const float NEARBY_TOLERANCE = 1e-3;
 layout(constant_id = 7) const uint NEARBY_SEEDS = 8;
 // render.hu_qin.d_t_step: Fig. 9's step (D_T_STEP_PAPER) or that step over |T1 . V| (D_T_STEP_NEWTON).
 layout(constant_id = 8) const uint D_T_STEP = D_T_STEP_PAPER;
+// render.hu_qin.d_t_bracket: 1 keeps the d_T iteration inside the interval where its residual
+// changes sign (glsl/include/hu_qin_exit.glsl).
+layout(constant_id = 13) const uint D_T_BRACKET = 1;
 // render.hu_qin.nearby_lookup: Fig. 13's closest rectangle (NEARBY_LOOKUP_PAPER) or the nearest
 // corrected surface over all rectangles (NEARBY_LOOKUP_NEAREST), glsl/include/nearby.glsl.
 layout(constant_id = 9) const uint NEARBY_LOOKUP = NEARBY_LOOKUP_PAPER;

@@ -874,6 +874,13 @@ params! {
         /// or that difference over |T1 . V|, a Newton step (the impostor textures of §2.2.1
         /// keep the paper's).
         d_t_step: DTStep = DTStep::Paper;
+        /// Keep the d_T iteration inside the interval where its residual changes sign, halving
+        /// the interval where a step would leave it, and stop when it is below `tolerance`
+        /// (prism's departure, in the camera view; the impostor textures of §2.2.1 keep the
+        /// paper's). Where the layer has no root along T1 (a grazing exit between two texels'
+        /// depths, a fold hiding the exit surface), Fig. 9's iteration oscillates until
+        /// `max_iterations`; this stops at the layer's jump instead. false: Fig. 9 as printed.
+        d_t_bracket: bool = true;
         /// Section 4's acceleration: skip the binary search, assume a back-facing exit, and
         /// decide "front-facing" (the front-facing layer) only when P2 leaves the refractor's
         /// silhouette.

@@ -280,6 +280,7 @@ impl HuQinPass {
                     DTStep::Newton => D_T_STEP_NEWTON,
                 }),
             ),
+            ("D_T_BRACKET", Spec::U32(u32::from(params.d_t_bracket))),
         ];
         specialization.extend(scene_specialization(scene));
         let fragment_shader = match &oracle {
