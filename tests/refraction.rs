@@ -965,12 +965,13 @@ fn wyman_back_surfaces_are_the_refractors_own() {
 }
 
 /// `render.hu_qin.assume_back_facing = "auto"` takes section 4's shortcut where every
-/// dielectric is at least as dense as air and §2.1.2's decision elsewhere: sphere_env's glass
-/// (1.5, and 1.0 exactly) assumes it, bubble_env's air bubble (0.75) and a dispersive glass
-/// with a channel below 1 do not; on bubble_env the image is the one of `false`, which differs
-/// from the one of `true` (so the comparison can tell them apart).
+/// dielectric is a closed object at least as dense as air and §2.1.2's decision elsewhere:
+/// sphere_env's glass (1.5, and 1.0 exactly) assumes it, bubble_env's air bubble (0.75), a
+/// dispersive glass with a channel below 1 and water_pool's water (1.33, an open heightfield)
+/// do not; on bubble_env the image is the one of `false`, which differs from the one of
+/// `true` (so the comparison can tell them apart).
 #[test]
-fn auto_assumes_a_back_facing_exit_where_every_dielectric_is_denser_than_air() {
+fn auto_assumes_a_back_facing_exit_where_every_dielectric_is_a_closed_object_denser_than_air() {
     use prism::scene::techniques::HuQinParams;
     use prism::technique::refraction::refraction_hu_qin::assumes_back_facing;
     if !common::in_own_process() {
@@ -984,6 +985,7 @@ fn auto_assumes_a_back_facing_exit_where_every_dielectric_is_denser_than_air() {
     assert!(auto("sphere_env", &["materials.glass.ior=1.0"]));
     assert!(!auto("bubble_env", &[]));
     assert!(!auto("sphere_env", &["materials.glass.ior=[0.98, 1.5, 1.6]"]));
+    assert!(!auto("water_pool", &[]));
     assert!(!auto("sphere_env", &["render.hu_qin.assume_back_facing=false"]));
     assert!(auto("bubble_env", &["render.hu_qin.assume_back_facing=true"]));
 

@@ -61,14 +61,19 @@ pub const REFRACTION_HU_QIN_NEARBY: &str = "refraction_hu_qin_nearby";
 pub const TECHNIQUE: Registration = registration!("refraction = \"hu_qin\"", plan, HuQinPass, ["hu_qin"]);
 
 /// Whether the exit search assumes a back-facing exit (§4) for `scene`: `"auto"` does where
-/// every dielectric is at least as dense as air in every channel ([`BackFacing::Auto`]).
+/// every dielectric object is a closed mesh at least as dense as air in every channel
+/// ([`BackFacing::Auto`]). §4's argument is about a closed refractor: light that entered an
+/// open surface (a heightfield's water) has no far side of it to leave through.
 pub fn assumes_back_facing(params: &HuQinParams, scene: &Scene) -> bool {
     match params.assume_back_facing {
         BackFacing::True => true,
         BackFacing::False => false,
-        BackFacing::Auto => {
-            scene.materials.iter().all(|m| !matches!(m, Material::Dielectric { ior, .. } if ior.min_element() < 1.0))
-        }
+        BackFacing::Auto => scene.objects.iter().all(|o| match scene.material_of(o) {
+            Material::Dielectric { ior, .. } => {
+                ior.min_element() >= 1.0 && o.heightfield.is_none() && o.mesh.is_closed_outward()
+            }
+            _ => true,
+        }),
     }
 }
 
