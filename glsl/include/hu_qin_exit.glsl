@@ -10,6 +10,10 @@
 //     that layer's depth at uv, a distance that grows away from the eye along the view
 //     direction, from the one texel both read;
 //   float exit_point_depth(vec3 P): P's depth in the same measure;
+//   vec4 exit_affine(vec3 P, float w): the view's map of the homogeneous point (P, w) before
+//     its divide, (x, y, depth, divisor): affine in (P, w), so along a ray P1 + t T1 it is
+//     exit_affine(P1, 1) + t exit_affine(T1, 0), and its depth with w = 1 is exit_point_depth;
+//   vec2 exit_affine_uv(vec4 a): the uv of such a point, exit_project's;
 //   vec3 exit_depth_axis(): the direction in which that depth grows by one per unit length;
 //   constant D_T_STEP: D_T_STEP_PAPER or D_T_STEP_NEWTON (hu_qin_search_d_t);
 //   constant D_T_BRACKET: 1 keeps the sign change of the search's residual (hu_qin_search_d_t);
@@ -82,12 +86,15 @@ bool hu_qin_search_d_t(bool front, vec3 P1, vec3 T1, float tol, float step0, out
     d_T = 0.0;
     // d_T >= 0 (P1 is on the front layer, in front of the back one); no upper bound yet.
     float lo = 0.0, hi = 3.4e38;
+    // P2 = P1 + d_T T1 projected as one multiply-add per component from the two ends' maps,
+    // not a matrix product per step.
+    vec4 a1 = exit_affine(P1, 1.0), aT = exit_affine(T1, 0.0);
     for (uint i = 0; i < MAX_ITERATIONS; ++i) {
         float next = max(d_T + step, 0.0);
         if (D_T_BRACKET != 0u && hi < 3.4e38 && !(next > lo && next < hi)) next = 0.5 * (lo + hi);
-        vec3 P2 = P1 + next * T1;
+        vec4 a2 = a1 + next * aT;
         float z;
-        if (!exit_layer(front, exit_project(P2), z)) {
+        if (!exit_layer(front, exit_affine_uv(a2), z)) {
             stayed = false;
             step *= 0.5;
             hi = min(hi, next);
@@ -95,7 +102,7 @@ bool hu_qin_search_d_t(bool front, vec3 P1, vec3 T1, float tol, float step0, out
         }
         d_T = next;
         found = true;
-        step = flag * (z - exit_point_depth(P2));
+        step = flag * (z - a2.z);
         if (abs(step) < tol) break;
         if (step > 0.0) lo = max(lo, d_T); else hi = min(hi, d_T);
         if (D_T_BRACKET != 0u && hi - lo < tol) break;

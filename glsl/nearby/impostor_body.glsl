@@ -73,6 +73,13 @@ float exit_point_depth(vec3 P) {
 vec3 exit_depth_axis() {
     return pc.axis.xyz;
 }
+vec4 exit_affine(vec3 P, float w) {
+    vec4 clip = pc.view_proj * vec4(P, w);
+    return vec4(clip.xy, dot(P - w * pc.origin.xyz, pc.axis.xyz), w);
+}
+vec2 exit_affine_uv(vec4 a) {
+    return a.xy * 0.5 + 0.5;
+}
 // OBJ_k's front (true) or back layer texel at uv; zero outside the texture.
 vec4 exit_texel(bool front, vec2 uv) {
     if (any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0)))) return vec4(0.0);

@@ -148,6 +148,13 @@ vec3 exit_depth_axis() {
 vec2 exit_project(vec3 P) {
     return project_uv(P);
 }
+vec4 exit_affine(vec3 P, float w) {
+    vec4 clip = frame.view_proj * vec4(P, w);
+    return vec4(clip.xy, -(frame.view * vec4(P, w)).z, clip.w);
+}
+vec2 exit_affine_uv(vec4 a) {
+    return a.xy / a.w * 0.5 + 0.5;
+}
 vec3 exit_back_point(vec2 uv) {
     return world_from_depth(uv, texelFetch(back_depth, texel_of(uv), 0).r);
 }

@@ -23,6 +23,10 @@ layout(constant_id = 0) const uint DEBUG = 0;
 // specular/single.frag): lavapipe runs both sides of a per-pixel branch, so the per-channel
 // code is compiled out otherwise.
 layout(constant_id = 2) const uint DISPERSION = 1;
+// 1 when the back layer keeps the furthest back faces (cleared to the far value 1, test LESS),
+// 0 for the nearest (cleared to 0, test GREATER): where its depth holds a face, so does its
+// normal, and the one-channel depth tells coverage at a quarter of the normal's bytes.
+layout(constant_id = 3) const uint BACK_FURTHEST = 1;
 #ifdef ORACLE_TRACE
 // ORACLE_EXIT_POINT | ORACLE_EXIT_NORMAL (src/scene/techniques.rs, WymanOracle).
 layout(constant_id = 1) const uint ORACLE = 0;
@@ -85,8 +89,8 @@ void main() {
     vec3 L_reflected = environment(reflect(V, N1));
 
     // d_V: distance between the front and the back surface along the view ray (Fig. 3c).
-    bool back_here = covered(back_texel(in_uv));
     float back_z = texelFetch(back_depth, ivec3(px, slot), 0).r;
+    bool back_here = BACK_FURTHEST != 0u ? back_z < 1.0 : back_z > 0.0;
     float d_V = back_here ? max(length(world_from_depth(in_uv, back_z) - P1), 0.0) : 0.0;
     float d_N = uintBitsToFloat(uint(albedo.r) | (uint(albedo.g) << 11) | (uint(albedo.b) << 22));
     if (d_N <= 0.0) d_N = d_V;   // open mesh: no far side along -N

@@ -143,7 +143,10 @@ impl WymanPass {
         let slots = Buffer::storage(ctx, "refraction_wyman_slots", &refractor_slots(scene, s.gpu))?;
         let b = &layers.layers[0];
         let tracer = oracle.as_ref().map(|o| o.buffers(s.gpu)).unwrap_or_default();
-        let mut specialization = vec![("DISPERSION", Spec::U32(u32::from(has_dispersion(scene))))];
+        let mut specialization = vec![
+            ("DISPERSION", Spec::U32(u32::from(has_dispersion(scene)))),
+            ("BACK_FURTHEST", Spec::U32(u32::from(back == LayerKind::BackFurthest))),
+        ];
         specialization.extend(scene_specialization(scene));
         let fragment_shader = match &oracle {
             None => "refraction/wyman.frag",
