@@ -9,12 +9,11 @@
 //   bool exit_layer(bool front, vec2 uv, out float depth): exit_covered, and where covered
 //     that layer's depth at uv, a distance that grows away from the eye along the view
 //     direction, from the one texel both read;
-//   float exit_point_depth(vec3 P): P's depth in the same measure;
 //   vec4 exit_affine(vec3 P, float w): the view's map of the homogeneous point (P, w) before
-//     its divide, (x, y, depth, divisor): affine in (P, w), so along a ray P1 + t T1 it is
-//     exit_affine(P1, 1) + t exit_affine(T1, 0), and its depth with w = 1 is exit_point_depth;
+//     its divide, (x, y, depth, divisor), depth in the layers' measure: affine in (P, w), so
+//     along a ray P1 + t T1 it is exit_affine(P1, 1) + t exit_affine(T1, 0), and the depth of
+//     a direction (w = 0) is the rate at which depth grows along it;
 //   vec2 exit_affine_uv(vec4 a): the uv of such a point, exit_project's;
-//   vec3 exit_depth_axis(): the direction in which that depth grows by one per unit length;
 //   constant D_T_STEP: D_T_STEP_PAPER or D_T_STEP_NEWTON (hu_qin_search_d_t);
 //   constant D_T_BRACKET: 1 keeps the sign change of the search's residual (hu_qin_search_d_t);
 //   vec2 exit_project(vec3 P): P's uv in the view;
@@ -106,7 +105,7 @@ bool hu_qin_search_d_t(bool front, vec3 P1, vec3 T1, float tol, float step0, out
         if (abs(step) < tol) break;
         if (step > 0.0) lo = max(lo, d_T); else hi = min(hi, d_T);
         if (D_T_BRACKET != 0u && hi - lo < tol) break;
-        if (D_T_STEP == D_T_STEP_NEWTON) step /= max(abs(dot(T1, exit_depth_axis())), 0.1);
+        if (D_T_STEP == D_T_STEP_NEWTON) step /= max(abs(aT.z), 0.1);
     }
     return stayed;
 }

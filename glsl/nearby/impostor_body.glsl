@@ -70,9 +70,6 @@ vec2 exit_project(vec3 P) {
 float exit_point_depth(vec3 P) {
     return dot(P - pc.origin.xyz, pc.axis.xyz);
 }
-vec3 exit_depth_axis() {
-    return pc.axis.xyz;
-}
 vec4 exit_affine(vec3 P, float w) {
     vec4 clip = pc.view_proj * vec4(P, w);
     return vec4(clip.xy, dot(P - w * pc.origin.xyz, pc.axis.xyz), w);

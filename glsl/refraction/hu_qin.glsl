@@ -138,16 +138,10 @@ bool exit_layer(bool front, vec2 uv, out float depth) {
     depth = frame.clip.x / max(d, 1e-30);
     return d > 0.0;
 }
-float exit_point_depth(vec3 P) {
-    return view_depth(P);
-}
-vec3 exit_depth_axis() {
-    // view_depth is -z in view space: it grows along the camera's forward axis.
-    return -vec3(frame.view[0][2], frame.view[1][2], frame.view[2][2]);
-}
 vec2 exit_project(vec3 P) {
     return project_uv(P);
 }
+// The depth is view_depth's, -z in view space.
 vec4 exit_affine(vec3 P, float w) {
     vec4 clip = frame.view_proj * vec4(P, w);
     return vec4(clip.xy, -(frame.view * vec4(P, w)).z, clip.w);

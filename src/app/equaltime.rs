@@ -80,6 +80,43 @@ pub struct ExactArgs {
     pub no_exact: bool,
 }
 
+impl ExactArgs {
+    /// The flags whose values differ from their defaults, as they would be typed, each with
+    /// a leading space: what a report section's provenance line must add to its command for
+    /// the section to be measured again as it was (" --exact-spp 1").
+    pub fn changed_flags(&self) -> String {
+        #[derive(clap::Parser)]
+        struct Defaults {
+            #[command(flatten)]
+            exact: ExactArgs,
+        }
+        let d = <Defaults as clap::Parser>::parse_from(["prism"]).exact;
+        fn list<T: ToString>(v: &[T]) -> String {
+            v.iter().map(ToString::to_string).collect::<Vec<_>>().join(",")
+        }
+        let mut flags = String::new();
+        if self.no_exact {
+            flags += " --no-exact";
+        }
+        if self.exact_source != d.exact_source {
+            flags += " --exact-source reference";
+        }
+        if self.exact_depths != d.exact_depths {
+            flags += &format!(" --exact-depths {}", list(&self.exact_depths));
+        }
+        if self.exact_photons != d.exact_photons {
+            flags += &format!(" --exact-photons {}", list(&self.exact_photons));
+        }
+        if self.exact_spp != d.exact_spp {
+            flags += &format!(" --exact-spp {}", list(&self.exact_spp));
+        }
+        if self.exact_frames != d.exact_frames {
+            flags += &format!(" --exact-frames {}", self.exact_frames);
+        }
+        flags
+    }
+}
+
 /// `--exact-source`: the exact tracer chosen from the settings, or the reference forced.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum ExactChoice {
@@ -667,6 +704,23 @@ impl Exact {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn changed_exact_flags_are_the_ones_typed() {
+        #[derive(clap::Parser)]
+        struct Cli {
+            #[command(flatten)]
+            exact: super::ExactArgs,
+        }
+        let parse = |args: &[&str]| <Cli as clap::Parser>::parse_from(args).exact.changed_flags();
+        assert_eq!(parse(&["prism"]), "");
+        assert_eq!(parse(&["prism", "--exact-spp", "1,2,4,8"]), "");
+        assert_eq!(parse(&["prism", "--exact-spp", "1"]), " --exact-spp 1");
+        assert_eq!(
+            parse(&["prism", "--exact-depths", "1,16", "--exact-source", "reference"]),
+            " --exact-source reference --exact-depths 1,16"
+        );
+    }
+
     use super::*;
 
     fn curve(points: &[(f64, f64)]) -> ExactCurve {

@@ -91,7 +91,13 @@ pub fn run(args: ReportArgs) -> Result<()> {
 
     let mut md = String::new();
     let mut summaries: Vec<SummaryRow> = Vec::new();
-    let command = format!("prism report --size {} --spp {} --photons {}", args.size, settings.spp, settings.photons);
+    let command = format!(
+        "prism report --size {} --spp {} --photons {}{}",
+        args.size,
+        settings.spp,
+        settings.photons,
+        args.exact.changed_flags()
+    );
     let provenance = format!("*Measured at git revision {} with `{command}`.*\n", super::bench::git_revision());
 
     for e in &spec.entry {
