@@ -704,12 +704,14 @@ impl Exact {
 
 #[cfg(test)]
 mod tests {
+    use super::*;
+
     #[test]
     fn changed_exact_flags_are_the_ones_typed() {
         #[derive(clap::Parser)]
         struct Cli {
             #[command(flatten)]
-            exact: super::ExactArgs,
+            exact: ExactArgs,
         }
         let parse = |args: &[&str]| <Cli as clap::Parser>::parse_from(args).exact.changed_flags();
         assert_eq!(parse(&["prism"]), "");
@@ -720,8 +722,6 @@ mod tests {
             " --exact-source reference --exact-depths 1,16"
         );
     }
-
-    use super::*;
 
     fn curve(points: &[(f64, f64)]) -> ExactCurve {
         ExactCurve {

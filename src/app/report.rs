@@ -641,7 +641,10 @@ fn header(frames: u32, warmup: u32, sections: &str) -> String {
             words.find(|w| *w == name).and_then(|_| words.next()).unwrap_or("?").to_string()
         };
         let size = flag("--size");
-        format!("{size}x{size}, {} spp, {} photons", flag("--spp"), flag("--photons"))
+        // The flags after these three (the exact curve's, where not the defaults).
+        let rest: Vec<&str> = command.split_whitespace().skip_while(|w| *w != "--photons").skip(2).collect();
+        let rest = if rest.is_empty() { String::new() } else { format!(" ({})", rest.join(" ")) };
+        format!("{size}x{size}, {} spp, {} photons{rest}", flag("--spp"), flag("--photons"))
     };
     let measured = match commands.as_slice() {
         [] => "none measured yet".to_string(),
