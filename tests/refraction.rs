@@ -307,6 +307,40 @@ fn wyman_d_tilde_on_a_slab_is_the_closed_form() {
     assert!(max_err < 1e-5, "d~ off the closed form by {max_err}");
 }
 
+/// Where the back layer holds no face behind P1 (an open pane: its only face is a front face),
+/// Wyman's d_V has nothing to measure and falls back to d_N, which an open mesh does not
+/// have: d~ is 0, P2 = P1. The layer's coverage at P1 is read from its depth, cleared to the
+/// far value 1 for the furthest back faces; reading a cleared texel as a face would
+/// reconstruct the near plane and give d~ the distance from it, up to 4.2 here.
+#[test]
+fn wyman_takes_no_thickness_where_no_back_face_lies_behind_p1() {
+    if !common::in_own_process() {
+        return;
+    }
+    let size = 32;
+    let object = "name = \"pane\"\nshape = \"quad\"\ncenter = [0, 0, 0]\nsize = [2, 2]\nnormal = [0, 0, 1]";
+    let s = common::glass_scene(
+        size,
+        [0.0, 0.0, 4.0],
+        1.5,
+        object,
+        &["render.refraction=wyman", "render.wyman.debug=true"],
+    );
+    let ctx = context(false);
+    let mut r = Renderer::new(&ctx, &s).unwrap();
+    r.render_frame().unwrap();
+    let p2 = r.read_target("refraction_wyman_p2").unwrap().unwrap();
+    let t2 = r.read_target("refraction_wyman_t2").unwrap().unwrap();
+    drop(r);
+    common::assert_no_validation_errors(&ctx);
+    // The pane's pixels are those the shading pass wrote (P2's w is the exit kind, 1 or 3).
+    let pane: Vec<usize> = (0..(size * size) as usize).filter(|&p| p2[4 * p + 3] > 0.0).collect();
+    let max_d = pane.iter().map(|&p| t2[4 * p + 3].abs()).fold(0.0f32, f32::max);
+    eprintln!("{} pane pixels, |d~| at most {max_d}", pane.len());
+    assert!(pane.len() > 100, "the pane covers {} pixels", pane.len());
+    assert_eq!(max_d, 0.0, "d~ where no back face lies behind P1");
+}
+
 /// The G-buffer culls a closed mesh's back faces only while the camera is outside it: from
 /// inside the ball, what every pixel sees is a back face, and the ball must still bend the
 /// view (a G-buffer culling them would show the environment as if the ball were not there).
