@@ -260,20 +260,7 @@ fn wyman_d_tilde_on_a_slab_is_the_closed_form() {
     }
     let (h, size) = (0.3f32, 64);
     let object = "name = \"slab\"\nshape = \"box\"\ncenter = [0, 0, 0]\nsize = [4, 4, 0.3]";
-    let s = common::glass_scene(
-        size,
-        [0.0, 0.0, 4.0],
-        1.5,
-        object,
-        &["render.refraction=wyman", "render.wyman.debug=true"],
-    );
-    let ctx = context(false);
-    let mut r = Renderer::new(&ctx, &s).unwrap();
-    r.render_frame().unwrap();
-    let p2 = r.read_target("refraction_wyman_p2").unwrap().unwrap();
-    let t2 = r.read_target("refraction_wyman_t2").unwrap().unwrap();
-    drop(r);
-    common::assert_no_validation_errors(&ctx);
+    let (s, p2, t2) = wyman_glass_exits(size, object);
     let (mut pixels, mut max_err, mut max_signal) = (0, 0.0f32, 0.0f32);
     for j in 0..size {
         for i in 0..size {
@@ -307,18 +294,9 @@ fn wyman_d_tilde_on_a_slab_is_the_closed_form() {
     assert!(max_err < 1e-5, "d~ off the closed form by {max_err}");
 }
 
-/// Where the back layer holds no face behind P1 (an open pane: its only face is a front face),
-/// Wyman's d_V has nothing to measure and falls back to d_N, which an open mesh does not
-/// have: d~ is 0, P2 = P1. The layer's coverage at P1 is read from its depth, cleared to the
-/// far value 1 for the furthest back faces; reading a cleared texel as a face would
-/// reconstruct the near plane and give d~ the distance from it, up to 4.2 here.
-#[test]
-fn wyman_takes_no_thickness_where_no_back_face_lies_behind_p1() {
-    if !common::in_own_process() {
-        return;
-    }
-    let size = 32;
-    let object = "name = \"pane\"\nshape = \"quad\"\ncenter = [0, 0, 0]\nsize = [2, 2]\nnormal = [0, 0, 1]";
+/// `object` in glass (ior 1.5) seen from (0, 0, 4) at size^2, rendered with Wyman: the scene
+/// and the debug targets P2 and T2 (w: the exit kind and d~).
+fn wyman_glass_exits(size: u32, object: &str) -> (prism::scene::Scene, Vec<f32>, Vec<f32>) {
     let s = common::glass_scene(
         size,
         [0.0, 0.0, 4.0],
@@ -333,6 +311,22 @@ fn wyman_takes_no_thickness_where_no_back_face_lies_behind_p1() {
     let t2 = r.read_target("refraction_wyman_t2").unwrap().unwrap();
     drop(r);
     common::assert_no_validation_errors(&ctx);
+    (s, p2, t2)
+}
+
+/// Where the back layer holds no face behind P1 (an open pane: its only face is a front face),
+/// Wyman's d_V has nothing to measure and falls back to d_N, which an open mesh does not
+/// have: d~ is 0, P2 = P1. The layer's coverage at P1 is read from its depth, cleared to the
+/// far value 1 for the furthest back faces; reading a cleared texel as a face would
+/// reconstruct the near plane and give d~ the distance from it, up to 4.2 here.
+#[test]
+fn wyman_takes_no_thickness_where_no_back_face_lies_behind_p1() {
+    if !common::in_own_process() {
+        return;
+    }
+    let size = 32;
+    let object = "name = \"pane\"\nshape = \"quad\"\ncenter = [0, 0, 0]\nsize = [2, 2]\nnormal = [0, 0, 1]";
+    let (_, p2, t2) = wyman_glass_exits(size, object);
     // The pane's pixels are those the shading pass wrote (P2's w is the exit kind, 1 or 3).
     let pane: Vec<usize> = (0..(size * size) as usize).filter(|&p| p2[4 * p + 3] > 0.0).collect();
     let max_d = pane.iter().map(|&p| t2[4 * p + 3].abs()).fold(0.0f32, f32::max);
