@@ -75,26 +75,4 @@ vec3 silhouette_normal(vec3 T1) {
     return len > 1e-12 ? n / len : T1;
 }
 
-// Single interface seen from inside a refractor (the camera inside it): what
-// specular/single.frag does, so that every technique agrees with the baseline there.
-// one_ior: the three channels share ior.x, so one refracted lookup serves them all (callers
-// pass a specialisation constant's test, so that the per-channel code is compiled out).
-vec3 refraction_from_inside(vec3 I, vec3 n_inward, vec3 ior, bool one_ior) {
-    vec3 R = environment(reflect(I, n_inward));
-    float cos_i = clamp(-dot(I, n_inward), 0.0, 1.0);
-    if (one_ior) {
-        float F = fresnel_dielectric(cos_i, ior.x);
-        vec3 T = refract(I, n_inward, ior.x);
-        vec3 L_t = dot(T, T) > 0.0 ? environment(T) : vec3(0.0);
-        return F * R + (1.0 - F) * L_t;
-    }
-    vec3 L;
-    for (int c = 0; c < 3; ++c) {
-        float F = fresnel_dielectric(cos_i, ior[c]);
-        vec3 T = refract(I, n_inward, ior[c]);
-        vec3 L_t = dot(T, T) > 0.0 ? environment(T) : vec3(0.0);
-        L[c] = F * R[c] + (1.0 - F) * L_t[c];
-    }
-    return L;
-}
 #endif

@@ -166,11 +166,13 @@ void main() {
     bool one_ior = DISPERSION == 0u || (ior.r == ior.g && ior.g == ior.b);
     vec3 V = camera_ray(in_uv);
     vec3 N1 = normalize(nm.xyz);
-    if (dot(V, N1) > 0.0) {
-        // The camera is inside the refractor: one interface, as the baseline.
-        out_radiance = vec4(finite_or_zero(refraction_from_inside(V, -N1, ior, one_ior)), 1.0);
-        return;
-    }
+    // A camera inside the refractor sees a back face: one interface, as the baseline
+    // (specular/single.frag), with N1 turned to face the camera and the same Fresnel term and
+    // two lookups as the two interfaces below (R and T1 meet the nearby objects, as every ray
+    // leaving OBJ_R does). A CPU device (lavapipe) runs a branch's code for every pixel,
+    // lanes masked, so a path of its own would add two lookups to each.
+    bool from_inside = dot(V, N1) > 0.0;
+    if (from_inside) N1 = -N1;
     vec3 P1 = world_from_depth(in_uv, depth);
     float dist1 = length(P1 - frame.camera_position.xyz);
     float tol = TOLERANCE * dist1;
@@ -189,16 +191,17 @@ void main() {
     vec3 L = vec3(0.0);
     for (int c = 0; c < 3; ++c) {
         int k = channels == 1 ? 0 : c;
-        float eta = 1.0 / ior[k];
+        float eta = from_inside ? ior[k] : 1.0 / ior[k];
         float F = fresnel_dielectric(cos_i, eta);
         vec3 T1 = refract(V, N1, eta);
-        vec3 L_t = vec3(0.0);
-        vec3 P2 = P1, T2 = vec3(0.0);
+        // No TIR at P1.
+        bool enters = dot(T1, T1) > 0.0;
+        vec3 P2 = P1, T2 = vec3(0.0), N2 = vec3(0.0);
         // debug: 0 no exit (TIR at P1); 1 back-facing, 2 front-facing exit (§2.1.2); 3 and 4 the
         // same decisions with P2 outside the chosen layer's coverage (N2 from §3.3 of Wyman 2005).
         float kind = 0.0;
         float d_T = 0.0;
-        if (dot(T1, T1) > 0.0) {
+        if (enters && !from_inside) {
             // §2.1.2: which surface P2 lies on.
             bool front = false;
             // A small positive first step for the front-facing search (Fig. 9), 1% of the
@@ -243,7 +246,7 @@ void main() {
             vec2 uv2 = project_uv(P2);
             // §2.1.4: N2 from the normal layer matching the exit surface.
             bool covered = exit_covered(front, uv2);
-            vec3 N2 = !covered ? silhouette_normal(T1)
+            N2 = !covered ? silhouette_normal(T1)
                                : (front ? layer_normal_at(front_normal, uv2) : layer_normal_at(back_normal, uv2));
 #ifdef ORACLE_TRACE
             // §2.1.4's N2 replaced by the exact normal at T1's exit.
@@ -256,12 +259,14 @@ void main() {
             // Leaving the object: the normal facing T1 is -N2 and eta = n_refractor / n_outside;
             // TIR at P2 is clamped to the critical angle as in Wyman 2005 §3.3.
             T2 = refract_clamped(T1, -N2, ior[k]);
-            vec3 L_T2 = seen_from(P2, T2);
-#ifdef ORACLE_TRACE
-            if ((ORACLE & ORACLE_NEARBY) != 0u) L_T2 = oracle_nearby_radiance(P2, T2, N2);
-#endif
-            L_t = L_T2 * exp(-m.spec_b.rgb * d_T);
         }
+        // From inside, T1 leaves the refractor at P1. Under TIR at P1, F = 1 and the lookup
+        // (along R, a direction that exists) adds nothing.
+        vec3 L_T2 = seen_from(P2, from_inside ? T1 : enters ? T2 : reflect(V, N1));
+#ifdef ORACLE_TRACE
+        if ((ORACLE & ORACLE_NEARBY) != 0u && !from_inside) L_T2 = oracle_nearby_radiance(P2, T2, N2);
+#endif
+        vec3 L_t = enters ? L_T2 * exp(-m.spec_b.rgb * d_T) : vec3(0.0);
         if (channels == 1) {
             L = F * L_reflected + (1.0 - F) * L_t;
         } else {

@@ -78,11 +78,12 @@ void main() {
     bool one_ior = DISPERSION == 0u || (ior.r == ior.g && ior.g == ior.b);
     vec3 V = camera_ray(in_uv);
     vec3 N1 = normalize(nm.xyz);
-    if (dot(V, N1) > 0.0) {
-        // The camera is inside the refractor: one interface, as the baseline.
-        out_radiance = vec4(finite_or_zero(refraction_from_inside(V, -N1, ior, one_ior)), 1.0);
-        return;
-    }
+    // A camera inside the refractor sees a back face: one interface, as the baseline
+    // (specular/single.frag), with N1 turned to face the camera and the same Fresnel term and
+    // two lookups as the two interfaces below. A CPU device (lavapipe) runs a branch's code
+    // for every pixel, lanes masked, so a path of its own would add two lookups to each.
+    bool from_inside = dot(V, N1) > 0.0;
+    if (from_inside) N1 = -N1;
     vec3 P1 = world_from_depth(in_uv, depth);
     float cos_i = clamp(-dot(V, N1), 0.0, 1.0);
     float theta_i = acos(cos_i);
@@ -101,7 +102,7 @@ void main() {
     vec3 L = vec3(0.0);
     for (int c = 0; c < 3; ++c) {
         int k = channels == 1 ? 0 : c;
-        float eta = 1.0 / ior[k];
+        float eta = from_inside ? ior[k] : 1.0 / ior[k];
         vec3 T1 = refract_clamped(V, N1, eta);
         float theta_t = acos(clamp(-dot(N1, T1), -1.0, 1.0));
         // theta_t / theta_i -> eta as theta_i -> 0 (Snell for small angles).
@@ -149,8 +150,9 @@ void main() {
 #endif
         // Leaving the object: the normal facing T1 is -N2, and eta = n_refractor / n_outside.
         vec3 T2 = refract_clamped(T1, -N2, ior[k]);
-        vec3 absorb = exp(-m.spec_b.rgb * d);
-        vec3 L_t = environment(T2) * absorb;
+        // From inside, T1 leaves the refractor (under TIR F = 1 and T1's lookup adds 0).
+        vec3 absorb = from_inside ? vec3(1.0) : exp(-m.spec_b.rgb * d);
+        vec3 L_t = environment(from_inside ? T1 : T2) * absorb;
         float F = fresnel_dielectric(cos_i, eta);
         if (channels == 1) {
             L = F * L_reflected + (1.0 - F) * L_t;
@@ -158,8 +160,9 @@ void main() {
             L[c] = F * L_reflected[c] + (1.0 - F) * L_t[c];
         }
         if (c == 0 && DEBUG != 0) {
-            out_p2 = vec4(P2, inside ? 1.0 : 3.0);
-            out_t2 = vec4(T2, d);
+            // No exit (kind 0) from inside.
+            out_p2 = from_inside ? vec4(0.0) : vec4(P2, inside ? 1.0 : 3.0);
+            out_t2 = from_inside ? vec4(0.0) : vec4(T2, d);
         }
         if (channels == 1) break;
     }
