@@ -1013,6 +1013,42 @@ fn wyman_back_surfaces_are_the_refractors_own() {
     common::assert_no_validation_errors(&ctx);
 }
 
+/// Each refractor's pixels read its own array layer of the back surfaces: ball b, the second
+/// of two balls in separate halves of the image, shades exactly as it does alone, where its
+/// layer is the first. Reading the first refractor's layer instead would find no back face
+/// behind b (so d_V from d_N and N2 from the silhouette normal) and change its pixels.
+#[test]
+fn every_refractor_reads_its_own_back_layer() {
+    if !common::in_own_process() {
+        return;
+    }
+    let size = 64u32;
+    let ball_b = "name = \"b\"\nshape = \"sphere\"\ncenter = [0.7, 0, 0]\nradius = 0.5";
+    let ball_a = "name = \"a\"\nshape = \"sphere\"\ncenter = [-0.7, 0, 0]\nradius = 0.5";
+    let both = format!("{ball_a}\n[[objects]]\nmaterial = \"glass\"\n{ball_b}");
+    let ctx = context(false);
+    let render = |object: &str| {
+        let s = common::glass_scene(size, [0.0, 0.0, 4.0], 1.5, object, &["render.refraction=wyman"]);
+        render_on(&ctx, &s).hdr
+    };
+    let (two, alone) = (render(&both), render(ball_b));
+    // The right half, where b lies (its silhouette ends 2.8 degrees right of the centre).
+    let mut differ = 0;
+    let mut b_pixels = 0;
+    let background = render("name = \"none\"\nshape = \"sphere\"\ncenter = [0, 0, -100]\nradius = 0.001");
+    for j in 0..size as usize {
+        for i in size as usize / 2..size as usize {
+            let k = 4 * (j * size as usize + i);
+            differ += usize::from(two[k..k + 3] != alone[k..k + 3]);
+            b_pixels += usize::from(alone[k..k + 3] != background[k..k + 3]);
+        }
+    }
+    eprintln!("{b_pixels} pixels of b, {differ} differ with a beside it");
+    assert!(b_pixels > 300, "b covers {b_pixels} pixels");
+    assert_eq!(differ, 0, "b's pixels change when a refractor is drawn before it");
+    common::assert_no_validation_errors(&ctx);
+}
+
 /// `render.hu_qin.assume_back_facing = "auto"` takes section 4's shortcut where every
 /// dielectric is a closed object at least as dense as air and §2.1.2's decision elsewhere:
 /// sphere_env's glass (1.5, and 1.0 exactly) assumes it, bubble_env's air bubble (0.75), a

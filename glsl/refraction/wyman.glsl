@@ -27,6 +27,10 @@ layout(constant_id = 2) const uint DISPERSION = 1;
 // 0 for the nearest (cleared to 0, test GREATER): where its depth holds a face, so does its
 // normal, and the one-channel depth tells coverage at a quarter of the normal's bytes.
 layout(constant_id = 3) const uint BACK_FURTHEST = 1;
+// 1 when the scene has one refractor: every dielectric pixel is its own and reads layer 0,
+// with no load from the slot buffer. lavapipe loads a storage buffer at a per-pixel index
+// lane by lane; that one load was about a tenth of this pass on sphere_env (docs/BENCHMARKS.md).
+layout(constant_id = 4) const uint ONE_REFRACTOR = 0;
 #ifdef ORACLE_TRACE
 // ORACLE_EXIT_POINT | ORACLE_EXIT_NORMAL (src/scene/techniques.rs, WymanOracle).
 layout(constant_id = 1) const uint ORACLE = 0;
@@ -71,8 +75,12 @@ void main() {
     // A dielectric's albedo texel: rgb = d_N's bits in three whole numbers, a = object index.
     vec4 albedo = texelFetch(gbuf_albedo, px, 0);
     uint object = uint(albedo.a + 0.5);
-    if (object >= slot_of_object.length() || slot_of_object[object] == 0xffffffffu) discard;
-    slot = int(slot_of_object[object]);
+    if (ONE_REFRACTOR != 0u) {
+        slot = 0;
+    } else {
+        if (object >= slot_of_object.length() || slot_of_object[object] == 0xffffffffu) discard;
+        slot = int(slot_of_object[object]);
+    }
     GpuMaterial m = materials[mat];
     vec3 ior = max(m.spec_a.rgb, vec3(1e-6));
     bool one_ior = DISPERSION == 0u || (ior.r == ior.g && ior.g == ior.b);

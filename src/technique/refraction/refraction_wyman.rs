@@ -140,12 +140,15 @@ impl WymanPass {
         // per-mesh cache: this call only reads the time the computation took.
         let d_n_ms = scene_distance_along_normals_timed(scene).1;
         let layers = RefractorLayers::new(s, REFRACTION_WYMAN_LAYERS, &[(back, LayerScope::PerRefractor)])?;
-        let slots = Buffer::storage(ctx, "refraction_wyman_slots", &refractor_slots(scene, s.gpu))?;
+        let slot_of_object = refractor_slots(scene, s.gpu);
+        let refractors = slot_of_object.iter().filter(|&&slot| slot != u32::MAX).count();
+        let slots = Buffer::storage(ctx, "refraction_wyman_slots", &slot_of_object)?;
         let b = &layers.layers[0];
         let tracer = oracle.as_ref().map(|o| o.buffers(s.gpu)).unwrap_or_default();
         let mut specialization = vec![
             ("DISPERSION", Spec::U32(u32::from(has_dispersion(scene)))),
             ("BACK_FURTHEST", Spec::U32(u32::from(back == LayerKind::BackFurthest))),
+            ("ONE_REFRACTOR", Spec::U32(u32::from(refractors == 1))),
         ];
         specialization.extend(scene_specialization(scene));
         let fragment_shader = match &oracle {
