@@ -43,11 +43,14 @@ bool nearby_select_object(uint object) {
     return false;
 }
 
+// The functions below take RECT_k itself, loaded once by the caller: a CPU device (lavapipe)
+// loads a storage buffer at a per-pixel index lane by lane, and each seed and correction step
+// re-read the rectangle's 28 floats (docs/BENCHMARKS.md).
+
 // Fig. 13's intersect() and UV(): the hit t > 0 of P + t Ray with RECT_k and its (u, v).
 // Rays parallel to the plane (|cos| <= 1e-6) miss: no division by ~0. Mirrors
 // NearbyRect::intersect (CPU, unit-tested).
-bool nearby_rect_hit(uint k, vec3 P, vec3 Ray, out float t, out vec2 uv) {
-    GpuNearbyRect r = nearby_rects[k];
+bool nearby_rect_hit(GpuNearbyRect r, vec3 P, vec3 Ray, out float t, out vec2 uv) {
     t = 0.0;
     uv = vec2(0.0);
     float c = dot(Ray, r.axis.xyz);
@@ -59,11 +62,16 @@ bool nearby_rect_hit(uint k, vec3 P, vec3 Ray, out float t, out vec2 uv) {
     return all(greaterThanEqual(uv, vec2(0.0))) && all(lessThanEqual(uv, vec2(1.0)));
 }
 
+// O_R of the selected set.
+vec3 nearby_origin() {
+    return nearby_header.origins[nearby_set].xyz;
+}
+
 // Fig. 16's projection of P_new into TEX_DEPTH_k: (u, v) of the parallel projection and the
 // point's own depth z (axial distance from O_R, the same quantity the texture stores).
-vec3 nearby_project(uint k, vec3 p) {
-    vec4 clip = nearby_rects[k].view_proj * vec4(p, 1.0);
-    return vec3(clip.xy * 0.5 + 0.5, dot(p - nearby_header.origins[nearby_set].xyz, nearby_rects[k].axis.xyz));
+vec3 nearby_project(GpuNearbyRect r, vec3 origin, vec3 p) {
+    vec4 clip = r.view_proj * vec4(p, 1.0);
+    return vec3(clip.xy * 0.5 + 0.5, dot(p - origin, r.axis.xyz));
 }
 
 bool nearby_inside(vec2 uv) {
@@ -71,14 +79,14 @@ bool nearby_inside(vec2 uv) {
 }
 
 // TEX_k at uv: rgb radiance, a depth (the far plane outside the texture).
-vec4 nearby_texel(uint k, vec2 uv) {
-    if (!nearby_inside(uv)) return vec4(0.0, 0.0, 0.0, nearby_rects[k].axis_u.w);
-    return textureLod(nearby_tex, vec3(uv, nearby_rects[k].axis_v.w), 0.0);
+vec4 nearby_texel(GpuNearbyRect r, vec2 uv) {
+    if (!nearby_inside(uv)) return vec4(0.0, 0.0, 0.0, r.axis_u.w);
+    return textureLod(nearby_tex, vec3(uv, r.axis_v.w), 0.0);
 }
 
 // A texel holds a surface when its depth is in front of the far plane it was cleared to.
-bool nearby_covered(uint k, vec4 texel) {
-    return texel.a < nearby_rects[k].axis_u.w - 1e-4 * nearby_rects[k].center.w;
+bool nearby_covered(GpuNearbyRect r, vec4 texel) {
+    return texel.a < r.axis_u.w - 1e-4 * r.center.w;
 }
 
 // Fig. 17's seed: P + alpha_j Ray, alpha_j = d_far (j + 1) / NEARBY_SEEDS. "The highest
@@ -86,13 +94,13 @@ bool nearby_covered(uint k, vec4 texel) {
 // corresponding P_select" (the point lies behind the surface seen from O_R): the first such
 // alpha_j along the ray; otherwise the one whose z is closest to P_select's. P_rect itself is
 // the last seed.
-float nearby_seed(uint k, vec3 P, vec3 Ray, float t_rect) {
+float nearby_seed(GpuNearbyRect r, vec3 origin, vec3 P, vec3 Ray, float t_rect) {
     float best = t_rect, best_err = 1e30;
     for (uint j = 0u; j < NEARBY_SEEDS; ++j) {
         float alpha = t_rect * float(j + 1u) / float(NEARBY_SEEDS);
-        vec3 s = nearby_project(k, P + alpha * Ray);
-        vec4 texel = nearby_texel(k, s.xy);
-        if (!nearby_covered(k, texel)) continue;
+        vec3 s = nearby_project(r, origin, P + alpha * Ray);
+        vec4 texel = nearby_texel(r, s.xy);
+        if (!nearby_covered(r, texel)) continue;
         float err = s.z - texel.a;
         if (err > 0.0) return alpha;
         if (-err < best_err) {
@@ -106,15 +114,15 @@ float nearby_seed(uint k, vec3 P, vec3 Ray, float t_rect) {
 // The colour of RECT_k along the ray, found by Figs. 16-17 from the rectangle hit t_rect =
 // d_far. False where the texel finally looked up is empty (the ray passes beside OBJ_k).
 // `residual` is |depth - z| there (0 for the plain lookup), in world units.
-bool nearby_lookup(uint k, vec3 P, vec3 Ray, float t_rect, vec2 uv_rect, out vec3 color, out float dist,
-                   out float residual) {
-    GpuNearbyRect r = nearby_rects[k];
+bool nearby_lookup(GpuNearbyRect r, vec3 P, vec3 Ray, float t_rect, vec2 uv_rect, out vec3 color,
+                   out float dist, out float residual) {
+    vec3 origin = nearby_origin();
     float d_i = r.center.w;
     vec2 uv = uv_rect;
     dist = t_rect;
     residual = 0.0;
     if (NEARBY_ITERATIONS > 0u) {
-        dist = nearby_seed(k, P, Ray, t_rect);
+        dist = nearby_seed(r, origin, P, Ray, t_rect);
         // Fig. 16: distance += (depth - z) / cos(theta), theta between Ray and the projection
         // direction. |cos| is kept >= 0.05 (rays grazing the rectangle: one step then moves at
         // most 20 depth differences instead of dividing by ~0), each step is bounded by the
@@ -124,8 +132,8 @@ bool nearby_lookup(uint k, vec3 P, vec3 Ray, float t_rect, vec2 uv_rect, out vec
         float tol = NEARBY_TOLERANCE * d_i;
         if (NEARBY_LOOKUP == NEARBY_LOOKUP_PAPER) {
             for (uint i = 0u; i < NEARBY_ITERATIONS; ++i) {
-                vec3 s = nearby_project(k, P + dist * Ray);
-                float diff = nearby_texel(k, s.xy).a - s.z;
+                vec3 s = nearby_project(r, origin, P + dist * Ray);
+                float diff = nearby_texel(r, s.xy).a - s.z;
                 residual = abs(diff);
                 if (residual <= tol) break;
                 dist = max(dist + clamp(diff / cos_t, -2.0 * d_i, 2.0 * d_i), 0.0);
@@ -140,8 +148,8 @@ bool nearby_lookup(uint k, vec3 P, vec3 Ray, float t_rect, vec2 uv_rect, out vec
             // empty texel (beyond OBJ_k's silhouette, where the texture holds the far plane
             // and f jumps) is halved, up to 4 times, instead of being taken: a point past the
             // silhouette would otherwise end the lookup on the background texel.
-            vec3 s = nearby_project(k, P + dist * Ray);
-            vec4 texel = nearby_texel(k, s.xy);
+            vec3 s = nearby_project(r, origin, P + dist * Ray);
+            vec4 texel = nearby_texel(r, s.xy);
             float f = texel.a - s.z;
             float t_prev = dist, f_prev = f;
             bool have_prev = false;
@@ -154,12 +162,12 @@ bool nearby_lookup(uint k, vec3 P, vec3 Ray, float t_rect, vec2 uv_rect, out vec
                 }
                 step = clamp(step, -2.0 * d_i, 2.0 * d_i);
                 float t_next = max(dist + step, 0.0);
-                vec3 s_next = nearby_project(k, P + t_next * Ray);
-                vec4 texel_next = nearby_texel(k, s_next.xy);
-                for (uint h = 0u; h < 4u && !nearby_covered(k, texel_next) && nearby_covered(k, texel); ++h) {
+                vec3 s_next = nearby_project(r, origin, P + t_next * Ray);
+                vec4 texel_next = nearby_texel(r, s_next.xy);
+                for (uint h = 0u; h < 4u && !nearby_covered(r, texel_next) && nearby_covered(r, texel); ++h) {
                     t_next = 0.5 * (dist + t_next);
-                    s_next = nearby_project(k, P + t_next * Ray);
-                    texel_next = nearby_texel(k, s_next.xy);
+                    s_next = nearby_project(r, origin, P + t_next * Ray);
+                    texel_next = nearby_texel(r, s_next.xy);
                 }
                 t_prev = dist;
                 f_prev = f;
@@ -170,11 +178,11 @@ bool nearby_lookup(uint k, vec3 P, vec3 Ray, float t_rect, vec2 uv_rect, out vec
             }
             residual = abs(f);
         }
-        uv = nearby_project(k, P + dist * Ray).xy;
+        uv = nearby_project(r, origin, P + dist * Ray).xy;
     }
-    vec4 texel = nearby_texel(k, uv);
+    vec4 texel = nearby_texel(r, uv);
     color = texel.rgb;
-    return nearby_covered(k, texel);
+    return nearby_covered(r, texel);
 }
 
 // The surface the ray P + t Ray (unit) meets through the selected set's rectangles. False when
@@ -215,11 +223,12 @@ bool nearby_hit(vec3 P, vec3 Ray, out vec3 color, out float dist) {
         for (uint i = first; i < end; ++i) {
             float t;
             vec2 uv;
-            if (!nearby_rect_hit(i, P, Ray, t, uv)) continue;
+            GpuNearbyRect r = nearby_rects[i];
+            if (!nearby_rect_hit(r, P, Ray, t, uv)) continue;
             vec3 c;
             float d, residual;
-            if (!nearby_lookup(i, P, Ray, t, uv, c, d, residual)) continue;
-            bool converged = residual <= 4.0 * texel_width * nearby_rects[i].center.w;
+            if (!nearby_lookup(r, P, Ray, t, uv, c, d, residual)) continue;
+            bool converged = residual <= 4.0 * texel_width * r.center.w;
             uint rank = (((see_through >> (i - first)) & 1u) == 0u ? 2u : 0u) + (converged ? 1u : 0u);
             if (!found || rank > found_rank || (rank == found_rank && d < dist)) {
                 color = c;
@@ -239,7 +248,7 @@ bool nearby_hit(vec3 P, vec3 Ray, out vec3 color, out float dist) {
         for (uint i = first; i < end; ++i) {
             float t;
             vec2 uv;
-            if (nearby_rect_hit(i, P, Ray, t, uv) && t > last && t < t_k) {
+            if (nearby_rect_hit(nearby_rects[i], P, Ray, t, uv) && t > last && t < t_k) {
                 k = i;
                 t_k = t;
                 uv_k = uv;
@@ -248,7 +257,7 @@ bool nearby_hit(vec3 P, vec3 Ray, out vec3 color, out float dist) {
         if (k == end) break;
         last = t_k;
         float residual;
-        if (nearby_lookup(k, P, Ray, t_k, uv_k, color, dist, residual)) {
+        if (nearby_lookup(nearby_rects[k], P, Ray, t_k, uv_k, color, dist, residual)) {
             color = finite_or_zero(color);
             return true;
         }

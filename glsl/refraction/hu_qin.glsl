@@ -96,11 +96,13 @@ vec3 oracle_nearby_radiance(vec3 P, vec3 Ray, vec3 N_out) {
     uint end = first + min(nearby_header.sets[nearby_set].y, MAX_NEARBY_RECTS);
     float best = 1e30;
     vec3 color = environment(Ray);
+    vec3 origin = nearby_origin();
     for (uint k = first; k < end; ++k) {
-        vec3 q = nearby_project(k, X);
+        GpuNearbyRect r = nearby_rects[k];
+        vec3 q = nearby_project(r, origin, X);
         if (!nearby_inside(q.xy)) continue;
-        vec4 texel = nearby_texel(k, q.xy);
-        if (!nearby_covered(k, texel)) continue;
+        vec4 texel = nearby_texel(r, q.xy);
+        if (!nearby_covered(r, texel)) continue;
         float e = abs(texel.a - q.z);
         if (e < best) {
             best = e;
