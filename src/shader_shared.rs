@@ -17,6 +17,13 @@ shared_constants! {
     // At most this many lights; each owns 6 layers of the shadow atlas (a cube for a point
     // light, layer 0 of its 6 for a directional light's orthographic map).
     MAX_LIGHTS: u32 = 4;
+
+    // At most this many materials: the shading passes read them from a uniform buffer of
+    // MAX_MATERIALS GpuMaterials, 16 KiB, the least maxUniformBufferRange Vulkan guarantees.
+    // Not a storage buffer: a CPU device (lavapipe) loads a storage buffer at a per-pixel index
+    // lane by lane and a uniform buffer with one gather, and the material loads were about
+    // half of the baseline's refraction pass (docs/BENCHMARKS.md).
+    MAX_MATERIALS: u32 = 256;
     SHADOW_LAYERS_PER_LIGHT: u32 = 6;
 
     // The scene's environment and lights as the shading passes' specialisation constants

@@ -6,8 +6,10 @@
 // FrameUniforms and GpuLight: src/shader_structs.rs (std140).
 layout(set = 0, binding = BINDING_FRAME, std140) uniform FrameBlock { FrameUniforms frame; };
 
-layout(set = 0, binding = BINDING_MATERIALS, std430) readonly buffer Materials {
-    GpuMaterial materials[];
+// A uniform buffer, not a storage buffer: lavapipe loads a storage buffer at a per-pixel
+// index lane by lane (MAX_MATERIALS, src/shader_shared.rs).
+layout(set = 0, binding = BINDING_MATERIALS, std140) uniform Materials {
+    GpuMaterial materials[MAX_MATERIALS];
 };
 
 layout(set = 0, binding = BINDING_ENVIRONMENT) uniform sampler2D environment_map;

@@ -8,7 +8,7 @@ use glam::{Mat4, Vec3};
 use crate::gpu::{vk, Buffer, GpuContext, Image, ImageDesc, MemoryLocation};
 use crate::graph::{FrameGraph, ImageId};
 use crate::scene::{Albedo, Environment, Light, Material, Scene};
-use crate::{ENVIRONMENT_GRID_ALPHA, MAX_LIGHTS, SHADOW_LAYERS_PER_LIGHT};
+use crate::{ENVIRONMENT_GRID_ALPHA, MAX_LIGHTS, MAX_MATERIALS, SHADOW_LAYERS_PER_LIGHT};
 use crate::{
     LIGHT_DIRECTIONAL, LIGHT_POINT, MATERIAL_CONDUCTOR, MATERIAL_DIELECTRIC, MATERIAL_DIFFUSE, MATERIAL_MIRROR,
 };
@@ -330,9 +330,12 @@ impl GpuScene {
         let usage = |u: vk::BufferUsageFlags| u | vk::BufferUsageFlags::STORAGE_BUFFER;
         let vertices = Buffer::with_data(ctx, "scene_vertices", &vertices, usage(vk::BufferUsageFlags::VERTEX_BUFFER))?;
         let indices = Buffer::with_data(ctx, "scene_indices", &indices, usage(vk::BufferUsageFlags::INDEX_BUFFER))?;
-        let mats: Vec<GpuMaterial> = scene.materials.iter().map(gpu_material).collect();
-        let mats = if mats.is_empty() { vec![GpuMaterial::default()] } else { mats };
-        let materials = Buffer::storage(ctx, "scene_materials", &mats)?;
+        // The frame set binds the materials as a uniform buffer of MAX_MATERIALS entries
+        // (glsl/include/frame.glsl), so it holds that many; ray tracers bind it as storage.
+        let mut mats: Vec<GpuMaterial> = scene.materials.iter().map(gpu_material).collect();
+        mats.resize(MAX_MATERIALS as usize, GpuMaterial::default());
+        let material_usage = vk::BufferUsageFlags::UNIFORM_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER;
+        let materials = Buffer::with_data(ctx, "scene_materials", &mats, material_usage)?;
 
         // Environment: always a texture (a constant is a 1x1 map, the grid a 1x1 map that
         // names it) so one lookup serves all (glsl/include/common.glsl).

@@ -245,7 +245,7 @@ impl Renderer {
         let frame_set = |ubo| {
             let set = Bindings::new(FRAME_STAGES)
                 .uniform(BINDING_FRAME, ubo)
-                .storage(BINDING_MATERIALS, &gpu_scene.materials)
+                .uniform(BINDING_MATERIALS, &gpu_scene.materials)
                 .sampled(BINDING_ENVIRONMENT, &gpu_scene.environment, &latlong);
             let set = bind_atlas(set, [BINDING_SHADOW_CUBE, BINDING_SHADOW_2D], &targets.shadow_atlas, &nearest);
             let set = bind_caustic_atlas(set, &targets.caustic, &nearest);

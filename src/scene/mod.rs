@@ -375,6 +375,15 @@ fn build(f: FileScene, src: &Source) -> Result<Scene, SceneError> {
         .enumerate()
         .map(|(i, l)| light(l, &format!("lights.{i}"), src))
         .collect::<Result<Vec<_>, _>>()?;
+    // Materials are indexed in sorted name order: the error points at the first beyond the limit.
+    if let Some(extra) = f.materials.keys().nth(crate::MAX_MATERIALS as usize) {
+        return Err(value_err(
+            src,
+            &format!("materials.{extra}"),
+            format!("the scene defines {} materials; the limit is {}", f.materials.len(), crate::MAX_MATERIALS),
+            "give objects with the same parameters one material, or split the scene",
+        ));
+    }
     let mut materials = Vec::new();
     let mut material_names = Vec::new();
     for (name, m) in &f.materials {

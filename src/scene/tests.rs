@@ -664,6 +664,14 @@ fn counts_beyond_their_limits_are_refused() {
     let lathe = format!("[[volume.region]]\nshape = \"lathe\"\nprofile = [{}]\n", points.join(", "));
     let e = base_err(&format!("{BASE}{volume}{lathe}"), &[]);
     assert!(e.to_string().contains("`volume.region.0.profile` has 4097 entries"), "{e}");
+
+    // The shading passes' uniform buffer holds MAX_MATERIALS (BASE defines one, glass).
+    let max = crate::MAX_MATERIALS as usize;
+    let materials =
+        |n: usize| (0..n).map(|k| format!("[materials.m{k}]\ntype = \"diffuse\"\nalbedo = 0.5\n")).collect::<String>();
+    let e = base_err(&format!("{BASE}{}", materials(max)), &[]);
+    assert!(e.to_string().contains("defines 257 materials; the limit is 256"), "{e}");
+    load_str(&format!("{BASE}{}", materials(max - 1)), Path::new("test.toml"), &[]).expect("256 materials are allowed");
 }
 
 #[test]
