@@ -27,7 +27,8 @@ layout(set = 0, binding = BINDING_CAUSTIC_RECEIVERS_2D) uniform sampler2DArray c
 // per receiver rectangle, and the rectangles.
 #include "photon_rect.glsl"
 layout(set = 0, binding = BINDING_PHOTON_CAUSTICS) uniform sampler2DArray photon_caustics;
-layout(set = 0, binding = BINDING_PHOTON_RECTS, std430) readonly buffer PhotonRects { GpuPhotonRect photon_rects[]; };
+// A uniform buffer of MAX_NEARBY_RECTS receivers, read per pixel as the materials are.
+layout(set = 0, binding = BINDING_PHOTON_RECTS, std140) uniform PhotonRects { GpuPhotonRect photon_rects[MAX_NEARBY_RECTS]; };
 
 uint material_kind(uint m) { return kind_of(materials[m]); }
 

@@ -13,9 +13,12 @@
 #include "environment.glsl"
 
 
-layout(set = 1, binding = BINDING_NEARBY_RECTS, std430) readonly buffer NearbyRects {
+// A uniform buffer, not a storage buffer: lavapipe loads a storage buffer at a per-pixel
+// index lane by lane, a uniform buffer with one gather (docs/BENCHMARKS.md). Every set's
+// rectangles fit: at most MAX_NEARBY_SETS of MAX_NEARBY_RECTS, 7.4 KiB in all.
+layout(set = 1, binding = BINDING_NEARBY_RECTS, std140) uniform NearbyRects {
     GpuNearbyHeader nearby_header;
-    GpuNearbyRect nearby_rects[];
+    GpuNearbyRect nearby_rects[MAX_NEARBY_SETS * MAX_NEARBY_RECTS];
 };
 // TEX_i (rgb: radiance) and TEX_DEPTH_i (a: axial distance dot(p - O_R, n_i)), layer i.
 layout(set = 1, binding = BINDING_NEARBY_TEXTURE) uniform sampler2DArray nearby_tex;

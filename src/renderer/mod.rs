@@ -959,7 +959,7 @@ fn clear_caustic_atlas(ctx: &GpuContext, graph: &mut FrameGraph, c: &CausticAtla
 
 /// Hu & Qin 2007 §3's caustic textures and rectangles in a frame set.
 fn bind_photon_caustics<'a>(set: Bindings<'a>, c: &'a PhotonCaustics, sampler: &'a Sampler) -> Bindings<'a> {
-    set.sampled(BINDING_PHOTON_CAUSTICS, &c.textures, sampler).storage(BINDING_PHOTON_RECTS, &c.rects)
+    set.sampled(BINDING_PHOTON_CAUSTICS, &c.textures, sampler).uniform(BINDING_PHOTON_RECTS, &c.rects)
 }
 
 /// Fill every layer of `atlas` with `value`, ready to be sampled.

@@ -82,8 +82,8 @@ use crate::technique::{
     Regeneration, Registration, RenderError, Setup, Stage, Technique,
 };
 use crate::{
-    CAUSTIC_BINDING_FACES, CAUSTIC_BINDING_MATERIALS, LIGHT_DIRECTIONAL, PHOTON_BINDING_RECEIVER_DEPTH,
-    PHOTON_BINDING_RECTS, PHOTON_PAPER, PHOTON_PHYSICAL,
+    CAUSTIC_BINDING_FACES, CAUSTIC_BINDING_MATERIALS, LIGHT_DIRECTIONAL, MAX_NEARBY_RECTS,
+    PHOTON_BINDING_RECEIVER_DEPTH, PHOTON_BINDING_RECTS, PHOTON_PAPER, PHOTON_PHYSICAL,
 };
 
 /// Photon buffer and caustic textures: 32-bit float, so that counts stay exact to 2^24
@@ -317,9 +317,12 @@ impl PhotonCaustics {
                 view: ImageViewKind::D2Array,
             },
         )?;
-        let stand_in = [GpuPhotonRect::zeroed()];
-        let data: &[GpuPhotonRect] = if rect_data.is_empty() { &stand_in } else { &rect_data };
-        let rects = Buffer::storage(ctx, "photon_rects", data)?;
+        // MAX_NEARBY_RECTS records, as the frame set's uniform block declares them
+        // (glsl/include/frame.glsl); the photon pass binds the same buffer as storage.
+        let mut data = rect_data.clone();
+        data.resize(MAX_NEARBY_RECTS as usize, GpuPhotonRect::zeroed());
+        let usage = vk::BufferUsageFlags::UNIFORM_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER;
+        let rects = Buffer::with_data(ctx, "photon_rects", &data, usage)?;
         let id = graph.register_image(&textures);
         // Defined contents ("no caustic") and the layout the shaders expect.
         ctx.one_shot(|cmd| {

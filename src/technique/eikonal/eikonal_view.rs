@@ -389,7 +389,7 @@ impl EikonalPass {
             .sampled(crate::BINDING_EIKONAL_LIGHT_DIR, direction, nearest)
             .sampled(crate::BINDING_NEARBY_TEXTURE, &nearby.texture, nearest)
             .read(nearby.texture_id)
-            .storage(crate::BINDING_NEARBY_RECTS, &nearby.rect_buffer)
+            .uniform(crate::BINDING_NEARBY_RECTS, &nearby.rect_buffer)
             .storage(crate::BINDING_EIKONAL_TRIANGLES, &triangles)
             .storage(crate::BINDING_EIKONAL_BRICKS, &textures.bricks)
             .storage(crate::BINDING_EIKONAL_BAND, &textures.band);

@@ -337,7 +337,8 @@ impl From<&NearbyRect> for GpuNearbyRect {
     }
 }
 
-/// Bytes of the storage buffer `NearbyRects` (header + one record per rectangle).
+/// Bytes of the uniform buffer `NearbyRects`: the header and MAX_NEARBY_SETS x
+/// MAX_NEARBY_RECTS records, the rectangles first (the size glsl/include/nearby.glsl declares).
 /// `see_through[i]`: rectangle i's TEX_i shows a dielectric refracting the environment only;
 /// each set's `sets[k].w` holds those of its rectangles as bits (bit i - first), which
 /// glsl/include/nearby.glsl's nearest lookup ranks after every other rectangle.
@@ -355,6 +356,9 @@ pub fn rect_buffer_bytes(layout: &NearbyLayout, see_through: &[bool]) -> Vec<u8>
     for r in &layout.rects {
         bytes.extend_from_slice(bytemuck::bytes_of(&GpuNearbyRect::from(r)));
     }
+    let records = (MAX_NEARBY_SETS * MAX_NEARBY_RECTS) as usize;
+    let size = std::mem::size_of::<GpuNearbyHeader>() + records * std::mem::size_of::<GpuNearbyRect>();
+    bytes.resize(size.max(bytes.len()), 0);
     bytes
 }
 
@@ -644,7 +648,7 @@ impl NearbyImpostors {
             ctx,
             &format!("{name}_rects"),
             &rect_buffer_bytes(&nearby, &see_through),
-            vk::BufferUsageFlags::STORAGE_BUFFER,
+            vk::BufferUsageFlags::UNIFORM_BUFFER,
         )?;
         // A framebuffer per layer of `image` (the layer of each rectangle).
         let layered = |label: &str, image: &Image| {
@@ -664,7 +668,7 @@ impl NearbyImpostors {
         let arrays = std::iter::once(&texture).chain(other.as_ref().map(|(image, _)| image));
         let set_reading = arrays.map(|array| {
             Bindings::new(vk::ShaderStageFlags::FRAGMENT)
-                .storage(BINDING_NEARBY_RECTS, &rect_buffer)
+                .uniform(BINDING_NEARBY_RECTS, &rect_buffer)
                 .sampled(BINDING_NEARBY_TEXTURE, array, &sampler)
                 .sampled(BINDING_NEARBY_BACK, &back, &sampler)
                 .sampled(BINDING_NEARBY_FRONT, &front, &sampler)

@@ -171,6 +171,7 @@ impl WymanPass {
                     (BINDING_REFR_BACK_DEPTH, &b.depth, b.depth_id),
                 ],
                 buffers: &[(BINDING_REFR_SLOTS, &slots)],
+                uniforms: &[],
                 tracer: &tracer,
                 specialization: &specialization,
                 debug: params.debug,

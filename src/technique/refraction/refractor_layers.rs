@@ -260,6 +260,8 @@ pub struct ShadeDesc<'a> {
     pub inputs: &'a [(u32, &'a Image, ImageId)],
     /// Set-1 storage buffers read by the fragment shader: (binding, buffer).
     pub buffers: &'a [(u32, &'a Buffer)],
+    /// Set-1 uniform buffers read by the fragment shader: (binding, buffer).
+    pub uniforms: &'a [(u32, &'a Buffer)],
     /// Set-2 storage buffers, (binding, buffer): the exact tracer's (glsl/reference/trace.glsl
     /// with REF_SET 2), bound only for an oracle; empty: the pipeline has no set 2.
     pub tracer: &'a [(u32, &'a Buffer)],
@@ -302,6 +304,9 @@ impl ShadePass {
         // Host-written once at creation (the graph tracks images only): visible at submission.
         for &(b, buffer) in desc.buffers {
             set = set.storage(b, buffer);
+        }
+        for &(b, buffer) in desc.uniforms {
+            set = set.uniform(b, buffer);
         }
         let set = set.build(ctx, name)?;
         let tracer = if desc.tracer.is_empty() {
