@@ -15,7 +15,7 @@
 //!
 //! Rendering pass ([`NearbyImpostors`], `refraction_hu_qin_nearby`): every TEX_i of every set
 //! into one layer of one 2D array texture (RGBA32F; the rectangles of set s are the layers
-//! `first_s .. first_s + count_s`, one storage buffer holds every set's O_R and rectangles):
+//! `first_s .. first_s + count_s`, one uniform buffer holds every set's O_R and rectangles):
 //! rgb = the object's shaded radiance (direct light with shadow maps + environment
 //! irradiance, glsl/include/lighting.glsl, exactly as deferred shading computes it), a =
 //! TEX_DEPTH_i as the *axial* distance dot(p - O_R, n_i) from O_R along the projection
