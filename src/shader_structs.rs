@@ -14,8 +14,9 @@
 shared_structs! {
     // ---- The frame set (glsl/include/frame.glsl, src/frame) ----------------------------
 
-    /// A mesh vertex: the raster passes read it as vertex attributes, the reference tracer
-    /// and the water animation as a storage buffer (scalar arrays keep it 32 bytes in std430).
+    /// A mesh vertex: the raster passes read it as vertex attributes, the exact tracer as two
+    /// RGBA32UI texels and the water animation as a storage buffer (scalar arrays keep it 32
+    /// bytes in std430).
     #[derive(Default)]
     buffer struct Vertex {
         position: [float; 3],

@@ -62,7 +62,7 @@ bool oracle_hit(vec3 p, vec3 R, out vec3 l) {
         Hit h = trace(o, R, 3.4e38);
         if (h.kind == 0u) return false;
         Surface s = surface_at(o, R, h);
-        uint object = h.kind == 2u ? spheres[h.prim].info.x : triangles[h.prim].w;
+        uint object = object_of(h.kind, h.prim);
         if (!impostor_map_leaves_out(object, s.material)) {
             l = s.p - pc.env_reference.xyz;
             return true;

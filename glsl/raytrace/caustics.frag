@@ -22,7 +22,7 @@ void main() {
     ivec2 px = ivec2(gl_FragCoord.xy);
     if (texelFetch(gbuf_depth, px, 0).r <= 0.0) discard;
     uint object = uint(texelFetch(gbuf_albedo, px, 0).a + 0.5);
-    if (material_kind(object_material[object]) != MATERIAL_DIFFUSE) discard;
+    if (material_kind(object_material(object)) != MATERIAL_DIFFUSE) discard;
     vec3 o = frame.camera_position.xyz, d = camera_ray(in_uv);
     Hit h = trace(o, d, 3.4e38);
     float tv;

@@ -97,7 +97,7 @@ void main() {
     if (MODE != RAYTRACE_MODE_FRAME) {
         if (texelFetch(gbuf_depth, px, 0).r <= 0.0) discard;
         uint object = uint(texelFetch(gbuf_albedo, px, 0).a + 0.5);
-        uint kind = material_kind(object_material[object]);
+        uint kind = material_kind(object_material(object));
         bool dielectric = kind == MATERIAL_DIELECTRIC;
         bool metal = kind == MATERIAL_MIRROR || kind == MATERIAL_CONDUCTOR;
         if ((MODE == SPECULAR_MODE_REFRACTION && !dielectric) || (MODE == SPECULAR_MODE_REFLECTION && !metal)) discard;

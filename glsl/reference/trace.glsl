@@ -14,7 +14,9 @@
 #endif
 
 
-// A storage block: the fragment pass binds it with its other storage buffers.
+// A storage block, though every lane reads the same address: as a uniform block, lavapipe
+// (Mesa 22.3) crashes ("stack smashing detected") compiling the raytrace technique's fragment
+// pass, and water_pool's refraction_water pass took 10x as long.
 layout(set = REF_SET, binding = REF_BINDING_UNIFORMS, std430) readonly buffer RefUniformsBlock { RefUniforms ref; };
 
 // photon.w flags
@@ -22,11 +24,23 @@ const uint REF_FLAG_DISPERSION = 1u;   // some dielectric has an RGB ior: trace 
 const uint REF_FLAG_JITTER = 2u;       // supersample the pixel area (default: pixel centres)
 
 
-layout(set = REF_SET, binding = REF_BINDING_VERTICES, std430) readonly buffer Vertices { Vertex vertices[]; };
-layout(set = REF_SET, binding = REF_BINDING_TRIANGLES, std430) readonly buffer Triangles { uvec4 triangles[]; };  // i0, i1, i2, object
-layout(set = REF_SET, binding = REF_BINDING_NODES, std430) readonly buffer Nodes { BvhNode nodes[]; };
-layout(set = REF_SET, binding = REF_BINDING_SPHERES, std430) readonly buffer Spheres { GpuSphere spheres[]; };
-layout(set = REF_SET, binding = REF_BINDING_OBJECTS, std430) readonly buffer Objects { uint object_material[]; };
+// The geometry, as texel buffers (src/reference/mod.rs, TraceGeometry): each lane of a
+// traversal fetches a node or a triangle of its own, and a texel fetch gathers them in one
+// instruction where lavapipe loads a storage buffer lane by lane. The texels are RGBA32UI,
+// floats by their bits, so every value is the one the CPU wrote.
+layout(set = REF_SET, binding = REF_BINDING_VERTICES) uniform usamplerBuffer vertex_texels;     // 2 per Vertex
+layout(set = REF_SET, binding = REF_BINDING_TRIANGLES) uniform usamplerBuffer triangle_texels;  // i0, i1, i2, object
+layout(set = REF_SET, binding = REF_BINDING_NODES) uniform usamplerBuffer node_texels;          // 2 per BvhNode
+layout(set = REF_SET, binding = REF_BINDING_SPHERES) uniform usamplerBuffer sphere_texels;      // 2 per GpuSphere
+layout(set = REF_SET, binding = REF_BINDING_OBJECTS) uniform usamplerBuffer object_texels;      // R32UI: material
+
+uvec4 triangle_at(uint k) { return texelFetch(triangle_texels, int(k)); }
+// The object a hit belongs to.
+uint object_of(uint kind, uint prim) {
+    return kind == 2u ? texelFetch(sphere_texels, int(2u * prim + 1u)).x : triangle_at(prim).w;
+}
+uint object_material(uint object) { return texelFetch(object_texels, int(object)).x; }
+vec4 sphere_center_radius(uint s) { return uintBitsToFloat(texelFetch(sphere_texels, int(2u * s))); }
 
 // ---------------------------------------------------------------------------------------
 // Random numbers: a PCG hash per (pixel or photon, iteration, seed), then an LCG stream.
@@ -46,9 +60,12 @@ float rand(inout uint state) {
 
 // ---------------------------------------------------------------------------------------
 // Intersection. Möller-Trumbore, the same arithmetic as bvh::intersect_triangle on the CPU.
-vec3 vertex_position(uint i) { Vertex v = vertices[i]; return vec3(v.position[0], v.position[1], v.position[2]); }
-vec3 vertex_normal(uint i) { Vertex v = vertices[i]; return vec3(v.normal[0], v.normal[1], v.normal[2]); }
-vec2 vertex_uv(uint i) { Vertex v = vertices[i]; return vec2(v.checker_uv[0], v.checker_uv[1]); }
+// A Vertex is eight floats: position.xyz normal.x | normal.yz checker_uv.
+vec3 vertex_position(uint i) { return uintBitsToFloat(texelFetch(vertex_texels, int(2u * i)).xyz); }
+vec3 vertex_normal(uint i) {
+    return uintBitsToFloat(uvec3(texelFetch(vertex_texels, int(2u * i)).w, texelFetch(vertex_texels, int(2u * i + 1u)).xy));
+}
+vec2 vertex_uv(uint i) { return uintBitsToFloat(texelFetch(vertex_texels, int(2u * i + 1u)).zw); }
 
 // Any hit with t > 0; callers decide which hit wins.
 bool intersect_triangle(vec3 o, vec3 d, vec3 a, vec3 b, vec3 c, out float t, out vec2 uv) {
@@ -121,13 +138,13 @@ Hit trace_triangles(vec3 o, vec3 d, float t_max) {
     stack[sp++] = 0u;
     while (sp > 0) {
         uint i = stack[--sp];
-        BvhNode n = nodes[i];
-        if (!slab(o, inv_d, n.lo, n.hi, h.t)) continue;
-        uint count = n.count;
-        uint index = n.index;
+        uvec4 lo_index = texelFetch(node_texels, int(2u * i)), hi_count = texelFetch(node_texels, int(2u * i + 1u));
+        if (!slab(o, inv_d, uintBitsToFloat(lo_index.xyz), uintBitsToFloat(hi_count.xyz), h.t)) continue;
+        uint count = hi_count.w;
+        uint index = lo_index.w;
         if (count > 0u) {
             for (uint k = index; k < index + count; ++k) {
-                uvec4 tri = triangles[k];
+                uvec4 tri = triangle_at(k);
                 float t; vec2 uv;
                 if (intersect_triangle(o, d, vertex_position(tri.x), vertex_position(tri.y), vertex_position(tri.z), t, uv)
                     && better(t, k, h.t, h.prim, h.kind == 1u)) {
@@ -146,7 +163,7 @@ Hit trace_triangles(vec3 o, vec3 d, float t_max) {
 Hit trace_triangles_brute_force(vec3 o, vec3 d, float t_max) {
     Hit h; h.t = t_max; h.prim = 0u; h.kind = 0u; h.uv = vec2(0.0);
     for (uint k = 0u; k < ref.counts.x; ++k) {
-        uvec4 tri = triangles[k];
+        uvec4 tri = triangle_at(k);
         float t; vec2 uv;
         if (intersect_triangle(o, d, vertex_position(tri.x), vertex_position(tri.y), vertex_position(tri.z), t, uv)
             && better(t, k, h.t, h.prim, h.kind == 1u)) {
@@ -160,7 +177,7 @@ Hit trace(vec3 o, vec3 d, float t_max) {
     Hit h = trace_triangles(o, d, t_max);
     for (uint s = 0u; s < ref.dims.w; ++s) {
         float t;
-        if (intersect_sphere(o, d, spheres[s].center_radius, 0.0, h.t, t)) {
+        if (intersect_sphere(o, d, sphere_center_radius(s), 0.0, h.t, t)) {
             h.t = t; h.prim = s; h.kind = 2u;
         }
     }
@@ -185,15 +202,14 @@ struct Surface {
 Surface surface_at(vec3 o, vec3 d, Hit h) {
     Surface s;
     if (h.kind == 2u) {
-        GpuSphere sp = spheres[h.prim];
         s.p = o + h.t * d;
-        s.ng = normalize(s.p - sp.center_radius.xyz);
+        s.ng = normalize(s.p - sphere_center_radius(h.prim).xyz);
         s.ns = s.ng;
         s.st = s.p.xz;
-        s.material = object_material[sp.info.x];
+        s.material = object_material(object_of(h.kind, h.prim));
         return s;
     }
-    uvec4 tri = triangles[h.prim];
+    uvec4 tri = triangle_at(h.prim);
     vec3 a = vertex_position(tri.x), b = vertex_position(tri.y), c = vertex_position(tri.z);
     float w = 1.0 - h.uv.x - h.uv.y;
     // Barycentric position: more precise than o + t d far from the origin.
@@ -206,7 +222,7 @@ Surface surface_at(vec3 o, vec3 d, Hit h) {
     s.ng = gl > 0.0 ? g / gl : s.ns;
     if (dot(s.ng, s.ns) < 0.0) s.ng = -s.ng;
     s.st = w * vertex_uv(tri.x) + h.uv.x * vertex_uv(tri.y) + h.uv.y * vertex_uv(tri.z);
-    s.material = object_material[tri.w];
+    s.material = object_material(tri.w);
     return s;
 }
 

@@ -86,7 +86,7 @@ vec3 oracle_nearby_radiance(vec3 P, vec3 Ray, vec3 N_out) {
         Hit h = trace(o, Ray, 3.4e38);
         if (h.kind == 0u) return environment(Ray);
         Surface s = surface_at(o, Ray, h);
-        uint object = h.kind == 2u ? spheres[h.prim].info.x : triangles[h.prim].w;
+        uint object = object_of(h.kind, h.prim);
         found = object != own;
         X = s.p;
         o = offset_origin(s, Ray);

@@ -36,10 +36,6 @@ layout(set = 1, binding = BINDING_WATER_SKY, std430) readonly buffer WaterSky { 
 layout(location = 0) in vec2 in_uv;
 layout(location = 0) out vec4 out_radiance;
 
-uint hit_object(Hit h) {
-    return h.kind == 2u ? spheres[h.prim].info.x : triangles[h.prim].w;
-}
-
 // Radiance arriving at o along the unit direction d from the first surface met: a diffuse
 // receiver's shading, else the environment in that direction (a second specular surface is not
 // followed: the technique models one interface). `in_water`: the ray travels in the water,
@@ -59,7 +55,7 @@ vec3 radiance_along(vec3 o, vec3 d, bool in_water, vec3 sigma) {
     } else {
         ambient = environment_irradiance(n);
     }
-    vec3 L = albedo / PI * lit_irradiance(s.p, n, ambient) + caustic_radiance(s.p, n, hit_object(h), albedo);
+    vec3 L = albedo / PI * lit_irradiance(s.p, n, ambient) + caustic_radiance(s.p, n, object_of(h.kind, h.prim), albedo);
     return in_water ? exp(-sigma * h.t) * L : L;
 }
 

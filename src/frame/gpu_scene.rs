@@ -5,7 +5,7 @@ use std::sync::Arc;
 
 use glam::{Mat4, Vec3};
 
-use crate::gpu::{vk, Buffer, GpuContext, Image, ImageDesc, MemoryLocation};
+use crate::gpu::{vk, Buffer, BufferView, GpuContext, GpuError, GpuResult, Image, ImageDesc, MemoryLocation};
 use crate::graph::{FrameGraph, ImageId};
 use crate::scene::{Albedo, Environment, Light, Material, Scene};
 use crate::{ENVIRONMENT_GRID_ALPHA, MAX_LIGHTS, MAX_MATERIALS, SHADOW_LAYERS_PER_LIGHT};
@@ -43,6 +43,9 @@ pub struct ShadowFace {
 
 pub struct GpuScene {
     pub vertices: Buffer,
+    /// The vertices as the exact tracer reads them: two RGBA32UI texels per [`Vertex`]
+    /// (glsl/reference/trace.glsl), or why the device cannot (maxTexelBufferElements).
+    vertex_texels: Result<BufferView, String>,
     pub indices: Buffer,
     pub draws: Vec<Draw>,
     pub materials: Buffer,
@@ -54,6 +57,22 @@ pub struct GpuScene {
     /// Centre and radius of a sphere bounding every object and the camera.
     pub bounds_center: Vec3,
     pub bounds_radius: f32,
+}
+
+impl GpuScene {
+    /// The vertices as the exact tracer reads them, or the device limit they exceed.
+    pub fn vertex_texels(&self) -> GpuResult<&BufferView> {
+        self.vertex_texels.as_ref().map_err(|why| GpuError::Unsupported(why.clone()))
+    }
+}
+
+/// The vertices as uploaded: a scene without meshes (a volume alone) gets one unused vertex,
+/// since the tracers' texel view of the buffer cannot be empty.
+fn at_least_one(mut vertices: Vec<Vertex>) -> Vec<Vertex> {
+    if vertices.is_empty() {
+        vertices.push(Vertex::default());
+    }
+    vertices
 }
 
 fn v4(v: Vec3, w: f32) -> [f32; 4] {
@@ -324,11 +343,19 @@ impl GpuScene {
             )));
         }
         let (vertices, indices, draws, bounds_center, bounds_radius) = geometry(scene);
+        let vertices = at_least_one(vertices);
         // Host-visible buffers: written once here, read by the GPU after the submission that
         // follows (host writes are visible to every later queue submission).
-        // Also storage buffers: the heightfield animation writes the vertices, ray tracers read both.
+        // Also storage buffers: the heightfield animation writes the vertices, ray tracers read
+        // the indices; they read the vertices as texels.
         let usage = |u: vk::BufferUsageFlags| u | vk::BufferUsageFlags::STORAGE_BUFFER;
-        let vertices = Buffer::with_data(ctx, "scene_vertices", &vertices, usage(vk::BufferUsageFlags::VERTEX_BUFFER))?;
+        let vertex_usage = usage(vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER);
+        let vertices = Buffer::with_data(ctx, "scene_vertices", &vertices, vertex_usage)?;
+        // A scene past the limit renders: only the tracers refuse it.
+        let vertex_texels = match BufferView::new(ctx, &vertices, vk::Format::R32G32B32A32_UINT, 16) {
+            Err(GpuError::Unsupported(why)) => Err(why),
+            view => Ok(view?),
+        };
         let indices = Buffer::with_data(ctx, "scene_indices", &indices, usage(vk::BufferUsageFlags::INDEX_BUFFER))?;
         // The frame set binds the materials as a uniform buffer of MAX_MATERIALS entries
         // (glsl/include/frame.glsl), so it holds that many; ray tracers bind it as storage.
@@ -392,6 +419,7 @@ impl GpuScene {
         let (lights, shadow_faces) = lights(scene, bounds_center, bounds_radius, shadow_size);
         Ok(GpuScene {
             vertices,
+            vertex_texels,
             indices,
             draws,
             materials,
@@ -411,6 +439,7 @@ impl GpuScene {
     /// and has checked that the topology is unchanged.
     pub fn update_placement(&mut self, scene: &Scene, shadow_size: u32) {
         let (vertices, _, _, center, radius) = geometry(scene);
+        let vertices = at_least_one(vertices);
         let bytes: &[u8] = bytemuck::cast_slice(&vertices);
         assert_eq!(bytes.len(), self.vertices.read().len(), "update_placement with a changed topology");
         self.vertices.write(0, bytes);

@@ -12,7 +12,7 @@ use ash::vk;
 
 use super::context::GpuContext;
 use super::error::{GpuError, GpuResult};
-use super::{Access, Buffer, DescriptorSet, DescriptorSetLayout, DescriptorWrite, Image, Sampler};
+use super::{Access, Buffer, BufferView, DescriptorSet, DescriptorSetLayout, DescriptorWrite, Image, Sampler};
 
 /// The resources of one descriptor set, in binding order of declaration.
 pub struct Bindings<'a, H> {
@@ -65,6 +65,11 @@ impl<'a, H: Copy> Bindings<'a, H> {
 
     pub fn storage(self, binding: u32, buffer: &'a Buffer) -> Self {
         self.push(DescriptorWrite::Storage(binding, buffer))
+    }
+
+    /// A buffer read through `view` as a uniform texel buffer (`samplerBuffer` in GLSL).
+    pub fn texels(self, binding: u32, view: &'a BufferView) -> Self {
+        self.push(DescriptorWrite::UniformTexels(binding, view.raw))
     }
 
     /// `image` (its default view) sampled with `sampler`, in the layout of a sampled access.

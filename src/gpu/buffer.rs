@@ -6,7 +6,7 @@ use gpu_allocator::vulkan::Allocation;
 use gpu_allocator::MemoryLocation;
 
 use super::context::{Garbage, GpuContext, MemoryKind};
-use super::error::{GpuResult, VkContext};
+use super::error::{GpuError, GpuResult, VkContext};
 
 pub struct Buffer {
     ctx: Arc<GpuContext>,
@@ -81,6 +81,47 @@ impl Buffer {
 
     pub fn raw(&self) -> vk::Buffer {
         self.raw
+    }
+}
+
+/// A buffer read through a formatted view (`texelFetch` on a `samplerBuffer` in GLSL). On
+/// lavapipe a texel fetch at a per-lane index is one gather, where a storage-buffer load is a
+/// loop over the SIMD lanes with a branch per lane and component (gallivm's `emit_load_mem`).
+pub struct BufferView {
+    ctx: Arc<GpuContext>,
+    pub(crate) raw: vk::BufferView,
+}
+
+impl BufferView {
+    /// `buffer` (made with `UNIFORM_TEXEL_BUFFER` usage) whole, as texels of `format`, each
+    /// `texel_bytes` long. Refused with the device's limit named when the buffer holds more
+    /// texels than `maxTexelBufferElements` (at least 65 536; lavapipe 2^27).
+    pub fn new(ctx: &Arc<GpuContext>, buffer: &Buffer, format: vk::Format, texel_bytes: u64) -> GpuResult<BufferView> {
+        let texels = buffer.size / texel_bytes;
+        let max = u64::from(ctx.limits().max_texel_buffer_elements);
+        if texels > max {
+            return Err(GpuError::Unsupported(format!(
+                "{} holds {texels} texels; the device's maxTexelBufferElements is {max}: use a smaller scene \
+                 (fewer triangles or vertices) or another device",
+                buffer.name
+            )));
+        }
+        let info = vk::BufferViewCreateInfo::default()
+            .buffer(buffer.raw)
+            .format(format)
+            .offset(0)
+            .range(texels * texel_bytes);
+        // SAFETY: valid create info; the buffer outlives the view's uses (both are freed
+        // after the last frame that used them).
+        let raw = unsafe { ctx.raw().create_buffer_view(&info, None) }.vk("vkCreateBufferView")?;
+        ctx.set_name(raw, &buffer.name);
+        Ok(BufferView { ctx: ctx.clone(), raw })
+    }
+}
+
+impl Drop for BufferView {
+    fn drop(&mut self) {
+        self.ctx.defer_destroy(Garbage::BufferView(self.raw));
     }
 }
 

@@ -124,6 +124,7 @@ pub struct MemoryUsage {
 pub(crate) enum Garbage {
     Buffer(vk::Buffer, gpu_allocator::vulkan::Allocation),
     Image(vk::Image, Vec<vk::ImageView>, gpu_allocator::vulkan::Allocation),
+    BufferView(vk::BufferView),
     /// The fence of a submission whose wait timed out (it may still be running).
     Fence(vk::Fence),
 }
@@ -649,6 +650,7 @@ impl GpuContext {
                         let _ = alloc.free(a);
                     }
                 }
+                Garbage::BufferView(v) => self.device.destroy_buffer_view(v, None),
                 Garbage::Fence(f) => self.device.destroy_fence(f, None),
             }
         }

@@ -87,6 +87,7 @@ pub(super) enum DescriptorWrite<'a> {
     /// binding, view, sampler, layout the image will be in when sampled.
     Sampled(u32, vk::ImageView, &'a Sampler, vk::ImageLayout),
     StorageImage(u32, vk::ImageView),
+    UniformTexels(u32, vk::BufferView),
 }
 
 impl DescriptorWrite<'_> {
@@ -95,7 +96,8 @@ impl DescriptorWrite<'_> {
             DescriptorWrite::Uniform(b, _)
             | DescriptorWrite::Storage(b, _)
             | DescriptorWrite::Sampled(b, ..)
-            | DescriptorWrite::StorageImage(b, _) => b,
+            | DescriptorWrite::StorageImage(b, _)
+            | DescriptorWrite::UniformTexels(b, _) => b,
         }
     }
 
@@ -105,6 +107,7 @@ impl DescriptorWrite<'_> {
             DescriptorWrite::Storage(..) => vk::DescriptorType::STORAGE_BUFFER,
             DescriptorWrite::Sampled(..) => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
             DescriptorWrite::StorageImage(..) => vk::DescriptorType::STORAGE_IMAGE,
+            DescriptorWrite::UniformTexels(..) => vk::DescriptorType::UNIFORM_TEXEL_BUFFER,
         }
     }
 }
@@ -113,6 +116,7 @@ impl DescriptorSet {
     pub(super) fn update(&self, ctx: &GpuContext, writes: &[DescriptorWrite<'_>]) {
         let mut buffer_infos = Vec::with_capacity(writes.len());
         let mut image_infos = Vec::with_capacity(writes.len());
+        let mut texel_views = Vec::with_capacity(writes.len());
         for w in writes {
             match w {
                 DescriptorWrite::Uniform(_, b) | DescriptorWrite::Storage(_, b) => {
@@ -128,9 +132,10 @@ impl DescriptorSet {
                     image_view: *view,
                     image_layout: vk::ImageLayout::GENERAL,
                 }]),
+                DescriptorWrite::UniformTexels(_, view) => texel_views.push([*view]),
             }
         }
-        let (mut bi, mut ii) = (0, 0);
+        let (mut bi, mut ii, mut ti) = (0, 0, 0);
         let raw_writes: Vec<_> = writes
             .iter()
             .map(|w| {
@@ -146,6 +151,10 @@ impl DescriptorSet {
                     DescriptorWrite::Sampled(..) | DescriptorWrite::StorageImage(..) => {
                         ii += 1;
                         base.image_info(&image_infos[ii - 1])
+                    }
+                    DescriptorWrite::UniformTexels(..) => {
+                        ti += 1;
+                        base.texel_buffer_view(&texel_views[ti - 1])
                     }
                 }
             })

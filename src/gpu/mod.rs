@@ -40,7 +40,7 @@ mod timing;
 
 pub use ash::vk;
 pub use bindings::{Bindings, BoundSet};
-pub use buffer::Buffer;
+pub use buffer::{Buffer, BufferView};
 pub use command::{Clear, Cmd, CommandPool, SubmitSync};
 pub use context::{
     ContextDesc, DeviceInfo, GpuContext, MemoryKinds, MemoryUsage, PipelineCounts, Progress, ProgressSink,

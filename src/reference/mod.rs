@@ -43,7 +43,10 @@ use glam::{Mat4, Vec3};
 
 use crate::frame::gpu_scene::GpuScene;
 use crate::frame::RenderError;
-use crate::gpu::{vk, Access, Buffer, ComputePipeline, GpuContext, MemoryLocation, Sampler, SamplerDesc};
+use crate::gpu::{
+    vk, Access, Buffer, BufferView, ComputePipeline, GpuContext, GpuResult, MemoryLocation, Sampler,
+    SamplerDesc,
+};
 use crate::graph::{Bindings, BoundSet, BufferId, FrameGraph};
 use crate::scene::{Analytic, Light, Material, Scene};
 use crate::*;
@@ -348,13 +351,42 @@ fn dispersive_dielectric(scene: &Scene) -> bool {
     scene.materials.iter().any(|m| matches!(m, Material::Dielectric { ior, .. } if ior.x != ior.y || ior.y != ior.z))
 }
 
+/// A host-visible texel buffer of `bytes` (at least one texel) and its view, of RGBA32UI
+/// texels (`texel_bytes` 16) or R32UI (4), for `binding`.
+fn texel_buffer(
+    ctx: &Arc<GpuContext>,
+    binding: u32,
+    name: &str,
+    bytes: &[u8],
+    texel_bytes: usize,
+) -> GpuResult<(u32, Buffer, BufferView)> {
+    let format = if texel_bytes == 16 { vk::Format::R32G32B32A32_UINT } else { vk::Format::R32_UINT };
+    let size = bytes.len().max(texel_bytes);
+    let mut buffer = Buffer::new(
+        ctx,
+        name,
+        size as u64,
+        vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER,
+        MemoryLocation::CpuToGpu,
+    )?;
+    buffer.write(0, bytes);
+    let view = BufferView::new(ctx, &buffer, format, texel_bytes as u64)?;
+    Ok((binding, buffer, view))
+}
+
 /// The exact tracer's scene besides the GPU scene's vertices and materials
 /// (glsl/reference/trace.glsl): the BVH-ordered triangles, the BVH, the exact spheres, each
 /// object's material and the volume's voxels. The reference binds them in set 0 of its compute
 /// passes; the raytrace technique (src/technique/raytrace.rs) in set 1 of its fragment pass,
 /// and keeps them across its re-creation while [`TraceGeometry::key`] is unchanged.
+///
+/// The shaders read the triangles, the BVH, the spheres and the objects' materials as texel
+/// buffers: every lane of a traversal fetches a node or a triangle of its own, which a texel
+/// fetch gathers in one instruction, where lavapipe loads a storage buffer lane by lane.
 pub struct TraceGeometry {
-    buffers: [(u32, Buffer); 5],
+    /// (binding, buffer, its view) of each texel buffer.
+    texels: [(u32, Buffer, BufferView); 4],
+    voxels: Buffer,
     triangles: u32,
     nodes: u32,
     spheres: u32,
@@ -437,14 +469,16 @@ impl TraceGeometry {
         let objects: Vec<u32> = scene.objects.iter().map(|o| o.material as u32).collect();
         let (voxels, volume_dispersive) = volume_voxels(scene.volume.as_ref());
         let dispersion = volume_dispersive || dispersive_dielectric(scene);
+        // Every texel is RGBA32UI (the floats' bits, exact) but the objects' R32UI materials.
+        let rgba = |binding: u32, name: &str, bytes: &[u8]| texel_buffer(ctx, binding, name, bytes, 16);
         Ok(TraceGeometry {
-            buffers: [
-                (REF_BINDING_TRIANGLES, Buffer::storage(ctx, "reference_triangles", &ordered)?),
-                (REF_BINDING_NODES, Buffer::storage(ctx, "reference_bvh", &bvh.nodes)?),
-                (REF_BINDING_SPHERES, Buffer::storage(ctx, "reference_spheres", &spheres)?),
-                (REF_BINDING_OBJECTS, Buffer::storage(ctx, "reference_objects", &objects)?),
-                (REF_BINDING_VOLUME, Buffer::storage(ctx, "reference_volume_voxels", &voxels)?),
+            texels: [
+                rgba(REF_BINDING_TRIANGLES, "reference_triangles", bytemuck::cast_slice(&ordered))?,
+                rgba(REF_BINDING_NODES, "reference_bvh", bytemuck::cast_slice(&bvh.nodes))?,
+                rgba(REF_BINDING_SPHERES, "reference_spheres", bytemuck::cast_slice(&spheres))?,
+                texel_buffer(ctx, REF_BINDING_OBJECTS, "reference_objects", bytemuck::cast_slice(&objects), 4)?,
             ],
+            voxels: Buffer::storage(ctx, "reference_volume_voxels", &voxels)?,
             triangles: ordered.len() as u32,
             nodes: bvh.nodes.len() as u32,
             spheres: spheres.len() as u32,
@@ -466,9 +500,13 @@ impl TraceGeometry {
         h.finish()
     }
 
-    /// (binding, buffer) of each of its buffers.
-    pub fn buffers(&self) -> impl Iterator<Item = (u32, &Buffer)> {
-        self.buffers.iter().map(|(b, buffer)| (*b, buffer))
+    /// `b` with the tracer's geometry at its REF_BINDING_*: these buffers and `gpu`'s vertices.
+    pub fn bind<'a>(&'a self, gpu: &'a GpuScene, b: Bindings<'a>) -> GpuResult<Bindings<'a>> {
+        let mut b = b.texels(REF_BINDING_VERTICES, gpu.vertex_texels()?);
+        for (binding, _, view) in &self.texels {
+            b = b.texels(*binding, view);
+        }
+        Ok(b.storage(REF_BINDING_VOLUME, &self.voxels))
     }
 
     /// The tracer's uniforms for `scene` over this geometry, following at most `max_depth`
@@ -693,11 +731,10 @@ impl Reference {
         stats.write(0, bytemuck::cast_slice(&initial_stats()));
 
         let sampler = Sampler::new(ctx, "reference_latlong", SamplerDesc::LATLONG)?;
-        let mut bindings = Bindings::new(vk::ShaderStageFlags::COMPUTE)
+        let bindings = Bindings::new(vk::ShaderStageFlags::COMPUTE)
             .storage(REF_BINDING_UNIFORMS, &ubo)
             .storage(REF_BINDING_MATERIALS, &gpu_scene.materials)
             .sampled(REF_BINDING_ENVIRONMENT, &gpu_scene.environment, &sampler)
-            .storage(REF_BINDING_VERTICES, &gpu_scene.vertices)
             .storage(REF_BINDING_ACCUM, &accum)
             .storage(REF_BINDING_PIXELS, &pixels)
             .storage(REF_BINDING_PHOTONS, &photon_buffer)
@@ -705,10 +742,7 @@ impl Reference {
             .storage(REF_BINDING_COUNTERS, &counters)
             .storage(REF_BINDING_DEBUG, &debug)
             .storage(REF_BINDING_STATS, &stats);
-        for (binding, buffer) in trace.buffers() {
-            bindings = bindings.storage(binding, buffer);
-        }
-        let set = bindings.build(ctx, "reference")?;
+        let set = trace.bind(&gpu_scene, bindings)?.build(ctx, "reference")?;
         let push = std::mem::size_of::<RefPush>() as u32;
         let pipeline = |name: &str, shader: &str| ComputePipeline::new(ctx, name, shader, &[set.layout()], push, &[]);
         let camera = pipeline("reference_camera", "reference/camera.comp")?;

@@ -424,20 +424,17 @@ fn create(s: &mut Setup<'_>, effect: Effect) -> Result<Box<dyn Technique>, Rende
 
     // The uniforms are host-written once at creation: visible at submission.
     let targets = s.targets;
-    let mut set = fragment_set()
+    let set = fragment_set()
         .sampled(BINDING_GBUF_ALBEDO, &targets.gbuf_albedo, s.nearest)
         .read(targets.gbuf_albedo_id)
         .sampled(BINDING_GBUF_DEPTH, &targets.depth, s.nearest)
         .read(targets.depth_id)
         .storage(REF_BINDING_UNIFORMS, &uniforms)
-        .storage(REF_BINDING_VERTICES, &s.gpu.vertices)
         .storage(REF_BINDING_PHOTONS, &photons.photons)
         .read(photons.photons_id)
         .storage(REF_BINDING_GRID, &photons.grid)
         .read(photons.grid_id);
-    for (binding, buffer) in geometry.buffers() {
-        set = set.storage(binding, buffer);
-    }
+    let set = geometry.bind(s.gpu, set)?;
     let pass = FullscreenPass::new(
         ctx,
         // Overwrites only the pixels of its objects; the caustic is added to the diffuse ones'.
@@ -537,12 +534,11 @@ fn make_photons(
         let sampler = Sampler::new(ctx, "raytrace_photon_latlong", SamplerDesc::LATLONG)?;
         let counters_id = graph.register_buffer(&counters);
         let (debug_id, stats_id) = (graph.register_buffer(&debug), graph.register_buffer(&stats));
-        let mut bindings = Bindings::new(vk::ShaderStageFlags::COMPUTE)
+        let bindings = Bindings::new(vk::ShaderStageFlags::COMPUTE)
             .storage(REF_BINDING_UNIFORMS, &uniforms)
             .storage(REF_BINDING_MATERIALS, &gpu.materials)
             .sampled(REF_BINDING_ENVIRONMENT, &gpu.environment, &sampler)
             .read(gpu.environment_id)
-            .storage(REF_BINDING_VERTICES, &gpu.vertices)
             .storage(REF_BINDING_PHOTONS, &photons)
             .access(photons_id, Access::ComputeWrite)
             .storage(REF_BINDING_GRID, &grid)
@@ -553,10 +549,7 @@ fn make_photons(
             .access(debug_id, Access::ComputeWrite)
             .storage(REF_BINDING_STATS, &stats)
             .access(stats_id, Access::ComputeWrite);
-        for (binding, buffer) in geometry.value.buffers() {
-            bindings = bindings.storage(binding, buffer);
-        }
-        let set = bindings.build(ctx, "raytrace_photons")?;
+        let set = geometry.value.bind(gpu, bindings)?.build(ctx, "raytrace_photons")?;
         let push = std::mem::size_of::<RefPush>() as u32;
         let pipeline =
             ComputePipeline::new(ctx, "raytrace_photons", "reference/photons.comp", &[set.layout()], push, &[])?;

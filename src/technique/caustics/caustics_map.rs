@@ -532,13 +532,8 @@ impl CausticsMapPass {
             .storage(CAUSTIC_BINDING_COUNTS, &splat_layers.counts)
             .build(ctx, CAUSTICS_MAP_HITS)?;
         let oracle = match oracle {
-            // Host-written once at creation: visible at submission.
             Some(o) => {
-                let set = o
-                    .buffers(gpu)
-                    .into_iter()
-                    .fold(Bindings::new(vk::ShaderStageFlags::COMPUTE), |b, (i, buffer)| b.storage(i, buffer))
-                    .build(ctx, &format!("{CAUSTICS_MAP_HITS}_tracer"))?;
+                let set = o.set(ctx, gpu, vk::ShaderStageFlags::COMPUTE, &format!("{CAUSTICS_MAP_HITS}_tracer"))?;
                 Some((o, set))
             }
             None => None,

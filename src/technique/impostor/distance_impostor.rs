@@ -601,13 +601,7 @@ impl ShadePass {
         });
         let sets = Bindings::build_each(ctx, name, sets.collect())?;
         let tracer = match oracle {
-            // Host-written once at creation: visible at submission.
-            Some(o) => Some(
-                o.buffers(s.gpu)
-                    .into_iter()
-                    .fold(Bindings::new(vk::ShaderStageFlags::FRAGMENT), |b, (i, buffer)| b.storage(i, buffer))
-                    .build(ctx, &format!("{name}_tracer"))?,
-            ),
+            Some(o) => Some(o.set(ctx, s.gpu, vk::ShaderStageFlags::FRAGMENT, &format!("{name}_tracer"))?),
             None => None,
         };
         let mut layouts = vec![s.frame_layout, sets.layout()];

@@ -9,12 +9,14 @@
 //! hits pass (glsl/caustics/splat_hits_oracle.comp) has one set of its own and binds them in
 //! set 1.
 use std::rc::Rc;
+use std::sync::Arc;
 
 use crate::frame::gpu_scene::GpuScene;
-use crate::gpu::Buffer;
+use crate::gpu::{vk, Buffer, GpuContext, GpuResult};
+use crate::graph::{Bindings, BoundSet};
 use crate::reference::TraceGeometry;
 use crate::technique::{trace_geometry_cost, OnceCost, RenderError, Setup, Timed};
-use crate::{REF_BINDING_UNIFORMS, REF_BINDING_VERTICES};
+use crate::REF_BINDING_UNIFORMS;
 
 /// What an oracle binds: the reference's geometry and the tracer's uniforms.
 pub struct Oracle {
@@ -39,10 +41,16 @@ impl Oracle {
         trace_geometry_cost(&self.geometry)
     }
 
-    /// The set-2 buffers of the oracle variants (REF_BINDING_*, glsl/reference/trace.glsl).
-    pub fn buffers<'a>(&'a self, gpu: &'a GpuScene) -> Vec<(u32, &'a Buffer)> {
-        let mut b = vec![(REF_BINDING_UNIFORMS, &self.uniforms), (REF_BINDING_VERTICES, &gpu.vertices)];
-        b.extend(self.geometry.value.buffers());
-        b
+    /// The tracer's set of the oracle variants (REF_BINDING_*, glsl/reference/trace.glsl),
+    /// for `stages`. Its buffers are host-written once at creation: visible at submission.
+    pub fn set(
+        &self,
+        ctx: &Arc<GpuContext>,
+        gpu: &GpuScene,
+        stages: vk::ShaderStageFlags,
+        name: &str,
+    ) -> GpuResult<BoundSet> {
+        let b = Bindings::new(stages).storage(REF_BINDING_UNIFORMS, &self.uniforms);
+        self.geometry.value.bind(gpu, b)?.build(ctx, name)
     }
 }

@@ -265,7 +265,6 @@ impl HuQinPass {
             Some(f) => [(&f.normal, f.normal_id), (&f.depth, f.depth_id)],
             None => [(&targets.gbuf_normal, targets.gbuf_normal_id), (&targets.depth, targets.depth_id)],
         };
-        let tracer = oracle.as_ref().map(|o| o.buffers(gpu)).unwrap_or_default();
         let mut specialization = vec![
             ("SEARCH_STEPS", Spec::U32(params.search_steps)),
             ("TOLERANCE", Spec::F32(params.tolerance)),
@@ -312,7 +311,7 @@ impl HuQinPass {
                 ],
                 buffers: &[],
                 uniforms: &[(BINDING_NEARBY_RECTS, &nearby.rect_buffer)],
-                tracer: &tracer,
+                tracer: oracle.as_ref().map(|o| (o, gpu)),
                 specialization: &specialization,
                 debug: params.debug,
                 scene,

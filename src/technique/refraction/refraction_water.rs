@@ -92,17 +92,14 @@ fn create(s: &mut Setup<'_>) -> Result<Box<dyn Technique>, RenderError> {
     // Host-written once at creation (the graph tracks images only): visible at submission.
     let sky = Buffer::storage(ctx, "refraction_water_sky", &sky_below(scene))?;
     let targets = s.targets;
-    let mut set = fragment_set()
+    let set = fragment_set()
         .sampled(BINDING_WATER_GBUF_NORMAL, &targets.gbuf_normal, s.nearest)
         .read(targets.gbuf_normal_id)
         .sampled(BINDING_GBUF_DEPTH, &targets.depth, s.nearest)
         .read(targets.depth_id)
         .storage(REF_BINDING_UNIFORMS, &uniforms)
-        .storage(REF_BINDING_VERTICES, &s.gpu.vertices)
         .storage(BINDING_WATER_SKY, &sky);
-    for (binding, buffer) in geometry.buffers() {
-        set = set.storage(binding, buffer);
-    }
+    let set = geometry.bind(s.gpu, set)?;
     let pass = FullscreenPass::new(
         ctx,
         // Overwrites only the pixels of the dielectrics.

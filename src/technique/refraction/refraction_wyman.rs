@@ -144,7 +144,6 @@ impl WymanPass {
         let refractors = slot_of_object.iter().filter(|&&slot| slot != u32::MAX).count();
         let slots = Buffer::storage(ctx, "refraction_wyman_slots", &slot_of_object)?;
         let b = &layers.layers[0];
-        let tracer = oracle.as_ref().map(|o| o.buffers(s.gpu)).unwrap_or_default();
         let mut specialization = vec![
             ("DISPERSION", Spec::U32(u32::from(has_dispersion(scene)))),
             ("BACK_FURTHEST", Spec::U32(u32::from(back == LayerKind::BackFurthest))),
@@ -172,7 +171,7 @@ impl WymanPass {
                 ],
                 buffers: &[(BINDING_REFR_SLOTS, &slots)],
                 uniforms: &[],
-                tracer: &tracer,
+                tracer: oracle.as_ref().map(|o| (o, s.gpu)),
                 specialization: &specialization,
                 debug: params.debug,
                 scene,

@@ -29,6 +29,7 @@ use crate::gpu::{
 use crate::graph::{Bindings, BoundSet, Frame, FrameGraph, ImageId};
 use crate::scene::{Material, Scene};
 use crate::technique::baseline::fullscreen::Cover;
+use crate::technique::refraction::oracle::Oracle;
 use crate::technique::{FrameInputs, Setup};
 
 /// Normal layers are 32-bit float like the radiance: P2's error should be the
@@ -262,9 +263,9 @@ pub struct ShadeDesc<'a> {
     pub buffers: &'a [(u32, &'a Buffer)],
     /// Set-1 uniform buffers read by the fragment shader: (binding, buffer).
     pub uniforms: &'a [(u32, &'a Buffer)],
-    /// Set-2 storage buffers, (binding, buffer): the exact tracer's (glsl/reference/trace.glsl
-    /// with REF_SET 2), bound only for an oracle; empty: the pipeline has no set 2.
-    pub tracer: &'a [(u32, &'a Buffer)],
+    /// Set 2: the exact tracer's (glsl/reference/trace.glsl with REF_SET 2) over the scene's
+    /// vertices, bound only for an oracle; `None`: the pipeline has no set 2.
+    pub tracer: Option<(&'a Oracle, &'a GpuScene)>,
     /// Specialisation constants besides `DEBUG` (the debug flag).
     pub specialization: Specs<'a>,
     pub debug: bool,
@@ -309,15 +310,11 @@ impl ShadePass {
             set = set.uniform(b, buffer);
         }
         let set = set.build(ctx, name)?;
-        let tracer = if desc.tracer.is_empty() {
-            None
-        } else {
-            // Host-written once at creation, as the buffers above.
-            let b = desc
-                .tracer
-                .iter()
-                .fold(Bindings::new(vk::ShaderStageFlags::FRAGMENT), |b, &(i, buffer)| b.storage(i, buffer));
-            Some(b.build(ctx, &format!("{name}_tracer"))?)
+        let tracer = match desc.tracer {
+            Some((oracle, gpu)) => {
+                Some(oracle.set(ctx, gpu, vk::ShaderStageFlags::FRAGMENT, &format!("{name}_tracer"))?)
+            }
+            None => None,
         };
         let mut layouts = vec![frame_layout, set.layout()];
         layouts.extend(tracer.as_ref().map(|t| t.layout()));
