@@ -50,8 +50,6 @@ shared_constants! {
 
     // Specular objects photons are aimed at, at most (reference path tracer).
     REF_MAX_TARGETS: u32 = 16;
-    // Traversal stack depth (a SAH BVH over 1e6 triangles is far shallower).
-    REF_STACK_SIZE: u32 = 64;
     // Threads per workgroup of the 1D kernels (the reference's, caustics mapping's splat hits),
     // dispatched in rows by src/reference/mod.rs `dispatch_size`.
     REF_WORKGROUP: u32 = 64;

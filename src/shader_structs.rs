@@ -520,7 +520,7 @@ shared_structs! {
     #[derive(Default, PartialEq)]
     buffer struct BvhNode {
         lo: vec3,
-        /// Leaf: first triangle. Interior: right child.
+        /// Leaf: first triangle. Interior: the node after its subtree (src/reference/bvh.rs).
         index: uint,
         hi: vec3,
         /// Triangle count; 0 for an interior node.

@@ -129,20 +129,21 @@ struct Hit {
 };
 
 // Closest triangle by BVH traversal. Ties go to the lower triangle index, as in brute force.
+// The threaded layout (src/reference/bvh.rs) needs no stack: into a node's subtree where the
+// ray meets its box, past it where not.
 Hit trace_triangles(vec3 o, vec3 d, float t_max) {
     Hit h; h.t = t_max; h.prim = 0u; h.kind = 0u; h.uv = vec2(0.0);
     if (ref.counts.x == 0u) return h;
     vec3 inv_d = 1.0 / d;
-    uint stack[REF_STACK_SIZE];
-    int sp = 0;
-    stack[sp++] = 0u;
-    while (sp > 0) {
-        uint i = stack[--sp];
+    uint nodes = ref.counts.y;
+    for (uint i = 0u; i < nodes;) {
         uvec4 lo_index = texelFetch(node_texels, int(2u * i)), hi_count = texelFetch(node_texels, int(2u * i + 1u));
-        if (!slab(o, inv_d, uintBitsToFloat(lo_index.xyz), uintBitsToFloat(hi_count.xyz), h.t)) continue;
+        bool hit = slab(o, inv_d, uintBitsToFloat(lo_index.xyz), uintBitsToFloat(hi_count.xyz), h.t);
         uint count = hi_count.w;
         uint index = lo_index.w;
-        if (count > 0u) {
+        bool leaf = count > 0u;
+        i = hit || leaf ? i + 1u : index;
+        if (hit && leaf) {
             for (uint k = index; k < index + count; ++k) {
                 uvec4 tri = triangle_at(k);
                 float t; vec2 uv;
@@ -151,9 +152,6 @@ Hit trace_triangles(vec3 o, vec3 d, float t_max) {
                     h.t = t; h.prim = k; h.kind = 1u; h.uv = uv;
                 }
             }
-        } else if (sp + 2 <= int(REF_STACK_SIZE)) {
-            stack[sp++] = index;
-            stack[sp++] = i + 1u;
         }
     }
     return h;

@@ -2,9 +2,14 @@
 //! heuristic (binned SAH, Wald 2007 "On fast construction of SAH-based bounding volume
 //! hierarchies") and traversed both here and in glsl/reference/scene.glsl.
 //!
-//! Layout (mirrored by the shader): nodes in depth-first order, 32 bytes each. An interior
-//! node's left child is the next node and `index` is its right child; a leaf has `count > 0`
-//! triangles starting at `index` in the BVH-ordered triangle list.
+//! Layout (mirrored by the shader): nodes in depth-first order, 32 bytes each, threaded for a
+//! traversal without a stack (Smits 1998, "Efficiency issues for ray tracing"). An interior
+//! node's left child is the next node and `index` is its skip: the node that follows its
+//! subtree, where a ray that misses its box goes on (its right child is its left child's
+//! skip). A leaf has `count > 0` triangles starting at `index` in the BVH-ordered triangle
+//! list; its skip is the next node. The traversal visits the nodes a stack's left-first
+//! traversal would, in the same order, so it finds the same hit; the shader keeps no per-lane
+//! stack, which lavapipe would store and load lane by lane.
 pub use crate::shader_structs::BvhNode;
 use glam::Vec3;
 
@@ -202,8 +207,8 @@ impl Bvh {
         };
         nodes[me].count = 0;
         Self::build_node(bounds, centroids, order, start, mid, nodes);
-        nodes[me].index = nodes.len() as u32;
         Self::build_node(bounds, centroids, order, mid, end, nodes);
+        nodes[me].index = nodes.len() as u32;
     }
 
     /// Closest hit with t in (0, t_max), traversing the tree; `triangles` in caller order.
@@ -216,13 +221,13 @@ impl Bvh {
         let inv = d.recip();
         let mut best: Option<Hit> = None;
         let mut closest = t_max;
-        let mut stack = vec![0u32];
-        while let Some(i) = stack.pop() {
-            let node = &self.nodes[i as usize];
-            if !slab(o, inv, Vec3::from(node.lo), Vec3::from(node.hi), closest) {
-                continue;
-            }
-            if node.count > 0 {
+        let mut i = 0;
+        while i < self.nodes.len() {
+            let node = &self.nodes[i];
+            let hit = slab(o, inv, Vec3::from(node.lo), Vec3::from(node.hi), closest);
+            // Into the subtree (a leaf's is itself), or past it.
+            i = if hit || node.count > 0 { i + 1 } else { node.index as usize };
+            if hit && node.count > 0 {
                 for k in node.index..node.index + node.count {
                     let tri = self.order[k as usize];
                     let [a, b, c] = triangles[tri as usize];
@@ -233,9 +238,6 @@ impl Bvh {
                         }
                     }
                 }
-            } else {
-                stack.push(node.index);
-                stack.push(i + 1);
             }
         }
         best
@@ -316,6 +318,27 @@ mod tests {
         }
         assert!(seen.iter().all(|&c| c == 1));
         assert!(bvh.nodes.iter().all(|n| n.count as usize <= 16));
+    }
+
+    /// Each interior node's skip is the node after its subtree: the end of its right child's,
+    /// which begins at its left child's skip.
+    #[test]
+    fn skips_follow_the_subtrees() {
+        let tris = bunny();
+        let bvh = Bvh::build(&tris);
+        fn end(nodes: &[BvhNode], i: usize) -> usize {
+            if nodes[i].count > 0 {
+                i + 1
+            } else {
+                end(nodes, end(nodes, i + 1))
+            }
+        }
+        for (i, n) in bvh.nodes.iter().enumerate() {
+            if n.count == 0 {
+                assert_eq!(n.index as usize, end(&bvh.nodes, i), "node {i}");
+            }
+        }
+        assert_eq!(end(&bvh.nodes, 0), bvh.nodes.len());
     }
 
     #[test]
