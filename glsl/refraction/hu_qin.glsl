@@ -246,10 +246,16 @@ void main() {
             }
 #endif
             vec2 uv2 = project_uv(P2);
-            // §2.1.4: N2 from the normal layer matching the exit surface.
-            bool covered = exit_covered(front, uv2);
-            N2 = !covered ? silhouette_normal(T1)
-                               : (front ? layer_normal_at(front_normal, uv2) : layer_normal_at(back_normal, uv2));
+            // §2.1.4: N2 from the normal layer matching the exit surface. One fetch of its
+            // texel serves the coverage test and N2, as in Wyman's pass: a layer's normal is
+            // zero where it holds no surface, a unit vector where it does.
+            vec3 n2 = vec3(0.0);
+            if (on_screen(uv2)) {
+                ivec2 t2 = texel_of(uv2);
+                n2 = front ? texelFetch(front_normal, t2, 0).xyz : texelFetch(back_normal, t2, 0).xyz;
+            }
+            bool covered = dot(n2, n2) > 0.25;
+            N2 = covered ? normalize(n2) : silhouette_normal(T1);
 #ifdef ORACLE_TRACE
             // §2.1.4's N2 replaced by the exact normal at T1's exit.
             if (exact && (ORACLE & ORACLE_EXIT_NORMAL) != 0u) {
