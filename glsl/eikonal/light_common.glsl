@@ -85,7 +85,8 @@ layout(constant_id = 26) const uint DIRECTION_NEAREST = 0u;
 // every corner stays in a uniform region (light_step.glsl; render.eikonal.light_leaps); 0: none.
 layout(constant_id = 27) const uint LEAP_STEPS = 0u;
 layout(constant_id = 28) const uint BRICK = 4u;
-layout(std430, set = 1, binding = LIGHT_BINDING_BRICKS) readonly buffer Bricks { uint brick_reach[]; };
+layout(std430, set = 1, binding = LIGHT_BINDING_BRICKS) readonly buffer Bricks { uint brick_reaches[]; };
+uint brick_reach(int i) { return brick_reaches[i]; }
 // 1: deposit only where `read_bits` says the volumes are read (render.eikonal.light_deposits,
 // src/technique/eikonal/read_mask.rs): one bit per voxel of the irradiance volume, x fastest,
 // set where a point that is looked up lies within two voxels of the voxel's centre.

@@ -72,10 +72,11 @@ layout(set = 1, binding = BINDING_EIKONAL_ALBEDO) uniform sampler3D albedo_map; 
 layout(set = 1, binding = BINDING_EIKONAL_EMISSION) uniform sampler3D emission_map;      // emission (rgb)
 // Per brick, the Chebyshev distance in bricks to the nearest brick that is not uniform
 // (src/technique/eikonal/volume.rs, `uniform_reach`).
-layout(std430, set = 1, binding = BINDING_EIKONAL_BRICKS) readonly buffer Bricks { uint brick_reach[]; };
+layout(set = 1, binding = BINDING_EIKONAL_BRICKS) uniform usamplerBuffer brick_texels;
+uint brick_reach(int i) { return texelFetch(brick_texels, i).x; }
 // The boundary band's reflectance factor per voxel, -1 outside the band, x fastest
 // (src/technique/eikonal/volume.rs).
-layout(std430, set = 1, binding = BINDING_EIKONAL_BAND) readonly buffer Band { float band_factors[]; };
+layout(set = 1, binding = BINDING_EIKONAL_BAND) uniform samplerBuffer band_factors;
 // ---- end of the material volumes ----
 layout(location = 0) in vec2 in_uv;
 layout(location = 0) out vec4 out_radiance;
@@ -147,14 +148,15 @@ vec4 sample_material(sampler3D map, vec3 x) {
 
 // The boundary band at x (nearest voxel), where the smoothed index crosses a jump: its
 // reflectance factor (the CPU spreads each surface's factor over its band), or -1 outside
-// the band and the box. One load per step, from a storage buffer: on lavapipe a texel fetch
-// per step was a tenth of the march, a buffer load costs a few percent (docs/BENCHMARKS.md).
+// the band and the box. One fetch per step from a buffer of one f32 per voxel: on lavapipe a
+// fetch from an RGBA16F volume was a tenth of the march, a storage-buffer load (a loop over the
+// lanes) a few percent, a texel-buffer fetch (one gather) less (docs/BENCHMARKS.md).
 float band_factor(vec3 x) {
     ivec3 size = slab_size();
     vec3 u = (x - BOX_MIN) / (BOX_MAX - BOX_MIN) * vec3(size);
     if (MATERIALS == 0u || any(lessThan(u, vec3(0.0))) || any(greaterThanEqual(u, vec3(size)))) return -1.0;
     ivec3 q = ivec3(u);
-    return band_factors[q.x + size.x * (q.y + size.y * q.z)];
+    return texelFetch(band_factors, q.x + size.x * (q.y + size.y * q.z)).r;
 }
 // ---- end of the material volumes ----
 

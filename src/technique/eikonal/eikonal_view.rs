@@ -391,8 +391,8 @@ impl EikonalPass {
             .read(nearby.texture_id)
             .uniform(crate::BINDING_NEARBY_RECTS, &nearby.rect_buffer)
             .storage(crate::BINDING_EIKONAL_TRIANGLES, &triangles)
-            .storage(crate::BINDING_EIKONAL_BRICKS, &textures.bricks)
-            .storage(crate::BINDING_EIKONAL_BAND, &textures.band);
+            .texels(crate::BINDING_EIKONAL_BRICKS, &textures.bricks_texels)
+            .texels(crate::BINDING_EIKONAL_BAND, &textures.band_texels);
         let view = FullscreenPass::new(
             ctx,
             // Overwrites the pixels whose ray enters the box.

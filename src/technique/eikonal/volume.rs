@@ -153,12 +153,16 @@ pub struct VolumeTextures {
     /// Whether any voxel scatters (sigma_s = albedo x extinction > 0 in a channel): only
     /// then do view rays read the light volumes inside the volume (Eq. 6).
     pub scatters: bool,
-    /// The uniform-region map of the view rays' leaps ([`uniform_reach`]).
+    /// The uniform-region map of the view rays' leaps ([`uniform_reach`]), and its R32UI
+    /// view, through which the view renderer reads it.
     pub bricks: crate::gpu::Buffer,
+    pub bricks_texels: crate::gpu::BufferView,
     /// The boundary band's reflectance factor per voxel (f32, x fastest), -1 outside the
-    /// band, device-local: the view renderer's march reads it every step, and a storage
-    /// buffer load costs lavapipe less than a texel fetch (docs/BENCHMARKS.md).
+    /// band, device-local, read through its R32F view: the view renderer's march reads it
+    /// every step, and a texel fetch from a buffer costs lavapipe one gather where a storage
+    /// buffer load is a loop over the lanes (docs/BENCHMARKS.md).
     pub band: crate::gpu::Buffer,
+    pub band_texels: crate::gpu::BufferView,
     /// Where the light can be anything but straight ([`medium_bricks`]).
     pub medium: Vec<(glam::Vec3, glam::Vec3)>,
 }
@@ -255,7 +259,13 @@ pub(crate) fn prepare_volume(
         .collect();
     let index_slabs: Vec<&[f32]> = fields.index[..channels as usize].iter().map(|v| v.as_slice()).collect();
     let reach = uniform_reach(&index_slabs, &material_at, fields.resolution, (3.0 * params.sigma).ceil() as usize + 2);
-    let bricks = crate::gpu::Buffer::storage(ctx, "eikonal_bricks", &reach)?;
+    let bricks = crate::gpu::Buffer::with_data(
+        ctx,
+        "eikonal_bricks",
+        &reach,
+        vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER,
+    )?;
+    let bricks_texels = crate::gpu::BufferView::new(ctx, &bricks, vk::Format::R32_UINT, 4)?;
     let absorbs: Vec<bool> = fields.extinction.iter().map(|e| e[..3].iter().any(|&c| c > 0.0)).collect();
     let medium = medium_bricks(&index_slabs, &absorbs, fields.resolution, volume.min, volume.voxel_size());
     let material_extent = if materials { volume.resolution } else { [1, 1, 1] };
@@ -285,9 +295,10 @@ pub(crate) fn prepare_volume(
     // Device-local (on a discrete GPU every step of every view ray reads it), filled by a
     // copy below.
     let band_bytes = std::mem::size_of_val(band_factor.as_slice()) as u64;
-    let band_usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
+    let band_usage = vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
     let band_buffer =
         crate::gpu::Buffer::new(ctx, "eikonal_band", band_bytes, band_usage, crate::gpu::MemoryLocation::GpuOnly)?;
+    let band_texels = crate::gpu::BufferView::new(ctx, &band_buffer, vk::Format::R32_SFLOAT, 4)?;
     let band_id = graph.register_buffer(&band_buffer);
     let emi_data = pack(&mut fields.emission.iter().zip(&band).map(|(e, &b)| [e[0], e[1], e[2], b]));
 
@@ -384,7 +395,9 @@ pub(crate) fn prepare_volume(
         scatters,
         emission_any,
         bricks,
+        bricks_texels,
         band: band_buffer,
+        band_texels,
         medium,
     })
 }
