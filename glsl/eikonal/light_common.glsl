@@ -85,19 +85,21 @@ layout(constant_id = 26) const uint DIRECTION_NEAREST = 0u;
 // every corner stays in a uniform region (light_step.glsl; render.eikonal.light_leaps); 0: none.
 layout(constant_id = 27) const uint LEAP_STEPS = 0u;
 layout(constant_id = 28) const uint BRICK = 4u;
-layout(std430, set = 1, binding = LIGHT_BINDING_BRICKS) readonly buffer Bricks { uint brick_reaches[]; };
-uint brick_reach(int i) { return brick_reaches[i]; }
+// Texel buffers, read at each patch's own index: one gather where lavapipe loads a storage
+// buffer lane by lane.
+layout(set = 1, binding = LIGHT_BINDING_BRICKS) uniform usamplerBuffer brick_texels;
+uint brick_reach(int i) { return texelFetch(brick_texels, i).x; }
 // 1: deposit only where `read_bits` says the volumes are read (render.eikonal.light_deposits,
 // src/technique/eikonal/read_mask.rs): one bit per voxel of the irradiance volume, x fastest,
 // set where a point that is looked up lies within two voxels of the voxel's centre.
 layout(constant_id = 29) const uint READ_MASK = 0u;
-layout(std430, set = 1, binding = LIGHT_BINDING_READ_MASK) readonly buffer ReadMask { uint read_bits[]; };
+layout(set = 1, binding = LIGHT_BINDING_READ_MASK) uniform usamplerBuffer read_bits;
 // Whether voxel w of the irradiance volume (of `size` voxels) is within two voxels of a
 // point that is read; always without READ_MASK.
 bool marked_read(ivec3 w, ivec3 size) {
     if (READ_MASK == 0u) return true;
     uint k = uint(w.x + size.x * (w.y + size.y * w.z));
-    return (read_bits[k >> 5u] & (1u << (k & 31u))) != 0u;
+    return (texelFetch(read_bits, int(k >> 5u)).x & (1u << (k & 31u))) != 0u;
 }
 #include "bricks.glsl"
 

@@ -106,11 +106,8 @@ impl BufferView {
                 buffer.name
             )));
         }
-        let info = vk::BufferViewCreateInfo::default()
-            .buffer(buffer.raw)
-            .format(format)
-            .offset(0)
-            .range(texels * texel_bytes);
+        let info =
+            vk::BufferViewCreateInfo::default().buffer(buffer.raw).format(format).offset(0).range(texels * texel_bytes);
         // SAFETY: valid create info; the buffer outlives the view's uses (both are freed
         // after the last frame that used them).
         let raw = unsafe { ctx.raw().create_buffer_view(&info, None) }.vk("vkCreateBufferView")?;

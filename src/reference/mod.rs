@@ -44,8 +44,7 @@ use glam::{Mat4, Vec3};
 use crate::frame::gpu_scene::GpuScene;
 use crate::frame::RenderError;
 use crate::gpu::{
-    vk, Access, Buffer, BufferView, ComputePipeline, GpuContext, GpuResult, MemoryLocation, Sampler,
-    SamplerDesc,
+    vk, Access, Buffer, BufferView, ComputePipeline, GpuContext, GpuResult, MemoryLocation, Sampler, SamplerDesc,
 };
 use crate::graph::{Bindings, BoundSet, BufferId, FrameGraph};
 use crate::scene::{Analytic, Light, Material, Scene};
@@ -362,13 +361,8 @@ fn texel_buffer(
 ) -> GpuResult<(u32, Buffer, BufferView)> {
     let format = if texel_bytes == 16 { vk::Format::R32G32B32A32_UINT } else { vk::Format::R32_UINT };
     let size = bytes.len().max(texel_bytes);
-    let mut buffer = Buffer::new(
-        ctx,
-        name,
-        size as u64,
-        vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER,
-        MemoryLocation::CpuToGpu,
-    )?;
+    let mut buffer =
+        Buffer::new(ctx, name, size as u64, vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER, MemoryLocation::CpuToGpu)?;
     buffer.write(0, bytes);
     let view = BufferView::new(ctx, &buffer, format, texel_bytes as u64)?;
     Ok((binding, buffer, view))

@@ -60,8 +60,8 @@ use std::time::Instant;
 use glam::{DVec3, Vec3};
 
 use crate::gpu::{
-    vk, Access, Buffer, ComputePipeline, DescriptorSet, GpuContext, GpuResult, Image, ImageDesc, MemoryLocation,
-    Progress, Sampler, SamplerDesc, Spec, TimestampPool, TimestampQuery,
+    vk, Access, Buffer, BufferView, ComputePipeline, DescriptorSet, GpuContext, GpuResult, Image, ImageDesc,
+    MemoryLocation, Progress, Sampler, SamplerDesc, Spec, TimestampPool, TimestampQuery,
 };
 use crate::graph::{Bindings, BoundSet, BufferId, Frame, FrameGraph, ImageId};
 use crate::scene::techniques::{EikonalParams, LightDeposits, LightDirectionSplat, LightIntegrator, LightVoxelization};
@@ -623,6 +623,7 @@ pub struct LightSim {
     /// reads to add the skipped patches' light, and the read mask of the step kernel's
     /// deposits.
     _buffers: [Buffer; 3],
+    _read_texels: BufferView,
     /// The run in progress and the runs still to do.
     pub run: LightRun,
     pub queue: VecDeque<LightRun>,
@@ -801,7 +802,13 @@ impl LightSim {
         air_skip.resize(air_skip.len().max(1), 0);
         let air_faces = Buffer::storage(ctx, "eikonal_air_faces", &air_faces)?;
         let air_skip = Buffer::storage(ctx, "eikonal_air_skip", &air_skip)?;
-        let read_bits = Buffer::storage(ctx, "eikonal_read_mask", mask.unwrap_or(&[0]))?;
+        let read_bits = Buffer::with_data(
+            ctx,
+            "eikonal_read_mask",
+            mask.unwrap_or(&[0]),
+            vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER,
+        )?;
+        let read_texels = BufferView::new(ctx, &read_bits, vk::Format::R32_UINT, 4)?;
         let voxel = volume.voxel_size().min_element();
         let dt = params.light_dt * voxel;
         // Enough time for the optical path of two box diagonals at the largest index, plus
@@ -891,8 +898,8 @@ impl LightSim {
                 .storage(crate::LIGHT_BINDING_AIR_SKIP, &air_skip)
                 .sampled(crate::LIGHT_BINDING_BAND, &textures.emission, sampler)
                 .sampled(crate::LIGHT_BINDING_REFLECTANCE, &textures.albedo, sampler)
-                .storage(crate::LIGHT_BINDING_BRICKS, &textures.bricks)
-                .storage(crate::LIGHT_BINDING_READ_MASK, &read_bits)
+                .texels(crate::LIGHT_BINDING_BRICKS, &textures.bricks_texels)
+                .texels(crate::LIGHT_BINDING_READ_MASK, &read_texels)
         };
         let sets = Bindings::build_each(ctx, "eikonal_light", vec![set(0), set(1)])?;
 
@@ -1016,6 +1023,7 @@ impl LightSim {
             largest,
             skipped,
             _buffers: [air_faces, air_skip, read_bits],
+            _read_texels: read_texels,
             run,
             queue,
             light_min,

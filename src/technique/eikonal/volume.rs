@@ -153,8 +153,8 @@ pub struct VolumeTextures {
     /// Whether any voxel scatters (sigma_s = albedo x extinction > 0 in a channel): only
     /// then do view rays read the light volumes inside the volume (Eq. 6).
     pub scatters: bool,
-    /// The uniform-region map of the view rays' leaps ([`uniform_reach`]), and its R32UI
-    /// view, through which the view renderer reads it.
+    /// The uniform-region map of the view rays' and the light patches' leaps
+    /// ([`uniform_reach`]), and its R32UI view, through which both read it.
     pub bricks: crate::gpu::Buffer,
     pub bricks_texels: crate::gpu::BufferView,
     /// The boundary band's reflectance factor per voxel (f32, x fastest), -1 outside the
@@ -259,12 +259,8 @@ pub(crate) fn prepare_volume(
         .collect();
     let index_slabs: Vec<&[f32]> = fields.index[..channels as usize].iter().map(|v| v.as_slice()).collect();
     let reach = uniform_reach(&index_slabs, &material_at, fields.resolution, (3.0 * params.sigma).ceil() as usize + 2);
-    let bricks = crate::gpu::Buffer::with_data(
-        ctx,
-        "eikonal_bricks",
-        &reach,
-        vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER,
-    )?;
+    let bricks =
+        crate::gpu::Buffer::with_data(ctx, "eikonal_bricks", &reach, vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER)?;
     let bricks_texels = crate::gpu::BufferView::new(ctx, &bricks, vk::Format::R32_UINT, 4)?;
     let absorbs: Vec<bool> = fields.extinction.iter().map(|e| e[..3].iter().any(|&c| c > 0.0)).collect();
     let medium = medium_bricks(&index_slabs, &absorbs, fields.resolution, volume.min, volume.voxel_size());
