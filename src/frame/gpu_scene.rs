@@ -346,8 +346,8 @@ impl GpuScene {
         let vertices = at_least_one(vertices);
         // Host-visible buffers: written once here, read by the GPU after the submission that
         // follows (host writes are visible to every later queue submission).
-        // Also storage buffers: the heightfield animation writes the vertices, ray tracers read
-        // the indices; they read the vertices as texels.
+        // Also storage buffers (the heightfield animation writes the vertices) and, for the
+        // vertices, a texel buffer (the exact tracer reads them).
         let usage = |u: vk::BufferUsageFlags| u | vk::BufferUsageFlags::STORAGE_BUFFER;
         let vertex_usage = usage(vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER);
         let vertices = Buffer::with_data(ctx, "scene_vertices", &vertices, vertex_usage)?;
