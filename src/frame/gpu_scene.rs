@@ -352,7 +352,7 @@ impl GpuScene {
         let vertex_usage = usage(vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER);
         let vertices = Buffer::with_data(ctx, "scene_vertices", &vertices, vertex_usage)?;
         // A scene past the limit renders: only the tracers refuse it.
-        let vertex_texels = match BufferView::new(ctx, &vertices, vk::Format::R32G32B32A32_UINT, 16) {
+        let vertex_texels = match BufferView::new(ctx, &vertices, vk::Format::R32G32B32A32_UINT) {
             Err(GpuError::Unsupported(why)) => Err(why),
             view => Ok(view?),
         };

@@ -55,6 +55,23 @@ impl Buffer {
         Ok(b)
     }
 
+    /// A host-visible buffer of `data` read only as texels of `format` (at least one texel
+    /// long: a view cannot be empty), and that view.
+    pub fn texels<T: bytemuck::Pod>(
+        ctx: &Arc<GpuContext>,
+        name: &str,
+        data: &[T],
+        format: vk::Format,
+    ) -> GpuResult<(Buffer, BufferView)> {
+        let bytes: &[u8] = bytemuck::cast_slice(data);
+        let size = (bytes.len() as u64).max(texel_bytes(format)?);
+        let usage = vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER;
+        let mut buffer = Buffer::new(ctx, name, size, usage, MemoryLocation::CpuToGpu)?;
+        buffer.write(0, bytes);
+        let view = BufferView::new(ctx, &buffer, format)?;
+        Ok((buffer, view))
+    }
+
     /// A host-visible storage buffer filled with `data`.
     pub fn storage<T: bytemuck::Pod>(ctx: &Arc<GpuContext>, name: &str, data: &[T]) -> GpuResult<Buffer> {
         Buffer::with_data(ctx, name, data, vk::BufferUsageFlags::STORAGE_BUFFER)
@@ -92,11 +109,21 @@ pub struct BufferView {
     pub(crate) raw: vk::BufferView,
 }
 
+/// The size of one texel of the formats prism reads buffers as.
+fn texel_bytes(format: vk::Format) -> GpuResult<u64> {
+    match format {
+        vk::Format::R32_UINT | vk::Format::R32_SFLOAT => Ok(4),
+        vk::Format::R32G32B32A32_UINT | vk::Format::R32G32B32A32_SFLOAT => Ok(16),
+        _ => Err(GpuError::Unsupported(format!("texel buffers of {format:?}"))),
+    }
+}
+
 impl BufferView {
-    /// `buffer` (made with `UNIFORM_TEXEL_BUFFER` usage) whole, as texels of `format`, each
-    /// `texel_bytes` long. Refused with the device's limit named when the buffer holds more
-    /// texels than `maxTexelBufferElements` (at least 65 536; lavapipe 2^27).
-    pub fn new(ctx: &Arc<GpuContext>, buffer: &Buffer, format: vk::Format, texel_bytes: u64) -> GpuResult<BufferView> {
+    /// `buffer` (made with `UNIFORM_TEXEL_BUFFER` usage) whole, as texels of `format`. Refused
+    /// with the device's limit named when the buffer holds more texels than
+    /// `maxTexelBufferElements` (at least 65 536; lavapipe 2^27).
+    pub fn new(ctx: &Arc<GpuContext>, buffer: &Buffer, format: vk::Format) -> GpuResult<BufferView> {
+        let texel_bytes = texel_bytes(format)?;
         let texels = buffer.size / texel_bytes;
         let max = u64::from(ctx.limits().max_texel_buffer_elements);
         if texels > max {

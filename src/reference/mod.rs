@@ -350,24 +350,6 @@ fn dispersive_dielectric(scene: &Scene) -> bool {
     scene.materials.iter().any(|m| matches!(m, Material::Dielectric { ior, .. } if ior.x != ior.y || ior.y != ior.z))
 }
 
-/// A host-visible texel buffer of `bytes` (at least one texel) and its view, of RGBA32UI
-/// texels (`texel_bytes` 16) or R32UI (4), for `binding`.
-fn texel_buffer(
-    ctx: &Arc<GpuContext>,
-    binding: u32,
-    name: &str,
-    bytes: &[u8],
-    texel_bytes: usize,
-) -> GpuResult<(u32, Buffer, BufferView)> {
-    let format = if texel_bytes == 16 { vk::Format::R32G32B32A32_UINT } else { vk::Format::R32_UINT };
-    let size = bytes.len().max(texel_bytes);
-    let mut buffer =
-        Buffer::new(ctx, name, size as u64, vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER, MemoryLocation::CpuToGpu)?;
-    buffer.write(0, bytes);
-    let view = BufferView::new(ctx, &buffer, format, texel_bytes as u64)?;
-    Ok((binding, buffer, view))
-}
-
 /// The exact tracer's scene besides the GPU scene's vertices and materials
 /// (glsl/reference/trace.glsl): the BVH-ordered triangles, the BVH, the exact spheres, each
 /// object's material and the volume's voxels. The reference binds them in set 0 of its compute
@@ -464,13 +446,14 @@ impl TraceGeometry {
         let (voxels, volume_dispersive) = volume_voxels(scene.volume.as_ref());
         let dispersion = volume_dispersive || dispersive_dielectric(scene);
         // Every texel is RGBA32UI (the floats' bits, exact) but the objects' R32UI materials.
-        let rgba = |binding: u32, name: &str, bytes: &[u8]| texel_buffer(ctx, binding, name, bytes, 16);
+        let rgba = vk::Format::R32G32B32A32_UINT;
+        let texels = |binding: u32, (buffer, view): (Buffer, BufferView)| (binding, buffer, view);
         Ok(TraceGeometry {
             texels: [
-                rgba(REF_BINDING_TRIANGLES, "reference_triangles", bytemuck::cast_slice(&ordered))?,
-                rgba(REF_BINDING_NODES, "reference_bvh", bytemuck::cast_slice(&bvh.nodes))?,
-                rgba(REF_BINDING_SPHERES, "reference_spheres", bytemuck::cast_slice(&spheres))?,
-                texel_buffer(ctx, REF_BINDING_OBJECTS, "reference_objects", bytemuck::cast_slice(&objects), 4)?,
+                texels(REF_BINDING_TRIANGLES, Buffer::texels(ctx, "reference_triangles", &ordered, rgba)?),
+                texels(REF_BINDING_NODES, Buffer::texels(ctx, "reference_bvh", &bvh.nodes, rgba)?),
+                texels(REF_BINDING_SPHERES, Buffer::texels(ctx, "reference_spheres", &spheres, rgba)?),
+                texels(REF_BINDING_OBJECTS, Buffer::texels(ctx, "reference_objects", &objects, vk::Format::R32_UINT)?),
             ],
             voxels: Buffer::storage(ctx, "reference_volume_voxels", &voxels)?,
             triangles: ordered.len() as u32,

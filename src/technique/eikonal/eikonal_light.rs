@@ -802,13 +802,8 @@ impl LightSim {
         air_skip.resize(air_skip.len().max(1), 0);
         let air_faces = Buffer::storage(ctx, "eikonal_air_faces", &air_faces)?;
         let air_skip = Buffer::storage(ctx, "eikonal_air_skip", &air_skip)?;
-        let read_bits = Buffer::with_data(
-            ctx,
-            "eikonal_read_mask",
-            mask.unwrap_or(&[0]),
-            vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER,
-        )?;
-        let read_texels = BufferView::new(ctx, &read_bits, vk::Format::R32_UINT, 4)?;
+        let (read_bits, read_texels) =
+            Buffer::texels(ctx, "eikonal_read_mask", mask.unwrap_or(&[0]), vk::Format::R32_UINT)?;
         let voxel = volume.voxel_size().min_element();
         let dt = params.light_dt * voxel;
         // Enough time for the optical path of two box diagonals at the largest index, plus

@@ -259,9 +259,7 @@ pub(crate) fn prepare_volume(
         .collect();
     let index_slabs: Vec<&[f32]> = fields.index[..channels as usize].iter().map(|v| v.as_slice()).collect();
     let reach = uniform_reach(&index_slabs, &material_at, fields.resolution, (3.0 * params.sigma).ceil() as usize + 2);
-    let bricks =
-        crate::gpu::Buffer::with_data(ctx, "eikonal_bricks", &reach, vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER)?;
-    let bricks_texels = crate::gpu::BufferView::new(ctx, &bricks, vk::Format::R32_UINT, 4)?;
+    let (bricks, bricks_texels) = crate::gpu::Buffer::texels(ctx, "eikonal_bricks", &reach, vk::Format::R32_UINT)?;
     let absorbs: Vec<bool> = fields.extinction.iter().map(|e| e[..3].iter().any(|&c| c > 0.0)).collect();
     let medium = medium_bricks(&index_slabs, &absorbs, fields.resolution, volume.min, volume.voxel_size());
     let material_extent = if materials { volume.resolution } else { [1, 1, 1] };
@@ -294,7 +292,7 @@ pub(crate) fn prepare_volume(
     let band_usage = vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
     let band_buffer =
         crate::gpu::Buffer::new(ctx, "eikonal_band", band_bytes, band_usage, crate::gpu::MemoryLocation::GpuOnly)?;
-    let band_texels = crate::gpu::BufferView::new(ctx, &band_buffer, vk::Format::R32_SFLOAT, 4)?;
+    let band_texels = crate::gpu::BufferView::new(ctx, &band_buffer, vk::Format::R32_SFLOAT)?;
     let band_id = graph.register_buffer(&band_buffer);
     let emi_data = pack(&mut fields.emission.iter().zip(&band).map(|(e, &b)| [e[0], e[1], e[2], b]));
 
