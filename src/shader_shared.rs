@@ -132,6 +132,8 @@ shared_constants! {
     EIKONAL_EULER: u32 = 0;
     EIKONAL_RK4: u32 = 1;
     EIKONAL_MIDPOINT: u32 = 2;
+    // The view renderer's velocity Verlet of x'' = n grad n (render.eikonal.integrator).
+    EIKONAL_VERLET: u32 = 3;
     // Compute workgroup edge of the eikonal volume passes (4^3 invocations).
     EIKONAL_GROUP: u32 = 4;
     // At most MAX_NEARBY_RECTS impostor rectangles of Hu & Qin 2007 §2.2 (the nearest

@@ -2,9 +2,9 @@
 // Eikonal view renderer (Ihrke et al. 2007, sections 4.1 and 5.3): the camera ray enters
 // the volume's proxy box (ray-box intersection; section 5.1's "suitable proxy geometry to
 // start the ray casting"), is marched through the smoothed index field with the ray
-// equation dx/ds = v/n, dv/ds = grad n (Eqs. 9-10; Euler Eqs. 11-12, the midpoint rule or
-// classical RK4), and its exit direction looks up the environment (the background radiance
-// L_bg of Eq. 1).
+// equation dx/ds = v/n, dv/ds = grad n (Eqs. 9-10; Euler Eqs. 11-12, the midpoint rule,
+// classical RK4, or velocity Verlet of the same equation as x'' = n grad n), and its exit
+// direction looks up the environment (the background radiance L_bg of Eq. 1).
 // No explicit ray-surface intersection: the bending comes from grad n alone.
 // Along the path (the material volumes of src/scene/volume_sources.rs):
 // RGB extinction (Eq. 5), emission (L_e of Eq. 2, integrated with Eq. 1), Fresnel reflection
@@ -309,6 +309,9 @@ vec3 march(vec3 o, vec3 d, float t_enter, int c, inout bool touched) {
         vec3 x0 = x;
         float n_before = n_cur;
         bool leapt = false;
+        // Verlet's parameter step: d tau = ds / n, so that a step of tau = STEP / n moves about
+        // STEP of arc length (|v| = n).
+        float tau = STEP / max(n_cur, 1e-3);
         if (LEAPS != 0u && !banded) {
             float n_leap = max(n_cur, 1e-3);
             float per_step = STEP * length(v) / n_leap;
@@ -329,6 +332,12 @@ vec3 march(vec3 o, vec3 d, float t_enter, int c, inout bool touched) {
                 rhs(x + h * k3x, v + h * k3v, c, k4x, k4v);
                 x += h / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x);
                 v += h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
+            } else if (INTEGRATOR == EIKONAL_VERLET) {
+                // Eqs. 9-10 in tau (d tau = ds / n: dx/d tau = v, dv/d tau = n grad n) by
+                // velocity Verlet: a half kick with a(x) = n grad n and the drift here, the
+                // second half kick with the end sample below.
+                v += (0.5 * tau * (1.0 + s.w)) * s.xyz;
+                x += tau * v;
             } else if (INTEGRATOR == EIKONAL_MIDPOINT) {
                 // Second order: the slope at the half step's Euler estimate.
                 vec3 k1x, k1v, k2x, k2v;
@@ -346,6 +355,7 @@ vec3 march(vec3 o, vec3 d, float t_enter, int c, inout bool touched) {
         }
         s = sample_field(x, c);
         n_cur = 1.0 + s.w;
+        if (INTEGRATOR == EIKONAL_VERLET && !leapt) v += (0.5 * tau * n_cur) * s.xyz;
         x_factor = band_factor(x);
         x_band = x_factor >= 0.0;
         // A constant index other than the air's bends the ray where a leap entered it.

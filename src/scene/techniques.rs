@@ -761,14 +761,22 @@ choice! {
 
 choice! {
     /// How eikonal_view integrates the ray equation (Ihrke et al. 2007, section 4.1).
-    Integrator, hint "Euler of Eqs. 11-12 (Ihrke et al. 2007), the midpoint rule or fourth-order Runge-Kutta" {
+    Integrator, hint "Euler of Eqs. 11-12 (Ihrke et al. 2007), the midpoint rule, fourth-order Runge-Kutta \
+                      or velocity Verlet" {
         /// Forward Euler, Eqs. 11-12 (the paper's view renderer).
         Euler = "euler",
         /// The explicit midpoint rule of Eqs. 9-10, second order: one field sample per step
         /// besides the step's end sample, which the next step starts from.
         Midpoint = "midpoint",
-        /// Classical fourth-order Runge-Kutta of Eqs. 9-10.
+        /// Classical fourth-order Runge-Kutta of Eqs. 9-10: three field samples per step
+        /// besides the end sample.
         Rk4 = "rk4",
+        /// Eqs. 9-10 in the parameter tau = integral ds / n, where they become x'' = n grad n,
+        /// a right-hand side free of x' (the field sample holds n and grad n), integrated by
+        /// velocity Verlet (Störmer-Verlet): second order like the midpoint rule, with no field
+        /// sample besides the end sample, the cost of Euler. Each step's tau is `step` over n
+        /// where it starts, so that it moves about `step` of arc length, as the others do.
+        Verlet = "verlet",
     }
 }
 

@@ -29,7 +29,7 @@ use crate::technique::{
 use crate::{
     BINDING_EIKONAL_ALBEDO, BINDING_EIKONAL_EMISSION, BINDING_EIKONAL_EXTINCTION, BINDING_EIKONAL_FIELD,
     BINDING_FILTER_PROBE_ERRORS, BINDING_FILTER_PROBE_TEXELS, BINDING_GBUF_DEPTH, EIKONAL_EULER, EIKONAL_MIDPOINT,
-    EIKONAL_RK4,
+    EIKONAL_RK4, EIKONAL_VERLET,
 };
 
 use super::eikonal_light::EIKONAL_LIGHT;
@@ -278,6 +278,7 @@ impl EikonalPass {
             Integrator::Euler => EIKONAL_EULER,
             Integrator::Midpoint => EIKONAL_MIDPOINT,
             Integrator::Rk4 => EIKONAL_RK4,
+            Integrator::Verlet => EIKONAL_VERLET,
         };
         let (light_min, light_max) = light.as_ref().map_or((glam::Vec3::ZERO, glam::Vec3::ONE), |l| l.light_box());
         // Without a simulation the field stands in for the light volumes (never read).

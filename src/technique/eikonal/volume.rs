@@ -79,12 +79,33 @@ pub fn midpoint_step(field: &impl IndexField, s: RayState, h: f64) -> RayState {
     RayState { x: s.x + h * k2.0, v: s.v + h * k2.1 }
 }
 
+/// The acceleration of Eqs. 9-10 in the parameter tau with d tau = ds / n: then dx/d tau = v
+/// and dv/d tau = n grad n = grad(n^2 / 2), a second-order equation x'' = a(x) whose right-hand
+/// side does not depend on x' (the Nyström method below integrates that form).
+fn acceleration(field: &impl IndexField, x: DVec3) -> DVec3 {
+    field.n(x) * field.gradient(x)
+}
+
+/// One velocity-Verlet (Störmer-Verlet) step of x'' = a(x) over the parameter step `t`,
+/// second order: a half kick with a(x), a drift, a half kick with a at the new point.
+pub fn verlet_tau_step(field: &impl IndexField, s: RayState, t: f64) -> RayState {
+    let v_half = s.v + 0.5 * t * acceleration(field, s.x);
+    let x = s.x + t * v_half;
+    RayState { x, v: v_half + 0.5 * t * acceleration(field, x) }
+}
+
+/// [`verlet_tau_step`] with the parameter step of arc length `h` where the step starts.
+pub fn verlet_step(field: &impl IndexField, s: RayState, h: f64) -> RayState {
+    verlet_tau_step(field, s, h / field.n(s.x))
+}
+
 /// One step with `integrator`.
 pub fn step(field: &impl IndexField, integrator: Integrator, s: RayState, h: f64) -> RayState {
     match integrator {
         Integrator::Euler => euler_step(field, s, h),
         Integrator::Midpoint => midpoint_step(field, s, h),
         Integrator::Rk4 => rk4_step(field, s, h),
+        Integrator::Verlet => verlet_step(field, s, h),
     }
 }
 
