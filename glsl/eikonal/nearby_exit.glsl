@@ -17,10 +17,20 @@
 
 #include "nearby.glsl"
 
-layout(set = 1, binding = BINDING_EIKONAL_TRIANGLES, std430) readonly buffer EikTriangles {
-    uvec4 eik_triangle_info;  // x: triangle count
-    GpuTriangle eik_triangles[];
-};
+// The triangles as RGBA32UI texels (floats by their bits; src/technique/eikonal/eikonal_nearby.rs
+// `triangle_buffer_bytes`): texel 0 holds the count in x, triangle i the five texels from
+// 1 + 5 i on, GpuTriangle's p0, e1, e2, uv01 and uv2. A texel fetch at a per-lane index is one
+// gather on a CPU device (lavapipe), where a storage-buffer load is a loop over the lanes.
+layout(set = 1, binding = BINDING_EIKONAL_TRIANGLES) uniform usamplerBuffer eik_triangle_texels;
+
+uint eik_triangle_count() {
+    return texelFetch(eik_triangle_texels, 0).x;
+}
+
+// Field `f` (0: p0, 1: e1, 2: e2, 3: uv01, 4: uv2) of triangle i.
+vec4 eik_triangle(uint i, int f) {
+    return uintBitsToFloat(texelFetch(eik_triangle_texels, 1 + 5 * int(i) + f));
+}
 
 // The nearest hit t in (t_min, t_max) of o + t d with the triangles: triangle k, barycentrics
 // b. Rays parallel to a triangle's plane (|det| <= 1e-12 |e1||e2||d|) miss it.
@@ -29,9 +39,9 @@ bool eik_triangle_hit(vec3 o, vec3 d, float t_min, float t_max, out float t, out
     k = 0u;
     b = vec2(0.0);
     bool hit = false;
-    uint count = min(eik_triangle_info.x, MAX_EIKONAL_TRIANGLES);
+    uint count = min(eik_triangle_count(), MAX_EIKONAL_TRIANGLES);
     for (uint i = 0u; i < count; ++i) {
-        vec3 p0 = eik_triangles[i].p0.xyz, e1 = eik_triangles[i].e1.xyz, e2 = eik_triangles[i].e2.xyz;
+        vec3 p0 = eik_triangle(i, 0).xyz, e1 = eik_triangle(i, 1).xyz, e2 = eik_triangle(i, 2).xyz;
         vec3 p = cross(d, e2);
         float det = dot(e1, p);
         if (!(abs(det) > 1e-12 * length(e1) * length(e2) * length(d))) continue;
@@ -64,13 +74,13 @@ vec3 eik_surface_radiance(vec3 p, vec3 n, vec3 albedo) {
 
 // The radiance leaving triangle k's hit o + t d towards o (two-sided, flat: the face normal).
 vec3 eik_triangle_radiance(uint k, vec3 o, vec3 d, float t, vec2 b) {
-    GpuTriangle tri = eik_triangles[k];
+    vec4 e1 = eik_triangle(k, 1), e2 = eik_triangle(k, 2), uv01 = eik_triangle(k, 3), uv2 = eik_triangle(k, 4);
     vec3 p = o + max(t, 0.0) * d;
-    vec3 n = cross(tri.e1.xyz, tri.e2.xyz);
+    vec3 n = cross(e1.xyz, e2.xyz);
     n = dot(n, n) > 1e-30 ? normalize(n) : -d;
     if (dot(n, d) > 0.0) n = -n;
-    vec2 uv = (1.0 - b.x - b.y) * tri.uv01.xy + b.x * tri.uv01.zw + b.y * tri.uv2.xy;
-    vec3 albedo = albedo_at(materials[uint(tri.uv2.z + 0.5)], uv);
+    vec2 uv = (1.0 - b.x - b.y) * uv01.xy + b.x * uv01.zw + b.y * uv2.xy;
+    vec3 albedo = albedo_at(materials[uint(uv2.z + 0.5)], uv);
     return finite_or_zero(eik_surface_radiance(p, n, albedo));
 }
 

@@ -222,7 +222,7 @@ pub struct EikonalPass {
     // (src/technique/eikonal/eikonal_nearby.rs): impostors (a 1x1 stand-in without rectangles)
     // and the exact triangles.
     nearby: NearbyImpostors,
-    _triangles: crate::gpu::Buffer,
+    _triangles: (crate::gpu::Buffer, crate::gpu::BufferView),
     // The field's sampler (trilinear with a zero border for `hardware_filtering`).
     _field_sampler: Sampler,
     // The light simulation and its receiver pass.
@@ -286,11 +286,11 @@ impl EikonalPass {
         // What exit and reflected rays meet (src/technique/eikonal/eikonal_nearby.rs).
         let tris: Vec<_> =
             eikonal_nearby::exact_triangles(scene, params.nearby).0.into_iter().map(|(_, t)| t).collect();
-        let triangles = crate::gpu::Buffer::with_data(
+        let (triangles, triangle_texels) = crate::gpu::Buffer::texels(
             ctx,
             "eikonal_triangles",
             &eikonal_nearby::triangle_buffer_bytes(&tris),
-            vk::BufferUsageFlags::STORAGE_BUFFER,
+            vk::Format::R32G32B32A32_UINT,
         )?;
         // The march crosses the box's faces by up to one step (its margin).
         let in_box = eikonal_nearby::triangles_meet_box(&tris, volume.min, volume.max, h);
@@ -391,7 +391,7 @@ impl EikonalPass {
             .sampled(crate::BINDING_NEARBY_TEXTURE, &nearby.texture, nearest)
             .read(nearby.texture_id)
             .uniform(crate::BINDING_NEARBY_RECTS, &nearby.rect_buffer)
-            .storage(crate::BINDING_EIKONAL_TRIANGLES, &triangles)
+            .texels(crate::BINDING_EIKONAL_TRIANGLES, &triangle_texels)
             .texels(crate::BINDING_EIKONAL_BRICKS, &textures.bricks_texels)
             .texels(crate::BINDING_EIKONAL_BAND, &textures.band_texels);
         let view = FullscreenPass::new(
@@ -401,7 +401,14 @@ impl EikonalPass {
             set,
             frame_layout,
         )?;
-        Ok(EikonalPass { volume: timed, view, nearby, _triangles: triangles, _field_sampler: field_sampler, light })
+        Ok(EikonalPass {
+            volume: timed,
+            view,
+            nearby,
+            _triangles: (triangles, triangle_texels),
+            _field_sampler: field_sampler,
+            light,
+        })
     }
 
     /// The light simulation's statistics (None without a simulation).
