@@ -12,7 +12,7 @@ layout(local_size_x = LIGHT_GROUP) in;
 void main() {
     uint i = gl_GlobalInvocationID.x;
     if (i >= state.count) return;
-    Patch p = src[i];
+    Patch p = src_patch(i);
     if (patch_mark(p) != run.substep + 1u) return;
     ivec3 q;
     vec3 dE;

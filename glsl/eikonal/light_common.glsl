@@ -5,6 +5,21 @@
 
 
 layout(std430, set = 1, binding = LIGHT_BINDING_SRC) buffer Src { Patch src[]; };
+// The same list as RGBA32UI texels, eight per patch (x[0..3], then v[0..3]; floats by their
+// bits). The kernels read their patch through it: a CPU device (lavapipe) loads a storage
+// buffer at a per-invocation index lane by lane and component by component, a texel in one
+// gather (the step kernel 0.72-0.85x, docs/BENCHMARKS.md). Writes stay storage-buffer stores.
+layout(set = 1, binding = LIGHT_BINDING_SRC_TEXELS) uniform usamplerBuffer src_texels;
+
+// src[i], read through src_texels.
+Patch src_patch(uint i) {
+    Patch p;
+    for (int k = 0; k < 4; ++k) {
+        p.x[k] = uintBitsToFloat(texelFetch(src_texels, 8 * int(i) + k));
+        p.v[k] = uintBitsToFloat(texelFetch(src_texels, 8 * int(i) + 4 + k));
+    }
+    return p;
+}
 layout(std430, set = 1, binding = LIGHT_BINDING_DST) buffer Dst { Patch dst[]; };
 // Outputs past the list's capacity (histopyramid_total.comp), continued by a later run.
 layout(std430, set = 1, binding = LIGHT_BINDING_SPILL) buffer Spill { Patch spill[]; };

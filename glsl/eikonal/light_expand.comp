@@ -48,7 +48,7 @@ void main() {
     uint j = gl_GlobalInvocationID.x;
     if (j >= state.next + state.spill_new) return;
     uvec2 pair = pairs[j];
-    Patch p = src[pair.x];
+    Patch p = src_patch(pair.x);
     if (classes[pair.x] != 4u) {
         emit(j, p);
         return;

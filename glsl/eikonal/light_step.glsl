@@ -242,7 +242,7 @@ void main() {
     uint i = gl_GlobalInvocationID.x;
     if (i >= state.count) return;
     if (run.substep > 0u && classes[i] != 1u) return;
-    Patch p = src[i];
+    Patch p = src_patch(i);
     uint steps = patch_steps(p);
     if (steps >= run.max_steps) {
         classes[i] = 0u;

@@ -560,6 +560,8 @@ pub fn air_patches(faces: &[WavefrontFace], medium: &[(Vec3, Vec3)], margin: f32
 pub struct LightSim {
     pub hp: HistoPyramid,
     lists: [Buffer; 2],
+    // The lists as texels, which the step kernel reads its patch through.
+    _list_texels: [crate::gpu::BufferView; 2],
     list_ids: [BufferId; 2],
     /// Outputs of a step past the list's capacity (histopyramid_total.comp), read back after
     /// the run and continued by a run of their own.
@@ -839,9 +841,15 @@ impl LightSim {
             | vk::BufferUsageFlags::TRANSFER_DST
             | vk::BufferUsageFlags::TRANSFER_SRC;
         let list_bytes = (capacity as u64) * std::mem::size_of::<Patch>() as u64;
+        // The kernels read their patches through texel views of the lists (light_common.glsl).
+        let list_usage = storage | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER;
         let lists = [
-            Buffer::new(ctx, "eikonal_patches_0", list_bytes, storage, MemoryLocation::GpuOnly)?,
-            Buffer::new(ctx, "eikonal_patches_1", list_bytes, storage, MemoryLocation::GpuOnly)?,
+            Buffer::new(ctx, "eikonal_patches_0", list_bytes, list_usage, MemoryLocation::GpuOnly)?,
+            Buffer::new(ctx, "eikonal_patches_1", list_bytes, list_usage, MemoryLocation::GpuOnly)?,
+        ];
+        let list_texels = [
+            crate::gpu::BufferView::new(ctx, &lists[0], vk::Format::R32G32B32A32_UINT)?,
+            crate::gpu::BufferView::new(ctx, &lists[1], vk::Format::R32G32B32A32_UINT)?,
         ];
         let spill_bytes = (hp.spill_capacity as u64) * std::mem::size_of::<Patch>() as u64;
         let spill = Buffer::new(ctx, "eikonal_spill", spill_bytes, storage, MemoryLocation::GpuOnly)?;
@@ -882,6 +890,7 @@ impl LightSim {
         let set = |src: usize| {
             Bindings::new(vk::ShaderStageFlags::COMPUTE)
                 .storage(LIGHT_BINDING_SRC, &lists[src])
+                .texels(crate::LIGHT_BINDING_SRC_TEXELS, &list_texels[src])
                 .storage(LIGHT_BINDING_DST, &lists[1 - src])
                 .storage(crate::LIGHT_BINDING_SPILL, &spill)
                 .sampled(LIGHT_BINDING_FIELD, &textures.field, &field_sampler)
@@ -986,6 +995,7 @@ impl LightSim {
         let mut sim = LightSim {
             hp,
             lists,
+            _list_texels: list_texels,
             list_ids,
             spill,
             spill_id,
