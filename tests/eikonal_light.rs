@@ -1515,12 +1515,13 @@ fn skipped_air_patches_equal_their_simulation() {
     common::assert_no_validation_errors(&ctx);
 }
 
-/// The simulation's GPU time is its work, whatever ran before it in the process. Three runs
-/// of one simulation (24^3, 32^2 initial patches): the first compiles the pipelines, the second
-/// runs before any frame, the third after a rendered frame. The second and third do the same
-/// work on the same device, so their kernel times agree up to the machine's scheduling noise
-/// (within a factor of 2), and no run's kernels take longer than the run's wall clock, which
-/// waited for them. On llvmpipe a framebuffer once set made the timestamps around each
+/// The simulation's GPU time is its work, whatever ran before it in the process. Runs of one
+/// simulation (24^3, 32^2 initial patches): the first compiles the pipelines, three run before
+/// any frame, three after a rendered frame. Those do the same work on the same device, so the
+/// least kernel time of each three agree up to the machine's scheduling noise (within a factor
+/// of 2; the least of three, because the test binary's other tests share the two cores and one
+/// run that overlaps a busy neighbour took 2.2x), and no run's kernels take longer than the
+/// run's wall clock, which waited for them. On llvmpipe a framebuffer once set made the timestamps around each
 /// dispatch read the clock together after it (the third run timed at 0.05x the second).
 #[test]
 fn a_light_simulation_after_a_frame_is_timed_as_before_it() {
@@ -1544,9 +1545,10 @@ fn a_light_simulation_after_a_frame_is_timed_as_before_it() {
         stats.gpu_ms
     };
     simulate("compiling");
-    let before = simulate("before a frame");
+    let least = |when: &str| (0..3).map(|_| simulate(when)).fold(f64::INFINITY, f64::min);
+    let before = least("before a frame");
     common::render_on(&ctx, &common::scene("caustic_sphere", 32, &[]));
-    let after = simulate("after a frame");
+    let after = least("after a frame");
     assert!(
         after > 0.5 * before && after < 2.0 * before,
         "the same simulation timed {after:.1} ms after a frame, {before:.1} ms before it"
