@@ -386,9 +386,9 @@ shared_bindings! {
         // Where the volumes are read: one bit per voxel of the irradiance volume
         // (src/technique/eikonal/read_mask.rs).
         LIGHT_BINDING_READ_MASK = 19;
-        // The source list again as RGBA32UI texels (eight per patch), which the step kernel
-        // reads its patch through: one gather per texel on a CPU device, where a storage-buffer
-        // load is a loop over the lanes.
+        // The source list again as RGBA32UI texels (eight per patch), which the step, commit
+        // and expansion kernels read their patch through: one gather per texel on a CPU
+        // device, where a storage-buffer load is a loop over the lanes.
         LIGHT_BINDING_SRC_TEXELS = 20;
     }
     // The window's water animation (glsl/common/heightfield.comp; src/frame/heightfield.rs):

@@ -1519,10 +1519,11 @@ fn skipped_air_patches_equal_their_simulation() {
 /// simulation (24^3, 32^2 initial patches): the first compiles the pipelines, three run before
 /// any frame, three after a rendered frame. Those do the same work on the same device, so the
 /// least kernel time of each three agree up to the machine's scheduling noise (within a factor
-/// of 2; the least of three, because the test binary's other tests share the two cores and one
-/// run that overlaps a busy neighbour took 2.2x), and no run's kernels take longer than the
-/// run's wall clock, which waited for them. On llvmpipe a framebuffer once set made the timestamps around each
-/// dispatch read the clock together after it (the third run timed at 0.05x the second).
+/// of 2; the least of three, because the test binary's other tests share the two cores, and a
+/// single run that overlapped a busy neighbour took 2.2x), and no run's kernels take longer
+/// than the run's wall clock, which waited for them. On llvmpipe a framebuffer once set made
+/// the timestamps around each dispatch read the clock together after it (the runs after a
+/// frame timed at 0.05x those before).
 #[test]
 fn a_light_simulation_after_a_frame_is_timed_as_before_it() {
     if !common::in_own_process() {

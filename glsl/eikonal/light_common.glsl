@@ -5,10 +5,14 @@
 
 
 layout(std430, set = 1, binding = LIGHT_BINDING_SRC) buffer Src { Patch src[]; };
-// The same list as RGBA32UI texels, eight per patch (x[0..3], then v[0..3]; floats by their
-// bits). The kernels read their patch through it: a CPU device (lavapipe) loads a storage
-// buffer at a per-invocation index lane by lane and component by component, a texel in one
-// gather (the step kernel 0.72-0.85x, docs/BENCHMARKS.md). Writes stay storage-buffer stores.
+layout(std430, set = 1, binding = LIGHT_BINDING_DST) buffer Dst { Patch dst[]; };
+// Outputs past the list's capacity (histopyramid_total.comp), continued by a later run.
+layout(std430, set = 1, binding = LIGHT_BINDING_SPILL) buffer Spill { Patch spill[]; };
+// The source list again as RGBA32UI texels, eight per patch (x[0..3], then v[0..3]; floats by
+// their bits). The kernels read their patch through it: a CPU device (lavapipe) loads a
+// storage buffer at a per-invocation index lane by lane and component by component, a texel
+// in one gather (the step kernel 0.72-0.85x at 128^3, docs/BENCHMARKS.md). Writes stay
+// storage-buffer stores.
 layout(set = 1, binding = LIGHT_BINDING_SRC_TEXELS) uniform usamplerBuffer src_texels;
 
 // src[i], read through src_texels.
@@ -20,9 +24,7 @@ Patch src_patch(uint i) {
     }
     return p;
 }
-layout(std430, set = 1, binding = LIGHT_BINDING_DST) buffer Dst { Patch dst[]; };
-// Outputs past the list's capacity (histopyramid_total.comp), continued by a later run.
-layout(std430, set = 1, binding = LIGHT_BINDING_SPILL) buffer Spill { Patch spill[]; };
+
 // xyz: grad n per metre, w: n - 1 (glsl/eikonal/gradient.comp), over the VOLUME's box.
 layout(set = 1, binding = LIGHT_BINDING_FIELD) uniform sampler3D field;
 // (sigma_a + sigma_s RGB per metre, HG g) of src/scene/volume_sources.rs, over the VOLUME's box.

@@ -560,7 +560,7 @@ pub fn air_patches(faces: &[WavefrontFace], medium: &[(Vec3, Vec3)], margin: f32
 pub struct LightSim {
     pub hp: HistoPyramid,
     lists: [Buffer; 2],
-    // The lists as texels, which the step kernel reads its patch through.
+    // The lists as texels, which the kernels read their patches through (light_common.glsl).
     _list_texels: [crate::gpu::BufferView; 2],
     list_ids: [BufferId; 2],
     /// Outputs of a step past the list's capacity (histopyramid_total.comp), read back after
