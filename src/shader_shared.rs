@@ -337,8 +337,9 @@ shared_bindings! {
         BINDING_EIKONAL_ALBEDO = 21;
         BINDING_EIKONAL_EMISSION = 22;
         BINDING_EIKONAL_TRIANGLES = 25;
-        // The uniform-region map of the leaps (u32 per brick; src/technique/eikonal/volume.rs).
-        BINDING_EIKONAL_BRICKS = 26;
+        // The weak-gradient map of the merged steps (u8 per voxel, x fastest;
+        // src/technique/eikonal/volume.rs, `weak_reach`).
+        BINDING_EIKONAL_WEAK = 26;
         // The boundary band's reflectance factor per voxel, -1 outside the band (f32, x
         // fastest; src/technique/eikonal/volume.rs).
         BINDING_EIKONAL_BAND = 27;

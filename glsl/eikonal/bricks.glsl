@@ -5,6 +5,8 @@
 // so a ray crosses it on a straight line. Before including, define `uint brick_reach(int i)`
 // (the map, x fastest) and BRICK.
 
+#include "cube.glsl"
+
 // How far the ray at x with unit direction d may go straight: to the edge of the cube of
 // uniform bricks around x, within the box [box_min, box_max] of `size` voxels; 0 where x's
 // brick is not uniform or x is outside the box.
@@ -14,11 +16,5 @@ float uniform_leap(vec3 x, vec3 d, vec3 box_min, vec3 box_max, ivec3 size) {
     vec3 brick = voxel * float(BRICK);
     ivec3 b = ivec3(floor((x - box_min) / brick));
     if (any(lessThan(b, ivec3(0))) || any(greaterThanEqual(b, nb))) return 0.0;
-    int k = int(brick_reach(b.x + nb.x * (b.y + nb.y * b.z)));
-    if (k == 0) return 0.0;
-    vec3 lo = max(box_min + vec3(b - (k - 1)) * brick, box_min);
-    vec3 hi = min(box_min + vec3(b + k) * brick, box_max);
-    vec3 inv = 1.0 / mix(vec3(1e-30), d, greaterThan(abs(d), vec3(1e-30)));
-    vec3 t = max((lo - x) * inv, (hi - x) * inv);
-    return max(min(min(t.x, t.y), t.z), 0.0);
+    return cube_exit(x, d, box_min, box_max, b, int(brick_reach(b.x + nb.x * (b.y + nb.y * b.z))), brick, 0.0);
 }

@@ -56,9 +56,8 @@ layout(constant_id = 28) const uint IMPOSTORS = 1u;
 // Which material volumes hold anything: one that is all zero is never sampled.
 layout(constant_id = 22) const uint EXTINCTION = 1u;
 layout(constant_id = 23) const uint EMISSION = 1u;
-// Straight leaps through uniform bricks of BRICK^3 voxels (render.eikonal.leaps).
+// Merged steps where the field is weak or constant (render.eikonal.leaps, weak_gradient).
 layout(constant_id = 24) const uint LEAPS = 0u;
-layout(constant_id = 25) const uint BRICK = 4u;
 layout(constant_id = 26) const uint HARDWARE_FILTER = 0u;  // the device's trilinear field lookup
 // A ray whose transmittance falls below this in every channel it carries stops there
 // (render.eikonal.min_transmittance; 0: never).
@@ -70,10 +69,10 @@ layout(set = 1, binding = BINDING_EIKONAL_FIELD) uniform sampler3D field;
 layout(set = 1, binding = BINDING_EIKONAL_EXTINCTION) uniform sampler3D extinction_map;  // sigma_a + sigma_s, g
 layout(set = 1, binding = BINDING_EIKONAL_ALBEDO) uniform sampler3D albedo_map;          // albedo (rgb)
 layout(set = 1, binding = BINDING_EIKONAL_EMISSION) uniform sampler3D emission_map;      // emission (rgb)
-// Per brick, the Chebyshev distance in bricks to the nearest brick that is not uniform
-// (src/technique/eikonal/volume.rs, `uniform_reach`).
-layout(set = 1, binding = BINDING_EIKONAL_BRICKS) uniform usamplerBuffer brick_texels;
-uint brick_reach(int i) { return texelFetch(brick_texels, i).x; }
+// Per voxel, the Chebyshev distance in voxels to the nearest voxel where the field is not
+// weak, or not constant with no threshold (src/technique/eikonal/volume.rs, `weak_reach`),
+// x fastest.
+layout(set = 1, binding = BINDING_EIKONAL_WEAK) uniform usamplerBuffer weak_texels;
 // The boundary band's reflectance factor per voxel, -1 outside the band, x fastest
 // (src/technique/eikonal/volume.rs).
 layout(set = 1, binding = BINDING_EIKONAL_BAND) uniform samplerBuffer band_factors;
@@ -124,11 +123,20 @@ void rhs(vec3 x, vec3 v, int c, out vec3 dx, out vec3 dv) {
     rhs_at(sample_field(x, c), v, dx, dv);
 }
 
-#include "bricks.glsl"
+#include "cube.glsl"
 
-// How far the ray at x with unit direction d may go straight in the volume (bricks.glsl).
-float leap_length(vec3 x, vec3 d) {
-    return uniform_leap(x, d, BOX_MIN, BOX_MAX, slab_size());
+// How far the ray at x with unit direction d stays where every field sample has |grad n|
+// below the weak-gradient threshold per voxel edge (or none at all with no threshold): in
+// the cube of the weak-gradient map
+// around x, less half a voxel on each side, where a trilinear lookup reads the cube's voxels
+// only (a cube of one voxel has no such inside).
+float weak_length(vec3 x, vec3 d) {
+    ivec3 size = slab_size();
+    vec3 cell = (BOX_MAX - BOX_MIN) / vec3(size);
+    ivec3 q = ivec3(floor((x - BOX_MIN) / cell));
+    if (any(lessThan(q, ivec3(0))) || any(greaterThanEqual(q, size))) return 0.0;
+    int k = int(texelFetch(weak_texels, q.x + size.x * (q.y + size.y * q.z)).x);
+    return k < 2 ? 0.0 : cube_exit(x, d, BOX_MIN, BOX_MAX, q, k, cell, 0.5);
 }
 
 // ---- material lookups ----
@@ -300,30 +308,25 @@ vec3 march(vec3 o, vec3 d, float t_enter, int c, inout bool touched) {
             r.turned = false;
             run_start(r, n_cur, v, T);
         }
-        // In a uniform brick every stage of a step sees the same (0, n - 1), so each step
-        // moves x by STEP v / n and leaves v as it is: m steps at once are one leap of
-        // m STEP v / n, as many whole steps as stay inside the uniform cube. The march
-        // goes on from the point where the full march would be, with the same step count.
-        // A leap and a step share the end sample and the receiver test below: a CPU device
-        // runs both branches' code in every iteration, so each is written once.
+        // Merged steps (LEAPS): where every field sample within reach of x is weak (the
+        // weak-gradient map), m whole steps are integrated as one of m STEP, and the march goes
+        // on with the same step count. Where the index is constant there (a uniform region:
+        // the air in the box, the inside of a constant-index object) every stage of a step sees
+        // the same (0, n - 1) and the merged step is the full march's straight line exactly;
+        // elsewhere the ray turns by less than the map's threshold per voxel travelled.
         vec3 x0 = x;
-        float n_before = n_cur;
-        bool leapt = false;
-        // Verlet's parameter step: d tau = ds / n, so that a step of tau = STEP / n moves about
-        // STEP of arc length (|v| = n).
-        float tau = STEP / max(n_cur, 1e-3);
-        if (LEAPS != 0u && !banded) {
-            float n_leap = max(n_cur, 1e-3);
-            float per_step = STEP * length(v) / n_leap;
-            float m = min(floor(leap_length(x, normalize(v)) / per_step), float(MAX_STEPS - i));
-            if (m >= 1.0) {
-                x += (m * STEP / n_leap) * v;
+        float h = STEP;
+        if (LEAPS != 0u) {
+            float m = min(floor(weak_length(x, normalize(v)) / STEP), float(MAX_STEPS - i));
+            if (m >= 2.0) {
+                h = m * STEP;
                 i += uint(m) - 1u;
-                leapt = true;
             }
         }
-        if (!leapt) {
-            float h = STEP;
+        // Verlet's parameter step: d tau = ds / n, so that a step of tau = h / n moves about h
+        // of arc length (|v| = n).
+        float tau = h / max(n_cur, 1e-3);
+        {
             if (INTEGRATOR == EIKONAL_RK4) {
                 vec3 k1x, k1v, k2x, k2v, k3x, k3v, k4x, k4v;
                 rhs_at(s, v, k1x, k1v);
@@ -355,11 +358,10 @@ vec3 march(vec3 o, vec3 d, float t_enter, int c, inout bool touched) {
         }
         s = sample_field(x, c);
         n_cur = 1.0 + s.w;
-        if (INTEGRATOR == EIKONAL_VERLET && !leapt) v += (0.5 * tau * n_cur) * s.xyz;
+        if (INTEGRATOR == EIKONAL_VERLET) v += (0.5 * tau * n_cur) * s.xyz;
         x_factor = band_factor(x);
         x_band = x_factor >= 0.0;
-        // A constant index other than the air's bends the ray where a leap entered it.
-        touched = touched || (leapt ? abs(n_before - 1.0) > 1e-4 : abs(s.w) > 1e-4);
+        touched = touched || abs(s.w) > 1e-4;
         // ---- a receiver inside (or touching) the box ends the path where the
         // step's chord crosses it (e.g. the table a wine glass stands on).
         if (TRIANGLES_IN_BOX != 0u) {
@@ -393,7 +395,7 @@ vec3 march(vec3 o, vec3 d, float t_enter, int c, inout bool touched) {
             // Only band voxels carry their surface's factor (the step may have left the band).
             if (x_band) r.rho = max(r.rho, x_factor);
         }
-        if ((EXTINCTION != 0u || EMISSION != 0u) && !leapt) {
+        if (EXTINCTION != 0u || EMISSION != 0u) {
             vec3 mid = 0.5 * (x0 + x);
             if (in_box(mid, 0.0)) {
                 // Eq. 1 over one segment of length len with constant extinction sigma and

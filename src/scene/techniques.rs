@@ -1134,9 +1134,21 @@ params! {
         /// Cross regions where the smoothed index is constant and the material volumes are zero
         /// (the air in the box, the inside of a constant-index object) in straight leaps to
         /// their edge instead of `step`-long steps: there grad n = 0, so Eqs. 9-10 give a
-        /// straight ray exactly (bricks of 4^3 voxels, src/technique/eikonal/volume.rs). false
-        /// marches at `step` everywhere, as the paper does.
+        /// straight ray exactly (a map of voxels, src/technique/eikonal/volume.rs `weak_reach`;
+        /// with `weak_gradient`, also where the index changes little). false marches at `step`
+        /// everywhere, as the paper does.
         leaps: bool = true;
+        /// With `leaps`: where the smoothed index changes by less than this per voxel (|grad n|
+        /// times the smallest voxel edge) at every voxel a field sample may read, whole steps
+        /// merge into one integrator step as long as that region allows (the tails of a
+        /// boundary's smoothing, where a step of `step` bends the ray by almost nothing; Eq. 10
+        /// bends it by less than this per voxel travelled; src/technique/eikonal/volume.rs,
+        /// `weak_reach`). 0 merges steps only where the index is exactly constant. At 1e-3,
+        /// the default, the view pass takes 0.62-0.68x the time of 0 on eikonal_sphere, with
+        /// FLIP within the reference's noise and a lower RMSE (docs/BENCHMARKS.md,
+        /// docs/ACCURACY.md).
+        // Above 0.1 the merged steps would cross the steep middle of a smoothed boundary.
+        weak_gradient: f32 = 1e-3, 0.0..=0.1;
         /// Stop a view ray once its transmittance (Eq. 5's T, after extinction and Fresnel
         /// reflection) is below this in every channel it carries: what lies beyond would add at
         /// most this fraction of its radiance. 0 marches every ray to the end, as the paper does.
@@ -1212,7 +1224,7 @@ params! {
         light_substeps: u32 = 4, 1..=64;
         /// Straight steps a patch may take after its integrated step in one dispatch of the
         /// step kernel, while each corner stays in a region where the smoothed index is
-        /// constant (the view renderer's brick map, or beyond the field's box), where Eqs.
+        /// constant (the brick map of volume.rs `uniform_reach`, or beyond the field's box), where Eqs.
         /// 14-15 move it in a straight line exactly: each is classified and deposited as a step
         /// of its own, so the wavefront is the same to rounding in fewer dispatches
         /// (glsl/eikonal/light_step.glsl). 0: every step integrated, as the paper does. Only

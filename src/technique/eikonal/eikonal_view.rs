@@ -246,10 +246,11 @@ impl EikonalPass {
         volume: &Volume,
         lights: &[crate::scene::Light],
     ) -> GpuResult<Self> {
-        // The sampled, smoothed and differentiated volume depends on the volume and sigma
-        // only: a resize or a change of another setting re-creates the pass around it.
+        // The sampled, smoothed and differentiated volume depends on the volume, sigma and the
+        // merged steps' map only: a resize or a change of another setting re-creates the pass
+        // around it.
         let (ctx, graph) = (s.ctx, &mut *s.graph);
-        let key = crate::technique::cache_key(&(params.sigma, volume));
+        let key = crate::technique::cache_key(&(params.sigma, params.leaps, params.weak_gradient, volume));
         let timed = s.cache.get_or_try_insert_timed(key, || prepare_volume(ctx, params, volume, graph))?;
         let textures = &timed.value;
         // Section 5.2's light simulation before the view pass is built.
@@ -354,11 +355,10 @@ impl EikonalPass {
             // Which material volumes hold anything (the others are never sampled).
             ("EXTINCTION", Spec::U32(textures.extinction_any as u32)),
             ("EMISSION", Spec::U32(textures.emission_any as u32)),
-            // Straight leaps through uniform bricks (volume.rs, `uniform_reach`).
+            // Merged steps where the field is constant or weak (volume.rs, `weak_reach`).
             ("LEAPS", Spec::U32(params.leaps as u32)),
             ("MIN_TRANSMITTANCE", Spec::F32(params.min_transmittance)),
             ("HARDWARE_FILTER", Spec::U32(u32::from(hardware_filter))),
-            ("BRICK", Spec::U32(super::volume::BRICK)),
             // Single scattering (glsl/eikonal/scatter.glsl) with the
             // irradiance and direction volumes of the light simulation.
             ("SCATTER", Spec::U32(u32::from(light.is_some()))),
@@ -392,7 +392,7 @@ impl EikonalPass {
             .read(nearby.texture_id)
             .uniform(crate::BINDING_NEARBY_RECTS, &nearby.rect_buffer)
             .texels(crate::BINDING_EIKONAL_TRIANGLES, &triangle_texels)
-            .texels(crate::BINDING_EIKONAL_BRICKS, &textures.bricks_texels)
+            .texels(crate::BINDING_EIKONAL_WEAK, &textures.weak_texels)
             .texels(crate::BINDING_EIKONAL_BAND, &textures.band_texels);
         let view = FullscreenPass::new(
             ctx,

@@ -174,10 +174,14 @@ pub struct VolumeTextures {
     /// Whether any voxel scatters (sigma_s = albedo x extinction > 0 in a channel): only
     /// then do view rays read the light volumes inside the volume (Eq. 6).
     pub scatters: bool,
-    /// The uniform-region map of the view rays' and the light patches' leaps
-    /// ([`uniform_reach`]), and its R32UI view, through which both read it.
+    /// The uniform-region map of the light patches' leaps ([`uniform_reach`]), and its R32UI
+    /// view.
     pub bricks: crate::gpu::Buffer,
     pub bricks_texels: crate::gpu::BufferView,
+    /// The weak-gradient map of the view rays' merged steps ([`weak_reach`]), device-local
+    /// and read through its R8UI view (one texel, 0, when `render.eikonal.leaps` is off).
+    pub weak: crate::gpu::Buffer,
+    pub weak_texels: crate::gpu::BufferView,
     /// The boundary band's reflectance factor per voxel (f32, x fastest), -1 outside the
     /// band, device-local, read through its R32F view: the view renderer's march reads it
     /// every step, and a texel fetch from a buffer costs lavapipe one gather where a storage
@@ -270,7 +274,7 @@ pub(crate) fn prepare_volume(
     let (extinction_any, emission_any) = (rgb_any(&fields.extinction), rgb_any(&fields.emission));
     let materials = band.iter().any(|&b| b > 0.0) || extinction_any || emission_any;
     let scatters = fields.extinction.iter().zip(&fields.albedo).any(|(e, a)| (0..3).any(|c| e[c] * a[c] > 0.0));
-    // Where a view ray may leap: nothing but a constant index within reach of the smoothing
+    // Where a light patch may leap: nothing but a constant index within reach of the smoothing
     // (ceil(3 sigma), as smooth.comp), the central differences and the trilinear lookup.
     let material_at: Vec<bool> = (0..fields.voxels())
         .map(|i| {
@@ -282,6 +286,20 @@ pub(crate) fn prepare_volume(
     let reach = uniform_reach(&index_slabs, &material_at, fields.resolution, (3.0 * params.sigma).ceil() as usize + 2);
     let (bricks, bricks_texels) = crate::gpu::Buffer::texels(ctx, "eikonal_bricks", &reach, vk::Format::R32_UINT)?;
     let absorbs: Vec<bool> = fields.extinction.iter().map(|e| e[..3].iter().any(|&c| c > 0.0)).collect();
+    let weak_reach = if params.leaps {
+        let integrated: Vec<bool> =
+            absorbs.iter().zip(&fields.emission).map(|(&a, e)| a || e[..3].iter().any(|&c| c > 0.0)).collect();
+        weak_reach(
+            &index_slabs,
+            &integrated,
+            fields.resolution,
+            volume.voxel_size(),
+            params.sigma,
+            params.weak_gradient,
+        )
+    } else {
+        vec![0]
+    };
     let medium = medium_bricks(&index_slabs, &absorbs, fields.resolution, volume.min, volume.voxel_size());
     let material_extent = if materials { volume.resolution } else { [1, 1, 1] };
     let material_usage = vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST;
@@ -315,6 +333,11 @@ pub(crate) fn prepare_volume(
         crate::gpu::Buffer::new(ctx, "eikonal_band", band_bytes, band_usage, crate::gpu::MemoryLocation::GpuOnly)?;
     let band_texels = crate::gpu::BufferView::new(ctx, &band_buffer, vk::Format::R32_SFLOAT)?;
     let band_id = graph.register_buffer(&band_buffer);
+    let weak_bytes = weak_reach.len() as u64;
+    let weak_buffer =
+        crate::gpu::Buffer::new(ctx, "eikonal_weak", weak_bytes, band_usage, crate::gpu::MemoryLocation::GpuOnly)?;
+    let weak_texels = crate::gpu::BufferView::new(ctx, &weak_buffer, vk::Format::R8_UINT)?;
+    let weak_id = graph.register_buffer(&weak_buffer);
     let emi_data = pack(&mut fields.emission.iter().zip(&band).map(|(e, &b)| [e[0], e[1], e[2], b]));
 
     // The blur ping-pongs raw -> scratch -> raw -> scratch; the gradient reads scratch.
@@ -361,6 +384,7 @@ pub(crate) fn prepare_volume(
         upload("eikonal_emission_upload", bytemuck::cast_slice(&emi_data))?,
     ];
     let band_staging = upload("eikonal_band_upload", bytemuck::cast_slice(&band_factor))?;
+    let weak_staging = upload("eikonal_weak_upload", &weak_reach)?;
     let groups = extent.map(|n| n.div_ceil(EIKONAL_GROUP));
     let ids = [(raw_id, scratch_id), (scratch_id, raw_id), (raw_id, scratch_id), (scratch_id, field_id)];
     let names = ["eikonal_smooth_x", "eikonal_smooth_y", "eikonal_smooth_z", "eikonal_gradient"];
@@ -373,15 +397,16 @@ pub(crate) fn prepare_volume(
                 (albedo_id, Access::TransferWrite),
                 (emission_id, Access::TransferWrite),
             ],
-            &[(band_id, Access::TransferWrite)],
+            &[(band_id, Access::TransferWrite), (weak_id, Access::TransferWrite)],
         );
         cmd.copy_buffer_to_image(&staging, &raw);
         for (buffer, image) in staging_materials.iter().zip([&extinction, &albedo, &emission]) {
             cmd.copy_buffer_to_image(buffer, image);
         }
         cmd.copy_buffer(&band_staging, &band_buffer, band_bytes);
-        // Only eikonal_view's fragments read it, in every later frame.
-        graph.access_now(cmd, &[], &[(band_id, Access::FragmentStorageRead)]);
+        cmd.copy_buffer(&weak_staging, &weak_buffer, weak_bytes);
+        // Only eikonal_view's fragments read them, in every later frame.
+        graph.access_now(cmd, &[], &[(band_id, Access::FragmentStorageRead), (weak_id, Access::FragmentStorageRead)]);
         let mut frame = graph.frame();
         for (i, &(src, dst)) in ids.iter().enumerate() {
             let pipeline = if i < 3 { &smooth[i] } else { &gradient };
@@ -411,6 +436,8 @@ pub(crate) fn prepare_volume(
         emission_any,
         bricks,
         bricks_texels,
+        weak: weak_buffer,
+        weak_texels,
         band: band_buffer,
         band_texels,
         medium,
@@ -455,8 +482,8 @@ pub fn medium_bricks(
 /// Voxels per edge of a brick of the uniform-region map ([`uniform_reach`]).
 pub const BRICK: u32 = 4;
 
-/// The uniform-region map of the view renderer's leaps (glsl/eikonal/view.frag,
-/// `leap_length`), one u32 per brick of [`BRICK`]^3 voxels, x fastest: the Chebyshev
+/// The uniform-region map of the light simulator's leaps (glsl/eikonal/light_step.glsl,
+/// `render.eikonal.light_leaps`), one u32 per brick of [`BRICK`]^3 voxels, x fastest: the Chebyshev
 /// distance, in bricks and at most 255, to the nearest brick that is not uniform (0: this
 /// brick is not). A brick is uniform when every index slab in `index` (n - 1 per voxel) is
 /// one constant over the brick's voxels widened by `radius` voxels, the air beyond the box
@@ -509,6 +536,83 @@ fn brick_range(values: Vec<(f32, f32)>, dims: [usize; 3], radius: usize) -> (Vec
             }
         }
         (out, out_dims)
+    })
+}
+
+/// The weak-gradient map of the view rays' merged steps (glsl/eikonal/view.frag,
+/// `weak_length`; `render.eikonal.weak_gradient`): per voxel, x fastest, the Chebyshev
+/// distance in voxels, at most 255, to the nearest voxel that is not weak (0: this one is
+/// not). A voxel is weak when the smoothed index of every slab in `index` (n - 1 per voxel,
+/// before smoothing) changes there by at most `threshold` per voxel, |grad n| times the
+/// smallest edge of `voxel` (not at all for a threshold of 0), and it has no material
+/// (`material`: extinction or emission, which the march integrates per step). In the cube of
+/// 2k - 1 voxels around a voxel of distance k, less half a voxel on each side, a trilinear
+/// field lookup reads weak voxels only, so |grad n| is at most `threshold` per voxel edge and
+/// a ray turns by at most `threshold` per voxel travelled (Eq. 10, dv/ds = grad n, n >= 1);
+/// with a threshold of 0 it goes straight. The smoothing and the gradient are those of
+/// glsl/eikonal/smooth.comp and gradient.comp: where the index is constant within the
+/// smoothing's reach, both give the same value at every voxel and a gradient of exactly 0.
+pub fn weak_reach(
+    index: &[&[f32]],
+    material: &[bool],
+    resolution: [u32; 3],
+    voxel: glam::Vec3,
+    sigma: f32,
+    threshold: f32,
+) -> Vec<u8> {
+    let dims = resolution.map(|n| n as usize);
+    let at = |p: [usize; 3]| p[0] + dims[0] * (p[1] + dims[1] * p[2]);
+    let edges = voxel.to_array();
+    let smallest = voxel.min_element();
+    let mut strong = material.to_vec();
+    for slab in index {
+        let s = smoothed(slab, dims, sigma);
+        let value = |p: [isize; 3]| {
+            let inside = (0..3).all(|a| p[a] >= 0 && (p[a] as usize) < dims[a]);
+            if inside {
+                s[at(p.map(|c| c as usize))]
+            } else {
+                0.0
+            }
+        };
+        for (i, flag) in strong.iter_mut().enumerate() {
+            let p = [i % dims[0], i / dims[0] % dims[1], i / (dims[0] * dims[1])].map(|c| c as isize);
+            let gradient = glam::Vec3::from_array(std::array::from_fn(|a| {
+                let (mut lo, mut hi) = (p, p);
+                lo[a] -= 1;
+                hi[a] += 1;
+                (value(hi) - value(lo)) / (2.0 * edges[a])
+            }));
+            *flag |= gradient.length() * smallest > threshold;
+        }
+    }
+    let weak: Vec<bool> = strong.iter().map(|&s| !s).collect();
+    chebyshev_distance(&weak, dims).into_iter().map(|d| d as u8).collect()
+}
+
+/// One slab of n - 1 smoothed as glsl/eikonal/smooth.comp smooths it: a separable Gaussian of
+/// `sigma` voxels over ceil(3 sigma) voxels on each side, the air beyond the box adding its
+/// weight with n - 1 = 0.
+fn smoothed(slab: &[f32], dims: [usize; 3], sigma: f32) -> Vec<f32> {
+    let radius = (3.0 * sigma).ceil() as isize;
+    let weights: Vec<f32> = (-radius..=radius)
+        .map(|k| if sigma > 0.0 { (-((k * k) as f32) / (2.0 * sigma * sigma)).exp() } else { 1.0 })
+        .collect();
+    let total: f32 = weights.iter().sum();
+    (0..3).fold(slab.to_vec(), |src, axis| {
+        let stride = [1, dims[0], dims[0] * dims[1]][axis] as isize;
+        let n = dims[axis] as isize;
+        (0..src.len())
+            .map(|i| {
+                let c = (i / stride as usize % dims[axis]) as isize;
+                let sum: f32 = (-radius..=radius)
+                    .zip(&weights)
+                    .filter(|&(k, _)| (0..n).contains(&(c + k)))
+                    .map(|(k, w)| w * src[(i as isize + k * stride) as usize])
+                    .sum();
+                sum / total
+            })
+            .collect()
     })
 }
 
@@ -602,6 +706,94 @@ mod tests {
                 .min()
                 .unwrap_or(255);
             assert_eq!(got, expected.min(255), "brick {p:?}");
+        }
+    }
+
+    /// The weak-gradient map against brute force on a ball of constant index (radius 6
+    /// voxels, with its one-voxel ramp) in a 24^3 volume with a material voxel: the smoothing
+    /// as one 3D convolution in f64, central differences, and each voxel's Chebyshev distance
+    /// to the nearest voxel whose index changes by more than the threshold per voxel or that
+    /// has a material. No voxel's change lies within 1e-5 of the threshold (checked), so f32
+    /// rounding cannot move one across it. With a threshold of 0 every voxel whose index is
+    /// constant within the smoothing's reach and one more voxel is weak.
+    #[test]
+    fn weak_reach_matches_brute_force() {
+        let (n, sigma, h) = (24usize, 0.75f32, 0.1f32);
+        let at = |x: usize, y: usize, z: usize| x + n * (y + n * z);
+        let mut index = vec![0.0f32; n * n * n];
+        for (i, v) in index.iter_mut().enumerate() {
+            let r = [i % n, i / n % n, i / (n * n)].map(|c| c as f32 + 0.5 - 11.0);
+            let d = (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt() - 6.0;
+            *v = 0.5 * (0.5 - d).clamp(0.0, 1.0);
+        }
+        let mut material = vec![false; n * n * n];
+        material[at(20, 3, 18)] = true;
+        let radius = (3.0 * sigma).ceil() as isize;
+        let w = |k: isize| (-((k * k) as f64) / (2.0 * f64::from(sigma).powi(2))).exp();
+        let total: f64 = (-radius..=radius).map(w).sum::<f64>().powi(3);
+        let value = |q: [isize; 3]| {
+            if q.iter().all(|&c| c >= 0 && (c as usize) < n) {
+                f64::from(index[at(q[0] as usize, q[1] as usize, q[2] as usize)])
+            } else {
+                0.0
+            }
+        };
+        let smooth = |q: [isize; 3]| {
+            let mut sum = 0.0;
+            for dz in -radius..=radius {
+                for dy in -radius..=radius {
+                    for dx in -radius..=radius {
+                        sum += w(dx) * w(dy) * w(dz) * value([q[0] + dx, q[1] + dy, q[2] + dz]);
+                    }
+                }
+            }
+            sum / total
+        };
+        let voxel = |i: usize| [i % n, i / n % n, i / (n * n)].map(|c| c as isize);
+        let change: Vec<f64> = (0..n * n * n)
+            .map(|i| {
+                let q = voxel(i);
+                let g: f64 = (0..3)
+                    .map(|a| {
+                        let (mut lo, mut hi) = (q, q);
+                        lo[a] -= 1;
+                        hi[a] += 1;
+                        ((smooth(hi) - smooth(lo)) / 2.0).powi(2)
+                    })
+                    .sum();
+                g.sqrt()
+            })
+            .collect();
+        let threshold = 1e-3;
+        assert!(change.iter().all(|c| (c - threshold).abs() > 1e-5), "a voxel's change lies at the threshold");
+        let strong: Vec<bool> = (0..n * n * n).map(|i| material[i] || change[i] > threshold).collect();
+        let got = weak_reach(&[&index], &material, [n as u32; 3], glam::Vec3::splat(h), sigma, threshold as f32);
+        assert!(got.contains(&0) && got.iter().any(|&k| k > 1), "the case must have both kinds");
+        for (i, &k) in got.iter().enumerate() {
+            let q = voxel(i);
+            let expected = (0..n * n * n)
+                .filter(|&j| strong[j])
+                .map(|j| (0..3).map(|a| (voxel(j)[a] - q[a]).unsigned_abs()).max().unwrap())
+                .min()
+                .unwrap_or(255);
+            assert_eq!(u32::from(k), expected.min(255) as u32, "voxel {q:?}");
+        }
+        // Threshold 0: the index constant within the smoothing's reach plus one voxel (the
+        // central differences) and no material makes a voxel weak.
+        let exact = weak_reach(&[&index], &material, [n as u32; 3], glam::Vec3::splat(h), sigma, 0.0);
+        let reach = radius + 1;
+        for (i, &k) in exact.iter().enumerate() {
+            let q = voxel(i);
+            let first = value(q);
+            let constant = (-reach..=reach).all(|dz| {
+                (-reach..=reach).all(|dy| (-reach..=reach).all(|dx| value([q[0] + dx, q[1] + dy, q[2] + dz]) == first))
+            });
+            if constant && !material[i] {
+                assert!(k > 0, "voxel {q:?} has a constant index around it but is not weak");
+            }
+            if change[i] > 1e-6 {
+                assert_eq!(k, 0, "voxel {q:?} changes by {} but is weak", change[i]);
+            }
         }
     }
 }
