@@ -561,29 +561,23 @@ pub fn weak_reach(
     threshold: f32,
 ) -> Vec<u8> {
     let dims = resolution.map(|n| n as usize);
-    let at = |p: [usize; 3]| p[0] + dims[0] * (p[1] + dims[1] * p[2]);
+    let strides = [1, dims[0], dims[0] * dims[1]];
     let edges = voxel.to_array();
     let smallest = voxel.min_element();
     let mut strong = material.to_vec();
     for slab in index {
         let s = smoothed(slab, dims, sigma);
-        let value = |p: [isize; 3]| {
-            let inside = (0..3).all(|a| p[a] >= 0 && (p[a] as usize) < dims[a]);
-            if inside {
-                s[at(p.map(|c| c as usize))]
-            } else {
-                0.0
-            }
-        };
         for (i, flag) in strong.iter_mut().enumerate() {
-            let p = [i % dims[0], i / dims[0] % dims[1], i / (dims[0] * dims[1])].map(|c| c as isize);
-            let gradient = glam::Vec3::from_array(std::array::from_fn(|a| {
-                let (mut lo, mut hi) = (p, p);
-                lo[a] -= 1;
-                hi[a] += 1;
-                (value(hi) - value(lo)) / (2.0 * edges[a])
-            }));
-            *flag |= gradient.length() * smallest > threshold;
+            // Central differences, the air beyond the box at n - 1 = 0.
+            let mut g2 = 0.0;
+            for a in 0..3 {
+                let c = i / strides[a] % dims[a];
+                let hi = if c + 1 < dims[a] { s[i + strides[a]] } else { 0.0 };
+                let lo = if c > 0 { s[i - strides[a]] } else { 0.0 };
+                let g = (hi - lo) / (2.0 * edges[a]);
+                g2 += g * g;
+            }
+            *flag |= g2.sqrt() * smallest > threshold;
         }
     }
     let weak: Vec<bool> = strong.iter().map(|&s| !s).collect();
@@ -594,26 +588,31 @@ pub fn weak_reach(
 /// `sigma` voxels over ceil(3 sigma) voxels on each side, the air beyond the box adding its
 /// weight with n - 1 = 0.
 fn smoothed(slab: &[f32], dims: [usize; 3], sigma: f32) -> Vec<f32> {
-    let radius = (3.0 * sigma).ceil() as isize;
-    let weights: Vec<f32> = (-radius..=radius)
-        .map(|k| if sigma > 0.0 { (-((k * k) as f32) / (2.0 * sigma * sigma)).exp() } else { 1.0 })
+    let radius = (3.0 * sigma).ceil() as usize;
+    let weights: Vec<f32> = (0..=2 * radius)
+        .map(|j| {
+            let k = j as f32 - radius as f32;
+            if sigma > 0.0 {
+                (-(k * k) / (2.0 * sigma * sigma)).exp()
+            } else {
+                1.0
+            }
+        })
         .collect();
     let total: f32 = weights.iter().sum();
-    (0..3).fold(slab.to_vec(), |src, axis| {
-        let stride = [1, dims[0], dims[0] * dims[1]][axis] as isize;
-        let n = dims[axis] as isize;
-        (0..src.len())
-            .map(|i| {
-                let c = (i / stride as usize % dims[axis]) as isize;
-                let sum: f32 = (-radius..=radius)
-                    .zip(&weights)
-                    .filter(|&(k, _)| (0..n).contains(&(c + k)))
-                    .map(|(k, w)| w * src[(i as isize + k * stride) as usize])
-                    .sum();
-                sum / total
-            })
-            .collect()
-    })
+    let (mut src, mut dst) = (slab.to_vec(), vec![0.0; slab.len()]);
+    for axis in 0..3 {
+        let (stride, n) = ([1, dims[0], dims[0] * dims[1]][axis], dims[axis]);
+        for (i, out) in dst.iter_mut().enumerate() {
+            let c = i / stride % n;
+            let base = i - c * stride;
+            let (lo, hi) = (c.saturating_sub(radius), (c + radius).min(n - 1));
+            let sum: f32 = (lo..=hi).map(|q| weights[q + radius - c] * src[base + q * stride]).sum();
+            *out = sum / total;
+        }
+        std::mem::swap(&mut src, &mut dst);
+    }
+    src
 }
 
 /// Chebyshev distance (in bricks, at most 255) from each brick to the nearest one that is
