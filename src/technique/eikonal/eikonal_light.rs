@@ -11,7 +11,7 @@
 //! - Section 5.2.1 (glsl/eikonal/light_step.glsl): every step advances the corners with the
 //!   equal-time ray equation, Eqs. 14-15, and absorbs with Eq. 18; the irradiance of a patch
 //!   is its flux over its area (Eq. 17, intensity law Eq. 16). Where every corner is in a
-//!   region of constant index (the view renderer's brick map), a patch takes up to
+//!   region of constant index (the brick map of volume.rs `uniform_reach`), a patch takes up to
 //!   `light_leaps` further steps in the same dispatch as the straight line Eqs. 14-15 give
 //!   there, each classified and deposited as a step of its own: the same wavefront in fewer
 //!   dispatches.

@@ -5,9 +5,13 @@
 //!   ([`Volume::sample`], as n - 1), uploaded, smoothed and differentiated on the GPU
 //!   ([`super::volume`]), once per volume and sigma.
 //! - Sections 4.1, 5.3: `eikonal_view` (glsl/eikonal/view.frag) marches every camera ray that
-//!   enters the volume's box with the ray equation, Eqs. 9-10, by Euler (Eqs. 11-12) or RK4,
-//!   absorbs along the curved path (Eq. 5) and looks up the environment in the exit
-//!   direction, over the deferred result.
+//!   enters the volume's box with the ray equation, Eqs. 9-10, by Euler (Eqs. 11-12), the
+//!   midpoint rule, RK4 or velocity Verlet, absorbs along the curved path (Eq. 5) and looks up
+//!   the environment in the exit direction, over the deferred result.
+//! - prism's departure, `render.eikonal.leaps` and `weak_gradient`: whole steps merge into one
+//!   where a per-voxel map (volume.rs `weak_reach`) finds the smoothed index constant (the
+//!   full march's straight line exactly) or changing by at most the threshold per voxel;
+//!   `leaps = false` marches at `step` everywhere, as the paper does (docs/BENCHMARKS.md).
 //! - Volume sources (src/scene/volume_sources.rs): the fields of `[[volume.region]]`s
 //!   are evaluated on the CPU; a per-channel index is uploaded as three slabs stacked along z
 //!   and smoothed/differentiated slab by slab (dispersion: one march per channel), and the
