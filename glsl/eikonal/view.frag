@@ -125,11 +125,10 @@ void rhs(vec3 x, vec3 v, int c, out vec3 dx, out vec3 dv) {
 
 #include "cube.glsl"
 
-// How far the ray at x with unit direction d stays where every field sample has |grad n|
-// below the weak-gradient threshold per voxel edge (or none at all with no threshold): in
-// the cube of the weak-gradient map
-// around x, less half a voxel on each side, where a trilinear lookup reads the cube's voxels
-// only (a cube of one voxel has no such inside).
+// How far the ray at x with unit direction d stays where every field sample has |grad n| at
+// most the weak-gradient threshold per voxel edge (0 with no threshold): in the cube of the
+// weak-gradient map around x, less half a voxel on each side, where a trilinear lookup reads
+// the cube's voxels only (a cube of one voxel has no such inside).
 float weak_length(vec3 x, vec3 d) {
     ivec3 size = slab_size();
     vec3 cell = (BOX_MAX - BOX_MIN) / vec3(size);
@@ -326,35 +325,33 @@ vec3 march(vec3 o, vec3 d, float t_enter, int c, inout bool touched) {
         // Verlet's parameter step: d tau = ds / n, so that a step of tau = h / n moves about h
         // of arc length (|v| = n).
         float tau = h / max(n_cur, 1e-3);
-        {
-            if (INTEGRATOR == EIKONAL_RK4) {
-                vec3 k1x, k1v, k2x, k2v, k3x, k3v, k4x, k4v;
-                rhs_at(s, v, k1x, k1v);
-                rhs(x + 0.5 * h * k1x, v + 0.5 * h * k1v, c, k2x, k2v);
-                rhs(x + 0.5 * h * k2x, v + 0.5 * h * k2v, c, k3x, k3v);
-                rhs(x + h * k3x, v + h * k3v, c, k4x, k4v);
-                x += h / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x);
-                v += h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
-            } else if (INTEGRATOR == EIKONAL_VERLET) {
-                // Eqs. 9-10 in tau (d tau = ds / n: dx/d tau = v, dv/d tau = n grad n) by
-                // velocity Verlet: a half kick with a(x) = n grad n and the drift here, the
-                // second half kick with the end sample below.
-                v += (0.5 * tau * (1.0 + s.w)) * s.xyz;
-                x += tau * v;
-            } else if (INTEGRATOR == EIKONAL_MIDPOINT) {
-                // Second order: the slope at the half step's Euler estimate.
-                vec3 k1x, k1v, k2x, k2v;
-                rhs_at(s, v, k1x, k1v);
-                rhs(x + 0.5 * h * k1x, v + 0.5 * h * k1v, c, k2x, k2v);
-                x += h * k2x;
-                v += h * k2v;
-            } else {
-                // Eqs. 11-12.
-                vec3 dx, dv;
-                rhs_at(s, v, dx, dv);
-                x += h * dx;
-                v += h * dv;
-            }
+        if (INTEGRATOR == EIKONAL_RK4) {
+            vec3 k1x, k1v, k2x, k2v, k3x, k3v, k4x, k4v;
+            rhs_at(s, v, k1x, k1v);
+            rhs(x + 0.5 * h * k1x, v + 0.5 * h * k1v, c, k2x, k2v);
+            rhs(x + 0.5 * h * k2x, v + 0.5 * h * k2v, c, k3x, k3v);
+            rhs(x + h * k3x, v + h * k3v, c, k4x, k4v);
+            x += h / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x);
+            v += h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
+        } else if (INTEGRATOR == EIKONAL_VERLET) {
+            // Eqs. 9-10 in tau (d tau = ds / n: dx/d tau = v, dv/d tau = n grad n) by
+            // velocity Verlet: a half kick with a(x) = n grad n and the drift here, the
+            // second half kick with the end sample below.
+            v += (0.5 * tau * (1.0 + s.w)) * s.xyz;
+            x += tau * v;
+        } else if (INTEGRATOR == EIKONAL_MIDPOINT) {
+            // Second order: the slope at the half step's Euler estimate.
+            vec3 k1x, k1v, k2x, k2v;
+            rhs_at(s, v, k1x, k1v);
+            rhs(x + 0.5 * h * k1x, v + 0.5 * h * k1v, c, k2x, k2v);
+            x += h * k2x;
+            v += h * k2v;
+        } else {
+            // Eqs. 11-12.
+            vec3 dx, dv;
+            rhs_at(s, v, dx, dv);
+            x += h * dx;
+            v += h * dv;
         }
         s = sample_field(x, c);
         n_cur = 1.0 + s.w;

@@ -1144,9 +1144,8 @@ params! {
         /// boundary's smoothing, where a step of `step` bends the ray by almost nothing; Eq. 10
         /// bends it by less than this per voxel travelled; src/technique/eikonal/volume.rs,
         /// `weak_reach`). 0 merges steps only where the index is exactly constant. At 1e-3,
-        /// the default, the view pass takes 0.62-0.68x the time of 0 on eikonal_sphere, with
-        /// FLIP within the reference's noise and a lower RMSE (docs/BENCHMARKS.md,
-        /// docs/ACCURACY.md).
+        /// the default, eikonal_sphere's view pass takes 0.77-0.79x the time of 0, with FLIP
+        /// within the reference's noise and a lower RMSE (docs/BENCHMARKS.md, docs/ACCURACY.md).
         // Above 0.1 the merged steps would cross the steep middle of a smoothed boundary.
         weak_gradient: f32 = 1e-3, 0.0..=0.1;
         /// Stop a view ray once its transmittance (Eq. 5's T, after extinction and Fresnel
