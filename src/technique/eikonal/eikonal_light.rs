@@ -1475,7 +1475,8 @@ impl StandaloneLight {
     /// read when its `light_deposits` is "read".
     pub fn with_reads(ctx: &Arc<GpuContext>, lit: LitVolume<'_>) -> GpuResult<Self> {
         let mut graph = FrameGraph::new();
-        let textures = prepare_volume(ctx, *lit.params, lit.volume, &mut graph)?;
+        // No view rays here: `leaps` off spares the view's weak-gradient map.
+        let textures = prepare_volume(ctx, EikonalParams { leaps: false, ..*lit.params }, lit.volume, &mut graph)?;
         let sampler = Sampler::new(ctx, "eikonal_light_field", crate::gpu::SamplerDesc::NEAREST_CLAMP)?;
         let sim = LightSim::new(ctx, lit, &textures, &sampler, &mut graph)?;
         Ok(StandaloneLight { sim, graph, _volume: textures, _sampler: sampler })
