@@ -337,12 +337,10 @@ shared_bindings! {
         BINDING_EIKONAL_ALBEDO = 21;
         BINDING_EIKONAL_EMISSION = 22;
         BINDING_EIKONAL_TRIANGLES = 25;
-        // The weak-gradient map of the merged steps (u8 per voxel, x fastest;
-        // src/technique/eikonal/volume.rs, `weak_reach`).
-        BINDING_EIKONAL_WEAK = 26;
-        // The boundary band's reflectance factor per voxel, -1 outside the band (f32, x
-        // fastest; src/technique/eikonal/volume.rs).
-        BINDING_EIKONAL_BAND = 27;
+        // The march map: per voxel (x fastest) the boundary band's reflectance factor (f32,
+        // -1 outside the band) whose eight lowest mantissa bits hold the weak-gradient reach
+        // of the merged steps (src/technique/eikonal/volume.rs, `march_map`).
+        BINDING_EIKONAL_MARCH = 27;
     }
     // Set 1 of refraction_water, besides the tracer's REF_BINDINGS and BINDING_GBUF_ALBEDO /
     // _DEPTH: the environment's SH coefficients as seen from under the water

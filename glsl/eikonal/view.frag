@@ -69,13 +69,11 @@ layout(set = 1, binding = BINDING_EIKONAL_FIELD) uniform sampler3D field;
 layout(set = 1, binding = BINDING_EIKONAL_EXTINCTION) uniform sampler3D extinction_map;  // sigma_a + sigma_s, g
 layout(set = 1, binding = BINDING_EIKONAL_ALBEDO) uniform sampler3D albedo_map;          // albedo (rgb)
 layout(set = 1, binding = BINDING_EIKONAL_EMISSION) uniform sampler3D emission_map;      // emission (rgb)
-// Per voxel, the Chebyshev distance in voxels to the nearest voxel where the field is not
-// weak, or not constant with no threshold (src/technique/eikonal/volume.rs, `weak_reach`),
-// x fastest.
-layout(set = 1, binding = BINDING_EIKONAL_WEAK) uniform usamplerBuffer weak_texels;
-// The boundary band's reflectance factor per voxel, -1 outside the band, x fastest
-// (src/technique/eikonal/volume.rs).
-layout(set = 1, binding = BINDING_EIKONAL_BAND) uniform samplerBuffer band_factors;
+// The march map, x fastest (src/technique/eikonal/volume.rs, `march_map`): per voxel the
+// boundary band's reflectance factor (f32 bits, -1 outside the band) whose eight lowest
+// mantissa bits hold the Chebyshev distance in voxels to the nearest voxel where the field is
+// not weak, or not constant with no threshold (`weak_reach`).
+layout(set = 1, binding = BINDING_EIKONAL_MARCH) uniform usamplerBuffer march_texels;
 // ---- end of the material volumes ----
 layout(location = 0) in vec2 in_uv;
 layout(location = 0) out vec4 out_radiance;
@@ -125,17 +123,37 @@ void rhs(vec3 x, vec3 v, int c, out vec3 dx, out vec3 dv) {
 
 #include "cube.glsl"
 
+// The march texel beyond the box, the air's: -1's bits, reach 0.
+const uint MARCH_OUTSIDE = 0xbf800000u;
+// The voxel holding x (inside the box).
+ivec3 march_cell(vec3 x) {
+    return ivec3((x - BOX_MIN) / (BOX_MAX - BOX_MIN) * vec3(slab_size()));
+}
+// The march map at the voxel holding x: one fetch per step, from a buffer of 32-bit texels:
+// on lavapipe a fetch from an RGBA16F volume was a tenth of the march, a storage-buffer load
+// (a loop over the lanes) a few percent, a texel-buffer fetch of 8 bits a loop too, one of
+// 32 bits a single gather (docs/BENCHMARKS.md).
+uint march_voxel(vec3 x) {
+    ivec3 size = slab_size();
+    vec3 u = (x - BOX_MIN) / (BOX_MAX - BOX_MIN) * vec3(size);
+    if ((MATERIALS == 0u && LEAPS == 0u) || any(lessThan(u, vec3(0.0))) || any(greaterThanEqual(u, vec3(size)))) return MARCH_OUTSIDE;
+    ivec3 q = ivec3(u);
+    return texelFetch(march_texels, q.x + size.x * (q.y + size.y * q.z)).r;
+}
+// The boundary band's reflectance factor (the CPU spreads each surface's factor over its
+// band), -1 outside the band and the box.
+float band_factor_of(uint bits) {
+    return MATERIALS != 0u ? uintBitsToFloat(bits & ~0xffu) : -1.0;
+}
+
 // How far the ray at x with unit direction d stays where every field sample has |grad n| at
 // most the weak-gradient threshold per voxel edge (0 with no threshold): in the cube of the
-// weak-gradient map around x, less half a voxel on each side, where a trilinear lookup reads
-// the cube's voxels only (a cube of one voxel has no such inside).
-float weak_length(vec3 x, vec3 d) {
-    ivec3 size = slab_size();
-    vec3 cell = (BOX_MAX - BOX_MIN) / vec3(size);
-    ivec3 q = ivec3(floor((x - BOX_MIN) / cell));
-    if (any(lessThan(q, ivec3(0))) || any(greaterThanEqual(q, size))) return 0.0;
-    int k = int(texelFetch(weak_texels, q.x + size.x * (q.y + size.y * q.z)).x);
-    return k < 2 ? 0.0 : cube_exit(x, d, BOX_MIN, BOX_MAX, q, k, cell, 0.5);
+// weak-gradient map around x (`bits`, x's march voxel), less half a voxel on each side, where
+// a trilinear lookup reads the cube's voxels only (a cube of one voxel has no such inside).
+float weak_length(vec3 x, vec3 d, uint bits) {
+    int k = int(bits & 0xffu);
+    vec3 cell = (BOX_MAX - BOX_MIN) / vec3(slab_size());
+    return k < 2 ? 0.0 : cube_exit(x, d, BOX_MIN, BOX_MAX, march_cell(x), k, cell, 0.5);
 }
 
 // ---- material lookups ----
@@ -151,19 +169,6 @@ vec4 sample_material(sampler3D map, vec3 x) {
     vec4 c01 = mix(texelFetch(map, ivec3(i.x, i.y, j.z), 0), texelFetch(map, ivec3(j.x, i.y, j.z), 0), f.x);
     vec4 c11 = mix(texelFetch(map, ivec3(i.x, j.y, j.z), 0), texelFetch(map, j, 0), f.x);
     return mix(mix(c00, c10, f.y), mix(c01, c11, f.y), f.z);
-}
-
-// The boundary band at x (nearest voxel), where the smoothed index crosses a jump: its
-// reflectance factor (the CPU spreads each surface's factor over its band), or -1 outside
-// the band and the box. One fetch per step from a buffer of one f32 per voxel: on lavapipe a
-// fetch from an RGBA16F volume was a tenth of the march, a storage-buffer load (a loop over the
-// lanes) a few percent, a texel-buffer fetch (one gather) less (docs/BENCHMARKS.md).
-float band_factor(vec3 x) {
-    ivec3 size = slab_size();
-    vec3 u = (x - BOX_MIN) / (BOX_MAX - BOX_MIN) * vec3(size);
-    if (MATERIALS == 0u || any(lessThan(u, vec3(0.0))) || any(greaterThanEqual(u, vec3(size)))) return -1.0;
-    ivec3 q = ivec3(u);
-    return texelFetch(band_factors, q.x + size.x * (q.y + size.y * q.z)).r;
 }
 // ---- end of the material volumes ----
 
@@ -270,9 +275,10 @@ vec3 march(vec3 o, vec3 d, float t_enter, int c, inout bool touched) {
     // A ray that enters the box inside a band comes from the air (n = 1).
     Run r;
     r.turned = false;
-    // The band at x (its factor, -1 outside): read once per step, at its end, for this step
-    // and the next.
-    float x_factor = band_factor(x);
+    // The march map at x: read once per step, at its end, for this step and the next (the
+    // band's factor, -1 outside, and the reach of the merged steps).
+    uint x_bits = march_voxel(x);
+    float x_factor = band_factor_of(x_bits);
     bool x_band = x_factor >= 0.0;
     bool banded = x_band;
     run_start(r, 1.0, d, T);
@@ -316,7 +322,7 @@ vec3 march(vec3 o, vec3 d, float t_enter, int c, inout bool touched) {
         vec3 x0 = x;
         float h = STEP;
         if (LEAPS != 0u) {
-            float m = min(floor(weak_length(x, normalize(v)) / STEP), float(MAX_STEPS - i));
+            float m = min(floor(weak_length(x, normalize(v), x_bits) / STEP), float(MAX_STEPS - i));
             if (m >= 2.0) {
                 h = m * STEP;
                 i += uint(m) - 1u;
@@ -356,7 +362,8 @@ vec3 march(vec3 o, vec3 d, float t_enter, int c, inout bool touched) {
         s = sample_field(x, c);
         n_cur = 1.0 + s.w;
         if (INTEGRATOR == EIKONAL_VERLET) v += (0.5 * tau * n_cur) * s.xyz;
-        x_factor = band_factor(x);
+        x_bits = march_voxel(x);
+        x_factor = band_factor_of(x_bits);
         x_band = x_factor >= 0.0;
         touched = touched || abs(s.w) > 1e-4;
         // ---- a receiver inside (or touching) the box ends the path where the

@@ -112,8 +112,7 @@ pub struct BufferView {
 /// The size of one texel of the formats prism reads buffers as.
 fn texel_bytes(format: vk::Format) -> GpuResult<u64> {
     match format {
-        vk::Format::R8_UINT => Ok(1),
-        vk::Format::R32_UINT | vk::Format::R32_SFLOAT => Ok(4),
+        vk::Format::R32_UINT => Ok(4),
         vk::Format::R32G32B32A32_UINT | vk::Format::R32G32B32A32_SFLOAT => Ok(16),
         _ => Err(GpuError::Unsupported(format!("texel buffers of {format:?}"))),
     }

@@ -396,8 +396,7 @@ impl EikonalPass {
             .read(nearby.texture_id)
             .uniform(crate::BINDING_NEARBY_RECTS, &nearby.rect_buffer)
             .texels(crate::BINDING_EIKONAL_TRIANGLES, &triangle_texels)
-            .texels(crate::BINDING_EIKONAL_WEAK, &textures.weak_texels)
-            .texels(crate::BINDING_EIKONAL_BAND, &textures.band_texels);
+            .texels(crate::BINDING_EIKONAL_MARCH, &textures.march_texels);
         let view = FullscreenPass::new(
             ctx,
             // Overwrites the pixels whose ray enters the box.

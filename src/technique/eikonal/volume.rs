@@ -178,16 +178,13 @@ pub struct VolumeTextures {
     /// view.
     pub bricks: crate::gpu::Buffer,
     pub bricks_texels: crate::gpu::BufferView,
-    /// The weak-gradient map of the view rays' merged steps ([`weak_reach`]), device-local
-    /// and read through its R8UI view (one texel, 0, when `render.eikonal.leaps` is off).
-    pub weak: crate::gpu::Buffer,
-    pub weak_texels: crate::gpu::BufferView,
-    /// The boundary band's reflectance factor per voxel (f32, x fastest), -1 outside the
-    /// band, device-local, read through its R32F view: the view renderer's march reads it
-    /// every step, and a texel fetch from a buffer costs lavapipe one gather where a storage
-    /// buffer load is a loop over the lanes (docs/BENCHMARKS.md).
-    pub band: crate::gpu::Buffer,
-    pub band_texels: crate::gpu::BufferView,
+    /// The view rays' march map ([`march_map`]: the band's reflectance factor and the
+    /// weak-gradient reach per voxel), device-local, read through its R32UI view: the march
+    /// reads it once per step, and a texel fetch from a buffer of 32-bit texels costs lavapipe
+    /// one gather where a storage buffer load, or a texel of 8 bits, is a loop over the lanes
+    /// (docs/BENCHMARKS.md).
+    pub march: crate::gpu::Buffer,
+    pub march_texels: crate::gpu::BufferView,
     /// Where the light can be anything but straight ([`medium_bricks`]).
     pub medium: Vec<(glam::Vec3, glam::Vec3)>,
 }
@@ -319,25 +316,22 @@ pub(crate) fn prepare_volume(
     };
     let ext_data = pack(&mut fields.extinction.iter().copied());
     let alb_data = pack(&mut fields.albedo.iter().zip(&band_reflectance).map(|(a, &r)| [a[0], a[1], a[2], r]));
-    // The view's band factor (`VolumeTextures::band`), one stand-in value without materials.
+    // The view's march map (`VolumeTextures::march`), one stand-in texel when the view reads
+    // neither the band nor the reach.
     let band_factor: Vec<f32> = if materials {
         band.iter().zip(&band_reflectance).map(|(&b, &r)| if b > 0.5 { r } else { -1.0 }).collect()
     } else {
-        vec![-1.0]
+        vec![-1.0; weak_reach.len()]
     };
+    let march = march_map(&band_factor, &weak_reach);
     // Device-local (on a discrete GPU every step of every view ray reads it), filled by a
     // copy below.
-    let band_bytes = std::mem::size_of_val(band_factor.as_slice()) as u64;
-    let band_usage = vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
-    let band_buffer =
-        crate::gpu::Buffer::new(ctx, "eikonal_band", band_bytes, band_usage, crate::gpu::MemoryLocation::GpuOnly)?;
-    let band_texels = crate::gpu::BufferView::new(ctx, &band_buffer, vk::Format::R32_SFLOAT)?;
-    let band_id = graph.register_buffer(&band_buffer);
-    let weak_bytes = weak_reach.len() as u64;
-    let weak_buffer =
-        crate::gpu::Buffer::new(ctx, "eikonal_weak", weak_bytes, band_usage, crate::gpu::MemoryLocation::GpuOnly)?;
-    let weak_texels = crate::gpu::BufferView::new(ctx, &weak_buffer, vk::Format::R8_UINT)?;
-    let weak_id = graph.register_buffer(&weak_buffer);
+    let march_bytes = std::mem::size_of_val(march.as_slice()) as u64;
+    let march_usage = vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
+    let march_buffer =
+        crate::gpu::Buffer::new(ctx, "eikonal_march", march_bytes, march_usage, crate::gpu::MemoryLocation::GpuOnly)?;
+    let march_texels = crate::gpu::BufferView::new(ctx, &march_buffer, vk::Format::R32_UINT)?;
+    let march_id = graph.register_buffer(&march_buffer);
     let emi_data = pack(&mut fields.emission.iter().zip(&band).map(|(e, &b)| [e[0], e[1], e[2], b]));
 
     // The blur ping-pongs raw -> scratch -> raw -> scratch; the gradient reads scratch.
@@ -383,8 +377,7 @@ pub(crate) fn prepare_volume(
         upload("eikonal_albedo_upload", bytemuck::cast_slice(&alb_data))?,
         upload("eikonal_emission_upload", bytemuck::cast_slice(&emi_data))?,
     ];
-    let band_staging = upload("eikonal_band_upload", bytemuck::cast_slice(&band_factor))?;
-    let weak_staging = upload("eikonal_weak_upload", &weak_reach)?;
+    let march_staging = upload("eikonal_march_upload", bytemuck::cast_slice(&march))?;
     let groups = extent.map(|n| n.div_ceil(EIKONAL_GROUP));
     let ids = [(raw_id, scratch_id), (scratch_id, raw_id), (raw_id, scratch_id), (scratch_id, field_id)];
     let names = ["eikonal_smooth_x", "eikonal_smooth_y", "eikonal_smooth_z", "eikonal_gradient"];
@@ -397,16 +390,15 @@ pub(crate) fn prepare_volume(
                 (albedo_id, Access::TransferWrite),
                 (emission_id, Access::TransferWrite),
             ],
-            &[(band_id, Access::TransferWrite), (weak_id, Access::TransferWrite)],
+            &[(march_id, Access::TransferWrite)],
         );
         cmd.copy_buffer_to_image(&staging, &raw);
         for (buffer, image) in staging_materials.iter().zip([&extinction, &albedo, &emission]) {
             cmd.copy_buffer_to_image(buffer, image);
         }
-        cmd.copy_buffer(&band_staging, &band_buffer, band_bytes);
-        cmd.copy_buffer(&weak_staging, &weak_buffer, weak_bytes);
-        // Only eikonal_view's fragments read them, in every later frame.
-        graph.access_now(cmd, &[], &[(band_id, Access::FragmentStorageRead), (weak_id, Access::FragmentStorageRead)]);
+        cmd.copy_buffer(&march_staging, &march_buffer, march_bytes);
+        // Only eikonal_view's fragments read it, in every later frame.
+        graph.access_now(cmd, &[], &[(march_id, Access::FragmentStorageRead)]);
         let mut frame = graph.frame();
         for (i, &(src, dst)) in ids.iter().enumerate() {
             let pipeline = if i < 3 { &smooth[i] } else { &gradient };
@@ -436,10 +428,8 @@ pub(crate) fn prepare_volume(
         emission_any,
         bricks,
         bricks_texels,
-        weak: weak_buffer,
-        weak_texels,
-        band: band_buffer,
-        band_texels,
+        march: march_buffer,
+        march_texels,
         medium,
     })
 }
@@ -537,6 +527,24 @@ fn brick_range(values: Vec<(f32, f32)>, dims: [usize; 3], radius: usize) -> (Vec
         }
         (out, out_dims)
     })
+}
+
+/// The view rays' march map (glsl/eikonal/view.frag, `march_voxel`): per voxel, the bits of
+/// the boundary band's reflectance factor (`band`, -1 outside the band) with its eight lowest
+/// mantissa bits replaced by the weak-gradient reach (`reach`, [`weak_reach`]), so that the
+/// march's one 32-bit fetch per step gives both. The factor keeps 15 of its 23 mantissa bits
+/// (a relative change under 2^-15, where the factor only scales a Fresnel term; 1, -1 and 0
+/// exactly). Either slice may be one stand-in texel where the view reads none of it (it then
+/// stands for -1 or 0 everywhere).
+pub fn march_map(band: &[f32], reach: &[u8]) -> Vec<u32> {
+    let voxels = band.len().max(reach.len());
+    (0..voxels)
+        .map(|i| {
+            let factor = if band.len() == voxels { band[i] } else { -1.0 };
+            let k = if reach.len() == voxels { reach[i] } else { 0 };
+            (factor.to_bits() & !0xff) | u32::from(k)
+        })
+        .collect()
 }
 
 /// The weak-gradient map of the view rays' merged steps (glsl/eikonal/view.frag,
@@ -706,6 +714,26 @@ mod tests {
                 .unwrap_or(255);
             assert_eq!(got, expected.min(255), "brick {p:?}");
         }
+    }
+
+    /// The march map unpacked as glsl/eikonal/view.frag unpacks it (`band_factor_of`,
+    /// `weak_reach_of`): every reach exactly, every factor within its 15 mantissa bits (a
+    /// relative 2^-15), and the sign of -1 (outside the band) and of 0 (inside) kept whatever
+    /// the reach. A stand-in slice of one texel stands for -1 or 0 everywhere.
+    #[test]
+    fn march_map_keeps_the_reach_and_the_band_factor() {
+        let band = [-1.0f32, 0.0, 1.0, 0.04, 0.6, 1.0 / 3.0, -1.0];
+        let reach = [0u8, 255, 1, 17, 2, 128, 255];
+        let map = march_map(&band, &reach);
+        for (i, &bits) in map.iter().enumerate() {
+            assert_eq!(bits & 0xff, u32::from(reach[i]), "reach of voxel {i}");
+            let factor = f32::from_bits(bits & !0xff);
+            assert_eq!(factor >= 0.0, band[i] >= 0.0, "band flag of voxel {i}");
+            assert!((factor - band[i]).abs() <= band[i].abs() * 2f32.powi(-15), "factor {factor} of {}", band[i]);
+        }
+        assert_eq!(march_map(&band, &[0]).iter().map(|b| b & 0xff).max(), Some(0));
+        let outside = march_map(&[-1.0], &reach);
+        assert!(outside.iter().all(|&b| f32::from_bits(b & !0xff) == -1.0));
     }
 
     /// The weak-gradient map against brute force on a ball of constant index (radius 6
