@@ -10,28 +10,57 @@ use std::path::Path;
 
 use prism::metrics::image::{non_finite_count, rmse_rgba};
 use prism::reference::{Reference, ReferenceSettings};
+use prism::renderer::Renderer;
 use prism::scene::{self, Scene, REFRACTION_TECHNIQUES};
 
 const SIZE: u32 = 64;
 
+/// What the last [`render_all`] built, kept alive until the next call has built its own:
+/// the context caches pipelines weakly under their description, so the next call's renderers
+/// and reference reuse the pipelines that did not change instead of compiling them again
+/// (lavapipe takes about 3 s for the exact tracer's and the reference's each, at every scene).
+#[derive(Default)]
+struct Warm {
+    renderers: Vec<Renderer>,
+    reference: Option<Reference>,
+}
+
+impl Warm {
+    /// Drop what is kept, with the validation layer's verdict on the teardown.
+    fn finish(self, ctx: &std::sync::Arc<prism::gpu::GpuContext>) {
+        drop(self);
+        common::assert_no_validation_errors(ctx);
+    }
+}
+
 /// Render `s` with every refraction technique and with the reference; assert finiteness.
 /// Returns (technique images, reference image).
-fn render_all(ctx: &std::sync::Arc<prism::gpu::GpuContext>, s: &Scene, what: &str) -> (Vec<Vec<f32>>, Vec<f32>) {
+fn render_all(
+    ctx: &std::sync::Arc<prism::gpu::GpuContext>,
+    s: &Scene,
+    what: &str,
+    warm: &mut Warm,
+) -> (Vec<Vec<f32>>, Vec<f32>) {
     let mut images = Vec::new();
+    let mut renderers = Vec::new();
     for t in REFRACTION_TECHNIQUES {
         let mut s = s.clone();
         s.render.refraction = t.to_string();
-        let r = common::render_on(ctx, &s);
-        assert_eq!(non_finite_count(&r.hdr), 0, "{what}: technique {t} produced NaN/Inf");
-        images.push(r.hdr);
+        let mut r = Renderer::new(ctx, &s).unwrap_or_else(|e| panic!("{what}, technique {t}: {e}"));
+        r.render_frame().unwrap_or_else(|e| panic!("{what}, technique {t}: {e}"));
+        let hdr = r.read_hdr().expect("hdr readback");
+        assert_eq!(non_finite_count(&hdr), 0, "{what}: technique {t} produced NaN/Inf");
+        images.push(hdr);
+        renderers.push(r);
     }
+    warm.renderers = renderers;
     let st = ReferenceSettings { spp: 4, photons: 1 << 14, ..ReferenceSettings::default() };
     let mut r = Reference::new(ctx, s, &st).unwrap_or_else(|e| panic!("{what}: {e}"));
     r.run_all(|_, _| {}).unwrap();
     assert_eq!(r.non_finite_values(), 0, "{what}: NaN/Inf in the reference's buffers");
     let img = r.image();
     assert_eq!(non_finite_count(&img), 0, "{what}: reference image");
-    drop(r);
+    warm.reference = Some(r);
     common::assert_no_validation_errors(ctx);
     (images, img)
 }
@@ -42,21 +71,23 @@ fn ior_extremes() {
         return;
     }
     let ctx = common::context(false);
+    let mut warm = Warm::default();
     for ior in ["0.5", "0.75", "0.999", "1.0", "1.0001", "1.5", "2.42", "4.0"] {
         let s = common::scene("sphere_env", SIZE, &[&format!("materials.glass.ior={ior}")]);
-        render_all(&ctx, &s, &format!("ior {ior}"));
+        render_all(&ctx, &s, &format!("ior {ior}"), &mut warm);
     }
     // ior 1 is defined: the ball is invisible, for every technique and for the reference.
     let with = common::scene("sphere_env", SIZE, &["materials.glass.ior=1.0"]);
     let without = common::scene("sphere_env", SIZE, &["objects.0.radius=0.0001"]);
-    let (a, ra) = render_all(&ctx, &with, "ior 1");
-    let (b, rb) = render_all(&ctx, &without, "no ball");
+    let (a, ra) = render_all(&ctx, &with, "ior 1", &mut warm);
+    let (b, rb) = render_all(&ctx, &without, "no ball", &mut warm);
     for (k, t) in REFRACTION_TECHNIQUES.iter().enumerate() {
         let e = rmse_rgba(&a[k], &b[k]);
         assert!(e < 0.02, "{t}: ior 1 ball changes the image: RMSE {e}");
     }
     let e = rmse_rgba(&ra, &rb);
     assert!(e < 1e-3, "reference: ior 1 ball changes the image: RMSE {e}");
+    warm.finish(&ctx);
 }
 
 #[test]
@@ -65,13 +96,15 @@ fn grazing_cameras() {
         return;
     }
     let ctx = common::context(false);
+    let mut warm = Warm::default();
     // Rays that just graze the ball's silhouette, and a camera 1e-4 m above the floor
     // looking along it.
     let s = common::scene("sphere_env", SIZE, &["camera.position=[0, 1.0, 4]", "camera.target=[0, 1.0, 0]"]);
-    render_all(&ctx, &s, "grazing the refractor");
+    render_all(&ctx, &s, "grazing the refractor", &mut warm);
     let s =
         common::scene("sphere_nearby", SIZE, &["camera.position=[0, -0.9999, 4]", "camera.target=[0, -0.9999, -3]"]);
-    render_all(&ctx, &s, "grazing the floor");
+    render_all(&ctx, &s, "grazing the floor", &mut warm);
+    warm.finish(&ctx);
 }
 
 #[test]
@@ -80,10 +113,12 @@ fn camera_inside_a_refractor_and_light_inside_a_refractor() {
         return;
     }
     let ctx = common::context(false);
+    let mut warm = Warm::default();
     let s = common::scene("sphere_env", SIZE, &["camera.position=[0, 0, 0.2]"]);
-    render_all(&ctx, &s, "camera inside the ball");
+    render_all(&ctx, &s, "camera inside the ball", &mut warm);
     let s = common::scene("caustic_sphere", SIZE, &["lights.0.position=[0, 1.2, 0]"]);
-    render_all(&ctx, &s, "light inside the ball");
+    render_all(&ctx, &s, "light inside the ball", &mut warm);
+    warm.finish(&ctx);
 }
 
 /// A scene template scaled by `k`: lengths times k, point-light intensity times k^2, so
@@ -153,9 +188,10 @@ fn tiny_and_huge_scene_scales_give_the_same_image() {
         return;
     }
     let ctx = common::context(false);
-    let (base, base_ref) = render_all(&ctx, &scaled(1.0), "scale 1");
+    let mut warm = Warm::default();
+    let (base, base_ref) = render_all(&ctx, &scaled(1.0), "scale 1", &mut warm);
     for k in [1e-3, 1e4] {
-        let (imgs, reference) = render_all(&ctx, &scaled(k), &format!("scale {k}"));
+        let (imgs, reference) = render_all(&ctx, &scaled(k), &format!("scale {k}"), &mut warm);
         for (t, (a, b)) in REFRACTION_TECHNIQUES.iter().zip(imgs.iter().zip(&base)) {
             let e = rmse_rgba(a, b);
             assert!(e < 0.01, "{t} at scale {k}: RMSE {e} against scale 1");
@@ -165,6 +201,7 @@ fn tiny_and_huge_scene_scales_give_the_same_image() {
         let e = rmse_rgba(&reference, &base_ref);
         assert!(e < 0.05, "reference at scale {k}: RMSE {e} against scale 1");
     }
+    warm.finish(&ctx);
 }
 
 const DEGENERATE_OBJ: &str = "\
@@ -188,6 +225,7 @@ fn degenerate_triangles_and_zero_length_normals() {
         return;
     }
     let ctx = common::context(false);
+    let mut warm = Warm::default();
     let dir = std::env::temp_dir().join(format!("prism-degenerate-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(dir.join("bad.obj"), DEGENERATE_OBJ).unwrap();
@@ -219,7 +257,8 @@ file = "bad.obj"
 "#
         );
         let s = scene::load_str(&text, &dir.join("scene.toml"), &[]).unwrap();
-        render_all(&ctx, &s, &format!("degenerate mesh, {material}"));
+        render_all(&ctx, &s, &format!("degenerate mesh, {material}"), &mut warm);
     }
+    warm.finish(&ctx);
     let _ = std::fs::remove_dir_all(&dir);
 }
