@@ -289,6 +289,23 @@ pub fn render_on(ctx: &Arc<GpuContext>, scene: &Scene) -> Rendered {
     out
 }
 
+/// Render `scene` with a fresh renderer built while `last` (the previous call's) is still
+/// alive, then keep the new one in `last`: the context caches pipelines weakly under their
+/// description, so a renderer built beside one with the same pipelines reuses them instead of
+/// compiling them again (lavapipe takes seconds for the larger shaders). The caller drops
+/// `last` at the end and asserts the teardown's validation.
+pub fn render_after(ctx: &Arc<GpuContext>, scene: &Scene, last: &mut Option<Renderer>) -> Rendered {
+    let mut r = Renderer::new(ctx, scene).expect("renderer");
+    r.render_frame().expect("frame");
+    let hdr = r.read_hdr().expect("hdr readback");
+    let ldr = r.read_ldr().expect("ldr readback");
+    let passes = r.plan().iter().map(|p| p.name.to_string()).collect();
+    let out = Rendered { width: r.width(), height: r.height(), hdr, ldr, passes };
+    *last = Some(r);
+    assert_no_validation_errors(ctx);
+    out
+}
+
 /// Render each of `scenes` in turn with one renderer, taking each next scene as a live change
 /// (`Renderer::update`): what a change does not touch is kept, above all the eikonal light
 /// simulation when only the view renderer's settings or the image size differ. tests/live.rs
