@@ -18,12 +18,16 @@ const SIZE: u32 = 64;
 /// Every frame shown as traced, not the running mean of the frames.
 const SINGLE: &str = "render.raytrace.accumulate=1";
 
-/// The reference at `spp` samples per pixel, centre rays (SCENES.md), no photons.
-fn reference(ctx: &Arc<GpuContext>, s: &Scene, spp: u32, seed: u32) -> Vec<f32> {
+/// The reference at `spp` samples per pixel, centre rays (SCENES.md), no photons. Built
+/// beside `last`, the previous call's, whose pipelines it reuses (common::render_after), and
+/// kept there.
+fn reference(ctx: &Arc<GpuContext>, s: &Scene, spp: u32, seed: u32, last: &mut Option<Reference>) -> Vec<f32> {
     let st = ReferenceSettings { spp, photons: 0, seed, ..ReferenceSettings::default() };
     let mut r = Reference::new(ctx, s, &st).expect("reference");
     r.run_all(|_, _| {}).unwrap();
-    r.image()
+    let image = r.image();
+    *last = Some(r);
+    image
 }
 
 /// The pixels a technique wrote: where its image differs from `render.<effect> = "single"`.
@@ -67,12 +71,16 @@ fn matches_reference(ctx: &Arc<GpuContext>, name: &str, effect: &str, ior: f64, 
     // caustics).
     let off = "render.raytrace.photons_per_frame=0";
     let s = common::scene(name, SIZE, &[&format!("render.{effect}=raytrace"), off]);
-    let traced = common::render_on(ctx, &s).hdr;
+    // Kept for the control below, which reuses its pipelines.
+    let mut tracer = None;
+    let traced = common::render_after(ctx, &s, &mut tracer).hdr;
     let single = common::render_on(ctx, &common::scene(name, SIZE, &[&format!("render.{effect}=single")])).hdr;
     let pixels = written(&traced, &single);
     assert!(pixels.len() > 300, "{name}: only {} pixels traced", pixels.len());
-    let a = reference(ctx, &s, spp, 1);
-    let b = reference(ctx, &s, spp, 2);
+    let mut last = None;
+    let a = reference(ctx, &s, spp, 1, &mut last);
+    let b = reference(ctx, &s, spp, 2, &mut last);
+    drop(last);
     let (noise, _) = stats(&a, &b, &pixels);
     let (error, bias) = stats(&traced, &a, &pixels);
     let threshold = noise.max(1e-4);
@@ -89,7 +97,8 @@ fn matches_reference(ctx: &Arc<GpuContext>, name: &str, effect: &str, ior: f64, 
     assert!(bias <= bias_limit && bias >= -bias_limit - cutoff_loss, "{name}: mean difference {bias}");
 
     let control = common::scene(name, SIZE, &[&format!("render.{effect}=raytrace"), off, broken]);
-    let (control, _) = stats(&common::render_on(ctx, &control).hdr, &a, &pixels);
+    let (control, _) = stats(&common::render_after(ctx, &control, &mut tracer).hdr, &a, &pixels);
+    drop(tracer);
     eprintln!("{name}: control {broken}: RMSE {control:.5}");
     assert!(control > 4.0 * threshold, "{name}: the comparison cannot tell {broken} ({control}) from the defaults");
     common::assert_no_validation_errors(ctx);
@@ -286,8 +295,10 @@ fn renders_a_volume_scene_as_the_reference_does() {
     let traced = common::render_on(&ctx, &s).hdr;
     common::assert_finite("volume_raytrace", &traced);
     let all: Vec<usize> = (0..traced.len() / 4).collect();
-    let a = reference(&ctx, &s, 16, 1);
-    let c = reference(&ctx, &s, 1, 3);
+    let mut last = None;
+    let a = reference(&ctx, &s, 16, 1, &mut last);
+    let c = reference(&ctx, &s, 1, 3, &mut last);
+    drop(last);
     let sq: Vec<f64> =
         all.iter().flat_map(|&p| (0..3).map(move |k| 4 * p + k)).map(|i| ((c[i] - a[i]) as f64).powi(2)).collect();
     let n = sq.len() as f64;
@@ -346,7 +357,15 @@ fn frame_statistics(ctx: &Arc<GpuContext>, s: &Scene, frames: u32) -> (Vec<f64>,
 /// The reference's caustic alone (its photon-mapped part) with the raytrace technique's
 /// gathering disk: every visible point starts at the largest radius (`footprint` 0, 1% of the
 /// scene's radius) and keeps it (alpha close to 1), at the centre ray of its pixel.
-fn reference_caustic(ctx: &Arc<GpuContext>, s: &Scene, spp: u32, photons: u64, seed: u32) -> (Vec<f32>, f32) {
+/// Built beside `last`, whose pipelines it reuses, and kept there (as `reference`).
+fn reference_caustic(
+    ctx: &Arc<GpuContext>,
+    s: &Scene,
+    spp: u32,
+    photons: u64,
+    seed: u32,
+    last: &mut Option<Reference>,
+) -> (Vec<f32>, f32) {
     let st = ReferenceSettings { spp, photons, seed, footprint: 0.0, alpha: 0.999, ..ReferenceSettings::default() };
     let mut r = Reference::new(ctx, s, &st).expect("reference");
     r.run_all(|_, _| {}).unwrap();
@@ -358,7 +377,9 @@ fn reference_caustic(ctx: &Arc<GpuContext>, s: &Scene, spp: u32, photons: u64, s
         .filter(|p| p[2][3] > 0.5)
         .map(|p| p[1][3] / initial)
         .fold(1.0f32, f32::min);
-    (r.caustic_image(), shrink)
+    let image = r.caustic_image();
+    *last = Some(r);
+    (image, shrink)
 }
 
 /// The GPU scene's bounding radius (src/frame/gpu_scene.rs): every vertex and the camera.
@@ -423,8 +444,10 @@ fn caustic_through_the_glass_matches_the_reference() {
     let pixels = written(&dark, &single);
     assert!(pixels.len() > 300, "only {} pixels traced", pixels.len());
     let photons = 1u64 << 21;
-    let (a, shrink) = reference_caustic(&ctx, &s, 32, photons, 1);
-    let (b, _) = reference_caustic(&ctx, &s, 32, photons, 2);
+    let mut last = None;
+    let (a, shrink) = reference_caustic(&ctx, &s, 32, photons, 1, &mut last);
+    let (b, _) = reference_caustic(&ctx, &s, 32, photons, 2, &mut last);
+    drop(last);
     let (mut sq, mut sum, mut noise, mut control, mut caustic, mut lit_pixels) =
         (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0f64, 0);
     for &p in &pixels {
