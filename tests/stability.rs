@@ -15,13 +15,13 @@ use prism::scene::{self, Scene, REFRACTION_TECHNIQUES};
 
 const SIZE: u32 = 64;
 
-/// What the last [`render_all`] built, kept alive until the next call has built its own:
-/// the context caches pipelines weakly under their description, so the next call's renderers
-/// and reference reuse the pipelines that did not change instead of compiling them again
-/// (lavapipe takes about 3 s for the exact tracer's and the reference's each, at every scene).
+/// What the last [`render_all`] built, kept alive until the next call has built its own
+/// (common::render_after): the next call's renderers and reference reuse the pipelines that
+/// did not change instead of compiling them again (lavapipe takes about 3 s for the exact
+/// tracer's and the reference's each, at every scene).
 #[derive(Default)]
 struct Warm {
-    renderers: Vec<Renderer>,
+    renderers: Vec<Option<Renderer>>,
     reference: Option<Reference>,
 }
 
@@ -41,19 +41,15 @@ fn render_all(
     what: &str,
     warm: &mut Warm,
 ) -> (Vec<Vec<f32>>, Vec<f32>) {
+    warm.renderers.resize_with(REFRACTION_TECHNIQUES.len(), || None);
     let mut images = Vec::new();
-    let mut renderers = Vec::new();
-    for t in REFRACTION_TECHNIQUES {
+    for (t, last) in REFRACTION_TECHNIQUES.iter().zip(&mut warm.renderers) {
         let mut s = s.clone();
         s.render.refraction = t.to_string();
-        let mut r = Renderer::new(ctx, &s).unwrap_or_else(|e| panic!("{what}, technique {t}: {e}"));
-        r.render_frame().unwrap_or_else(|e| panic!("{what}, technique {t}: {e}"));
-        let hdr = r.read_hdr().expect("hdr readback");
-        assert_eq!(non_finite_count(&hdr), 0, "{what}: technique {t} produced NaN/Inf");
-        images.push(hdr);
-        renderers.push(r);
+        let r = common::render_after(ctx, &s, last);
+        assert_eq!(non_finite_count(&r.hdr), 0, "{what}: technique {t} produced NaN/Inf");
+        images.push(r.hdr);
     }
-    warm.renderers = renderers;
     let st = ReferenceSettings { spp: 4, photons: 1 << 14, ..ReferenceSettings::default() };
     let mut r = Reference::new(ctx, s, &st).unwrap_or_else(|e| panic!("{what}: {e}"));
     r.run_all(|_, _| {}).unwrap();
