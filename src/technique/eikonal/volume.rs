@@ -575,17 +575,22 @@ pub fn weak_reach(
     let mut strong = material.to_vec();
     for slab in index {
         let s = smoothed(slab, dims, sigma);
-        for (i, flag) in strong.iter_mut().enumerate() {
-            // Central differences, the air beyond the box at n - 1 = 0.
-            let mut g2 = 0.0;
-            for a in 0..3 {
-                let c = i / strides[a] % dims[a];
-                let hi = if c + 1 < dims[a] { s[i + strides[a]] } else { 0.0 };
-                let lo = if c > 0 { s[i - strides[a]] } else { 0.0 };
-                let g = (hi - lo) / (2.0 * edges[a]);
-                g2 += g * g;
+        let mut i = 0;
+        for z in 0..dims[2] {
+            for y in 0..dims[1] {
+                for x in 0..dims[0] {
+                    // Central differences, the air beyond the box at n - 1 = 0.
+                    let mut g2 = 0.0;
+                    for (a, c) in [x, y, z].into_iter().enumerate() {
+                        let hi = if c + 1 < dims[a] { s[i + strides[a]] } else { 0.0 };
+                        let lo = if c > 0 { s[i - strides[a]] } else { 0.0 };
+                        let g = (hi - lo) / (2.0 * edges[a]);
+                        g2 += g * g;
+                    }
+                    strong[i] |= g2.sqrt() * smallest > threshold;
+                    i += 1;
+                }
             }
-            *flag |= g2.sqrt() * smallest > threshold;
         }
     }
     let weak: Vec<bool> = strong.iter().map(|&s| !s).collect();
@@ -609,14 +614,30 @@ fn smoothed(slab: &[f32], dims: [usize; 3], sigma: f32) -> Vec<f32> {
         .collect();
     let total: f32 = weights.iter().sum();
     let (mut src, mut dst) = (slab.to_vec(), vec![0.0; slab.len()]);
+    let strides = [1, dims[0], dims[0] * dims[1]];
     for axis in 0..3 {
-        let (stride, n) = ([1, dims[0], dims[0] * dims[1]][axis], dims[axis]);
-        for (i, out) in dst.iter_mut().enumerate() {
-            let c = i / stride % n;
-            let base = i - c * stride;
-            let (lo, hi) = (c.saturating_sub(radius), (c + radius).min(n - 1));
-            let sum: f32 = (lo..=hi).map(|q| weights[q + radius - c] * src[base + q * stride]).sum();
-            *out = sum / total;
+        let (stride, n) = (strides[axis], dims[axis]);
+        // Each line along `axis` in a buffer padded with the air's 0 on both sides: a tap
+        // beyond the box adds exactly 0, as the shader's skipped ones add nothing.
+        let mut line = vec![0.0f32; n + 2 * radius];
+        // The other two axes.
+        let (a, b) = match axis {
+            0 => (1, 2),
+            1 => (0, 2),
+            _ => (0, 1),
+        };
+        for j in 0..dims[b] {
+            for k in 0..dims[a] {
+                let start = k * strides[a] + j * strides[b];
+                for c in 0..n {
+                    line[radius + c] = src[start + c * stride];
+                }
+                for c in 0..n {
+                    let taps = &line[c..c + 2 * radius + 1];
+                    let sum: f32 = weights.iter().zip(taps).map(|(w, v)| w * v).sum();
+                    dst[start + c * stride] = sum / total;
+                }
+            }
         }
         std::mem::swap(&mut src, &mut dst);
     }
@@ -628,21 +649,32 @@ fn smoothed(slab: &[f32], dims: [usize; 3], sigma: f32) -> Vec<f32> {
 /// exact for the Chebyshev metric.
 fn chebyshev_distance(uniform: &[bool], nb: [usize; 3]) -> Vec<u32> {
     let mut d: Vec<u32> = uniform.iter().map(|&u| if u { 255 } else { 0 }).collect();
-    let at = |x: usize, y: usize, z: usize| x + nb[0] * (y + nb[1] * z);
+    // The 13 neighbours before a cell in raster order (the other 13 after it, mirrored).
     let neighbours: Vec<[isize; 3]> = (-1..=1)
         .flat_map(|z| (-1..=1).flat_map(move |y| (-1..=1).map(move |x| [x, y, z])))
         .filter(|&[x, y, z]| (z, y, x) < (0, 0, 0))
         .collect();
+    let strides = [1, nb[0] as isize, (nb[0] * nb[1]) as isize];
+    let offset = |o: [isize; 3]| o[0] * strides[0] + o[1] * strides[1] + o[2] * strides[2];
     for forward in [true, false] {
-        for k in 0..d.len() {
-            let k = if forward { k } else { d.len() - 1 - k };
-            let (x, y, z) = (k % nb[0], k / nb[0] % nb[1], k / (nb[0] * nb[1]));
-            for o in &neighbours {
-                let o = if forward { *o } else { o.map(|c| -c) };
-                let q = [x as isize + o[0], y as isize + o[1], z as isize + o[2]];
-                if q.iter().zip(nb).all(|(&c, n)| c >= 0 && (c as usize) < n) {
-                    let v = d[at(q[0] as usize, q[1] as usize, q[2] as usize)] + 1;
-                    d[k] = d[k].min(v);
+        let sign = if forward { 1 } else { -1 };
+        let steps: Vec<([isize; 3], isize)> =
+            neighbours.iter().map(|o| o.map(|c| c * sign)).map(|o| (o, offset(o))).collect();
+        for z in 0..nb[2] {
+            for y in 0..nb[1] {
+                for x in 0..nb[0] {
+                    let p = if forward { [x, y, z] } else { [nb[0] - 1 - x, nb[1] - 1 - y, nb[2] - 1 - z] };
+                    let k = offset(p.map(|c| c as isize));
+                    // Inside, every neighbour exists; on the border each is checked.
+                    let interior = (0..3).all(|a| p[a] > 0 && p[a] + 1 < nb[a]);
+                    let mut best = d[k as usize];
+                    for &(o, delta) in &steps {
+                        let inside = interior || (0..3).all(|a| (0..nb[a] as isize).contains(&(p[a] as isize + o[a])));
+                        if inside {
+                            best = best.min(d[(k + delta) as usize] + 1);
+                        }
+                    }
+                    d[k as usize] = best;
                 }
             }
         }
