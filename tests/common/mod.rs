@@ -276,15 +276,12 @@ impl Rendered {
     }
 }
 
-/// Render one frame of `scene` on `ctx`, read back HDR and LDR, and check validation.
+/// Render one frame of `scene` on `ctx`, read back HDR and LDR, and check validation, the
+/// renderer's teardown included.
 pub fn render_on(ctx: &Arc<GpuContext>, scene: &Scene) -> Rendered {
-    let mut r = Renderer::new(ctx, scene).expect("renderer");
-    r.render_frame().expect("frame");
-    let hdr = r.read_hdr().expect("hdr readback");
-    let ldr = r.read_ldr().expect("ldr readback");
-    let passes = r.plan().iter().map(|p| p.name.to_string()).collect();
-    let out = Rendered { width: r.width(), height: r.height(), hdr, ldr, passes };
-    drop(r);
+    let mut renderer = None;
+    let out = render_after(ctx, scene, &mut renderer);
+    drop(renderer);
     assert_no_validation_errors(ctx);
     out
 }

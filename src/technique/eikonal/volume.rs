@@ -321,7 +321,7 @@ pub(crate) fn prepare_volume(
     let band_factor: Vec<f32> = if materials {
         band.iter().zip(&band_reflectance).map(|(&b, &r)| if b > 0.5 { r } else { -1.0 }).collect()
     } else {
-        vec![-1.0; weak_reach.len()]
+        vec![-1.0]
     };
     let march = march_map(&band_factor, &weak_reach);
     // Device-local (on a discrete GPU every step of every view ray reads it), filled by a
